@@ -1,0 +1,184 @@
+//! The pipeline: recipe → parts of strings → steps → checks → G-code and stats.
+
+use std::io::{self, Write};
+use std::path::Path;
+
+use sha2::{Digest, Sha256};
+
+use crate::check::{self, Finding};
+use crate::error::{Error, Result};
+use crate::gcode::{Emitter, MoveStats};
+use crate::recipe::Recipe;
+use crate::stats::{PartStats, Stats};
+use crate::toolpath::Toolpath;
+
+/// What the command line says about one build.
+#[derive(Clone, Debug, Default)]
+pub struct Options {
+    /// `--set NAME=VALUE` overrides, in order.
+    pub sets: Vec<(String, String)>,
+    /// `--printer NAME|FILE` overrides the recipe's printer.
+    pub printer: Option<String>,
+}
+
+/// A recipe made into strings and checked, ready to write.
+#[derive(Clone, Debug)]
+pub struct Plan {
+    /// The recipe file as given.
+    pub path: String,
+    /// The resolved recipe.
+    pub recipe: Recipe,
+    /// Skirt, then parts, in print order.
+    pub paths: Vec<Toolpath>,
+    /// What the checks found.
+    pub findings: Vec<Finding>,
+}
+
+/// Makes a part's strings: its primitive, then each step in order.
+pub fn make_part(recipe: &Recipe, k: usize) -> Result<Toolpath> {
+    let part = &recipe.parts[k];
+    let mut tp = part.primitive.build(part.cross_section, part.speed);
+    tp.name = part.name.clone();
+    for (j, step) in part.steps.iter().enumerate() {
+        step.apply(&mut tp, recipe.max_strings).map_err(|m| {
+            Error::input(format!("parts[{k}].steps[{j}].{}", step.key()), m)
+        })?;
+    }
+    Ok(tp)
+}
+
+/// Loads, builds and checks a recipe.
+pub fn plan(path: &Path, opts: &Options) -> Result<Plan> {
+    let shown = path.display().to_string();
+    let recipe = Recipe::load(path, &opts.sets, opts.printer.as_deref())?;
+    let mut parts = Vec::with_capacity(recipe.parts.len());
+    for k in 0..recipe.parts.len() {
+        parts.push(make_part(&recipe, k).map_err(|e| e.in_file(&shown))?);
+    }
+    let mut paths = Vec::with_capacity(parts.len() + 1);
+    if let Some(s) = &recipe.skirt {
+        let (c, v) = (recipe.parts[0].cross_section, recipe.parts[0].speed);
+        if let Some(sk) = crate::skirt::make(s, &parts, recipe.printer.nozzle_diameter, c, v) {
+            paths.push(sk);
+        }
+    }
+    paths.extend(parts);
+    let refs: Vec<&Toolpath> = paths.iter().collect();
+    let findings = check::run(&recipe, &refs);
+    Ok(Plan {
+        path: shown,
+        recipe,
+        paths,
+        findings,
+    })
+}
+
+impl Plan {
+    /// Highest point of any part, recipe coordinates.
+    pub fn top_z(&self) -> f64 {
+        self.paths
+            .iter()
+            .flat_map(|t| t.points.iter().map(|p| p.z))
+            .fold(0.0, f64::max)
+    }
+
+    /// The findings that fail the build: errors, and warnings when `strict`.
+    pub fn failing(&self, strict: bool) -> Vec<&Finding> {
+        check::failing(&self.findings, strict)
+    }
+
+    /// Writes the G-code to `out`.
+    pub fn write_gcode<W: Write>(&self, out: W) -> Result<(W, MoveStats)> {
+        let io = |e: io::Error| Error::io(&self.path, format!("cannot write the G-code: {e}"));
+        let top = self.top_z();
+        let mut em = Emitter::new(out, &self.recipe);
+        em.start(&self.recipe, top)?;
+        for tp in &self.paths {
+            em.part(tp).map_err(io)?;
+        }
+        em.finish(&self.recipe, top)
+    }
+
+    /// Writes the G-code to `out`, hashing it, and returns the stats.
+    pub fn render<W: Write>(&self, out: W) -> Result<Stats> {
+        let (hw, moves) = self.write_gcode(HashWriter::new(out))?;
+        let (digest, bytes) = hw.finish();
+        let parts = self
+            .paths
+            .iter()
+            .zip(&moves.part_times)
+            .map(|(t, (_, time))| PartStats {
+                name: t.name.clone(),
+                strings: t.len(),
+                print_time_s: *time,
+            })
+            .collect();
+        Ok(Stats::new(
+            &self.path,
+            &self.recipe,
+            &moves,
+            parts,
+            digest,
+            bytes,
+            self.findings.clone(),
+        ))
+    }
+}
+
+/// A writer that hashes and counts what passes through it.
+pub struct HashWriter<W: Write> {
+    inner: io::BufWriter<W>,
+    hasher: Sha256,
+    bytes: u64,
+}
+
+impl<W: Write> HashWriter<W> {
+    /// Wraps `inner` (buffered).
+    pub fn new(inner: W) -> HashWriter<W> {
+        HashWriter {
+            inner: io::BufWriter::with_capacity(1 << 16, inner),
+            hasher: Sha256::new(),
+            bytes: 0,
+        }
+    }
+
+    /// The SHA-256 in hex and the byte count.
+    pub fn finish(self) -> (String, u64) {
+        let d = self.hasher.finalize();
+        let hex: String = d.iter().map(|b| format!("{b:02x}")).collect();
+        (hex, self.bytes)
+    }
+}
+
+impl<W: Write> Write for HashWriter<W> {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        let n = self.inner.write(buf)?;
+        self.hasher.update(&buf[..n]);
+        self.bytes += n as u64;
+        Ok(n)
+    }
+    fn flush(&mut self) -> io::Result<()> {
+        self.inner.flush()
+    }
+}
+
+/// Writes `bytes` to `target` atomically: a temp file beside it, renamed on success.
+pub fn write_atomic(target: &Path, f: impl FnOnce(&mut std::fs::File) -> Result<()>) -> Result<()> {
+    let shown = target.display().to_string();
+    let dir = match target.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let mut tmp = tempfile::Builder::new()
+        .prefix(".p3dp-")
+        .suffix(".tmp")
+        .tempfile_in(dir)
+        .map_err(|e| Error::io(&shown, format!("cannot create a file in {}: {e}", dir.display())))?;
+    f(tmp.as_file_mut())?;
+    tmp.as_file_mut()
+        .sync_all()
+        .map_err(|e| Error::io(&shown, format!("cannot write: {e}")))?;
+    tmp.persist(target)
+        .map_err(|e| Error::io(&shown, format!("cannot write: {}", e.error)))?;
+    Ok(())
+}

@@ -1,0 +1,583 @@
+//! Math expressions of a recipe, compiled once and evaluated per point or string.
+//!
+//! Parsing is meval's (its tokenizer and shunting-yard turn the text into
+//! reverse Polish notation); we then resolve every name to a variable slot, a
+//! param constant or a function pointer, fold constant sub-expressions, and run
+//! the result on a small fixed stack. Every transcendental function goes
+//! through the `libm` crate, so a recipe gives bit-identical numbers on every
+//! machine (std's `sin` may call the platform's libm, which differs).
+
+use indexmap::IndexMap;
+use meval::tokenizer::{Operation, Token};
+
+/// Named params of a recipe, in the order they were defined.
+pub type Params = IndexMap<String, f64>;
+
+/// Slot of each per-point / per-string variable in the value array.
+pub mod var {
+    /// x coordinate (mm).
+    pub const X: usize = 0;
+    /// y coordinate (mm).
+    pub const Y: usize = 1;
+    /// z coordinate (mm).
+    pub const Z: usize = 2;
+    /// distance from the z axis (mm).
+    pub const R: usize = 3;
+    /// angle around the z axis, in [0, 2·pi).
+    pub const THETA: usize = 4;
+    /// cross-section of the string (mm²).
+    pub const C: usize = 5;
+    /// head speed of the string (mm/s).
+    pub const V: usize = 6;
+    /// index of the point or string in the part.
+    pub const I: usize = 7;
+    /// number of points or strings in the part.
+    pub const N: usize = 8;
+    /// i / (n - 1), 0 to 1 along the part.
+    pub const T: usize = 9;
+    /// how many slots there are.
+    pub const COUNT: usize = 10;
+}
+
+/// Names of the variable slots, indexed by [`var`].
+pub const VAR_NAMES: [&str; var::COUNT] = ["x", "y", "z", "r", "theta", "c", "v", "i", "n", "t"];
+
+/// The values an expression sees for one point or string.
+pub type Vars = [f64; var::COUNT];
+
+/// Names that params may not take: the variables and the constants.
+pub fn is_reserved(name: &str) -> bool {
+    VAR_NAMES.contains(&name) || name == "pi" || name == "e"
+}
+
+const STACK: usize = 32;
+
+type F1 = fn(f64) -> f64;
+type F2 = fn(f64, f64) -> f64;
+type F3 = fn(f64, f64, f64) -> f64;
+
+#[derive(Clone, Copy, Debug)]
+enum Op {
+    Num(f64),
+    Var(u8),
+    Neg,
+    Add,
+    Sub,
+    Mul,
+    Div,
+    Rem,
+    Pow,
+    F1(F1),
+    F2(F2),
+    F3(F3),
+    Min(u8),
+    Max(u8),
+}
+
+/// A compiled expression.
+#[derive(Clone, Debug)]
+pub struct Expr {
+    src: String,
+    ops: Vec<Op>,
+    used: u32,
+}
+
+// The functions recipe authors may call, beyond meval's operators.
+fn f_mod(a: f64, b: f64) -> f64 {
+    // floored modulo: the result has the sign of b, so mod(-1, 360) = 359
+    a - b * libm::floor(a / b)
+}
+fn f_clamp(x: f64, lo: f64, hi: f64) -> f64 {
+    x.max(lo).min(hi)
+}
+fn f_step(edge: f64, x: f64) -> f64 {
+    // GLSL's step: 0 below the edge, 1 from it on
+    if x < edge {
+        0.0
+    } else {
+        1.0
+    }
+}
+fn f_smoothstep(e0: f64, e1: f64, x: f64) -> f64 {
+    let t = f_clamp((x - e0) / (e1 - e0), 0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+fn f_mix(a: f64, b: f64, t: f64) -> f64 {
+    a + (b - a) * t
+}
+fn f_sign(x: f64) -> f64 {
+    if x > 0.0 {
+        1.0
+    } else if x < 0.0 {
+        -1.0
+    } else {
+        0.0
+    }
+}
+fn f_sqrt(x: f64) -> f64 {
+    x.sqrt() // IEEE 754 correctly rounded: portable
+}
+fn f_abs(x: f64) -> f64 {
+    x.abs()
+}
+fn f_fract(x: f64) -> f64 {
+    x - libm::floor(x)
+}
+fn f_radians(x: f64) -> f64 {
+    x * (std::f64::consts::PI / 180.0)
+}
+fn f_degrees(x: f64) -> f64 {
+    x * (180.0 / std::f64::consts::PI)
+}
+
+fn lookup1(name: &str) -> Option<F1> {
+    Some(match name {
+        "sin" => libm::sin,
+        "cos" => libm::cos,
+        "tan" => libm::tan,
+        "asin" => libm::asin,
+        "acos" => libm::acos,
+        "atan" => libm::atan,
+        "sinh" => libm::sinh,
+        "cosh" => libm::cosh,
+        "tanh" => libm::tanh,
+        "asinh" => libm::asinh,
+        "acosh" => libm::acosh,
+        "atanh" => libm::atanh,
+        "sqrt" => f_sqrt,
+        "cbrt" => libm::cbrt,
+        "exp" => libm::exp,
+        "ln" | "log" => libm::log,
+        "log10" => libm::log10,
+        "log2" => libm::log2,
+        "abs" => f_abs,
+        "floor" => libm::floor,
+        "ceil" => libm::ceil,
+        "round" => libm::round,
+        "trunc" => libm::trunc,
+        "sign" | "signum" => f_sign,
+        "fract" => f_fract,
+        "radians" => f_radians,
+        "degrees" => f_degrees,
+        _ => return None,
+    })
+}
+
+fn lookup2(name: &str) -> Option<F2> {
+    Some(match name {
+        "atan2" => libm::atan2,
+        "hypot" => libm::hypot,
+        "pow" => libm::pow,
+        "mod" => f_mod,
+        "step" => f_step,
+        _ => return None,
+    })
+}
+
+fn lookup3(name: &str) -> Option<F3> {
+    Some(match name {
+        "clamp" => f_clamp,
+        "smoothstep" => f_smoothstep,
+        "mix" | "lerp" => f_mix,
+        _ => return None,
+    })
+}
+
+/// Every function name an expression may call, for error messages.
+pub const FUNCTIONS: &str = "sin cos tan asin acos atan atan2(y,x) sinh cosh tanh asinh acosh atanh \
+sqrt cbrt exp ln log log10 log2 pow(a,b) abs sign floor ceil round trunc fract \
+mod(a,b) min(a,b,…) max(a,b,…) clamp(x,lo,hi) step(edge,x) smoothstep(e0,e1,x) \
+mix(a,b,t) hypot(x,y) radians degrees";
+
+#[derive(Clone, Debug)]
+enum Node {
+    Num(f64),
+    Var(u8),
+    Neg(Box<Node>),
+    Bin(Op, Box<Node>, Box<Node>),
+    Call(Op, Vec<Node>),
+}
+
+impl Node {
+    fn num(&self) -> Option<f64> {
+        match self {
+            Node::Num(v) => Some(*v),
+            _ => None,
+        }
+    }
+    fn depth(&self) -> usize {
+        match self {
+            Node::Num(_) | Node::Var(_) => 1,
+            Node::Neg(a) => a.depth(),
+            Node::Bin(_, a, b) => a.depth().max(1 + b.depth()),
+            Node::Call(_, args) => args
+                .iter()
+                .enumerate()
+                .map(|(k, a)| k + a.depth())
+                .max()
+                .unwrap_or(1),
+        }
+    }
+    fn emit(&self, out: &mut Vec<Op>) {
+        match self {
+            Node::Num(v) => out.push(Op::Num(*v)),
+            Node::Var(s) => out.push(Op::Var(*s)),
+            Node::Neg(a) => {
+                a.emit(out);
+                out.push(Op::Neg);
+            }
+            Node::Bin(op, a, b) => {
+                a.emit(out);
+                b.emit(out);
+                out.push(*op);
+            }
+            Node::Call(op, args) => {
+                for a in args {
+                    a.emit(out);
+                }
+                out.push(*op);
+            }
+        }
+    }
+}
+
+/// Runs `ops` on a stack; the one evaluator used for folding and at run time.
+#[inline]
+fn run(ops: &[Op], vars: &Vars) -> f64 {
+    let mut st = [0.0f64; STACK];
+    let mut sp = 0usize;
+    for op in ops {
+        match *op {
+            Op::Num(v) => {
+                st[sp] = v;
+                sp += 1;
+            }
+            Op::Var(s) => {
+                st[sp] = vars[s as usize];
+                sp += 1;
+            }
+            Op::Neg => st[sp - 1] = -st[sp - 1],
+            Op::F1(f) => st[sp - 1] = f(st[sp - 1]),
+            Op::Add | Op::Sub | Op::Mul | Op::Div | Op::Rem | Op::Pow | Op::F2(_) => {
+                sp -= 1;
+                let (a, b) = (st[sp - 1], st[sp]);
+                st[sp - 1] = match *op {
+                    Op::Add => a + b,
+                    Op::Sub => a - b,
+                    Op::Mul => a * b,
+                    Op::Div => a / b,
+                    Op::Rem => libm::fmod(a, b),
+                    Op::Pow => libm::pow(a, b),
+                    Op::F2(f) => f(a, b),
+                    _ => unreachable!(),
+                };
+            }
+            Op::F3(f) => {
+                sp -= 2;
+                st[sp - 1] = f(st[sp - 1], st[sp], st[sp + 1]);
+            }
+            Op::Min(k) | Op::Max(k) => {
+                let k = k as usize;
+                let args = &st[sp - k..sp];
+                let mut m = args[0];
+                for &a in &args[1..] {
+                    m = if matches!(op, Op::Min(_)) {
+                        m.min(a)
+                    } else {
+                        m.max(a)
+                    };
+                }
+                sp -= k;
+                st[sp] = m;
+                sp += 1;
+            }
+        }
+    }
+    st[0]
+}
+
+fn describe_parse_error(src: &str, e: &meval::ParseError) -> String {
+    match e {
+        meval::ParseError::UnexpectedToken(at) => {
+            let rest: String = src.get(*at..).unwrap_or("").chars().take(12).collect();
+            format!(
+                "cannot read the expression `{src}`: unexpected `{rest}` at character {}",
+                at + 1
+            )
+        }
+        meval::ParseError::MissingRParen(k) => {
+            format!("cannot read the expression `{src}`: {k} closing parenthesis missing")
+        }
+        meval::ParseError::MissingArgument => {
+            format!("cannot read the expression `{src}`: it ends where a value was expected")
+        }
+    }
+}
+
+fn allowed_names(allowed: &[usize], params: &Params) -> String {
+    let mut names: Vec<&str> = allowed.iter().map(|&k| VAR_NAMES[k]).collect();
+    names.extend(["pi", "e"]);
+    let mut s = names.join(", ");
+    if !params.is_empty() {
+        let p: Vec<&str> = params.keys().map(String::as_str).collect();
+        s.push_str(" and the params ");
+        s.push_str(&p.join(", "));
+    }
+    s
+}
+
+impl Expr {
+    /// Compiles `src`, resolving params to constants and only the `allowed`
+    /// variable slots (see [`var`]) to variables. The error is a sentence
+    /// naming the expression and what is wrong with it.
+    pub fn compile(src: &str, params: &Params, allowed: &[usize]) -> Result<Expr, String> {
+        // Kanada's Python recipes write powers as `**`; meval's operator is `^`.
+        let text = src.replace("**", "^");
+        let tokens =
+            meval::tokenizer::tokenize(&text).map_err(|e| describe_parse_error(src, &e))?;
+        let rpn = meval::shunting_yard::to_rpn(&tokens)
+            .map_err(|e| format!("cannot read the expression `{src}`: {e}"))?;
+        let mut stack: Vec<Node> = Vec::new();
+        let mut used = 0u32;
+        let pop = |stack: &mut Vec<Node>| -> Result<Node, String> {
+            stack
+                .pop()
+                .ok_or_else(|| format!("cannot read the expression `{src}`: an operand is missing"))
+        };
+        for tok in rpn {
+            let node = match tok {
+                Token::Number(v) => Node::Num(v),
+                Token::Var(name) => {
+                    if let Some(k) = VAR_NAMES.iter().position(|n| *n == name) {
+                        if !allowed.contains(&k) {
+                            return Err(format!(
+                                "`{name}` is not available in `{src}` here; it may use {}",
+                                allowed_names(allowed, params)
+                            ));
+                        }
+                        used |= 1 << k;
+                        Node::Var(k as u8)
+                    } else if let Some(v) = params.get(&name) {
+                        Node::Num(*v)
+                    } else if name == "pi" {
+                        Node::Num(std::f64::consts::PI)
+                    } else if name == "e" {
+                        Node::Num(std::f64::consts::E)
+                    } else {
+                        return Err(format!(
+                            "unknown name `{name}` in `{src}`; it may use {}",
+                            allowed_names(allowed, params)
+                        ));
+                    }
+                }
+                Token::Unary(Operation::Minus) => Node::Neg(Box::new(pop(&mut stack)?)),
+                Token::Unary(_) => pop(&mut stack)?,
+                Token::Binary(op) => {
+                    let b = pop(&mut stack)?;
+                    let a = pop(&mut stack)?;
+                    let op = match op {
+                        Operation::Plus => Op::Add,
+                        Operation::Minus => Op::Sub,
+                        Operation::Times => Op::Mul,
+                        Operation::Div => Op::Div,
+                        Operation::Rem => Op::Rem,
+                        Operation::Pow => Op::Pow,
+                    };
+                    Node::Bin(op, Box::new(a), Box::new(b))
+                }
+                Token::Func(name, nargs) => {
+                    let k = nargs.unwrap_or(0);
+                    let op = match (name.as_str(), k) {
+                        ("min", 1..=255) => Op::Min(k as u8),
+                        ("max", 1..=255) => Op::Max(k as u8),
+                        (n, 1) if lookup1(n).is_some() => Op::F1(lookup1(n).unwrap()),
+                        (n, 2) if lookup2(n).is_some() => Op::F2(lookup2(n).unwrap()),
+                        (n, 3) if lookup3(n).is_some() => Op::F3(lookup3(n).unwrap()),
+                        (n, _) => {
+                            let arity = if lookup1(n).is_some() {
+                                Some(1)
+                            } else if lookup2(n).is_some() {
+                                Some(2)
+                            } else if lookup3(n).is_some() {
+                                Some(3)
+                            } else {
+                                None
+                            };
+                            return Err(match arity {
+                                Some(a) => format!(
+                                    "`{n}` takes {a} argument{} but is given {k} in `{src}`",
+                                    if a == 1 { "" } else { "s" }
+                                ),
+                                None => format!(
+                                    "unknown function `{n}` in `{src}`; functions are: {FUNCTIONS}"
+                                ),
+                            });
+                        }
+                    };
+                    if stack.len() < k {
+                        return Err(format!(
+                            "cannot read the expression `{src}`: `{name}` lacks arguments"
+                        ));
+                    }
+                    let args = stack.split_off(stack.len() - k);
+                    Node::Call(op, args)
+                }
+                other => {
+                    return Err(format!(
+                        "cannot read the expression `{src}`: unexpected {other:?}"
+                    ))
+                }
+            };
+            stack.push(fold(node));
+        }
+        if stack.len() != 1 {
+            return Err(format!(
+                "cannot read the expression `{src}`: expected one value, found {}",
+                stack.len()
+            ));
+        }
+        let root = stack.pop().unwrap();
+        if root.depth() > STACK {
+            return Err(format!("the expression `{src}` is nested too deeply"));
+        }
+        let mut ops = Vec::new();
+        root.emit(&mut ops);
+        Ok(Expr {
+            src: src.to_string(),
+            ops,
+            used,
+        })
+    }
+
+    /// Evaluates with the given variable values.
+    #[inline]
+    pub fn eval(&self, vars: &Vars) -> f64 {
+        run(&self.ops, vars)
+    }
+
+    /// The value when the expression uses no variable.
+    pub fn constant(&self) -> Option<f64> {
+        match self.ops.as_slice() {
+            [Op::Num(v)] => Some(*v),
+            _ => None,
+        }
+    }
+
+    /// Whether the expression reads variable slot `k`.
+    pub fn uses(&self, k: usize) -> bool {
+        self.used & (1 << k) != 0
+    }
+
+    /// Whether the expression is exactly variable `k` (an identity mapping).
+    pub fn is_var(&self, k: usize) -> bool {
+        matches!(self.ops.as_slice(), [Op::Var(s)] if *s as usize == k)
+    }
+
+    /// The source text as written in the recipe.
+    pub fn src(&self) -> &str {
+        &self.src
+    }
+}
+
+fn fold(node: Node) -> Node {
+    let all_const = match &node {
+        Node::Num(_) | Node::Var(_) => return node,
+        Node::Neg(a) => a.num().is_some(),
+        Node::Bin(_, a, b) => a.num().is_some() && b.num().is_some(),
+        Node::Call(_, args) => args.iter().all(|a| a.num().is_some()),
+    };
+    if !all_const {
+        return node;
+    }
+    let mut ops = Vec::new();
+    node.emit(&mut ops);
+    Node::Num(run(&ops, &[0.0; var::COUNT]))
+}
+
+/// Evaluates an expression over params only (a number written as text).
+pub fn eval_const(src: &str, params: &Params) -> Result<f64, String> {
+    let e = Expr::compile(src, params, &[])?;
+    let v = e.eval(&[0.0; var::COUNT]);
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(format!("`{src}` evaluates to {v}, not a finite number"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ev(src: &str, vars: &Vars) -> f64 {
+        let all: Vec<usize> = (0..var::COUNT).collect();
+        Expr::compile(src, &Params::new(), &all).unwrap().eval(vars)
+    }
+
+    #[test]
+    fn arithmetic_and_precedence() {
+        let v = [0.0; var::COUNT];
+        assert_eq!(ev("1+2*3", &v), 7.0);
+        assert_eq!(ev("2^3^2", &v), 512.0);
+        assert_eq!(ev("2**3", &v), 8.0);
+        assert_eq!(ev("-2+5", &v), 3.0);
+        assert_eq!(ev("7 % 4", &v), 3.0);
+    }
+
+    #[test]
+    fn variables_and_params() {
+        let mut p = Params::new();
+        p.insert("radius".into(), 25.0);
+        let e = Expr::compile("radius*sin(pi*z/10)+r", &p, &[var::Z, var::R]).unwrap();
+        let mut v = [0.0; var::COUNT];
+        v[var::Z] = 5.0;
+        v[var::R] = 1.0;
+        assert_eq!(e.eval(&v), 26.0);
+        assert!(e.uses(var::Z) && e.uses(var::R) && !e.uses(var::X));
+    }
+
+    #[test]
+    fn added_functions() {
+        let v = [0.0; var::COUNT];
+        assert_eq!(ev("mod(-1, 360)", &v), 359.0);
+        assert_eq!(ev("clamp(5, 0, 2)", &v), 2.0);
+        assert_eq!(ev("step(1, 0.5)", &v), 0.0);
+        assert_eq!(ev("step(1, 1)", &v), 1.0);
+        assert_eq!(ev("hypot(3, 4)", &v), 5.0);
+        assert_eq!(ev("atan2(1, 0)", &v), std::f64::consts::FRAC_PI_2);
+        assert_eq!(ev("min(3, 1, 2)", &v), 1.0);
+        assert_eq!(ev("max(3, 1, 2)", &v), 3.0);
+    }
+
+    #[test]
+    fn constants_fold() {
+        let e = Expr::compile("2*pi*3", &Params::new(), &[]).unwrap();
+        assert_eq!(e.constant(), Some(2.0 * std::f64::consts::PI * 3.0));
+        let id = Expr::compile("theta", &Params::new(), &[var::THETA]).unwrap();
+        assert!(id.is_var(var::THETA));
+    }
+
+    #[test]
+    fn transcendental_functions_are_libm() {
+        // the same bits as libm on every machine
+        let v = [0.0; var::COUNT];
+        assert_eq!(ev("sin(1.234)", &v).to_bits(), libm::sin(1.234).to_bits());
+        assert_eq!(ev("1.5^0.3", &v).to_bits(), libm::pow(1.5, 0.3).to_bits());
+    }
+
+    #[test]
+    fn errors_name_the_problem() {
+        let p = Params::new();
+        let e = Expr::compile("sin(", &p, &[]).unwrap_err();
+        assert!(e.contains("sin("), "{e}");
+        let e = Expr::compile("foo + 1", &p, &[var::X]).unwrap_err();
+        assert!(e.contains("unknown name `foo`") && e.contains("x"), "{e}");
+        let e = Expr::compile("bar(1)", &p, &[]).unwrap_err();
+        assert!(e.contains("unknown function `bar`"), "{e}");
+        let e = Expr::compile("atan2(1)", &p, &[]).unwrap_err();
+        assert!(e.contains("takes 2 arguments"), "{e}");
+        let e = Expr::compile("c*2", &p, &[var::X]).unwrap_err();
+        assert!(e.contains("`c` is not available"), "{e}");
+        assert!(eval_const("1/0", &p).is_err());
+    }
+}

@@ -1,0 +1,506 @@
+//! Strings to G-code.
+//!
+//! Numbers are fixed-point, never exponent notation and never `-0.000`: each
+//! value is rounded once to integer units (µm for XYZ, 10 nm of filament for E)
+//! and printed from the integer. E is tracked as the exact running total
+//! Σ c·L / (pi·(d/2)²) and printed rounded, so the printed E values (absolute)
+//! or deltas (relative) add up to the rounded exact total with no drift.
+//!
+//! Short-string merging (Kanada's `draw`): near a globe's poles 300 strings a
+//! turn are far too short for the printer's planner. A run of consecutive
+//! extruding strings, each shorter than the printer's `min_string_length`, is
+//! written as one move from the run's start to the point where its length first
+//! reaches that minimum. The move carries the run's filament exactly, and its
+//! speed is set so that it takes the same time as the strings would.
+
+use std::collections::BTreeMap;
+use std::io::{self, Write};
+
+use glam::DVec3;
+
+use crate::error::Result;
+use crate::printer::{Extrusion, Printer};
+use crate::recipe::Recipe;
+use crate::toolpath::Toolpath;
+
+/// What the written moves add up to; the stats report is made from it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MoveStats {
+    /// G1 moves that extrude.
+    pub extrude_moves: u64,
+    /// G0 moves.
+    pub travel_moves: u64,
+    /// Length of extruding moves, mm.
+    pub extrude_length: f64,
+    /// Length of travel moves, mm (the first move from home is not counted).
+    pub travel_length: f64,
+    /// Filament fed, mm (exact, before rounding).
+    pub filament: f64,
+    /// Extruded volume, mm³.
+    pub volume: f64,
+    /// Σ length / speed over the moves, plus retractions, s.
+    pub time: f64,
+    /// Time of each part (and the skirt), s, in print order.
+    pub part_times: Vec<(String, f64)>,
+    /// Lowest corner of the extruding moves, recipe coordinates.
+    pub bbox_min: DVec3,
+    /// Highest corner of the extruding moves, recipe coordinates.
+    pub bbox_max: DVec3,
+    /// Highest volumetric flow of any extruding move, mm³/s.
+    pub max_flow: f64,
+    /// Strings that were merged into longer moves.
+    pub merged_strings: u64,
+    /// Retractions made.
+    pub retractions: u64,
+}
+
+/// Rounds `x` to integer units of 10^-`decimals`.
+#[inline]
+fn units(x: f64, scale: f64) -> i64 {
+    libm::round(x * scale) as i64
+}
+
+/// Appends `v / 10^decimals` in fixed point, e.g. `-12.345`.
+fn put_fixed(buf: &mut Vec<u8>, v: i64, decimals: u32) {
+    let pow = 10i64.pow(decimals);
+    if v < 0 {
+        buf.push(b'-');
+    }
+    let a = v.unsigned_abs();
+    let mut ib = itoa::Buffer::new();
+    buf.extend_from_slice(ib.format(a / pow as u64).as_bytes());
+    buf.push(b'.');
+    let frac = ib.format(a % pow as u64);
+    for _ in frac.len()..decimals as usize {
+        buf.push(b'0');
+    }
+    buf.extend_from_slice(frac.as_bytes());
+}
+
+const XYZ: f64 = 1e3;
+const E: f64 = 1e5;
+
+/// Writes one print: header, start G-code, parts, end G-code, summary.
+pub struct Emitter<'a, W: Write> {
+    out: W,
+    printer: &'a Printer,
+    /// Filament cross-section area, mm².
+    area: f64,
+    /// Last written machine position in µm, once known.
+    written: Option<[i64; 3]>,
+    /// Exact head position, recipe coordinates.
+    head: Option<DVec3>,
+    /// Exact filament total, mm.
+    e_exact: f64,
+    /// Last E total written, 1e-5 mm.
+    e_units: i64,
+    retracted: bool,
+    feed: i64,
+    line: Vec<u8>,
+    /// The moves so far.
+    pub stats: MoveStats,
+    pending: Pending,
+}
+
+#[derive(Default)]
+struct Pending {
+    count: u64,
+    end: DVec3,
+    path: f64,
+    filament: f64,
+    time: f64,
+    v_last: f64,
+}
+
+impl<'a, W: Write> Emitter<'a, W> {
+    /// An emitter writing to `out` for `recipe`'s printer and material.
+    pub fn new(out: W, recipe: &'a Recipe) -> Emitter<'a, W> {
+        let d = recipe
+            .material
+            .filament_diameter
+            .unwrap_or(recipe.printer.filament_diameter);
+        Emitter {
+            out,
+            printer: &recipe.printer,
+            area: std::f64::consts::PI * (d / 2.0) * (d / 2.0),
+            written: None,
+            head: None,
+            e_exact: 0.0,
+            e_units: 0,
+            retracted: false,
+            feed: -1,
+            line: Vec::with_capacity(96),
+            stats: MoveStats {
+                bbox_min: DVec3::splat(f64::INFINITY),
+                bbox_max: DVec3::splat(f64::NEG_INFINITY),
+                ..MoveStats::default()
+            },
+            pending: Pending::default(),
+        }
+    }
+
+    /// Filament cross-section area, mm².
+    pub fn filament_area(&self) -> f64 {
+        self.area
+    }
+
+    /// The placeholders of start and end G-code.
+    pub fn template_values(recipe: &Recipe, top_z: f64) -> BTreeMap<&'static str, String> {
+        let p = &recipe.printer;
+        let m = &recipe.material;
+        let (bx, by) = match p.bed {
+            crate::printer::Bed::Rectangle { size, .. } => (size[0], size[1]),
+            crate::printer::Bed::Circle { .. } => (0.0, 0.0),
+        };
+        let park = (p.to_machine(DVec3::new(0.0, 0.0, top_z)).z + 10.0).min(p.bed.max_z());
+        let mut v = BTreeMap::new();
+        v.insert("nozzle_temp", fmt_num(m.nozzle_temp));
+        v.insert("bed_temp", fmt_num(m.bed_temp));
+        v.insert(
+            "filament_diameter",
+            fmt_num(m.filament_diameter.unwrap_or(p.filament_diameter)),
+        );
+        v.insert("nozzle_diameter", fmt_num(p.nozzle_diameter));
+        v.insert("bed_x", fmt_num(bx));
+        v.insert("bed_y", fmt_num(by));
+        v.insert("max_z", fmt_num(p.bed.max_z()));
+        v.insert("park_z", fmt_num(park));
+        v
+    }
+
+    fn text(&mut self, s: &str) -> io::Result<()> {
+        self.out.write_all(s.as_bytes())?;
+        if !s.ends_with('\n') && !s.is_empty() {
+            self.out.write_all(b"\n")?;
+        }
+        Ok(())
+    }
+
+    /// Header comments, start G-code and the extrusion mode.
+    pub fn start(&mut self, recipe: &Recipe, top_z: f64) -> Result<()> {
+        let vals = Self::template_values(recipe, top_z);
+        let start = self.printer.fill("start_gcode", &self.printer.start_gcode, &vals)?;
+        let io = |e: io::Error| crate::error::Error::io("output", e.to_string());
+        let head = format!(
+            "; generated by p3dp {}\n; recipe: {}\n; printer: {} ({:?})\n; material: {}, {} °C nozzle, {} °C bed\n",
+            env!("CARGO_PKG_VERSION"),
+            recipe.name,
+            self.printer.name,
+            self.printer.flavor,
+            recipe.material.name,
+            fmt_num(recipe.material.nozzle_temp),
+            fmt_num(recipe.material.bed_temp),
+        );
+        self.text(&head).map_err(io)?;
+        for (k, v) in &recipe.params {
+            self.text(&format!("; param {k} = {}", fmt_num(*v))).map_err(io)?;
+        }
+        self.text(&start).map_err(io)?;
+        let mode = match self.printer.extrusion {
+            Extrusion::Absolute => "M82 ; absolute extrusion",
+            Extrusion::Relative => "M83 ; relative extrusion",
+        };
+        self.text(&format!("G21 ; millimetres\nG90 ; absolute XYZ\n{mode}\nG92 E0"))
+            .map_err(io)?;
+        Ok(())
+    }
+
+    fn set_feed(&mut self, mm_s: f64) {
+        let f = libm::round(mm_s * 60.0).max(1.0) as i64;
+        if f != self.feed {
+            self.line.extend_from_slice(b" F");
+            let mut ib = itoa::Buffer::new();
+            self.line.extend_from_slice(ib.format(f).as_bytes());
+            self.feed = f;
+        }
+    }
+
+    fn feed_mm_s(&self) -> f64 {
+        self.feed as f64 / 60.0
+    }
+
+    /// Starts a move line; returns whether any axis changed.
+    fn axes(&mut self, g: &[u8], to: DVec3, only: [bool; 3]) -> bool {
+        let m = self.printer.to_machine(to);
+        let u = [units(m.x, XYZ), units(m.y, XYZ), units(m.z, XYZ)];
+        self.line.clear();
+        self.line.extend_from_slice(g);
+        let mut changed = false;
+        for (k, name) in [b" X", b" Y", b" Z"].iter().enumerate() {
+            if !only[k] {
+                continue;
+            }
+            if self.written.is_none_or(|w| w[k] != u[k]) {
+                self.line.extend_from_slice(*name);
+                put_fixed(&mut self.line, u[k], 3);
+                changed = true;
+            }
+        }
+        let mut w = self.written.unwrap_or(u);
+        for k in 0..3 {
+            if only[k] {
+                w[k] = u[k];
+            }
+        }
+        self.written = Some(w);
+        changed
+    }
+
+    fn end_line(&mut self) -> io::Result<()> {
+        self.line.push(b'\n');
+        self.out.write_all(&self.line)
+    }
+
+    fn retract(&mut self) -> io::Result<()> {
+        let r = &self.printer.retraction;
+        if r.length <= 0.0 || self.retracted {
+            return Ok(());
+        }
+        let len = units(r.length, E);
+        self.line.clear();
+        self.line.extend_from_slice(b"G1 E");
+        match self.printer.extrusion {
+            Extrusion::Absolute => put_fixed(&mut self.line, self.e_units - len, 5),
+            Extrusion::Relative => put_fixed(&mut self.line, -len, 5),
+        }
+        self.set_feed(r.speed);
+        self.line.extend_from_slice(b" ; retract");
+        self.end_line()?;
+        self.retracted = true;
+        self.stats.retractions += 1;
+        self.stats.time += 2.0 * r.length / r.speed;
+        Ok(())
+    }
+
+    fn unretract(&mut self) -> io::Result<()> {
+        if !self.retracted {
+            return Ok(());
+        }
+        let r = &self.printer.retraction;
+        let len = units(r.length, E);
+        self.line.clear();
+        self.line.extend_from_slice(b"G1 E");
+        match self.printer.extrusion {
+            Extrusion::Absolute => put_fixed(&mut self.line, self.e_units, 5),
+            Extrusion::Relative => put_fixed(&mut self.line, len, 5),
+        }
+        self.set_feed(r.speed);
+        self.line.extend_from_slice(b" ; unretract");
+        self.end_line()?;
+        self.retracted = false;
+        Ok(())
+    }
+
+    /// A straight travel move to `to` (G0), retracting first when it is long.
+    fn travel_line(&mut self, to: DVec3, only: [bool; 3]) -> io::Result<()> {
+        let from = self.head;
+        let mut target = from.unwrap_or(to);
+        for k in 0..3 {
+            if only[k] {
+                target[k] = to[k];
+            }
+        }
+        let dist = from.map_or(0.0, |f| f.distance(target));
+        if from.is_some() && dist >= self.printer.retraction.min_travel {
+            self.retract()?;
+        }
+        let changed = self.axes(b"G0", target, only);
+        if !changed {
+            self.head = Some(target);
+            return Ok(());
+        }
+        let tv = self.printer.travel_speed;
+        self.set_feed(tv);
+        self.end_line()?;
+        self.stats.travel_moves += 1;
+        self.stats.travel_length += dist;
+        self.stats.time += dist / self.feed_mm_s();
+        self.head = Some(target);
+        Ok(())
+    }
+
+    /// Travel to `to` between parts: rise first when going up, go down last
+    /// when going down, so the nozzle does not drag across what is printed.
+    pub fn travel_to(&mut self, to: DVec3) -> io::Result<()> {
+        self.flush()?;
+        match self.head {
+            None => self.travel_line(to, [true; 3]),
+            Some(h) if to.z > h.z => {
+                self.travel_line(to, [false, false, true])?;
+                self.travel_line(to, [true, true, false])
+            }
+            Some(_) => {
+                self.travel_line(to, [true, true, false])?;
+                self.travel_line(to, [false, false, true])
+            }
+        }
+    }
+
+    /// One G1 extruding move to `to` carrying `filament` mm at `v` mm/s.
+    fn extrude_line(&mut self, to: DVec3, filament: f64, v: f64) -> io::Result<()> {
+        self.unretract()?;
+        let from = self.head.expect("extrusion starts after a travel");
+        self.axes(b"G1", to, [true; 3]);
+        self.e_exact += filament;
+        let e_new = units(self.e_exact, E);
+        self.line.extend_from_slice(b" E");
+        match self.printer.extrusion {
+            Extrusion::Absolute => put_fixed(&mut self.line, e_new, 5),
+            Extrusion::Relative => put_fixed(&mut self.line, e_new - self.e_units, 5),
+        }
+        self.e_units = e_new;
+        self.set_feed(v);
+        self.end_line()?;
+        let len = from.distance(to);
+        let st = &mut self.stats;
+        st.extrude_moves += 1;
+        st.extrude_length += len;
+        st.filament += filament;
+        st.volume += filament * self.area;
+        let f = self.feed as f64 / 60.0;
+        let t = if len > 0.0 { len / f } else { filament / f };
+        st.time += t;
+        if t > 0.0 {
+            st.max_flow = st.max_flow.max(filament * self.area / t);
+        }
+        st.bbox_min = st.bbox_min.min(from).min(to);
+        st.bbox_max = st.bbox_max.max(from).max(to);
+        self.head = Some(to);
+        Ok(())
+    }
+
+    /// Writes what is pending of a run of short strings.
+    fn flush(&mut self) -> io::Result<()> {
+        if self.pending.count == 0 {
+            return Ok(());
+        }
+        let p = std::mem::take(&mut self.pending);
+        let from = self.head.expect("pending strings follow the head");
+        let chord = from.distance(p.end);
+        // same time as the strings: v = chord / Σ(L_i / v_i)
+        let v = if chord > 0.0 && p.time > 0.0 {
+            chord / p.time
+        } else {
+            p.v_last
+        };
+        if p.count > 1 {
+            self.stats.merged_strings += p.count;
+        }
+        self.extrude_line(p.end, p.filament, v)
+    }
+
+    /// Writes one part: a comment, a travel to its start, then its strings.
+    pub fn part(&mut self, tp: &Toolpath) -> io::Result<()> {
+        let t0 = self.stats.time;
+        let comment = format!("; part: {} ({} strings)", tp.name, tp.len());
+        self.flush()?;
+        self.text(&comment)?;
+        self.travel_to(tp.points[0])?;
+        let min = self.printer.min_string_length;
+        for k in 0..tp.len() {
+            let s = tp.strings[k];
+            let (a, b) = tp.ends(k);
+            if s.travel {
+                self.flush()?;
+                self.travel_line(b, [true; 3])?;
+                continue;
+            }
+            let len = a.distance(b);
+            let filament = s.c * len / self.area;
+            if len >= min && self.pending.count == 0 {
+                self.extrude_line(b, filament, s.v)?;
+                continue;
+            }
+            if len >= min {
+                self.flush()?;
+                self.extrude_line(b, filament, s.v)?;
+                continue;
+            }
+            let p = &mut self.pending;
+            p.count += 1;
+            p.end = b;
+            p.path += len;
+            p.filament += filament;
+            p.time += len / s.v;
+            p.v_last = s.v;
+            if p.path >= min {
+                self.flush()?;
+            }
+        }
+        self.flush()?;
+        self.stats.part_times.push((tp.name.clone(), self.stats.time - t0));
+        Ok(())
+    }
+
+    /// End G-code and the summary comments slicers write.
+    pub fn finish(mut self, recipe: &Recipe, top_z: f64) -> Result<(W, MoveStats)> {
+        let io = |e: io::Error| crate::error::Error::io("output", e.to_string());
+        self.flush().map_err(io)?;
+        let vals = Self::template_values(recipe, top_z);
+        let end = self.printer.fill("end_gcode", &self.printer.end_gcode, &vals)?;
+        self.text(&end).map_err(io)?;
+        let st = &self.stats;
+        let grams = st.volume / 1000.0 * recipe.material.density;
+        let summary = format!(
+            "; filament used [mm] = {:.2}\n; filament used [cm3] = {:.2}\n; filament used [g] = {:.2}\n; estimated printing time = {}\n",
+            st.filament,
+            st.volume / 1000.0,
+            grams,
+            hms(st.time)
+        );
+        self.text(&summary).map_err(io)?;
+        self.out.flush().map_err(io)?;
+        Ok((self.out, self.stats))
+    }
+}
+
+/// A temperature or size for a comment or template: integers without decimals.
+pub fn fmt_num(v: f64) -> String {
+    if v.fract() == 0.0 && v.abs() < 1e15 {
+        format!("{}", v as i64)
+    } else {
+        let s = format!("{v:.3}");
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    }
+}
+
+/// Seconds as `1h 2m 3s` (the form slicers write).
+pub fn hms(t: f64) -> String {
+    let s = libm::round(t) as u64;
+    let (h, m, s) = (s / 3600, s / 60 % 60, s % 60);
+    if h > 0 {
+        format!("{h}h {m}m {s}s")
+    } else if m > 0 {
+        format!("{m}m {s}s")
+    } else {
+        format!("{s}s")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn fixed(v: f64, d: u32) -> String {
+        let mut b = Vec::new();
+        put_fixed(&mut b, units(v, 10f64.powi(d as i32)), d);
+        String::from_utf8(b).unwrap()
+    }
+
+    #[test]
+    fn fixed_point_never_exponent_nor_negative_zero() {
+        assert_eq!(fixed(3e-5, 5), "0.00003");
+        assert_eq!(fixed(-0.0001, 3), "0.000");
+        assert_eq!(fixed(-0.0, 3), "0.000");
+        assert_eq!(fixed(-12.3456, 3), "-12.346");
+        assert_eq!(fixed(110.0, 3), "110.000");
+        assert_eq!(fixed(1234567.5, 5), "1234567.50000");
+    }
+
+    #[test]
+    fn time_format() {
+        assert_eq!(hms(3723.4), "1h 2m 3s");
+        assert_eq!(hms(59.6), "1m 0s");
+        assert_eq!(hms(5.0), "5s");
+    }
+}

@@ -1,0 +1,74 @@
+//! `helix`: the single wall with no layers and no seam (Kanada, Fig. 4b).
+
+use glam::DVec3;
+
+use super::on_circle;
+use crate::toolpath::Toolpath;
+
+/// A helix rising continuously from `center.z` to `center.z + height`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Helix {
+    /// Radius, mm.
+    pub radius: f64,
+    /// Total rise, mm.
+    pub height: f64,
+    /// Vertical rise per turn, mm.
+    pub pitch: f64,
+    /// Centre of the bottom.
+    pub center: DVec3,
+    /// Strings per turn.
+    pub segments: u32,
+}
+
+impl Helix {
+    /// `round(height / pitch * segments)`, as the spec says.
+    pub fn string_count(&self) -> u64 {
+        libm::round(self.height / self.pitch * self.segments as f64).max(1.0) as u64
+    }
+
+    /// Point k is at angle 2·pi·k/segments and height `height·k/n`, so the
+    /// angle steps are uniform and the last point sits exactly at `height`.
+    pub fn build(&self, c: f64, v: f64) -> Toolpath {
+        let n = self.string_count();
+        let at = |k: u64| {
+            let (x, y) = on_circle(self.radius, k, self.segments);
+            let z = if k == n {
+                self.height
+            } else {
+                self.height * k as f64 / n as f64
+            };
+            self.center + DVec3::new(x, y, z)
+        };
+        let mut t = Toolpath::with_capacity(at(0), n as usize);
+        for k in 1..=n {
+            t.draw(at(k), c, v);
+        }
+        t
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rises_to_exactly_height_with_segments_per_turn() {
+        let h = Helix {
+            radius: 20.0,
+            height: 10.0,
+            pitch: 0.3,
+            center: DVec3::new(0.0, 0.0, 0.2),
+            segments: 72,
+        };
+        let t = h.build(0.1, 20.0);
+        assert_eq!(t.len() as u64, (10.0f64 / 0.3 * 72.0).round() as u64);
+        assert_eq!(t.head().z, 10.2);
+        assert_eq!(t.points[0], DVec3::new(20.0, 0.0, 0.2));
+        // one turn later the point is straight above the start, one pitch up
+        let p = t.points[72];
+        assert!(p.x == 20.0 && p.y == 0.0);
+        assert!((p.z - 0.2 - 0.3).abs() < 1e-3);
+        // z never decreases
+        assert!(t.points.windows(2).all(|w| w[1].z > w[0].z));
+    }
+}

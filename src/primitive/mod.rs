@@ -1,0 +1,68 @@
+//! Primitives: the shapes a part starts from (Kanada's Fig. 3 "parts assembly").
+//!
+//! Each primitive knows how many strings it will make before it makes them,
+//! so an impossible recipe is refused before it allocates.
+
+mod circle;
+mod cylinder;
+mod helix;
+mod path;
+mod spiral;
+
+pub use circle::Circle;
+pub use cylinder::Cylinder;
+pub use helix::Helix;
+pub use path::PathCmd;
+pub use spiral::{Direction, Spiral};
+
+use crate::toolpath::Toolpath;
+
+/// A primitive with every value resolved to a number.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Primitive {
+    /// The papers' low-level API: move, draw, cross_section, speed.
+    Path(Vec<PathCmd>),
+    /// One closed circle.
+    Circle(Circle),
+    /// A flat spiral.
+    Spiral(Spiral),
+    /// A single-wall helix with no seam.
+    Helix(Helix),
+    /// A filled cylinder of stacked spirals.
+    Cylinder(Cylinder),
+}
+
+impl Primitive {
+    /// How many strings `build` will make.
+    pub fn string_count(&self) -> u64 {
+        match self {
+            Primitive::Path(cmds) => path::string_count(cmds),
+            Primitive::Circle(p) => p.string_count(),
+            Primitive::Spiral(p) => p.string_count(),
+            Primitive::Helix(p) => p.string_count(),
+            Primitive::Cylinder(p) => p.string_count(),
+        }
+    }
+
+    /// Makes the strings, with cross-section `c` and speed `v` where the
+    /// primitive sets none of its own.
+    pub fn build(&self, c: f64, v: f64) -> Toolpath {
+        match self {
+            Primitive::Path(cmds) => path::build(cmds, c, v),
+            Primitive::Circle(p) => p.build(c, v),
+            Primitive::Spiral(p) => p.build(c, v),
+            Primitive::Helix(p) => p.build(c, v),
+            Primitive::Cylinder(p) => p.build(c, v),
+        }
+    }
+}
+
+/// The point at angle `k / segments` of a turn on a circle of radius `r`.
+///
+/// The angle is reduced to one turn first (`k mod segments`) so every turn of
+/// a helix or spiral uses exactly the same sines and cosines.
+#[inline]
+pub(crate) fn on_circle(r: f64, k: u64, segments: u32) -> (f64, f64) {
+    let a = std::f64::consts::TAU * (k % segments as u64) as f64 / segments as f64;
+    (r * libm::cos(a), r * libm::sin(a))
+}

@@ -1,0 +1,380 @@
+//! Printer profiles and materials.
+//!
+//! A profile is the spec's printer YAML; built-in profiles are the same YAML
+//! embedded in the binary, parsed by the same code as a user's file.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use glam::DVec3;
+use serde::Deserialize;
+
+use crate::error::{Error, Result};
+
+/// G-code dialect of the firmware.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Flavor {
+    /// Marlin (and Prusa's Marlin).
+    #[default]
+    Marlin,
+    /// Klipper.
+    Klipper,
+    /// RepRapFirmware.
+    Reprap,
+}
+
+/// Absolute (M82) or relative (M83) E values.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Extrusion {
+    /// M82: E is the total filament fed so far.
+    #[default]
+    Absolute,
+    /// M83: E is the filament fed by this move.
+    Relative,
+}
+
+/// The printable area. Rectangle beds span machine X in [0, width] and Y in
+/// [0, depth]; round (delta) beds are centred on machine (0, 0).
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(tag = "shape", rename_all = "lowercase", deny_unknown_fields)]
+pub enum Bed {
+    /// A rectangular bed.
+    Rectangle {
+        /// Width and depth, mm.
+        size: [f64; 2],
+        /// Highest reachable nozzle height, mm.
+        max_z: f64,
+    },
+    /// A round bed.
+    Circle {
+        /// Diameter, mm.
+        diameter: f64,
+        /// Highest reachable nozzle height, mm.
+        max_z: f64,
+    },
+}
+
+impl Bed {
+    /// Highest reachable nozzle height, mm.
+    pub fn max_z(&self) -> f64 {
+        match *self {
+            Bed::Rectangle { max_z, .. } | Bed::Circle { max_z, .. } => max_z,
+        }
+    }
+
+    /// Whether machine point `p` is over the bed (XY only).
+    pub fn contains_xy(&self, p: DVec3) -> bool {
+        const EPS: f64 = 1e-9;
+        match *self {
+            Bed::Rectangle { size, .. } => {
+                p.x >= -EPS && p.y >= -EPS && p.x <= size[0] + EPS && p.y <= size[1] + EPS
+            }
+            Bed::Circle { diameter, .. } => p.truncate().length() <= diameter / 2.0 + EPS,
+        }
+    }
+
+    /// A short description for reports: `220 × 220 × 250 mm`.
+    pub fn describe(&self) -> String {
+        match *self {
+            Bed::Rectangle { size, max_z } => format!("{} × {} × {} mm", size[0], size[1], max_z),
+            Bed::Circle { diameter, max_z } => format!("round Ø {diameter} × {max_z} mm"),
+        }
+    }
+}
+
+/// Retraction before long travel moves.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Retraction {
+    /// Filament pulled back, mm (0 for none).
+    pub length: f64,
+    /// Retraction speed, mm/s of filament.
+    pub speed: f64,
+    /// Travel moves shorter than this are not retracted, mm.
+    #[serde(default = "d_min_travel")]
+    pub min_travel: f64,
+}
+
+fn d_min_travel() -> f64 {
+    2.0
+}
+
+impl Default for Retraction {
+    fn default() -> Self {
+        Retraction {
+            length: 0.0,
+            speed: 35.0,
+            min_travel: d_min_travel(),
+        }
+    }
+}
+
+/// A printer profile: the spec's keys plus the limits p3dp checks against.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Printer {
+    /// Profile name.
+    pub name: String,
+    /// Firmware dialect.
+    #[serde(default)]
+    pub flavor: Flavor,
+    /// Printable area.
+    pub bed: Bed,
+    /// Where recipe (0, 0, 0) lands, in machine coordinates.
+    pub origin: [f64; 3],
+    /// Nozzle diameter, mm.
+    pub nozzle_diameter: f64,
+    /// Filament diameter, mm (a material may override it).
+    pub filament_diameter: f64,
+    /// Absolute or relative E.
+    #[serde(default)]
+    pub extrusion: Extrusion,
+    /// G-code before the print; `{nozzle_temp}`, `{bed_temp}` and the other
+    /// placeholders of [`Printer::fill`] are filled in.
+    #[serde(default)]
+    pub start_gcode: String,
+    /// G-code after the print, with the same placeholders.
+    #[serde(default)]
+    pub end_gcode: String,
+    /// Head speed of travel moves, mm/s.
+    #[serde(default = "d_travel")]
+    pub travel_speed: f64,
+    /// Retraction before long travel moves.
+    #[serde(default)]
+    pub retraction: Retraction,
+    /// Hottest nozzle the hot end allows, °C.
+    #[serde(default = "d_max_nozzle")]
+    pub max_nozzle_temp: f64,
+    /// Hottest bed allowed, °C.
+    #[serde(default = "d_max_bed")]
+    pub max_bed_temp: f64,
+    /// Fastest head speed, mm/s.
+    #[serde(default = "d_max_speed")]
+    pub max_speed: f64,
+    /// Hot-end volumetric flow limit, mm³/s.
+    #[serde(default = "d_max_flow")]
+    pub max_flow: f64,
+    /// Runs of extruding strings shorter than this are merged into one move
+    /// (Kanada's `draw` does the same near a globe's poles), mm.
+    #[serde(default = "d_min_string")]
+    pub min_string_length: f64,
+}
+
+fn d_travel() -> f64 {
+    120.0
+}
+fn d_max_nozzle() -> f64 {
+    260.0
+}
+fn d_max_bed() -> f64 {
+    110.0
+}
+fn d_max_speed() -> f64 {
+    300.0
+}
+fn d_max_flow() -> f64 {
+    12.0
+}
+fn d_min_string() -> f64 {
+    0.1
+}
+
+const BUILT_IN: &[(&str, &str)] = &[("generic-220", include_str!("printers/generic-220.yaml"))];
+
+/// Names of the built-in printer profiles.
+pub fn built_in_names() -> Vec<&'static str> {
+    BUILT_IN.iter().map(|(n, _)| *n).collect()
+}
+
+impl Printer {
+    /// A built-in profile by name.
+    pub fn built_in(name: &str) -> Option<Printer> {
+        let (_, text) = BUILT_IN.iter().find(|(n, _)| *n == name)?;
+        let p: Printer = crate::recipe::parse_yaml(text, name).expect("built-in profiles parse");
+        Some(p)
+    }
+
+    /// A profile from a YAML file.
+    pub fn from_file(path: &Path) -> Result<Printer> {
+        let shown = path.display().to_string();
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| Error::io(&shown, format!("cannot read the printer profile: {e}")))?;
+        let p: Printer = crate::recipe::parse_yaml(&text, &shown)?;
+        p.validate().map_err(|e| e.in_file(&shown))?;
+        Ok(p)
+    }
+
+    /// A built-in name, or else a path (relative paths from `base`).
+    pub fn resolve(spec: &str, base: &Path) -> Result<Printer> {
+        if let Some(p) = Printer::built_in(spec) {
+            return Ok(p);
+        }
+        let looks_like_path = spec.contains('/') || spec.ends_with(".yaml") || spec.ends_with(".yml");
+        if !looks_like_path {
+            return Err(Error::input(
+                "printer",
+                format!(
+                    "unknown printer `{spec}`; built-in printers are {} (or give a path to a printer YAML)",
+                    built_in_names().join(", ")
+                ),
+            ));
+        }
+        Printer::from_file(&base.join(spec))
+    }
+
+    fn validate(&self) -> Result<()> {
+        let positive = |key: &str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(Error::input(key, format!("{v} is not allowed; expected a number > 0")))
+            }
+        };
+        positive("nozzle_diameter", self.nozzle_diameter)?;
+        positive("filament_diameter", self.filament_diameter)?;
+        positive("travel_speed", self.travel_speed)?;
+        positive("bed.max_z", self.bed.max_z())?;
+        positive("max_speed", self.max_speed)?;
+        positive("max_flow", self.max_flow)?;
+        if !(self.min_string_length >= 0.0) {
+            return Err(Error::input("min_string_length", "expected a length ≥ 0"));
+        }
+        if self.retraction.length < 0.0 || !(self.retraction.speed > 0.0) {
+            return Err(Error::input(
+                "retraction",
+                "expected a length ≥ 0 and a speed > 0",
+            ));
+        }
+        self.fill("start_gcode", &self.start_gcode, &BTreeMap::new())?;
+        self.fill("end_gcode", &self.end_gcode, &BTreeMap::new())?;
+        Ok(())
+    }
+
+    /// Recipe coordinates to machine coordinates.
+    pub fn to_machine(&self, p: DVec3) -> DVec3 {
+        p + DVec3::from_array(self.origin)
+    }
+
+    /// Fills `{name}` placeholders of a G-code template with `values`; an
+    /// unknown placeholder is an error naming `key`.
+    pub fn fill(&self, key: &str, template: &str, values: &BTreeMap<&str, String>) -> Result<String> {
+        let mut out = String::with_capacity(template.len());
+        let mut rest = template;
+        while let Some(open) = rest.find('{') {
+            out.push_str(&rest[..open]);
+            let after = &rest[open + 1..];
+            let Some(close) = after.find('}') else {
+                return Err(Error::input(key, "a `{` is never closed; expected `{placeholder}`"));
+            };
+            let name = &after[..close];
+            match values.get(name) {
+                Some(v) => out.push_str(v),
+                None if values.is_empty() && PLACEHOLDERS.contains(&name) => {}
+                None => {
+                    return Err(Error::input(
+                        key,
+                        format!(
+                            "unknown placeholder `{{{name}}}`; expected one of {}",
+                            PLACEHOLDERS.map(|p| format!("{{{p}}}")).join(", ")
+                        ),
+                    ))
+                }
+            }
+            rest = &after[close + 1..];
+        }
+        out.push_str(rest);
+        Ok(out)
+    }
+}
+
+/// Placeholders a start or end G-code template may use.
+pub const PLACEHOLDERS: [&str; 8] = [
+    "nozzle_temp",
+    "bed_temp",
+    "filament_diameter",
+    "nozzle_diameter",
+    "bed_x",
+    "bed_y",
+    "max_z",
+    "park_z",
+];
+
+/// A filament material.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    /// Name for reports.
+    pub name: String,
+    /// Filament diameter, mm; the printer's when `None`.
+    pub filament_diameter: Option<f64>,
+    /// Density, g/cm³.
+    pub density: f64,
+    /// Printing temperature, °C.
+    pub nozzle_temp: f64,
+    /// Bed temperature, °C.
+    pub bed_temp: f64,
+    /// Hottest safe nozzle for this material, °C.
+    pub max_nozzle_temp: f64,
+}
+
+impl Material {
+    /// A built-in material: `pla`, `abs` or `petg`.
+    pub fn built_in(name: &str) -> Option<Material> {
+        let (density, nozzle, bed, max) = match name {
+            "pla" => (1.24, 210.0, 60.0, 240.0),
+            "abs" => (1.04, 240.0, 100.0, 270.0),
+            "petg" => (1.27, 235.0, 80.0, 260.0),
+            _ => return None,
+        };
+        Some(Material {
+            name: name.to_string(),
+            filament_diameter: None,
+            density,
+            nozzle_temp: nozzle,
+            bed_temp: bed,
+            max_nozzle_temp: max,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn generic_profile_loads_and_maps_the_centre() {
+        let p = Printer::built_in("generic-220").unwrap();
+        p.validate().unwrap();
+        assert_eq!(p.to_machine(DVec3::ZERO), DVec3::new(110.0, 110.0, 0.0));
+        assert!(p.bed.contains_xy(DVec3::new(220.0, 0.0, 0.0)));
+        assert!(!p.bed.contains_xy(DVec3::new(220.5, 0.0, 0.0)));
+    }
+
+    #[test]
+    fn round_bed_and_unknown_keys() {
+        let p: Printer = crate::recipe::parse_yaml(
+            "name: d\nbed: {shape: circle, diameter: 280, max_z: 300}\norigin: [0,0,0]\nnozzle_diameter: 0.4\nfilament_diameter: 1.75\n",
+            "d.yaml",
+        )
+        .unwrap();
+        assert!(p.bed.contains_xy(DVec3::new(0.0, 139.9, 0.0)));
+        assert!(!p.bed.contains_xy(DVec3::new(100.0, 100.0, 0.0)));
+        let e = crate::recipe::parse_yaml::<Printer>(
+            "name: d\nbed: {shape: circle, diameter: 280, max_z: 300, size: 3}\norigin: [0,0,0]\nnozzle_diameter: 0.4\nfilament_diameter: 1.75\n",
+            "d.yaml",
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("size"), "{e}");
+    }
+
+    #[test]
+    fn templates_fill_and_refuse_unknown_placeholders() {
+        let p = Printer::built_in("generic-220").unwrap();
+        let mut v = BTreeMap::new();
+        v.insert("nozzle_temp", "210".to_string());
+        assert_eq!(p.fill("k", "M104 S{nozzle_temp}", &v).unwrap(), "M104 S210");
+        let e = p.fill("start_gcode", "M104 S{hot}", &v).unwrap_err();
+        assert!(e.to_string().contains("unknown placeholder `{hot}`"), "{e}");
+    }
+}

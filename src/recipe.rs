@@ -1,0 +1,949 @@
+//! Recipes: the YAML format of `../shared/spec/recipe-v1.md`, loaded and resolved.
+//!
+//! Loading is two stages. [`parse_yaml`] reads the text into the raw schema
+//! (`Raw*` types, every number still a number-or-expression), reporting the
+//! line and key path of any syntax error, unknown key or wrong type. Then
+//! [`Recipe::resolve`] evaluates params (with `--set` overrides), every number,
+//! compiles step expressions and loads images, naming the key path of any
+//! problem.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use glam::DVec3;
+use indexmap::IndexMap;
+use serde::de::{self, Deserializer, MapAccess, Visitor};
+use serde::Deserialize;
+
+use crate::error::{Error, Result};
+use crate::expr::{self, var, Expr, Params};
+use crate::primitive::{Circle, Cylinder, Direction, Helix, PathCmd, Primitive, Spiral};
+use crate::printer::{Material, Printer};
+use crate::step::{Bitmap, Deform, Keep, Modulate, ModulateMap, Step};
+
+/// The default limit on strings in one part (a recipe may change it).
+pub const DEFAULT_MAX_STRINGS: u64 = 50_000_000;
+
+/// Deserializes YAML into `T`, with errors naming `file`, line, column and key path.
+///
+/// Enums are written as one-key maps (`{helix: {…}}`), as the spec does.
+pub fn parse_yaml<T: de::DeserializeOwned>(text: &str, file: &str) -> Result<T> {
+    let de = serde_yaml::Deserializer::from_str(text);
+    let mut track = serde_path_to_error::Track::new();
+    let tracked = serde_path_to_error::Deserializer::new(de, &mut track);
+    serde_yaml::with::singleton_map_recursive::deserialize(tracked).map_err(|e| {
+        // a syntax error leaves `?` segments where the parser lost track
+        let mut path = track.path().to_string();
+        while let Some(p) = path.strip_suffix(".?").or(path.strip_suffix("?")) {
+            path = p.to_string();
+        }
+        let mut msg = e.to_string();
+        if let Some(loc) = e.location() {
+            let suffix = format!(" at line {} column {}", loc.line(), loc.column());
+            if let Some(k) = msg.find(&suffix) {
+                msg.replace_range(k..k + suffix.len(), "");
+            }
+        }
+        // serde_yaml prefixes the parent's path; we give the exact one.
+        if let Some((pre, rest)) = msg.split_once(": ") {
+            if !pre.is_empty() && !pre.contains(' ') {
+                msg = rest.to_string();
+            }
+        }
+        let mut err = Error::input(if path == "." { String::new() } else { path }, msg);
+        err.file = Some(file.to_string());
+        err.line = e.location().map(|l| (l.line(), l.column()));
+        err
+    })
+}
+
+/// A number, or an expression over params written as a string.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Num {
+    /// A literal number.
+    Value(f64),
+    /// An expression string, e.g. `"pi/2*radius"`.
+    Expr(String),
+}
+
+impl Num {
+    /// The expression text (a literal number becomes its decimal text).
+    pub fn src(&self) -> String {
+        match self {
+            Num::Value(v) => format!("{v}"),
+            Num::Expr(s) => s.clone(),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Num {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Num, D::Error> {
+        struct V;
+        impl Visitor<'_> for V {
+            type Value = Num;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a number or an expression string")
+            }
+            fn visit_f64<E: de::Error>(self, v: f64) -> std::result::Result<Num, E> {
+                Ok(Num::Value(v))
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> std::result::Result<Num, E> {
+                Ok(Num::Value(v as f64))
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> std::result::Result<Num, E> {
+                Ok(Num::Value(v as f64))
+            }
+            fn visit_str<E: de::Error>(self, v: &str) -> std::result::Result<Num, E> {
+                Ok(Num::Expr(v.to_string()))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// A point or vector of three numbers.
+pub type Num3 = [Num; 3];
+
+/// `material:` a built-in name or an inline map.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RawMaterial {
+    /// `pla`, `abs` or `petg`.
+    Named(String),
+    /// `{filament_diameter, density, nozzle_temp, bed_temp}`.
+    Inline(InlineMaterial),
+}
+
+/// An inline material.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct InlineMaterial {
+    /// Name for reports.
+    #[serde(default)]
+    pub name: Option<String>,
+    /// mm; the printer's when absent.
+    #[serde(default)]
+    pub filament_diameter: Option<Num>,
+    /// g/cm³.
+    pub density: Num,
+    /// °C.
+    pub nozzle_temp: Num,
+    /// °C.
+    pub bed_temp: Num,
+    /// Hottest safe nozzle, °C; `nozzle_temp` + 25 when absent.
+    #[serde(default)]
+    pub max_nozzle_temp: Option<Num>,
+}
+
+impl<'de> Deserialize<'de> for RawMaterial {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<RawMaterial, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = RawMaterial;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a material name (pla, abs, petg) or a map {filament_diameter, density, nozzle_temp, bed_temp}")
+            }
+            fn visit_str<E: de::Error>(self, v: &str) -> std::result::Result<RawMaterial, E> {
+                Ok(RawMaterial::Named(v.to_string()))
+            }
+            fn visit_map<A: MapAccess<'de>>(self, m: A) -> std::result::Result<RawMaterial, A::Error> {
+                InlineMaterial::deserialize(de::value::MapAccessDeserializer::new(m))
+                    .map(RawMaterial::Inline)
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// `defaults:`.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawDefaults {
+    /// mm².
+    #[serde(default)]
+    pub cross_section: Option<Num>,
+    /// mm/s.
+    #[serde(default)]
+    pub speed: Option<Num>,
+}
+
+/// `skirt:`.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawSkirt {
+    /// mm outside the parts' footprint.
+    pub distance: Num,
+    /// Number of loops.
+    pub loops: Num,
+}
+
+/// The top level of a recipe file.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawRecipe {
+    /// Format version; must be 1.
+    pub p3dp: u32,
+    /// Recipe name.
+    pub name: String,
+    /// Free text.
+    #[serde(default)]
+    pub description: Option<String>,
+    /// Built-in profile name or a path.
+    #[serde(default)]
+    pub printer: Option<String>,
+    /// Built-in material or inline map.
+    #[serde(default)]
+    pub material: Option<RawMaterial>,
+    /// Named params in order.
+    #[serde(default)]
+    pub params: IndexMap<String, Num>,
+    /// Default cross-section and speed.
+    #[serde(default)]
+    pub defaults: RawDefaults,
+    /// Optional skirt.
+    #[serde(default)]
+    pub skirt: Option<RawSkirt>,
+    /// The parts, printed in order.
+    pub parts: Vec<RawPart>,
+    /// Most strings one part may have (default 50 million).
+    #[serde(default)]
+    pub max_strings: Option<Num>,
+}
+
+/// One part.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawPart {
+    /// Name for reports.
+    #[serde(default)]
+    pub name: Option<String>,
+    /// mm², overrides defaults.
+    #[serde(default)]
+    pub cross_section: Option<Num>,
+    /// mm/s, overrides defaults.
+    #[serde(default)]
+    pub speed: Option<Num>,
+    /// Exactly one primitive.
+    pub primitive: RawPrimitive,
+    /// Steps in order.
+    #[serde(default)]
+    pub steps: Vec<RawStep>,
+}
+
+/// A primitive as written.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+#[allow(missing_docs)]
+pub enum RawPrimitive {
+    Path {
+        commands: Vec<RawCmd>,
+    },
+    Circle {
+        radius: Num,
+        #[serde(default)]
+        center: Option<Num3>,
+        #[serde(default)]
+        segments: Option<Num>,
+    },
+    Spiral {
+        radius: Num,
+        pitch: Num,
+        #[serde(default)]
+        center: Option<Num3>,
+        #[serde(default)]
+        segments: Option<Num>,
+        #[serde(default)]
+        inner_radius: Option<Num>,
+        #[serde(default)]
+        direction: Option<RawDirection>,
+    },
+    Helix {
+        radius: Num,
+        height: Num,
+        pitch: Num,
+        #[serde(default)]
+        center: Option<Num3>,
+        #[serde(default)]
+        segments: Option<Num>,
+    },
+    Cylinder {
+        radius: Num,
+        height: Num,
+        vpitch: Num,
+        hpitch: Num,
+        #[serde(default)]
+        center: Option<Num3>,
+        #[serde(default)]
+        segments: Option<Num>,
+    },
+}
+
+/// `direction:` of a spiral.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(rename_all = "snake_case")]
+#[allow(missing_docs)]
+pub enum RawDirection {
+    Outward,
+    Inward,
+}
+
+/// A `path` command.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(rename_all = "snake_case")]
+#[allow(missing_docs)]
+pub enum RawCmd {
+    Move(Num3),
+    Draw(Num3),
+    CrossSection(Num),
+    Speed(Num),
+}
+
+/// `keep:` of a modulation.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(rename_all = "snake_case")]
+#[allow(missing_docs)]
+pub enum RawKeep {
+    Flow,
+    Speed,
+}
+
+/// The keys of `deform_xyz` and `deform_cylinder`.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawDeform {
+    #[serde(default)]
+    pub position: Option<Num3>,
+    #[serde(default)]
+    pub cross_section: Option<Num>,
+    #[serde(default)]
+    pub speed: Option<Num>,
+}
+
+/// A step as written.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+#[allow(missing_docs)]
+pub enum RawStep {
+    DeformXyz(RawDeform),
+    DeformCylinder(RawDeform),
+    ModulateCylinder {
+        factor: Num,
+        #[serde(default)]
+        keep: Option<RawKeep>,
+    },
+    ModulateMap {
+        image: String,
+        u: Num,
+        v: Num,
+        #[serde(default)]
+        dark: Option<Num>,
+        #[serde(default)]
+        light: Option<Num>,
+        #[serde(default)]
+        threshold: Option<Num>,
+        #[serde(default)]
+        keep: Option<RawKeep>,
+    },
+    Subdivide {
+        max_length: Num,
+    },
+    Translate(Num3),
+}
+
+/// `skirt:` resolved.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Skirt {
+    /// mm outside the parts' footprint.
+    pub distance: f64,
+    /// Number of loops.
+    pub loops: u32,
+}
+
+/// A part resolved: numbers evaluated, expressions compiled.
+#[derive(Clone, Debug)]
+pub struct Part {
+    /// Name for reports (`part 1` when the recipe gives none).
+    pub name: String,
+    /// Cross-section, mm².
+    pub cross_section: f64,
+    /// Speed, mm/s.
+    pub speed: f64,
+    /// The primitive.
+    pub primitive: Primitive,
+    /// The steps.
+    pub steps: Vec<Step>,
+}
+
+/// A recipe resolved and ready to build.
+#[derive(Clone, Debug)]
+pub struct Recipe {
+    /// Recipe name.
+    pub name: String,
+    /// Param values after `--set`.
+    pub params: Params,
+    /// Printer profile.
+    pub printer: Printer,
+    /// Material.
+    pub material: Material,
+    /// Optional skirt.
+    pub skirt: Option<Skirt>,
+    /// Parts in print order.
+    pub parts: Vec<Part>,
+    /// Most strings one part may have.
+    pub max_strings: u64,
+}
+
+/// Default cross-section when a recipe gives none: Kanada's 0.196 mm² (Fig. 9).
+pub const DEFAULT_CROSS_SECTION: f64 = 0.196;
+/// Default speed when a recipe gives none: Kanada's 40 mm/s (Fig. 9).
+pub const DEFAULT_SPEED: f64 = 40.0;
+
+/// Evaluates numbers of one recipe against its params.
+struct Ctx<'a> {
+    params: &'a Params,
+    dir: &'a Path,
+}
+
+impl Ctx<'_> {
+    fn num(&self, n: &Num, place: &str) -> Result<f64> {
+        match n {
+            Num::Value(v) => Ok(*v),
+            Num::Expr(s) => expr::eval_const(s, self.params).map_err(|m| Error::input(place, m)),
+        }
+    }
+
+    fn positive(&self, n: &Num, place: &str) -> Result<f64> {
+        let v = self.num(n, place)?;
+        if v > 0.0 {
+            Ok(v)
+        } else {
+            Err(Error::input(place, format!("{v} is not allowed; expected a number > 0")))
+        }
+    }
+
+    fn non_negative(&self, n: &Num, place: &str) -> Result<f64> {
+        let v = self.num(n, place)?;
+        if v >= 0.0 {
+            Ok(v)
+        } else {
+            Err(Error::input(place, format!("{v} is not allowed; expected a number ≥ 0")))
+        }
+    }
+
+    fn whole(&self, n: &Num, place: &str, min: u32) -> Result<u32> {
+        let v = self.num(n, place)?;
+        if v.fract() != 0.0 || v < min as f64 || v > 1e7 {
+            return Err(Error::input(
+                place,
+                format!("{v} is not allowed; expected a whole number from {min} to 10000000"),
+            ));
+        }
+        Ok(v as u32)
+    }
+
+    fn segments(&self, n: &Option<Num>, place: &str) -> Result<u32> {
+        match n {
+            Some(n) => self.whole(n, &format!("{place}.segments"), 3),
+            None => Ok(72),
+        }
+    }
+
+    fn point(&self, n: &Num3, place: &str) -> Result<DVec3> {
+        Ok(DVec3::new(
+            self.num(&n[0], &format!("{place}[0]"))?,
+            self.num(&n[1], &format!("{place}[1]"))?,
+            self.num(&n[2], &format!("{place}[2]"))?,
+        ))
+    }
+
+    fn center(&self, n: &Option<Num3>, place: &str) -> Result<DVec3> {
+        match n {
+            Some(n) => self.point(n, &format!("{place}.center")),
+            None => Ok(DVec3::ZERO),
+        }
+    }
+
+    fn expr(&self, n: &Num, allowed: &[usize], place: &str) -> Result<Expr> {
+        Expr::compile(&n.src(), self.params, allowed).map_err(|m| Error::input(place, m))
+    }
+}
+
+const POINT_VARS: &[usize] = &[var::X, var::Y, var::Z, var::R, var::THETA, var::I, var::N, var::T];
+const STRING_VARS: &[usize] = &[
+    var::X,
+    var::Y,
+    var::Z,
+    var::R,
+    var::THETA,
+    var::C,
+    var::V,
+    var::I,
+    var::N,
+    var::T,
+];
+
+fn is_identifier(s: &str) -> bool {
+    let mut cs = s.chars();
+    matches!(cs.next(), Some(c) if c.is_ascii_alphabetic() || c == '_')
+        && cs.all(|c| c.is_ascii_alphanumeric() || c == '_')
+}
+
+/// Evaluates params in order, each over the ones before it; `sets` replaces
+/// a param's expression (`--set NAME=VALUE`).
+pub fn eval_params(raw: &IndexMap<String, Num>, sets: &[(String, String)]) -> Result<Params> {
+    let mut params = Params::new();
+    for (name, value) in raw {
+        let place = format!("params.{name}");
+        if !is_identifier(name) {
+            return Err(Error::input(
+                place,
+                "a param name must be letters, digits and `_`, not starting with a digit",
+            ));
+        }
+        if expr::is_reserved(name) {
+            return Err(Error::input(
+                place,
+                format!("`{name}` is a name expressions already use; choose another param name"),
+            ));
+        }
+        let v = match sets.iter().rev().find(|(n, _)| n == name) {
+            Some((_, s)) => expr::eval_const(s, &params)
+                .map_err(|m| Error::input(format!("--set {name}={s}"), m))?,
+            None => match value {
+                Num::Value(v) => *v,
+                Num::Expr(s) => expr::eval_const(s, &params).map_err(|m| Error::input(&place, m))?,
+            },
+        };
+        params.insert(name.clone(), v);
+    }
+    for (name, s) in sets {
+        if !raw.contains_key(name) {
+            let known: Vec<&str> = raw.keys().map(String::as_str).collect();
+            return Err(Error::input(
+                format!("--set {name}={s}"),
+                if known.is_empty() {
+                    format!("unknown param `{name}`; this recipe has no params")
+                } else {
+                    format!("unknown param `{name}`; the recipe's params are {}", known.join(", "))
+                },
+            ));
+        }
+    }
+    Ok(params)
+}
+
+/// Parses a `NAME=VALUE` of `--set`.
+pub fn parse_set(s: &str) -> Result<(String, String)> {
+    match s.split_once('=') {
+        Some((n, v)) if !n.trim().is_empty() && !v.trim().is_empty() => {
+            Ok((n.trim().to_string(), v.trim().to_string()))
+        }
+        _ => Err(Error::input(
+            format!("--set {s}"),
+            "expected NAME=VALUE, e.g. --set radius=30",
+        )),
+    }
+}
+
+impl Recipe {
+    /// Reads and resolves a recipe file. `printer` overrides the recipe's printer.
+    pub fn load(path: &Path, sets: &[(String, String)], printer: Option<&str>) -> Result<Recipe> {
+        let shown = path.display().to_string();
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| Error::io(&shown, format!("cannot read the recipe: {e}")))?;
+        let raw: RawRecipe = parse_yaml(&text, &shown)?;
+        let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        Recipe::resolve(&raw, sets, printer, &dir).map_err(|e| e.in_file(&shown))
+    }
+
+    /// Resolves a parsed recipe; relative paths are taken from `dir`.
+    pub fn resolve(
+        raw: &RawRecipe,
+        sets: &[(String, String)],
+        printer: Option<&str>,
+        dir: &Path,
+    ) -> Result<Recipe> {
+        if raw.p3dp != 1 {
+            return Err(Error::input(
+                "p3dp",
+                format!("format version {} is not known; expected 1", raw.p3dp),
+            ));
+        }
+        if raw.name.trim().is_empty() {
+            return Err(Error::input("name", "expected a non-empty name"));
+        }
+        if raw.parts.is_empty() {
+            return Err(Error::input("parts", "expected at least one part"));
+        }
+        let params = eval_params(&raw.params, sets)?;
+        let ctx = Ctx {
+            params: &params,
+            dir,
+        };
+        let printer = match printer {
+            Some(p) => Printer::resolve(p, Path::new("."))
+                .map_err(|e| if e.file.is_none() { e.under("--printer") } else { e })?,
+            None => Printer::resolve(raw.printer.as_deref().unwrap_or("generic-220"), dir)?,
+        };
+        let material = resolve_material(&ctx, raw.material.as_ref())?;
+        let c0 = match &raw.defaults.cross_section {
+            Some(n) => ctx.positive(n, "defaults.cross_section")?,
+            None => DEFAULT_CROSS_SECTION,
+        };
+        let v0 = match &raw.defaults.speed {
+            Some(n) => ctx.positive(n, "defaults.speed")?,
+            None => DEFAULT_SPEED,
+        };
+        let skirt = match &raw.skirt {
+            Some(s) => Some(Skirt {
+                distance: ctx.non_negative(&s.distance, "skirt.distance")?,
+                loops: ctx.whole(&s.loops, "skirt.loops", 1)?,
+            }),
+            None => None,
+        };
+        let max_strings = match &raw.max_strings {
+            Some(n) => ctx.whole(n, "max_strings", 1)? as u64,
+            None => DEFAULT_MAX_STRINGS,
+        };
+        let mut parts = Vec::with_capacity(raw.parts.len());
+        for (k, p) in raw.parts.iter().enumerate() {
+            let place = format!("parts[{k}]");
+            let part = resolve_part(&ctx, p, c0, v0, k).map_err(|e| e.under(&place))?;
+            let n = part.primitive.string_count();
+            if n > max_strings {
+                return Err(Error::input(
+                    format!("{place}.primitive"),
+                    format!(
+                        "this primitive would make {n} strings, more than the limit of {max_strings}; expected a larger pitch or fewer segments (or raise max_strings)"
+                    ),
+                ));
+            }
+            parts.push(part);
+        }
+        Ok(Recipe {
+            name: raw.name.clone(),
+            params,
+            printer,
+            material,
+            skirt,
+            parts,
+            max_strings,
+        })
+    }
+}
+
+fn resolve_material(ctx: &Ctx, m: Option<&RawMaterial>) -> Result<Material> {
+    match m {
+        None => Ok(Material::built_in("pla").unwrap()),
+        Some(RawMaterial::Named(n)) => Material::built_in(n).ok_or_else(|| {
+            Error::input(
+                "material",
+                format!("unknown material `{n}`; built-in materials are pla, abs, petg (or give an inline map)"),
+            )
+        }),
+        Some(RawMaterial::Inline(m)) => {
+            let nozzle_temp = ctx.positive(&m.nozzle_temp, "material.nozzle_temp")?;
+            Ok(Material {
+                name: m.name.clone().unwrap_or_else(|| "custom".into()),
+                filament_diameter: match &m.filament_diameter {
+                    Some(n) => Some(ctx.positive(n, "material.filament_diameter")?),
+                    None => None,
+                },
+                density: ctx.positive(&m.density, "material.density")?,
+                nozzle_temp,
+                bed_temp: ctx.non_negative(&m.bed_temp, "material.bed_temp")?,
+                max_nozzle_temp: match &m.max_nozzle_temp {
+                    Some(n) => ctx.positive(n, "material.max_nozzle_temp")?,
+                    None => nozzle_temp + 25.0,
+                },
+            })
+        }
+    }
+}
+
+fn resolve_part(ctx: &Ctx, p: &RawPart, c0: f64, v0: f64, k: usize) -> Result<Part> {
+    let cross_section = match &p.cross_section {
+        Some(n) => ctx.positive(n, "cross_section")?,
+        None => c0,
+    };
+    let speed = match &p.speed {
+        Some(n) => ctx.positive(n, "speed")?,
+        None => v0,
+    };
+    let primitive = resolve_primitive(ctx, &p.primitive).map_err(|e| e.under("primitive"))?;
+    let mut steps = Vec::with_capacity(p.steps.len());
+    for (j, s) in p.steps.iter().enumerate() {
+        steps.push(resolve_step(ctx, s).map_err(|e| e.under(&format!("steps[{j}]")))?);
+    }
+    Ok(Part {
+        name: p.name.clone().unwrap_or_else(|| format!("part {}", k + 1)),
+        cross_section,
+        speed,
+        primitive,
+        steps,
+    })
+}
+
+fn resolve_primitive(ctx: &Ctx, p: &RawPrimitive) -> Result<Primitive> {
+    Ok(match p {
+        RawPrimitive::Path { commands } => {
+            let mut cmds = Vec::with_capacity(commands.len());
+            for (k, c) in commands.iter().enumerate() {
+                let place = format!("path.commands[{k}]");
+                cmds.push(match c {
+                    RawCmd::Move(n) => PathCmd::Move(ctx.point(n, &format!("{place}.move"))?),
+                    RawCmd::Draw(n) => PathCmd::Draw(ctx.point(n, &format!("{place}.draw"))?),
+                    RawCmd::CrossSection(n) => {
+                        PathCmd::CrossSection(ctx.positive(n, &format!("{place}.cross_section"))?)
+                    }
+                    RawCmd::Speed(n) => PathCmd::Speed(ctx.positive(n, &format!("{place}.speed"))?),
+                });
+            }
+            if !cmds.iter().any(|c| matches!(c, PathCmd::Draw(_))) {
+                return Err(Error::input(
+                    "path.commands",
+                    "expected at least one `draw` command (a path that extrudes nothing prints nothing)",
+                ));
+            }
+            Primitive::Path(cmds)
+        }
+        RawPrimitive::Circle {
+            radius,
+            center,
+            segments,
+        } => Primitive::Circle(Circle {
+            radius: ctx.positive(radius, "circle.radius")?,
+            center: ctx.center(center, "circle")?,
+            segments: ctx.segments(segments, "circle")?,
+        }),
+        RawPrimitive::Spiral {
+            radius,
+            pitch,
+            center,
+            segments,
+            inner_radius,
+            direction,
+        } => {
+            let radius = ctx.positive(radius, "spiral.radius")?;
+            let inner = match inner_radius {
+                Some(n) => ctx.non_negative(n, "spiral.inner_radius")?,
+                None => 0.0,
+            };
+            if inner >= radius {
+                return Err(Error::input(
+                    "spiral.inner_radius",
+                    format!("{inner} is not allowed; expected less than radius {radius}"),
+                ));
+            }
+            Primitive::Spiral(Spiral {
+                radius,
+                pitch: ctx.positive(pitch, "spiral.pitch")?,
+                center: ctx.center(center, "spiral")?,
+                segments: ctx.segments(segments, "spiral")?,
+                inner_radius: inner,
+                direction: match direction {
+                    Some(RawDirection::Inward) => Direction::Inward,
+                    _ => Direction::Outward,
+                },
+            })
+        }
+        RawPrimitive::Helix {
+            radius,
+            height,
+            pitch,
+            center,
+            segments,
+        } => Primitive::Helix(Helix {
+            radius: ctx.positive(radius, "helix.radius")?,
+            height: ctx.positive(height, "helix.height")?,
+            pitch: ctx.positive(pitch, "helix.pitch")?,
+            center: ctx.center(center, "helix")?,
+            segments: ctx.segments(segments, "helix")?,
+        }),
+        RawPrimitive::Cylinder {
+            radius,
+            height,
+            vpitch,
+            hpitch,
+            center,
+            segments,
+        } => Primitive::Cylinder(Cylinder {
+            radius: ctx.positive(radius, "cylinder.radius")?,
+            height: ctx.positive(height, "cylinder.height")?,
+            vpitch: ctx.positive(vpitch, "cylinder.vpitch")?,
+            hpitch: ctx.positive(hpitch, "cylinder.hpitch")?,
+            center: ctx.center(center, "cylinder")?,
+            segments: ctx.segments(segments, "cylinder")?,
+        }),
+    })
+}
+
+fn keep(k: &Option<RawKeep>) -> Keep {
+    match k {
+        Some(RawKeep::Speed) => Keep::Speed,
+        _ => Keep::Flow,
+    }
+}
+
+fn resolve_deform(ctx: &Ctx, d: &RawDeform, key: &str, cylinder: bool) -> Result<Deform> {
+    let position = match &d.position {
+        Some(p) => Some([
+            ctx.expr(&p[0], POINT_VARS, &format!("{key}.position[0]"))?,
+            ctx.expr(&p[1], POINT_VARS, &format!("{key}.position[1]"))?,
+            ctx.expr(&p[2], POINT_VARS, &format!("{key}.position[2]"))?,
+        ]),
+        None => None,
+    };
+    Ok(Deform {
+        cylinder,
+        position,
+        cross_section: match &d.cross_section {
+            Some(n) => Some(ctx.expr(n, STRING_VARS, &format!("{key}.cross_section"))?),
+            None => None,
+        },
+        speed: match &d.speed {
+            Some(n) => Some(ctx.expr(n, STRING_VARS, &format!("{key}.speed"))?),
+            None => None,
+        },
+    })
+}
+
+fn resolve_step(ctx: &Ctx, s: &RawStep) -> Result<Step> {
+    Ok(match s {
+        RawStep::DeformXyz(d) => Step::DeformXyz(resolve_deform(ctx, d, "deform_xyz", false)?),
+        RawStep::DeformCylinder(d) => {
+            Step::DeformCylinder(resolve_deform(ctx, d, "deform_cylinder", true)?)
+        }
+        RawStep::ModulateCylinder { factor, keep: k } => Step::ModulateCylinder(Modulate {
+            factor: ctx.expr(factor, STRING_VARS, "modulate_cylinder.factor")?,
+            keep: keep(k),
+        }),
+        RawStep::ModulateMap {
+            image,
+            u,
+            v,
+            dark,
+            light,
+            threshold,
+            keep: k,
+        } => {
+            let key = "modulate_map";
+            let factor = |n: &Option<Num>, name: &str| match n {
+                Some(n) => ctx.positive(n, &format!("{key}.{name}")),
+                None => Ok(1.0),
+            };
+            let threshold = match threshold {
+                Some(n) => ctx.num(n, &format!("{key}.threshold"))?,
+                None => 0.5,
+            };
+            if !(0.0..=1.0).contains(&threshold) {
+                return Err(Error::input(
+                    format!("{key}.threshold"),
+                    format!("{threshold} is not allowed; expected a number from 0 to 1"),
+                ));
+            }
+            Step::ModulateMap(ModulateMap {
+                image: load_bitmap(&ctx.dir.join(image), image)
+                    .map_err(|m| Error::input(format!("{key}.image"), m))?,
+                u: ctx.expr(u, POINT_VARS, &format!("{key}.u"))?,
+                v: ctx.expr(v, POINT_VARS, &format!("{key}.v"))?,
+                dark: factor(dark, "dark")?,
+                light: factor(light, "light")?,
+                threshold,
+                keep: keep(k),
+            })
+        }
+        RawStep::Subdivide { max_length } => {
+            Step::Subdivide(ctx.positive(max_length, "subdivide.max_length")?)
+        }
+        RawStep::Translate(d) => Step::Translate(ctx.point(d, "translate")?),
+    })
+}
+
+/// Loads an image as grey levels 0..1; the error names the image as written.
+pub fn load_bitmap(path: &PathBuf, shown: &str) -> std::result::Result<Bitmap, String> {
+    let reader = image::ImageReader::open(path)
+        .map_err(|e| format!("cannot open the image `{shown}` ({}): {e}", path.display()))?
+        .with_guessed_format()
+        .map_err(|e| format!("cannot read the image `{shown}`: {e}"))?;
+    let img = reader
+        .decode()
+        .map_err(|e| format!("`{shown}` is not an image p3dp can read (PNG, JPEG, BMP, GIF): {e}"))?;
+    let grey = img.to_luma8();
+    let (w, h) = grey.dimensions();
+    if w == 0 || h == 0 {
+        return Err(format!("the image `{shown}` is empty"));
+    }
+    Ok(Bitmap {
+        width: w as usize,
+        height: h as usize,
+        pixels: grey.as_raw().iter().map(|&p| p as f32 / 255.0).collect(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn load(text: &str) -> Result<Recipe> {
+        let raw: RawRecipe = parse_yaml(text, "t.yaml")?;
+        Recipe::resolve(&raw, &[], None, Path::new("."))
+    }
+
+    const HELIX: &str = "p3dp: 1\nname: h\nparams:\n  radius: 10\n  height: \"2*radius\"\nparts:\n  - primitive: {helix: {radius: radius, height: height, pitch: 0.5}}\n";
+
+    #[test]
+    fn params_chain_and_set_overrides() {
+        let r = load(HELIX).unwrap();
+        assert_eq!(r.params["height"], 20.0);
+        let raw: RawRecipe = parse_yaml(HELIX, "t.yaml").unwrap();
+        let r = Recipe::resolve(&raw, &[("radius".into(), "3*4".into())], None, Path::new(".")).unwrap();
+        assert_eq!(r.params["height"], 24.0);
+        let e = Recipe::resolve(&raw, &[("radios".into(), "3".into())], None, Path::new("."))
+            .unwrap_err();
+        assert!(e.to_string().contains("unknown param `radios`"), "{e}");
+    }
+
+    #[test]
+    fn unknown_key_names_the_path_and_line() {
+        let e = load(&HELIX.replace("pitch: 0.5", "pitch: 0.5, pich: 1")).unwrap_err();
+        assert_eq!(e.place.as_deref(), Some("parts[0].primitive.helix.pich"));
+        assert_eq!(e.line.map(|l| l.0), Some(7));
+        assert!(e.message.contains("expected one of"), "{e}");
+    }
+
+    #[test]
+    fn bad_values_name_the_key() {
+        let e = load(&HELIX.replace("pitch: 0.5", "pitch: -1")).unwrap_err();
+        assert_eq!(e.place.as_deref(), Some("parts[0].primitive.helix.pitch"));
+        let e = load(&HELIX.replace("pitch: 0.5", "pitch: 0.5, segments: 2.5")).unwrap_err();
+        assert_eq!(e.place.as_deref(), Some("parts[0].primitive.helix.segments"));
+        let e = load(&HELIX.replace("pitch: 0.5", "pitch: 0.0000001")).unwrap_err();
+        assert!(e.message.contains("more than the limit"), "{e}");
+    }
+
+    #[test]
+    fn step_expressions_compile_with_places() {
+        let text = format!("{HELIX}    steps:\n      - deform_cylinder: {{position: [r, theta, \"z + \"]}}\n");
+        let e = load(&text).unwrap_err();
+        assert_eq!(
+            e.place.as_deref(),
+            Some("parts[0].steps[0].deform_cylinder.position[2]")
+        );
+        assert!(e.message.contains("z + "), "{e}");
+    }
+
+    #[test]
+    fn materials() {
+        let r = load(&HELIX.replace("name: h", "name: h\nmaterial: petg")).unwrap();
+        assert_eq!(r.material.name, "petg");
+        let r = load(&HELIX.replace(
+            "name: h",
+            "name: h\nmaterial: {filament_diameter: 2.85, density: 1.2, nozzle_temp: 200, bed_temp: 50}",
+        ))
+        .unwrap();
+        assert_eq!(r.material.filament_diameter, Some(2.85));
+        let e = load(&HELIX.replace("name: h", "name: h\nmaterial: wood")).unwrap_err();
+        assert_eq!(e.place.as_deref(), Some("material"));
+    }
+}

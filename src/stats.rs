@@ -1,0 +1,169 @@
+//! The stats report: a few lines for people, and JSON for scripts.
+
+use serde::Serialize;
+
+use crate::check::{Finding, Severity};
+use crate::gcode::{hms, MoveStats};
+
+/// Corners of the bounding box of the extruding moves, recipe coordinates.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct BBox {
+    /// Lowest corner.
+    pub min: [f64; 3],
+    /// Highest corner.
+    pub max: [f64; 3],
+}
+
+/// One part's share.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PartStats {
+    /// Part name (`skirt` for the skirt).
+    pub name: String,
+    /// Strings after all steps.
+    pub strings: usize,
+    /// Σ length / speed of its moves, s.
+    pub print_time_s: f64,
+}
+
+/// Everything the spec's `--stats-json` promises, and a little more.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Stats {
+    /// The recipe file as given.
+    pub recipe: String,
+    /// The recipe's name.
+    pub name: String,
+    /// Printer profile used.
+    pub printer: String,
+    /// Material used.
+    pub material: String,
+    /// Param values after `--set`, in order.
+    pub params: indexmap::IndexMap<String, f64>,
+    /// SHA-256 of the G-code bytes.
+    pub gcode_sha256: String,
+    /// Size of the G-code.
+    pub gcode_bytes: u64,
+    /// Strings of all parts and the skirt.
+    pub strings: u64,
+    /// G1 moves that extrude.
+    pub extrude_moves: u64,
+    /// G0 moves.
+    pub travel_moves: u64,
+    /// Strings merged into longer moves (see `min_string_length`).
+    pub merged_strings: u64,
+    /// Retractions.
+    pub retractions: u64,
+    /// Length of extruding moves, mm.
+    pub extrude_length_mm: f64,
+    /// Length of travel moves, mm.
+    pub travel_length_mm: f64,
+    /// Filament fed, mm.
+    pub filament_length_mm: f64,
+    /// Filament volume, mm³.
+    pub filament_volume_mm3: f64,
+    /// Filament mass, g.
+    pub filament_mass_g: f64,
+    /// Σ distance / speed, s (no acceleration yet).
+    pub print_time_s: f64,
+    /// Bounding box of the extruding moves.
+    pub bbox: BBox,
+    /// Highest volumetric flow of any move, mm³/s.
+    pub max_flow_mm3_s: f64,
+    /// Each part's strings and time.
+    pub parts: Vec<PartStats>,
+    /// Findings of the checks (warnings and, under `--force`, errors).
+    pub warnings: Vec<Finding>,
+}
+
+impl Stats {
+    /// Assembles the stats of one build.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        recipe_path: &str,
+        recipe: &crate::recipe::Recipe,
+        m: &MoveStats,
+        parts: Vec<PartStats>,
+        sha256: String,
+        bytes: u64,
+        findings: Vec<Finding>,
+    ) -> Stats {
+        let bbox = if m.extrude_moves > 0 {
+            BBox {
+                min: m.bbox_min.to_array(),
+                max: m.bbox_max.to_array(),
+            }
+        } else {
+            BBox {
+                min: [0.0; 3],
+                max: [0.0; 3],
+            }
+        };
+        Stats {
+            recipe: recipe_path.to_string(),
+            name: recipe.name.clone(),
+            printer: recipe.printer.name.clone(),
+            material: recipe.material.name.clone(),
+            params: recipe.params.clone(),
+            gcode_sha256: sha256,
+            gcode_bytes: bytes,
+            strings: parts.iter().map(|p| p.strings as u64).sum(),
+            extrude_moves: m.extrude_moves,
+            travel_moves: m.travel_moves,
+            merged_strings: m.merged_strings,
+            retractions: m.retractions,
+            extrude_length_mm: m.extrude_length,
+            travel_length_mm: m.travel_length,
+            filament_length_mm: m.filament,
+            filament_volume_mm3: m.volume,
+            filament_mass_g: m.volume / 1000.0 * recipe.material.density,
+            print_time_s: m.time,
+            bbox,
+            max_flow_mm3_s: m.max_flow,
+            parts,
+            warnings: findings,
+        }
+    }
+
+    /// The short human report printed after a build.
+    pub fn report(&self, output: &str) -> String {
+        let b = &self.bbox;
+        let size = [0, 1, 2].map(|k| b.max[k] - b.min[k]);
+        let errors = self
+            .warnings
+            .iter()
+            .filter(|f| f.severity == Severity::Error)
+            .count();
+        let warnings = self.warnings.len() - errors;
+        let mut s = format!(
+            "{} → {output}\n  {} strings in {} part{}; {} extruding and {} travel moves ({} short strings merged)\n  size {:.1} × {:.1} × {:.1} mm\n  filament {:.0} mm, {:.2} g {} ({:.2} cm³); max flow {:.2} mm³/s\n  time {} (distance / speed)\n  {} warning{}, {} error{}\n",
+            self.recipe,
+            self.strings,
+            self.parts.len(),
+            if self.parts.len() == 1 { "" } else { "s" },
+            self.extrude_moves,
+            self.travel_moves,
+            self.merged_strings,
+            size[0],
+            size[1],
+            size[2],
+            self.filament_length_mm,
+            self.filament_mass_g,
+            self.material,
+            self.filament_volume_mm3 / 1000.0,
+            self.max_flow_mm3_s,
+            hms(self.print_time_s),
+            warnings,
+            if warnings == 1 { "" } else { "s" },
+            errors,
+            if errors == 1 { "" } else { "s" },
+        );
+        for f in &self.warnings {
+            let sev = match f.severity {
+                Severity::Warning => "warning",
+                Severity::Error => "error",
+            };
+            s.push_str(&format!("  {sev} [{}]: {}\n", f.code, f.message));
+        }
+        s
+    }
+}
+

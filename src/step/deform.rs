@@ -1,0 +1,196 @@
+//! `deform_xyz` and `deform_cylinder` (Kanada's `part.deform_xyz(fd, fc, fv)`).
+
+use glam::DVec3;
+
+use super::{not_finite, vars_at};
+use crate::expr::{var, Expr};
+use crate::toolpath::Toolpath;
+
+/// A deformation: new positions and/or new cross-sections and speeds.
+#[derive(Clone, Debug)]
+pub struct Deform {
+    /// In cylinder coordinates (r, theta, z) rather than (x, y, z).
+    pub cylinder: bool,
+    /// The three position expressions.
+    pub position: Option<[Expr; 3]>,
+    /// New cross-section, per string (sees `c`).
+    pub cross_section: Option<Expr>,
+    /// New speed, per string (sees `v`).
+    pub speed: Option<Expr>,
+}
+
+impl Deform {
+    fn needs_polar(&self, exprs: &[&Expr]) -> bool {
+        exprs
+            .iter()
+            .any(|e| e.uses(var::R) || e.uses(var::THETA))
+    }
+
+    /// Applies the deformation: c and v first, at the old midpoints, then the points.
+    pub fn apply(&self, tp: &mut Toolpath) -> Result<(), String> {
+        if self.cross_section.is_some() || self.speed.is_some() {
+            self.apply_strings(tp)?;
+        }
+        if let Some(pos) = &self.position {
+            self.apply_points(tp, pos)?;
+        }
+        Ok(())
+    }
+
+    fn apply_strings(&self, tp: &mut Toolpath) -> Result<(), String> {
+        let exprs: Vec<&Expr> = self.cross_section.iter().chain(&self.speed).collect();
+        let polar_too = self.needs_polar(&exprs);
+        let n = tp.len();
+        for k in 0..n {
+            let s = tp.strings[k];
+            if s.travel {
+                continue;
+            }
+            let m = tp.midpoint(k);
+            let mut vars = vars_at(m, k, n, polar_too);
+            vars[var::C] = s.c;
+            vars[var::V] = s.v;
+            if let Some(e) = &self.cross_section {
+                let c = e.eval(&vars);
+                if !c.is_finite() || c < 0.0 {
+                    return Err(bad_value("cross_section", e, c, k, m, "≥ 0 mm²"));
+                }
+                tp.strings[k].c = c;
+            }
+            if let Some(e) = &self.speed {
+                let v = e.eval(&vars);
+                if !v.is_finite() || v <= 0.0 {
+                    return Err(bad_value("speed", e, v, k, m, "> 0 mm/s"));
+                }
+                tp.strings[k].v = v;
+            }
+        }
+        Ok(())
+    }
+
+    fn apply_points(&self, tp: &mut Toolpath, pos: &[Expr; 3]) -> Result<(), String> {
+        let n = tp.points.len();
+        let [f0, f1, f2] = pos;
+        if self.cylinder {
+            // theta' = theta needs no trigonometry: (x, y) scales by r'/r.
+            let keep_theta = f1.is_var(var::THETA);
+            let polar_too = true;
+            for i in 0..n {
+                let p = tp.points[i];
+                let vars = vars_at(p, i, n, polar_too);
+                let r = f0.eval(&vars);
+                let z = f2.eval(&vars);
+                let q = if keep_theta {
+                    let r0 = vars[var::R];
+                    if r0 > 0.0 {
+                        let s = r / r0;
+                        DVec3::new(p.x * s, p.y * s, z)
+                    } else {
+                        DVec3::new(r, 0.0, z)
+                    }
+                } else {
+                    let th = f1.eval(&vars);
+                    DVec3::new(r * libm::cos(th), r * libm::sin(th), z)
+                };
+                if !q.is_finite() {
+                    let (e, value) = worst(pos, &vars);
+                    return Err(not_finite("position", e.src(), value, "point", i, p));
+                }
+                tp.points[i] = q;
+            }
+        } else {
+            let polar_too = self.needs_polar(&[f0, f1, f2]);
+            for i in 0..n {
+                let p = tp.points[i];
+                let vars = vars_at(p, i, n, polar_too);
+                let q = DVec3::new(f0.eval(&vars), f1.eval(&vars), f2.eval(&vars));
+                if !q.is_finite() {
+                    let (e, value) = worst(pos, &vars);
+                    return Err(not_finite("position", e.src(), value, "point", i, p));
+                }
+                tp.points[i] = q;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The first position expression whose value is not finite.
+fn worst<'a>(pos: &'a [Expr; 3], vars: &crate::expr::Vars) -> (&'a Expr, f64) {
+    pos.iter()
+        .map(|e| (e, e.eval(vars)))
+        .find(|(_, v)| !v.is_finite())
+        .unwrap_or((&pos[0], f64::NAN))
+}
+
+fn bad_value(key: &str, e: &Expr, value: f64, k: usize, m: DVec3, expected: &str) -> String {
+    if value.is_finite() {
+        format!(
+            "{key} `{}` gives {value} at string {k}, midpoint (x, y, z) = ({:.3}, {:.3}, {:.3}); expected {expected}",
+            e.src(),
+            m.x,
+            m.y,
+            m.z
+        )
+    } else {
+        not_finite(key, e.src(), value, "string", k, m)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::expr::Params;
+
+    fn ex(src: &str) -> Expr {
+        let all: Vec<usize> = (0..var::COUNT).collect();
+        Expr::compile(src, &Params::new(), &all).unwrap()
+    }
+
+    fn line() -> Toolpath {
+        let mut t = Toolpath::new(DVec3::new(1.0, 0.0, 0.0));
+        t.draw(DVec3::new(0.0, 1.0, 1.0), 0.2, 10.0);
+        t.draw(DVec3::new(-1.0, 0.0, 2.0), 0.2, 10.0);
+        t
+    }
+
+    #[test]
+    fn cylinder_deform_sees_old_coordinates() {
+        let d = Deform {
+            cylinder: true,
+            position: Some([ex("2*r"), ex("theta"), ex("z + r")]),
+            cross_section: Some(ex("c*z")),
+            speed: None,
+        };
+        let mut t = line();
+        d.apply(&mut t).unwrap();
+        assert!((t.points[1] - DVec3::new(0.0, 2.0, 2.0)).length() < 1e-12);
+        // c evaluated at the old midpoint of string 0 (z = 0.5)
+        assert!((t.strings[0].c - 0.1).abs() < 1e-12);
+    }
+
+    #[test]
+    fn rotation_through_theta() {
+        let d = Deform {
+            cylinder: true,
+            position: Some([ex("r"), ex("theta + pi/2"), ex("z")]),
+            cross_section: None,
+            speed: None,
+        };
+        let mut t = line();
+        d.apply(&mut t).unwrap();
+        assert!((t.points[0] - DVec3::new(0.0, 1.0, 0.0)).length() < 1e-12);
+    }
+
+    #[test]
+    fn nan_names_the_place() {
+        let d = Deform {
+            cylinder: false,
+            position: Some([ex("x"), ex("sqrt(y - 0.5)"), ex("z")]),
+            cross_section: None,
+            speed: None,
+        };
+        let e = d.apply(&mut line()).unwrap_err();
+        assert!(e.contains("sqrt(y - 0.5)") && e.contains("point 0"), "{e}");
+    }
+}

@@ -1,0 +1,106 @@
+//! Steps: rewrite every point and/or every string's c and v (Kanada's Fig. 3
+//! "part deformation" and "modulation").
+//!
+//! Expressions see the coordinates from before the step. Position expressions
+//! run per point (`i` a point index, `n` the point count); cross-section, speed
+//! and modulation expressions run per string at its midpoint (`i` a string
+//! index, `n` the string count). Travel strings keep their c and v.
+
+mod deform;
+mod modulate;
+mod subdivide;
+
+pub use deform::Deform;
+pub use modulate::{Bitmap, Modulate, ModulateMap};
+
+use glam::DVec3;
+
+use crate::expr::{var, Vars};
+use crate::toolpath::{polar, Toolpath};
+
+/// What `modulate_*` keeps when it scales the cross-section.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Keep {
+    /// Speed is divided by the factor, so the flow c·v stays constant.
+    Flow,
+    /// Speed is unchanged.
+    Speed,
+}
+
+/// A step with its expressions compiled.
+#[derive(Clone, Debug)]
+pub enum Step {
+    /// Deformation in Cartesian coordinates.
+    DeformXyz(Deform),
+    /// Deformation in cylinder coordinates.
+    DeformCylinder(Deform),
+    /// Cross-section scaled by a function of the midpoint.
+    ModulateCylinder(Modulate),
+    /// Cross-section scaled by a bitmap.
+    ModulateMap(ModulateMap),
+    /// Strings split into pieces no longer than this, mm.
+    Subdivide(f64),
+    /// Every point moved by this.
+    Translate(DVec3),
+}
+
+impl Step {
+    /// The step's key in a recipe, for error places.
+    pub fn key(&self) -> &'static str {
+        match self {
+            Step::DeformXyz(_) => "deform_xyz",
+            Step::DeformCylinder(_) => "deform_cylinder",
+            Step::ModulateCylinder(_) => "modulate_cylinder",
+            Step::ModulateMap(_) => "modulate_map",
+            Step::Subdivide(_) => "subdivide",
+            Step::Translate(_) => "translate",
+        }
+    }
+
+    /// Applies the step in place. `max_strings` bounds what `subdivide` may make.
+    pub fn apply(&self, tp: &mut Toolpath, max_strings: u64) -> Result<(), String> {
+        match self {
+            Step::DeformXyz(d) | Step::DeformCylinder(d) => d.apply(tp),
+            Step::ModulateCylinder(m) => m.apply(tp),
+            Step::ModulateMap(m) => m.apply(tp),
+            Step::Subdivide(max) => subdivide::apply(tp, *max, max_strings),
+            Step::Translate(d) => {
+                for p in &mut tp.points {
+                    *p += *d;
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+/// Variable values for point or string `i` of `n` at `p`; r and theta only
+/// when `polar_too` (atan2 is the costly part).
+#[inline]
+pub(crate) fn vars_at(p: DVec3, i: usize, n: usize, polar_too: bool) -> Vars {
+    let mut v = [0.0; var::COUNT];
+    v[var::X] = p.x;
+    v[var::Y] = p.y;
+    v[var::Z] = p.z;
+    if polar_too {
+        let (r, theta) = polar(p);
+        v[var::R] = r;
+        v[var::THETA] = theta;
+    }
+    v[var::I] = i as f64;
+    v[var::N] = n as f64;
+    v[var::T] = if n > 1 {
+        i as f64 / (n - 1) as f64
+    } else {
+        0.0
+    };
+    v
+}
+
+/// The error for an expression that gave NaN or infinity.
+pub(crate) fn not_finite(what: &str, src: &str, value: f64, kind: &str, i: usize, p: DVec3) -> String {
+    format!(
+        "{what} `{src}` gives {value} at {kind} {i}, (x, y, z) = ({:.3}, {:.3}, {:.3}); expected a finite number",
+        p.x, p.y, p.z
+    )
+}

@@ -1,0 +1,195 @@
+//! `modulate_cylinder` and `modulate_map`: texture by changing the
+//! cross-section (Kanada, section 3.5). With `keep: flow` the head speed is
+//! divided by the same factor, so the extruder's flow c·v never changes and
+//! only the head's (fast-responding) speed does — the paper's way.
+
+use glam::DVec3;
+
+use super::{not_finite, vars_at, Keep};
+use crate::expr::{var, Expr};
+use crate::toolpath::Toolpath;
+
+/// Cross-section multiplied by an expression of the midpoint.
+#[derive(Clone, Debug)]
+pub struct Modulate {
+    /// The factor fm.
+    pub factor: Expr,
+    /// What stays constant.
+    pub keep: Keep,
+}
+
+/// A grey-level image, values 0 (black) to 1 (white).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Bitmap {
+    /// Width in pixels.
+    pub width: usize,
+    /// Height in pixels.
+    pub height: usize,
+    /// Row-major luminance, 0..1, row 0 at the top.
+    pub pixels: Vec<f32>,
+}
+
+impl Bitmap {
+    /// The pixel at image coordinates (u, v) in 0..1, u left→right, v
+    /// top→bottom, clamped to the image (nearest pixel, no blending).
+    pub fn at(&self, u: f64, v: f64) -> f32 {
+        let col = ((u * self.width as f64).floor().max(0.0) as usize).min(self.width - 1);
+        let row = ((v * self.height as f64).floor().max(0.0) as usize).min(self.height - 1);
+        self.pixels[row * self.width + col]
+    }
+}
+
+/// Cross-section multiplied by `dark` or `light` as the image says.
+#[derive(Clone, Debug)]
+pub struct ModulateMap {
+    /// The image.
+    pub image: Bitmap,
+    /// u coordinate expression.
+    pub u: Expr,
+    /// v coordinate expression.
+    pub v: Expr,
+    /// Factor where the pixel is darker than `threshold`.
+    pub dark: f64,
+    /// Factor elsewhere.
+    pub light: f64,
+    /// Luminance threshold, 0..1.
+    pub threshold: f64,
+    /// What stays constant.
+    pub keep: Keep,
+}
+
+fn scale(tp: &mut Toolpath, k: usize, f: f64, keep: Keep) {
+    let s = &mut tp.strings[k];
+    s.c *= f;
+    if keep == Keep::Flow {
+        s.v /= f;
+    }
+}
+
+impl Modulate {
+    /// Scales every extruding string.
+    pub fn apply(&self, tp: &mut Toolpath) -> Result<(), String> {
+        let n = tp.len();
+        for k in 0..n {
+            let s = tp.strings[k];
+            if s.travel {
+                continue;
+            }
+            let m = tp.midpoint(k);
+            let mut vars = vars_at(m, k, n, true);
+            vars[var::C] = s.c;
+            vars[var::V] = s.v;
+            let f = self.factor.eval(&vars);
+            check_factor(&self.factor, f, k, m)?;
+            scale(tp, k, f, self.keep);
+        }
+        Ok(())
+    }
+}
+
+fn check_factor(e: &Expr, f: f64, k: usize, m: DVec3) -> Result<(), String> {
+    if !f.is_finite() {
+        return Err(not_finite("factor", e.src(), f, "string", k, m));
+    }
+    if f <= 0.0 {
+        return Err(format!(
+            "factor `{}` gives {f} at string {k}, midpoint (x, y, z) = ({:.3}, {:.3}, {:.3}); expected a factor > 0",
+            e.src(),
+            m.x,
+            m.y,
+            m.z
+        ));
+    }
+    Ok(())
+}
+
+impl ModulateMap {
+    /// Looks up each extruding string's midpoint in the image and scales it.
+    pub fn apply(&self, tp: &mut Toolpath) -> Result<(), String> {
+        let n = tp.len();
+        for k in 0..n {
+            if tp.strings[k].travel {
+                continue;
+            }
+            let m = tp.midpoint(k);
+            let vars = vars_at(m, k, n, true);
+            let u = self.u.eval(&vars);
+            let v = self.v.eval(&vars);
+            if !u.is_finite() {
+                return Err(not_finite("u", self.u.src(), u, "string", k, m));
+            }
+            if !v.is_finite() {
+                return Err(not_finite("v", self.v.src(), v, "string", k, m));
+            }
+            let dark = (self.image.at(u, v) as f64) < self.threshold;
+            scale(tp, k, if dark { self.dark } else { self.light }, self.keep);
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::expr::Params;
+
+    fn ex(src: &str) -> Expr {
+        let all: Vec<usize> = (0..var::COUNT).collect();
+        Expr::compile(src, &Params::new(), &all).unwrap()
+    }
+
+    fn two_strings() -> Toolpath {
+        let mut t = Toolpath::new(DVec3::new(0.0, 0.0, 0.0));
+        t.draw(DVec3::new(1.0, 0.0, 0.0), 0.2, 10.0);
+        t.draw(DVec3::new(2.0, 0.0, 0.0), 0.2, 10.0);
+        t
+    }
+
+    #[test]
+    fn keep_flow_keeps_c_times_v() {
+        let m = Modulate {
+            factor: ex("1 + x"),
+            keep: Keep::Flow,
+        };
+        let mut t = two_strings();
+        m.apply(&mut t).unwrap();
+        for s in &t.strings {
+            assert!((s.c * s.v - 2.0).abs() < 1e-12);
+        }
+        assert!((t.strings[0].c - 0.3).abs() < 1e-12);
+        assert!((t.strings[1].c - 0.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn map_picks_dark_or_light() {
+        let image = Bitmap {
+            width: 2,
+            height: 1,
+            pixels: vec![0.0, 1.0],
+        };
+        let m = ModulateMap {
+            image,
+            u: ex("x / 2"),
+            v: ex("0"),
+            dark: 1.0,
+            light: 0.5,
+            threshold: 0.5,
+            keep: Keep::Speed,
+        };
+        let mut t = two_strings();
+        m.apply(&mut t).unwrap();
+        assert_eq!(t.strings[0].c, 0.2); // midpoint x = 0.5 → u = 0.25: dark
+        assert_eq!(t.strings[1].c, 0.1); // midpoint x = 1.5 → u = 0.75: light
+        assert_eq!(t.strings[1].v, 10.0);
+    }
+
+    #[test]
+    fn zero_factor_is_refused() {
+        let m = Modulate {
+            factor: ex("x - 0.5"),
+            keep: Keep::Flow,
+        };
+        let e = m.apply(&mut two_strings()).unwrap_err();
+        assert!(e.contains("expected a factor > 0"), "{e}");
+    }
+}

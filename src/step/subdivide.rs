@@ -1,0 +1,62 @@
+//! `subdivide`: split long strings so later deformations bend the path smoothly.
+
+use crate::toolpath::Toolpath;
+
+/// Splits every string longer than `max` into `ceil(L / max)` equal pieces,
+/// refusing when the part would exceed `max_strings`.
+pub fn apply(tp: &mut Toolpath, max: f64, max_strings: u64) -> Result<(), String> {
+    let pieces = |k: usize| -> u64 {
+        let l = tp.length(k);
+        if l > max {
+            libm::ceil(l / max) as u64
+        } else {
+            1
+        }
+    };
+    let total: u64 = (0..tp.len()).map(pieces).sum();
+    if total > max_strings {
+        return Err(format!(
+            "max_length {max} would make {total} strings, more than the limit of {max_strings}; expected a larger max_length"
+        ));
+    }
+    if total == tp.len() as u64 {
+        return Ok(());
+    }
+    let mut points = Vec::with_capacity(total as usize + 1);
+    let mut strings = Vec::with_capacity(total as usize);
+    points.push(tp.points[0]);
+    for k in 0..tp.len() {
+        let (a, b) = tp.ends(k);
+        let m = pieces(k);
+        for j in 1..m {
+            points.push(a.lerp(b, j as f64 / m as f64));
+            strings.push(tp.strings[k]);
+        }
+        points.push(b);
+        strings.push(tp.strings[k]);
+    }
+    tp.points = points;
+    tp.strings = strings;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DVec3;
+
+    #[test]
+    fn equal_pieces_no_longer_than_max() {
+        let mut t = Toolpath::new(DVec3::ZERO);
+        t.draw(DVec3::new(10.0, 0.0, 0.0), 0.2, 10.0);
+        t.draw(DVec3::new(10.0, 0.5, 0.0), 0.3, 10.0);
+        let v = t.volume();
+        apply(&mut t, 3.0, 100).unwrap();
+        assert_eq!(t.len(), 5);
+        for k in 0..4 {
+            assert!((t.length(k) - 2.5).abs() < 1e-12);
+        }
+        assert!((t.volume() - v).abs() < 1e-12);
+        assert!(apply(&mut t, 0.001, 100).is_err());
+    }
+}

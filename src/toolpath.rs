@@ -1,0 +1,165 @@
+//! The one type that carries a part between stages: the papers' strings.
+//!
+//! Kanada represents a part as a sequence of strings S_i = (P_start_i, P_end_i,
+//! c_i, v_i): straight pieces of filament with cross-section c (mm²) and head
+//! speed v (mm/s). Consecutive strings share their end and start points, so a
+//! part is stored as a polyline: string k runs from `points[k]` to
+//! `points[k + 1]`, with its attributes in `strings[k]`.
+
+use glam::DVec3;
+
+/// Cross-section, speed and kind of one string (named `Strand` so as not to
+/// clash with Rust's `String`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Strand {
+    /// Cross-section of the extruded filament, mm².
+    pub c: f64,
+    /// Head speed, mm/s.
+    pub v: f64,
+    /// A travel move: the head moves without extruding.
+    pub travel: bool,
+}
+
+/// A part: a polyline of points and the strings between them.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Toolpath {
+    /// The part's name, for reports and error places.
+    pub name: String,
+    /// n + 1 points for n strings.
+    pub points: Vec<DVec3>,
+    /// String k runs from `points[k]` to `points[k + 1]`.
+    pub strings: Vec<Strand>,
+}
+
+impl Toolpath {
+    /// An empty part whose head starts at `start`.
+    pub fn new(start: DVec3) -> Toolpath {
+        Toolpath {
+            name: String::new(),
+            points: vec![start],
+            strings: Vec::new(),
+        }
+    }
+
+    /// An empty part with room for `n` strings.
+    pub fn with_capacity(start: DVec3, n: usize) -> Toolpath {
+        let mut points = Vec::with_capacity(n + 1);
+        points.push(start);
+        Toolpath {
+            name: String::new(),
+            points,
+            strings: Vec::with_capacity(n),
+        }
+    }
+
+    /// The head's current position (the last point).
+    pub fn head(&self) -> DVec3 {
+        *self.points.last().expect("a toolpath has a start point")
+    }
+
+    /// Adds an extruding string to `p` (the papers' `draw`).
+    pub fn draw(&mut self, p: DVec3, c: f64, v: f64) {
+        self.points.push(p);
+        self.strings.push(Strand {
+            c,
+            v,
+            travel: false,
+        });
+    }
+
+    /// Adds a travel string to `p` (the papers' `move`).
+    pub fn travel(&mut self, p: DVec3, v: f64) {
+        self.points.push(p);
+        self.strings.push(Strand {
+            c: 0.0,
+            v,
+            travel: true,
+        });
+    }
+
+    /// Number of strings.
+    pub fn len(&self) -> usize {
+        self.strings.len()
+    }
+
+    /// Whether the part has no strings.
+    pub fn is_empty(&self) -> bool {
+        self.strings.is_empty()
+    }
+
+    /// Start and end point of string k.
+    pub fn ends(&self, k: usize) -> (DVec3, DVec3) {
+        (self.points[k], self.points[k + 1])
+    }
+
+    /// Length of string k, mm.
+    pub fn length(&self, k: usize) -> f64 {
+        let (a, b) = self.ends(k);
+        a.distance(b)
+    }
+
+    /// Midpoint of string k, where its c and v expressions are evaluated.
+    pub fn midpoint(&self, k: usize) -> DVec3 {
+        let (a, b) = self.ends(k);
+        (a + b) * 0.5
+    }
+
+    /// Extruded volume Σ c·L over the extruding strings, mm³.
+    pub fn volume(&self) -> f64 {
+        (0..self.len())
+            .filter(|&k| !self.strings[k].travel)
+            .map(|k| self.strings[k].c * self.length(k))
+            .sum()
+    }
+
+    /// Appends `other`, joining with a travel move when it starts elsewhere.
+    pub fn append(&mut self, other: &Toolpath, travel_speed: f64) {
+        let start = other.points[0];
+        if self.head() != start {
+            self.travel(start, travel_speed);
+        }
+        self.points.extend_from_slice(&other.points[1..]);
+        self.strings.extend_from_slice(&other.strings);
+    }
+}
+
+/// Cylinder coordinates (r, theta) of a point, theta in [0, 2·pi).
+#[inline]
+pub fn polar(p: DVec3) -> (f64, f64) {
+    let r = (p.x * p.x + p.y * p.y).sqrt();
+    let mut theta = libm::atan2(p.y, p.x);
+    if theta < 0.0 {
+        theta += std::f64::consts::TAU;
+        if theta >= std::f64::consts::TAU {
+            theta = 0.0; // -0 and tiny negatives round up to exactly 2·pi
+        }
+    }
+    (r, theta)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn polyline_strings_share_points() {
+        let mut t = Toolpath::new(DVec3::ZERO);
+        t.draw(DVec3::new(3.0, 0.0, 0.0), 0.2, 10.0);
+        t.travel(DVec3::new(3.0, 4.0, 0.0), 100.0);
+        t.draw(DVec3::new(0.0, 0.0, 0.0), 0.1, 10.0);
+        assert_eq!(t.len(), 3);
+        assert_eq!(t.length(1), 4.0);
+        assert_eq!(t.midpoint(0), DVec3::new(1.5, 0.0, 0.0));
+        // the travel string extrudes nothing
+        assert!((t.volume() - (0.2 * 3.0 + 0.1 * 5.0)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn polar_angle_is_in_range() {
+        let (r, th) = polar(DVec3::new(0.0, -2.0, 0.0));
+        assert_eq!(r, 2.0);
+        assert!((th - 1.5 * std::f64::consts::PI).abs() < 1e-15);
+        let (_, th) = polar(DVec3::new(1.0, -1e-300, 0.0));
+        assert!((0.0..std::f64::consts::TAU).contains(&th));
+    }
+}
