@@ -40,9 +40,8 @@ pub fn make_part(recipe: &Recipe, k: usize) -> Result<Toolpath> {
     let mut tp = part.primitive.build(part.cross_section, part.speed);
     tp.name = part.name.clone();
     for (j, step) in part.steps.iter().enumerate() {
-        step.apply(&mut tp, recipe.max_strings).map_err(|m| {
-            Error::input(format!("parts[{k}].steps[{j}].{}", step.key()), m)
-        })?;
+        step.apply(&mut tp, recipe.max_strings)
+            .map_err(|m| Error::input(format!("parts[{k}].steps[{j}].{}", step.key()), m))?;
     }
     Ok(tp)
 }
@@ -162,18 +161,27 @@ impl<W: Write> Write for HashWriter<W> {
     }
 }
 
-/// Writes `bytes` to `target` atomically: a temp file beside it, renamed on success.
+/// Writes `target` atomically: a temp file beside it, renamed on success.
 pub fn write_atomic(target: &Path, f: impl FnOnce(&mut std::fs::File) -> Result<()>) -> Result<()> {
     let shown = target.display().to_string();
     let dir = match target.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
-    let mut tmp = tempfile::Builder::new()
-        .prefix(".p3dp-")
-        .suffix(".tmp")
-        .tempfile_in(dir)
-        .map_err(|e| Error::io(&shown, format!("cannot create a file in {}: {e}", dir.display())))?;
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".p3dp-").suffix(".tmp");
+    #[cfg(unix)]
+    {
+        // an ordinary file (0666 less the umask), not tempfile's private 0600
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    let mut tmp = builder.tempfile_in(dir).map_err(|e| {
+        Error::io(
+            &shown,
+            format!("cannot create a file in {}: {e}", dir.display()),
+        )
+    })?;
     f(tmp.as_file_mut())?;
     tmp.as_file_mut()
         .sync_all()

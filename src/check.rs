@@ -20,6 +20,16 @@ pub enum Severity {
     Error,
 }
 
+impl Severity {
+    /// `warning` or `error`.
+    pub fn word(self) -> &'static str {
+        match self {
+            Severity::Warning => "warning",
+            Severity::Error => "error",
+        }
+    }
+}
+
 /// One finding: a stable code, a severity and the place.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Finding {

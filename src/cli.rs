@@ -217,13 +217,16 @@ pub fn check(c: &Common) -> Vec<Error> {
                     if n_err == 1 { "" } else { "s" }
                 );
                 for f in &p.findings {
-                    println!("  {:?} [{}]: {}", f.severity, f.code, f.message);
+                    println!("  {} [{}]: {}", f.severity.word(), f.code, f.message);
                 }
                 let failing = p.failing(c.strict).len();
                 if failing > 0 {
                     errors.push(Error::check(
                         &p.path,
-                        format!("{failing} check{} failed", if failing == 1 { "" } else { "s" }),
+                        format!(
+                            "{failing} check{} failed",
+                            if failing == 1 { "" } else { "s" }
+                        ),
                     ));
                 }
             }

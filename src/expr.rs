@@ -184,7 +184,8 @@ fn lookup3(name: &str) -> Option<F3> {
 }
 
 /// Every function name an expression may call, for error messages.
-pub const FUNCTIONS: &str = "sin cos tan asin acos atan atan2(y,x) sinh cosh tanh asinh acosh atanh \
+pub const FUNCTIONS: &str =
+    "sin cos tan asin acos atan atan2(y,x) sinh cosh tanh asinh acosh atanh \
 sqrt cbrt exp ln log log10 log2 pow(a,b) abs sign floor ceil round trunc fract \
 mod(a,b) min(a,b,…) max(a,b,…) clamp(x,lo,hi) step(edge,x) smoothstep(e0,e1,x) \
 mix(a,b,t) hypot(x,y) radians degrees";

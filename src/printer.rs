@@ -211,7 +211,8 @@ impl Printer {
         if let Some(p) = Printer::built_in(spec) {
             return Ok(p);
         }
-        let looks_like_path = spec.contains('/') || spec.ends_with(".yaml") || spec.ends_with(".yml");
+        let looks_like_path =
+            spec.contains('/') || spec.ends_with(".yaml") || spec.ends_with(".yml");
         if !looks_like_path {
             return Err(Error::input(
                 "printer",
@@ -229,7 +230,10 @@ impl Printer {
             if v.is_finite() && v > 0.0 {
                 Ok(())
             } else {
-                Err(Error::input(key, format!("{v} is not allowed; expected a number > 0")))
+                Err(Error::input(
+                    key,
+                    format!("{v} is not allowed; expected a number > 0"),
+                ))
             }
         };
         positive("nozzle_diameter", self.nozzle_diameter)?;
@@ -238,10 +242,11 @@ impl Printer {
         positive("bed.max_z", self.bed.max_z())?;
         positive("max_speed", self.max_speed)?;
         positive("max_flow", self.max_flow)?;
-        if !(self.min_string_length >= 0.0) {
+        if self.min_string_length.is_nan() || self.min_string_length < 0.0 {
             return Err(Error::input("min_string_length", "expected a length ≥ 0"));
         }
-        if self.retraction.length < 0.0 || !(self.retraction.speed > 0.0) {
+        let r = &self.retraction;
+        if r.length.is_nan() || r.length < 0.0 || r.speed.is_nan() || r.speed <= 0.0 {
             return Err(Error::input(
                 "retraction",
                 "expected a length ≥ 0 and a speed > 0",
@@ -259,14 +264,22 @@ impl Printer {
 
     /// Fills `{name}` placeholders of a G-code template with `values`; an
     /// unknown placeholder is an error naming `key`.
-    pub fn fill(&self, key: &str, template: &str, values: &BTreeMap<&str, String>) -> Result<String> {
+    pub fn fill(
+        &self,
+        key: &str,
+        template: &str,
+        values: &BTreeMap<&str, String>,
+    ) -> Result<String> {
         let mut out = String::with_capacity(template.len());
         let mut rest = template;
         while let Some(open) = rest.find('{') {
             out.push_str(&rest[..open]);
             let after = &rest[open + 1..];
             let Some(close) = after.find('}') else {
-                return Err(Error::input(key, "a `{` is never closed; expected `{placeholder}`"));
+                return Err(Error::input(
+                    key,
+                    "a `{` is never closed; expected `{placeholder}`",
+                ));
             };
             let name = &after[..close];
             match values.get(name) {

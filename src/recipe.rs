@@ -145,7 +145,10 @@ impl<'de> Deserialize<'de> for RawMaterial {
             fn visit_str<E: de::Error>(self, v: &str) -> std::result::Result<RawMaterial, E> {
                 Ok(RawMaterial::Named(v.to_string()))
             }
-            fn visit_map<A: MapAccess<'de>>(self, m: A) -> std::result::Result<RawMaterial, A::Error> {
+            fn visit_map<A: MapAccess<'de>>(
+                self,
+                m: A,
+            ) -> std::result::Result<RawMaterial, A::Error> {
                 InlineMaterial::deserialize(de::value::MapAccessDeserializer::new(m))
                     .map(RawMaterial::Inline)
             }
@@ -417,7 +420,10 @@ impl Ctx<'_> {
         if v > 0.0 {
             Ok(v)
         } else {
-            Err(Error::input(place, format!("{v} is not allowed; expected a number > 0")))
+            Err(Error::input(
+                place,
+                format!("{v} is not allowed; expected a number > 0"),
+            ))
         }
     }
 
@@ -426,7 +432,10 @@ impl Ctx<'_> {
         if v >= 0.0 {
             Ok(v)
         } else {
-            Err(Error::input(place, format!("{v} is not allowed; expected a number ≥ 0")))
+            Err(Error::input(
+                place,
+                format!("{v} is not allowed; expected a number ≥ 0"),
+            ))
         }
     }
 
@@ -468,7 +477,16 @@ impl Ctx<'_> {
     }
 }
 
-const POINT_VARS: &[usize] = &[var::X, var::Y, var::Z, var::R, var::THETA, var::I, var::N, var::T];
+const POINT_VARS: &[usize] = &[
+    var::X,
+    var::Y,
+    var::Z,
+    var::R,
+    var::THETA,
+    var::I,
+    var::N,
+    var::T,
+];
 const STRING_VARS: &[usize] = &[
     var::X,
     var::Y,
@@ -511,7 +529,9 @@ pub fn eval_params(raw: &IndexMap<String, Num>, sets: &[(String, String)]) -> Re
                 .map_err(|m| Error::input(format!("--set {name}={s}"), m))?,
             None => match value {
                 Num::Value(v) => *v,
-                Num::Expr(s) => expr::eval_const(s, &params).map_err(|m| Error::input(&place, m))?,
+                Num::Expr(s) => {
+                    expr::eval_const(s, &params).map_err(|m| Error::input(&place, m))?
+                }
             },
         };
         params.insert(name.clone(), v);
@@ -524,7 +544,10 @@ pub fn eval_params(raw: &IndexMap<String, Num>, sets: &[(String, String)]) -> Re
                 if known.is_empty() {
                     format!("unknown param `{name}`; this recipe has no params")
                 } else {
-                    format!("unknown param `{name}`; the recipe's params are {}", known.join(", "))
+                    format!(
+                        "unknown param `{name}`; the recipe's params are {}",
+                        known.join(", ")
+                    )
                 },
             ));
         }
@@ -581,8 +604,13 @@ impl Recipe {
             dir,
         };
         let printer = match printer {
-            Some(p) => Printer::resolve(p, Path::new("."))
-                .map_err(|e| if e.file.is_none() { e.under("--printer") } else { e })?,
+            Some(p) => Printer::resolve(p, Path::new(".")).map_err(|e| {
+                if e.file.is_none() {
+                    e.under("--printer")
+                } else {
+                    e
+                }
+            })?,
             None => Printer::resolve(raw.printer.as_deref().unwrap_or("generic-220"), dir)?,
         };
         let material = resolve_material(&ctx, raw.material.as_ref())?;
@@ -866,9 +894,9 @@ pub fn load_bitmap(path: &PathBuf, shown: &str) -> std::result::Result<Bitmap, S
         .map_err(|e| format!("cannot open the image `{shown}` ({}): {e}", path.display()))?
         .with_guessed_format()
         .map_err(|e| format!("cannot read the image `{shown}`: {e}"))?;
-    let img = reader
-        .decode()
-        .map_err(|e| format!("`{shown}` is not an image p3dp can read (PNG, JPEG, BMP, GIF): {e}"))?;
+    let img = reader.decode().map_err(|e| {
+        format!("`{shown}` is not an image p3dp can read (PNG, JPEG, BMP, GIF): {e}")
+    })?;
     let grey = img.to_luma8();
     let (w, h) = grey.dimensions();
     if w == 0 || h == 0 {
@@ -897,7 +925,13 @@ mod tests {
         let r = load(HELIX).unwrap();
         assert_eq!(r.params["height"], 20.0);
         let raw: RawRecipe = parse_yaml(HELIX, "t.yaml").unwrap();
-        let r = Recipe::resolve(&raw, &[("radius".into(), "3*4".into())], None, Path::new(".")).unwrap();
+        let r = Recipe::resolve(
+            &raw,
+            &[("radius".into(), "3*4".into())],
+            None,
+            Path::new("."),
+        )
+        .unwrap();
         assert_eq!(r.params["height"], 24.0);
         let e = Recipe::resolve(&raw, &[("radios".into(), "3".into())], None, Path::new("."))
             .unwrap_err();
@@ -917,14 +951,19 @@ mod tests {
         let e = load(&HELIX.replace("pitch: 0.5", "pitch: -1")).unwrap_err();
         assert_eq!(e.place.as_deref(), Some("parts[0].primitive.helix.pitch"));
         let e = load(&HELIX.replace("pitch: 0.5", "pitch: 0.5, segments: 2.5")).unwrap_err();
-        assert_eq!(e.place.as_deref(), Some("parts[0].primitive.helix.segments"));
+        assert_eq!(
+            e.place.as_deref(),
+            Some("parts[0].primitive.helix.segments")
+        );
         let e = load(&HELIX.replace("pitch: 0.5", "pitch: 0.0000001")).unwrap_err();
         assert!(e.message.contains("more than the limit"), "{e}");
     }
 
     #[test]
     fn step_expressions_compile_with_places() {
-        let text = format!("{HELIX}    steps:\n      - deform_cylinder: {{position: [r, theta, \"z + \"]}}\n");
+        let text = format!(
+            "{HELIX}    steps:\n      - deform_cylinder: {{position: [r, theta, \"z + \"]}}\n"
+        );
         let e = load(&text).unwrap_err();
         assert_eq!(
             e.place.as_deref(),

@@ -27,7 +27,9 @@ pub fn convex_hull(mut pts: Vec<DVec2>) -> Vec<DVec2> {
             Box::new(pts.iter().rev())
         };
         for &p in iter {
-            while hull.len() >= start + 2 && cross(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0.0 {
+            while hull.len() >= start + 2
+                && cross(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0.0
+            {
                 hull.pop();
             }
             hull.push(p);
@@ -93,7 +95,11 @@ pub fn make(skirt: &Skirt, parts: &[Toolpath], spacing: f64, c: f64, v: f64) -> 
     let mut tp: Option<Toolpath> = None;
     for k in 0..skirt.loops {
         let d = skirt.distance + spacing * k as f64;
-        let ring = if d > 0.0 { offset(&hull, d) } else { hull.clone() };
+        let ring = if d > 0.0 {
+            offset(&hull, d)
+        } else {
+            hull.clone()
+        };
         let at = |p: DVec2| DVec3::new(p.x, p.y, z);
         let t = tp.get_or_insert_with(|| Toolpath::new(at(ring[0])));
         if k > 0 {
@@ -131,7 +137,17 @@ mod tests {
         part.draw(DVec3::new(5.0, -5.0, 0.3), 0.1, 10.0);
         part.draw(DVec3::new(5.0, 5.0, 0.3), 0.1, 10.0);
         part.draw(DVec3::new(-5.0, 5.0, 0.3), 0.1, 10.0);
-        let s = make(&Skirt { distance: 3.0, loops: 2 }, &[part], 0.4, 0.1, 20.0).unwrap();
+        let s = make(
+            &Skirt {
+                distance: 3.0,
+                loops: 2,
+            },
+            &[part],
+            0.4,
+            0.1,
+            20.0,
+        )
+        .unwrap();
         // every skirt point is 3 or 3.4 mm from the square
         for p in &s.points {
             let q = DVec2::new(p.x.abs() - 5.0, p.y.abs() - 5.0);

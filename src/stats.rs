@@ -157,13 +157,13 @@ impl Stats {
             if errors == 1 { "" } else { "s" },
         );
         for f in &self.warnings {
-            let sev = match f.severity {
-                Severity::Warning => "warning",
-                Severity::Error => "error",
-            };
-            s.push_str(&format!("  {sev} [{}]: {}\n", f.code, f.message));
+            s.push_str(&format!(
+                "  {} [{}]: {}\n",
+                f.severity.word(),
+                f.code,
+                f.message
+            ));
         }
         s
     }
 }
-

@@ -36,7 +36,7 @@ impl Cylinder {
             center: self.center + DVec3::new(0.0, 0.0, self.vpitch * j as f64),
             segments: self.segments,
             inner_radius: 0.0,
-            direction: if j % 2 == 0 {
+            direction: if j.is_multiple_of(2) {
                 Direction::Outward
             } else {
                 Direction::Inward

@@ -21,9 +21,7 @@ pub struct Deform {
 
 impl Deform {
     fn needs_polar(&self, exprs: &[&Expr]) -> bool {
-        exprs
-            .iter()
-            .any(|e| e.uses(var::R) || e.uses(var::THETA))
+        exprs.iter().any(|e| e.uses(var::R) || e.uses(var::THETA))
     }
 
     /// Applies the deformation: c and v first, at the old midpoints, then the points.

@@ -98,7 +98,14 @@ pub(crate) fn vars_at(p: DVec3, i: usize, n: usize, polar_too: bool) -> Vars {
 }
 
 /// The error for an expression that gave NaN or infinity.
-pub(crate) fn not_finite(what: &str, src: &str, value: f64, kind: &str, i: usize, p: DVec3) -> String {
+pub(crate) fn not_finite(
+    what: &str,
+    src: &str,
+    value: f64,
+    kind: &str,
+    i: usize,
+    p: DVec3,
+) -> String {
     format!(
         "{what} `{src}` gives {value} at {kind} {i}, (x, y, z) = ({:.3}, {:.3}, {:.3}); expected a finite number",
         p.x, p.y, p.z

@@ -1,0 +1,125 @@
+//! Helpers shared by the integration tests: run the real binary, read G-code back.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// The crate root.
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// A recipe of `recipes/`.
+pub fn recipe(name: &str) -> PathBuf {
+    root().join("recipes").join(name)
+}
+
+/// A fresh empty temporary folder for one test.
+pub fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("p3dp-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Runs `p3dp ARGS` in `dir`.
+pub fn p3dp(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_p3dp"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("run p3dp")
+}
+
+/// One G0/G1 move read back from G-code, in machine coordinates.
+#[derive(Clone, Copy, Debug)]
+pub struct Move {
+    /// G0 or G1.
+    pub g: u8,
+    /// Position before the move.
+    pub from: [f64; 3],
+    /// Position after the move.
+    pub to: [f64; 3],
+    /// Filament fed by this move (negative for a retraction), mm.
+    pub de: f64,
+    /// Feed rate in force, mm/min.
+    pub f: f64,
+    /// Index of the `; part:` comment this move follows.
+    pub part: usize,
+}
+
+/// G-code read back: the moves and the part names in order.
+pub struct Gcode {
+    pub moves: Vec<Move>,
+    pub parts: Vec<String>,
+    pub lines: Vec<String>,
+}
+
+/// Reads G-code as a firmware would: G90 XYZ, M82/M83 E, G92 E resets, modal F.
+pub fn parse(text: &str) -> Gcode {
+    let mut pos = [f64::NAN; 3];
+    let (mut e, mut f, mut relative) = (0.0, 0.0, false);
+    let mut moves = Vec::new();
+    let mut parts = vec!["(before parts)".to_string()];
+    let mut lines = Vec::new();
+    for raw in text.lines() {
+        lines.push(raw.to_string());
+        if let Some(name) = raw.strip_prefix("; part: ") {
+            parts.push(name.split(" (").next().unwrap().to_string());
+        }
+        let code = raw.split(';').next().unwrap().trim();
+        let mut words = code.split_whitespace();
+        let Some(cmd) = words.next() else { continue };
+        match cmd {
+            "M82" => relative = false,
+            "M83" => relative = true,
+            "G92" => {
+                for w in words {
+                    if let Some(v) = w.strip_prefix('E') {
+                        e = v.parse().unwrap();
+                    }
+                }
+            }
+            "G0" | "G1" => {
+                let from = pos;
+                let mut de = 0.0;
+                for w in words {
+                    let (axis, v) = w.split_at(1);
+                    let v: f64 = v
+                        .parse()
+                        .unwrap_or_else(|_| panic!("bad number in `{raw}`"));
+                    match axis {
+                        "X" => pos[0] = v,
+                        "Y" => pos[1] = v,
+                        "Z" => pos[2] = v,
+                        "E" => {
+                            de = if relative { v } else { v - e };
+                            e = if relative { e + v } else { v };
+                        }
+                        "F" => f = v,
+                        other => panic!("unexpected word {other} in `{raw}`"),
+                    }
+                }
+                moves.push(Move {
+                    g: if cmd == "G0" { 0 } else { 1 },
+                    from,
+                    to: pos,
+                    de,
+                    f,
+                    part: parts.len() - 1,
+                });
+            }
+            _ => {}
+        }
+    }
+    Gcode {
+        moves,
+        parts,
+        lines,
+    }
+}
+
+/// Machine → recipe coordinates for the generic-220 profile (origin 110, 110, 0).
+pub fn to_recipe(p: [f64; 3]) -> [f64; 3] {
+    [p[0] - 110.0, p[1] - 110.0, p[2]]
+}
