@@ -1,7 +1,7 @@
 //! The pipeline: recipe → parts of strings → steps → checks → G-code and stats.
 
 use std::io::{self, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use sha2::{Digest, Sha256};
 
@@ -56,9 +56,12 @@ pub fn plan(path: &Path, opts: &Options) -> Result<Plan> {
     }
     let mut paths = Vec::with_capacity(parts.len() + 1);
     if let Some(s) = &recipe.skirt {
-        let (c, v) = (recipe.parts[0].cross_section, recipe.parts[0].speed);
-        if let Some(sk) = crate::skirt::make(s, &parts, recipe.printer.nozzle_diameter, c, v) {
-            paths.push(sk);
+        let cv = (recipe.parts[0].cross_section, recipe.parts[0].speed);
+        let spacing = recipe.printer.nozzle_diameter;
+        match crate::skirt::make(s, &parts, spacing, cv, recipe.max_strings) {
+            Ok(Some(sk)) => paths.push(sk),
+            Ok(None) => {}
+            Err(m) => return Err(Error::input("skirt", m).in_file(&shown)),
         }
     }
     paths.extend(parts);
@@ -143,9 +146,19 @@ impl<W: Write> HashWriter<W> {
 
     /// The SHA-256 in hex and the byte count.
     pub fn finish(self) -> (String, u64) {
+        let (hex, bytes, _) = self.finish_into();
+        (hex, bytes)
+    }
+
+    /// The SHA-256 in hex, the byte count and the inner writer.
+    pub fn finish_into(self) -> (String, u64, W) {
         let d = self.hasher.finalize();
         let hex: String = d.iter().map(|b| format!("{b:02x}")).collect();
-        (hex, self.bytes)
+        let inner = self
+            .inner
+            .into_inner()
+            .unwrap_or_else(|e| panic!("flushed before: {e}"));
+        (hex, self.bytes, inner)
     }
 }
 
@@ -161,32 +174,63 @@ impl<W: Write> Write for HashWriter<W> {
     }
 }
 
+/// A file being written: a temp file beside its target, renamed into place by
+/// [`AtomicFile::commit`]; dropped uncommitted, it leaves nothing behind.
+pub struct AtomicFile {
+    tmp: tempfile::NamedTempFile,
+    target: PathBuf,
+}
+
+impl AtomicFile {
+    /// Opens a temp file in `target`'s folder (which must exist).
+    pub fn create(target: &Path) -> Result<AtomicFile> {
+        let shown = target.display().to_string();
+        let dir = match target.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        let mut builder = tempfile::Builder::new();
+        builder.prefix(".p3dp-").suffix(".tmp");
+        #[cfg(unix)]
+        {
+            // an ordinary file (0666 less the umask), not tempfile's private 0600
+            use std::os::unix::fs::PermissionsExt;
+            builder.permissions(std::fs::Permissions::from_mode(0o666));
+        }
+        let tmp = builder.tempfile_in(dir).map_err(|e| {
+            Error::io(
+                &shown,
+                format!("cannot create a file in {}: {e}", dir.display()),
+            )
+        })?;
+        Ok(AtomicFile {
+            tmp,
+            target: target.to_path_buf(),
+        })
+    }
+
+    /// The temp file, to write to.
+    pub fn file(&mut self) -> &mut std::fs::File {
+        self.tmp.as_file_mut()
+    }
+
+    /// Flushes to disk and renames the temp file to the target.
+    pub fn commit(mut self) -> Result<()> {
+        let shown = self.target.display().to_string();
+        self.tmp
+            .as_file_mut()
+            .sync_all()
+            .map_err(|e| Error::io(&shown, format!("cannot write: {e}")))?;
+        self.tmp
+            .persist(&self.target)
+            .map_err(|e| Error::io(&shown, format!("cannot write: {}", e.error)))?;
+        Ok(())
+    }
+}
+
 /// Writes `target` atomically: a temp file beside it, renamed on success.
 pub fn write_atomic(target: &Path, f: impl FnOnce(&mut std::fs::File) -> Result<()>) -> Result<()> {
-    let shown = target.display().to_string();
-    let dir = match target.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let mut builder = tempfile::Builder::new();
-    builder.prefix(".p3dp-").suffix(".tmp");
-    #[cfg(unix)]
-    {
-        // an ordinary file (0666 less the umask), not tempfile's private 0600
-        use std::os::unix::fs::PermissionsExt;
-        builder.permissions(std::fs::Permissions::from_mode(0o666));
-    }
-    let mut tmp = builder.tempfile_in(dir).map_err(|e| {
-        Error::io(
-            &shown,
-            format!("cannot create a file in {}: {e}", dir.display()),
-        )
-    })?;
-    f(tmp.as_file_mut())?;
-    tmp.as_file_mut()
-        .sync_all()
-        .map_err(|e| Error::io(&shown, format!("cannot write: {e}")))?;
-    tmp.persist(target)
-        .map_err(|e| Error::io(&shown, format!("cannot write: {}", e.error)))?;
-    Ok(())
+    let mut a = AtomicFile::create(target)?;
+    f(a.file())?;
+    a.commit()
 }

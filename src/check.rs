@@ -73,7 +73,7 @@ fn temperatures(recipe: &Recipe, out: &mut Vec<Finding>) {
             code: "nozzle-temp",
             severity: Severity::Error,
             message: format!(
-                "nozzle temperature {} °C is above the limit of {limit} °C (material {} allows {} °C, printer {} allows {} °C)",
+                "material.nozzle_temp {} °C is above the limit of {limit} °C (material {} allows {} °C, printer {} allows {} °C)",
                 m.nozzle_temp, m.name, m.max_nozzle_temp, p.name, p.max_nozzle_temp
             ),
             part: None,
@@ -86,7 +86,7 @@ fn temperatures(recipe: &Recipe, out: &mut Vec<Finding>) {
             code: "bed-temp",
             severity: Severity::Error,
             message: format!(
-                "bed temperature {} °C is above printer {}'s limit of {} °C",
+                "material.bed_temp {} °C is above printer {}'s limit of {} °C",
                 m.bed_temp, p.name, p.max_bed_temp
             ),
             part: None,

@@ -1,14 +1,19 @@
 //! The commands `build`, `check` and `hash`, as the spec's command-line contract says.
 //!
-//! Each returns the errors it met (one per failed recipe); the binary prints
-//! them and exits with the worst status: 2 unusable input, 1 failed check.
+//! A command expands its recipes and `--sweep`s into jobs (see [`crate::batch`])
+//! and runs them in parallel. Each returns the errors it met (one per failed
+//! job); the binary prints them and exits with the worst status: 2 unusable
+//! input, 1 failed check.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use crate::build::{plan, write_atomic, Options, Plan};
+use crate::batch::{self, Job};
+use crate::build::{plan, write_atomic, AtomicFile, HashWriter, Options, Plan};
 use crate::error::{Error, Result};
-use crate::recipe::parse_set;
+use crate::gcode::hms;
+use crate::lock::{self, Entry, LineHashes, Lock};
+use crate::recipe::{parse_set, parse_yaml, RawRecipe};
 use crate::stats::Stats;
 
 /// Flags every command shares.
@@ -18,12 +23,16 @@ pub struct Common {
     pub recipes: Vec<PathBuf>,
     /// `--set NAME=VALUE`, as typed.
     pub sets: Vec<String>,
+    /// `--sweep NAME=v1,v2` or `NAME=a..b:step`, as typed.
+    pub sweeps: Vec<String>,
     /// `--printer NAME|FILE`.
     pub printer: Option<String>,
     /// Warnings fail too.
     pub strict: bool,
     /// Write even when checks fail.
     pub force: bool,
+    /// `-j N`: at most N builds at once (default: one per core).
+    pub jobs: Option<usize>,
 }
 
 /// Flags of `build`.
@@ -37,27 +46,56 @@ pub struct BuildArgs {
     pub stats_json: Option<PathBuf>,
 }
 
+/// Flags of `hash`.
+#[derive(Clone, Debug, Default)]
+pub struct HashArgs {
+    /// Shared flags.
+    pub common: Common,
+    /// `--lock FILE`: write a lock file of the hashes.
+    pub lock: Option<PathBuf>,
+    /// `--check FILE`: verify every entry of a lock file.
+    pub check: Option<PathBuf>,
+}
+
 impl Common {
-    fn options(&self) -> Result<Options> {
-        Ok(Options {
-            sets: self
-                .sets
-                .iter()
-                .map(|s| parse_set(s))
-                .collect::<Result<_>>()?,
-            printer: self.printer.clone(),
-        })
+    fn jobs(&self) -> Result<Vec<Job>> {
+        let sets: Vec<(String, String)> = self
+            .sets
+            .iter()
+            .map(|s| parse_set(s))
+            .collect::<Result<_>>()?;
+        let sweeps: Vec<(String, Vec<String>)> = self
+            .sweeps
+            .iter()
+            .map(|s| batch::parse_sweep(s))
+            .collect::<Result<_>>()?;
+        if self.recipes.is_empty() {
+            return Err(Error::input(
+                "",
+                "no recipe given; expected one or more RECIPE files",
+            ));
+        }
+        Ok(batch::expand(&self.recipes, &sets, &sweeps))
     }
 
-    /// Plans a recipe and refuses it when its checks fail (unless forced).
-    fn checked_plan(&self, path: &Path, opts: &Options) -> Result<Plan> {
-        let p = plan(path, opts)?;
+    fn threads(&self) -> usize {
+        self.jobs
+            .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+    }
+
+    /// Plans a job and refuses it when its checks fail (unless forced).
+    fn checked_plan(&self, job: &Job) -> Result<Plan> {
+        let opts = Options {
+            sets: job.sets.clone(),
+            printer: self.printer.clone(),
+        };
+        let p = plan(&job.recipe, &opts)?;
         let failing = p.failing(self.strict);
         if !failing.is_empty() && !self.force {
             let mut msg = format!(
                 "{} check{} failed, nothing written (--force writes anyway):",
                 failing.len(),
-                if failing.len() == 1 { "" } else { "s" }
+                plural(failing.len())
             );
             for f in failing {
                 msg.push_str(&format!("\n  [{}] {}", f.code, f.message));
@@ -65,6 +103,14 @@ impl Common {
             return Err(Error::check(&p.path, msg));
         }
         Ok(p)
+    }
+}
+
+fn plural(n: usize) -> &'static str {
+    if n == 1 {
+        ""
+    } else {
+        "s"
     }
 }
 
@@ -81,140 +127,312 @@ pub fn file_stem(name: &str) -> String {
         .collect()
 }
 
+/// `name_param-value_…`: the file stem of a sweep variant.
+pub fn variant_stem(name: &str, sweep: &[(String, String)]) -> String {
+    let mut s = file_stem(name);
+    for (n, v) in sweep {
+        s.push_str(&format!("_{}-{}", file_stem(n), file_stem(v)));
+    }
+    s
+}
+
+fn job_label(job: &Job) -> String {
+    let mut s = job.recipe.display().to_string();
+    if !job.sweep.is_empty() {
+        let v: Vec<String> = job.sweep.iter().map(|(n, v)| format!("{n}={v}")).collect();
+        s.push_str(&format!(" [{}]", v.join(" ")));
+    }
+    s
+}
+
+#[derive(Clone, Debug)]
 enum Target {
     Stdout,
     File(PathBuf),
 }
 
-fn targets(a: &BuildArgs, names: &[String]) -> Result<Vec<Target>> {
-    let many = names.len() > 1;
-    match a.output.as_deref() {
-        Some("-") if many => Err(Error::input(
-            "-o -",
-            "standard output takes one recipe; give a folder with -o to build several",
-        )),
-        Some("-") => Ok(vec![Target::Stdout]),
-        Some(o) if many || Path::new(o).is_dir() || o.ends_with('/') => {
-            std::fs::create_dir_all(o)
-                .map_err(|e| Error::io(o, format!("cannot create the output folder: {e}")))?;
-            Ok(names
-                .iter()
-                .map(|n| Target::File(Path::new(o).join(format!("{}.gcode", file_stem(n)))))
-                .collect())
+/// The recipe's name, read without building it.
+fn recipe_name(path: &Path) -> Result<String> {
+    let shown = path.display().to_string();
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| Error::io(&shown, format!("cannot read the recipe: {e}")))?;
+    Ok(parse_yaml::<RawRecipe>(&text, &shown)?.name)
+}
+
+/// Where each job writes, and the folder of a batch (for summary.csv).
+fn targets(a: &BuildArgs, jobs: &[Job]) -> Result<(Vec<Result<Target>>, PathBuf)> {
+    let many = jobs.len() > 1;
+    let dir = match a.output.as_deref() {
+        Some("-") if many => {
+            return Err(Error::input(
+                "-o -",
+                "standard output takes one recipe; give a folder with -o to build several",
+            ))
         }
-        Some(o) => Ok(vec![Target::File(PathBuf::from(o))]),
-        None => Ok(names
-            .iter()
-            .map(|n| Target::File(PathBuf::from(format!("{}.gcode", file_stem(n)))))
-            .collect()),
+        Some("-") => return Ok((vec![Ok(Target::Stdout)], PathBuf::from("."))),
+        // folders are made only when a build succeeds (see `make_parent`)
+        Some(o) if many || Path::new(o).is_dir() || o.ends_with('/') => PathBuf::from(o),
+        Some(o) => return Ok((vec![Ok(Target::File(PathBuf::from(o)))], PathBuf::from("."))),
+        None => PathBuf::from("."),
+    };
+    let mut out: Vec<Result<Target>> = Vec::with_capacity(jobs.len());
+    let mut seen: Vec<(PathBuf, String)> = Vec::new();
+    for job in jobs {
+        let t = recipe_name(&job.recipe).and_then(|name| {
+            let file = dir.join(format!("{}.gcode", variant_stem(&name, &job.sweep)));
+            let file = if dir == Path::new(".") {
+                PathBuf::from(file.file_name().unwrap())
+            } else {
+                file
+            };
+            if let Some((_, other)) = seen.iter().find(|(f, _)| *f == file) {
+                return Err(Error::input(
+                    "name",
+                    format!(
+                        "{} and {other} would both write {}; give the recipes different names",
+                        job_label(job),
+                        file.display()
+                    ),
+                )
+                .in_file(&job.recipe.display().to_string()));
+            }
+            seen.push((file.clone(), job_label(job)));
+            Ok(Target::File(file))
+        });
+        out.push(t);
+    }
+    Ok((out, dir))
+}
+
+fn progress(n: usize) -> indicatif::ProgressBar {
+    if n < 2 {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::with_draw_target(
+        Some(n as u64),
+        indicatif::ProgressDrawTarget::stderr_with_hz(4),
+    );
+    if let Ok(style) =
+        indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} builds  {elapsed}")
+    {
+        bar.set_style(style);
+    }
+    bar
+}
+
+/// Makes the folder `file` goes in, if missing.
+fn make_parent(file: &Path) -> Result<()> {
+    match file.parent() {
+        Some(d) if !d.as_os_str().is_empty() => std::fs::create_dir_all(d).map_err(|e| {
+            Error::io(
+                d.display().to_string(),
+                format!("cannot create the folder: {e}"),
+            )
+        }),
+        _ => Ok(()),
     }
 }
 
-/// `p3dp build`: writes G-code and prints a report per recipe.
+/// `p3dp build`: writes G-code and prints a report per job.
 pub fn build(a: &BuildArgs) -> Vec<Error> {
-    let opts = match a.common.options() {
-        Ok(o) => o,
+    let jobs = match a.common.jobs() {
+        Ok(j) => j,
         Err(e) => return vec![e],
     };
-    let mut errors = Vec::new();
-    let mut plans = Vec::new();
-    for path in &a.common.recipes {
-        match a.common.checked_plan(path, &opts) {
-            Ok(p) => plans.push(p),
-            Err(e) => errors.push(e),
+    // open the stats file first where its folder exists: if it cannot be
+    // written, no G-code is; a missing folder is made only after a build
+    let mut stats_file = None;
+    if let Some(p) = &a.stats_json {
+        let folder_exists = p
+            .parent()
+            .is_none_or(|d| d.as_os_str().is_empty() || d.is_dir());
+        if folder_exists {
+            match AtomicFile::create(p) {
+                Ok(f) => stats_file = Some(f),
+                Err(e) => return vec![e],
+            }
         }
     }
-    let names: Vec<String> = plans.iter().map(|p| p.recipe.name.clone()).collect();
-    for (k, n) in names.iter().enumerate() {
-        if let Some(j) = names[..k].iter().position(|m| file_stem(m) == file_stem(n)) {
-            errors.push(Error::input(
-                "name",
-                format!(
-                    "recipes {} and {} are both named `{n}` and would write the same file",
-                    plans[j].path, plans[k].path
-                ),
-            ));
-            return errors;
-        }
-    }
-    let targets = match targets(a, &names) {
+    let (targets, dir) = match targets(a, &jobs) {
         Ok(t) => t,
-        Err(e) => {
-            errors.push(e);
-            return errors;
-        }
+        Err(e) => return vec![e],
     };
-    let mut all_stats = Vec::new();
-    for (p, target) in plans.iter().zip(targets) {
-        let result = match &target {
-            Target::Stdout => {
-                let out = std::io::stdout().lock();
-                p.render(out).map(|s| (s, "standard output".to_string()))
-            }
-            Target::File(f) => {
-                let mut stats = None;
-                write_atomic(f, |file| {
-                    stats = Some(p.render(file)?);
-                    Ok(())
-                })
-                .map(|_| (stats.expect("rendered"), f.display().to_string()))
-            }
-        };
-        match result {
-            Ok((stats, shown)) => {
-                let report = stats.report(&shown);
-                match target {
-                    Target::Stdout => eprint!("{report}"),
-                    Target::File(_) => print!("{report}"),
+    let bar = progress(jobs.len());
+    let results = batch::run_parallel(
+        jobs.len(),
+        a.common.threads(),
+        |k| {
+            let target = targets[k].clone()?;
+            let p = a.common.checked_plan(&jobs[k])?;
+            match &target {
+                Target::Stdout => p
+                    .render(std::io::stdout().lock())
+                    .map(|s| (s, "standard output".to_string(), true)),
+                Target::File(f) => {
+                    make_parent(f)?;
+                    let mut stats = None;
+                    write_atomic(f, |file| {
+                        stats = Some(p.render(file)?);
+                        Ok(())
+                    })
+                    .map(|_| (stats.expect("rendered"), f.display().to_string(), false))
                 }
-                all_stats.push(stats);
             }
-            Err(e) => errors.push(e),
+        },
+        || bar.inc(1),
+    );
+    bar.finish_and_clear();
+    let mut errors = Vec::new();
+    let mut all_stats = Vec::new();
+    let single = jobs.len() == 1;
+    for (job, r) in jobs.iter().zip(&results) {
+        match r {
+            Ok((stats, shown, to_stdout)) => {
+                let text = if single {
+                    stats.report(shown)
+                } else {
+                    summary_line(job, stats, shown)
+                };
+                if *to_stdout {
+                    eprint!("{text}");
+                } else {
+                    print!("{text}");
+                }
+                all_stats.push(stats.clone());
+            }
+            Err(e) => errors.push(e.clone()),
         }
     }
-    if let Some(path) = &a.stats_json {
-        if !all_stats.is_empty() {
-            if let Err(e) = write_stats(path, &all_stats) {
-                errors.push(e);
-            }
+    if let (Some(path), false) = (&a.stats_json, all_stats.is_empty()) {
+        let file = match stats_file {
+            Some(f) => Ok(f),
+            None => make_parent(path).and_then(|_| AtomicFile::create(path)),
+        };
+        if let Err(e) = file.and_then(|f| write_stats(f, &all_stats)) {
+            errors.push(e);
+        }
+    }
+    if !a.common.sweeps.is_empty() && !all_stats.is_empty() {
+        let csv = dir.join("summary.csv");
+        if let Err(e) = make_parent(&csv).and_then(|_| write_summary(&csv, &jobs, &results)) {
+            errors.push(e);
         }
     }
     errors
 }
 
-fn write_stats(path: &Path, stats: &[Stats]) -> Result<()> {
+fn summary_line(job: &Job, s: &Stats, out: &str) -> String {
+    format!(
+        "{} → {out}: {} strings, {:.0} mm / {:.2} g, {}, {} warning{}, sha256 {}\n",
+        job_label(job),
+        s.strings,
+        s.filament_length_mm,
+        s.filament_mass_g,
+        hms(s.print_time_s),
+        s.warnings.len(),
+        plural(s.warnings.len()),
+        &s.gcode_sha256[..12]
+    )
+}
+
+fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+type Built = Result<(Stats, String, bool)>;
+
+/// `summary.csv` of a sweep: one row per variant.
+fn write_summary(path: &Path, jobs: &[Job], results: &[Built]) -> Result<()> {
+    let names: Vec<&str> = jobs[0].sweep.iter().map(|(n, _)| n.as_str()).collect();
+    let mut text = String::from("file,recipe");
+    for n in &names {
+        text.push(',');
+        text.push_str(&csv_field(n));
+    }
+    text.push_str(",filament_mm,filament_g,print_time_s,warnings,sha256,error\n");
+    for (job, r) in jobs.iter().zip(results) {
+        let file = match r {
+            Ok((_, f, _)) => Path::new(f)
+                .file_name()
+                .map(|n| n.to_string_lossy().to_string())
+                .unwrap_or_default(),
+            Err(_) => String::new(),
+        };
+        let mut row = vec![
+            csv_field(&file),
+            csv_field(&job.recipe.display().to_string()),
+        ];
+        row.extend(job.sweep.iter().map(|(_, v)| csv_field(v)));
+        match r {
+            Ok((s, _, _)) => row.extend([
+                format!("{:.3}", s.filament_length_mm),
+                format!("{:.3}", s.filament_mass_g),
+                format!("{:.1}", s.print_time_s),
+                s.warnings.len().to_string(),
+                s.gcode_sha256.clone(),
+                String::new(),
+            ]),
+            Err(e) => row.extend(
+                ["", "", "", "", ""]
+                    .map(String::from)
+                    .into_iter()
+                    .chain([csv_field(&e.to_string())]),
+            ),
+        }
+        text.push_str(&row.join(","));
+        text.push('\n');
+    }
+    write_atomic(path, |f| {
+        f.write_all(text.as_bytes())
+            .map_err(|e| Error::io(path.display().to_string(), e.to_string()))
+    })
+}
+
+fn write_stats(mut file: AtomicFile, stats: &[Stats]) -> Result<()> {
     let json = if stats.len() == 1 {
         serde_json::to_string_pretty(&stats[0])
     } else {
         serde_json::to_string_pretty(stats)
     }
-    .map_err(|e| Error::io(path.display().to_string(), e.to_string()))?;
-    write_atomic(path, |f| {
-        f.write_all(json.as_bytes())
-            .and_then(|_| f.write_all(b"\n"))
-            .map_err(|e| Error::io(path.display().to_string(), e.to_string()))
-    })
+    .map_err(|e| Error::io("--stats-json", e.to_string()))?;
+    file.file()
+        .write_all(json.as_bytes())
+        .and_then(|_| file.file().write_all(b"\n"))
+        .map_err(|e| Error::io("--stats-json", e.to_string()))?;
+    file.commit()
 }
 
 /// `p3dp check`: runs every check and prints the findings; writes nothing.
 pub fn check(c: &Common) -> Vec<Error> {
-    let opts = match c.options() {
-        Ok(o) => o,
+    let jobs = match c.jobs() {
+        Ok(j) => j,
         Err(e) => return vec![e],
     };
+    let opts = |job: &Job| Options {
+        sets: job.sets.clone(),
+        printer: c.printer.clone(),
+    };
+    let results = batch::run_parallel(
+        jobs.len(),
+        c.threads(),
+        |k| plan(&jobs[k].recipe, &opts(&jobs[k])),
+        || {},
+    );
     let mut errors = Vec::new();
-    for path in &c.recipes {
-        match plan(path, &opts) {
+    for (job, r) in jobs.iter().zip(results) {
+        match r {
             Ok(p) => {
                 let n_err = p.failing(false).len();
                 let n_warn = p.findings.len() - n_err;
                 println!(
-                    "{}: {} warning{}, {} error{}",
-                    p.path,
-                    n_warn,
-                    if n_warn == 1 { "" } else { "s" },
-                    n_err,
-                    if n_err == 1 { "" } else { "s" }
+                    "{}: {n_warn} warning{}, {n_err} error{}",
+                    job_label(job),
+                    plural(n_warn),
+                    plural(n_err)
                 );
                 for f in &p.findings {
                     println!("  {} [{}]: {}", f.severity.word(), f.code, f.message);
@@ -223,10 +441,7 @@ pub fn check(c: &Common) -> Vec<Error> {
                 if failing > 0 {
                     errors.push(Error::check(
                         &p.path,
-                        format!(
-                            "{failing} check{} failed",
-                            if failing == 1 { "" } else { "s" }
-                        ),
+                        format!("{failing} check{} failed", plural(failing)),
                     ));
                 }
             }
@@ -236,21 +451,171 @@ pub fn check(c: &Common) -> Vec<Error> {
     errors
 }
 
-/// `p3dp hash`: prints `SHA256  RECIPE`, the hash of exactly what `build` writes.
-pub fn hash(c: &Common) -> Vec<Error> {
-    let opts = match c.options() {
-        Ok(o) => o,
+/// Builds a job into nothing but its hash and line fingerprint.
+fn fingerprint(c: &Common, job: &Job) -> Result<(String, LineHashes)> {
+    let p = c.checked_plan(job)?;
+    let (hw, _) = p.write_gcode(HashWriter::new(LineHashes::default()))?;
+    let (digest, _, lines) = hw.finish_into();
+    Ok((digest, lines))
+}
+
+/// `p3dp hash`: prints `SHA256  RECIPE`, the hash of exactly what `build` writes;
+/// with `--lock` writes a lock file, with `--check` verifies one.
+pub fn hash(a: &HashArgs) -> Vec<Error> {
+    if let Some(lockfile) = &a.check {
+        return check_lock(a, lockfile);
+    }
+    let c = &a.common;
+    let jobs = match c.jobs() {
+        Ok(j) => j,
         Err(e) => return vec![e],
     };
+    let results = batch::run_parallel(jobs.len(), c.threads(), |k| fingerprint(c, &jobs[k]), || {});
     let mut errors = Vec::new();
-    for path in &c.recipes {
-        match c
-            .checked_plan(path, &opts)
-            .and_then(|p| p.render(std::io::sink()))
-        {
-            Ok(s) => println!("{}  {}", s.gcode_sha256, path.display()),
+    let mut entries = Vec::new();
+    for (job, r) in jobs.iter().zip(results) {
+        match r {
+            Ok((digest, lines)) => {
+                let mut line = format!("{digest}  {}", job.recipe.display());
+                if !job.sweep.is_empty() {
+                    let v: Vec<String> =
+                        job.sweep.iter().map(|(n, v)| format!("{n}={v}")).collect();
+                    line.push_str(&format!("  {}", v.join(" ")));
+                }
+                println!("{line}");
+                if let Some(lockfile) = &a.lock {
+                    entries.push(lock_entry(lockfile, job, digest, &lines));
+                }
+            }
+            Err(e) => errors.push(e),
+        }
+    }
+    if let Some(lockfile) = &a.lock {
+        if !errors.is_empty() {
+            errors.push(Error::check(
+                lockfile.display().to_string(),
+                "not written: some recipes failed to build",
+            ));
+            return errors;
+        }
+        let lock = Lock {
+            p3dp_lock: 1,
+            entries,
+        };
+        let text = format!(
+            "# p3dp lock file: each recipe's G-code hash. Verify with: p3dp hash --check {}\n# An intended change of output is a commit that updates this file and says why.\n{}",
+            lockfile.display(),
+            serde_yaml::to_string(&lock).expect("a lock serialises")
+        );
+        if let Err(e) = write_atomic(lockfile, |f| {
+            f.write_all(text.as_bytes())
+                .map_err(|e| Error::io(lockfile.display().to_string(), e.to_string()))
+        }) {
+            errors.push(e);
+        }
+    }
+    errors
+}
+
+/// The path of `recipe` relative to the lock file's folder, `/`-separated.
+fn relative_to_lock(lockfile: &Path, recipe: &Path) -> String {
+    let base = lockfile
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let rel = match (base.canonicalize(), recipe.canonicalize()) {
+        (Ok(b), Ok(r)) => r.strip_prefix(&b).map(Path::to_path_buf).unwrap_or(r),
+        _ => recipe.to_path_buf(),
+    };
+    rel.components()
+        .map(|c| c.as_os_str().to_string_lossy())
+        .collect::<Vec<_>>()
+        .join("/")
+}
+
+fn lock_entry(lockfile: &Path, job: &Job, digest: String, lines: &LineHashes) -> Entry {
+    let b = LineHashes::block_lines(lines.count());
+    Entry {
+        recipe: relative_to_lock(lockfile, &job.recipe),
+        set: job.sets.iter().map(|(n, v)| format!("{n}={v}")).collect(),
+        sha256: digest,
+        lines: lines.count(),
+        block_lines: b,
+        blocks: lines.blocks(b).join(" "),
+    }
+}
+
+fn check_lock(a: &HashArgs, lockfile: &Path) -> Vec<Error> {
+    let shown = lockfile.display().to_string();
+    let lock: Lock = match std::fs::read_to_string(lockfile)
+        .map_err(|e| Error::io(&shown, format!("cannot read the lock file: {e}")))
+        .and_then(|t| parse_yaml(&t, &shown))
+    {
+        Ok(l) => l,
+        Err(e) => return vec![e],
+    };
+    let base = lockfile.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let mut jobs = Vec::new();
+    for (k, e) in lock.entries.iter().enumerate() {
+        let sets: Result<Vec<(String, String)>> = e.set.iter().map(|s| parse_set(s)).collect();
+        match sets {
+            Ok(sets) => jobs.push(Job {
+                recipe: base.join(&e.recipe),
+                sets,
+                sweep: Vec::new(),
+            }),
+            Err(err) => return vec![err.under(&format!("entries[{k}].set")).in_file(&shown)],
+        }
+    }
+    let c = &a.common;
+    let results = batch::run_parallel(jobs.len(), c.threads(), |k| fingerprint(c, &jobs[k]), || {});
+    let mut errors = Vec::new();
+    for ((entry, job), r) in lock.entries.iter().zip(&jobs).zip(results) {
+        let label = if entry.set.is_empty() {
+            entry.recipe.clone()
+        } else {
+            format!("{} [{}]", entry.recipe, entry.set.join(" "))
+        };
+        match r {
+            Ok((digest, _)) if digest == entry.sha256 => println!("ok       {label}"),
+            Ok((digest, lines)) => {
+                let new = lines.blocks(entry.block_lines);
+                let place = match lock::first_difference(&entry.blocks, &new) {
+                    Some(k) => {
+                        let first = k as u64 * entry.block_lines;
+                        let text =
+                            new_line(c, job, first).unwrap_or_else(|| "(end of file)".into());
+                        if entry.block_lines == 1 {
+                            format!("first differing line {}: `{text}`", first + 1)
+                        } else {
+                            format!(
+                                "first difference in lines {}–{}, which now begin `{text}`",
+                                first + 1,
+                                first + entry.block_lines
+                            )
+                        }
+                    }
+                    None => "the lines hash alike block by block (a hash collision?)".into(),
+                };
+                println!("CHANGED  {label}");
+                errors.push(Error::check(
+                    &entry.recipe,
+                    format!(
+                        "G-code changed: sha256 was {}, now {digest}; {place}",
+                        &entry.sha256[..12]
+                    ),
+                ));
+            }
             Err(e) => errors.push(e),
         }
     }
     errors
+}
+
+/// Line `k` (0-based) of the job's G-code, rebuilt.
+fn new_line(c: &Common, job: &Job, k: u64) -> Option<String> {
+    let p = c.checked_plan(job).ok()?;
+    let (buf, _) = p.write_gcode(Vec::new()).ok()?;
+    let text = String::from_utf8(buf).ok()?;
+    text.lines().nth(k as usize).map(str::to_string)
 }

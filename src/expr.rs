@@ -487,8 +487,8 @@ fn fold(node: Node) -> Node {
         Node::Bin(_, a, b) => a.num().is_some() && b.num().is_some(),
         Node::Call(_, args) => args.iter().all(|a| a.num().is_some()),
     };
-    if !all_const {
-        return node;
+    if !all_const || node.depth() > STACK {
+        return node; // too deep to fold: compile reports it
     }
     let mut ops = Vec::new();
     node.emit(&mut ops);
@@ -575,6 +575,9 @@ mod tests {
         assert!(e.contains("unknown name `foo`") && e.contains("x"), "{e}");
         let e = Expr::compile("bar(1)", &p, &[]).unwrap_err();
         assert!(e.contains("unknown function `bar`"), "{e}");
+        let many = format!("max({})", vec!["1"; 40].join(","));
+        let e = Expr::compile(&many, &p, &[]).unwrap_err();
+        assert!(e.contains("nested too deeply"), "{e}");
         let e = Expr::compile("atan2(1)", &p, &[]).unwrap_err();
         assert!(e.contains("takes 2 arguments"), "{e}");
         let e = Expr::compile("c*2", &p, &[var::X]).unwrap_err();

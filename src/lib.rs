@@ -5,12 +5,14 @@
 //! [`primitive`]) → [`step`]s → [`check`]s → [`gcode`] and [`stats`];
 //! [`build`] runs the pipeline and [`cli`] the commands.
 
+pub mod batch;
 pub mod build;
 pub mod check;
 pub mod cli;
 pub mod error;
 pub mod expr;
 pub mod gcode;
+pub mod lock;
 pub mod primitive;
 pub mod printer;
 pub mod recipe;

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand};
-use p3dp::cli::{self, BuildArgs, Common};
+use p3dp::cli::{self, BuildArgs, Common, HashArgs};
 
 /// Procedural 3D printing: YAML recipes of nozzle paths to G-code.
 #[derive(Parser)]
@@ -18,11 +18,17 @@ struct Cli {
 #[derive(Args)]
 struct CommonArgs {
     /// Recipe files (YAML).
-    #[arg(required = true, value_name = "RECIPE")]
+    #[arg(value_name = "RECIPE")]
     recipes: Vec<PathBuf>,
     /// Override a param: NAME=VALUE (VALUE may be an expression); repeatable.
     #[arg(long = "set", value_name = "NAME=VALUE")]
     sets: Vec<String>,
+    /// Build every combination of values: NAME=v1,v2,… or NAME=a..b:step; repeatable.
+    #[arg(long = "sweep", value_name = "NAME=VALUES")]
+    sweeps: Vec<String>,
+    /// At most N builds at once (default: one per core).
+    #[arg(short = 'j', long = "jobs", value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
+    jobs: Option<u16>,
     /// Use this printer (built-in name or YAML file) instead of the recipe's.
     #[arg(long, value_name = "NAME|FILE")]
     printer: Option<String>,
@@ -39,6 +45,8 @@ impl From<CommonArgs> for Common {
         Common {
             recipes: a.recipes,
             sets: a.sets,
+            sweeps: a.sweeps,
+            jobs: a.jobs.map(usize::from),
             printer: a.printer,
             strict: a.strict,
             force: a.force,
@@ -68,6 +76,12 @@ enum Command {
     Hash {
         #[command(flatten)]
         common: CommonArgs,
+        /// Write the hashes (with recipe paths and --set values) to a lock file.
+        #[arg(long, value_name = "FILE", conflicts_with = "check")]
+        lock: Option<PathBuf>,
+        /// Rebuild every entry of a lock file; exit 1 naming each that changed.
+        #[arg(long, value_name = "FILE")]
+        check: Option<PathBuf>,
     },
 }
 
@@ -84,7 +98,15 @@ fn main() -> ExitCode {
             stats_json,
         }),
         Command::Check { common } => cli::check(&common.into()),
-        Command::Hash { common } => cli::hash(&common.into()),
+        Command::Hash {
+            common,
+            lock,
+            check,
+        } => cli::hash(&HashArgs {
+            common: common.into(),
+            lock,
+            check,
+        }),
     };
     let mut code = 0;
     for e in &errors {

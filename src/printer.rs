@@ -222,7 +222,18 @@ impl Printer {
                 ),
             ));
         }
-        Printer::from_file(&base.join(spec))
+        let path = base.join(spec);
+        if !path.is_file() {
+            return Err(Error::input(
+                "printer",
+                format!(
+                    "no printer profile at `{spec}` ({}); built-in printers are {}",
+                    path.display(),
+                    built_in_names().join(", ")
+                ),
+            ));
+        }
+        Printer::from_file(&path)
     }
 
     fn validate(&self) -> Result<()> {
@@ -242,6 +253,29 @@ impl Printer {
         positive("bed.max_z", self.bed.max_z())?;
         positive("max_speed", self.max_speed)?;
         positive("max_flow", self.max_flow)?;
+        match self.bed {
+            Bed::Rectangle { size, .. } => {
+                positive("bed.size[0]", size[0])?;
+                positive("bed.size[1]", size[1])?;
+            }
+            Bed::Circle { diameter, .. } => positive("bed.diameter", diameter)?,
+        }
+        for (k, o) in self.origin.iter().enumerate() {
+            if !o.is_finite() {
+                return Err(Error::input(
+                    format!("origin[{k}]"),
+                    "expected a finite number",
+                ));
+            }
+        }
+        for (key, t) in [
+            ("max_nozzle_temp", self.max_nozzle_temp),
+            ("max_bed_temp", self.max_bed_temp),
+        ] {
+            if !t.is_finite() {
+                return Err(Error::input(key, "expected a finite temperature"));
+            }
+        }
         if self.min_string_length.is_nan() || self.min_string_length < 0.0 {
             return Err(Error::input("min_string_length", "expected a length ≥ 0"));
         }

@@ -410,7 +410,7 @@ struct Ctx<'a> {
 impl Ctx<'_> {
     fn num(&self, n: &Num, place: &str) -> Result<f64> {
         match n {
-            Num::Value(v) => Ok(*v),
+            Num::Value(v) => finite(*v, place),
             Num::Expr(s) => expr::eval_const(s, self.params).map_err(|m| Error::input(place, m)),
         }
     }
@@ -445,6 +445,17 @@ impl Ctx<'_> {
             return Err(Error::input(
                 place,
                 format!("{v} is not allowed; expected a whole number from {min} to 10000000"),
+            ));
+        }
+        Ok(v as u32)
+    }
+
+    fn whole_max(&self, n: &Num, place: &str, min: u32, max: u32) -> Result<u32> {
+        let v = self.num(n, place)?;
+        if v.fract() != 0.0 || v < min as f64 || v > max as f64 {
+            return Err(Error::input(
+                place,
+                format!("{v} is not allowed; expected a whole number from {min} to {max}"),
             ));
         }
         Ok(v as u32)
@@ -500,6 +511,17 @@ const STRING_VARS: &[usize] = &[
     var::T,
 ];
 
+fn finite(v: f64, place: &str) -> Result<f64> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(Error::input(
+            place,
+            format!("{v} is not allowed; expected a finite number"),
+        ))
+    }
+}
+
 fn is_identifier(s: &str) -> bool {
     let mut cs = s.chars();
     matches!(cs.next(), Some(c) if c.is_ascii_alphabetic() || c == '_')
@@ -528,7 +550,7 @@ pub fn eval_params(raw: &IndexMap<String, Num>, sets: &[(String, String)]) -> Re
             Some((_, s)) => expr::eval_const(s, &params)
                 .map_err(|m| Error::input(format!("--set {name}={s}"), m))?,
             None => match value {
-                Num::Value(v) => *v,
+                Num::Value(v) => finite(*v, &place)?,
                 Num::Expr(s) => {
                     expr::eval_const(s, &params).map_err(|m| Error::input(&place, m))?
                 }
@@ -625,7 +647,7 @@ impl Recipe {
         let skirt = match &raw.skirt {
             Some(s) => Some(Skirt {
                 distance: ctx.non_negative(&s.distance, "skirt.distance")?,
-                loops: ctx.whole(&s.loops, "skirt.loops", 1)?,
+                loops: ctx.whole_max(&s.loops, "skirt.loops", 1, 1000)?,
             }),
             None => None,
         };

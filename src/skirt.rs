@@ -74,8 +74,15 @@ fn offset(hull: &[DVec2], d: f64) -> Vec<DVec2> {
     out
 }
 
-/// The skirt around `parts`, or `None` when they extrude nothing.
-pub fn make(skirt: &Skirt, parts: &[Toolpath], spacing: f64, c: f64, v: f64) -> Option<Toolpath> {
+/// The skirt around `parts`, or `None` when they extrude nothing; an error
+/// when it would have more than `max_strings` strings.
+pub fn make(
+    skirt: &Skirt,
+    parts: &[Toolpath],
+    spacing: f64,
+    (c, v): (f64, f64),
+    max_strings: u64,
+) -> Result<Option<Toolpath>, String> {
     let mut pts = Vec::new();
     let mut z = f64::INFINITY;
     for tp in parts {
@@ -89,9 +96,17 @@ pub fn make(skirt: &Skirt, parts: &[Toolpath], spacing: f64, c: f64, v: f64) -> 
         }
     }
     if pts.is_empty() {
-        return None;
+        return Ok(None);
     }
     let hull = convex_hull(pts);
+    // every loop has about as many strings as the first
+    let per_loop = offset(&hull, skirt.distance.max(spacing)).len() as u64 + 1;
+    if per_loop * skirt.loops as u64 > max_strings {
+        return Err(format!(
+            "{} loops of about {per_loop} strings each exceed the limit of {max_strings} strings; expected fewer loops",
+            skirt.loops
+        ));
+    }
     let mut tp: Option<Toolpath> = None;
     for k in 0..skirt.loops {
         let d = skirt.distance + spacing * k as f64;
@@ -109,9 +124,9 @@ pub fn make(skirt: &Skirt, parts: &[Toolpath], spacing: f64, c: f64, v: f64) -> 
             t.draw(at(*p), c, v);
         }
     }
-    let mut tp = tp?;
+    let Some(mut tp) = tp else { return Ok(None) };
     tp.name = "skirt".into();
-    Some(tp)
+    Ok(Some(tp))
 }
 
 #[cfg(test)]
@@ -137,17 +152,13 @@ mod tests {
         part.draw(DVec3::new(5.0, -5.0, 0.3), 0.1, 10.0);
         part.draw(DVec3::new(5.0, 5.0, 0.3), 0.1, 10.0);
         part.draw(DVec3::new(-5.0, 5.0, 0.3), 0.1, 10.0);
-        let s = make(
-            &Skirt {
-                distance: 3.0,
-                loops: 2,
-            },
-            &[part],
-            0.4,
-            0.1,
-            20.0,
-        )
-        .unwrap();
+        let sk = Skirt {
+            distance: 3.0,
+            loops: 2,
+        };
+        // two loops of about 40 strings do not fit in 10
+        assert!(make(&sk, &[part.clone()], 0.4, (0.1, 20.0), 10).is_err());
+        let s = make(&sk, &[part], 0.4, (0.1, 20.0), 1000).unwrap().unwrap();
         // every skirt point is 3 or 3.4 mm from the square
         for p in &s.points {
             let q = DVec2::new(p.x.abs() - 5.0, p.y.abs() - 5.0);

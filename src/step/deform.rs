@@ -91,8 +91,8 @@ impl Deform {
                     DVec3::new(r * libm::cos(th), r * libm::sin(th), z)
                 };
                 if !q.is_finite() {
-                    let (e, value) = worst(pos, &vars);
-                    return Err(not_finite("position", e.src(), value, "point", i, p));
+                    let (key, src, value) = worst(pos, &vars);
+                    return Err(not_finite(&key, src, value, "point", i, p));
                 }
                 tp.points[i] = q;
             }
@@ -103,8 +103,8 @@ impl Deform {
                 let vars = vars_at(p, i, n, polar_too);
                 let q = DVec3::new(f0.eval(&vars), f1.eval(&vars), f2.eval(&vars));
                 if !q.is_finite() {
-                    let (e, value) = worst(pos, &vars);
-                    return Err(not_finite("position", e.src(), value, "point", i, p));
+                    let (key, src, value) = worst(pos, &vars);
+                    return Err(not_finite(&key, src, value, "point", i, p));
                 }
                 tp.points[i] = q;
             }
@@ -113,12 +113,14 @@ impl Deform {
     }
 }
 
-/// The first position expression whose value is not finite.
-fn worst<'a>(pos: &'a [Expr; 3], vars: &crate::expr::Vars) -> (&'a Expr, f64) {
-    pos.iter()
-        .map(|e| (e, e.eval(vars)))
+/// `position[k]` and the value of the first position expression that is not finite.
+fn worst<'a>(pos: &'a [Expr; 3], vars: &crate::expr::Vars) -> (String, &'a str, f64) {
+    (0..3)
+        .map(|k| (k, pos[k].eval(vars)))
         .find(|(_, v)| !v.is_finite())
-        .unwrap_or((&pos[0], f64::NAN))
+        .map_or(("position".into(), pos[0].src(), f64::NAN), |(k, v)| {
+            (format!("position[{k}]"), pos[k].src(), v)
+        })
 }
 
 fn bad_value(key: &str, e: &Expr, value: f64, k: usize, m: DVec3, expected: &str) -> String {
@@ -189,6 +191,9 @@ mod tests {
             speed: None,
         };
         let e = d.apply(&mut line()).unwrap_err();
-        assert!(e.contains("sqrt(y - 0.5)") && e.contains("point 0"), "{e}");
+        assert!(
+            e.contains("position[1] `sqrt(y - 0.5)`") && e.contains("point 0"),
+            "{e}"
+        );
     }
 }
