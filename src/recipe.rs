@@ -17,7 +17,7 @@ use serde::Deserialize;
 
 use crate::error::{Error, Result};
 use crate::expr::{self, var, Expr, Params};
-use crate::primitive::{Circle, Cylinder, Direction, Helix, PathCmd, Primitive, Spiral};
+use crate::primitive::{Arc, Circle, Cylinder, Direction, Helix, PathCmd, Primitive, Spiral};
 use crate::printer::{Material, Printer};
 use crate::step::{Bitmap, Deform, Keep, Modulate, ModulateMap, Step};
 
@@ -246,6 +246,17 @@ pub enum RawPrimitive {
         center: Option<Num3>,
         #[serde(default)]
         segments: Option<Num>,
+    },
+    Arc {
+        radius: Num,
+        start: Num,
+        end: Num,
+        #[serde(default)]
+        center: Option<Num3>,
+        #[serde(default)]
+        segments: Option<Num>,
+        #[serde(default)]
+        rise: Option<Num>,
     },
     Spiral {
         radius: Num,
@@ -766,6 +777,33 @@ fn resolve_primitive(ctx: &Ctx, p: &RawPrimitive) -> Result<Primitive> {
             center: ctx.center(center, "circle")?,
             segments: ctx.segments(segments, "circle")?,
         }),
+        RawPrimitive::Arc {
+            radius,
+            start,
+            end,
+            center,
+            segments,
+            rise,
+        } => {
+            let (start, end) = (ctx.num(start, "arc.start")?, ctx.num(end, "arc.end")?);
+            if start == end {
+                return Err(Error::input(
+                    "arc.end",
+                    "expected an end angle other than start",
+                ));
+            }
+            Primitive::Arc(Arc {
+                radius: ctx.positive(radius, "arc.radius")?,
+                center: ctx.center(center, "arc")?,
+                start,
+                end,
+                segments: ctx.segments(segments, "arc")?,
+                rise: match rise {
+                    Some(n) => ctx.num(n, "arc.rise")?,
+                    None => 0.0,
+                },
+            })
+        }
         RawPrimitive::Spiral {
             radius,
             pitch,

@@ -3,12 +3,14 @@
 //! Each primitive knows how many strings it will make before it makes them,
 //! so an impossible recipe is refused before it allocates.
 
+mod arc;
 mod circle;
 mod cylinder;
 mod helix;
 mod path;
 mod spiral;
 
+pub use arc::Arc;
 pub use circle::Circle;
 pub use cylinder::Cylinder;
 pub use helix::Helix;
@@ -24,6 +26,8 @@ pub enum Primitive {
     Path(Vec<PathCmd>),
     /// One closed circle.
     Circle(Circle),
+    /// Part of a circle, optionally rising.
+    Arc(Arc),
     /// A flat spiral.
     Spiral(Spiral),
     /// A single-wall helix with no seam.
@@ -38,6 +42,7 @@ impl Primitive {
         match self {
             Primitive::Path(cmds) => path::string_count(cmds),
             Primitive::Circle(p) => p.string_count(),
+            Primitive::Arc(p) => p.string_count(),
             Primitive::Spiral(p) => p.string_count(),
             Primitive::Helix(p) => p.string_count(),
             Primitive::Cylinder(p) => p.string_count(),
@@ -50,6 +55,7 @@ impl Primitive {
         match self {
             Primitive::Path(cmds) => path::build(cmds, c, v),
             Primitive::Circle(p) => p.build(c, v),
+            Primitive::Arc(p) => p.build(c, v),
             Primitive::Spiral(p) => p.build(c, v),
             Primitive::Helix(p) => p.build(c, v),
             Primitive::Cylinder(p) => p.build(c, v),
