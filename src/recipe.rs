@@ -346,7 +346,10 @@ pub enum RawStep {
         keep: Option<RawKeep>,
     },
     ModulateMap {
-        image: String,
+        #[serde(default)]
+        image: Option<String>,
+        #[serde(default)]
+        text: Option<String>,
         u: Num,
         v: Num,
         #[serde(default)]
@@ -908,6 +911,7 @@ fn resolve_step(ctx: &Ctx, s: &RawStep) -> Result<Step> {
         }),
         RawStep::ModulateMap {
             image,
+            text,
             u,
             v,
             dark,
@@ -930,9 +934,21 @@ fn resolve_step(ctx: &Ctx, s: &RawStep) -> Result<Step> {
                     format!("{threshold} is not allowed; expected a number from 0 to 1"),
                 ));
             }
-            Step::ModulateMap(ModulateMap {
-                image: load_bitmap(&ctx.dir.join(image), image)
+            let bitmap = match (image, text) {
+                (Some(image), None) => load_bitmap(&ctx.dir.join(image), image)
                     .map_err(|m| Error::input(format!("{key}.image"), m))?,
+                (None, Some(text)) => {
+                    Bitmap::from_text(text).map_err(|m| Error::input(format!("{key}.text"), m))?
+                }
+                _ => {
+                    return Err(Error::input(
+                        key,
+                        "expected exactly one of `image` (a picture file) and `text` (letters)",
+                    ))
+                }
+            };
+            Step::ModulateMap(ModulateMap {
+                image: bitmap,
                 u: ctx.expr(u, POINT_VARS, &format!("{key}.u"))?,
                 v: ctx.expr(v, POINT_VARS, &format!("{key}.v"))?,
                 dark: factor(dark, "dark")?,

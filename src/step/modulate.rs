@@ -39,6 +39,43 @@ impl Bitmap {
     }
 }
 
+impl Bitmap {
+    /// `text` in one line of 8 × 8 glyphs (the `font8x8` crate's), one light
+    /// column between letters and a light border of one pixel all round, so
+    /// that looking up outside the text (clamped to the edge) finds background.
+    pub fn from_text(text: &str) -> Result<Bitmap, String> {
+        use font8x8::UnicodeFonts;
+        if text.is_empty() {
+            return Err("the text is empty; expected at least one character".into());
+        }
+        let chars: Vec<char> = text.chars().collect();
+        let width = 1 + 9 * chars.len();
+        let height = 10;
+        let mut pixels = vec![1.0f32; width * height];
+        for (k, ch) in chars.iter().enumerate() {
+            let glyph = font8x8::BASIC_FONTS
+                .get(*ch)
+                .or_else(|| font8x8::LATIN_FONTS.get(*ch))
+                .ok_or_else(|| {
+                    format!("no glyph for `{ch}` in the 8x8 font (Basic Latin and Latin-1)")
+                })?;
+            for (row, bits) in glyph.iter().enumerate() {
+                for col in 0..8 {
+                    // bit 0 is the leftmost pixel of the row
+                    if bits >> col & 1 == 1 {
+                        pixels[(1 + row) * width + 1 + 9 * k + col] = 0.0;
+                    }
+                }
+            }
+        }
+        Ok(Bitmap {
+            width,
+            height,
+            pixels,
+        })
+    }
+}
+
 /// Cross-section multiplied by `dark` or `light` as the image says.
 #[derive(Clone, Debug)]
 pub struct ModulateMap {
@@ -181,6 +218,22 @@ mod tests {
         assert_eq!(t.strings[0].c, 0.2); // midpoint x = 0.5 → u = 0.25: dark
         assert_eq!(t.strings[1].c, 0.1); // midpoint x = 1.5 → u = 0.75: light
         assert_eq!(t.strings[1].v, 10.0);
+    }
+
+    #[test]
+    fn text_renders_glyphs_with_a_light_border() {
+        let b = Bitmap::from_text("IL").unwrap();
+        assert_eq!((b.width, b.height), (19, 10));
+        // the border and the gap between letters are light
+        assert!((0..b.width).all(|c| b.pixels[c] == 1.0 && b.pixels[9 * b.width + c] == 1.0));
+        assert!((0..b.height).all(|r| b.pixels[r * b.width + 9] == 1.0));
+        // `L` has a full-height left stroke and a bottom bar
+        let dark = |r: usize, c: usize| b.pixels[r * b.width + c] == 0.0;
+        let l0 = 10;
+        assert!((1..8).filter(|&r| (l0..l0 + 8).any(|c| dark(r, c))).count() >= 6);
+        assert!((l0..l0 + 8).filter(|&c| dark(7, c)).count() >= 5);
+        assert!(Bitmap::from_text("").is_err());
+        assert!(Bitmap::from_text("\u{1F600}").is_err());
     }
 
     #[test]
