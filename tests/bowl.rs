@@ -47,11 +47,11 @@ fn letters_only_in_the_band_and_read_from_outside_once_turned_over() {
     let (w, h) = (bitmap.width, bitmap.height);
     // votes[row][col] = (letter strings, all strings) over one copy of the text
     let mut votes = vec![(0usize, 0usize); w * h];
-    for k in 0..tp.len() {
+    for (k, &is_letter) in letter.iter().enumerate() {
         let m = tp.midpoint(k);
         let lat = ((m.z - 0.3) / 40.0).clamp(-1.0, 1.0).asin().to_degrees();
         if lat < lo || lat > hi {
-            assert!(!letter[k], "a letter outside the band at latitude {lat}");
+            assert!(!is_letter, "a letter outside the band at latitude {lat}");
             continue;
         }
         // turned over: theta_final = atan2(-y, x); `repeat` copies around
@@ -61,7 +61,7 @@ fn letters_only_in_the_band_and_read_from_outside_once_turned_over() {
         let col = ((u * w as f64) as usize).min(w - 1);
         let row = ((v * h as f64) as usize).min(h - 1);
         votes[row * w + col].1 += 1;
-        if letter[k] {
+        if is_letter {
             votes[row * w + col].0 += 1;
         }
     }
