@@ -204,3 +204,42 @@ fn the_projects_recipes_match_the_committed_lock() {
         }
     }
 }
+
+#[test]
+fn example_script_makes_the_same_files_as_the_sweep() {
+    let dir = tmp("example-script");
+    let script = root().join("examples/plate-variants.sh");
+    let out = std::process::Command::new("bash")
+        .arg(&script)
+        .arg(dir.join("loop"))
+        .env("P3DP", env!("CARGO_BIN_EXE_p3dp"))
+        .env("CYCLES", "3 4")
+        .env("AMPLITUDES", "1 1.5")
+        .output()
+        .unwrap();
+    ok(&out);
+    let plate = recipe("plate.yaml");
+    ok(&p3dp(
+        &dir,
+        &[
+            "build",
+            plate.to_str().unwrap(),
+            "--sweep",
+            "cycles=3,4",
+            "--sweep",
+            "amplitude=1..1.5:0.5",
+            "-o",
+            "sweep",
+        ],
+    ));
+    for c in ["3", "4"] {
+        for a in ["1", "1.5"] {
+            let name = format!("plate_cycles-{c}_amplitude-{a}.gcode");
+            let (l, s) = (dir.join("loop").join(&name), dir.join("sweep").join(&name));
+            assert!(
+                std::fs::read(&l).unwrap() == std::fs::read(&s).unwrap(),
+                "{name} differs"
+            );
+        }
+    }
+}
