@@ -94,6 +94,7 @@ impl Plan {
         let io = |e: io::Error| Error::io(&self.path, format!("cannot write the G-code: {e}"));
         let top = self.top_z();
         let mut em = Emitter::new(out, &self.recipe);
+        em.thumbnails = crate::preview::thumbnail::blocks(self)?;
         em.start(&self.recipe, top)?;
         for tp in &self.paths {
             em.part(tp).map_err(io)?;

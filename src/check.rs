@@ -62,6 +62,8 @@ pub fn run(recipe: &Recipe, paths: &[&Toolpath]) -> Vec<Finding> {
         machine_limits(recipe, tp, &mut out);
         strings(recipe, tp, &mut out);
     }
+    // pattern_helix: parameters outside the paper's ranges, modulated strings
+    crate::primitive::pattern::findings(recipe, paths, &mut out);
     out
 }
 

@@ -13,6 +13,7 @@ use crate::build::{plan, write_atomic, AtomicFile, HashWriter, Options, Plan};
 use crate::error::{Error, Result};
 use crate::gcode::hms;
 use crate::lock::{self, Entry, LineHashes, Lock};
+use crate::primitive::ca::pattern_png;
 use crate::recipe::{parse_set, parse_yaml, RawRecipe};
 use crate::stats::Stats;
 
@@ -44,6 +45,10 @@ pub struct BuildArgs {
     pub output: Option<String>,
     /// `--stats-json FILE`.
     pub stats_json: Option<PathBuf>,
+    /// `--pattern FILE`: also write the `ca_helix` cell array as a PNG.
+    pub pattern: Option<PathBuf>,
+    /// `--preview FILE`: also write a preview (`.png` or `.html`) of the build.
+    pub preview: Option<PathBuf>,
 }
 
 /// Flags of `hash`.
@@ -233,12 +238,27 @@ fn make_parent(file: &Path) -> Result<()> {
     }
 }
 
+/// Writes the PNG of `--pattern` (after the G-code, so a failed build writes neither).
+fn write_pattern(file: &Path, png: &[u8]) -> Result<()> {
+    make_parent(file)?;
+    write_atomic(file, |f| {
+        f.write_all(png)
+            .map_err(|e| Error::io(file.display().to_string(), e.to_string()))
+    })
+}
+
 /// `p3dp build`: writes G-code and prints a report per job.
 pub fn build(a: &BuildArgs) -> Vec<Error> {
     let jobs = match a.common.jobs() {
         Ok(j) => j,
         Err(e) => return vec![e],
     };
+    if a.pattern.is_some() && jobs.len() > 1 {
+        return vec![Error::input(
+            "--pattern",
+            "writes the cell array of one build; expected one recipe and no --sweep",
+        )];
+    }
     // open the stats file first where its folder exists: if it cannot be
     // written, no G-code is; a missing folder is made only after a build
     let mut stats_file = None;
@@ -253,6 +273,17 @@ pub fn build(a: &BuildArgs) -> Vec<Error> {
             }
         }
     }
+    if let Some(pv) = &a.preview {
+        if jobs.len() > 1 {
+            return vec![Error::input(
+                "--preview",
+                "a preview is of one build; give one recipe (or run `p3dp preview` per recipe)",
+            )];
+        }
+        if let Err(e) = crate::preview::Format::of(pv) {
+            return vec![e];
+        }
+    }
     let (targets, dir) = match targets(a, &jobs) {
         Ok(t) => t,
         Err(e) => return vec![e],
@@ -264,7 +295,12 @@ pub fn build(a: &BuildArgs) -> Vec<Error> {
         |k| {
             let target = targets[k].clone()?;
             let p = a.common.checked_plan(&jobs[k])?;
-            match &target {
+            // the cell array of --pattern, made before any file is written
+            let pattern = match &a.pattern {
+                Some(f) => Some((f, pattern_png(&p.recipe).map_err(|e| e.in_file(&p.path))?)),
+                None => None,
+            };
+            let built = match &target {
                 Target::Stdout => p
                     .render(std::io::stdout().lock())
                     .map(|s| (s, "standard output".to_string(), true)),
@@ -277,7 +313,20 @@ pub fn build(a: &BuildArgs) -> Vec<Error> {
                     })
                     .map(|_| (stats.expect("rendered"), f.display().to_string(), false))
                 }
+            }?;
+            if let Some(pv) = &a.preview {
+                make_parent(pv)?;
+                let line = crate::preview::write(&p, pv, &crate::preview::Options::default())?;
+                if built.2 {
+                    eprintln!("{line}");
+                } else {
+                    println!("{line}");
+                }
             }
+            if let Some((f, png)) = &pattern {
+                write_pattern(f, png)?;
+            }
+            Ok::<_, Error>(built)
         },
         || bar.inc(1),
     );
@@ -618,4 +667,75 @@ fn new_line(c: &Common, job: &Job, k: u64) -> Option<String> {
     let (buf, _) = p.write_gcode(Vec::new()).ok()?;
     let text = String::from_utf8(buf).ok()?;
     text.lines().nth(k as usize).map(str::to_string)
+}
+
+/// Flags of `preview`.
+#[derive(Clone, Debug, Default)]
+pub struct PreviewArgs {
+    /// The recipe.
+    pub recipe: PathBuf,
+    /// `--set NAME=VALUE`, as typed.
+    pub sets: Vec<String>,
+    /// `--printer NAME|FILE`.
+    pub printer: Option<String>,
+    /// `-o FILE`: `.png` or `.html` (default `./NAME.png`).
+    pub output: Option<PathBuf>,
+    /// `--view iso|top|front|side`.
+    pub view: Option<String>,
+    /// `--color speed|cross-section|flow|order|findings|plain`.
+    pub color: Option<String>,
+    /// `--size WxH` (PNG).
+    pub size: Option<String>,
+    /// `--bare`: the model alone, no text or legend (PNG).
+    pub bare: bool,
+}
+
+/// `p3dp preview`: draws the toolpath to a PNG image or an HTML viewer; a
+/// recipe that fails its checks is drawn too (`--color findings` shows where).
+pub fn preview(a: &PreviewArgs) -> Vec<Error> {
+    let run = || -> Result<()> {
+        use crate::preview::{ColorMode, Options as PreviewOptions, Size, View};
+        let opts = PreviewOptions {
+            view: a
+                .view
+                .as_deref()
+                .map(View::parse)
+                .transpose()?
+                .unwrap_or_default(),
+            color: a
+                .color
+                .as_deref()
+                .map(ColorMode::parse)
+                .transpose()?
+                .unwrap_or_default(),
+            size: a
+                .size
+                .as_deref()
+                .map(|s| Size::parse(s, "--size"))
+                .transpose()?
+                .unwrap_or_default(),
+            bare: a.bare,
+        };
+        let sets: Vec<(String, String)> =
+            a.sets.iter().map(|s| parse_set(s)).collect::<Result<_>>()?;
+        let out = match &a.output {
+            Some(o) => o.clone(),
+            None => PathBuf::from(format!("{}.png", file_stem(&recipe_name(&a.recipe)?))),
+        };
+        crate::preview::Format::of(&out)?;
+        let p = plan(
+            &a.recipe,
+            &Options {
+                sets,
+                printer: a.printer.clone(),
+            },
+        )?;
+        make_parent(&out)?;
+        println!("{}", crate::preview::write(&p, &out, &opts)?);
+        Ok(())
+    };
+    match run() {
+        Ok(()) => Vec::new(),
+        Err(e) => vec![e],
+    }
 }

@@ -100,6 +100,9 @@ pub struct Emitter<'a, W: Write> {
     /// The moves so far.
     pub stats: MoveStats,
     pending: Pending,
+    /// Thumbnail blocks written after the header comments (see
+    /// [`crate::preview::thumbnail`]); empty for none.
+    pub thumbnails: String,
 }
 
 #[derive(Default)]
@@ -136,6 +139,7 @@ impl<'a, W: Write> Emitter<'a, W> {
                 ..MoveStats::default()
             },
             pending: Pending::default(),
+            thumbnails: String::new(),
         }
     }
 
@@ -198,6 +202,10 @@ impl<'a, W: Write> Emitter<'a, W> {
         for (k, v) in &recipe.params {
             self.text(&format!("; param {k} = {}", fmt_num(*v)))
                 .map_err(io)?;
+        }
+        if !self.thumbnails.is_empty() {
+            let t = std::mem::take(&mut self.thumbnails);
+            self.text(&t).map_err(io)?;
         }
         self.text(&start).map_err(io)?;
         let mode = match self.printer.extrusion {

@@ -13,6 +13,7 @@ pub mod error;
 pub mod expr;
 pub mod gcode;
 pub mod lock;
+pub mod preview;
 pub mod primitive;
 pub mod printer;
 pub mod recipe;

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand};
-use p3dp::cli::{self, BuildArgs, Common, HashArgs};
+use p3dp::cli::{self, BuildArgs, Common, HashArgs, PreviewArgs};
 
 /// Procedural 3D printing: YAML recipes of nozzle paths to G-code.
 #[derive(Parser)]
@@ -66,6 +66,39 @@ enum Command {
         /// Also write the stats as JSON to FILE.
         #[arg(long, value_name = "FILE")]
         stats_json: Option<PathBuf>,
+        /// Also write the cell array of the recipe's ca_helix as a PNG: one row per layer, filled cells dark.
+        #[arg(long, value_name = "FILE")]
+        pattern: Option<PathBuf>,
+        /// Also write a preview of the build: FILE.png (an image) or FILE.html (a 3D viewer).
+        #[arg(long, value_name = "FILE")]
+        preview: Option<PathBuf>,
+    },
+    /// Draw the toolpath: a PNG image, or a self-contained HTML file with a 3D viewer.
+    Preview {
+        /// Recipe file (YAML).
+        #[arg(value_name = "RECIPE")]
+        recipe: PathBuf,
+        /// Override a param: NAME=VALUE (VALUE may be an expression); repeatable.
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        sets: Vec<String>,
+        /// Use this printer (built-in name or YAML file) instead of the recipe's.
+        #[arg(long, value_name = "NAME|FILE")]
+        printer: Option<String>,
+        /// Output: FILE.png or FILE.html (default ./NAME.png).
+        #[arg(short, long, value_name = "FILE")]
+        output: Option<PathBuf>,
+        /// Where to look from: iso, top, front or side (the viewer starts there).
+        #[arg(long, value_name = "VIEW")]
+        view: Option<String>,
+        /// Colour by speed, cross-section, flow, order, findings or plain.
+        #[arg(long, value_name = "MODE")]
+        color: Option<String>,
+        /// Image size WIDTHxHEIGHT in pixels (PNG; default 1200x900).
+        #[arg(long, value_name = "WxH")]
+        size: Option<String>,
+        /// The model alone: no name, stats or legend (PNG).
+        #[arg(long)]
+        bare: bool,
     },
     /// Run every printability check without writing G-code.
     Check {
@@ -92,10 +125,33 @@ fn main() -> ExitCode {
             common,
             output,
             stats_json,
+            pattern,
+            preview,
         } => cli::build(&BuildArgs {
             common: common.into(),
             output,
             stats_json,
+            pattern,
+            preview,
+        }),
+        Command::Preview {
+            recipe,
+            sets,
+            printer,
+            output,
+            view,
+            color,
+            size,
+            bare,
+        } => cli::preview(&PreviewArgs {
+            recipe,
+            sets,
+            printer,
+            output,
+            view,
+            color,
+            size,
+            bare,
         }),
         Command::Check { common } => cli::check(&common.into()),
         Command::Hash {

@@ -160,6 +160,10 @@ pub struct Printer {
     /// (Kanada's `draw` does the same near a globe's poles), mm.
     #[serde(default = "d_min_string")]
     pub min_string_length: f64,
+    /// PNG thumbnails to embed in the G-code, as `WxH` sizes (PrusaSlicer's
+    /// `; thumbnail begin` blocks); none by default.
+    #[serde(default)]
+    pub thumbnails: Vec<String>,
 }
 
 fn d_travel() -> f64 {
@@ -286,6 +290,7 @@ impl Printer {
                 "expected a length ≥ 0 and a speed > 0",
             ));
         }
+        crate::preview::thumbnail::sizes(&self.thumbnails)?;
         self.fill("start_gcode", &self.start_gcode, &BTreeMap::new())?;
         self.fill("end_gcode", &self.end_gcode, &BTreeMap::new())?;
         Ok(())

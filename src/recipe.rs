@@ -289,6 +289,9 @@ pub enum RawPrimitive {
         #[serde(default)]
         segments: Option<Num>,
     },
+    PatternHelix(crate::primitive::pattern::RawPatternHelix),
+    CaHelix(crate::primitive::ca::RawCaHelix),
+    Solid(crate::primitive::solid::RawSolid),
 }
 
 /// `direction:` of a spiral.
@@ -866,6 +869,16 @@ fn resolve_primitive(ctx: &Ctx, p: &RawPrimitive) -> Result<Primitive> {
             center: ctx.center(center, "cylinder")?,
             segments: ctx.segments(segments, "cylinder")?,
         }),
+        RawPrimitive::PatternHelix(p) => {
+            Primitive::PatternHelix(p.resolve(&|n: &Num, place: &str| ctx.num(n, place))?)
+        }
+        RawPrimitive::CaHelix(p) => {
+            Primitive::CaHelix(p.resolve(&|n: &Num, place: &str| ctx.num(n, place))?)
+        }
+        RawPrimitive::Solid(s) => Primitive::Solid(crate::primitive::solid::resolve(
+            s,
+            &|n: &Num, place: &str| ctx.num(n, place),
+        )?),
     })
 }
 

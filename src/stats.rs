@@ -72,6 +72,9 @@ pub struct Stats {
     pub parts: Vec<PartStats>,
     /// Findings of the checks (warnings and, under `--force`, errors).
     pub warnings: Vec<Finding>,
+    /// The z-buffer of each `solid` part: loops and area per layer (absent without solids).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub solids: Vec<crate::primitive::solid::SolidStats>,
 }
 
 impl Stats {
@@ -120,6 +123,7 @@ impl Stats {
             max_flow_mm3_s: m.max_flow,
             parts,
             warnings: findings,
+            solids: crate::primitive::solid::stats(recipe),
         }
     }
 

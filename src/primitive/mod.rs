@@ -4,17 +4,26 @@
 //! so an impossible recipe is refused before it allocates.
 
 mod arc;
+/// Kanada's cellular-automaton model of self-organised printing: `ca_helix`.
+pub mod ca;
 mod circle;
 mod cylinder;
 mod helix;
 mod path;
+/// The constant-flow helix of self-organised patterns: `pattern_helix`.
+pub mod pattern;
+/// Feature-based solids printed from a z-buffer of loops: `solid`.
+pub mod solid;
 mod spiral;
 
 pub use arc::Arc;
+pub use ca::CaHelix;
 pub use circle::Circle;
 pub use cylinder::Cylinder;
 pub use helix::Helix;
 pub use path::PathCmd;
+pub use pattern::PatternHelix;
+pub use solid::Solid;
 pub use spiral::{Direction, Spiral};
 
 use crate::toolpath::Toolpath;
@@ -34,6 +43,12 @@ pub enum Primitive {
     Helix(Helix),
     /// A filled cylinder of stacked spirals.
     Cylinder(Cylinder),
+    /// Boxes and cylinders combined, printed layer by layer from exact loops.
+    Solid(Solid),
+    /// Kanada's self-organised pattern print: a constant-flow helix.
+    PatternHelix(PatternHelix),
+    /// Kanada's cellular-automaton model of those patterns, as G-code.
+    CaHelix(CaHelix),
 }
 
 impl Primitive {
@@ -46,6 +61,9 @@ impl Primitive {
             Primitive::Spiral(p) => p.string_count(),
             Primitive::Helix(p) => p.string_count(),
             Primitive::Cylinder(p) => p.string_count(),
+            Primitive::Solid(p) => p.string_count(),
+            Primitive::PatternHelix(p) => p.string_count(),
+            Primitive::CaHelix(p) => p.string_count(),
         }
     }
 
@@ -59,6 +77,9 @@ impl Primitive {
             Primitive::Spiral(p) => p.build(c, v),
             Primitive::Helix(p) => p.build(c, v),
             Primitive::Cylinder(p) => p.build(c, v),
+            Primitive::Solid(p) => p.build(c, v),
+            Primitive::PatternHelix(p) => p.build(c, v),
+            Primitive::CaHelix(p) => p.build(c, v),
         }
     }
 }

@@ -1,0 +1,877 @@
+//! Previews: see the print before printing it.
+//!
+//! Three outputs share one reading of the plan ([`Scene`]): a PNG rendering
+//! ([`png`]), a self-contained HTML file with a WebGL viewer ([`html`]) and the
+//! PNG thumbnails PrusaSlicer-style printers show from the G-code
+//! ([`thumbnail`]).
+//!
+//! Projection. Every still view is orthographic. A view is an orthonormal
+//! basis (right, up, toward) of recipe space, `toward` pointing at the viewer:
+//! a point p lands on the screen plane at (u, w) = (p·right, p·up) and lies at
+//! depth d = p·toward (larger is nearer). Pixels are x = cx + s·(u − u_c) and
+//! y = cy − s·(w − w_c), with s the scale in px/mm and (u_c, w_c) the centre of
+//! the drawing; the minus sign because image rows grow downwards.
+//!
+//! Width. A string of cross-section c laid h from the next pass (a helix's
+//! layer height, measured on the path: [`Grid::local`]) fills those h along
+//! the surface and is c / h thick across it, the real string width. The
+//! previews draw it as that flat tube seen from the view: the projection of
+//! its cross-section (an ellipse of axes h along the surface and c / h along
+//! the normal) onto the screen direction across the string. So a wall seen
+//! face on is closed, as printed, and its rim shows the real thickness; a
+//! string with no neighbouring pass is drawn round, of diameter 2·sqrt(c/pi).
+
+pub mod html;
+pub mod png;
+pub mod thumbnail;
+
+mod text;
+
+use std::collections::{HashMap, HashSet};
+use std::path::Path;
+
+use glam::DVec3;
+
+use crate::build::{write_atomic, Plan};
+use crate::error::{Error, Result};
+use crate::stats::Stats;
+
+/// Where the still views look from.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum View {
+    /// Isometric, from the front right and above.
+    #[default]
+    Iso,
+    /// From above: x to the right, y up the image.
+    Top,
+    /// From the front (−y): x to the right, z up.
+    Front,
+    /// From the right (+x): y to the right, z up.
+    Side,
+}
+
+/// An orthonormal view basis in recipe coordinates (right × up = toward).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Basis {
+    /// Screen right.
+    pub right: DVec3,
+    /// Screen up.
+    pub up: DVec3,
+    /// Towards the viewer; depth grows along it.
+    pub toward: DVec3,
+}
+
+impl View {
+    /// The names `--view` accepts.
+    pub const NAMES: [&'static str; 4] = ["iso", "top", "front", "side"];
+
+    /// Parses a `--view` value.
+    pub fn parse(s: &str) -> Result<View> {
+        match s {
+            "iso" => Ok(View::Iso),
+            "top" => Ok(View::Top),
+            "front" => Ok(View::Front),
+            "side" => Ok(View::Side),
+            _ => Err(Error::input(
+                "--view",
+                format!(
+                    "unknown view `{s}`; expected one of {}",
+                    View::NAMES.join(", ")
+                ),
+            )),
+        }
+    }
+
+    /// The view's name.
+    pub fn name(self) -> &'static str {
+        match self {
+            View::Iso => "iso",
+            View::Top => "top",
+            View::Front => "front",
+            View::Side => "side",
+        }
+    }
+
+    /// The view's basis.
+    pub fn basis(self) -> Basis {
+        match self {
+            View::Top => Basis {
+                right: DVec3::X,
+                up: DVec3::Y,
+                toward: DVec3::Z,
+            },
+            View::Front => Basis {
+                right: DVec3::X,
+                up: DVec3::Z,
+                toward: DVec3::NEG_Y,
+            },
+            View::Side => Basis {
+                right: DVec3::Y,
+                up: DVec3::Z,
+                toward: DVec3::X,
+            },
+            View::Iso => {
+                // the viewer on the diagonal (1, −1, 1): right = z × toward
+                // (horizontal), up = toward × right (completes the basis)
+                let toward = DVec3::new(1.0, -1.0, 1.0).normalize();
+                let right = DVec3::Z.cross(toward).normalize();
+                Basis {
+                    right,
+                    up: toward.cross(right),
+                    toward,
+                }
+            }
+        }
+    }
+}
+
+impl Basis {
+    /// Screen-plane coordinates (u, w) and depth d of recipe point `p`.
+    pub fn project(&self, p: DVec3) -> (f64, f64, f64) {
+        (p.dot(self.right), p.dot(self.up), p.dot(self.toward))
+    }
+}
+
+/// What the colour of a string shows.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ColorMode {
+    /// Head speed v, mm/s.
+    #[default]
+    Speed,
+    /// Cross-section c, mm².
+    CrossSection,
+    /// Volumetric flow c·v, mm³/s.
+    Flow,
+    /// Print order, as the print time at which the string is laid, min.
+    Order,
+    /// Grey, with the strings the checks found problems in red.
+    Findings,
+    /// One filament colour (the G-code thumbnails).
+    Plain,
+}
+
+impl ColorMode {
+    /// The names `--color` accepts.
+    pub const NAMES: [&'static str; 6] = [
+        "speed",
+        "cross-section",
+        "flow",
+        "order",
+        "findings",
+        "plain",
+    ];
+
+    /// Parses a `--color` value.
+    pub fn parse(s: &str) -> Result<ColorMode> {
+        match s {
+            "speed" => Ok(ColorMode::Speed),
+            "cross-section" => Ok(ColorMode::CrossSection),
+            "flow" => Ok(ColorMode::Flow),
+            "order" => Ok(ColorMode::Order),
+            "findings" => Ok(ColorMode::Findings),
+            "plain" => Ok(ColorMode::Plain),
+            _ => Err(Error::input(
+                "--color",
+                format!(
+                    "unknown colour mode `{s}`; expected one of {}",
+                    ColorMode::NAMES.join(", ")
+                ),
+            )),
+        }
+    }
+
+    /// The mode's name.
+    pub fn name(self) -> &'static str {
+        match self {
+            ColorMode::Speed => "speed",
+            ColorMode::CrossSection => "cross-section",
+            ColorMode::Flow => "flow",
+            ColorMode::Order => "order",
+            ColorMode::Findings => "findings",
+            ColorMode::Plain => "plain",
+        }
+    }
+
+    /// The unit of the scale, for the legend.
+    pub fn unit(self) -> &'static str {
+        match self {
+            ColorMode::Speed => "mm/s",
+            ColorMode::CrossSection => "mm²",
+            ColorMode::Flow => "mm³/s",
+            ColorMode::Order => "min",
+            ColorMode::Findings | ColorMode::Plain => "",
+        }
+    }
+
+    /// Whether colours follow a number (and the legend is a scale).
+    pub fn is_scalar(self) -> bool {
+        !matches!(self, ColorMode::Findings | ColorMode::Plain)
+    }
+}
+
+/// An image size in pixels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Size {
+    /// Width, px.
+    pub width: u32,
+    /// Height, px.
+    pub height: u32,
+}
+
+impl Default for Size {
+    fn default() -> Size {
+        Size {
+            width: 1200,
+            height: 900,
+        }
+    }
+}
+
+impl Size {
+    /// Largest side accepted, px.
+    pub const MAX: u32 = 8192;
+
+    /// Parses `WxH`, e.g. `1200x900`; `what` names the place for errors.
+    pub fn parse(s: &str, what: &str) -> Result<Size> {
+        let bad = || {
+            Error::input(
+                what,
+                format!(
+                    "`{s}` is not a size; expected WIDTHxHEIGHT in pixels, e.g. 1200x900, each 1 to {}",
+                    Size::MAX
+                ),
+            )
+        };
+        let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
+        let w: u32 = w.trim().parse().map_err(|_| bad())?;
+        let h: u32 = h.trim().parse().map_err(|_| bad())?;
+        if !(1..=Size::MAX).contains(&w) || !(1..=Size::MAX).contains(&h) {
+            return Err(bad());
+        }
+        Ok(Size {
+            width: w,
+            height: h,
+        })
+    }
+}
+
+/// What a preview shows and how big.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Options {
+    /// Still view (the HTML viewer starts there).
+    pub view: View,
+    /// Colour mode (the HTML viewer starts there).
+    pub color: ColorMode,
+    /// Image size (PNG only).
+    pub size: Size,
+    /// Only the model: no title, stats or legend (PNG only).
+    pub bare: bool,
+}
+
+/// The plan read for drawing: per path the spacing of its passes, per string
+/// the print time at its end and whether a check found a problem in it.
+pub struct Scene<'a> {
+    /// The plan drawn.
+    pub plan: &'a Plan,
+    /// Per path: print time at the end of each string, s (Σ length / speed).
+    pub time: Vec<Vec<f64>>,
+    /// Per path: whether a finding concerns each string.
+    pub flagged: Vec<Vec<bool>>,
+    /// Per path: the typical spacing between its passes, mm.
+    pub spacing: Vec<f64>,
+    /// Where the findings are, recipe coordinates.
+    pub marks: Vec<DVec3>,
+}
+
+impl<'a> Scene<'a> {
+    /// Reads `plan` for drawing.
+    pub fn new(plan: &'a Plan) -> Scene<'a> {
+        let fallback = plan.recipe.printer.nozzle_diameter / 2.0;
+        let spacing: Vec<f64> = plan
+            .paths
+            .iter()
+            .map(|tp| pass_spacing(&tp.points).unwrap_or(fallback))
+            .collect();
+        let mut t = 0.0;
+        let time = plan
+            .paths
+            .iter()
+            .map(|tp| {
+                (0..tp.len())
+                    .map(|k| {
+                        let v = tp.strings[k].v;
+                        if v > 0.0 {
+                            t += tp.length(k) / v;
+                        }
+                        t
+                    })
+                    .collect()
+            })
+            .collect();
+        Scene {
+            plan,
+            time,
+            flagged: flags(plan),
+            spacing,
+            marks: plan
+                .findings
+                .iter()
+                .filter_map(|f| f.at.map(DVec3::from_array))
+                .filter(|p| p.is_finite())
+                .collect(),
+        }
+    }
+
+    /// The number string k of path `pi` shows in colour mode `mode`.
+    pub fn value(&self, mode: ColorMode, pi: usize, k: usize) -> f64 {
+        let s = self.plan.paths[pi].strings[k];
+        match mode {
+            ColorMode::Speed => s.v,
+            ColorMode::CrossSection => s.c,
+            ColorMode::Flow => s.c * s.v,
+            ColorMode::Order => self.time[pi][k] / 60.0,
+            ColorMode::Findings | ColorMode::Plain => 0.0,
+        }
+    }
+
+    /// Lowest and highest value over the extruding strings (0, 0 when none).
+    pub fn range(&self, mode: ColorMode) -> (f64, f64) {
+        if mode == ColorMode::Order {
+            let end = self.time.iter().flatten().last().copied().unwrap_or(0.0);
+            return (0.0, end / 60.0);
+        }
+        let mut lo = f64::INFINITY;
+        let mut hi = f64::NEG_INFINITY;
+        for (pi, tp) in self.plan.paths.iter().enumerate() {
+            for (k, s) in tp.strings.iter().enumerate() {
+                if !s.travel {
+                    let v = self.value(mode, pi, k);
+                    if v.is_finite() {
+                        lo = lo.min(v);
+                        hi = hi.max(v);
+                    }
+                }
+            }
+        }
+        if lo > hi {
+            (0.0, 0.0)
+        } else {
+            (lo, hi)
+        }
+    }
+
+    /// The extruding points (all points when nothing extrudes).
+    pub fn extruding_points(&self) -> Vec<DVec3> {
+        let mut out = Vec::new();
+        for tp in &self.plan.paths {
+            for (k, s) in tp.strings.iter().enumerate() {
+                if !s.travel {
+                    let (a, b) = tp.ends(k);
+                    if out.last() != Some(&a) {
+                        out.push(a);
+                    }
+                    out.push(b);
+                }
+            }
+        }
+        if out.is_empty() {
+            out = self
+                .plan
+                .paths
+                .iter()
+                .flat_map(|t| t.points.clone())
+                .collect();
+        }
+        out.retain(|p| p.is_finite());
+        out
+    }
+
+    /// Half the widest a string is drawn, mm: room to leave round the model.
+    pub fn pad(&self) -> f64 {
+        let mut w: f64 = 0.0;
+        for (tp, h) in self.plan.paths.iter().zip(&self.spacing) {
+            let c = tp
+                .strings
+                .iter()
+                .filter(|s| !s.travel)
+                .fold(0.0f64, |a, s| a.max(s.c));
+            w = w.max(*h).max(2.0 * c / h).max(round_diameter(c));
+        }
+        (w / 2.0).min(2.0 * self.plan.recipe.printer.nozzle_diameter)
+    }
+
+    /// The typical spacing between passes, weighted by string count, mm.
+    pub fn typical_spacing(&self) -> f64 {
+        let mut v: Vec<(f64, usize)> = self
+            .spacing
+            .iter()
+            .zip(&self.plan.paths)
+            .map(|(h, tp)| (*h, tp.len()))
+            .collect();
+        v.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let total: usize = v.iter().map(|x| x.1).sum();
+        let mut seen = 0;
+        for (h, n) in &v {
+            seen += n;
+            if 2 * seen >= total {
+                return *h;
+            }
+        }
+        self.plan.recipe.printer.nozzle_diameter / 2.0
+    }
+}
+
+/// Which strings the findings concern, per path.
+///
+/// A finding names its first string only; for the checks that judge each
+/// string by itself (bed limits, speed, flow, finite numbers) every string that
+/// fails the same test is marked, with the printer's limits the checks use.
+fn flags(plan: &Plan) -> Vec<Vec<bool>> {
+    let codes: HashSet<&str> = plan.findings.iter().map(|f| f.code).collect();
+    let p = &plan.recipe.printer;
+    let max_z = p.bed.max_z();
+    let outside = |q: DVec3| {
+        let m = p.to_machine(q);
+        (codes.contains("non-finite") && !q.is_finite())
+            || (codes.contains("out-of-bed") && q.is_finite() && !p.bed.contains_xy(m))
+            || (codes.contains("below-bed") && m.z < 0.0)
+            || (codes.contains("above-max-z") && m.z > max_z)
+    };
+    let mut out: Vec<Vec<bool>> = plan
+        .paths
+        .iter()
+        .map(|tp| {
+            let bad_point: Vec<bool> = tp.points.iter().map(|q| outside(*q)).collect();
+            tp.strings
+                .iter()
+                .enumerate()
+                .map(|(k, s)| {
+                    bad_point[k]
+                        || bad_point[k + 1]
+                        || (!s.travel
+                            && ((codes.contains("speed") && s.v > p.max_speed)
+                                || (codes.contains("flow") && s.c * s.v > p.max_flow)))
+                })
+                .collect()
+        })
+        .collect();
+    for f in &plan.findings {
+        if let (Some(part), Some(k)) = (&f.part, f.string) {
+            for (pi, tp) in plan.paths.iter().enumerate() {
+                if &tp.name == part && k < tp.len() {
+                    out[pi][k] = true;
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Points in a uniform grid, to find the nearest point of another pass: one
+/// much farther along the path than in space (path distance over 3 ×
+/// straight distance), so that a point's own neighbours on its string do not
+/// count.
+pub struct Grid<'t> {
+    points: &'t [DVec3],
+    /// Arc length along the path at each point, mm.
+    s: Vec<f64>,
+    cell: f64,
+    /// The points' indices, sorted by cell.
+    order: Vec<u32>,
+    /// Each cell's run in `order`: start and length.
+    map: HashMap<(i64, i64, i64), (u32, u32)>,
+}
+
+impl<'t> Grid<'t> {
+    /// Files the polyline `points` in cubes of `cell` mm.
+    pub fn new(points: &'t [DVec3], cell: f64) -> Grid<'t> {
+        let mut s = Vec::with_capacity(points.len());
+        let mut acc = 0.0;
+        for (k, p) in points.iter().enumerate() {
+            if k > 0 {
+                let d = p.distance(points[k - 1]);
+                if d.is_finite() {
+                    acc += d;
+                }
+            }
+            s.push(acc);
+        }
+        let mut g = Grid {
+            points,
+            s,
+            cell,
+            order: Vec::new(),
+            map: HashMap::new(),
+        };
+        // one sorted list of (cell, index) and a run per cell: compact for
+        // millions of points
+        let mut keyed: Vec<((i64, i64, i64), u32)> = points
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| p.is_finite())
+            .map(|(i, p)| (g.key(*p), i as u32))
+            .collect();
+        keyed.sort_unstable();
+        g.order = keyed.iter().map(|k| k.1).collect();
+        let mut start = 0;
+        while start < keyed.len() {
+            let c = keyed[start].0;
+            let mut end = start;
+            while end < keyed.len() && keyed[end].0 == c {
+                end += 1;
+            }
+            g.map.insert(c, (start as u32, (end - start) as u32));
+            start = end;
+        }
+        g
+    }
+
+    /// A grid to find the passes next to a surface whose passes lie about
+    /// `h` apart: cells big enough to reach the ends of the strings nearby
+    /// (longer than `h` on a coarse helix).
+    pub fn for_surface(points: &'t [DVec3], h: f64) -> Grid<'t> {
+        let step = (points.len() / 4096).max(1);
+        let mut lens: Vec<f64> = (step..points.len())
+            .step_by(step)
+            .map(|k| points[k].distance(points[k - 1]))
+            .filter(|l| l.is_finite())
+            .collect();
+        lens.sort_by(f64::total_cmp);
+        let l90 = lens.get(lens.len() * 9 / 10).copied().unwrap_or(0.0);
+        Grid::new(points, (3.0 * h).max(0.6 * l90 + 1.5 * h).clamp(0.3, 4.0))
+    }
+
+    fn key(&self, p: DVec3) -> (i64, i64, i64) {
+        let c = |x: f64| (x / self.cell).floor() as i64;
+        (c(p.x), c(p.y), c(p.z))
+    }
+
+    /// Arc length at point k, mm.
+    pub fn arc(&self, k: usize) -> f64 {
+        self.s[k]
+    }
+
+    /// The nearest point of another pass to `p` (at arc length `sp`): the
+    /// closest point on the strings next to the points filed near `p`, or
+    /// `None` when none lies within one cell.
+    pub fn nearest_other(&self, p: DVec3, sp: f64) -> Option<DVec3> {
+        let c = self.key(p);
+        let n = self.points.len();
+        let mut best: Option<(f64, DVec3)> = None;
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    let Some(&(at, len)) = self.map.get(&(c.0 + dx, c.1 + dy, c.2 + dz)) else {
+                        continue;
+                    };
+                    for &j in &self.order[at as usize..(at + len) as usize] {
+                        let j = j as usize;
+                        // the strings ending and starting at point j
+                        let ks = [j.checked_sub(1), (j + 1 < n).then_some(j)];
+                        for k in ks.into_iter().flatten() {
+                            let (a, b) = (self.points[k], self.points[k + 1]);
+                            let ab = b - a;
+                            let l2 = ab.length_squared();
+                            // the closest point of the string: a + f·(b − a)
+                            let f = if l2 > 0.0 {
+                                ((p - a).dot(ab) / l2).clamp(0.0, 1.0)
+                            } else {
+                                0.0
+                            };
+                            let q = a + ab * f;
+                            let d = p.distance(q);
+                            let sq = self.s[k] + f * (self.s[k + 1] - self.s[k]);
+                            // 1 µm: a point revisited (a closed loop) is no neighbour
+                            if d > 1e-3
+                                && d < self.cell
+                                && best.is_none_or(|b| d < b.0)
+                                && (sq - sp).abs() > 3.0 * d
+                            {
+                                best = Some((d, q));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        best.map(|(_, q)| q)
+    }
+
+    /// The surface a string from `a` to `b` lies in, told by the nearest
+    /// other pass to its middle (arc length `sm`): see [`Local`].
+    pub fn local(&self, a: DVec3, b: DVec3, sm: f64) -> Option<Local> {
+        let t = (b - a).normalize_or_zero();
+        let m = (a + b) * 0.5;
+        let q = self.nearest_other(m, sm)?;
+        // the way across to the neighbour, less any part along the string
+        let across = (q - m) - t * (q - m).dot(t);
+        let normal = t.cross(across).normalize_or_zero();
+        if t == DVec3::ZERO || normal == DVec3::ZERO {
+            return None;
+        }
+        Some(Local {
+            normal,
+            spacing: across.length(),
+        })
+    }
+}
+
+/// The wall around one string: it fills the `spacing` across to the next
+/// pass along the surface, and is c / spacing thick along `normal`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Local {
+    /// Unit normal of the surface (either side).
+    pub normal: DVec3,
+    /// Distance across to the neighbouring pass, mm.
+    pub spacing: f64,
+}
+
+/// The distance between neighbouring passes of a polyline (a helix's layer
+/// height, a spiral's pitch), mm, or `None` when it has no such neighbours:
+/// the median, over up to 1024 sampled points, of the distance to the nearest
+/// point of another pass within 2 mm (see [`Grid`]).
+pub fn pass_spacing(points: &[DVec3]) -> Option<f64> {
+    let n = points.len();
+    if n < 3 {
+        return None;
+    }
+    let grid = Grid::new(points, 2.0);
+    let step = (n / 1024).max(1);
+    let mut found: Vec<f64> = (0..n)
+        .step_by(step)
+        .filter(|&i| points[i].is_finite())
+        .filter_map(|i| {
+            let p = points[i];
+            grid.nearest_other(p, grid.arc(i)).map(|q| p.distance(q))
+        })
+        .collect();
+    if found.len() < 8 {
+        return None;
+    }
+    found.sort_by(f64::total_cmp);
+    Some(found[found.len() / 2])
+}
+
+/// The diameter of a round string of cross-section `c`, mm: how a string with
+/// no neighbouring pass is drawn.
+pub fn round_diameter(c: f64) -> f64 {
+    2.0 * (c.max(0.0) / std::f64::consts::PI).sqrt()
+}
+
+/// Colour stops of the scalar modes: blue, cyan, green, yellow, red.
+pub const STOPS: [[f32; 3]; 5] = [
+    [0.23, 0.30, 0.85],
+    [0.10, 0.65, 0.95],
+    [0.25, 0.85, 0.45],
+    [0.98, 0.80, 0.20],
+    [0.90, 0.25, 0.15],
+];
+
+/// The colour of `t` in [0, 1] on the scale of [`STOPS`].
+pub fn colormap(t: f64) -> [f32; 3] {
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let x = t * (STOPS.len() - 1) as f64;
+    let k = (x.floor() as usize).min(STOPS.len() - 2);
+    let f = (x - k as f64) as f32;
+    let (a, b) = (STOPS[k], STOPS[k + 1]);
+    [0, 1, 2].map(|i| a[i] + (b[i] - a[i]) * f)
+}
+
+/// A number for a legend: three significant figures or so, no exponent.
+pub fn fmt_value(v: f64) -> String {
+    let a = v.abs();
+    let s = if a >= 100.0 || a == 0.0 {
+        format!("{v:.0}")
+    } else if a >= 10.0 {
+        format!("{v:.1}")
+    } else if a >= 1.0 {
+        format!("{v:.2}")
+    } else {
+        format!("{v:.3}")
+    };
+    match s.strip_prefix('-') {
+        // never `-0.000`
+        Some(rest) if rest.chars().all(|c| c == '0' || c == '.') => rest.to_string(),
+        _ => s,
+    }
+}
+
+/// The output format, by the file's extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// A PNG image.
+    Png,
+    /// A self-contained HTML viewer.
+    Html,
+}
+
+impl Format {
+    /// The format of `path` by its extension.
+    pub fn of(path: &Path) -> Result<Format> {
+        let ext = path
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase())
+            .unwrap_or_default();
+        match ext.as_str() {
+            "png" => Ok(Format::Png),
+            "html" | "htm" => Ok(Format::Html),
+            _ => Err(Error::input(
+                "preview",
+                format!(
+                    "cannot tell the format of `{}`; expected a file name ending in .png or .html",
+                    path.display()
+                ),
+            )),
+        }
+    }
+}
+
+/// The plan's stats, its G-code written to nowhere.
+pub fn stats(plan: &Plan) -> Result<Stats> {
+    plan.render(std::io::sink())
+}
+
+/// Renders the plan's G-code into memory: its bytes and stats.
+pub fn gcode(plan: &Plan) -> Result<(Vec<u8>, Stats)> {
+    let mut buf = Vec::new();
+    let stats = plan.render(&mut buf)?;
+    Ok((buf, stats))
+}
+
+/// Writes a preview of `plan` to `out` (PNG or HTML by extension, atomically);
+/// returns a line for the report.
+pub fn write(plan: &Plan, out: &Path, opts: &Options) -> Result<String> {
+    let format = Format::of(out)?;
+    let shown = out.display().to_string();
+    let io = |e: std::io::Error| Error::io(&shown, format!("cannot write the preview: {e}"));
+    match format {
+        Format::Png => {
+            let stats = stats(plan)?;
+            let scene = Scene::new(plan);
+            let r = png::render(&scene, Some(&stats), opts);
+            let bytes = png::encode(&r.pixmap, false);
+            write_atomic(out, |f| {
+                use std::io::Write;
+                f.write_all(&bytes).map_err(io)
+            })?;
+            let (x, y) = r.frame.pixel(DVec3::ZERO);
+            Ok(format!(
+                "preview → {shown}: {} × {} px, {} view, colour {}, scale {:.4} px/mm, recipe (0, 0, 0) at pixel ({x:.2}, {y:.2})",
+                opts.size.width,
+                opts.size.height,
+                opts.view.name(),
+                opts.color.name(),
+                r.frame.scale
+            ))
+        }
+        Format::Html => {
+            let (code, stats) = gcode(plan)?;
+            let text = String::from_utf8_lossy(&code);
+            let page = html::page(plan, &text, &stats, opts);
+            write_atomic(out, |f| {
+                use std::io::Write;
+                f.write_all(page.html.as_bytes()).map_err(io)
+            })?;
+            Ok(format!(
+                "preview → {shown}: HTML viewer, {} points, {} kB",
+                page.points,
+                (page.html.len() + 512) / 1024
+            ))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::toolpath::Toolpath;
+
+    #[test]
+    fn view_bases_are_right_handed_and_orthonormal() {
+        for name in View::NAMES {
+            let b = View::parse(name).unwrap().basis();
+            assert!((b.right.cross(b.up) - b.toward).length() < 1e-12, "{name}");
+            for v in [b.right, b.up, b.toward] {
+                assert!((v.length() - 1.0).abs() < 1e-12);
+            }
+            assert!(b.right.dot(b.up).abs() < 1e-12);
+        }
+        // iso: the z axis points up the image, the x axis to the lower right
+        let b = View::Iso.basis();
+        assert!(b.up.z > 0.0 && b.right.z == 0.0);
+        assert!(DVec3::X.dot(b.right) > 0.0 && DVec3::X.dot(b.up) < 0.0);
+        assert!(View::parse("bottom").is_err());
+    }
+
+    #[test]
+    fn sizes_parse() {
+        assert_eq!(
+            Size::parse("220x124", "s").unwrap(),
+            Size {
+                width: 220,
+                height: 124
+            }
+        );
+        assert_eq!(Size::parse("16X16", "s").unwrap().width, 16);
+        for bad in ["", "12", "0x5", "5x", "ax3", "9000x10", "-3x4"] {
+            assert!(Size::parse(bad, "--size").is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn colormap_ends_and_middle() {
+        assert_eq!(colormap(0.0), STOPS[0]);
+        assert_eq!(colormap(1.0), STOPS[4]);
+        assert_eq!(colormap(0.5), STOPS[2]);
+        assert_eq!(colormap(f64::NAN), STOPS[0]);
+        assert_eq!(colormap(7.0), STOPS[4]);
+    }
+
+    #[test]
+    fn legend_numbers() {
+        assert_eq!(fmt_value(123.456), "123");
+        assert_eq!(fmt_value(12.345), "12.3");
+        assert_eq!(fmt_value(0.19634), "0.196");
+        assert_eq!(fmt_value(-0.0001), "0.000");
+        assert_eq!(fmt_value(-2.5), "-2.50");
+        assert_eq!(fmt_value(0.0), "0");
+    }
+
+    #[test]
+    fn helix_spacing_is_its_pitch() {
+        // a helix of radius 10, pitch 0.3, 200 strings a turn, 20 turns
+        let mut tp = Toolpath::new(DVec3::new(10.0, 0.0, 0.0));
+        let n = 200 * 20;
+        for i in 1..=n {
+            let a = std::f64::consts::TAU * i as f64 / 200.0;
+            let z = 0.3 * i as f64 / 200.0;
+            tp.draw(DVec3::new(10.0 * a.cos(), 10.0 * a.sin(), z), 0.1, 30.0);
+        }
+        let h = pass_spacing(&tp.points).unwrap();
+        assert!((h - 0.3).abs() < 0.01, "{h}");
+        // a single straight line has no other pass
+        let mut line = Toolpath::new(DVec3::ZERO);
+        for i in 1..100 {
+            line.draw(DVec3::new(i as f64 * 0.1, 0.0, 0.0), 0.1, 30.0);
+        }
+        assert_eq!(pass_spacing(&line.points), None);
+        // the surface of the helix: a horizontal normal, spacing the pitch
+        let g = Grid::new(&tp.points, 1.0);
+        let k = 200 * 10;
+        let l = g.local(tp.points[k], tp.points[k + 1], g.arc(k)).unwrap();
+        assert!(l.normal.z.abs() < 1e-6, "{l:?}");
+        assert!((l.spacing - 0.3).abs() < 0.01, "{l:?}");
+    }
+
+    #[test]
+    fn formats_by_extension() {
+        assert_eq!(Format::of(Path::new("a/b.PNG")).unwrap(), Format::Png);
+        assert_eq!(Format::of(Path::new("x.html")).unwrap(), Format::Html);
+        assert!(Format::of(Path::new("x.jpg")).is_err());
+        assert!(Format::of(Path::new("x")).is_err());
+    }
+}

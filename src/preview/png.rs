@@ -1,0 +1,595 @@
+//! The PNG preview: the strings as anti-aliased strokes (tiny-skia), painted
+//! far to near so that the front of a sphere hides its back, shaded, with the
+//! recipe's name, its key stats and a colour legend in the corners.
+//!
+//! Shading. A string is a thin tube: lit from a light L fixed to the view, the
+//! brightest normal of a tube with unit tangent T gives the diffuse term
+//! sqrt(1 − (L·T)²), and the highlight is (sqrt(1 − (L·T)²)·sqrt(1 − (V·T)²)
+//! − (L·T)(V·T))^n with V the direction to the viewer (Stalling et al.'s
+//! illuminated lines). A depth cue darkens far strings, so walls read as
+//! surfaces and the near side of a helix stands out from the far side.
+
+use glam::DVec3;
+use tiny_skia::{LineCap, Paint, PathBuilder, Pixmap, Rect, Stroke, Transform};
+
+use super::{
+    colormap, fmt_value, round_diameter, text, Basis, ColorMode, Grid, Options, Scene, Size,
+};
+use crate::gcode::hms;
+use crate::stats::Stats;
+
+/// Where recipe space lands in the image.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Frame {
+    /// The view.
+    pub basis: Basis,
+    /// Pixels per mm.
+    pub scale: f64,
+    /// The screen-plane point (u, w) drawn at `pixel_centre`.
+    pub centre: (f64, f64),
+    /// Pixel where `centre` lands.
+    pub pixel_centre: (f64, f64),
+}
+
+impl Frame {
+    /// The largest scale that fits `points` (grown by `pad` mm on each side)
+    /// into the pixel rectangle `rect` = [x0, y0, x1, y1], centred in it.
+    pub fn fit(basis: Basis, points: &[DVec3], rect: [f64; 4], pad: f64) -> Frame {
+        let mut lo = (f64::INFINITY, f64::INFINITY);
+        let mut hi = (f64::NEG_INFINITY, f64::NEG_INFINITY);
+        for p in points {
+            let (u, w, _) = basis.project(*p);
+            lo = (lo.0.min(u), lo.1.min(w));
+            hi = (hi.0.max(u), hi.1.max(w));
+        }
+        if lo.0 > hi.0 {
+            (lo, hi) = ((0.0, 0.0), (0.0, 0.0));
+        }
+        // extent on the screen plane, at least 1 mm either way
+        let du = (hi.0 - lo.0 + 2.0 * pad).max(1.0);
+        let dw = (hi.1 - lo.1 + 2.0 * pad).max(1.0);
+        let scale = ((rect[2] - rect[0]) / du).min((rect[3] - rect[1]) / dw);
+        Frame {
+            basis,
+            scale,
+            centre: ((lo.0 + hi.0) / 2.0, (lo.1 + hi.1) / 2.0),
+            pixel_centre: ((rect[0] + rect[2]) / 2.0, (rect[1] + rect[3]) / 2.0),
+        }
+    }
+
+    /// The pixel (x right, y down) where recipe point `p` lands.
+    pub fn pixel(&self, p: DVec3) -> (f64, f64) {
+        let (u, w, _) = self.basis.project(p);
+        (
+            self.pixel_centre.0 + self.scale * (u - self.centre.0),
+            self.pixel_centre.1 - self.scale * (w - self.centre.1),
+        )
+    }
+}
+
+/// A rendered preview and where recipe space landed in it.
+pub struct Rendered {
+    /// The image (premultiplied RGBA).
+    pub pixmap: Pixmap,
+    /// The projection used.
+    pub frame: Frame,
+}
+
+const BACKGROUND: [u8; 3] = [30, 33, 39];
+const TEXT: [u8; 3] = [232, 234, 237];
+const DIM: [u8; 3] = [160, 166, 175];
+const RED: [f32; 3] = [0.95, 0.16, 0.13];
+const GREY: [f32; 3] = [0.66, 0.68, 0.71];
+/// PLA orange, the colour of the G-code thumbnails.
+const FILAMENT: [f32; 3] = [0.98, 0.56, 0.16];
+/// Strings shorter than this on screen are merged with their neighbours, px.
+const MERGE_PX: f64 = 2.0;
+
+/// One stroke to paint.
+struct Item {
+    a: (f32, f32),
+    b: (f32, f32),
+    depth: f64,
+    width: f32,
+    /// The number the colour shows (scalar modes).
+    value: f64,
+    /// 0: lit string; 1: travel (faint, unlit); 2: flagged (lit, brighter).
+    kind: u8,
+    tangent: DVec3,
+    /// When the string has a neighbouring pass to tell the surface by: the
+    /// normals of its face and of its edge turned towards the viewer, and the
+    /// share of its width that is face.
+    normal: Option<(DVec3, DVec3, f64)>,
+}
+
+/// The full preview: background, model, and unless `opts.bare` (or the image
+/// is too small for text) the name, stats and legend.
+pub fn render(scene: &Scene, stats: Option<&Stats>, opts: &Options) -> Rendered {
+    let Size { width, height } = opts.size;
+    let mut pm = Pixmap::new(width, height).expect("sizes are 1..=8192");
+    pm.fill(tiny_skia::Color::from_rgba8(
+        BACKGROUND[0],
+        BACKGROUND[1],
+        BACKGROUND[2],
+        255,
+    ));
+    let (w, h) = (width as f64, height as f64);
+    let decorate = !opts.bare && width >= 320 && height >= 240;
+    let ts = (height / 450).clamp(1, 4);
+    let m = 12.0 * ts as f64;
+    let rect = if decorate {
+        let header = m + 8.0 * (ts + 1) as f64 + 4.0 * 11.0 * ts as f64 + 6.0 * ts as f64;
+        let legend = legend_width(scene, opts.color, ts) as f64 + m;
+        [m, header, w - legend - m, h - m]
+    } else {
+        let pad = (w.min(h) * 0.03).max(1.0);
+        [pad, pad, w - pad, h - pad]
+    };
+    let frame = draw_model(&mut pm, scene, opts, rect, 0.75);
+    if decorate {
+        if let Some(st) = stats {
+            header(&mut pm, st, scene, ts);
+        }
+        legend(&mut pm, scene, opts.color, ts);
+    }
+    Rendered { pixmap: pm, frame }
+}
+
+/// A G-code thumbnail: the model alone in filament colour, iso view, on a
+/// transparent background.
+pub fn thumbnail(scene: &Scene, size: Size) -> Pixmap {
+    let mut pm = Pixmap::new(size.width, size.height).expect("sizes are 1..=8192");
+    let (w, h) = (size.width as f64, size.height as f64);
+    let pad = (w.min(h) * 0.04).max(0.5);
+    let opts = Options {
+        view: super::View::Iso,
+        color: ColorMode::Plain,
+        size,
+        bare: true,
+    };
+    draw_model(&mut pm, scene, &opts, [pad, pad, w - pad, h - pad], 1.0);
+    pm
+}
+
+/// Paints the strings into `rect`; returns the projection.
+fn draw_model(
+    pm: &mut Pixmap,
+    scene: &Scene,
+    opts: &Options,
+    rect: [f64; 4],
+    min_px: f32,
+) -> Frame {
+    let basis = opts.view.basis();
+    let pts = scene.extruding_points();
+    let frame = Frame::fit(basis, &pts, rect, scene.pad());
+    let mode = opts.color;
+    let (lo, hi) = scene.range(mode);
+    let mut items = collect(scene, &frame, mode);
+    // painter's algorithm: far (small depth) first; the sort is stable, so
+    // strings at equal depth keep print order and the result is deterministic
+    items.sort_by(|a, b| a.depth.total_cmp(&b.depth));
+    let (dmin, dmax) = items
+        .iter()
+        .filter(|i| i.kind != 1)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), i| {
+            (a.min(i.depth), b.max(i.depth))
+        });
+    let dspan = if dmax > dmin { dmax - dmin } else { 1.0 };
+    // the light comes from the upper left, in front: fixed to the view
+    let light = (-0.6 * basis.right + 0.5 * basis.up + 0.6 * basis.toward).normalize();
+    let mut paint = Paint {
+        anti_alias: true,
+        ..Paint::default()
+    };
+    let mut stroke = Stroke {
+        line_cap: LineCap::Round,
+        ..Stroke::default()
+    };
+    let mut pb = PathBuilder::new();
+    for it in &items {
+        let rgb = if it.kind == 1 {
+            paint.set_color_rgba8(150, 155, 165, 90);
+            stroke.width = min_px.max(1.0);
+            None
+        } else {
+            let base = match mode {
+                ColorMode::Findings if it.kind == 2 => RED,
+                ColorMode::Findings => GREY,
+                ColorMode::Plain => FILAMENT,
+                _ if hi > lo => colormap((it.value - lo) / (hi - lo)),
+                _ => colormap(0.5),
+            };
+            let depth = (it.depth - dmin) / dspan;
+            let (diffuse, spec) = shade(it, light, basis);
+            let mut k = 0.16 + 0.14 * depth + 0.85 * diffuse;
+            if it.kind == 2 {
+                k = 0.55 + 0.45 * k;
+            }
+            let c = base.map(|x| (x as f64 * k + 0.30 * spec).clamp(0.0, 1.0));
+            stroke.width = it.width.max(min_px);
+            Some(c)
+        };
+        if let Some(c) = rgb {
+            let [r, g, b] = c.map(|x| libm::round(x * 255.0) as u8);
+            paint.set_color_rgba8(r, g, b, 255);
+        }
+        pb.move_to(it.a.0, it.a.1);
+        pb.line_to(it.b.0, it.b.1);
+        let Some(path) = pb.finish() else {
+            pb = PathBuilder::new();
+            continue;
+        };
+        pm.stroke_path(&path, &paint, &stroke, Transform::identity(), None);
+        pb = path.clear();
+    }
+    if mode == ColorMode::Findings {
+        paint.set_color_rgba8(255, 60, 50, 255);
+        let r = (6.0 * (rect[3] - rect[1]) / 400.0).clamp(4.0, 24.0) as f32;
+        stroke.width = (r / 5.0).max(1.0);
+        for p in &scene.marks {
+            let (x, y) = frame.pixel(*p);
+            if let Some(path) = PathBuilder::from_circle(x as f32, y as f32, r) {
+                pm.stroke_path(&path, &paint, &stroke, Transform::identity(), None);
+            }
+        }
+    }
+    frame
+}
+
+/// The strings as strokes: runs shorter than [`MERGE_PX`] on screen become
+/// one stroke (length-weighted cross-section and value), so a
+/// 2-million-string vase paints as fast as its pixels allow.
+fn collect(scene: &Scene, frame: &Frame, mode: ColorMode) -> Vec<Item> {
+    let mut items = Vec::new();
+    for (pi, tp) in scene.plan.paths.iter().enumerate() {
+        // neighbouring passes lie about `spacing` apart: look a little further
+        let h_typ = scene.spacing[pi];
+        let grid = Grid::for_surface(&tp.points, h_typ);
+        let mut k = 0;
+        while k < tp.len() {
+            let k0 = k;
+            let start = tp.points[k];
+            let s0 = tp.strings[k];
+            let flag0 = scene.flagged[pi][k];
+            let (mut len, mut csum, mut vsum) = (0.0, 0.0, 0.0);
+            let mut end = k;
+            // take strings while the run is shorter than MERGE_PX and alike
+            while end < tp.len()
+                && tp.strings[end].travel == s0.travel
+                && scene.flagged[pi][end] == flag0
+            {
+                let l = tp.length(end);
+                len += l;
+                csum += tp.strings[end].c * l;
+                vsum += scene.value(mode, pi, end) * l;
+                end += 1;
+                if start.distance(tp.points[end]) * frame.scale >= MERGE_PX {
+                    break;
+                }
+            }
+            let b = tp.points[end];
+            let (c, v) = if len > 0.0 {
+                (csum / len, vsum / len)
+            } else {
+                (s0.c, scene.value(mode, pi, k))
+            };
+            k = end;
+            if !start.is_finite() || !b.is_finite() {
+                continue;
+            }
+            let tangent = (b - start).normalize_or_zero();
+            let local = if s0.travel {
+                None
+            } else {
+                grid.local(start, b, (grid.arc(k0) + grid.arc(end)) / 2.0)
+            };
+            let (width, normal) = match local {
+                _ if s0.travel => (0.0, None),
+                Some(l) => {
+                    let h = l.spacing.clamp(0.5 * h_typ, 2.0 * h_typ);
+                    let (w, face) = flat_tube(&frame.basis, tangent, l.normal, c / h, h);
+                    // the sides facing the viewer
+                    let facing = |n: DVec3| {
+                        if n.dot(frame.basis.toward) < 0.0 {
+                            -n
+                        } else {
+                            n
+                        }
+                    };
+                    let edge = l.normal.cross(tangent).normalize_or_zero();
+                    (w, Some((facing(l.normal), facing(edge), face)))
+                }
+                None => (round_diameter(c), None),
+            };
+            let pa = frame.pixel(start);
+            let pb = frame.pixel(b);
+            items.push(Item {
+                a: (pa.0 as f32, pa.1 as f32),
+                b: (pb.0 as f32, pb.1 as f32),
+                depth: frame.basis.project((start + b) * 0.5).2,
+                width: (width * frame.scale) as f32,
+                value: v,
+                kind: if s0.travel {
+                    1
+                } else if flag0 {
+                    2
+                } else {
+                    0
+                },
+                tangent,
+                normal,
+            });
+        }
+    }
+    items
+}
+
+/// How a string of tangent `t` looks, as a flat tube: its width in mm and
+/// the share of that width that is its face (normal `n`) rather than its edge
+/// (normal b = n × t).
+///
+/// Its cross-section is an ellipse of axes `thick` along n and `along`
+/// across the surface along b; seen across the string's image (screen
+/// direction e) it spans sqrt((thick·n·e)² + (along·b·e)²), of which the face
+/// makes |along·b·e| and the edge |thick·n·e|.
+pub fn flat_tube(basis: &Basis, t: DVec3, n: DVec3, thick: f64, along: f64) -> (f64, f64) {
+    let (du, dw) = (t.dot(basis.right), t.dot(basis.up));
+    let l = (du * du + dw * dw).sqrt();
+    if l < 1e-6 {
+        // seen end on: the larger axis
+        return (thick.max(along), 0.5);
+    }
+    let e = (-dw * basis.right + du * basis.up) / l;
+    let b = n.cross(t).normalize_or_zero();
+    let (face, edge) = ((along * b.dot(e)).abs(), (thick * n.dot(e)).abs());
+    let share = if face + edge > 0.0 {
+        face / (face + edge)
+    } else {
+        1.0
+    };
+    (face.hypot(edge), share)
+}
+
+/// Diffuse and highlight terms of a string under `light` (world direction).
+///
+/// With a surface: for the face (normal N) and the edge (normal B), Lambert
+/// N·L (with a quarter from a fill light at the viewer) and a Blinn highlight
+/// (N·H)^40, H halfway between L and the viewer, mixed by (1 − f)³ where f
+/// is the share of the string's width that is face. Without one the string is a thin tube of
+/// tangent T (illuminated lines): sqrt(1 − (L·T)²), and the highlight
+/// (sqrt(1 − (L·T)²)·sqrt(1 − (V·T)²) − (L·T)(V·T))^24.
+fn shade(it: &Item, light: DVec3, basis: Basis) -> (f64, f64) {
+    let v = basis.toward;
+    let t = it.tangent;
+    let lt = light.dot(t);
+    let tube = (1.0 - lt * lt).max(0.0).sqrt();
+    match it.normal {
+        Some((face, edge, share)) => {
+            let h = (light + v).normalize();
+            let lambert = |n: DVec3| {
+                // the key light, and a fill light from the viewer
+                let d = 0.75 * n.dot(light).max(0.0) + 0.25 * n.dot(v).max(0.0);
+                (d, n.dot(h).max(0.0).powi(40))
+            };
+            let (df, sf) = lambert(face);
+            let (de, se) = lambert(edge);
+            // in a wall the next pass hides most of a string's edge: it shows
+            // where the face is seen nearly edge on (a rim, a wall from above)
+            let e = (1.0 - share).powi(3);
+            let diffuse = (1.0 - e) * df + e * de;
+            // a trace of the tube term keeps the strings visible on the surface
+            (diffuse * (0.85 + 0.15 * tube), (1.0 - e) * sf + e * se)
+        }
+        None => {
+            let vt = v.dot(t);
+            let spec = (tube * (1.0 - vt * vt).max(0.0).sqrt() - lt * vt).max(0.0);
+            (tube, spec.powi(24))
+        }
+    }
+}
+
+/// The legend's labels for `mode`.
+fn legend_lines(scene: &Scene, mode: ColorMode) -> Vec<String> {
+    let (lo, hi) = scene.range(mode);
+    match mode {
+        ColorMode::Plain => Vec::new(),
+        ColorMode::Findings => {
+            let n = scene.plan.findings.len();
+            let mut v = vec![
+                "findings".to_string(),
+                format!("{n} finding{}", if n == 1 { "" } else { "s" }),
+                "no finding".into(),
+            ];
+            let mut codes: Vec<&str> = Vec::new();
+            for f in &scene.plan.findings {
+                if !codes.contains(&f.code) {
+                    codes.push(f.code);
+                }
+            }
+            v.extend(codes.iter().map(|c| format!("· {c}")));
+            v
+        }
+        _ => vec![
+            mode.name().to_string(),
+            mode.unit().to_string(),
+            fmt_value(hi),
+            fmt_value((lo + hi) / 2.0),
+            fmt_value(lo),
+        ],
+    }
+}
+
+fn legend_width(scene: &Scene, mode: ColorMode, ts: u32) -> u32 {
+    let text = legend_lines(scene, mode)
+        .iter()
+        .map(|l| text::width(l, ts))
+        .max()
+        .unwrap_or(0);
+    (22 * ts + text).max(text::width("cross-section", ts))
+}
+
+fn fill(pm: &mut Pixmap, x: f64, y: f64, w: f64, h: f64, rgb: [f32; 3]) {
+    let mut paint = Paint::default();
+    let [r, g, b] = rgb.map(|c| libm::round(c as f64 * 255.0) as u8);
+    paint.set_color_rgba8(r, g, b, 255);
+    paint.anti_alias = false;
+    if let Some(rect) = Rect::from_xywh(x as f32, y as f32, w as f32, h as f32) {
+        pm.fill_rect(rect, &paint, Transform::identity(), None);
+    }
+}
+
+/// The colour scale (or the findings key) in the top-right corner.
+fn legend(pm: &mut Pixmap, scene: &Scene, mode: ColorMode, ts: u32) {
+    let lines = legend_lines(scene, mode);
+    if lines.is_empty() {
+        return;
+    }
+    let s = ts as f64;
+    let m = 12.0 * s;
+    let x = pm.width() as f64 - legend_width(scene, mode, ts) as f64 - m;
+    let line = 11.0 * s;
+    let (xi, yi) = (x as i32, m as i32);
+    text::draw(pm, xi, yi, ts, &lines[0], TEXT);
+    if mode == ColorMode::Findings {
+        let y0 = m + 1.6 * line;
+        for (k, (label, rgb)) in [(&lines[1], RED), (&lines[2], GREY)].iter().enumerate() {
+            let y = y0 + k as f64 * 1.4 * line;
+            fill(pm, x, y, 12.0 * s, 8.0 * s, *rgb);
+            text::draw(pm, (x + 16.0 * s) as i32, y as i32, ts, label, TEXT);
+        }
+        for (k, code) in lines[3..].iter().enumerate() {
+            let y = y0 + (2.0 * 1.4 + k as f64) * line + 4.0 * s;
+            text::draw(pm, xi, y as i32, ts, code, DIM);
+        }
+        return;
+    }
+    text::draw(pm, xi, (m + line) as i32, ts, &lines[1], DIM);
+    let top = m + 2.6 * line;
+    let bar_h = (pm.height() as f64 * 0.42).round().max(20.0);
+    let rows = bar_h as usize;
+    for r in 0..rows {
+        // top row: the highest value
+        let t = 1.0 - r as f64 / (rows - 1) as f64;
+        fill(pm, x, top + r as f64, 14.0 * s, 1.0, colormap(t));
+    }
+    let lx = (x + 20.0 * s) as i32;
+    let (lo, hi) = scene.range(mode);
+    let ticks: Vec<(f64, &String)> = if hi > lo {
+        vec![
+            (top, &lines[2]),
+            (top + bar_h / 2.0, &lines[3]),
+            (top + bar_h, &lines[4]),
+        ]
+    } else {
+        vec![(top + bar_h / 2.0, &lines[3])]
+    };
+    for (y, label) in ticks {
+        text::draw(pm, lx, (y - 4.0 * s) as i32, ts, label, TEXT);
+    }
+}
+
+/// The recipe's name and key stats in the top-left corner.
+fn header(pm: &mut Pixmap, st: &Stats, scene: &Scene, ts: u32) {
+    let s = ts as f64;
+    let m = 12.0 * s;
+    let line = 11.0 * s;
+    text::draw(pm, m as i32, m as i32, ts + 1, &st.name, TEXT);
+    let size = [0, 1, 2].map(|k| st.bbox.max[k] - st.bbox.min[k]);
+    let mut lines = vec![
+        (
+            format!("{:.1} × {:.1} × {:.1} mm", size[0], size[1], size[2]),
+            TEXT,
+        ),
+        (
+            format!(
+                "filament {:.2} m, {:.1} g {}",
+                st.filament_length_mm / 1000.0,
+                st.filament_mass_g,
+                st.material
+            ),
+            TEXT,
+        ),
+        (format!("time {}", hms(st.print_time_s)), TEXT),
+    ];
+    let n = scene.plan.findings.len();
+    if n > 0 {
+        lines.push((
+            format!("{n} finding{}", if n == 1 { "" } else { "s" }),
+            [255, 110, 100],
+        ));
+    }
+    let y0 = m + 8.0 * (ts + 1) as f64 + 6.0 * s;
+    for (k, (l, rgb)) in lines.iter().enumerate() {
+        text::draw(pm, m as i32, (y0 + k as f64 * line) as i32, ts, l, *rgb);
+    }
+}
+
+/// PNG bytes of `pm`: RGB, or RGBA with `alpha` (colours un-premultiplied).
+pub fn encode(pm: &Pixmap, alpha: bool) -> Vec<u8> {
+    use image::ImageEncoder;
+    let n = if alpha { 4 } else { 3 };
+    let mut data = Vec::with_capacity(pm.pixels().len() * n);
+    for px in pm.pixels() {
+        let c = px.demultiply();
+        data.extend_from_slice(&[c.red(), c.green(), c.blue()]);
+        if alpha {
+            data.push(c.alpha());
+        }
+    }
+    let mut out = Vec::new();
+    let kind = if alpha {
+        image::ExtendedColorType::Rgba8
+    } else {
+        image::ExtendedColorType::Rgb8
+    };
+    use image::codecs::png::{CompressionType, FilterType, PngEncoder};
+    PngEncoder::new_with_quality(&mut out, CompressionType::Best, FilterType::Adaptive)
+        .write_image(&data, pm.width(), pm.height(), kind)
+        .expect("PNG encoding into memory does not fail");
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::preview::View;
+
+    #[test]
+    fn fit_centres_and_scales() {
+        let pts = [DVec3::new(-10.0, -5.0, 0.0), DVec3::new(10.0, 5.0, 3.0)];
+        let f = Frame::fit(View::Top.basis(), &pts, [0.0, 0.0, 200.0, 100.0], 0.0);
+        assert_eq!(f.scale, 10.0);
+        assert_eq!(f.pixel(DVec3::ZERO), (100.0, 50.0));
+        // +y is up the image, +x to the right
+        assert_eq!(f.pixel(DVec3::new(10.0, 5.0, 0.0)), (200.0, 0.0));
+        let f = Frame::fit(View::Front.basis(), &pts, [0.0, 0.0, 200.0, 100.0], 0.0);
+        assert_eq!(f.pixel(DVec3::new(0.0, 0.0, 3.0)).1, 50.0 - 1.5 * f.scale);
+    }
+
+    #[test]
+    fn wall_strings_look_as_tall_face_on_and_as_thick_edge_on() {
+        // a horizontal string along x in a vertical wall (normal −y)
+        let (t, n) = (DVec3::X, DVec3::NEG_Y);
+        let front = View::Front.basis();
+        let (w, face) = flat_tube(&front, t, n, 0.5, 0.3);
+        assert!((w - 0.3).abs() < 1e-12 && face == 1.0);
+        let top = View::Top.basis();
+        let (w, face) = flat_tube(&top, t, n, 0.5, 0.3);
+        assert!((w - 0.5).abs() < 1e-12 && face == 0.0);
+        // seen end on (along x, from the side): the larger axis
+        let side = View::Side.basis();
+        assert_eq!(flat_tube(&side, t, n, 0.5, 0.3).0, 0.5);
+    }
+
+    #[test]
+    fn encode_round_trips() {
+        let mut pm = Pixmap::new(5, 4).unwrap();
+        pm.fill(tiny_skia::Color::from_rgba8(10, 20, 30, 255));
+        let bytes = encode(&pm, false);
+        let img = image::load_from_memory(&bytes).unwrap().to_rgb8();
+        assert_eq!(img.dimensions(), (5, 4));
+        assert_eq!(img.get_pixel(4, 3).0, [10, 20, 30]);
+        let img = image::load_from_memory(&encode(&Pixmap::new(3, 3).unwrap(), true)).unwrap();
+        assert_eq!(img.to_rgba8().get_pixel(1, 1).0[3], 0);
+    }
+}

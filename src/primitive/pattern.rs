@@ -1,0 +1,327 @@
+//! `pattern_helix`: the print of Kanada's self-organised patterns
+//! ("Self-organized 3D-printing Patterns Simulated by Cellular Automata",
+//! section 2, Figs. 2 and 3).
+//!
+//! The head runs a helix (pseudo-layers: layer transitions would leave edges)
+//! of 72 strings per turn at constant speed, extruding constantly and far too
+//! little for a wall (c much less than 0.2 mm², layers 0.1 to 0.3 mm high), so
+//! that the filament itself decides where it sticks: chunks stack into stripes
+//! that lean, split, merge and die out. Only the first turn differs: it is
+//! filled and slow, the all-ones initial layer of the automaton. After it,
+//! every string has the same cross-section and speed; any change would print
+//! an artefact (the vertical bars of Fig. 8b come from speed changes).
+//!
+//! The checks warn when a value lies outside what the paper reports patterns
+//! for (section 2: layer height 0.1 to 0.3 mm, head speed 40 to 150 mm/s,
+//! 72 strings per turn, nozzle 0.3 to 0.5 mm, PLA at 180 to 220 °C or ABS at
+//! 220 to 260 °C; Figs. 3, 10 and 12: c from 0.02 to 0.045 mm²), and when a
+//! step has made the strings after the first turn differ.
+
+use glam::DVec3;
+use serde::Deserialize;
+
+use super::ca::{NumFn, Values};
+use super::{on_circle, Primitive};
+use crate::check::{Finding, Severity};
+use crate::error::Result;
+use crate::recipe::{Num, Num3, Recipe};
+use crate::toolpath::Toolpath;
+
+/// The filled, slow first turn when a recipe names none: a normal string, slowly.
+pub const FIRST_LAYER: FirstLayer = FirstLayer {
+    cross_section: 0.2,
+    speed: 15.0,
+};
+
+/// Cross-section and speed of the first turn.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FirstLayer {
+    /// mm².
+    pub cross_section: f64,
+    /// mm/s.
+    pub speed: f64,
+}
+
+/// A constant-flow helix of `layers` turns of `segments` strings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PatternHelix {
+    /// Radius, mm.
+    pub radius: f64,
+    /// Turns, the first one included.
+    pub layers: u32,
+    /// Rise per turn, mm.
+    pub layer_height: f64,
+    /// Strings per turn.
+    pub segments: u32,
+    /// Cross-section after the first turn, mm²; the part's when `None`.
+    pub cross_section: Option<f64>,
+    /// Head speed after the first turn, mm/s; the part's when `None`.
+    pub speed: Option<f64>,
+    /// The first turn.
+    pub first_layer: FirstLayer,
+    /// Centre; the helix starts at height `center.z`.
+    pub center: DVec3,
+}
+
+impl PatternHelix {
+    /// `layers × segments`.
+    pub fn string_count(&self) -> u64 {
+        self.layers as u64 * self.segments as u64
+    }
+
+    /// Point k at angle 2·pi·k/segments and height `layer_height·k/segments`:
+    /// the first `segments` strings at the first layer's c and v, every later
+    /// one at exactly `c` and `v` (the primitive's own, else the part's).
+    pub fn build(&self, c: f64, v: f64) -> Toolpath {
+        let (c, v) = (self.cross_section.unwrap_or(c), self.speed.unwrap_or(v));
+        let n = self.string_count();
+        let seg = self.segments as u64;
+        let at = |k: u64| {
+            let (x, y) = on_circle(self.radius, k, self.segments);
+            let z = self.layer_height * k as f64 / seg as f64;
+            self.center + DVec3::new(x, y, z)
+        };
+        let mut t = Toolpath::with_capacity(at(0), n as usize);
+        let first = self.first_layer;
+        for k in 1..=n {
+            if k <= seg {
+                t.draw(at(k), first.cross_section, first.speed);
+            } else {
+                t.draw(at(k), c, v);
+            }
+        }
+        t
+    }
+}
+
+/// `pattern_helix:` as written in a recipe. Required: `radius`, `layers`
+/// (turns, the first included), `layer_height`; optional (default):
+/// `segments` (72), `cross_section` and `speed` (the part's), `first_layer:
+/// {cross_section, speed}` ({0.2, 15}), `center` ([0, 0, layer_height]).
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawPatternHelix {
+    pub radius: Num,
+    pub layers: Num,
+    pub layer_height: Num,
+    #[serde(default)]
+    pub segments: Option<Num>,
+    #[serde(default)]
+    pub cross_section: Option<Num>,
+    #[serde(default)]
+    pub speed: Option<Num>,
+    #[serde(default)]
+    pub first_layer: Option<RawFirstLayer>,
+    #[serde(default)]
+    pub center: Option<Num3>,
+}
+
+/// `first_layer:` of a `pattern_helix`.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawFirstLayer {
+    #[serde(default)]
+    pub cross_section: Option<Num>,
+    #[serde(default)]
+    pub speed: Option<Num>,
+}
+
+impl RawPatternHelix {
+    /// Resolves every number, naming `pattern_helix.KEY` in errors.
+    pub fn resolve(&self, num: NumFn) -> Result<PatternHelix> {
+        let v = Values {
+            num,
+            key: "pattern_helix",
+        };
+        let positive = |n: &Option<Num>, name: &str, default: f64| {
+            v.opt(n, name, default, |x| x > 0.0, "a number > 0")
+        };
+        let layer_height = v.positive(&self.layer_height, "layer_height")?;
+        let (fc, fv) = match &self.first_layer {
+            Some(f) => (&f.cross_section, &f.speed),
+            None => (&None, &None),
+        };
+        Ok(PatternHelix {
+            radius: v.positive(&self.radius, "radius")?,
+            layers: v.whole(&self.layers, "layers", 1)?,
+            layer_height,
+            segments: match &self.segments {
+                Some(n) => v.whole(n, "segments", 3)?,
+                None => 72,
+            },
+            cross_section: match &self.cross_section {
+                Some(n) => Some(v.positive(n, "cross_section")?),
+                None => None,
+            },
+            speed: match &self.speed {
+                Some(n) => Some(v.positive(n, "speed")?),
+                None => None,
+            },
+            first_layer: FirstLayer {
+                cross_section: positive(
+                    fc,
+                    "first_layer.cross_section",
+                    FIRST_LAYER.cross_section,
+                )?,
+                speed: positive(fv, "first_layer.speed", FIRST_LAYER.speed)?,
+            },
+            center: v.center(&self.center, layer_height)?,
+        })
+    }
+}
+
+/// Whether `v` lies outside [lo, hi].
+fn outside(v: f64, lo: f64, hi: f64) -> bool {
+    !(lo..=hi).contains(&v)
+}
+
+/// The `pattern-range` and `pattern-modulated` warnings of every
+/// `pattern_helix` part; `paths` are the skirt (if any) then the parts.
+pub fn findings(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) {
+    let offset = paths.len().saturating_sub(recipe.parts.len());
+    for (k, part) in recipe.parts.iter().enumerate() {
+        let Primitive::PatternHelix(p) = &part.primitive else {
+            continue;
+        };
+        let name = &part.name;
+        let mut warn = |code: &'static str, what: String| {
+            out.push(Finding {
+                code,
+                severity: Severity::Warning,
+                message: format!("part `{name}`: {what}"),
+                part: Some(name.clone()),
+                string: None,
+                at: None,
+            })
+        };
+        let range = "the paper reports self-organised patterns for";
+        let c = p.cross_section.unwrap_or(part.cross_section);
+        let v = p.speed.unwrap_or(part.speed);
+        if outside(p.layer_height, 0.1, 0.3) {
+            warn("pattern-range", format!("layer_height {} mm is outside 0.1–0.3 mm, the layer heights {range} (section 2)", p.layer_height));
+        }
+        if outside(c, 0.02, 0.045) {
+            warn("pattern-range", format!("cross_section {c} mm² is outside 0.02–0.045 mm², the cross-sections {range} (Figs. 3, 10, 12; \"much less than 0.2 mm²\")"));
+        }
+        if outside(v, 40.0, 150.0) {
+            warn(
+                "pattern-range",
+                format!(
+                    "speed {v} mm/s is outside 40–150 mm/s, the head speeds {range} (section 2)"
+                ),
+            );
+        }
+        if p.segments != 72 {
+            warn(
+                "pattern-range",
+                format!(
+                    "segments {} differs from the 72 strings per turn {range} (section 2)",
+                    p.segments
+                ),
+            );
+        }
+        let nozzle = recipe.printer.nozzle_diameter;
+        if outside(nozzle, 0.3, 0.5) {
+            warn("pattern-range", format!("the nozzle of printer {} ({nozzle} mm) is outside 0.3–0.5 mm, the nozzles {range} (section 2)", recipe.printer.name));
+        }
+        let m = &recipe.material;
+        let temps = match m.name.as_str() {
+            "pla" => Some((180.0, 220.0)),
+            "abs" => Some((220.0, 260.0)),
+            _ => None,
+        };
+        match temps {
+            Some((lo, hi)) if outside(m.nozzle_temp, lo, hi) => warn("pattern-range", format!("nozzle_temp {} °C is outside {lo}–{hi} °C, the {} temperatures {range} (section 2)", m.nozzle_temp, m.name)),
+            Some(_) => {}
+            None => warn("pattern-range", format!("material `{}`: {range} PLA and ABS only (section 2)", m.name)),
+        }
+        if let Some(tp) = paths.get(offset + k) {
+            modulated(tp, &mut warn);
+        }
+    }
+}
+
+/// Warns when the extruding strings after the first turn (the leading run of
+/// strings with the first string's c and v) do not all share one c and v.
+fn modulated(tp: &Toolpath, warn: &mut impl FnMut(&'static str, String)) {
+    let mut strings = tp.strings.iter().enumerate().filter(|(_, s)| !s.travel);
+    let Some((_, first)) = strings.next() else {
+        return;
+    };
+    let mut rest = strings.skip_while(|(_, s)| s.c == first.c && s.v == first.v);
+    let Some((k0, s0)) = rest.next() else {
+        return;
+    };
+    let (mut count, mut first_bad) = (0usize, None);
+    for (k, s) in rest {
+        if s.c != s0.c || s.v != s0.v {
+            count += 1;
+            first_bad.get_or_insert(k);
+        }
+    }
+    if let Some(k) = first_bad {
+        warn("pattern-modulated", format!(
+            "{count} strings after the first turn differ in cross-section or speed from string {k0} (c {} mm², v {} mm/s), the first at string {k}; the paper prints the pattern at constant speed and extrusion, since any change prints an artefact (section 2)",
+            s0.c, s0.v
+        ));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn helix() -> PatternHelix {
+        PatternHelix {
+            radius: 20.0,
+            layers: 150,
+            layer_height: 0.2,
+            segments: 72,
+            cross_section: Some(0.045),
+            speed: Some(60.0),
+            first_layer: FIRST_LAYER,
+            center: DVec3::new(0.0, 0.0, 0.2),
+        }
+    }
+
+    #[test]
+    fn constant_after_the_first_turn() {
+        let t = helix().build(0.196, 40.0);
+        assert_eq!(t.len(), 150 * 72);
+        for (k, s) in t.strings.iter().enumerate() {
+            let want = if k < 72 { (0.2, 15.0) } else { (0.045, 60.0) };
+            assert_eq!((s.c, s.v), want, "string {k}");
+            assert!(!s.travel);
+        }
+        for k in 0..t.len() - 72 {
+            let (a, b) = (t.points[k], t.points[k + 72]);
+            assert!(a.x == b.x && a.y == b.y, "point {k}");
+            assert!((b.z - a.z - 0.2).abs() < 1e-9, "point {k}");
+        }
+        assert_eq!(t.points[0], DVec3::new(20.0, 0.0, 0.2));
+        // without its own c and v the part's are used
+        let t = PatternHelix {
+            cross_section: None,
+            speed: None,
+            ..helix()
+        }
+        .build(0.03, 50.0);
+        assert_eq!((t.strings[100].c, t.strings[100].v), (0.03, 50.0));
+    }
+
+    #[test]
+    fn modulation_after_the_first_turn_is_found() {
+        let mut t = helix().build(0.1, 40.0);
+        let mut found = Vec::new();
+        modulated(&t, &mut |code, m| found.push((code, m)));
+        assert!(found.is_empty(), "{found:?}");
+        t.strings[500].v = 61.0;
+        t.strings[900].c = 0.05;
+        modulated(&t, &mut |code, m| found.push((code, m)));
+        assert_eq!(found.len(), 1);
+        assert!(found[0].1.starts_with("2 strings"), "{}", found[0].1);
+        assert!(found[0].1.contains("string 500"), "{}", found[0].1);
+    }
+}

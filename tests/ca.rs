@@ -1,0 +1,563 @@
+//! Kanada's self-organised patterns ("Self-organized 3D-printing Patterns
+//! Simulated by Cellular Automata"): the constant-flow `pattern_helix` print
+//! and the `ca_helix` automaton, checked on the cell array against the
+//! paper's Figs. 6, 7 and 9, and through the real binary on the recipes.
+
+mod common;
+
+use std::path::Path;
+
+use common::{p3dp, parse, recipe, tmp};
+use p3dp::build::make_part;
+use p3dp::primitive::ca::{Automaton, CaHelix, Initial, Pattern, Rule};
+use p3dp::primitive::{PatternHelix, Primitive};
+use p3dp::recipe::Recipe;
+use sha2::{Digest, Sha256};
+
+const N: usize = 288;
+const SEEDS: std::ops::Range<u64> = 0..8;
+
+/// The basic rule of Fig. 5 on the paper's N = 288, e1 = 0.3, all ones first.
+fn basic(p0: f64, p1: f64, layers: u32, seed: u64) -> Pattern {
+    basic_model(p0, p1, layers, seed).run()
+}
+
+/// Section 4.2's rule with the values of `recipes/ca-split-merge.yaml`.
+fn split_merge(layers: u32, seed: u64) -> Pattern {
+    Automaton {
+        rule: Rule::SplitMerge,
+        consume: 0.7,
+        ..basic_model(0.99, 0.7, layers, seed)
+    }
+    .run()
+}
+
+fn basic_model(p0: f64, p1: f64, layers: u32, seed: u64) -> Automaton {
+    Automaton {
+        cells: N as u32,
+        layers,
+        rule: Rule::Basic,
+        p0,
+        p1,
+        consume: 0.5,
+        e1: 0.3,
+        initial: Initial::Ones,
+        seed,
+    }
+}
+
+/// Of the chunks above turn `from`: the share standing straight on the cell
+/// below (i − N) and the share standing only on the next cell below (i − N + 1).
+fn straight_and_leaning(p: &Pattern, from: usize) -> (f64, f64) {
+    let (mut straight, mut leaning, mut all) = (0, 0, 0);
+    for i in from * N..p.cell.len() {
+        if !p.filled(i) {
+            continue;
+        }
+        all += 1;
+        if p.filled(i - N) {
+            straight += 1;
+        } else if p.filled(i - N + 1) {
+            leaning += 1;
+        }
+    }
+    (straight as f64 / all as f64, leaning as f64 / all as f64)
+}
+
+/// The first turn from which every turn is the one below shifted by `shift`
+/// cells against the head (0: the same columns; 1: leaning one cell a turn).
+fn steady_from(p: &Pattern, shift: usize) -> Option<usize> {
+    let same = |i: usize| p.filled(i) == p.filled(i - N + shift);
+    let mut from = None;
+    for l in 1..p.layers {
+        if (l * N..(l + 1) * N).all(same) {
+            from.get_or_insert(l);
+        } else {
+            from = None;
+        }
+    }
+    from
+}
+
+fn chunks_in(p: &Pattern, layer: usize) -> usize {
+    p.row(layer).iter().filter(|c| c.filled()).count()
+}
+
+#[test]
+fn p0_one_gives_vertical_stripes_fig_6c() {
+    for seed in SEEDS {
+        // p1 = 0: from turn 2 on, the same columns turn after turn
+        let p = basic(1.0, 0.0, 150, seed);
+        assert_eq!(steady_from(&p, 0), Some(2), "seed {seed}");
+        // p1 = 0.5: the chunk after the initial layer's gap can still lean, a
+        // defect that wanders through vertical stripes (the waves of Fig. 11)
+        let p = basic(1.0, 0.5, 150, seed);
+        let (straight, _) = straight_and_leaning(&p, 1);
+        assert!(straight > 0.9, "seed {seed}: {straight}");
+        assert_eq!(p.events().extinctions, 0, "seed {seed}");
+    }
+}
+
+#[test]
+fn p1_one_gives_crisp_leaning_stripes_fig_6b() {
+    for seed in SEEDS {
+        let p = basic(0.99, 1.0, 150, seed);
+        // from an early turn on, every turn is the one below moved one cell
+        let from = steady_from(&p, 1).unwrap_or(usize::MAX);
+        assert!(from <= 5, "seed {seed}: steady from turn {from}");
+        let (straight, leaning) = straight_and_leaning(&p, 5);
+        assert_eq!((straight, leaning), (0.0, 1.0), "seed {seed}");
+        // nothing dies: as many chunks in the top turn as in turn 5
+        assert!(chunks_in(&p, 149) >= chunks_in(&p, 5), "seed {seed}");
+    }
+}
+
+#[test]
+fn p1_below_one_gives_noisy_stripes_fig_6a() {
+    for seed in SEEDS {
+        let p = basic(0.99, 0.9, 150, seed);
+        assert_eq!(steady_from(&p, 1), None, "seed {seed}");
+        assert_eq!(steady_from(&p, 0), None, "seed {seed}");
+        // a mixture: mostly leaning, partly straight
+        let (straight, leaning) = straight_and_leaning(&p, 5);
+        assert!((0.1..0.5).contains(&straight), "seed {seed}: {straight}");
+        assert!(leaning > 0.5, "seed {seed}: {leaning}");
+        let off: usize = (5 * N..p.cell.len())
+            .filter(|&i| p.filled(i) != p.filled(i - N + 1))
+            .count();
+        assert!(off > p.cell.len() / 50, "seed {seed}: {off}");
+    }
+}
+
+#[test]
+fn p0_097_gives_extinctions_fig_7b() {
+    let (mut low, mut high) = (0, 0);
+    for seed in SEEDS {
+        let p = basic(0.97, 0.9, 150, seed);
+        let e = p.events();
+        assert!(e.extinctions >= 20, "seed {seed}: {e:?}");
+        // dead stripes are not replaced: the wall thins out
+        assert!(chunks_in(&p, 149) * 3 < chunks_in(&p, 1) * 2, "seed {seed}");
+        low += e.extinctions;
+        high += basic(0.999, 0.9, 150, seed).events().extinctions;
+        // with p1 = 1 every chunk leans at once, p0 is never consulted, and
+        // nothing dies: Fig. 7b needs p1 < 1 in this model
+        assert_eq!(basic(0.97, 1.0, 150, seed).events().extinctions, 0);
+    }
+    assert!(low > 5 * high, "p0 = 0.97: {low}, p0 = 0.999: {high}");
+}
+
+#[test]
+fn split_merge_splits_and_merges_basic_never_does_fig_9() {
+    let (mut splits, mut merges) = (0, 0);
+    for seed in SEEDS {
+        let e = split_merge(300, seed).events();
+        assert!(e.splits >= 1 && e.merges >= 1, "seed {seed}: {e:?}");
+        splits += e.splits;
+        merges += e.merges;
+        for (p0, p1) in [
+            (0.99, 1.0),
+            (0.99, 0.9),
+            (0.97, 0.9),
+            (1.0, 0.5),
+            (0.97, 0.5),
+        ] {
+            let e = basic(p0, p1, 300, seed).events();
+            assert_eq!((e.splits, e.merges), (0, 0), "basic {p0} {p1} seed {seed}");
+        }
+    }
+    assert!(
+        splits >= 80 && merges >= 20,
+        "{splits} splits, {merges} merges"
+    );
+}
+
+#[test]
+fn the_same_seed_gives_the_same_cells_on_every_machine() {
+    // pinned: a different platform, float library or generator would change these
+    let bits = |p: &Pattern| -> String {
+        let s: String = p
+            .cell
+            .iter()
+            .map(|c| if c.filled() { '1' } else { '0' })
+            .collect();
+        let d = Sha256::digest(s.as_bytes());
+        d.iter().map(|b| format!("{b:02x}")).collect()
+    };
+    let sm = split_merge(300, 7);
+    assert_eq!(sm, split_merge(300, 7));
+    let e = sm.events();
+    let noisy = Automaton {
+        initial: Initial::Random { noise: 0.1 },
+        ..basic_model(0.97, 0.9, 150, 7)
+    }
+    .run();
+    let got = (bits(&sm), e.splits, e.merges, e.extinctions, bits(&noisy));
+    let want = (
+        "bc6baef777a9c25f7232bb4b84d75edb1ebb882b50b043d8502c0be50d1da195".to_string(),
+        18,
+        4,
+        64,
+        "b3e2b6183e4330119a458782f76210f1f6c5005314810a3ee36dc0a56c8364b1".to_string(),
+    );
+    assert_eq!(got, want);
+}
+
+fn load(name: &str, sets: &[(&str, &str)]) -> Recipe {
+    let sets: Vec<(String, String)> = sets
+        .iter()
+        .map(|(k, v)| (k.to_string(), v.to_string()))
+        .collect();
+    Recipe::load(&recipe(name), &sets, None).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+fn ca_of(r: &Recipe) -> CaHelix {
+    match &r.parts[0].primitive {
+        Primitive::CaHelix(h) => *h,
+        p => panic!("not a ca_helix: {p:?}"),
+    }
+}
+
+#[test]
+fn recipes_carry_the_papers_parameter_sets() {
+    let h = ca_of(&load("ca-stripes.yaml", &[]));
+    let m = h.model;
+    assert_eq!(
+        (m.cells, m.rule, m.initial),
+        (288, Rule::Basic, Initial::Ones)
+    );
+    assert!(m.p0 < 1.0 && m.p0 >= 0.99 && m.p1 == 1.0, "Fig. 6b: {m:?}");
+    let m = ca_of(&load("ca-stripes.yaml", &[("p1", "0.9")])).model;
+    assert!(m.p1 < 1.0, "Fig. 6a");
+    let m = ca_of(&load("ca-stripes.yaml", &[("p0", "1"), ("p1", "0.5")])).model;
+    assert_eq!((m.p0, m.p1), (1.0, 0.5), "Fig. 6c");
+
+    let m = ca_of(&load("ca-extinction.yaml", &[])).model;
+    assert_eq!((m.cells, m.rule, m.p0), (288, Rule::Basic, 0.97), "Fig. 7b");
+    assert!(m.p1 < 1.0);
+
+    let m = ca_of(&load("ca-split-merge.yaml", &[])).model;
+    assert_eq!((m.cells, m.rule), (288, Rule::SplitMerge), "Fig. 9");
+    assert!(m.consume > 0.0 && m.consume < 1.0 && m.layers >= 200);
+    let e = m.run().events();
+    assert!(e.splits > 0 && e.merges > 0, "{e:?}");
+
+    // the print: section 2 and Fig. 3a
+    let r = load("self-organised-stripes.yaml", &[]);
+    let Primitive::PatternHelix(p) = r.parts[0].primitive else {
+        panic!("not a pattern_helix")
+    };
+    assert_eq!((p.segments, p.layer_height), (72, 0.3));
+    assert_eq!((p.cross_section, p.speed), (Some(0.045), Some(60.0)));
+    assert!(p.first_layer.cross_section > 0.1 && p.first_layer.speed < p.speed.unwrap());
+    assert_eq!(r.material.name, "pla");
+}
+
+#[test]
+fn pattern_helix_is_constant_after_the_first_turn() {
+    let r = load("self-organised-stripes.yaml", &[]);
+    let Primitive::PatternHelix(p): Primitive = r.parts[0].primitive.clone() else {
+        panic!()
+    };
+    let PatternHelix {
+        segments,
+        layers,
+        layer_height,
+        ..
+    } = p;
+    let seg = segments as usize;
+    let t = make_part(&r, 0).unwrap();
+    assert_eq!(t.len(), layers as usize * seg);
+    let first = t.strings[0];
+    let after = t.strings[seg];
+    assert_ne!((first.c, first.v), (after.c, after.v));
+    for (k, s) in t.strings.iter().enumerate() {
+        assert!(!s.travel);
+        let want = if k < seg { first } else { after };
+        assert!(s.c == want.c && s.v == want.v, "string {k}: {s:?}");
+    }
+    // segments strings a turn: point k + segments straight above point k,
+    // one layer height higher
+    for k in 0..t.len() + 1 - seg {
+        let (a, b) = (t.points[k], t.points[k + seg]);
+        assert!(a.x == b.x && a.y == b.y, "point {k}");
+        assert!((b.z - a.z - layer_height).abs() < 1e-9, "point {k}");
+    }
+    // …and no point of a turn is straight above an earlier point of it
+    for k in 1..seg {
+        assert!(t.points[k].truncate().distance(t.points[0].truncate()) > 1.0);
+    }
+}
+
+#[test]
+fn pattern_helix_gcode_has_one_speed_and_one_flow_after_the_first_turn() {
+    let dir = tmp("ca-pattern-gcode");
+    let out = p3dp(
+        &dir,
+        &[
+            "build",
+            recipe("self-organised-stripes.yaml").to_str().unwrap(),
+            "-o",
+            "s.gcode",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let g = parse(&std::fs::read_to_string(dir.join("s.gcode")).unwrap());
+    let part = g.parts.iter().position(|p| p == "stripes").unwrap();
+    let moves: Vec<_> = g
+        .moves
+        .iter()
+        .filter(|m| m.part == part && m.g == 1 && m.de > 0.0 && m.from != m.to)
+        .collect();
+    assert_eq!(moves.len(), 150 * 72);
+    let area = std::f64::consts::PI * 0.875 * 0.875;
+    for (k, m) in moves.iter().enumerate().skip(72) {
+        let len = (0..3)
+            .map(|a| (m.to[a] - m.from[a]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        assert_eq!(m.f, 3600.0, "move {k}");
+        // E is written to 5 decimals and XYZ to 3: c within rounding
+        let c = m.de * area / len;
+        assert!((c - 0.045).abs() < 0.001, "move {k}: c = {c}");
+    }
+    assert!(moves[..72].iter().all(|m| m.f == 900.0));
+}
+
+#[test]
+fn check_warns_outside_the_papers_ranges() {
+    let dir = tmp("ca-ranges");
+    let r = recipe("self-organised-stripes.yaml");
+    let r = r.to_str().unwrap();
+    let out = p3dp(&dir, &["check", r]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success() && text.contains("0 warnings, 0 errors"),
+        "{text}"
+    );
+    let sets = [
+        "layer_height=0.35",
+        "cross_section=0.1",
+        "speed=30",
+        "first_speed=20",
+    ];
+    let mut args = vec!["check", r];
+    for s in &sets {
+        args.extend(["--set", s]);
+    }
+    let out = p3dp(&dir, &args);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "warnings only: {text}");
+    assert!(text.contains("3 warnings, 0 errors"), "{text}");
+    for what in ["layer_height 0.35", "cross_section 0.1", "speed 30"] {
+        assert!(
+            text.contains(&format!("[pattern-range]: part `stripes`: {what}")),
+            "{text}"
+        );
+    }
+    args.push("--strict");
+    assert_eq!(p3dp(&dir, &args).status.code(), Some(1));
+
+    // a step that modulates the strings after the first turn is found
+    let text = std::fs::read_to_string(recipe("self-organised-stripes.yaml")).unwrap();
+    let modulated = format!(
+        "{text}    steps:\n      - modulate_cylinder: {{factor: \"1 + 0.3*sin(8*theta)\"}}\n"
+    );
+    std::fs::write(dir.join("m.yaml"), modulated).unwrap();
+    let out = p3dp(&dir, &["check", "m.yaml"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("[pattern-modulated]"), "{text}");
+}
+
+/// Pixels of a PNG, rows top to bottom.
+fn png(path: &Path) -> image::GrayImage {
+    image::open(path).unwrap().to_luma8()
+}
+
+#[test]
+fn build_draws_the_pattern_in_gcode_and_png() {
+    for (name, layers) in [
+        ("ca-stripes.yaml", 150),
+        ("ca-extinction.yaml", 150),
+        ("ca-split-merge.yaml", 300),
+    ] {
+        let dir = tmp(&format!("ca-build-{name}"));
+        let out = p3dp(
+            &dir,
+            &[
+                "build",
+                recipe(name).to_str().unwrap(),
+                "-o",
+                "c.gcode",
+                "--pattern",
+                "pics/c.png",
+            ],
+        );
+        assert!(
+            out.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let img = png(&dir.join("pics/c.png"));
+        assert_eq!(img.dimensions(), (N as u32, layers), "{name}");
+        // the cells, first turn first, from the image (first turn at the bottom)
+        let cells: Vec<bool> = (0..layers)
+            .rev()
+            .flat_map(|y| (0..N as u32).map(move |x| (x, y)))
+            .map(|(x, y)| img.get_pixel(x, y).0[0] < 128)
+            .collect();
+        assert!(
+            cells[..N].iter().all(|&c| c),
+            "{name}: the filled first turn"
+        );
+        let cells_of_lib = ca_of(&load(name, &[])).model.run();
+        assert!(cells
+            .iter()
+            .enumerate()
+            .all(|(i, &c)| c == cells_of_lib.filled(i)));
+        // the G-code: after the travel to the start, one move per cell, an
+        // extruding G1 for a filled one and a G0 for an empty one
+        let g = parse(&std::fs::read_to_string(dir.join("c.gcode")).unwrap());
+        let part = g.parts.len() - 1;
+        let moves: Vec<_> = g.moves.iter().filter(|m| m.part == part).collect();
+        // the travel to the first cell's start (radius 20, one layer up)
+        assert_eq!(moves[0].to, [130.0, 110.0, 0.2], "{name}");
+        let moves = &moves[1..=cells.len()];
+        for (i, (m, &c)) in moves.iter().zip(&cells).enumerate() {
+            assert_eq!(
+                (m.g == 1 && m.de > 0.0, m.g == 0),
+                (c, !c),
+                "{name}: cell {i}"
+            );
+        }
+    }
+}
+
+#[test]
+fn builds_are_byte_identical() {
+    let dir = tmp("ca-same-bytes");
+    let r = recipe("ca-split-merge.yaml");
+    let r = r.to_str().unwrap();
+    let a = p3dp(&dir, &["hash", r]);
+    let b = p3dp(&dir, &["hash", r, "-j", "1"]);
+    assert!(a.status.success());
+    assert_eq!(a.stdout, b.stdout);
+    let c = p3dp(&dir, &["hash", r, "--set", "seed=8"]);
+    assert_ne!(a.stdout[..64], c.stdout[..64]);
+}
+
+#[test]
+fn pattern_needs_one_ca_helix_and_one_build() {
+    let dir = tmp("ca-pattern-errors");
+    let sos = recipe("self-organised-stripes.yaml");
+    let out = p3dp(
+        &dir,
+        &[
+            "build",
+            sos.to_str().unwrap(),
+            "-o",
+            "s.gcode",
+            "--pattern",
+            "s.png",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--pattern") && err.contains("0 `ca_helix` parts"),
+        "{err}"
+    );
+    assert!(!dir.join("s.gcode").exists() && !dir.join("s.png").exists());
+    let ca = recipe("ca-stripes.yaml");
+    let out = p3dp(
+        &dir,
+        &[
+            "build",
+            ca.to_str().unwrap(),
+            "-o",
+            "out/",
+            "--sweep",
+            "seed=1,2",
+            "--pattern",
+            "c.png",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--pattern"));
+    assert!(!dir.join("out").exists() && !dir.join("c.png").exists());
+}
+
+const CA: &str = "p3dp: 1\nname: bad\nparts:\n  - primitive:\n      ca_helix: {radius: 20, layers: 10, layer_height: 0.2, KEYS}\n";
+const PH: &str = "p3dp: 1\nname: bad\nparts:\n  - primitive:\n      pattern_helix: {radius: 20, layers: 10, layer_height: 0.2, KEYS}\n";
+
+#[test]
+fn bad_values_are_input_errors_naming_the_key() {
+    let dir = tmp("ca-bad");
+    let cases = [
+        (CA, "p0: 1.5", "ca_helix.p0"),
+        (CA, "p1: -0.1", "ca_helix.p1"),
+        (CA, "e1: 1", "ca_helix.e1"),
+        (CA, "e1: 0", "ca_helix.e1"),
+        (CA, "rule: zigzag", "ca_helix.rule"),
+        (CA, "initial: zeros", "ca_helix.initial"),
+        (CA, "consume: 0.5", "ca_helix.consume"),
+        (CA, "rule: split_merge, consume: 1", "ca_helix.consume"),
+        (CA, "noise: 0.1", "ca_helix.noise"),
+        (CA, "initial: random, noise: 2", "ca_helix.noise"),
+        (CA, "seed: 1.5", "ca_helix.seed"),
+        (CA, "seed: -1", "ca_helix.seed"),
+        (CA, "cells: 2", "ca_helix.cells"),
+        (CA, "center: [0, 0, \"1/0\"]", "ca_helix.center[2]"),
+        (CA, "pe: 1", "ca_helix.pe"),
+        (PH, "segments: 72.5", "pattern_helix.segments"),
+        (PH, "cross_section: 0", "pattern_helix.cross_section"),
+        (
+            PH,
+            "first_layer: {speed: -15}",
+            "pattern_helix.first_layer.speed",
+        ),
+        (
+            PH,
+            "first_layer: {height: 1}",
+            "pattern_helix.first_layer.height",
+        ),
+    ];
+    for (k, (base, keys, place)) in cases.iter().enumerate() {
+        let file = format!("bad{k}.yaml");
+        std::fs::write(dir.join(&file), base.replace("KEYS", keys)).unwrap();
+        let out = p3dp(&dir, &["build", &file]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{keys}: {err}");
+        assert!(
+            err.contains(&format!("parts[0].primitive.{place}")),
+            "{keys}: {err}"
+        );
+        assert!(!dir.join("bad.gcode").exists());
+    }
+    for (base, key) in [(CA, "ca_helix"), (PH, "pattern_helix")] {
+        let text = base
+            .replace("radius: 20", "radius: -20")
+            .replace(", KEYS", "");
+        std::fs::write(dir.join("neg.yaml"), text).unwrap();
+        let out = p3dp(&dir, &["check", "neg.yaml"]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2));
+        assert!(
+            err.contains(&format!("parts[0].primitive.{key}.radius")),
+            "{err}"
+        );
+    }
+    // the string count is known before anything is built
+    let text = CA
+        .replace("name: bad", "name: bad\nmax_strings: 1000")
+        .replace(", KEYS", "");
+    std::fs::write(dir.join("big.yaml"), text).unwrap();
+    let out = p3dp(&dir, &["check", "big.yaml"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(err.contains("would make 2880 strings"), "{err}");
+}

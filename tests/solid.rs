@@ -1,0 +1,602 @@
+//! The `solid` primitive: features → z-buffer of exact loops → perimeters and
+//! ±45° infill → strings (feature-based modelling, paper 003). Through the
+//! library (the exact loops, the strings made from them) and the binary
+//! (the gallery recipes, the stats, bad input).
+
+mod common;
+
+use std::f64::consts::{FRAC_PI_4, PI};
+use std::path::{Path, PathBuf};
+
+use glam::{DVec2, DVec3};
+use p3dp::build::{make_part, plan};
+use p3dp::primitive::solid::piece::Piece;
+use p3dp::primitive::solid::{Loop, Region, Solid};
+use p3dp::primitive::Primitive;
+use p3dp::recipe::Recipe;
+use p3dp::toolpath::Toolpath;
+
+/// Writes a one-part recipe whose primitive is `solid: {SOLID}` (YAML flow
+/// text) into a fresh folder and returns its path.
+fn recipe_file(tag: &str, solid: &str) -> PathBuf {
+    let dir = common::tmp(&format!("solid-{tag}"));
+    let path = dir.join(format!("{tag}.yaml"));
+    let text = format!(
+        "p3dp: 1\nname: {tag}\nprinter: generic-220\nmaterial: pla\nparts:\n  - name: solid\n    speed: 40\n    primitive:\n      solid: {solid}\n"
+    );
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+fn load(path: &Path) -> Recipe {
+    Recipe::load(path, &[], None).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn solid_of(recipe: &Recipe, k: usize) -> &Solid {
+    match &recipe.parts[k].primitive {
+        Primitive::Solid(s) => s,
+        p => panic!("part {k} is not a solid: {p:?}"),
+    }
+}
+
+fn rel(a: f64, b: f64) -> f64 {
+    (a - b).abs() / b.abs()
+}
+
+/// Distance from `p` to a loop.
+fn dist_loop(l: &Loop, p: DVec2) -> f64 {
+    l.pieces
+        .iter()
+        .map(|q| q.distance(p))
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Extruding strings at height `z`, as plan segments.
+fn strings_at(t: &Toolpath, z: f64) -> Vec<(DVec2, DVec2)> {
+    (0..t.len())
+        .filter(|&k| !t.strings[k].travel)
+        .map(|k| t.ends(k))
+        .filter(|(a, b)| (a.z - z).abs() < 1e-9 && (b.z - z).abs() < 1e-9)
+        .map(|(a, b)| (a.truncate(), b.truncate()))
+        .collect()
+}
+
+/// The loops of every perimeter of a layer's islands, and of the innermost
+/// perimeters only, and the infill regions.
+struct LayerGeometry {
+    perimeters: Vec<Loop>,
+    innermost: Vec<Region>,
+    infill_area: f64,
+}
+
+fn geometry(s: &Solid, index: u64) -> LayerGeometry {
+    let layer = s.layers().find(|l| l.index == index).unwrap();
+    let slab = layer.slab.expect("a printed layer");
+    let mut g = LayerGeometry {
+        perimeters: Vec::new(),
+        innermost: Vec::new(),
+        infill_area: 0.0,
+    };
+    for isl in &slab.islands {
+        for r in &isl.perimeters {
+            g.perimeters.extend(r.loops.iter().cloned());
+        }
+        if let Some(r) = isl.perimeters.last() {
+            g.innermost.push(r.clone());
+        }
+        g.infill_area += isl.infill_region.area();
+    }
+    g
+}
+
+/// Splits a layer's strings into perimeter strings (both ends on a perimeter
+/// loop, with that loop) and infill strings.
+#[allow(clippy::type_complexity)]
+fn classify<'a>(
+    g: &'a LayerGeometry,
+    strings: &[(DVec2, DVec2)],
+) -> (Vec<(DVec2, DVec2, &'a Loop)>, Vec<(DVec2, DVec2)>) {
+    let mut per = Vec::new();
+    let mut inf = Vec::new();
+    for &(a, b) in strings {
+        match g
+            .perimeters
+            .iter()
+            .find(|l| dist_loop(l, a) < 1e-9 && dist_loop(l, b) < 1e-9)
+        {
+            Some(l) => per.push((a, b, l)),
+            None => inf.push((a, b)),
+        }
+    }
+    (per, inf)
+}
+
+const BOX_WITH_HOLE: &str = "{layer_height: 0.2, perimeters: 2, chord_tolerance: 0.01, infill: {angle: 45, spacing: 0.8, alternate: true}, features: [{box: {center: [0, 0, 5], size: [40, 30, 10]}}, {cylinder: {center: [0, 0, 0], radius: 8, height: 10, op: subtract}}, {cylinder: {center: [15, 0, 10], radius: 5, height: 6, op: union}}]}";
+
+#[test]
+fn each_layer_of_a_box_with_a_hole_has_the_exact_area() {
+    let path = recipe_file("box-hole", BOX_WITH_HOLE);
+    let r = load(&path);
+    let s = solid_of(&r, 0);
+    let below = 40.0 * 30.0 - PI * 64.0;
+    let boss = PI * 25.0;
+    let mut n = 0;
+    for layer in s.layers() {
+        let region = &layer.slab.expect("every layer prints").region;
+        let (want, loops) = if layer.z <= 10.0 + 1e-9 {
+            (below, 2)
+        } else {
+            (boss, 1)
+        };
+        assert!(
+            rel(region.area(), want) < 1e-6,
+            "z {}: {}",
+            layer.z,
+            region.area()
+        );
+        assert!(
+            rel(region.area(), want) < 1e-12,
+            "arcs are exact until discretised"
+        );
+        assert_eq!(region.loops.len(), loops);
+        n += 1;
+    }
+    assert_eq!(n, 80, "layers 0.2 … 16.0");
+    // the same z-buffer in the stats JSON of a real build
+    let dir = path.parent().unwrap();
+    let out = common::p3dp(
+        dir,
+        &["build", "box-hole.yaml", "--stats-json", "stats.json"],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("stats.json")).unwrap()).unwrap();
+    let layers = json["solids"][0]["layers"].as_array().unwrap();
+    assert_eq!(json["solids"][0]["part"], "solid");
+    assert_eq!(layers.len(), 80);
+    assert!((layers[0]["z"].as_f64().unwrap() - 0.2).abs() < 1e-12);
+    assert_eq!(layers[0]["loops"], 2);
+    assert!(rel(layers[0]["area_mm2"].as_f64().unwrap(), below) < 1e-6);
+    assert_eq!(layers[79]["loops"], 1);
+    assert!(rel(layers[79]["area_mm2"].as_f64().unwrap(), boss) < 1e-6);
+}
+
+#[test]
+fn boundary_strings_stay_within_the_chord_tolerance() {
+    for tol in [0.01, 0.05] {
+        let text =
+            BOX_WITH_HOLE.replace("chord_tolerance: 0.01", &format!("chord_tolerance: {tol}"));
+        let r = load(&recipe_file(&format!("chords-{tol}"), &text));
+        let s = solid_of(&r, 0);
+        let t = make_part(&r, 0).unwrap();
+        for (index, z) in [(1, 0.2), (60, 12.0)] {
+            let g = geometry(s, index);
+            let (per, _) = classify(&g, &strings_at(&t, z));
+            assert!(!per.is_empty());
+            let mut worst: f64 = 0.0;
+            for (a, b, l) in &per {
+                for i in 0..=16 {
+                    let p = a.lerp(*b, i as f64 / 16.0);
+                    worst = worst.max(dist_loop(l, p));
+                }
+            }
+            assert!(worst <= tol * (1.0 + 1e-9), "tol {tol}, z {z}: {worst}");
+            // the budget is used, not wasted on needless strings
+            assert!(worst > 0.5 * tol, "tol {tol}, z {z}: {worst}");
+            // and every perimeter is there: the chords are as long as the
+            // loops but for what they cut off (a fraction ≈ tol/3r of an arc)
+            let printed: f64 = per.iter().map(|(a, b, _)| a.distance(*b)).sum();
+            let exact: f64 = g.perimeters.iter().map(Loop::length).sum();
+            assert!(
+                printed <= exact && printed > exact * (1.0 - tol / 2.0),
+                "{printed} vs {exact}"
+            );
+        }
+    }
+}
+
+#[test]
+fn infill_lies_inside_the_innermost_perimeter_fills_it_and_alternates() {
+    let r = load(&recipe_file("infill", BOX_WITH_HOLE));
+    let s = solid_of(&r, 0);
+    let t = make_part(&r, 0).unwrap();
+    let w = s.line_width;
+    for (index, z) in [(1u64, 0.2), (2, 0.4), (30, 6.0), (61, 12.2), (62, 12.4)] {
+        let g = geometry(s, index);
+        let (_, inf) = classify(&g, &strings_at(&t, z));
+        assert!(!inf.is_empty());
+        let mut length = 0.0;
+        for &(a, b) in &inf {
+            for p in [a, b, a.lerp(b, 0.5)] {
+                assert!(
+                    g.innermost.iter().any(|r| r.contains(p)),
+                    "z {z}: {p} outside the innermost perimeter"
+                );
+                // at least half a line inside that perimeter's centre line
+                let d = g
+                    .innermost
+                    .iter()
+                    .flat_map(|r| r.loops.iter())
+                    .map(|l| dist_loop(l, p))
+                    .fold(f64::INFINITY, f64::min);
+                assert!(d >= 0.5 * w - 1e-9, "z {z}: {p} only {d} inside");
+            }
+            // +45° on odd layers, −45° on even ones
+            let d = b - a;
+            let angle = libm::atan2(d.y, d.x).rem_euclid(PI);
+            let want = if index % 2 == 1 {
+                FRAC_PI_4
+            } else {
+                3.0 * FRAC_PI_4
+            };
+            assert!((angle - want).abs() < 1e-9, "z {z}: line at {angle}");
+            length += a.distance(b);
+        }
+        let filled = length * s.infill.spacing;
+        assert!(
+            rel(filled, g.infill_area) < 0.03,
+            "z {z}: length × spacing {filled} vs area {}",
+            g.infill_area
+        );
+    }
+}
+
+/// The infill strings of layer `index` of a one-part solid recipe.
+fn infill_of(r: &Recipe, index: u64) -> Vec<(DVec2, DVec2)> {
+    let s = solid_of(r, 0);
+    let t = make_part(r, 0).unwrap();
+    let g = geometry(s, index);
+    classify(&g, &strings_at(&t, index as f64 * s.layer_height)).1
+}
+
+#[test]
+fn a_line_exactly_through_corners_prints_whole() {
+    // a 10 × 10 square, one perimeter 0.5 wide: the infill region is the
+    // square ±4.5, whose diagonals are scanline 0 of +45° and of −45°
+    let r = load(&recipe_file(
+        "corners",
+        "{layer_height: 0.2, perimeters: 1, line_width: 0.5, infill: {spacing: 0.5}, features: [{box: {center: [0, 0, 0.2], size: [10, 10, 0.4]}}]}",
+    ));
+    let b = 4.5;
+    for (index, diagonal) in [(1, [(-b, -b), (b, b)]), (2, [(-b, b), (b, -b)])] {
+        let inf = infill_of(&r, index);
+        let [p, q] = diagonal.map(|(x, y)| DVec2::new(x, y));
+        // the diagonal is one string from corner to corner, exactly: no gap
+        // at either corner, nothing counted twice
+        let on: Vec<_> = inf
+            .iter()
+            .filter(|(a, c)| (*a == p && *c == q) || (*a == q && *c == p))
+            .collect();
+        assert_eq!(on.len(), 1, "layer {index}: {inf:?}");
+        // scanlines k·0.5 with |k·0.5| < 4.5·√2 each give one string, none stray
+        let half_diag = b * 2f64.sqrt();
+        let lines = (-20..=20)
+            .filter(|&k| {
+                let s = f64::from(k) * 0.5;
+                2.0 * (half_diag - s.abs()) >= 0.25
+            })
+            .count();
+        assert_eq!(inf.len(), lines, "layer {index}");
+        let total: f64 = inf.iter().map(|(a, c)| a.distance(*c)).sum();
+        assert!(rel(total * 0.5, 81.0) < 0.03);
+    }
+    // lines along the edges (horizontal, 0.5 apart, the edges at y = ±4.5):
+    // each scanline is a whole-width string, the one on the top edge counts as
+    // inside (a point on a scanline lies above it), the bottom one as outside
+    let r = load(&recipe_file(
+        "edges",
+        "{layer_height: 0.2, perimeters: 1, line_width: 0.5, infill: {angle: 0, spacing: 0.5}, features: [{box: {center: [0, 0, 0.2], size: [10, 10, 0.4]}}]}",
+    ));
+    let inf = infill_of(&r, 1);
+    assert_eq!(inf.len(), 18);
+    for (a, c) in &inf {
+        assert_eq!(a.y, c.y);
+        assert_eq!((a.x - c.x).abs(), 9.0);
+        assert!(a.y > -4.5 && a.y <= 4.5);
+    }
+}
+
+#[test]
+fn a_line_tangent_to_a_circle_prints_no_stray_string() {
+    // radius 4.5, one perimeter 0.5 wide: the infill region is the disc of
+    // radius 4; vertical lines x = k·0.5 (exact), so k = ±8 touch it
+    let r = load(&recipe_file(
+        "tangent",
+        "{layer_height: 0.2, perimeters: 1, line_width: 0.5, infill: {angle: 90, spacing: 0.5}, features: [{cylinder: {center: [0, 0, 0], radius: 4.5, height: 0.4}}]}",
+    ));
+    for index in [1, 2] {
+        let inf = infill_of(&r, index);
+        assert_eq!(inf.len(), 15, "k = -7 … 7, none at the tangents");
+        for (a, b) in &inf {
+            assert_eq!(a.x, b.x);
+            let k = a.x / 0.5;
+            assert!(k.fract() == 0.0 && k.abs() <= 7.0);
+            let chord = 2.0 * (16.0 - a.x * a.x).sqrt();
+            assert!((a.distance(*b) - chord).abs() < 1e-12, "no gap at the ends");
+        }
+    }
+    // at 45° the tangent lines are k·0.5 = ±4 up to rounding: the line then
+    // misses the circle or cuts a chord too short to print; either way nothing
+    let r = load(&recipe_file(
+        "tangent45",
+        "{layer_height: 0.2, perimeters: 1, line_width: 0.5, infill: {angle: 45, spacing: 0.5}, features: [{cylinder: {center: [0, 0, 0], radius: 4.5, height: 0.4}}]}",
+    ));
+    for index in [1, 2] {
+        let inf = infill_of(&r, index);
+        assert_eq!(inf.len(), 15);
+        for (a, b) in &inf {
+            assert!(a.distance(*b) >= 0.25);
+            // every end on the circle of radius 4
+            assert!((a.length() - 4.0).abs() < 1e-12 && (b.length() - 4.0).abs() < 1e-12);
+        }
+    }
+}
+
+#[test]
+fn the_bracket_is_its_features_exactly() {
+    let r = load(&common::recipe("bracket.yaml"));
+    let p = |name: &str| r.params[name];
+    let s = solid_of(&r, 0);
+    let slot = 2.0 * p("slot_radius") * p("slot_length") + PI * p("slot_radius").powi(2);
+    let plate =
+        p("length") * p("width") - 4.0 * PI * p("hole").powi(2) - PI * p("bore").powi(2) - slot;
+    let boss = PI * (p("boss").powi(2) - p("bore").powi(2));
+    let mut seen = [0, 0];
+    for layer in s.layers() {
+        let region = &layer.slab.unwrap().region;
+        if layer.z <= p("thickness") + 1e-9 {
+            // outer loop, four holes, the bore, the slot: its circles meet
+            // the box exactly at its corners, tangent to its long edges
+            assert_eq!(region.loops.len(), 7);
+            assert!(rel(region.area(), plate) < 1e-9, "z {}", layer.z);
+            seen[0] += 1;
+        } else {
+            assert_eq!(region.loops.len(), 2);
+            assert!(rel(region.area(), boss) < 1e-9, "z {}", layer.z);
+            seen[1] += 1;
+        }
+    }
+    assert_eq!(seen, [20, 60]);
+    // the slot is one hole of two lines and two half circles
+    let slab = s.layers().next().unwrap().slab.unwrap();
+    let slot_loop = slab
+        .region
+        .loops
+        .iter()
+        .find(|l| rel(-l.area(), slot) < 1e-9)
+        .expect("the slot");
+    let kinds: Vec<bool> = slot_loop
+        .pieces
+        .iter()
+        .map(|q| matches!(q, Piece::Line(..)))
+        .collect();
+    assert_eq!(kinds.len(), 4, "{slot_loop:?}");
+    assert_eq!(kinds.iter().filter(|l| **l).count(), 2);
+}
+
+#[test]
+fn string_counts_are_exact_before_building() {
+    for name in ["bracket.yaml", "cup-solid-base.yaml"] {
+        let r = load(&common::recipe(name));
+        for k in 0..r.parts.len() {
+            let t = make_part(&r, k).unwrap();
+            assert_eq!(
+                t.len() as u64,
+                r.parts[k].primitive.string_count(),
+                "{name} part {k}"
+            );
+        }
+    }
+    // a limit refuses a solid before it is made
+    let path = recipe_file("limit", BOX_WITH_HOLE);
+    let text = std::fs::read_to_string(&path)
+        .unwrap()
+        .replace("material: pla\n", "material: pla\nmax_strings: 1000\n");
+    std::fs::write(&path, text).unwrap();
+    let e = Recipe::load(&path, &[], None).unwrap_err();
+    assert_eq!(e.place.as_deref(), Some("parts[0].primitive"));
+    assert!(e.message.contains("more than the limit of 1000"), "{e}");
+}
+
+#[test]
+fn the_solid_recipes_build_and_print() {
+    let dir = common::tmp("solid-recipes");
+    for name in ["bracket", "cup-solid-base"] {
+        let recipe = common::recipe(&format!("{name}.yaml"));
+        let recipe = recipe.to_str().unwrap();
+        let out = common::p3dp(&dir, &["check", recipe]);
+        let text = String::from_utf8_lossy(&out.stdout).to_string()
+            + &String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{text}");
+        assert!(text.contains("0 warnings, 0 errors"), "{text}");
+        let json = format!("{name}.json");
+        let out = common::p3dp(&dir, &["build", recipe, "--stats-json", &json]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let g = common::parse(&std::fs::read_to_string(dir.join(format!("{name}.gcode"))).unwrap());
+        assert!(g.moves.iter().filter(|m| m.g == 1 && m.de > 0.0).count() > 1000);
+        let stats: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join(&json)).unwrap()).unwrap();
+        assert_eq!(stats["warnings"].as_array().unwrap().len(), 0);
+        assert!(!stats["solids"][0]["layers"].as_array().unwrap().is_empty());
+    }
+    // the cup's wall starts on the base's top layer, over its outer perimeter
+    let r = load(&common::recipe("cup-solid-base.yaml"));
+    let s = solid_of(&r, 0);
+    let top = s.layers().last().unwrap();
+    let outer = &top.slab.unwrap().islands[0].perimeters[0];
+    let wall = make_part(&r, 1).unwrap();
+    let start = wall.points[0];
+    assert!((start.z - top.z).abs() < 1e-12);
+    assert!(dist_loop(&outer.loops[0], start.truncate()) < 1e-9);
+    assert_eq!(
+        start,
+        DVec3::new(r.params["wall_radius"], 0.0, r.params["base"])
+    );
+    // the base is printed bottom up from the bed
+    let base = make_part(&r, 0).unwrap();
+    assert!((base.points[0].z - r.params["layer"]).abs() < 1e-12);
+    let plan = plan(&common::recipe("cup-solid-base.yaml"), &Default::default()).unwrap();
+    assert!(plan.failing(true).is_empty());
+}
+
+#[test]
+fn holes_and_islands_print_one_after_another() {
+    // two separate blocks, each with a hole: two islands per layer; each is
+    // finished (perimeters, then infill) before the head travels to the other
+    let r = load(&recipe_file(
+        "islands",
+        "{layer_height: 0.2, perimeters: 2, features: [{box: {center: [-15, 0, 0.3], size: [20, 20, 0.6]}}, {box: {center: [15, 0, 0.3], size: [20, 20, 0.6]}}, {cylinder: {center: [-15, 0, -1], radius: 4, height: 3, op: subtract}}, {cylinder: {center: [15, 0, -1], radius: 4, height: 3, op: subtract}}]}",
+    ));
+    let s = solid_of(&r, 0);
+    let t = make_part(&r, 0).unwrap();
+    for layer in s.layers() {
+        let slab = layer.slab.unwrap();
+        assert_eq!(slab.islands.len(), 2);
+        // which island each extruding string of this layer belongs to, in order
+        let seq: Vec<bool> = strings_at(&t, layer.z)
+            .iter()
+            .map(|(a, _)| a.x > 0.0)
+            .collect();
+        let switches = seq.windows(2).filter(|w| w[0] != w[1]).count();
+        assert_eq!(switches, 1, "z {}: islands interleaved", layer.z);
+        // no string is printed inside a hole
+        for (a, b) in strings_at(&t, layer.z) {
+            for c in [-15.0, 15.0] {
+                let m = a.lerp(b, 0.5);
+                assert!(m.distance(DVec2::new(c, 0.0)) > 4.0, "{m} in a hole");
+            }
+        }
+    }
+}
+
+/// A small deterministic generator (no dependency, same numbers everywhere).
+struct Lcg(u64);
+
+impl Lcg {
+    fn unit(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// A multiple of `step` in [lo, hi]: a coarse grid, so that edges
+    /// coincide, corners meet and circles touch edges and each other.
+    fn grid(&mut self, lo: f64, hi: f64, step: f64) -> f64 {
+        let n = ((hi - lo) / step) as u64;
+        lo + step * ((self.unit() * (n + 1) as f64) as u64).min(n) as f64
+    }
+}
+
+#[test]
+fn random_features_on_a_grid_agree_with_point_tests() {
+    use p3dp::primitive::solid::infill::{direction, spans};
+    use p3dp::primitive::solid::offset::offset;
+    use p3dp::primitive::solid::region::{boolean, evaluate, Op, Shape};
+
+    fn holds(s: &Shape, p: DVec2) -> bool {
+        match *s {
+            Shape::Rect { min, max } => p.cmpge(min).all() && p.cmple(max).all(),
+            Shape::Disc { c, r } => p.distance(c) <= r,
+        }
+    }
+    fn near(r: &Region, p: DVec2, tol: f64) -> bool {
+        r.loops
+            .iter()
+            .flat_map(|l| l.pieces.iter())
+            .any(|q| q.distance(p) < tol)
+    }
+
+    let mut rng = Lcg(987654321);
+    for case in 0..800 {
+        let n = 2 + (rng.unit() * 8.0) as usize;
+        let shapes: Vec<(Option<Shape>, Op)> = (0..n)
+            .map(|k| {
+                let s = if rng.unit() < 0.5 {
+                    let min = DVec2::new(rng.grid(-8.0, 6.0, 0.5), rng.grid(-8.0, 6.0, 0.5));
+                    let size = DVec2::new(rng.grid(0.5, 8.0, 0.5), rng.grid(0.5, 8.0, 0.5));
+                    Shape::Rect {
+                        min,
+                        max: min + size,
+                    }
+                } else {
+                    Shape::Disc {
+                        c: DVec2::new(rng.grid(-6.0, 6.0, 0.5), rng.grid(-6.0, 6.0, 0.5)),
+                        r: rng.grid(0.25, 5.0, 0.25),
+                    }
+                };
+                let op = match (k, (rng.unit() * 3.0) as u32) {
+                    (0, _) | (_, 0) => Op::Union,
+                    (_, 1) => Op::Subtract,
+                    _ => Op::Intersect,
+                };
+                (Some(s), op)
+            })
+            .collect();
+        let ops: Vec<Op> = shapes.iter().map(|s| s.1).collect();
+        let r = boolean(&shapes);
+        for l in &r.loops {
+            for k in 0..l.pieces.len() {
+                assert_eq!(
+                    l.pieces[k].end(),
+                    l.pieces[(k + 1) % l.pieces.len()].start()
+                );
+            }
+        }
+        let o = offset(&r, 0.45);
+        let bounds: Vec<Piece> = r
+            .loops
+            .iter()
+            .flat_map(|l| l.pieces.iter().copied())
+            .collect();
+        let mut count = 0;
+        let cell = 28.0 / 70.0;
+        for i in 0..70 {
+            for j in 0..70 {
+                // off the grid the features are snapped to
+                let p = DVec2::new(
+                    -14.0 + (i as f64 + 0.5) * cell + 1e-7,
+                    -14.0 + (j as f64 + 0.5) * cell + 2e-7,
+                );
+                let want = evaluate(&ops, |k| holds(&shapes[k].0.unwrap(), p));
+                count += want as u32;
+                assert!(
+                    r.contains(p) == want || near(&r, p, 1e-6),
+                    "case {case}: {p} {shapes:?}"
+                );
+                let want = want && bounds.iter().all(|q| q.distance(p) >= 0.45);
+                assert!(
+                    o.contains(p) == want || near(&o, p, 1e-6),
+                    "case {case}: offset at {p} {shapes:?}"
+                );
+            }
+        }
+        // the exact area against the count of cells (its error is about
+        // half a cell along the boundary)
+        let per: f64 = r.loops.iter().map(Loop::length).sum();
+        assert!(
+            (r.area() - count as f64 * cell * cell).abs() <= 0.5 * per * cell + 1e-9,
+            "case {case}: {} {shapes:?}",
+            r.area()
+        );
+        // every infill span inside the offset region, its ends on its boundary
+        for deg in [45.0, -45.0, 30.0] {
+            for (a, b) in spans(&o, direction(deg), 0.5, 1e-3) {
+                assert!(near(&o, a, 1e-7) && near(&o, b, 1e-7), "case {case}");
+                for i in 1..10 {
+                    let p = a.lerp(b, i as f64 / 10.0);
+                    assert!(o.contains(p) || near(&o, p, 1e-6), "case {case}: {p}");
+                }
+            }
+        }
+    }
+}
