@@ -467,35 +467,14 @@ fn bad_preview_options_are_input_errors() {
     );
 }
 
-/// Thumbnail blocks read back: (width, height, PNG bytes).
+/// Thumbnail blocks read back: (width, height, PNG bytes). `parse` checks
+/// LEN, the line length of 78 and that every block is closed.
 fn thumbnails(gcode: &str) -> Vec<(u32, u32, Vec<u8>)> {
-    let mut out = Vec::new();
-    let mut cur: Option<(u32, u32, usize, String)> = None;
-    for line in gcode.lines() {
-        if let Some(rest) = line.strip_prefix("; thumbnail begin ") {
-            let (size, len) = rest.split_once(' ').unwrap();
-            let (w, h) = size.split_once('x').unwrap();
-            cur = Some((
-                w.parse().unwrap(),
-                h.parse().unwrap(),
-                len.parse().unwrap(),
-                String::new(),
-            ));
-        } else if line == "; thumbnail end" {
-            let (w, h, len, b64) = cur.take().expect("an end after a begin");
-            assert_eq!(b64.len(), len, "LEN is the length of the base64 text");
-            let png = base64::engine::general_purpose::STANDARD
-                .decode(b64)
-                .unwrap();
-            out.push((w, h, png));
-        } else if let Some((.., b64)) = cur.as_mut() {
-            let data = line.strip_prefix("; ").expect("base64 lines are comments");
-            assert!(data.len() <= 78, "a line of {} characters", data.len());
-            b64.push_str(data);
-        }
-    }
-    assert!(cur.is_none(), "a block is not closed");
-    out
+    p3dp::preview::thumbnail::parse(gcode)
+        .expect("thumbnail blocks as PrusaSlicer writes them")
+        .into_iter()
+        .map(|t| (t.width, t.height, t.png))
+        .collect()
 }
 
 #[test]

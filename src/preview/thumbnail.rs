@@ -65,39 +65,71 @@ pub fn blocks(plan: &Plan) -> Result<String> {
     Ok(out)
 }
 
+/// A thumbnail read back from G-code.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Thumbnail {
+    /// Width named in the block header, pixels.
+    pub width: u32,
+    /// Height named in the block header, pixels.
+    pub height: u32,
+    /// The decoded PNG bytes.
+    pub png: Vec<u8>,
+}
+
+/// Reads every thumbnail block of `gcode` back, checking what printers rely
+/// on: LEN is the length of the base64 text, data lines are `; ` comments of
+/// at most [`LINE`] characters, and every block is closed.
+pub fn parse(gcode: &str) -> std::result::Result<Vec<Thumbnail>, String> {
+    let mut out = Vec::new();
+    let mut cur: Option<(u32, u32, usize, String)> = None;
+    for (k, line) in gcode.lines().enumerate() {
+        let at = k + 1;
+        if let Some(rest) = line.strip_prefix("; thumbnail begin ") {
+            let header = || format!("line {at}: expected `; thumbnail begin WxH LEN`");
+            let (wh, len) = rest.split_once(' ').ok_or_else(header)?;
+            let (w, h) = wh.split_once('x').ok_or_else(header)?;
+            let num = |t: &str| t.parse::<u32>().map_err(|_| header());
+            let len = len.parse::<usize>().map_err(|_| header())?;
+            if cur.is_some() {
+                return Err(format!("line {at}: a block begins inside another"));
+            }
+            cur = Some((num(w)?, num(h)?, len, String::new()));
+        } else if line == "; thumbnail end" {
+            let (width, height, len, b64) = cur
+                .take()
+                .ok_or_else(|| format!("line {at}: an end without a begin"))?;
+            if b64.len() != len {
+                return Err(format!(
+                    "line {at}: the block holds {} base64 characters, its header says {len}",
+                    b64.len()
+                ));
+            }
+            let png = base64::engine::general_purpose::STANDARD
+                .decode(b64)
+                .map_err(|e| format!("line {at}: not base64: {e}"))?;
+            out.push(Thumbnail { width, height, png });
+        } else if let Some((.., b64)) = cur.as_mut() {
+            let data = line
+                .strip_prefix("; ")
+                .ok_or_else(|| format!("line {at}: a data line is not a `; ` comment"))?;
+            if data.len() > LINE {
+                return Err(format!(
+                    "line {at}: {} characters of base64, more than {LINE}",
+                    data.len()
+                ));
+            }
+            b64.push_str(data);
+        }
+    }
+    match cur {
+        Some(_) => Err("a thumbnail block is not closed".into()),
+        None => Ok(out),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// Reads blocks back: (width, height, PNG bytes).
-    fn read(text: &str) -> Vec<(u32, u32, Vec<u8>)> {
-        let mut out = Vec::new();
-        let mut cur: Option<(u32, u32, usize, String)> = None;
-        for line in text.lines() {
-            if let Some(rest) = line.strip_prefix("; thumbnail begin ") {
-                let (wh, len) = rest.split_once(' ').unwrap();
-                let (w, h) = wh.split_once('x').unwrap();
-                cur = Some((
-                    w.parse().unwrap(),
-                    h.parse().unwrap(),
-                    len.parse().unwrap(),
-                    String::new(),
-                ));
-            } else if line == "; thumbnail end" {
-                let (w, h, len, b64) = cur.take().unwrap();
-                assert_eq!(b64.len(), len);
-                let png = base64::engine::general_purpose::STANDARD
-                    .decode(b64)
-                    .unwrap();
-                out.push((w, h, png));
-            } else if let Some((.., b64)) = cur.as_mut() {
-                let data = line.strip_prefix("; ").unwrap();
-                assert!(data.len() <= LINE);
-                b64.push_str(data);
-            }
-        }
-        out
-    }
 
     #[test]
     fn blocks_read_back_as_pngs_of_their_size() {
@@ -109,10 +141,38 @@ mod tests {
         let text = block(size, &png::encode(&pm, true));
         assert!(text.starts_with("; thumbnail begin 40x30 "));
         assert!(text.lines().all(|l| l.len() <= 2 + LINE));
-        let got = read(&text);
+        let got = parse(&text).unwrap();
         assert_eq!(got.len(), 1);
-        let img = image::load_from_memory(&got[0].2).unwrap();
+        assert_eq!((got[0].width, got[0].height), (40, 30));
+        let img = image::load_from_memory(&got[0].png).unwrap();
         assert_eq!((img.width(), img.height()), (40, 30));
+    }
+
+    #[test]
+    fn parse_refuses_broken_blocks() {
+        let size = Size {
+            width: 8,
+            height: 8,
+        };
+        let pm = tiny_skia::Pixmap::new(8, 8).unwrap();
+        let good = block(size, &png::encode(&pm, true));
+        let len = good
+            .lines()
+            .next()
+            .unwrap()
+            .rsplit(' ')
+            .next()
+            .unwrap()
+            .to_string();
+        let wrong_len = good.replacen(&format!(" {len}\n"), " 3\n", 1);
+        assert!(parse(&wrong_len).unwrap_err().contains("header says 3"));
+        let unclosed = good.replace("; thumbnail end\n;\n", "");
+        assert!(parse(&unclosed).unwrap_err().contains("not closed"));
+        let long = format!(
+            "; thumbnail begin 1x1 80\n; {}\n; thumbnail end\n",
+            "A".repeat(80)
+        );
+        assert!(parse(&long).unwrap_err().contains("more than 78"));
     }
 
     #[test]
