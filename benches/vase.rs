@@ -49,4 +49,36 @@ fn main() {
     );
     println!("  peak resident memory: {peak} (target < 300 MB)");
     println!("  sha256 {}", hashes[0]);
+    checks_against_generation(&recipe, runs);
+}
+
+/// Issue 7: the support and collision checks on the same vase must take less
+/// time than generating its strings (primitive and steps).
+fn checks_against_generation(path: &Path, runs: usize) {
+    let recipe = p3dp::recipe::Recipe::load(path, &[], None).expect("recipe");
+    let (mut gen, mut sup, mut col) = (Vec::new(), Vec::new(), Vec::new());
+    let mut found = 0;
+    for _ in 0..runs {
+        let t0 = Instant::now();
+        let part = p3dp::build::make_part(&recipe, 0).expect("part");
+        gen.push(t0.elapsed().as_secs_f64());
+        let refs = [&part];
+        let mut out = Vec::new();
+        let t1 = Instant::now();
+        p3dp::check::support::check(&recipe, &refs, &mut out);
+        sup.push(t1.elapsed().as_secs_f64());
+        let t2 = Instant::now();
+        p3dp::check::collision::check(&recipe, &refs, &mut out);
+        col.push(t2.elapsed().as_secs_f64());
+        found = out.len();
+    }
+    for v in [&mut gen, &mut sup, &mut col] {
+        v.sort_by(f64::total_cmp);
+    }
+    let (g, s, c) = (gen[runs / 2], sup[runs / 2], col[runs / 2]);
+    println!("  checks (median of {runs}): generating the strings {g:.3} s; support {s:.3} s, collision {c:.3} s ({found} findings)");
+    println!(
+        "  support + collision = {:.0} % of generation (target < 100 %)",
+        100.0 * (s + c) / g
+    );
 }

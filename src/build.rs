@@ -19,6 +19,8 @@ pub struct Options {
     pub sets: Vec<(String, String)>,
     /// `--printer NAME|FILE` overrides the recipe's printer.
     pub printer: Option<String>,
+    /// `--allow CODE`: check codes silenced for this build.
+    pub allow: Vec<String>,
 }
 
 /// A recipe made into strings and checked, ready to write.
@@ -66,7 +68,10 @@ pub fn plan(path: &Path, opts: &Options) -> Result<Plan> {
     }
     paths.extend(parts);
     let refs: Vec<&Toolpath> = paths.iter().collect();
-    let findings = check::run(&recipe, &refs);
+    check::validate_allow(&opts.allow, |i| format!("--allow {}", opts.allow[i]))?;
+    let mut findings = check::run(&recipe, &refs);
+    check::apply_allow(&mut findings, &recipe.allow);
+    check::apply_allow(&mut findings, &opts.allow);
     Ok(Plan {
         path: shown,
         recipe,
@@ -95,6 +100,14 @@ impl Plan {
         let top = self.top_z();
         let mut em = Emitter::new(out, &self.recipe);
         em.thumbnails = crate::preview::thumbnail::blocks(self)?;
+        let fan_events = |t: &Toolpath| {
+            t.events
+                .iter()
+                .any(|(_, e)| matches!(e, crate::toolpath::Event::Fan { .. }))
+        };
+        if self.paths.iter().any(fan_events) {
+            em.manual_fan();
+        }
         em.start(&self.recipe, top)?;
         for tp in &self.paths {
             em.part(tp).map_err(io)?;
@@ -109,14 +122,15 @@ impl Plan {
         let parts = self
             .paths
             .iter()
-            .zip(&moves.part_times)
-            .map(|(t, (_, time))| PartStats {
+            .zip(&moves.estimate.parts)
+            .map(|(t, pt)| PartStats {
                 name: t.name.clone(),
                 strings: t.len(),
-                print_time_s: *time,
+                print_time_s: pt.times.planned,
+                time_lost_s: pt.times.lost(),
             })
             .collect();
-        Ok(Stats::new(
+        let mut stats = Stats::new(
             &self.path,
             &self.recipe,
             &moves,
@@ -124,7 +138,10 @@ impl Plan {
             digest,
             bytes,
             self.findings.clone(),
-        ))
+        );
+        let refs: Vec<&Toolpath> = self.paths.iter().collect();
+        stats.first_layer = check::first_layer::footprints(&self.recipe, &refs);
+        Ok(stats)
     }
 }
 

@@ -34,6 +34,8 @@ pub struct Common {
     pub force: bool,
     /// `-j N`: at most N builds at once (default: one per core).
     pub jobs: Option<usize>,
+    /// `--allow CODE`: check codes silenced for these builds.
+    pub allow: Vec<String>,
 }
 
 /// Flags of `build`.
@@ -93,6 +95,7 @@ impl Common {
         let opts = Options {
             sets: job.sets.clone(),
             printer: self.printer.clone(),
+            allow: self.allow.clone(),
         };
         let p = plan(&job.recipe, &opts)?;
         let failing = p.failing(self.strict);
@@ -464,6 +467,7 @@ pub fn check(c: &Common) -> Vec<Error> {
     let opts = |job: &Job| Options {
         sets: job.sets.clone(),
         printer: c.printer.clone(),
+        allow: c.allow.clone(),
     };
     let results = batch::run_parallel(
         jobs.len(),
@@ -475,14 +479,7 @@ pub fn check(c: &Common) -> Vec<Error> {
     for (job, r) in jobs.iter().zip(results) {
         match r {
             Ok(p) => {
-                let n_err = p.failing(false).len();
-                let n_warn = p.findings.len() - n_err;
-                println!(
-                    "{}: {n_warn} warning{}, {n_err} error{}",
-                    job_label(job),
-                    plural(n_warn),
-                    plural(n_err)
-                );
+                println!("{}: {}", job_label(job), crate::check::summary(&p.findings));
                 for f in &p.findings {
                     println!("  {} [{}]: {}", f.severity.word(), f.code, f.message);
                 }
@@ -688,6 +685,8 @@ pub struct PreviewArgs {
     pub size: Option<String>,
     /// `--bare`: the model alone, no text or legend (PNG).
     pub bare: bool,
+    /// `--allow CODE`: check codes silenced for this build.
+    pub allow: Vec<String>,
 }
 
 /// `p3dp preview`: draws the toolpath to a PNG image or an HTML viewer; a
@@ -728,6 +727,7 @@ pub fn preview(a: &PreviewArgs) -> Vec<Error> {
             &Options {
                 sets,
                 printer: a.printer.clone(),
+                allow: a.allow.clone(),
             },
         )?;
         make_parent(&out)?;
@@ -738,4 +738,30 @@ pub fn preview(a: &PreviewArgs) -> Vec<Error> {
         Ok(()) => Vec::new(),
         Err(e) => vec![e],
     }
+}
+
+/// `p3dp printers`: one line per built-in profile (name, flavour, bed,
+/// origin of recipe (0, 0, 0), nozzle and filament), under a header line.
+pub fn printers() -> String {
+    use crate::gcode::fmt_num;
+    use crate::printer::{built_in_names, Printer};
+    let mut out = format!(
+        "{:<13} {:<8} {:<26} {:<14} {:<7} {}\n",
+        "NAME", "FLAVOUR", "BED", "ORIGIN", "NOZZLE", "FILAMENT"
+    );
+    for name in built_in_names() {
+        let p = Printer::built_in(name).expect("built-in profiles parse");
+        let origin = p.origin.map(fmt_num).join(", ");
+        out.push_str(&format!(
+            "{:<13} {:<8} {:<26} {:<14} {:<7} {}\n",
+            name,
+            p.flavor.name(),
+            p.bed.describe(),
+            origin,
+            fmt_num(p.nozzle_diameter),
+            fmt_num(p.filament_diameter)
+        ));
+    }
+    out.push_str("Use one with --printer NAME, or a YAML file (--printer FILE; `inherits: NAME` starts from a built-in one).\n");
+    out
 }

@@ -55,6 +55,7 @@ const STACK: usize = 32;
 type F1 = fn(f64) -> f64;
 type F2 = fn(f64, f64) -> f64;
 type F3 = fn(f64, f64, f64) -> f64;
+type F4 = fn(f64, f64, f64, f64) -> f64;
 
 #[derive(Clone, Copy, Debug)]
 enum Op {
@@ -70,8 +71,11 @@ enum Op {
     F1(F1),
     F2(F2),
     F3(F3),
+    F4(F4),
     Min(u8),
     Max(u8),
+    /// A value of the extra slots of [`Expr::compile_ext`].
+    Ext(u16),
 }
 
 /// A compiled expression.
@@ -80,6 +84,8 @@ pub struct Expr {
     src: String,
     ops: Vec<Op>,
     used: u32,
+    /// `rand()` calls, read from the extra slots after the named ones.
+    rands: u16,
 }
 
 // The functions recipe authors may call, beyond meval's operators.
@@ -174,6 +180,47 @@ fn lookup2(name: &str) -> Option<F2> {
     })
 }
 
+/// `eca(rule, width, row, col)`: the cell (0 or 1) at `row` and `col` of
+/// Wolfram's elementary cellular automaton `rule` (0–255) on a ring of
+/// `width` cells (1–64) whose row 0 has one live cell, at column 0; columns
+/// wrap around the ring. NaN for arguments out of range (rows up to 10⁶).
+pub fn eca(rule: f64, width: f64, row: f64, col: f64) -> f64 {
+    let whole = |x: f64, hi: f64| x.fract() == 0.0 && (0.0..=hi).contains(&x);
+    if !whole(rule, 255.0) || !whole(width, 64.0) || width < 1.0 || !whole(row, 1e6) {
+        return f64::NAN;
+    }
+    if !col.is_finite() || col.fract() != 0.0 {
+        return f64::NAN;
+    }
+    let (rule, w) = (rule as u8, width as u32);
+    let mask = if w == 64 { u64::MAX } else { (1u64 << w) - 1 };
+    let mut cells = 1u64;
+    for _ in 0..row as u64 {
+        // each cell's neighbourhood (left, self, right) as a 3-bit number
+        let left = (cells << 1 | cells >> (w - 1)) & mask;
+        let right = (cells >> 1 | cells << (w - 1)) & mask;
+        let mut next = 0u64;
+        for k in 0..8u64 {
+            if rule >> k & 1 == 1 {
+                let l = if k & 4 != 0 { left } else { !left };
+                let c = if k & 2 != 0 { cells } else { !cells };
+                let r = if k & 1 != 0 { right } else { !right };
+                next |= l & c & r;
+            }
+        }
+        cells = next & mask;
+    }
+    let c = f_mod(col, width) as u32;
+    (cells >> c & 1) as f64
+}
+
+fn lookup4(name: &str) -> Option<F4> {
+    Some(match name {
+        "eca" => eca,
+        _ => return None,
+    })
+}
+
 fn lookup3(name: &str) -> Option<F3> {
     Some(match name {
         "clamp" => f_clamp,
@@ -188,12 +235,13 @@ pub const FUNCTIONS: &str =
     "sin cos tan asin acos atan atan2(y,x) sinh cosh tanh asinh acosh atanh \
 sqrt cbrt exp ln log log10 log2 pow(a,b) abs sign floor ceil round trunc fract \
 mod(a,b) min(a,b,…) max(a,b,…) clamp(x,lo,hi) step(edge,x) smoothstep(e0,e1,x) \
-mix(a,b,t) hypot(x,y) radians degrees";
+mix(a,b,t) hypot(x,y) radians degrees eca(rule,width,row,col)";
 
 #[derive(Clone, Debug)]
 enum Node {
     Num(f64),
     Var(u8),
+    Ext(u16),
     Neg(Box<Node>),
     Bin(Op, Box<Node>, Box<Node>),
     Call(Op, Vec<Node>),
@@ -208,7 +256,7 @@ impl Node {
     }
     fn depth(&self) -> usize {
         match self {
-            Node::Num(_) | Node::Var(_) => 1,
+            Node::Num(_) | Node::Var(_) | Node::Ext(_) => 1,
             Node::Neg(a) => a.depth(),
             Node::Bin(_, a, b) => a.depth().max(1 + b.depth()),
             Node::Call(_, args) => args
@@ -223,6 +271,7 @@ impl Node {
         match self {
             Node::Num(v) => out.push(Op::Num(*v)),
             Node::Var(s) => out.push(Op::Var(*s)),
+            Node::Ext(s) => out.push(Op::Ext(*s)),
             Node::Neg(a) => {
                 a.emit(out);
                 out.push(Op::Neg);
@@ -244,7 +293,7 @@ impl Node {
 
 /// Runs `ops` on a stack; the one evaluator used for folding and at run time.
 #[inline]
-fn run(ops: &[Op], vars: &Vars) -> f64 {
+fn run(ops: &[Op], vars: &Vars, ext: &[f64]) -> f64 {
     let mut st = [0.0f64; STACK];
     let mut sp = 0usize;
     for op in ops {
@@ -255,6 +304,10 @@ fn run(ops: &[Op], vars: &Vars) -> f64 {
             }
             Op::Var(s) => {
                 st[sp] = vars[s as usize];
+                sp += 1;
+            }
+            Op::Ext(s) => {
+                st[sp] = ext[s as usize];
                 sp += 1;
             }
             Op::Neg => st[sp - 1] = -st[sp - 1],
@@ -276,6 +329,10 @@ fn run(ops: &[Op], vars: &Vars) -> f64 {
             Op::F3(f) => {
                 sp -= 2;
                 st[sp - 1] = f(st[sp - 1], st[sp], st[sp + 1]);
+            }
+            Op::F4(f) => {
+                sp -= 3;
+                st[sp - 1] = f(st[sp - 1], st[sp], st[sp + 1], st[sp + 2]);
             }
             Op::Min(k) | Op::Max(k) => {
                 let k = k as usize;
@@ -332,8 +389,35 @@ impl Expr {
     /// variable slots (see [`var`]) to variables. The error is a sentence
     /// naming the expression and what is wrong with it.
     pub fn compile(src: &str, params: &Params, allowed: &[usize]) -> Result<Expr, String> {
+        Expr::compile_inner(src, params, allowed, None)
+    }
+
+    /// Compiles `src` as [`Expr::compile`] does, with `names` as extra
+    /// variables (they shadow nothing: a caller keeps them apart from params)
+    /// and `rand()` allowed: name k reads extra slot k, and the j-th `rand()`
+    /// of the text reads slot `names.len() + j`, which the caller fills with a
+    /// fresh random number before each [`Expr::eval_ext`] (see [`Expr::rands`]).
+    pub fn compile_ext(
+        src: &str,
+        params: &Params,
+        allowed: &[usize],
+        names: &[&str],
+    ) -> Result<Expr, String> {
+        Expr::compile_inner(src, params, allowed, Some(names))
+    }
+
+    fn compile_inner(
+        src: &str,
+        params: &Params,
+        allowed: &[usize],
+        names: Option<&[&str]>,
+    ) -> Result<Expr, String> {
         // Kanada's Python recipes write powers as `**`; meval's operator is `^`.
-        let text = src.replace("**", "^");
+        let mut text = src.replace("**", "^");
+        if names.is_some() {
+            text = mark_rand(&text);
+        }
+        let mut rands = 0u16;
         let tokens =
             meval::tokenizer::tokenize(&text).map_err(|e| describe_parse_error(src, &e))?;
         let rpn = meval::shunting_yard::to_rpn(&tokens)
@@ -349,7 +433,13 @@ impl Expr {
             let node = match tok {
                 Token::Number(v) => Node::Num(v),
                 Token::Var(name) => {
-                    if let Some(k) = VAR_NAMES.iter().position(|n| *n == name) {
+                    let ext = names.and_then(|ns| ns.iter().position(|n| *n == name));
+                    if let Some(k) = ext {
+                        Node::Ext(k as u16)
+                    } else if names.is_some() && is_rand_mark(&name) {
+                        rands += 1;
+                        Node::Ext((names.unwrap_or(&[]).len() + rands as usize - 1) as u16)
+                    } else if let Some(k) = VAR_NAMES.iter().position(|n| *n == name) {
                         if !allowed.contains(&k) {
                             return Err(format!(
                                 "`{name}` is not available in `{src}` here; it may use {}",
@@ -394,6 +484,7 @@ impl Expr {
                         (n, 1) if lookup1(n).is_some() => Op::F1(lookup1(n).unwrap()),
                         (n, 2) if lookup2(n).is_some() => Op::F2(lookup2(n).unwrap()),
                         (n, 3) if lookup3(n).is_some() => Op::F3(lookup3(n).unwrap()),
+                        (n, 4) if lookup4(n).is_some() => Op::F4(lookup4(n).unwrap()),
                         (n, _) => {
                             let arity = if lookup1(n).is_some() {
                                 Some(1)
@@ -401,6 +492,8 @@ impl Expr {
                                 Some(2)
                             } else if lookup3(n).is_some() {
                                 Some(3)
+                            } else if lookup4(n).is_some() {
+                                Some(4)
                             } else {
                                 None
                             };
@@ -447,13 +540,26 @@ impl Expr {
             src: src.to_string(),
             ops,
             used,
+            rands,
         })
     }
 
     /// Evaluates with the given variable values.
     #[inline]
     pub fn eval(&self, vars: &Vars) -> f64 {
-        run(&self.ops, vars)
+        run(&self.ops, vars, &[])
+    }
+
+    /// Evaluates an expression of [`Expr::compile_ext`]: `ext` holds the
+    /// named extra values, then [`Expr::rands`] random numbers.
+    #[inline]
+    pub fn eval_ext(&self, vars: &Vars, ext: &[f64]) -> f64 {
+        run(&self.ops, vars, ext)
+    }
+
+    /// How many `rand()` calls the expression makes per evaluation.
+    pub fn rands(&self) -> usize {
+        self.rands as usize
     }
 
     /// The value when the expression uses no variable.
@@ -482,7 +588,7 @@ impl Expr {
 
 fn fold(node: Node) -> Node {
     let all_const = match &node {
-        Node::Num(_) | Node::Var(_) => return node,
+        Node::Num(_) | Node::Var(_) | Node::Ext(_) => return node,
         Node::Neg(a) => a.num().is_some(),
         Node::Bin(_, a, b) => a.num().is_some() && b.num().is_some(),
         Node::Call(_, args) => args.iter().all(|a| a.num().is_some()),
@@ -492,7 +598,49 @@ fn fold(node: Node) -> Node {
     }
     let mut ops = Vec::new();
     node.emit(&mut ops);
-    Node::Num(run(&ops, &[0.0; var::COUNT]))
+    Node::Num(run(&ops, &[0.0; var::COUNT], &[]))
+}
+
+/// The variable name `rand()` becomes before tokenizing (then numbered).
+const RAND_MARK: &str = "rand_";
+
+fn is_rand_mark(name: &str) -> bool {
+    name.strip_prefix(RAND_MARK)
+        .is_some_and(|rest| rest.bytes().all(|c| c == b'_'))
+}
+
+/// Rewrites each `rand()` (spaces allowed inside) as a variable `rand_…` of
+/// the same length, so error positions stay those of the text as written.
+fn mark_rand(text: &str) -> String {
+    let b = text.as_bytes();
+    let mut out = String::with_capacity(text.len());
+    let (mut k, mut copied) = (0, 0);
+    while k < b.len() {
+        let word_start = k == 0 || !(b[k - 1].is_ascii_alphanumeric() || b[k - 1] == b'_');
+        if word_start && b[k..].starts_with(b"rand") {
+            let skip = |mut j: usize| {
+                while j < b.len() && b[j] == b' ' {
+                    j += 1;
+                }
+                j
+            };
+            let j = skip(k + 4);
+            if b.get(j) == Some(&b'(') {
+                let m = skip(j + 1);
+                if b.get(m) == Some(&b')') {
+                    out.push_str(&text[copied..k]);
+                    out.push_str(RAND_MARK);
+                    out.extend(std::iter::repeat_n('_', m + 1 - k - RAND_MARK.len()));
+                    k = m + 1;
+                    copied = k;
+                    continue;
+                }
+            }
+        }
+        k += 1;
+    }
+    out.push_str(&text[copied..]);
+    out
 }
 
 /// Evaluates an expression over params only (a number written as text).
@@ -564,6 +712,45 @@ mod tests {
         let v = [0.0; var::COUNT];
         assert_eq!(ev("sin(1.234)", &v).to_bits(), libm::sin(1.234).to_bits());
         assert_eq!(ev("1.5^0.3", &v).to_bits(), libm::pow(1.5, 0.3).to_bits());
+    }
+
+    #[test]
+    fn extra_names_and_rand_slots() {
+        let p = Params::new();
+        let e = Expr::compile_ext("k*10 + rand() + rand ( )", &p, &[], &["j", "k"]).unwrap();
+        assert_eq!(e.rands(), 2);
+        assert_eq!(
+            e.eval_ext(&[0.0; var::COUNT], &[1.0, 2.0, 0.25, 0.5]),
+            20.75
+        );
+        assert!(Expr::compile("rand()", &p, &[]).is_err());
+        let e = Expr::compile_ext("operand(1)", &p, &[], &[]).unwrap_err();
+        assert!(e.contains("operand"), "{e}");
+    }
+
+    #[test]
+    fn elementary_automaton() {
+        // Rule 30 from one cell, rows 0..3 around column 0 on a wide ring:
+        // 1 / 111 / 11001 / 1101111
+        let row = |r: f64| -> String {
+            (-3..=3)
+                .map(|c| {
+                    if eca(30.0, 64.0, r, c as f64) == 1.0 {
+                        '1'
+                    } else {
+                        '0'
+                    }
+                })
+                .collect()
+        };
+        assert_eq!(row(0.0), "0001000");
+        assert_eq!(row(1.0), "0011100");
+        assert_eq!(row(2.0), "0110010");
+        assert_eq!(row(3.0), "1101111");
+        assert!(eca(30.0, 65.0, 1.0, 0.0).is_nan());
+        assert!(eca(30.5, 8.0, 1.0, 0.0).is_nan());
+        // wraps: column -1 is column width-1
+        assert_eq!(eca(30.0, 8.0, 1.0, -1.0), eca(30.0, 8.0, 1.0, 7.0));
     }
 
     #[test]

@@ -21,7 +21,7 @@ use glam::DVec3;
 use crate::error::Result;
 use crate::printer::{Extrusion, Printer};
 use crate::recipe::Recipe;
-use crate::toolpath::Toolpath;
+use crate::toolpath::{Event, Toolpath};
 
 /// What the written moves add up to; the stats report is made from it.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -38,10 +38,13 @@ pub struct MoveStats {
     pub filament: f64,
     /// Extruded volume, mm³.
     pub volume: f64,
-    /// Σ length / speed over the moves, plus retractions, s.
+    /// Estimated printing time, s: the planner's (see [`crate::planner`]).
     pub time: f64,
-    /// Time of each part (and the skirt), s, in print order.
+    /// Planned time of each part (and the skirt), s, in print order.
     pub part_times: Vec<(String, f64)>,
+    /// The planner's estimate in full: planned, ideal and nominal times of
+    /// the print and of each part.
+    pub estimate: crate::planner::Estimate,
     /// Lowest corner of the extruding moves, recipe coordinates.
     pub bbox_min: DVec3,
     /// Highest corner of the extruding moves, recipe coordinates.
@@ -103,6 +106,11 @@ pub struct Emitter<'a, W: Write> {
     /// Thumbnail blocks written after the header comments (see
     /// [`crate::preview::thumbnail`]); empty for none.
     pub thumbnails: String,
+    /// Every written move, for the print-time estimate.
+    planner: crate::planner::Background,
+    /// The material's fan: (speed, start z), until it is switched on or a
+    /// `fan` event takes over.
+    fan: Option<(f64, f64)>,
 }
 
 #[derive(Default)]
@@ -140,6 +148,11 @@ impl<'a, W: Write> Emitter<'a, W> {
             },
             pending: Pending::default(),
             thumbnails: String::new(),
+            planner: crate::planner::Background::new(
+                recipe.printer.kinematics.limits(recipe.printer.max_speed),
+            ),
+            fan: (recipe.material.fan_speed > 0.0)
+                .then_some((recipe.material.fan_speed, recipe.material.fan_start_z)),
         }
     }
 
@@ -207,6 +220,14 @@ impl<'a, W: Write> Emitter<'a, W> {
             let t = std::mem::take(&mut self.thumbnails);
             self.text(&t).map_err(io)?;
         }
+        if self.printer.arcs {
+            self.text(&format!(
+                "; arcs: G2/G3 within {} mm of the strings ({})",
+                fmt_num(self.printer.arc_tolerance),
+                crate::flavor::arc_note(self.printer.flavor)
+            ))
+            .map_err(io)?;
+        }
         self.text(&start).map_err(io)?;
         let mode = match self.printer.extrusion {
             Extrusion::Absolute => "M82 ; absolute extrusion",
@@ -231,6 +252,12 @@ impl<'a, W: Write> Emitter<'a, W> {
 
     fn feed_mm_s(&self) -> f64 {
         self.feed as f64 / 60.0
+    }
+
+    /// The last written machine position, mm (what the firmware plans with).
+    fn written_mm(&self) -> DVec3 {
+        let w = self.written.unwrap_or([0; 3]);
+        DVec3::new(w[0] as f64, w[1] as f64, w[2] as f64) / XYZ
     }
 
     /// Starts a move line; returns whether any axis changed.
@@ -271,6 +298,14 @@ impl<'a, W: Write> Emitter<'a, W> {
             return Ok(());
         }
         let len = units(r.length, E);
+        if self.printer.firmware_retraction {
+            // G10: the firmware's length and speed; E is untouched
+            self.text(crate::flavor::retract(self.printer.flavor))?;
+            self.retracted = true;
+            self.stats.retractions += 1;
+            self.planner.extrude_only(len as f64 / E, r.speed);
+            return Ok(());
+        }
         self.line.clear();
         self.line.extend_from_slice(b"G1 E");
         match self.printer.extrusion {
@@ -282,7 +317,7 @@ impl<'a, W: Write> Emitter<'a, W> {
         self.end_line()?;
         self.retracted = true;
         self.stats.retractions += 1;
-        self.stats.time += 2.0 * r.length / r.speed;
+        self.planner.extrude_only(len as f64 / E, self.feed_mm_s());
         Ok(())
     }
 
@@ -292,6 +327,12 @@ impl<'a, W: Write> Emitter<'a, W> {
         }
         let r = &self.printer.retraction;
         let len = units(r.length, E);
+        if self.printer.firmware_retraction {
+            self.text(crate::flavor::unretract(self.printer.flavor))?;
+            self.retracted = false;
+            self.planner.extrude_only(len as f64 / E, r.speed);
+            return Ok(());
+        }
         self.line.clear();
         self.line.extend_from_slice(b"G1 E");
         match self.printer.extrusion {
@@ -302,6 +343,7 @@ impl<'a, W: Write> Emitter<'a, W> {
         self.line.extend_from_slice(b" ; unretract");
         self.end_line()?;
         self.retracted = false;
+        self.planner.extrude_only(len as f64 / E, self.feed_mm_s());
         Ok(())
     }
 
@@ -328,57 +370,155 @@ impl<'a, W: Write> Emitter<'a, W> {
         self.end_line()?;
         self.stats.travel_moves += 1;
         self.stats.travel_length += dist;
-        self.stats.time += dist / self.feed_mm_s();
+        let (to_m, f) = (self.written_mm(), self.feed_mm_s());
+        self.planner
+            .move_to(to_m, 0.0, f, crate::planner::MoveKind::Travel);
         self.head = Some(target);
         Ok(())
     }
 
-    /// Travel to `to` between parts: rise first when going up, go down last
-    /// when going down, so the nozzle does not drag across what is printed.
+    /// Travel to `to` between parts: up to a safe height (above everything
+    /// printed so far by the head's clearance, see
+    /// [`crate::check::collision::safe_travel_z`]), across, then down, so the
+    /// head never crosses what is printed; the collision check models the same.
     pub fn travel_to(&mut self, to: DVec3) -> io::Result<()> {
         self.flush()?;
-        match self.head {
-            None => self.travel_line(to, [true; 3]),
-            Some(h) if to.z > h.z => {
-                self.travel_line(to, [false, false, true])?;
-                self.travel_line(to, [true, true, false])
-            }
-            Some(_) => {
+        let Some(h) = self.head else {
+            return self.travel_line(to, [true; 3]);
+        };
+        let top = if self.stats.extrude_moves > 0 {
+            self.stats.bbox_max.z
+        } else {
+            f64::NEG_INFINITY
+        };
+        match crate::check::collision::safe_travel_z(self.printer, h, to, top) {
+            Some(z) => {
+                self.travel_line(DVec3::new(h.x, h.y, z), [false, false, true])?;
                 self.travel_line(to, [true, true, false])?;
                 self.travel_line(to, [false, false, true])
             }
+            None => self.travel_line(to, [false, false, true]),
         }
     }
 
-    /// One G1 extruding move to `to` carrying `filament` mm at `v` mm/s.
-    fn extrude_line(&mut self, to: DVec3, filament: f64, v: f64) -> io::Result<()> {
-        self.unretract()?;
-        let from = self.head.expect("extrusion starts after a travel");
-        self.axes(b"G1", to, [true; 3]);
+    /// The recipe sets the fan itself (a turtle's `fan`): no automatic fan.
+    pub fn manual_fan(&mut self) {
+        self.fan = None;
+    }
+
+    /// Switches the material's fan on before the first extruding move that
+    /// ends above its start height (slicers keep the first layers warm).
+    fn fan_on_above(&mut self, to: DVec3) -> io::Result<()> {
+        match self.fan {
+            Some((speed, z)) if to.z > z => {
+                self.fan = None;
+                let line = crate::flavor::fan(self.printer.flavor, speed);
+                self.text(&format!("{line}: above z = {z} mm"))
+            }
+            _ => Ok(()),
+        }
+    }
+
+    /// Adds `filament` mm to the exact E total and writes the E value after
+    /// ` E` in the line: the rounded total (M82) or its step from the last
+    /// written one (M83), so the written values add up to the exact total.
+    fn put_e(&mut self, filament: f64) {
         self.e_exact += filament;
         let e_new = units(self.e_exact, E);
-        self.line.extend_from_slice(b" E");
         match self.printer.extrusion {
             Extrusion::Absolute => put_fixed(&mut self.line, e_new, 5),
             Extrusion::Relative => put_fixed(&mut self.line, e_new - self.e_units, 5),
         }
         self.e_units = e_new;
+    }
+
+    /// One G1 extruding move to `to` carrying `filament` mm at `v` mm/s.
+    fn extrude_line(&mut self, to: DVec3, filament: f64, v: f64) -> io::Result<()> {
+        self.fan_on_above(to)?;
+        self.unretract()?;
+        let from = self.head.expect("extrusion starts after a travel");
+        self.axes(b"G1", to, [true; 3]);
+        self.line.extend_from_slice(b" E");
+        self.put_e(filament);
         self.set_feed(v);
         self.end_line()?;
         let len = from.distance(to);
+        let (to_m, f) = (self.written_mm(), self.feed_mm_s());
+        self.planner
+            .move_to(to_m, filament, f, crate::planner::MoveKind::Extrude);
         let st = &mut self.stats;
         st.extrude_moves += 1;
         st.extrude_length += len;
         st.filament += filament;
         st.volume += filament * self.area;
-        let f = self.feed as f64 / 60.0;
         let t = if len > 0.0 { len / f } else { filament / f };
-        st.time += t;
         if t > 0.0 {
             st.max_flow = st.max_flow.max(filament * self.area / t);
         }
         st.bbox_min = st.bbox_min.min(from).min(to);
         st.bbox_max = st.bbox_max.max(from).max(to);
+        self.head = Some(to);
+        Ok(())
+    }
+
+    /// One `G2`/`G3` move along `arc` (see [`crate::arc`]), replacing strings
+    /// `arc.start..arc.end` of `tp`: E is their exact filament, the speed the
+    /// one that keeps their time, I J the centre from the written start. The
+    /// planner sees the arc as chords of at most 1 mm, as Marlin
+    /// (MAX_ARC_SEGMENT_MM) and Klipper (`resolution`) split it.
+    fn arc_move(&mut self, tp: &Toolpath, arc: &crate::arc::Arc) -> io::Result<()> {
+        self.fan_on_above(tp.points[arc.end])?;
+        self.unretract()?;
+        let (mut filament, mut time) = (0.0, 0.0);
+        for k in arc.start..arc.end {
+            let (len, s) = (tp.length(k), tp.strings[k]);
+            filament += s.c * len / self.area;
+            time += len / s.v;
+        }
+        let len = arc.length();
+        let v = if time > 0.0 {
+            len / time
+        } else {
+            tp.strings[arc.start].v
+        };
+        let start = self.written_mm();
+        let to = tp.points[arc.end];
+        self.axes(if arc.ccw { b"G3" } else { b"G2" }, to, [true; 3]);
+        let c = self.printer.to_machine(arc.center.extend(0.0));
+        self.line.extend_from_slice(b" I");
+        put_fixed(&mut self.line, units(c.x - start.x, XYZ), 3);
+        self.line.extend_from_slice(b" J");
+        put_fixed(&mut self.line, units(c.y - start.y, XYZ), 3);
+        self.line.extend_from_slice(b" E");
+        self.put_e(filament);
+        self.set_feed(v);
+        self.end_line()?;
+        let f = self.feed_mm_s();
+        let pieces = libm::ceil(len / 1.0).max(1.0) as usize;
+        for i in 1..=pieces {
+            let p = if i == pieces {
+                self.written_mm()
+            } else {
+                let phi = arc.sweep * i as f64 / pieces as f64;
+                self.printer.to_machine(arc.point_at(phi))
+            };
+            let e = filament / pieces as f64;
+            self.planner
+                .move_to(p, e, f, crate::planner::MoveKind::Extrude);
+        }
+        let st = &mut self.stats;
+        st.extrude_moves += 1;
+        st.extrude_length += len;
+        st.filament += filament;
+        st.volume += filament * self.area;
+        let t = len / f;
+        if t > 0.0 {
+            st.max_flow = st.max_flow.max(filament * self.area / t);
+        }
+        for p in &tp.points[arc.start..=arc.end] {
+            st.bbox_min = st.bbox_min.min(*p);
+            st.bbox_max = st.bbox_max.max(*p);
+        }
         self.head = Some(to);
         Ok(())
     }
@@ -403,15 +543,82 @@ impl<'a, W: Write> Emitter<'a, W> {
         self.extrude_line(p.end, p.filament, v)
     }
 
+    /// Writes an event between strings (see [`Event`]): a dialect command,
+    /// a retraction, or filament fed in place.
+    fn event(&mut self, e: &Event) -> io::Result<()> {
+        self.flush()?;
+        match *e {
+            Event::Retract => self.retract(),
+            Event::Extrude { filament, speed } => self.extrude_in_place(filament, speed),
+            _ => {
+                if let Event::Fan { .. } = e {
+                    self.fan = None; // the recipe sets the fan itself from here on
+                }
+                // the head stops for these; a dwell also takes its time
+                match *e {
+                    Event::Dwell { ms } => self.planner.dwell(ms.max(0.0) / 1000.0),
+                    Event::Pause
+                    | Event::NozzleTemp { wait: true, .. }
+                    | Event::BedTemp { wait: true, .. } => self.planner.stop(),
+                    _ => {}
+                }
+                let line = crate::flavor::event_line(self.printer.flavor, e)
+                    .expect("moves are handled above");
+                self.text(&line)
+            }
+        }
+    }
+
+    /// `G1 E… F…`: feeds `filament` mm at `speed` mm/s without moving.
+    fn extrude_in_place(&mut self, filament: f64, speed: f64) -> io::Result<()> {
+        if filament <= 0.0 {
+            return Ok(());
+        }
+        self.unretract()?;
+        self.line.clear();
+        self.line.extend_from_slice(b"G1 E");
+        self.put_e(filament);
+        self.set_feed(speed);
+        self.line.extend_from_slice(b" ; extrude in place");
+        self.end_line()?;
+        let st = &mut self.stats;
+        st.filament += filament;
+        st.volume += filament * self.area;
+        let f = self.feed_mm_s();
+        self.planner.extrude_only(filament, f);
+        Ok(())
+    }
+
     /// Writes one part: a comment, a travel to its start, then its strings.
     pub fn part(&mut self, tp: &Toolpath) -> io::Result<()> {
-        let t0 = self.stats.time;
+        self.planner.begin_part(&tp.name);
         let comment = format!("; part: {} ({} strings)", tp.name, tp.len());
         self.flush()?;
         self.text(&comment)?;
         self.travel_to(tp.points[0])?;
         let min = self.printer.min_string_length;
+        let mut events = tp.events.iter().peekable();
+        let arcs = if self.printer.arcs {
+            let fw = crate::flavor::arc_firmware(self.printer.flavor);
+            crate::arc::fit_part(tp, self.printer.arc_tolerance, fw)
+        } else {
+            Vec::new()
+        };
+        let mut arcs = arcs.iter().peekable();
+        let mut skip_to = 0;
         for k in 0..tp.len() {
+            if k < skip_to {
+                continue;
+            }
+            while let Some((_, e)) = events.next_if(|(at, _)| *at <= k) {
+                self.event(e)?;
+            }
+            if let Some(a) = arcs.next_if(|a| a.start == k) {
+                self.flush()?;
+                self.arc_move(tp, a)?;
+                skip_to = a.end;
+                continue;
+            }
             let s = tp.strings[k];
             let (a, b) = tp.ends(k);
             if s.travel {
@@ -442,9 +649,9 @@ impl<'a, W: Write> Emitter<'a, W> {
             }
         }
         self.flush()?;
-        self.stats
-            .part_times
-            .push((tp.name.clone(), self.stats.time - t0));
+        for (_, e) in events {
+            self.event(e)?;
+        }
         Ok(())
     }
 
@@ -457,15 +664,39 @@ impl<'a, W: Write> Emitter<'a, W> {
             .printer
             .fill("end_gcode", &self.printer.end_gcode, &vals)?;
         self.text(&end).map_err(io)?;
+        // the planner needs the whole print: times are known only now
+        let limits = self.planner.limits().clone();
+        let est = self.planner.finish();
+        self.stats.time = est.total.planned;
+        self.stats.part_times = est
+            .parts
+            .iter()
+            .map(|p| (p.name.clone(), p.times.planned))
+            .collect();
         let st = &self.stats;
         let grams = st.volume / 1000.0 * recipe.material.density;
-        let summary = format!(
+        let mut summary = format!(
             "; filament used [mm] = {:.2}\n; filament used [cm3] = {:.2}\n; filament used [g] = {:.2}\n; estimated printing time = {}\n",
             st.filament,
             st.volume / 1000.0,
             grams,
             hms(st.time)
         );
+        for p in &est.parts {
+            summary.push_str(&format!(
+                "; estimated time part {} = {}\n",
+                p.name,
+                hms(p.times.planned)
+            ));
+        }
+        summary.push_str(&format!(
+            "; time at the G-code's speeds (distance / speed) = {}\n; time lost to acceleration and corners = {}\n; time lost to speed limits = {}\n; planner: {}\n",
+            hms(est.total.ideal),
+            hms(est.total.lost_to_acceleration()),
+            hms(est.total.lost_to_speed_limits()),
+            limits.describe()
+        ));
+        self.stats.estimate = est;
         self.text(&summary).map_err(io)?;
         self.out.flush().map_err(io)?;
         Ok((self.out, self.stats))

@@ -5,14 +5,17 @@
 //! [`primitive`]) → [`step`]s → [`check`]s → [`gcode`] and [`stats`];
 //! [`build`] runs the pipeline and [`cli`] the commands.
 
+pub mod arc;
 pub mod batch;
 pub mod build;
 pub mod check;
 pub mod cli;
 pub mod error;
 pub mod expr;
+pub mod flavor;
 pub mod gcode;
 pub mod lock;
+pub mod planner;
 pub mod preview;
 pub mod primitive;
 pub mod printer;

@@ -38,6 +38,9 @@ struct CommonArgs {
     /// Write even when checks fail.
     #[arg(long)]
     force: bool,
+    /// Silence a check for this build: its code, e.g. `bridge`; repeatable.
+    #[arg(long = "allow", value_name = "CODE")]
+    allow: Vec<String>,
 }
 
 impl From<CommonArgs> for Common {
@@ -50,6 +53,7 @@ impl From<CommonArgs> for Common {
             printer: a.printer,
             strict: a.strict,
             force: a.force,
+            allow: a.allow,
         }
     }
 }
@@ -99,12 +103,17 @@ enum Command {
         /// The model alone: no name, stats or legend (PNG).
         #[arg(long)]
         bare: bool,
+        /// Silence a check for this build: its code, e.g. `bridge`; repeatable.
+        #[arg(long = "allow", value_name = "CODE")]
+        allow: Vec<String>,
     },
     /// Run every printability check without writing G-code.
     Check {
         #[command(flatten)]
         common: CommonArgs,
     },
+    /// List the built-in printer profiles: flavour, bed, origin, nozzle and filament.
+    Printers,
     /// Print `SHA256  RECIPE`: the hash of exactly the bytes `build` would write.
     Hash {
         #[command(flatten)]
@@ -143,6 +152,7 @@ fn main() -> ExitCode {
             color,
             size,
             bare,
+            allow,
         } => cli::preview(&PreviewArgs {
             recipe,
             sets,
@@ -152,8 +162,13 @@ fn main() -> ExitCode {
             color,
             size,
             bare,
+            allow,
         }),
         Command::Check { common } => cli::check(&common.into()),
+        Command::Printers => {
+            print!("{}", cli::printers());
+            Vec::new()
+        }
         Command::Hash {
             common,
             lock,

@@ -22,6 +22,9 @@ pub enum Flavor {
     Klipper,
     /// RepRapFirmware.
     Reprap,
+    /// Prusa's firmware (MK3S's Prusa-Firmware, MK4's Buddy): Marlin but for
+    /// the pause, `M601` (see [`crate::flavor`]).
+    Prusa,
 }
 
 /// Absolute (M82) or relative (M83) E values.
@@ -144,6 +147,10 @@ pub struct Printer {
     /// Retraction before long travel moves.
     #[serde(default)]
     pub retraction: Retraction,
+    /// Retract with the firmware's `G10`/`G11` (its own length and speed,
+    /// `M207`/`M208` or Klipper's `[firmware_retraction]`) instead of E moves.
+    #[serde(default)]
+    pub firmware_retraction: bool,
     /// Hottest nozzle the hot end allows, °C.
     #[serde(default = "d_max_nozzle")]
     pub max_nozzle_temp: f64,
@@ -160,10 +167,29 @@ pub struct Printer {
     /// (Kanada's `draw` does the same near a globe's poles), mm.
     #[serde(default = "d_min_string")]
     pub min_string_length: f64,
+    /// Fit `G2`/`G3` arcs to runs of strings on a circle or helix (see
+    /// [`crate::arc`]); off by default.
+    #[serde(default)]
+    pub arcs: bool,
+    /// Largest distance between an arc and the strings it replaces, mm.
+    #[serde(default = "d_arc_tolerance")]
+    pub arc_tolerance: f64,
     /// PNG thumbnails to embed in the G-code, as `WxH` sizes (PrusaSlicer's
     /// `; thumbnail begin` blocks); none by default.
     #[serde(default)]
     pub thumbnails: Vec<String>,
+    /// The firmware planner's limits, for the print-time estimate (see
+    /// [`crate::planner::Kinematics`]).
+    #[serde(default)]
+    pub kinematics: crate::planner::Kinematics,
+    /// The print head's geometry for the collision check and the travel
+    /// height between parts (see [`crate::check::Head`]).
+    #[serde(default)]
+    pub head: crate::check::Head,
+    /// Thresholds of the flow, support and planner checks (see
+    /// [`crate::check::CheckLimits`]).
+    #[serde(default)]
+    pub checks: crate::check::CheckLimits,
 }
 
 fn d_travel() -> f64 {
@@ -184,8 +210,18 @@ fn d_max_flow() -> f64 {
 fn d_min_string() -> f64 {
     0.1
 }
+fn d_arc_tolerance() -> f64 {
+    0.025
+}
 
-const BUILT_IN: &[(&str, &str)] = &[("generic-220", include_str!("printers/generic-220.yaml"))];
+const BUILT_IN: &[(&str, &str)] = &[
+    ("generic-220", include_str!("printers/generic-220.yaml")),
+    ("ender3", include_str!("printers/ender3.yaml")),
+    ("prusa-mk3s", include_str!("printers/prusa-mk3s.yaml")),
+    ("prusa-mk4", include_str!("printers/prusa-mk4.yaml")),
+    ("voron-350", include_str!("printers/voron-350.yaml")),
+    ("rostock-max", include_str!("printers/rostock-max.yaml")),
+];
 
 /// Names of the built-in printer profiles.
 pub fn built_in_names() -> Vec<&'static str> {
@@ -200,12 +236,29 @@ impl Printer {
         Some(p)
     }
 
-    /// A profile from a YAML file.
+    /// A profile from a YAML file. With `inherits: NAME|FILE` the file's keys
+    /// override those of a built-in profile or another file (maps merged key
+    /// by key, see [`merge_yaml`]); a file without it is parsed on its own.
     pub fn from_file(path: &Path) -> Result<Printer> {
         let shown = path.display().to_string();
         let text = std::fs::read_to_string(path)
             .map_err(|e| Error::io(&shown, format!("cannot read the printer profile: {e}")))?;
-        let p: Printer = crate::recipe::parse_yaml(&text, &shown)?;
+        let value: serde_yaml::Value = crate::recipe::parse_yaml(&text, &shown)?;
+        let p: Printer = if value.get("inherits").is_some() {
+            let named = value.get("name").is_some();
+            let mut seen = vec![path.canonicalize().unwrap_or_else(|_| path.to_path_buf())];
+            let mut merged = inherit(value, path, &mut seen).map_err(|e| e.in_file(&shown))?;
+            if !named {
+                // a profile named after its file, not after its base
+                let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned());
+                if let (Some(m), Some(stem)) = (merged.as_mapping_mut(), stem) {
+                    m.insert("name".into(), stem.into());
+                }
+            }
+            from_value(merged, &shown)?
+        } else {
+            crate::recipe::parse_yaml(&text, &shown)?
+        };
         p.validate().map_err(|e| e.in_file(&shown))?;
         Ok(p)
     }
@@ -241,22 +294,14 @@ impl Printer {
     }
 
     fn validate(&self) -> Result<()> {
-        let positive = |key: &str, v: f64| {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err(Error::input(
-                    key,
-                    format!("{v} is not allowed; expected a number > 0"),
-                ))
-            }
-        };
+        let positive = crate::check::config::positive;
         positive("nozzle_diameter", self.nozzle_diameter)?;
         positive("filament_diameter", self.filament_diameter)?;
         positive("travel_speed", self.travel_speed)?;
         positive("bed.max_z", self.bed.max_z())?;
         positive("max_speed", self.max_speed)?;
         positive("max_flow", self.max_flow)?;
+        positive("arc_tolerance", self.arc_tolerance)?;
         match self.bed {
             Bed::Rectangle { size, .. } => {
                 positive("bed.size[0]", size[0])?;
@@ -291,6 +336,9 @@ impl Printer {
             ));
         }
         crate::preview::thumbnail::sizes(&self.thumbnails)?;
+        self.kinematics.validate()?;
+        self.head.validate()?;
+        self.checks.validate()?;
         self.fill("start_gcode", &self.start_gcode, &BTreeMap::new())?;
         self.fill("end_gcode", &self.end_gcode, &BTreeMap::new())?;
         Ok(())
@@ -341,6 +389,113 @@ impl Printer {
     }
 }
 
+/// Deepest chain of `inherits` followed.
+const MAX_INHERITS: usize = 16;
+
+/// Resolves the `inherits:` of a profile file's YAML `value` (read from
+/// `path`): the base (a built-in name, or a file relative to `path`, itself
+/// resolved) with `value`'s keys merged over it. `seen` holds the files of
+/// the chain so far, to refuse cycles.
+fn inherit(
+    mut value: serde_yaml::Value,
+    path: &Path,
+    seen: &mut Vec<std::path::PathBuf>,
+) -> Result<serde_yaml::Value> {
+    let Some(spec) = value.as_mapping_mut().and_then(|m| m.remove("inherits")) else {
+        return Ok(value);
+    };
+    let Some(spec) = spec.as_str().map(str::to_string) else {
+        return Err(Error::input(
+            "inherits",
+            "expected the name of a built-in printer or the path of a printer YAML",
+        ));
+    };
+    if seen.len() > MAX_INHERITS {
+        return Err(Error::input(
+            "inherits",
+            format!("more than {MAX_INHERITS} profiles inherit one from another"),
+        ));
+    }
+    let base = if let Some((_, text)) = BUILT_IN.iter().find(|(n, _)| *n == spec) {
+        serde_yaml::from_str(text).expect("built-in profiles parse")
+    } else if spec.contains('/') || spec.ends_with(".yaml") || spec.ends_with(".yml") {
+        let rel = spec.trim_start_matches("./");
+        let file = match path.parent() {
+            Some(dir) if !dir.as_os_str().is_empty() && dir != Path::new(".") => dir.join(rel),
+            _ => Path::new(rel).to_path_buf(),
+        };
+        let canon = file.canonicalize().map_err(|e| {
+            Error::input(
+                "inherits",
+                format!(
+                    "cannot read the printer profile `{spec}` ({}): {e}",
+                    file.display()
+                ),
+            )
+        })?;
+        if seen.contains(&canon) {
+            return Err(Error::input(
+                "inherits",
+                format!("`{spec}` inherits, directly or not, from itself"),
+            ));
+        }
+        seen.push(canon);
+        let shown = file.display().to_string();
+        let text = std::fs::read_to_string(&file)
+            .map_err(|e| Error::io(&shown, format!("cannot read the printer profile: {e}")))?;
+        let v: serde_yaml::Value = crate::recipe::parse_yaml(&text, &shown)?;
+        inherit(v, &file, seen).map_err(|e| e.in_file(&shown))?
+    } else {
+        return Err(Error::input(
+            "inherits",
+            format!(
+                "unknown printer `{spec}`; built-in printers are {} (or give a path to a printer YAML)",
+                built_in_names().join(", ")
+            ),
+        ));
+    };
+    Ok(merge_yaml(base, value))
+}
+
+/// Deep merge: keys of `over` replace those of `base`, maps are merged key by
+/// key, except two maps whose `shape` differs (a round bed replacing a
+/// rectangle), where `over` replaces `base` whole.
+pub fn merge_yaml(base: serde_yaml::Value, over: serde_yaml::Value) -> serde_yaml::Value {
+    use serde_yaml::Value;
+    match (base, over) {
+        (Value::Mapping(mut b), Value::Mapping(o)) => {
+            let shape = |m: &serde_yaml::Mapping| m.get("shape").cloned();
+            if shape(&o).is_some() && shape(&b).is_some() && shape(&o) != shape(&b) {
+                return Value::Mapping(o);
+            }
+            for (k, v) in o {
+                let merged = match b.remove(&k) {
+                    Some(old) => merge_yaml(old, v),
+                    None => v,
+                };
+                b.insert(k, merged);
+            }
+            Value::Mapping(b)
+        }
+        (_, over) => over,
+    }
+}
+
+/// Deserialises a merged profile, naming the key path of any error.
+fn from_value(value: serde_yaml::Value, file: &str) -> Result<Printer> {
+    let mut track = serde_path_to_error::Track::new();
+    let tracked = serde_path_to_error::Deserializer::new(value, &mut track);
+    Printer::deserialize(tracked).map_err(|e| {
+        let path = track.path().to_string();
+        let mut err = Error::input(
+            if path == "." { String::new() } else { path },
+            e.to_string(),
+        );
+        err.file = Some(file.to_string());
+        err
+    })
+}
+
 /// Placeholders a start or end G-code template may use.
 pub const PLACEHOLDERS: [&str; 8] = [
     "nozzle_temp",
@@ -368,15 +523,26 @@ pub struct Material {
     pub bed_temp: f64,
     /// Hottest safe nozzle for this material, °C.
     pub max_nozzle_temp: f64,
+    /// Part-cooling fan once the print is above `fan_start_z`, 0 (off) to 1.
+    pub fan_speed: f64,
+    /// Height (recipe z, mm) above which the fan turns on: the first layers
+    /// stick better warm.
+    pub fan_start_z: f64,
 }
+
+/// Height above which the fan of a built-in material turns on, mm: past the
+/// first layer or two.
+pub const FAN_START_Z: f64 = 0.5;
 
 impl Material {
     /// A built-in material: `pla`, `abs` or `petg`.
     pub fn built_in(name: &str) -> Option<Material> {
-        let (density, nozzle, bed, max) = match name {
-            "pla" => (1.24, 210.0, 60.0, 240.0),
-            "abs" => (1.04, 240.0, 100.0, 270.0),
-            "petg" => (1.27, 235.0, 80.0, 260.0),
+        // PLA wants full cooling, PETG some (it sticks to itself less when
+        // cold), ABS none (it warps and splits between layers)
+        let (density, nozzle, bed, max, fan) = match name {
+            "pla" => (1.24, 210.0, 60.0, 240.0, 1.0),
+            "abs" => (1.04, 240.0, 100.0, 270.0, 0.0),
+            "petg" => (1.27, 235.0, 80.0, 260.0, 0.5),
             _ => return None,
         };
         Some(Material {
@@ -386,6 +552,8 @@ impl Material {
             nozzle_temp: nozzle,
             bed_temp: bed,
             max_nozzle_temp: max,
+            fan_speed: fan,
+            fan_start_z: FAN_START_Z,
         })
     }
 }

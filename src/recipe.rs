@@ -132,6 +132,12 @@ pub struct InlineMaterial {
     /// Hottest safe nozzle, °C; `nozzle_temp` + 25 when absent.
     #[serde(default)]
     pub max_nozzle_temp: Option<Num>,
+    /// Part-cooling fan, 0 to 1, above `fan_start_z`; 0 (off) when absent.
+    #[serde(default)]
+    pub fan_speed: Option<Num>,
+    /// Height above which the fan turns on, mm; 0.5 when absent.
+    #[serde(default)]
+    pub fan_start_z: Option<Num>,
 }
 
 impl<'de> Deserialize<'de> for RawMaterial {
@@ -210,6 +216,64 @@ pub struct RawRecipe {
     /// Most strings one part may have (default 50 million).
     #[serde(default)]
     pub max_strings: Option<Num>,
+    /// Check codes silenced for this recipe (see [`crate::check::CODES`]).
+    #[serde(default)]
+    pub allow: Vec<RawAllow>,
+}
+
+/// An `allow:` entry: a check code, or `{code, reason}`.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RawAllow {
+    /// Just the code.
+    Code(String),
+    /// The code and why it is allowed.
+    WithReason {
+        /// The check code.
+        code: String,
+        /// Why the finding is accepted.
+        reason: Option<String>,
+    },
+}
+
+/// `{code, reason}` of an `allow:` entry.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AllowMap {
+    code: String,
+    #[serde(default)]
+    reason: Option<String>,
+}
+
+impl<'de> Deserialize<'de> for RawAllow {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<RawAllow, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = RawAllow;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a check code, or a map {code, reason}")
+            }
+            fn visit_str<E: de::Error>(self, v: &str) -> std::result::Result<RawAllow, E> {
+                Ok(RawAllow::Code(v.to_string()))
+            }
+            fn visit_map<A: MapAccess<'de>>(self, m: A) -> std::result::Result<RawAllow, A::Error> {
+                let a = AllowMap::deserialize(de::value::MapAccessDeserializer::new(m))?;
+                Ok(RawAllow::WithReason {
+                    code: a.code,
+                    reason: a.reason,
+                })
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+impl RawAllow {
+    /// The check code.
+    pub fn code(&self) -> &str {
+        match self {
+            RawAllow::Code(c) | RawAllow::WithReason { code: c, .. } => c,
+        }
+    }
 }
 
 /// One part.
@@ -292,6 +356,7 @@ pub enum RawPrimitive {
     PatternHelix(crate::primitive::pattern::RawPatternHelix),
     CaHelix(crate::primitive::ca::RawCaHelix),
     Solid(crate::primitive::solid::RawSolid),
+    Turtle(crate::primitive::turtle::RawTurtle),
 }
 
 /// `direction:` of a spiral.
@@ -411,6 +476,8 @@ pub struct Recipe {
     pub parts: Vec<Part>,
     /// Most strings one part may have.
     pub max_strings: u64,
+    /// Check codes the recipe silences (`allow:`).
+    pub allow: Vec<String>,
 }
 
 /// Default cross-section when a recipe gives none: Kanada's 0.196 mm² (Fig. 9).
@@ -422,6 +489,8 @@ pub const DEFAULT_SPEED: f64 = 40.0;
 struct Ctx<'a> {
     params: &'a Params,
     dir: &'a Path,
+    /// Filament area (mm²) and max_strings, for a turtle (set once known).
+    turtle: (f64, u64),
 }
 
 impl Ctx<'_> {
@@ -641,6 +710,7 @@ impl Recipe {
         let ctx = Ctx {
             params: &params,
             dir,
+            turtle: (0.0, DEFAULT_MAX_STRINGS),
         };
         let printer = match printer {
             Some(p) => Printer::resolve(p, Path::new(".")).map_err(|e| {
@@ -672,6 +742,13 @@ impl Recipe {
             Some(n) => ctx.whole(n, "max_strings", 1)? as u64,
             None => DEFAULT_MAX_STRINGS,
         };
+        let d = material
+            .filament_diameter
+            .unwrap_or(printer.filament_diameter);
+        let ctx = Ctx {
+            turtle: (std::f64::consts::PI * (d / 2.0) * (d / 2.0), max_strings),
+            ..ctx
+        };
         let mut parts = Vec::with_capacity(raw.parts.len());
         for (k, p) in raw.parts.iter().enumerate() {
             let place = format!("parts[{k}]");
@@ -687,6 +764,8 @@ impl Recipe {
             }
             parts.push(part);
         }
+        let allow: Vec<String> = raw.allow.iter().map(|a| a.code().to_string()).collect();
+        crate::check::validate_allow(&allow, |i| format!("allow[{i}]"))?;
         Ok(Recipe {
             name: raw.name.clone(),
             params,
@@ -695,6 +774,7 @@ impl Recipe {
             skirt,
             parts,
             max_strings,
+            allow,
         })
     }
 }
@@ -723,6 +803,23 @@ fn resolve_material(ctx: &Ctx, m: Option<&RawMaterial>) -> Result<Material> {
                     Some(n) => ctx.positive(n, "material.max_nozzle_temp")?,
                     None => nozzle_temp + 25.0,
                 },
+                fan_speed: match &m.fan_speed {
+                    Some(n) => {
+                        let f = ctx.non_negative(n, "material.fan_speed")?;
+                        if f > 1.0 {
+                            return Err(Error::input(
+                                "material.fan_speed",
+                                format!("{f} is not allowed; expected a fraction of full speed from 0 to 1"),
+                            ));
+                        }
+                        f
+                    }
+                    None => 0.0,
+                },
+                fan_start_z: match &m.fan_start_z {
+                    Some(n) => ctx.non_negative(n, "material.fan_start_z")?,
+                    None => crate::printer::FAN_START_Z,
+                },
             })
         }
     }
@@ -737,7 +834,21 @@ fn resolve_part(ctx: &Ctx, p: &RawPart, c0: f64, v0: f64, k: usize) -> Result<Pa
         Some(n) => ctx.positive(n, "speed")?,
         None => v0,
     };
-    let primitive = resolve_primitive(ctx, &p.primitive).map_err(|e| e.under("primitive"))?;
+    let primitive = match &p.primitive {
+        // a turtle runs now: its strings start with the part's c and v
+        RawPrimitive::Turtle(t) => {
+            let env = crate::primitive::turtle::Env {
+                cross_section,
+                speed,
+                filament_area: ctx.turtle.0,
+                max_strings: ctx.turtle.1,
+            };
+            crate::primitive::turtle::resolve(t, ctx.params, &env)
+                .map(|t| Primitive::Turtle(Box::new(t)))
+        }
+        other => resolve_primitive(ctx, other),
+    }
+    .map_err(|e| e.under("primitive"))?;
     let mut steps = Vec::with_capacity(p.steps.len());
     for (j, s) in p.steps.iter().enumerate() {
         steps.push(resolve_step(ctx, s).map_err(|e| e.under(&format!("steps[{j}]")))?);
@@ -879,6 +990,7 @@ fn resolve_primitive(ctx: &Ctx, p: &RawPrimitive) -> Result<Primitive> {
             s,
             &|n: &Num, place: &str| ctx.num(n, place),
         )?),
+        RawPrimitive::Turtle(_) => unreachable!("a turtle is resolved by resolve_part"),
     })
 }
 

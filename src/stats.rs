@@ -2,7 +2,7 @@
 
 use serde::Serialize;
 
-use crate::check::{Finding, Severity};
+use crate::check::Finding;
 use crate::gcode::{hms, MoveStats};
 
 /// Corners of the bounding box of the extruding moves, recipe coordinates.
@@ -21,8 +21,10 @@ pub struct PartStats {
     pub name: String,
     /// Strings after all steps.
     pub strings: usize,
-    /// Σ length / speed of its moves, s.
+    /// Planned time of its moves (the travel to it included), s.
     pub print_time_s: f64,
+    /// Planned time less Σ length / speed of its moves, s.
+    pub time_lost_s: f64,
 }
 
 /// Everything the spec's `--stats-json` promises, and a little more.
@@ -62,8 +64,19 @@ pub struct Stats {
     pub filament_volume_mm3: f64,
     /// Filament mass, g.
     pub filament_mass_g: f64,
-    /// Σ distance / speed, s (no acceleration yet).
+    /// Estimated printing time, s: the planner's, with acceleration,
+    /// junction speeds and speed limits (see `planner`).
     pub print_time_s: f64,
+    /// Σ distance / speed at the G-code's speeds, s.
+    pub print_time_ideal_s: f64,
+    /// Time lost to acceleration, deceleration and corners, s (planned
+    /// time less Σ distance / speed at the speeds the limits allow).
+    pub time_lost_to_acceleration_s: f64,
+    /// Time lost to `max_velocity` and `min_segment_time`, s; with the time
+    /// lost to acceleration, `print_time_s − print_time_ideal_s`.
+    pub time_lost_to_speed_limits_s: f64,
+    /// The limits the planner used.
+    pub planner: crate::planner::Limits,
     /// Bounding box of the extruding moves.
     pub bbox: BBox,
     /// Highest volumetric flow of any move, mm³/s.
@@ -72,6 +85,9 @@ pub struct Stats {
     pub parts: Vec<PartStats>,
     /// Findings of the checks (warnings and, under `--force`, errors).
     pub warnings: Vec<Finding>,
+    /// Where each part (and the skirt) holds on to the bed: contact length,
+    /// area and footprint; parts that start on earlier filament are absent.
+    pub first_layer: Vec<crate::check::first_layer::Footprint>,
     /// The z-buffer of each `solid` part: loops and area per layer (absent without solids).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub solids: Vec<crate::primitive::solid::SolidStats>,
@@ -119,26 +135,46 @@ impl Stats {
             filament_volume_mm3: m.volume,
             filament_mass_g: m.volume / 1000.0 * recipe.material.density,
             print_time_s: m.time,
+            print_time_ideal_s: m.estimate.total.ideal,
+            time_lost_to_acceleration_s: m.estimate.total.lost_to_acceleration(),
+            time_lost_to_speed_limits_s: m.estimate.total.lost_to_speed_limits(),
+            planner: recipe.printer.kinematics.limits(recipe.printer.max_speed),
             bbox,
             max_flow_mm3_s: m.max_flow,
             parts,
             warnings: findings,
             solids: crate::primitive::solid::stats(recipe),
+            first_layer: Vec::new(),
         }
+    }
+
+    /// `  bed contact: bottom 5653 mm² in 59.8 × 59.5 mm; …` (the first layer's hold).
+    fn bed_contact(&self) -> String {
+        if self.first_layer.is_empty() {
+            return "  bed contact: none (nothing lies on the bed)\n".to_string();
+        }
+        let each: Vec<String> = self
+            .first_layer
+            .iter()
+            .map(|f| {
+                format!(
+                    "{} {:.0} mm² in {:.1} × {:.1} mm",
+                    f.part,
+                    f.contact_area_mm2,
+                    f.max[0] - f.min[0],
+                    f.max[1] - f.min[1]
+                )
+            })
+            .collect();
+        format!("  bed contact: {}\n", each.join("; "))
     }
 
     /// The short human report printed after a build.
     pub fn report(&self, output: &str) -> String {
         let b = &self.bbox;
         let size = [0, 1, 2].map(|k| b.max[k] - b.min[k]);
-        let errors = self
-            .warnings
-            .iter()
-            .filter(|f| f.severity == Severity::Error)
-            .count();
-        let warnings = self.warnings.len() - errors;
         let mut s = format!(
-            "{} → {output}\n  {} strings in {} part{}; {} extruding and {} travel moves ({} short strings merged)\n  size {:.1} × {:.1} × {:.1} mm\n  filament {:.0} mm, {:.2} g {} ({:.2} cm³); max flow {:.2} mm³/s\n  time {} (distance / speed)\n  {} warning{}, {} error{}\n",
+            "{} → {output}\n  {} strings in {} part{}; {} extruding and {} travel moves ({} short strings merged)\n  size {:.1} × {:.1} × {:.1} mm\n  filament {:.0} mm, {:.2} g {} ({:.2} cm³); max flow {:.2} mm³/s\n  time {} ({} lost to acceleration and corners, {} to speed limits; at the G-code's speeds {})\n{}{}  {}\n",
             self.recipe,
             self.strings,
             self.parts.len(),
@@ -155,10 +191,26 @@ impl Stats {
             self.filament_volume_mm3 / 1000.0,
             self.max_flow_mm3_s,
             hms(self.print_time_s),
-            warnings,
-            if warnings == 1 { "" } else { "s" },
-            errors,
-            if errors == 1 { "" } else { "s" },
+            hms(self.time_lost_to_acceleration_s),
+            hms(self.time_lost_to_speed_limits_s),
+            hms(self.print_time_ideal_s),
+            if self.parts.len() > 1 {
+                self.parts
+                    .iter()
+                    .map(|p| {
+                        format!(
+                            "    {}: {} ({} lost)\n",
+                            p.name,
+                            hms(p.print_time_s),
+                            hms(p.time_lost_s)
+                        )
+                    })
+                    .collect::<String>()
+            } else {
+                String::new()
+            },
+            self.bed_contact(),
+            crate::check::summary(&self.warnings),
         );
         for f in &self.warnings {
             s.push_str(&format!(

@@ -20,6 +20,48 @@ pub struct Strand {
     pub travel: bool,
 }
 
+/// Something the printer does between two strings that is not a move
+/// (ExtruderTurtle's dwell, pause and temperature commands; a turtle's pen-up
+/// retraction and in-place extrusion).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Event {
+    /// Wait this many milliseconds (G4).
+    Dwell {
+        /// Milliseconds.
+        ms: f64,
+    },
+    /// A firmware pause, so a person can act (insert a thread, change colour).
+    Pause,
+    /// Set the nozzle temperature, °C, and optionally wait for it.
+    NozzleTemp {
+        /// °C.
+        celsius: f64,
+        /// Wait until it is reached.
+        wait: bool,
+    },
+    /// Set the bed temperature, °C, and optionally wait for it.
+    BedTemp {
+        /// °C.
+        celsius: f64,
+        /// Wait until it is reached.
+        wait: bool,
+    },
+    /// Set the part-cooling fan, 0 (off) to 1 (full).
+    Fan {
+        /// Fraction of full speed.
+        speed: f64,
+    },
+    /// Retract now with the profile's length; the next extruding move undoes it.
+    Retract,
+    /// Feed filament without moving the head.
+    Extrude {
+        /// Filament, mm.
+        filament: f64,
+        /// Filament speed, mm/s.
+        speed: f64,
+    },
+}
+
 /// A part: a polyline of points and the strings between them.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Toolpath {
@@ -29,6 +71,9 @@ pub struct Toolpath {
     pub points: Vec<DVec3>,
     /// String k runs from `points[k]` to `points[k + 1]`.
     pub strings: Vec<Strand>,
+    /// Events in order of their string index: `(k, e)` happens before
+    /// string k (k = n: after the last string).
+    pub events: Vec<(usize, Event)>,
 }
 
 impl Toolpath {
@@ -38,6 +83,7 @@ impl Toolpath {
             name: String::new(),
             points: vec![start],
             strings: Vec::new(),
+            events: Vec::new(),
         }
     }
 
@@ -49,6 +95,7 @@ impl Toolpath {
             name: String::new(),
             points,
             strings: Vec::with_capacity(n),
+            events: Vec::new(),
         }
     }
 
@@ -75,6 +122,11 @@ impl Toolpath {
             v,
             travel: true,
         });
+    }
+
+    /// Adds an event before the next string.
+    pub fn event(&mut self, e: Event) {
+        self.events.push((self.strings.len(), e));
     }
 
     /// Number of strings.
@@ -118,6 +170,9 @@ impl Toolpath {
         if self.head() != start {
             self.travel(start, travel_speed);
         }
+        let base = self.len();
+        self.events
+            .extend(other.events.iter().map(|&(k, e)| (k + base, e)));
         self.points.extend_from_slice(&other.points[1..]);
         self.strings.extend_from_slice(&other.strings);
     }

@@ -15,6 +15,8 @@ pub mod pattern;
 /// Feature-based solids printed from a z-buffer of loops: `solid`.
 pub mod solid;
 mod spiral;
+/// A 3D turtle that prints as it walks (turtle.py, ExtruderTurtle): `turtle`.
+pub mod turtle;
 
 pub use arc::Arc;
 pub use ca::CaHelix;
@@ -25,6 +27,7 @@ pub use path::PathCmd;
 pub use pattern::PatternHelix;
 pub use solid::Solid;
 pub use spiral::{Direction, Spiral};
+pub use turtle::Turtle;
 
 use crate::toolpath::Toolpath;
 
@@ -49,6 +52,8 @@ pub enum Primitive {
     PatternHelix(PatternHelix),
     /// Kanada's cellular-automaton model of those patterns, as G-code.
     CaHelix(CaHelix),
+    /// A 3D turtle program, run when the recipe was resolved.
+    Turtle(Box<Turtle>),
 }
 
 impl Primitive {
@@ -64,6 +69,7 @@ impl Primitive {
             Primitive::Solid(p) => p.string_count(),
             Primitive::PatternHelix(p) => p.string_count(),
             Primitive::CaHelix(p) => p.string_count(),
+            Primitive::Turtle(p) => p.string_count(),
         }
     }
 
@@ -80,6 +86,8 @@ impl Primitive {
             Primitive::Solid(p) => p.build(c, v),
             Primitive::PatternHelix(p) => p.build(c, v),
             Primitive::CaHelix(p) => p.build(c, v),
+            // the part's c and v were the turtle's starting values
+            Primitive::Turtle(p) => p.build(),
         }
     }
 }

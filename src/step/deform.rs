@@ -2,7 +2,7 @@
 
 use glam::DVec3;
 
-use super::{not_finite, vars_at};
+use super::{not_finite, par_chunks, vars_at};
 use crate::expr::{var, Expr};
 use crate::toolpath::Toolpath;
 
@@ -39,77 +39,74 @@ impl Deform {
         let exprs: Vec<&Expr> = self.cross_section.iter().chain(&self.speed).collect();
         let polar_too = self.needs_polar(&exprs);
         let n = tp.len();
-        for k in 0..n {
-            let s = tp.strings[k];
-            if s.travel {
-                continue;
-            }
-            let m = tp.midpoint(k);
-            let mut vars = vars_at(m, k, n, polar_too);
-            vars[var::C] = s.c;
-            vars[var::V] = s.v;
-            if let Some(e) = &self.cross_section {
-                let c = e.eval(&vars);
-                if !c.is_finite() || c < 0.0 {
-                    return Err(bad_value("cross_section", e, c, k, m, "≥ 0 mm²"));
+        let points = &tp.points;
+        par_chunks(&mut tp.strings, |start, chunk| {
+            for (j, s) in chunk.iter_mut().enumerate() {
+                if s.travel {
+                    continue;
                 }
-                tp.strings[k].c = c;
-            }
-            if let Some(e) = &self.speed {
-                let v = e.eval(&vars);
-                if !v.is_finite() || v <= 0.0 {
-                    return Err(bad_value("speed", e, v, k, m, "> 0 mm/s"));
+                let k = start + j;
+                let m = (points[k] + points[k + 1]) * 0.5;
+                let mut vars = vars_at(m, k, n, polar_too);
+                vars[var::C] = s.c;
+                vars[var::V] = s.v;
+                if let Some(e) = &self.cross_section {
+                    let c = e.eval(&vars);
+                    if !c.is_finite() || c < 0.0 {
+                        return Err(bad_value("cross_section", e, c, k, m, "≥ 0 mm²"));
+                    }
+                    s.c = c;
                 }
-                tp.strings[k].v = v;
+                if let Some(e) = &self.speed {
+                    let v = e.eval(&vars);
+                    if !v.is_finite() || v <= 0.0 {
+                        return Err(bad_value("speed", e, v, k, m, "> 0 mm/s"));
+                    }
+                    s.v = v;
+                }
             }
-        }
-        Ok(())
+            Ok(())
+        })
     }
 
     fn apply_points(&self, tp: &mut Toolpath, pos: &[Expr; 3]) -> Result<(), String> {
         let n = tp.points.len();
         let [f0, f1, f2] = pos;
-        if self.cylinder {
-            // theta' = theta needs no trigonometry: (x, y) scales by r'/r.
-            let keep_theta = f1.is_var(var::THETA);
-            let polar_too = true;
-            for i in 0..n {
-                let p = tp.points[i];
+        let cylinder = self.cylinder;
+        // theta' = theta needs no trigonometry: (x, y) scales by r'/r.
+        let keep_theta = f1.is_var(var::THETA);
+        let polar_too = cylinder || self.needs_polar(&[f0, f1, f2]);
+        par_chunks(&mut tp.points, |start, chunk| {
+            for (j, point) in chunk.iter_mut().enumerate() {
+                let i = start + j;
+                let p = *point;
                 let vars = vars_at(p, i, n, polar_too);
-                let r = f0.eval(&vars);
-                let z = f2.eval(&vars);
-                let q = if keep_theta {
-                    let r0 = vars[var::R];
-                    if r0 > 0.0 {
-                        let s = r / r0;
-                        DVec3::new(p.x * s, p.y * s, z)
-                    } else {
-                        DVec3::new(r, 0.0, z)
-                    }
+                let q = if !cylinder {
+                    DVec3::new(f0.eval(&vars), f1.eval(&vars), f2.eval(&vars))
                 } else {
-                    let th = f1.eval(&vars);
-                    DVec3::new(r * libm::cos(th), r * libm::sin(th), z)
+                    let r = f0.eval(&vars);
+                    let z = f2.eval(&vars);
+                    if keep_theta {
+                        let r0 = vars[var::R];
+                        if r0 > 0.0 {
+                            let s = r / r0;
+                            DVec3::new(p.x * s, p.y * s, z)
+                        } else {
+                            DVec3::new(r, 0.0, z)
+                        }
+                    } else {
+                        let th = f1.eval(&vars);
+                        DVec3::new(r * libm::cos(th), r * libm::sin(th), z)
+                    }
                 };
                 if !q.is_finite() {
                     let (key, src, value) = worst(pos, &vars);
                     return Err(not_finite(&key, src, value, "point", i, p));
                 }
-                tp.points[i] = q;
+                *point = q;
             }
-        } else {
-            let polar_too = self.needs_polar(&[f0, f1, f2]);
-            for i in 0..n {
-                let p = tp.points[i];
-                let vars = vars_at(p, i, n, polar_too);
-                let q = DVec3::new(f0.eval(&vars), f1.eval(&vars), f2.eval(&vars));
-                if !q.is_finite() {
-                    let (key, src, value) = worst(pos, &vars);
-                    return Err(not_finite(&key, src, value, "point", i, p));
-                }
-                tp.points[i] = q;
-            }
-        }
-        Ok(())
+            Ok(())
+        })
     }
 }
 
@@ -195,5 +192,60 @@ mod tests {
             e.contains("position[1] `sqrt(y - 0.5)`") && e.contains("point 0"),
             "{e}"
         );
+    }
+
+    fn long_helix(n: usize) -> Toolpath {
+        let mut t = Toolpath::new(DVec3::new(10.0, 0.0, 0.0));
+        for i in 1..=n {
+            let a = i as f64 * 0.05;
+            t.draw(
+                DVec3::new(10.0 * libm::cos(a), 10.0 * libm::sin(a), i as f64 * 1e-3),
+                0.2,
+                10.0,
+            );
+        }
+        t
+    }
+
+    #[test]
+    fn chunks_on_threads_give_the_one_thread_bits_and_the_first_error() {
+        // above PAR_MIN, so the points and strings are split among threads
+        let n = 120_000;
+        let d = Deform {
+            cylinder: true,
+            position: Some([
+                ex("r + sin(5*theta + z)"),
+                ex("theta"),
+                ex("z + 0.1*cos(x)"),
+            ]),
+            cross_section: Some(ex("c*(1 + 0.5*sin(i))")),
+            speed: None,
+        };
+        let mut t = long_helix(n);
+        let old = t.clone();
+        d.apply(&mut t).unwrap();
+        let [f0, _, f2] = d.position.as_ref().unwrap();
+        for (i, p) in old.points.iter().enumerate() {
+            let vars = vars_at(*p, i, n + 1, true);
+            let s = f0.eval(&vars) / vars[var::R];
+            let want = DVec3::new(p.x * s, p.y * s, f2.eval(&vars));
+            assert_eq!(t.points[i].to_array(), want.to_array(), "point {i}");
+        }
+        for k in 0..n {
+            let mut vars = vars_at(old.midpoint(k), k, n, true);
+            vars[var::C] = 0.2;
+            vars[var::V] = 10.0;
+            let want = d.cross_section.as_ref().unwrap().eval(&vars);
+            assert_eq!(t.strings[k].c.to_bits(), want.to_bits(), "string {k}");
+        }
+        // NaN from point 30001 on, in every chunk: the error names the first
+        let bad = Deform {
+            cylinder: false,
+            position: Some([ex("x"), ex("y"), ex("sqrt(30000.5 - i)")]),
+            cross_section: None,
+            speed: None,
+        };
+        let e = bad.apply(&mut long_helix(n)).unwrap_err();
+        assert!(e.contains("at point 30001,"), "{e}");
     }
 }

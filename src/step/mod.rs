@@ -74,6 +74,44 @@ impl Step {
     }
 }
 
+/// Below this many items a step runs on one thread (a thread costs ~50 µs).
+const PAR_MIN: usize = 50_000;
+
+/// Calls `f(start, chunk)` on consecutive chunks of `items` (chunk j starts at
+/// item `start`), on up to `available_parallelism` (at most 4) scoped
+/// threads, and returns the error of the earliest failing chunk. Every item
+/// is computed by the same code whatever the split, and each chunk stops at
+/// its own first error, so results and error are those of one thread: the
+/// output cannot depend on the thread count.
+pub(crate) fn par_chunks<T: Send>(
+    items: &mut [T],
+    f: impl Fn(usize, &mut [T]) -> Result<(), String> + Sync,
+) -> Result<(), String> {
+    let n = items.len();
+    let threads = if n < PAR_MIN {
+        1
+    } else {
+        std::thread::available_parallelism().map_or(1, |t| t.get().min(4))
+    };
+    if threads <= 1 {
+        return f(0, items);
+    }
+    let size = n.div_ceil(threads);
+    let results: Vec<Result<(), String>> = std::thread::scope(|s| {
+        let f = &f;
+        let handles: Vec<_> = items
+            .chunks_mut(size)
+            .enumerate()
+            .map(|(j, chunk)| s.spawn(move || f(j * size, chunk)))
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+            .collect()
+    });
+    results.into_iter().collect()
+}
+
 /// Variable values for point or string `i` of `n` at `p`; r and theta only
 /// when `polar_too` (atan2 is the costly part).
 #[inline]

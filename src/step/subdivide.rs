@@ -25,7 +25,11 @@ pub fn apply(tp: &mut Toolpath, max: f64, max_strings: u64) -> Result<(), String
     let mut points = Vec::with_capacity(total as usize + 1);
     let mut strings = Vec::with_capacity(total as usize);
     points.push(tp.points[0]);
+    // new index of the first piece of each old string (and of the end), so
+    // events stay before the same string
+    let mut first = Vec::with_capacity(tp.len() + 1);
     for k in 0..tp.len() {
+        first.push(strings.len());
         let (a, b) = tp.ends(k);
         let m = pieces(k);
         for j in 1..m {
@@ -35,8 +39,12 @@ pub fn apply(tp: &mut Toolpath, max: f64, max_strings: u64) -> Result<(), String
         points.push(b);
         strings.push(tp.strings[k]);
     }
+    first.push(strings.len());
     tp.points = points;
     tp.strings = strings;
+    for ev in &mut tp.events {
+        ev.0 = first[ev.0];
+    }
     Ok(())
 }
 
@@ -58,5 +66,23 @@ mod tests {
         }
         assert!((t.volume() - v).abs() < 1e-12);
         assert!(apply(&mut t, 0.001, 100).is_err());
+    }
+
+    #[test]
+    fn events_stay_before_the_same_string() {
+        use crate::toolpath::Event;
+        let mut t = Toolpath::new(DVec3::ZERO);
+        t.draw(DVec3::new(10.0, 0.0, 0.0), 0.2, 10.0);
+        t.event(Event::Pause);
+        t.draw(DVec3::new(10.0, 10.0, 0.0), 0.2, 10.0);
+        t.event(Event::Dwell { ms: 5.0 });
+        apply(&mut t, 3.0, 100).unwrap();
+        // 4 + 4 pieces: the pause sits before piece 4 (the second string's
+        // first), the dwell after the last
+        assert_eq!(
+            t.events,
+            vec![(4, Event::Pause), (8, Event::Dwell { ms: 5.0 })]
+        );
+        assert_eq!(t.ends(4).0, DVec3::new(10.0, 0.0, 0.0));
     }
 }

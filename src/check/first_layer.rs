@@ -1,0 +1,272 @@
+//! The first layer: where each part holds on to the bed.
+//!
+//! A string sticks to the bed when the nozzle runs no higher over it than the
+//! string's width w (the round bead of its cross-section, at least the
+//! nozzle's diameter): the bead then reaches down to the bed. (The support
+//! check is more lenient, `support_tolerance` × w, as a string that high still
+//! rests on the bed, though it barely holds; a wall starting 0.6 mm up on a
+//! filled bottom lies on the bottom, not on the bed.) Its
+//! filament of cross-section c, pressed into the gap h between nozzle and bed
+//! (h = the string's mean height), covers a band of width c / h: a first layer
+//! of c = 0.15 mm² at h = 0.2 mm sticks along a 0.75 mm band. The band is
+//! taken at least the round bead's width and at most three nozzles (where the
+//! nozzle nearly touches the bed, c / h runs away). The contact area is
+//! Σ L·(c / h) over the part's bed strings, and the footprint is their
+//! bounding rectangle seen from above.
+//!
+//! The report and the stats JSON (`first_layer`) give each part's contact
+//! length, area and footprint: the adhesion the papers leave to the designer
+//! (a tall print on a small ring of contact is worth a skirt, a brim or a
+//! slower first turn). A bed string with the nozzle
+//! closer to the bed than `checks.first_layer_min` × the nozzle's diameter
+//! is a warning: the nozzle scrapes the bed and the filament cannot get out.
+
+use glam::DVec2;
+use serde::Serialize;
+
+use super::support::width;
+use super::{fmt_p, Finding, Severity};
+use crate::recipe::Recipe;
+use crate::toolpath::Toolpath;
+
+/// One part's hold on the bed.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Footprint {
+    /// The part's name (`skirt` for the skirt).
+    pub part: String,
+    /// Length of extruding strings lying on the bed, mm.
+    pub contact_length_mm: f64,
+    /// Area of bed the filament covers, Σ L·(c / h), mm².
+    pub contact_area_mm2: f64,
+    /// Lowest corner of the contact's bounding rectangle, recipe x and y.
+    pub min: [f64; 2],
+    /// Highest corner of the contact's bounding rectangle, recipe x and y.
+    pub max: [f64; 2],
+    /// Lowest nozzle height over the bed of a bed string, mm.
+    pub min_height_mm: f64,
+}
+
+/// Width of the band of bed a string of cross-section `c` at mean height `h`
+/// covers: c / h, between the round bead's width and three nozzles.
+#[inline]
+fn band(c: f64, h: f64, nozzle: f64) -> f64 {
+    let lo = width(c, nozzle);
+    let hi = (3.0 * nozzle).max(lo);
+    if h > 0.0 {
+        (c / h).clamp(lo, hi)
+    } else {
+        hi
+    }
+}
+
+/// A bed string seen from above: its ends and its nozzle height.
+type BedString = (DVec2, DVec2, f64);
+
+/// The bed strings laid so far, hashed by the 1 mm squares their ends'
+/// rectangle (grown by `reach`) covers, seen from above.
+#[derive(Default)]
+struct BedGrid {
+    cells: std::collections::HashMap<(i64, i64), Vec<BedString>>,
+}
+
+impl BedGrid {
+    fn squares(a: DVec2, b: DVec2, reach: f64) -> impl Iterator<Item = (i64, i64)> {
+        let lo = (a.min(b) - DVec2::splat(reach)).floor();
+        let hi = (a.max(b) + DVec2::splat(reach)).floor();
+        let (x0, x1, y0, y1) = (lo.x as i64, hi.x as i64, lo.y as i64, hi.y as i64);
+        (x0..=x1).flat_map(move |x| (y0..=y1).map(move |y| (x, y)))
+    }
+
+    fn insert(&mut self, a: DVec2, b: DVec2, h: f64, reach: f64) {
+        for sq in Self::squares(a, b, reach) {
+            self.cells.entry(sq).or_default().push((a, b, h));
+        }
+    }
+
+    /// Whether a bed string lower than `h` passes within `r` of `p`, seen from above.
+    fn under(&self, p: DVec2, h: f64, r: f64) -> bool {
+        let key = (libm::floor(p.x) as i64, libm::floor(p.y) as i64);
+        self.cells.get(&key).is_some_and(|v| {
+            v.iter().any(|&(a, b, hb)| {
+                let ab = b - a;
+                let l2 = ab.length_squared();
+                let u = if l2 > 0.0 {
+                    ((p - a).dot(ab) / l2).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
+                hb < h && p.distance(a + ab * u) < r
+            })
+        })
+    }
+}
+
+/// The footprint of each of `paths` on the bed (`None` where none of its
+/// strings lies there), and per path the first bed string whose nozzle runs
+/// lower than `min_h`, with its height.
+///
+/// A string lies on the bed when its nozzle height h ≤ its width w and no
+/// earlier bed string passes under its middle within w / 2, seen from above
+/// (so a second layer at 0.4 mm, on the first, does not count, nor a helix's
+/// second turn).
+#[allow(clippy::type_complexity)]
+fn footprint_all(
+    paths: &[&Toolpath],
+    nozzle: f64,
+    min_h: f64,
+) -> Vec<(Option<Footprint>, Option<(usize, f64)>)> {
+    let mut grid = BedGrid::default();
+    let mut out = Vec::with_capacity(paths.len());
+    for tp in paths {
+        let (mut len, mut area) = (0.0, 0.0);
+        let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+        let mut lowest = f64::INFINITY;
+        let mut scrape = None;
+        for (k, s) in tp.strings.iter().enumerate() {
+            if s.travel {
+                continue;
+            }
+            let (a, b) = tp.ends(k);
+            let w = width(s.c, nozzle);
+            let l = a.distance(b);
+            if a.z > w || b.z > w || l <= 0.0 {
+                continue;
+            }
+            let h = (a.z + b.z) / 2.0;
+            let (a2, b2) = (a.truncate(), b.truncate());
+            if grid.under((a2 + b2) * 0.5, h - 1e-9, w / 2.0) {
+                continue;
+            }
+            grid.insert(a2, b2, h, w / 2.0);
+            len += l;
+            area += l * band(s.c, h, nozzle);
+            lo = lo.min(a2).min(b2);
+            hi = hi.max(a2).max(b2);
+            let low = a.z.min(b.z);
+            lowest = f64::min(lowest, low);
+            if low < min_h && scrape.is_none() {
+                scrape = Some((k, low));
+            }
+        }
+        let f = (len > 0.0).then(|| Footprint {
+            part: tp.name.clone(),
+            contact_length_mm: len,
+            contact_area_mm2: area,
+            min: lo.to_array(),
+            max: hi.to_array(),
+            min_height_mm: lowest,
+        });
+        out.push((f, scrape));
+    }
+    out
+}
+
+/// The footprints of the paths that touch the bed, in print order.
+pub fn footprints(recipe: &Recipe, paths: &[&Toolpath]) -> Vec<Footprint> {
+    let p = &recipe.printer;
+    let min_h = p.checks.first_layer_min * p.nozzle_diameter;
+    footprint_all(paths, p.nozzle_diameter, min_h)
+        .into_iter()
+        .filter_map(|(f, _)| f)
+        .collect()
+}
+
+/// The `first-layer` findings: a warning per part where the nozzle runs too
+/// close to the bed.
+pub fn check(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) {
+    let p = &recipe.printer;
+    let min_h = p.checks.first_layer_min * p.nozzle_diameter;
+    for (tp, (_, scrape)) in paths
+        .iter()
+        .zip(footprint_all(paths, p.nozzle_diameter, min_h))
+    {
+        if let Some((k, h)) = scrape {
+            let at = tp.midpoint(k);
+            out.push(Finding {
+                code: "first-layer",
+                severity: Severity::Warning,
+                message: format!(
+                    "part `{}` lays filament with the nozzle {h:.3} mm over the bed, closer than {min_h:.3} mm ({} × the {} mm nozzle, checks.first_layer_min): the nozzle scrapes the bed and the filament cannot get out; first at string {k}, {}",
+                    tp.name,
+                    p.checks.first_layer_min,
+                    p.nozzle_diameter,
+                    fmt_p(at)
+                ),
+                part: Some(tp.name.clone()),
+                string: Some(k),
+                at: Some(at.to_array()),
+            });
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::toolpath::Strand;
+    use glam::DVec3;
+
+    fn ring(r: f64, z: f64, n: usize, c: f64) -> Toolpath {
+        let mut tp = Toolpath {
+            name: "ring".into(),
+            ..Toolpath::default()
+        };
+        for i in 0..=n {
+            let a = std::f64::consts::TAU * i as f64 / n as f64;
+            tp.points
+                .push(DVec3::new(r * libm::cos(a), r * libm::sin(a), z));
+        }
+        tp.strings = vec![
+            Strand {
+                c,
+                v: 30.0,
+                travel: false
+            };
+            n
+        ];
+        tp
+    }
+
+    #[test]
+    fn a_ring_on_the_bed_covers_its_length_times_c_over_h() {
+        // c = 0.15 at h = 0.2: a 0.75 mm band along the polygon's perimeter
+        let tp = ring(10.0, 0.2, 360, 0.15);
+        let (f, scrape) = footprint_all(&[&tp], 0.4, 0.08).remove(0);
+        let f = f.unwrap();
+        let perimeter = 360.0 * 2.0 * 10.0 * libm::sin(std::f64::consts::PI / 360.0);
+        assert!((f.contact_length_mm - perimeter).abs() < 1e-9);
+        assert!((f.contact_area_mm2 - perimeter * 0.75).abs() < 1e-9);
+        assert!((f.min[0] + 10.0).abs() < 1e-9 && (f.max[1] - 10.0).abs() < 1e-3);
+        assert_eq!(f.min_height_mm, 0.2);
+        assert!(scrape.is_none());
+    }
+
+    #[test]
+    fn raised_rings_do_not_touch_and_scraping_rings_warn() {
+        // the round bead of c = 0.15 is 0.437 mm wide: a ring at 0.5 mm does not stick
+        assert!(footprint_all(&[&ring(10.0, 0.5, 36, 0.15)], 0.4, 0.08)[0]
+            .0
+            .is_none());
+        assert!(footprint_all(&[&ring(10.0, 0.43, 36, 0.15)], 0.4, 0.08)[0]
+            .0
+            .is_some());
+        // at 0.05 mm the band is capped at three nozzles, and the nozzle scrapes
+        let (f, scrape) = footprint_all(&[&ring(10.0, 0.05, 36, 0.15)], 0.4, 0.08).remove(0);
+        let f = f.unwrap();
+        assert!((f.contact_area_mm2 - f.contact_length_mm * 1.2).abs() < 1e-9);
+        assert_eq!(scrape, Some((0, 0.05)));
+    }
+
+    #[test]
+    fn layers_on_the_first_do_not_touch_the_bed() {
+        // a second ring right over the first, 0.2 mm higher, lies on it
+        let (lower, upper) = (ring(10.0, 0.2, 72, 0.15), ring(10.0, 0.4, 72, 0.15));
+        let all = footprint_all(&[&lower, &upper], 0.4, 0.08);
+        assert!(all[0].0.is_some() && all[1].0.is_none());
+        // beside it, 1 mm out, it lies on the bed
+        let beside = ring(11.0, 0.4, 72, 0.15);
+        let all = footprint_all(&[&lower, &beside], 0.4, 0.08);
+        let f = all[1].0.as_ref().unwrap();
+        assert!((f.contact_area_mm2 - f.contact_length_mm * 0.437).abs() < 0.01);
+    }
+}

@@ -1,0 +1,107 @@
+//! Cross-sections a nozzle can lay: far above nozzle² the nozzle cannot
+//! shape the bead (it floods and clogs), far below it the string breaks.
+//! Warnings past `checks.cross_section_max` / `_min` (× nozzle²), errors past
+//! the hard limits. The volumetric flow c·v is checked in [`super::run`]'s
+//! `flow` (the hot end's `max_flow`).
+
+use super::{fmt_p, Finding, Severity};
+use crate::recipe::Recipe;
+use crate::toolpath::Toolpath;
+
+/// Strings of one kind: count, first, extreme.
+struct Tally {
+    n: usize,
+    first: usize,
+    extreme: f64,
+    hard: bool,
+}
+
+/// The `over-extrusion` and `thin-string` findings of one path.
+pub fn cross_sections(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) {
+    let p = &recipe.printer;
+    let n2 = p.nozzle_diameter * p.nozzle_diameter;
+    let lim = &p.checks;
+    let (hi, hard_hi) = (lim.cross_section_max * n2, lim.cross_section_hard_max * n2);
+    let (lo, hard_lo) = (lim.cross_section_min * n2, lim.cross_section_hard_min * n2);
+    let mut over: Option<Tally> = None;
+    let mut thin: Option<Tally> = None;
+    for (k, s) in tp.strings.iter().enumerate() {
+        if s.travel || !s.c.is_finite() || tp.length(k) <= 0.0 {
+            continue;
+        }
+        if s.c > hi {
+            let t = over.get_or_insert(Tally {
+                n: 0,
+                first: k,
+                extreme: s.c,
+                hard: false,
+            });
+            t.n += 1;
+            t.extreme = t.extreme.max(s.c);
+            t.hard |= s.c > hard_hi;
+        } else if s.c < lo {
+            let t = thin.get_or_insert(Tally {
+                n: 0,
+                first: k,
+                extreme: s.c,
+                hard: false,
+            });
+            t.n += 1;
+            t.extreme = t.extreme.min(s.c);
+            t.hard |= s.c < hard_lo;
+        }
+    }
+    let plural = |n: usize| if n == 1 { "" } else { "s" };
+    if let Some(t) = over {
+        let m = tp.midpoint(t.first);
+        out.push(Finding {
+            code: "over-extrusion",
+            severity: if t.hard { Severity::Error } else { Severity::Warning },
+            message: format!(
+                "{} string{} of part `{}` have cross-sections above {hi:.3} mm² ({} × the {} mm nozzle²), up to {:.3} mm²{}; the first is string {} at {}",
+                t.n,
+                plural(t.n),
+                tp.name,
+                lim.cross_section_max,
+                p.nozzle_diameter,
+                t.extreme,
+                if t.hard {
+                    format!(", past the hard limit of {hard_hi:.3} mm²: the nozzle floods and clogs")
+                } else {
+                    String::new()
+                },
+                t.first,
+                fmt_p(m)
+            ),
+            part: Some(tp.name.clone()),
+            string: Some(t.first),
+            at: Some(m.to_array()),
+        });
+    }
+    if let Some(t) = thin {
+        let m = tp.midpoint(t.first);
+        out.push(Finding {
+            code: "thin-string",
+            severity: if t.hard { Severity::Error } else { Severity::Warning },
+            message: format!(
+                "{} string{} of part `{}` have cross-sections below {lo:.4} mm² ({} × the {} mm nozzle²), down to {:.4} mm²{}; the first is string {} at {}",
+                t.n,
+                plural(t.n),
+                tp.name,
+                lim.cross_section_min,
+                p.nozzle_diameter,
+                t.extreme,
+                if t.hard {
+                    format!(", past the hard limit of {hard_lo:.4} mm²: the string breaks")
+                } else {
+                    ": the string may break".to_string()
+                },
+                t.first,
+                fmt_p(m)
+            ),
+            part: Some(tp.name.clone()),
+            string: Some(t.first),
+            at: Some(m.to_array()),
+        });
+    }
+}

@@ -1,0 +1,486 @@
+//! Support: every string rests on the bed or on filament printed before it
+//! (Kanada's second condition for printing parts one after another).
+//!
+//! A string of cross-section c is taken as a bead of width w = the diameter of
+//! a round bead of area c (Kanada's "0.196 mm², a 0.5 mm string"), but at
+//! least the nozzle's diameter (the nozzle presses a thin string flat). Two
+//! strings touch when their centre lines come closer than `support_tolerance`
+//! × the mean of their widths; the bed holds a string whose centre line is at
+//! most `support_tolerance` × w high. Each extruding string is sampled about
+//! every w along its length, and each sample looks for earlier filament:
+//! first the string that held the sample before and the next few after it
+//! (on a helix, the turn below, string after string), else in the hashed
+//! grid ([`super::grid`]) round it, newest first, stopping at the first
+//! string it touches. The strings just laid before a sample on the
+//! same path do not count: a candidate of the same part must lie farther
+//! along the path than 3 × its distance in space (and than w), so a helix
+//! rests on its previous turn and not on its own tail.
+//!
+//! Overhang is fine so long as the string touches what is under or beside it
+//! (Kanada's sphere closes its top with near-horizontal turns, each leaning on
+//! the one before). Consecutive unsupported samples make a run: a run with
+//! supported ends is a `bridge` (a note up to `checks.max_bridge`, a warning
+//! beyond), any other run longer than the string's width is `unsupported`
+//! (an error: the string hangs from one end or floats). Findings are one per
+//! part and kind, with the run count, the total length, the place of the
+//! first run and the worst overhang: how far the farthest sample lies from
+//! the bed or the nearest earlier filament.
+
+use glam::DVec3;
+
+use super::grid::{closest, SegGrid};
+use super::{fmt_p, Finding, Severity};
+use crate::recipe::Recipe;
+use crate::toolpath::Toolpath;
+
+/// Width of a string of cross-section `c`: a round bead's diameter, at least the nozzle's.
+#[inline]
+pub fn width(c: f64, nozzle: f64) -> f64 {
+    (2.0 * (c.max(0.0) / std::f64::consts::PI).sqrt()).max(nozzle)
+}
+
+/// How far beyond the search radius an unsupported sample looks for the
+/// nearest filament, to say how far it hangs, mm.
+const GAP_SEARCH: f64 = 5.0;
+/// Unsupported samples whose overhang is measured (the rest use the bed).
+const GAP_BUDGET: usize = 20_000;
+
+/// The extruding strings of all paths in print order, and the grid over them.
+pub struct Deposits<'a> {
+    /// The paths, in print order.
+    pub paths: &'a [&'a Toolpath],
+    /// (path, string) of each extruding string of nonzero length, in print order.
+    pub ids: Vec<(u32, u32)>,
+    /// Per path, the path length before each point, mm.
+    pub arc: Vec<Vec<f64>>,
+    /// The grid over `ids[..built]`, made when a search first needs it and
+    /// remade (at least twice as large) when a search needs later deposits.
+    grid: std::cell::RefCell<(SegGrid, usize)>,
+    /// Side of the grid's cubes, mm.
+    cell: f64,
+    /// Widest string, mm.
+    pub w_max: f64,
+    /// Nozzle diameter, mm (the narrowest string).
+    pub nozzle: f64,
+}
+
+impl<'a> Deposits<'a> {
+    /// Lists and grids the extruding strings of `paths`.
+    pub fn new(paths: &'a [&'a Toolpath], nozzle: f64, tolerance: f64) -> Deposits<'a> {
+        let mut ids = Vec::new();
+        let mut arc = Vec::with_capacity(paths.len());
+        let mut w_max = nozzle;
+        for (p, tp) in paths.iter().enumerate() {
+            let mut s = Vec::with_capacity(tp.points.len());
+            let mut acc = 0.0;
+            s.push(0.0);
+            for k in 0..tp.len() {
+                let l = tp.length(k);
+                acc += l;
+                s.push(acc);
+                let st = tp.strings[k];
+                if !st.travel && l > 0.0 {
+                    ids.push((p as u32, k as u32));
+                    w_max = w_max.max(width(st.c, nozzle));
+                }
+            }
+            arc.push(s);
+        }
+        // cubes twice the widest reach: a sample's neighbours lie in ≤ 8 cubes
+        let cell = (2.0 * tolerance * w_max).clamp(0.5, 8.0);
+        Deposits {
+            paths,
+            ids,
+            arc,
+            grid: std::cell::RefCell::new((
+                SegGrid::build(0, cell, |_| (DVec3::ZERO, DVec3::ZERO)),
+                0,
+            )),
+            cell,
+            w_max,
+            nozzle,
+        }
+    }
+
+    /// Calls `f` on the deposits before `g` within `r` of `p` (see
+    /// [`SegGrid::search`]), until it says stop; whether it did.
+    pub fn search(&self, p: DVec3, r: f64, g: u32, f: impl FnMut(u32) -> bool) -> bool {
+        let mut grid = self.grid.borrow_mut();
+        if (g as usize) > grid.1 {
+            // a helix mostly finds its support by coherence: grids are made
+            // rarely, and each at least doubles, so all cost ≤ 2 full ones
+            let n = (g as usize).max(2 * grid.1).min(self.ids.len());
+            let ids = &self.ids;
+            let paths = self.paths;
+            *grid = (
+                SegGrid::build(n, self.cell, |i| {
+                    let (p, k) = ids[i];
+                    paths[p as usize].ends(k as usize)
+                }),
+                n,
+            );
+        }
+        grid.0.search(p, r, g, f)
+    }
+
+    /// Ends of deposit i.
+    #[inline]
+    pub fn ends(&self, i: u32) -> (DVec3, DVec3) {
+        let (p, k) = self.ids[i as usize];
+        self.paths[p as usize].ends(k as usize)
+    }
+}
+
+/// One run of unsupported samples.
+#[derive(Clone, Copy)]
+struct Run {
+    first: DVec3,
+    first_k: usize,
+    len: f64,
+    before: Option<DVec3>,
+    width: f64,
+    worst: f64,
+    worst_at: DVec3,
+}
+
+/// Unsupported runs or bridges of one part.
+#[derive(Default)]
+struct Tally {
+    runs: usize,
+    len: f64,
+    first: Option<(usize, DVec3)>,
+    worst: f64,
+    worst_at: DVec3,
+    longest: f64,
+    longest_at: DVec3,
+}
+
+impl Tally {
+    fn add(&mut self, r: &Run, span: f64, middle: DVec3) {
+        self.runs += 1;
+        self.len += r.len;
+        self.first.get_or_insert((r.first_k, r.first));
+        if r.worst > self.worst || self.runs == 1 {
+            self.worst = r.worst;
+            self.worst_at = r.worst_at;
+        }
+        if span > self.longest {
+            self.longest = span;
+            self.longest_at = middle;
+        }
+    }
+}
+
+/// The support check: `unsupported` and `bridge` findings, one per part and kind.
+pub fn check(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) {
+    let p = &recipe.printer;
+    let nozzle = p.nozzle_diameter;
+    let tol = p.checks.support_tolerance;
+    let dep = Deposits::new(paths, nozzle, tol);
+    let mut budget = GAP_BUDGET;
+    let mut g = 0u32; // global id of the current string
+    for (pi, tp) in paths.iter().enumerate() {
+        let arc = &dep.arc[pi];
+        let mut unsup = Tally::default();
+        let mut bridges = Tally::default();
+        let mut bridge_max = 0usize; // bridges longer than max_bridge
+        let mut run: Option<Run> = None;
+        let mut run_pts: Vec<DVec3> = Vec::new();
+        let mut last_ok: Option<DVec3> = None;
+        let mut hint: Option<u32> = None;
+        let mut close = |run: &mut Option<Run>, pts: &mut Vec<DVec3>, after: Option<DVec3>| {
+            let Some(r) = run.take() else { return };
+            let middle = pts[pts.len() / 2];
+            pts.clear();
+            if r.len <= r.width {
+                return; // a string may hang out by its own width
+            }
+            match (r.before, after) {
+                (Some(a), Some(b)) => {
+                    let span = a.distance(b);
+                    if span > p.checks.max_bridge {
+                        bridge_max += 1;
+                    }
+                    bridges.add(&r, span, middle);
+                }
+                _ => unsup.add(&r, r.len, r.first),
+            }
+        };
+        for (k, s) in tp.strings.iter().enumerate() {
+            let (a, b) = tp.ends(k);
+            let l = a.distance(b);
+            if s.travel {
+                close(&mut run, &mut run_pts, None);
+                last_ok = None;
+                hint = None;
+                continue;
+            }
+            if l <= 0.0 {
+                continue;
+            }
+            let w = width(s.c, nozzle);
+            let n = libm::ceil(l / w).clamp(1.0, 1e6) as usize;
+            for i in 0..n {
+                let u = (i as f64 + 0.5) / n as f64;
+                let q = a.lerp(b, u);
+                let sq = arc[k] + u * l;
+                let ok = q.z <= tol * w || {
+                    hint = rests(&dep, g, pi as u32, sq, q, w, tol, hint);
+                    hint.is_some()
+                };
+                if ok {
+                    close(&mut run, &mut run_pts, Some(q));
+                    last_ok = Some(q);
+                    continue;
+                }
+                let gap = if budget > 0 {
+                    budget -= 1;
+                    gap(&dep, g, pi as u32, sq, q, w)
+                } else {
+                    q.z
+                };
+                let r = run.get_or_insert(Run {
+                    first: q,
+                    first_k: k,
+                    len: 0.0,
+                    before: last_ok,
+                    width: w,
+                    worst: gap,
+                    worst_at: q,
+                });
+                r.len += l / n as f64;
+                if gap > r.worst {
+                    r.worst = gap;
+                    r.worst_at = q;
+                }
+                run_pts.push(q);
+            }
+            g += 1;
+        }
+        close(&mut run, &mut run_pts, None);
+        if let Some((k, at)) = unsup.first {
+            out.push(Finding {
+                code: "unsupported",
+                severity: Severity::Error,
+                message: format!(
+                    "{} run{} of part `{}` ({:.1} mm of filament) rest{} on neither the bed nor earlier filament; the first starts at string {k}, {}; worst overhang {:.2} mm from any support, at {}",
+                    unsup.runs,
+                    if unsup.runs == 1 { "" } else { "s" },
+                    tp.name,
+                    unsup.len,
+                    if unsup.runs == 1 { "s" } else { "" },
+                    fmt_p(at),
+                    unsup.worst,
+                    fmt_p(unsup.worst_at)
+                ),
+                part: Some(tp.name.clone()),
+                string: Some(k),
+                at: Some(at.to_array()),
+            });
+        }
+        if let Some((k, _)) = bridges.first {
+            let long = bridge_max > 0;
+            out.push(Finding {
+                code: "bridge",
+                severity: if long { Severity::Warning } else { Severity::Info },
+                message: format!(
+                    "part `{}` bridges {} gap{} ({:.1} mm of filament with nothing under it); the longest spans {:.1} mm, its middle at {}{}",
+                    tp.name,
+                    bridges.runs,
+                    if bridges.runs == 1 { "" } else { "s" },
+                    bridges.len,
+                    bridges.longest,
+                    fmt_p(bridges.longest_at),
+                    if long {
+                        format!(
+                            "; {bridge_max} longer than the {} mm a bridge holds (checks.max_bridge): print slowly with the fan on, or add support",
+                            p.checks.max_bridge
+                        )
+                    } else {
+                        String::new()
+                    }
+                ),
+                part: Some(tp.name.clone()),
+                string: Some(k),
+                at: Some(bridges.longest_at.to_array()),
+            });
+        }
+    }
+}
+
+/// Whether deposit `j` holds up a sample at `q` (width `w`) that lies `sq`
+/// along path `pi`: it passes within touching distance, not above the
+/// sample, and it is not the sample's own tail (a deposit of the same path
+/// must lie farther back along it than 3 × its distance in space, and than w).
+#[inline]
+fn holds(dep: &Deposits, j: u32, pi: u32, sq: f64, q: DVec3, w: f64, tol: f64) -> bool {
+    let (pj, kj) = dep.ids[j as usize];
+    let tp = dep.paths[pj as usize];
+    let k = kj as usize;
+    let (a, b) = (tp.points[k], tp.points[k + 1]);
+    let u = closest(q, a, b);
+    let x = a.lerp(b, u);
+    let d = q.distance(x);
+    if d > tol * (w + dep.w_max) / 2.0 || x.z > q.z + 0.25 * w {
+        return false;
+    }
+    if d > tol * (w + width(tp.strings[k].c, dep.nozzle)) / 2.0 {
+        return false;
+    }
+    if pj != pi {
+        return true;
+    }
+    let arc = &dep.arc[pj as usize];
+    let sj = arc[k] + u * (arc[k + 1] - arc[k]);
+    sq - sj > (3.0 * d).max(w)
+}
+
+/// The deposit (printed before string `g`) that holds up a sample at `q`, if
+/// any: first the one that held the sample before and the next few after it
+/// (a helix rests on its previous turn string after string), then the grid.
+#[allow(clippy::too_many_arguments)]
+fn rests(
+    dep: &Deposits,
+    g: u32,
+    pi: u32,
+    sq: f64,
+    q: DVec3,
+    w: f64,
+    tol: f64,
+    hint: Option<u32>,
+) -> Option<u32> {
+    if let Some(h) = hint {
+        for j in h..(h + 4).min(g) {
+            if holds(dep, j, pi, sq, q, w, tol) {
+                return Some(j);
+            }
+        }
+    }
+    let reach = tol * (w + dep.w_max) / 2.0;
+    let mut found = None;
+    dep.search(q, reach, g, |j| {
+        let ok = holds(dep, j, pi, sq, q, w, tol);
+        if ok {
+            found = Some(j);
+        }
+        ok
+    });
+    found
+}
+
+/// How far an unsupported sample hangs: its distance (centre lines) to the
+/// nearest earlier filament within [`GAP_SEARCH`] mm, or its height above the bed.
+fn gap(dep: &Deposits, g: u32, pi: u32, sq: f64, q: DVec3, w: f64) -> f64 {
+    let mut best = q.z.max(0.0);
+    let r = GAP_SEARCH.min(best);
+    if r <= 0.0 {
+        return best;
+    }
+    dep.search(q, r, g, |j| {
+        let (pj, kj) = dep.ids[j as usize];
+        let k = kj as usize;
+        let (a, b) = dep.paths[pj as usize].ends(k);
+        let u = closest(q, a, b);
+        let d = q.distance(a.lerp(b, u));
+        let own_tail = pj == pi && {
+            let arc = &dep.arc[pj as usize];
+            sq - (arc[k] + u * (arc[k + 1] - arc[k])) <= (3.0 * d).max(w)
+        };
+        if d < best && !own_tail {
+            best = d;
+        }
+        false
+    });
+    best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn widths() {
+        // Kanada's 0.196 mm² is a 0.5 mm string; thin strings are pressed to the nozzle
+        assert!((width(0.196, 0.4) - 0.49956).abs() < 1e-4);
+        assert_eq!(width(0.01, 0.4), 0.4);
+        assert_eq!(width(-1.0, 0.4), 0.4);
+    }
+
+    fn helix(pitch: f64, turns: usize, c: f64) -> Toolpath {
+        let mut tp = Toolpath::new(DVec3::new(10.0, 0.0, 0.2));
+        tp.name = "h".into();
+        let n = 72;
+        for i in 1..=turns * n {
+            let t = i as f64 / n as f64;
+            let th = std::f64::consts::TAU * t;
+            tp.draw(
+                DVec3::new(10.0 * libm::cos(th), 10.0 * libm::sin(th), 0.2 + pitch * t),
+                c,
+                30.0,
+            );
+        }
+        tp
+    }
+
+    fn run(tps: &[Toolpath]) -> Vec<Finding> {
+        let recipe = crate::recipe::Recipe::resolve(
+            &crate::recipe::parse_yaml(
+                "p3dp: 1\nname: t\nparts:\n  - primitive: {circle: {radius: 1}}\n",
+                "t.yaml",
+            )
+            .unwrap(),
+            &[],
+            None,
+            std::path::Path::new("."),
+        )
+        .unwrap();
+        let refs: Vec<&Toolpath> = tps.iter().collect();
+        let mut out = Vec::new();
+        check(&recipe, &refs, &mut out);
+        out
+    }
+
+    #[test]
+    fn a_helix_rests_on_its_previous_turn() {
+        assert!(run(&[helix(0.3, 5, 0.15)]).is_empty());
+    }
+
+    #[test]
+    fn turns_that_do_not_touch_are_unsupported() {
+        let f = run(&[helix(1.5, 3, 0.15)]);
+        assert_eq!(f.len(), 1, "{f:?}");
+        assert_eq!(f[0].code, "unsupported");
+        // the first turn leaves the bed at 1.5 × its width (0.437 mm) and hangs from there
+        let at = f[0].at.unwrap();
+        assert!(at[2] > 0.64 && at[2] < 0.7, "{at:?}");
+    }
+
+    #[test]
+    fn a_string_between_two_posts_is_a_bridge() {
+        // two posts: small helices of radius 1 round x = -1 and x = 7
+        let mut posts = Toolpath::new(DVec3::new(0.0, 0.0, 0.2));
+        posts.name = "posts".into();
+        for (k, cx) in [-1.0, 7.0].into_iter().enumerate() {
+            if k == 1 {
+                posts.travel(DVec3::new(cx - 1.0, 0.0, 0.2), 100.0);
+            }
+            for i in 1..=20 * 24 {
+                let t = i as f64 / 24.0;
+                let th = std::f64::consts::TAU * t * if k == 0 { 1.0 } else { -1.0 };
+                let x = cx + if k == 0 { 1.0 } else { -1.0 } * libm::cos(th);
+                posts.draw(DVec3::new(x, libm::sin(th), 0.2 + 0.2 * t), 0.15, 20.0);
+            }
+        }
+        let mut span = Toolpath::new(DVec3::new(0.0, 0.0, 4.4));
+        span.name = "span".into();
+        span.draw(DVec3::new(6.0, 0.0, 4.4), 0.2, 10.0);
+        let f = run(&[posts, span]);
+        assert_eq!(f.len(), 1, "{f:?}");
+        assert_eq!((f[0].code, f[0].severity), ("bridge", Severity::Info));
+        let at = f[0].at.unwrap();
+        assert!(
+            (at[0] - 3.0).abs() < 0.5 && (at[2] - 4.4).abs() < 1e-9,
+            "{at:?}"
+        );
+    }
+}

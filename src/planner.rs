@@ -1,0 +1,1127 @@
+//! The print-time estimate: a trapezoidal-velocity planner with look-ahead,
+//! modelled on the firmware's own (Marlin's junction deviation, Klipper's
+//! square-corner velocity and minimum cruise ratio).
+//!
+//! Each written move is a *block*: its length (3D, Z included; for a move of E
+//! alone, its filament length), an acceleration `a` and a nominal speed
+//!
+//! ```text
+//! v_nom = min(F, max_velocity, L / min_segment_time)
+//! ```
+//!
+//! (`max_velocity` does not cap E-only moves, which run at their own F). The
+//! head starts and ends at rest. Between two XYZ blocks the speed may not
+//! exceed the *junction speed* of the corner (see [`Planner::junction_v2`]),
+//! nor either block's nominal speed; around an E-only block (a retraction) the
+//! head is at rest, as in Klipper. Then, in v² units, with `e_i` the entry v²
+//! of block i:
+//!
+//! - backward pass, from the end at rest: `e_i = min(j_i, e_{i+1} + 2·a_i·L_i)`
+//!   (every block can decelerate to what follows);
+//! - forward pass, from the start at rest: `e_i = min(e_i, e_{i-1} + 2·a_{i-1}·L_{i-1})`
+//!   (every block can be reached by accelerating);
+//! - each block is a trapezoid: it accelerates at `a` from its entry speed,
+//!   cruises at `v_nom` when it gets there, and decelerates to its exit speed
+//!   (a triangle when the block is too short to reach `v_nom`).
+//!
+//! This is the firmware's look-ahead with an unbounded buffer: the passes run
+//! over the whole print at [`Planner::finish`]. A firmware's buffer (16 moves
+//! for Marlin, about 2 s of moves for Klipper) is long enough for the short
+//! strings of p3dp's recipes that this differs little; with long moves at high
+//! speed a short buffer would plan slower than this.
+//!
+//! Everything is + − × ÷ and `sqrt` (IEEE-exact), plus `libm::asin`, so the
+//! estimate is the same on every machine.
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+
+/// Marlin's default junction deviation, mm (`JUNCTION_DEVIATION_MM`).
+pub const MARLIN_JUNCTION_DEVIATION: f64 = 0.013;
+/// Marlin's default minimum segment time, s (`DEFAULT_MINSEGMENTTIME` 20000 µs).
+pub const MARLIN_MIN_SEGMENT_TIME: f64 = 0.02;
+/// Klipper's default `minimum_cruise_ratio`.
+pub const KLIPPER_MINIMUM_CRUISE_RATIO: f64 = 0.5;
+
+fn d_accel() -> f64 {
+    1000.0
+}
+
+/// A printer profile's `kinematics:` block: the limits the firmware's planner
+/// works with. Give `junction_deviation` (Marlin) or `square_corner_velocity`
+/// (Klipper), not both; with neither, Marlin's 0.013 mm.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Kinematics {
+    /// Highest head speed, mm/s; the profile's `max_speed` when absent.
+    #[serde(default)]
+    pub max_velocity: Option<f64>,
+    /// Acceleration of printing moves, mm/s² (Marlin's `M204 P`, Klipper's `max_accel`).
+    #[serde(default = "d_accel")]
+    pub max_acceleration: f64,
+    /// Acceleration of travel moves, mm/s² (Marlin's `M204 T`); `max_acceleration` when absent.
+    #[serde(default)]
+    pub travel_acceleration: Option<f64>,
+    /// Acceleration of E-only moves (retractions), mm/s² of filament
+    /// (Marlin's `M204 R`); `max_acceleration` when absent.
+    #[serde(default)]
+    pub retract_acceleration: Option<f64>,
+    /// Marlin's junction deviation, mm (`M205 J`).
+    #[serde(default)]
+    pub junction_deviation: Option<f64>,
+    /// Klipper's square-corner velocity: the speed of a 90° corner, mm/s.
+    #[serde(default)]
+    pub square_corner_velocity: Option<f64>,
+    /// Shortest time a move may take, s (Marlin's `M205 B`, in s here); 0.02
+    /// with junction deviation, 0 with square-corner velocity (Klipper has none).
+    #[serde(default)]
+    pub min_segment_time: Option<f64>,
+    /// Klipper's `minimum_cruise_ratio`: the share of a move that must cruise;
+    /// 0.5 with square-corner velocity, 0 with junction deviation (Marlin has none).
+    #[serde(default)]
+    pub minimum_cruise_ratio: Option<f64>,
+}
+
+impl Default for Kinematics {
+    fn default() -> Self {
+        Kinematics {
+            max_velocity: None,
+            max_acceleration: d_accel(),
+            travel_acceleration: None,
+            retract_acceleration: None,
+            junction_deviation: None,
+            square_corner_velocity: None,
+            min_segment_time: None,
+            minimum_cruise_ratio: None,
+        }
+    }
+}
+
+impl Kinematics {
+    /// Checks the values; errors name the key under `kinematics.`.
+    pub fn validate(&self) -> Result<()> {
+        let check = |key: &str, v: Option<f64>, zero_ok: bool| -> Result<()> {
+            match v {
+                Some(v) if !v.is_finite() || v < 0.0 || (v == 0.0 && !zero_ok) => {
+                    Err(Error::input(
+                        format!("kinematics.{key}"),
+                        format!(
+                            "{v} is not allowed; expected a number {}",
+                            if zero_ok { "≥ 0" } else { "> 0" }
+                        ),
+                    ))
+                }
+                _ => Ok(()),
+            }
+        };
+        check("max_velocity", self.max_velocity, false)?;
+        check("max_acceleration", Some(self.max_acceleration), false)?;
+        check("travel_acceleration", self.travel_acceleration, false)?;
+        check("retract_acceleration", self.retract_acceleration, false)?;
+        check("junction_deviation", self.junction_deviation, true)?;
+        check("square_corner_velocity", self.square_corner_velocity, true)?;
+        check("min_segment_time", self.min_segment_time, true)?;
+        check("minimum_cruise_ratio", self.minimum_cruise_ratio, true)?;
+        if self.minimum_cruise_ratio.is_some_and(|r| r >= 1.0) {
+            return Err(Error::input(
+                "kinematics.minimum_cruise_ratio",
+                "expected a ratio in [0, 1)",
+            ));
+        }
+        if self.junction_deviation.is_some() && self.square_corner_velocity.is_some() {
+            return Err(Error::input(
+                "kinematics",
+                "give `junction_deviation` (Marlin) or `square_corner_velocity` (Klipper), not both",
+            ));
+        }
+        Ok(())
+    }
+
+    /// The limits with every default filled in; `max_speed` is the profile's.
+    pub fn limits(&self, max_speed: f64) -> Limits {
+        let klipper = self.square_corner_velocity.is_some();
+        let accel = self.max_acceleration;
+        Limits {
+            max_velocity: self.max_velocity.unwrap_or(max_speed),
+            max_acceleration: accel,
+            travel_acceleration: self.travel_acceleration.unwrap_or(accel),
+            retract_acceleration: self.retract_acceleration.unwrap_or(accel),
+            junction_deviation: if klipper {
+                None
+            } else {
+                Some(self.junction_deviation.unwrap_or(MARLIN_JUNCTION_DEVIATION))
+            },
+            square_corner_velocity: self.square_corner_velocity,
+            min_segment_time: self.min_segment_time.unwrap_or(if klipper {
+                0.0
+            } else {
+                MARLIN_MIN_SEGMENT_TIME
+            }),
+            minimum_cruise_ratio: self.minimum_cruise_ratio.unwrap_or(if klipper {
+                KLIPPER_MINIMUM_CRUISE_RATIO
+            } else {
+                0.0
+            }),
+        }
+    }
+}
+
+/// The limits the planner uses (written into the stats JSON as `planner`).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Limits {
+    /// Highest head speed, mm/s.
+    pub max_velocity: f64,
+    /// Acceleration of printing moves, mm/s².
+    pub max_acceleration: f64,
+    /// Acceleration of travel moves, mm/s².
+    pub travel_acceleration: f64,
+    /// Acceleration of E-only moves, mm/s².
+    pub retract_acceleration: f64,
+    /// Marlin's junction deviation, mm (absent under Klipper's model).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub junction_deviation: Option<f64>,
+    /// Klipper's square-corner velocity, mm/s (absent under Marlin's model).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub square_corner_velocity: Option<f64>,
+    /// Shortest time a move may take, s.
+    pub min_segment_time: f64,
+    /// Share of each move that must cruise (Klipper), 0 for none.
+    pub minimum_cruise_ratio: f64,
+}
+
+impl Limits {
+    /// One line for reports: `Marlin junction deviation 0.013 mm, 1000 mm/s², …`.
+    pub fn describe(&self) -> String {
+        let junction = match (self.junction_deviation, self.square_corner_velocity) {
+            (_, Some(v)) => format!("square-corner velocity {v} mm/s"),
+            (Some(d), None) => format!("junction deviation {d} mm"),
+            (None, None) => "no junction limit".to_string(),
+        };
+        let mut s = format!(
+            "{junction}, acceleration {} mm/s² (travel {}), max {} mm/s",
+            self.max_acceleration, self.travel_acceleration, self.max_velocity
+        );
+        if self.min_segment_time > 0.0 {
+            s.push_str(&format!(
+                ", min segment time {} ms",
+                crate::gcode::fmt_num(self.min_segment_time * 1000.0)
+            ));
+        }
+        if self.minimum_cruise_ratio > 0.0 {
+            s.push_str(&format!(
+                ", minimum cruise ratio {}",
+                self.minimum_cruise_ratio
+            ));
+        }
+        s
+    }
+}
+
+/// What a move is, which chooses its acceleration.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MoveKind {
+    /// An extruding move (G1 with E): `max_acceleration`.
+    Extrude,
+    /// A travel move (G0): `travel_acceleration`.
+    Travel,
+}
+
+/// Times of a print or of one part, s.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Times {
+    /// Planned: with acceleration, junction speeds and speed limits.
+    pub planned: f64,
+    /// Σ L / F: the time the G-code asks for, as if every move ran at its F.
+    pub ideal: f64,
+    /// Σ L / v_nom: F capped by `max_velocity` and `min_segment_time`, no acceleration.
+    pub nominal: f64,
+}
+
+impl Times {
+    /// Time lost to acceleration, deceleration and corners: planned − nominal.
+    pub fn lost_to_acceleration(&self) -> f64 {
+        self.planned - self.nominal
+    }
+
+    /// Time lost to the speed limits: nominal − ideal.
+    pub fn lost_to_speed_limits(&self) -> f64 {
+        self.nominal - self.ideal
+    }
+
+    /// All time lost against the G-code's speeds: planned − ideal.
+    pub fn lost(&self) -> f64 {
+        self.planned - self.ideal
+    }
+}
+
+/// One part's times.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PartTimes {
+    /// Part name.
+    pub name: String,
+    /// Its times, s.
+    pub times: Times,
+}
+
+/// The planner's answer: the whole print's times, and each part's.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Estimate {
+    /// All moves.
+    pub total: Times,
+    /// Each part begun with [`Planner::begin_part`], in order.
+    pub parts: Vec<PartTimes>,
+}
+
+/// One move, as the passes need it (32 bytes: 2M moves take 64 MB).
+#[derive(Clone, Copy, Debug)]
+struct Block {
+    len: f64,
+    accel: f64,
+    /// Cruise v²: v_nom², then capped by the minimum cruise ratio.
+    cruise_v2: f64,
+    /// Highest entry v² (junction limit), then the planned entry v².
+    entry_v2: f64,
+}
+
+/// The last XYZ block, for the next junction.
+#[derive(Clone, Copy, Debug)]
+struct Last {
+    dir: DVec3,
+    len: f64,
+    accel: f64,
+    cruise_v2: f64,
+}
+
+struct Part {
+    name: String,
+    first: usize,
+    ideal: f64,
+    nominal: f64,
+    dwell: f64,
+}
+
+/// Collects the moves of a print and plans them (see the module comment).
+pub struct Planner {
+    limits: Limits,
+    blocks: Vec<Block>,
+    pos: Option<DVec3>,
+    last: Option<Last>,
+    parts: Vec<Part>,
+    /// Before any part: (ideal, nominal, dwell).
+    pre: (f64, f64, f64),
+}
+
+impl Planner {
+    /// A planner with these limits, the head at an unknown place.
+    pub fn new(limits: Limits) -> Planner {
+        Planner {
+            limits,
+            blocks: Vec::new(),
+            pos: None,
+            last: None,
+            parts: Vec::new(),
+            pre: (0.0, 0.0, 0.0),
+        }
+    }
+
+    /// The limits in use.
+    pub fn limits(&self) -> &Limits {
+        &self.limits
+    }
+
+    /// Moves from now on belong to part `name` (parts are consecutive).
+    pub fn begin_part(&mut self, name: &str) {
+        self.parts.push(Part {
+            name: name.to_string(),
+            first: self.blocks.len(),
+            ideal: 0.0,
+            nominal: 0.0,
+            dwell: 0.0,
+        });
+    }
+
+    fn add(&mut self, ideal: f64, nominal: f64, dwell: f64) {
+        match self.parts.last_mut() {
+            Some(p) => {
+                p.ideal += ideal;
+                p.nominal += nominal;
+                p.dwell += dwell;
+            }
+            None => {
+                self.pre.0 += ideal;
+                self.pre.1 += nominal;
+                self.pre.2 += dwell;
+            }
+        }
+    }
+
+    /// The head comes to rest here (a pause, a wait, a dwell): the next move
+    /// starts from rest.
+    pub fn stop(&mut self) {
+        self.last = None;
+    }
+
+    /// The head stands still for `seconds` (e.g. `G4`): counted in every time.
+    pub fn dwell(&mut self, seconds: f64) {
+        self.stop();
+        if seconds > 0.0 {
+            self.add(seconds, seconds, seconds);
+        }
+    }
+
+    /// Nominal speed: F capped by `max_velocity` (XYZ moves) and by
+    /// `min_segment_time` (Marlin slows a move so it lasts at least that long).
+    fn nominal(&self, len: f64, feed: f64, xyz: bool) -> f64 {
+        let mut v = if feed.is_finite() && feed > 0.0 {
+            feed
+        } else {
+            self.limits.max_velocity
+        };
+        if xyz {
+            v = v.min(self.limits.max_velocity);
+        }
+        if self.limits.min_segment_time > 0.0 {
+            v = v.min(len / self.limits.min_segment_time);
+        }
+        v
+    }
+
+    /// A move to `to` (machine coordinates, mm) at `feed` mm/s, feeding `e` mm
+    /// of filament. The first move, from an unknown place, only sets the
+    /// position; a move of E alone (`to` where the head is, `e` > 0) is an
+    /// E-only block at `feed` with `retract_acceleration`, from rest to rest;
+    /// a move of nothing is skipped.
+    pub fn move_to(&mut self, to: DVec3, e: f64, feed: f64, kind: MoveKind) {
+        let Some(from) = self.pos else {
+            self.pos = Some(to);
+            return;
+        };
+        let d = to - from;
+        let len = d.length();
+        if len > 0.0 {
+            let accel = match kind {
+                MoveKind::Extrude => self.limits.max_acceleration,
+                MoveKind::Travel => self.limits.travel_acceleration,
+            };
+            let v = self.nominal(len, feed, true);
+            let cruise_v2 = v * v;
+            let dir = d / len;
+            let entry_v2 = match self.last {
+                Some(prev) => self.junction_v2(&prev, dir, len, accel, cruise_v2),
+                None => 0.0,
+            };
+            self.blocks.push(Block {
+                len,
+                accel,
+                cruise_v2,
+                entry_v2,
+            });
+            self.last = Some(Last {
+                dir,
+                len,
+                accel,
+                cruise_v2,
+            });
+            self.pos = Some(to);
+            let ideal = if feed.is_finite() && feed > 0.0 {
+                len / feed
+            } else {
+                len / v
+            };
+            self.add(ideal, len / v, 0.0);
+        } else if e > 0.0 {
+            self.extrude_only(e, feed);
+        }
+    }
+
+    /// A move of E alone (retraction, unretraction), `length` mm of filament
+    /// at `feed` mm/s: from rest to rest, as Klipper plans extrude-only moves.
+    pub fn extrude_only(&mut self, length: f64, feed: f64) {
+        let length = length.abs();
+        if length <= 0.0 || !length.is_finite() {
+            return;
+        }
+        let v = self.nominal(length, feed, false);
+        self.blocks.push(Block {
+            len: length,
+            accel: self.limits.retract_acceleration,
+            cruise_v2: v * v,
+            entry_v2: 0.0,
+        });
+        self.last = None;
+        let ideal = if feed.is_finite() && feed > 0.0 {
+            length / feed
+        } else {
+            length / v
+        };
+        self.add(ideal, length / v, 0.0);
+    }
+
+    /// Highest v² at the corner from `prev` into a block along `dir` of length
+    /// `len`, acceleration `accel` and cruise v² `cruise_v2` (never above
+    /// either block's cruise v²).
+    ///
+    /// With θ the angle between the reversed incoming direction and the
+    /// outgoing one (θ = 180° straight on, 90° a square corner, 0 a reversal),
+    /// both firmwares use the "approximated centripetal acceleration" of
+    /// Grbl (Marlin's junction deviation; Klipper's Kinematics document): a
+    /// circle tangent to both moves whose closest approach to the corner is δ
+    /// has radius R = δ·sin(θ/2) / (1 − sin(θ/2)), and the speed on it at
+    /// acceleration a is v² = a·R.
+    ///
+    /// - Marlin: δ = `junction_deviation`, a the outgoing block's
+    ///   acceleration. With `JD_HANDLE_SMALL_SEGMENTS` (on in Marlin's default
+    ///   configuration) a block shorter than 1 mm turning by less than 45° is
+    ///   taken as a chord of an arc of radius L / φ (φ = π − θ the turn), so
+    ///   also v² ≤ a·L / φ. (Marlin approximates φ by a polynomial that never
+    ///   goes below 0.033 rad; here φ is exact.)
+    /// - Klipper: δ = scv²·(√2 − 1) / a, so v² = R/δ·scv²·(√2 − 1), and a 90°
+    ///   corner gets exactly scv; and the circle must touch each move no
+    ///   further than its middle: v² ≤ ½·L·a·tan(θ/2) for both moves.
+    fn junction_v2(&self, prev: &Last, dir: DVec3, len: f64, accel: f64, cruise_v2: f64) -> f64 {
+        let both = cruise_v2.min(prev.cruise_v2);
+        // w = |u1 − u2|² = 2·(1 − cos φ) = 4·cos²(θ/2): stable for small turns
+        let w = (prev.dir - dir).length_squared().min(4.0);
+        if w <= 0.0 {
+            return both; // straight on
+        }
+        let cos_half2 = 0.25 * w; // cos²(θ/2)
+        let sin_half = (1.0 - cos_half2).max(0.0).sqrt(); // sin(θ/2)
+        if sin_half <= 0.0 {
+            return 0.0; // a full reversal stops the head
+        }
+        // sin/(1 − sin) = sin·(1 + sin)/cos², exact where sin is near 1
+        let r = sin_half * (1.0 + sin_half) / cos_half2;
+        match (
+            self.limits.square_corner_velocity,
+            self.limits.junction_deviation,
+        ) {
+            (Some(scv), _) => {
+                let jd_v2 = r * scv * scv * (std::f64::consts::SQRT_2 - 1.0);
+                let tan_half = sin_half / cos_half2.sqrt();
+                let c_this = 0.5 * len * accel * tan_half;
+                let c_prev = 0.5 * prev.len * prev.accel * tan_half;
+                jd_v2.min(c_this).min(c_prev).min(both)
+            }
+            (None, Some(delta)) => {
+                let mut v2 = r * accel * delta;
+                // turn φ = π − θ = 2·asin(cos(θ/2)); φ < 45° ⇔ θ > 135°
+                // ⇔ cos²(θ/2) < sin²(22.5°) = (1 − √½)/2
+                const SMALL_TURN: f64 = 0.5 * (1.0 - std::f64::consts::FRAC_1_SQRT_2);
+                let cap = v2.min(both);
+                // 2x ≤ 2·asin x ≤ π·x: skip the asin when even the largest φ
+                // leaves a limit above the others
+                let x = cos_half2.sqrt();
+                if len < 1.0
+                    && cos_half2 < SMALL_TURN
+                    && len * accel < cap * std::f64::consts::PI * x
+                {
+                    let phi = 2.0 * libm::asin(x.min(1.0));
+                    v2 = v2.min(len * accel / phi);
+                }
+                v2.min(both)
+            }
+            (None, None) => both,
+        }
+    }
+
+    /// Plans every move (the passes of the module comment) and sums the times.
+    pub fn finish(mut self) -> Estimate {
+        let n = self.blocks.len();
+        let b = &mut self.blocks;
+        // Klipper's smoothed look-ahead: the same passes at the virtual
+        // acceleration a_d = a·(1 − minimum_cruise_ratio) ("accel_to_decel")
+        // give smoothed corner speeds s_i; a move that can speed up in that
+        // profile (s_i < s_{i+1} + 2·a_d·L) cruises no faster than its peak,
+        // (s_i + s_{i+1} + 2·a_d·L)/2, which leaves at least the ratio of it
+        // at cruising speed; a move that only slows down keeps its speed.
+        let ratio = self.limits.minimum_cruise_ratio;
+        if ratio > 0.0 && n > 0 {
+            let k = 1.0 - ratio;
+            let mut sm = vec![0.0f64; n + 1];
+            for i in (0..n).rev() {
+                sm[i] = b[i]
+                    .entry_v2
+                    .min(sm[i + 1] + 2.0 * k * b[i].accel * b[i].len);
+            }
+            for i in 1..n {
+                let reach = sm[i - 1] + 2.0 * k * b[i - 1].accel * b[i - 1].len;
+                sm[i] = sm[i].min(reach);
+            }
+            for i in 0..n {
+                let reach = sm[i + 1] + 2.0 * k * b[i].accel * b[i].len;
+                if sm[i] < reach {
+                    let peak = 0.5 * (sm[i] + reach);
+                    b[i].cruise_v2 = b[i].cruise_v2.min(peak);
+                }
+            }
+        }
+        // backward pass (exit of the last block: rest); junctions also under
+        // both blocks' (possibly lowered) cruise speeds
+        let mut next = 0.0f64;
+        for i in (0..n).rev() {
+            let mut cap = b[i].entry_v2.min(b[i].cruise_v2);
+            if i > 0 {
+                cap = cap.min(b[i - 1].cruise_v2);
+            }
+            let e = cap.min(next + 2.0 * b[i].accel * b[i].len);
+            b[i].entry_v2 = e;
+            next = e;
+        }
+        // forward pass (entry of the first block: rest), with each block's
+        // time summed into its part's (parts are consecutive ranges)
+        if n > 0 {
+            b[0].entry_v2 = 0.0;
+        }
+        let mut ends: Vec<usize> = self.parts.iter().map(|p| p.first).collect();
+        ends.push(n);
+        let mut planned = vec![0.0f64; ends.len()]; // [before the parts, part 0, …]
+        let mut slot = 0;
+        for i in 0..n {
+            while i >= ends[slot] {
+                slot += 1;
+            }
+            let exit = if i + 1 < n {
+                let reach = b[i].entry_v2 + 2.0 * b[i].accel * b[i].len;
+                b[i + 1].entry_v2 = b[i + 1].entry_v2.min(reach);
+                b[i + 1].entry_v2
+            } else {
+                0.0
+            };
+            planned[slot] +=
+                trapezoid_time(b[i].len, b[i].accel, b[i].entry_v2, exit, b[i].cruise_v2);
+        }
+        let mut est = Estimate {
+            total: Times {
+                planned: planned[0] + self.pre.2,
+                ideal: self.pre.0,
+                nominal: self.pre.1,
+            },
+            parts: Vec::with_capacity(self.parts.len()),
+        };
+        for (k, p) in self.parts.iter().enumerate() {
+            let t = Times {
+                planned: planned[k + 1] + p.dwell,
+                ideal: p.ideal,
+                nominal: p.nominal,
+            };
+            est.total.planned += t.planned;
+            est.total.ideal += t.ideal;
+            est.total.nominal += t.nominal;
+            est.parts.push(PartTimes {
+                name: p.name.clone(),
+                times: t,
+            });
+        }
+        est
+    }
+}
+
+/// Time of one block of length `len` at acceleration `a`, entering at v0²,
+/// leaving at v1², cruising at most at vc² (all reachable: |v1² − v0²| ≤ 2aL).
+///
+/// The highest speed the block can reach is the peak of a triangle,
+/// vp² = (v0² + v1² + 2aL)/2 (from v² = v0² + 2a·x, Klipper's key look-ahead
+/// formula). When vp ≤ vc it is a triangle: (vp − v0)/a + (vp − v1)/a;
+/// otherwise a trapezoid: (vc − v0)/a + (vc − v1)/a plus the cruise
+/// L − (2vc² − v0² − v1²)/(2a) = (vp² − vc²)/a long at vc. Differences of
+/// speeds are written as differences of squares over sums, exact when close.
+pub fn trapezoid_time(len: f64, a: f64, v0_2: f64, v1_2: f64, vc_2: f64) -> f64 {
+    if len <= 0.0 {
+        return 0.0;
+    }
+    let vp_2 = 0.5 * (v0_2 + v1_2 + 2.0 * a * len);
+    let (v0, v1) = (v0_2.sqrt(), v1_2.sqrt());
+    let ramp = |top_2: f64, top: f64| {
+        (top_2 - v0_2).max(0.0) / (a * (top + v0)) + (top_2 - v1_2).max(0.0) / (a * (top + v1))
+    };
+    if vp_2 <= vc_2 {
+        ramp(vp_2, vp_2.sqrt())
+    } else {
+        let vc = vc_2.sqrt();
+        ramp(vc_2, vc) + (vp_2 - vc_2) / (a * vc)
+    }
+}
+
+/// One call on a [`Planner`], recorded to replay on another thread.
+#[derive(Clone, Debug)]
+enum Call {
+    BeginPart(String),
+    Stop,
+    Dwell(f64),
+    MoveTo(DVec3, f64, f64, MoveKind),
+    ExtrudeOnly(f64, f64),
+}
+
+/// Calls sent to the planner's thread at a time.
+const BATCH: usize = 4096;
+
+/// A [`Planner`] on its own thread: the same calls, recorded in batches and
+/// replayed there in order while the G-code is written, so the estimate is
+/// exactly the one planner's and costs the writer almost nothing.
+pub struct Background {
+    limits: Limits,
+    batch: Vec<Call>,
+    tx: Option<std::sync::mpsc::SyncSender<Vec<Call>>>,
+    worker: Option<std::thread::JoinHandle<Estimate>>,
+}
+
+impl Background {
+    /// A planner with these limits, started on a thread of its own.
+    pub fn new(limits: Limits) -> Background {
+        let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<Call>>(64);
+        let mut planner = Planner::new(limits.clone());
+        let worker = std::thread::spawn(move || {
+            for batch in rx {
+                for call in batch {
+                    match call {
+                        Call::BeginPart(name) => planner.begin_part(&name),
+                        Call::Stop => planner.stop(),
+                        Call::Dwell(s) => planner.dwell(s),
+                        Call::MoveTo(to, e, feed, kind) => planner.move_to(to, e, feed, kind),
+                        Call::ExtrudeOnly(l, feed) => planner.extrude_only(l, feed),
+                    }
+                }
+            }
+            planner.finish()
+        });
+        Background {
+            limits,
+            batch: Vec::with_capacity(BATCH),
+            tx: Some(tx),
+            worker: Some(worker),
+        }
+    }
+
+    fn call(&mut self, c: Call) {
+        self.batch.push(c);
+        if self.batch.len() >= BATCH && self.tx.is_some() {
+            self.send();
+        }
+    }
+
+    fn send(&mut self) {
+        let batch = std::mem::replace(&mut self.batch, Vec::with_capacity(BATCH));
+        if let Some(tx) = &self.tx {
+            // a send fails only if the worker died: its panic is raised at finish
+            let _ = tx.send(batch);
+        }
+    }
+
+    /// The limits in use.
+    pub fn limits(&self) -> &Limits {
+        &self.limits
+    }
+
+    /// See [`Planner::begin_part`].
+    pub fn begin_part(&mut self, name: &str) {
+        self.call(Call::BeginPart(name.to_string()));
+    }
+
+    /// See [`Planner::stop`].
+    pub fn stop(&mut self) {
+        self.call(Call::Stop);
+    }
+
+    /// See [`Planner::dwell`].
+    pub fn dwell(&mut self, seconds: f64) {
+        self.call(Call::Dwell(seconds));
+    }
+
+    /// See [`Planner::move_to`].
+    pub fn move_to(&mut self, to: DVec3, e: f64, feed: f64, kind: MoveKind) {
+        self.call(Call::MoveTo(to, e, feed, kind));
+    }
+
+    /// See [`Planner::extrude_only`].
+    pub fn extrude_only(&mut self, length: f64, feed: f64) {
+        self.call(Call::ExtrudeOnly(length, feed));
+    }
+
+    /// Sends what is left, waits for the thread and returns its estimate;
+    /// calls after it are ignored.
+    pub fn finish(&mut self) -> Estimate {
+        self.send();
+        self.tx = None;
+        let worker = self.worker.take().expect("finish is called once");
+        worker
+            .join()
+            .unwrap_or_else(|e| std::panic::resume_unwind(e))
+    }
+}
+
+impl Drop for Background {
+    fn drop(&mut self) {
+        // an emitter dropped on an error: let the thread end, ignore its result
+        self.tx = None;
+        if let Some(w) = self.worker.take() {
+            let _ = w.join();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn marlin(accel: f64, jd: f64, vmax: f64) -> Limits {
+        Limits {
+            max_velocity: vmax,
+            max_acceleration: accel,
+            travel_acceleration: accel,
+            retract_acceleration: accel,
+            junction_deviation: Some(jd),
+            square_corner_velocity: None,
+            min_segment_time: 0.0,
+            minimum_cruise_ratio: 0.0,
+        }
+    }
+
+    fn klipper(accel: f64, scv: f64, vmax: f64, ratio: f64) -> Limits {
+        Limits {
+            junction_deviation: None,
+            square_corner_velocity: Some(scv),
+            minimum_cruise_ratio: ratio,
+            ..marlin(accel, 0.0, vmax)
+        }
+    }
+
+    fn close(got: f64, want: f64, rel: f64) {
+        assert!(
+            ((got - want) / want).abs() <= rel,
+            "got {got}, want {want} (relative error {:e})",
+            ((got - want) / want).abs()
+        );
+    }
+
+    /// Plans a path through `points` at `feed`, all extruding.
+    fn plan(limits: Limits, points: &[DVec3], feed: f64) -> Estimate {
+        let mut p = Planner::new(limits);
+        p.move_to(points[0], 0.0, feed, MoveKind::Extrude);
+        p.begin_part("p");
+        for &q in &points[1..] {
+            p.move_to(q, 0.1, feed, MoveKind::Extrude);
+        }
+        p.finish()
+    }
+
+    #[test]
+    fn one_long_move_is_a_trapezoid() {
+        // 100 mm at 50 mm/s, a = 500: from rest to rest t = L/v + v/a
+        let e = plan(
+            marlin(500.0, 0.013, 300.0),
+            &[DVec3::ZERO, DVec3::new(100.0, 0.0, 0.0)],
+            50.0,
+        );
+        close(e.total.planned, 100.0 / 50.0 + 50.0 / 500.0, 1e-12);
+        close(e.total.ideal, 2.0, 1e-12);
+        close(e.total.lost_to_acceleration(), 0.1, 1e-9);
+        assert_eq!(e.parts.len(), 1);
+        assert_eq!(e.parts[0].times, e.total);
+    }
+
+    #[test]
+    fn one_short_move_is_a_triangle() {
+        // 2 mm at 100 mm/s, a = 1000: v² = aL = 2000 < 100², so t = 2·sqrt(L/a)
+        let e = plan(
+            marlin(1000.0, 0.013, 300.0),
+            &[DVec3::ZERO, DVec3::new(0.0, 2.0, 0.0)],
+            100.0,
+        );
+        close(e.total.planned, 2.0 * (2.0f64 / 1000.0).sqrt(), 1e-12);
+        // a 3D move: the length includes Z
+        let e = plan(
+            marlin(1000.0, 0.013, 300.0),
+            &[DVec3::ZERO, DVec3::new(1.0, 1.0, 1.0)],
+            100.0,
+        );
+        close(e.total.planned, 2.0 * (3f64.sqrt() / 1000.0).sqrt(), 1e-12);
+    }
+
+    #[test]
+    fn max_velocity_caps_the_feed() {
+        let e = plan(
+            marlin(1000.0, 0.013, 40.0),
+            &[DVec3::ZERO, DVec3::new(100.0, 0.0, 0.0)],
+            100.0,
+        );
+        close(e.total.planned, 100.0 / 40.0 + 40.0 / 1000.0, 1e-12);
+        close(e.total.ideal, 1.0, 1e-12);
+        close(e.total.nominal, 2.5, 1e-12);
+    }
+
+    /// Time from rest to rest through `n` equal segments of length `l` whose
+    /// every inner corner allows `vj`, cruising at `v` where they can, by
+    /// hand: the speed at corner i is what the junction, the acceleration
+    /// from the start (v² = 2a·i·l) and the deceleration to the end
+    /// (v² = 2a·(n − i)·l) allow, and each segment is a triangle or a
+    /// trapezoid between its corner speeds.
+    fn by_hand(n: usize, l: f64, a: f64, v: f64, vj: f64) -> f64 {
+        let corner = |i: usize| {
+            if i == 0 || i == n {
+                0.0
+            } else {
+                (vj * vj)
+                    .min(2.0 * a * i as f64 * l)
+                    .min(2.0 * a * (n - i) as f64 * l)
+                    .sqrt()
+            }
+        };
+        let seg = |v0: f64, v1: f64| {
+            let vp2 = (v0 * v0 + v1 * v1 + 2.0 * a * l) / 2.0;
+            if vp2 <= v * v {
+                let vp = vp2.sqrt();
+                (vp - v0) / a + (vp - v1) / a
+            } else {
+                let d = (2.0 * v * v - v0 * v0 - v1 * v1) / (2.0 * a);
+                (v - v0) / a + (v - v1) / a + (l - d) / v
+            }
+        };
+        (0..n).map(|i| seg(corner(i), corner(i + 1))).sum()
+    }
+
+    #[test]
+    fn square_with_junction_deviation() {
+        // a 20 mm square at 60 mm/s, a = 1000, δ = 0.05: a 90° corner has
+        // sin(θ/2) = √½, so v² = a·δ·√½/(1 − √½) = 50·(1 + √2) ≈ 120.7, v ≈ 11 mm/s
+        let a = 1000.0;
+        let vj = (a * 0.05 * (0.5f64.sqrt() / (1.0 - 0.5f64.sqrt()))).sqrt();
+        close(vj, (50.0 * (1.0 + 2f64.sqrt())).sqrt(), 1e-12);
+        let pts = [
+            DVec3::ZERO,
+            DVec3::new(20.0, 0.0, 0.0),
+            DVec3::new(20.0, 20.0, 0.0),
+            DVec3::new(0.0, 20.0, 0.0),
+            DVec3::ZERO,
+        ];
+        let e = plan(marlin(a, 0.05, 300.0), &pts, 60.0);
+        close(e.total.planned, by_hand(4, 20.0, a, 60.0, vj), 1e-12);
+        // hand arithmetic, written out: ends 0→60→vj, inner vj→60→vj
+        let ramp = |v0: f64| (60.0 - v0) / a;
+        let dist = |v0: f64| (3600.0 - v0 * v0) / (2.0 * a);
+        let end = ramp(0.0) + ramp(vj) + (20.0 - dist(0.0) - dist(vj)) / 60.0;
+        let inner = 2.0 * ramp(vj) + (20.0 - 2.0 * dist(vj)) / 60.0;
+        close(e.total.planned, 2.0 * end + 2.0 * inner, 1e-12);
+    }
+
+    #[test]
+    fn square_with_square_corner_velocity() {
+        // Klipper: a 90° corner is taken at exactly scv = 5 mm/s (no smoothing)
+        let pts = [
+            DVec3::ZERO,
+            DVec3::new(30.0, 0.0, 0.0),
+            DVec3::new(30.0, 30.0, 0.0),
+            DVec3::new(0.0, 30.0, 0.0),
+            DVec3::ZERO,
+        ];
+        let e = plan(klipper(3000.0, 5.0, 300.0, 0.0), &pts, 150.0);
+        close(e.total.planned, by_hand(4, 30.0, 3000.0, 150.0, 5.0), 1e-12);
+    }
+
+    #[test]
+    fn circle_where_the_junction_speed_limits() {
+        // a 60-gon of radius 10 at 100 mm/s, a = 500, δ = 0.01: each string is
+        // L = 2·10·sin(π/60) ≈ 1.047 mm (> 1 mm: no small-segment rule), the
+        // turn φ = 6°, θ = 174°: v_j² = a·δ·sin 87°/(1 − sin 87°) ≈ 60.4²,
+        // below 100 and below what a string can reach between two corners
+        // (v² = v_j² + a·L ≈ 64.6²), so it limits every corner
+        let n = 60;
+        let r = 10.0;
+        let pts: Vec<DVec3> = (0..=n)
+            .map(|k| {
+                let t = std::f64::consts::TAU * k as f64 / n as f64;
+                DVec3::new(r * t.cos(), r * t.sin(), 0.0)
+            })
+            .collect();
+        let l = 2.0 * r * (std::f64::consts::PI / n as f64).sin();
+        let s = (87.0f64).to_radians().sin();
+        let vj = (500.0 * 0.01 * s / (1.0 - s)).sqrt();
+        assert!(l > 1.0 && vj < 100.0);
+        let e = plan(marlin(500.0, 0.01, 300.0), &pts, 100.0);
+        let want = by_hand(n, l, 500.0, 100.0, vj);
+        close(e.total.planned, want, 1e-9);
+        // and it is well over distance / speed (about 100/64 of it)
+        assert!(e.total.planned > 1.4 * e.total.ideal);
+    }
+
+    #[test]
+    fn circle_of_short_strings_uses_the_curvature_limit() {
+        // 360 strings of radius 20: L ≈ 0.349 mm < 1 mm and φ = 1°, so Marlin's
+        // small-segment rule v² ≤ a·L/φ = a·R·(2 sin(φ/2)/φ) ≈ a·R limits,
+        // not δ; at a = 500, v ≈ 100 mm/s, below the 150 asked for
+        let n = 360;
+        let r = 20.0;
+        let pts: Vec<DVec3> = (0..=n)
+            .map(|k| {
+                let t = std::f64::consts::TAU * k as f64 / n as f64;
+                DVec3::new(r * t.cos(), r * t.sin(), 0.0)
+            })
+            .collect();
+        let l = 2.0 * r * (std::f64::consts::PI / n as f64).sin();
+        let phi = std::f64::consts::TAU / n as f64;
+        let vj = (500.0 * l / phi).sqrt();
+        let e = plan(marlin(500.0, 0.013, 300.0), &pts, 150.0);
+        close(e.total.planned, by_hand(n, l, 500.0, 150.0, vj), 1e-9);
+        // Klipper's centripetal limit from the move length: ½·L·a·tan(θ/2)
+        let tan_half = (std::f64::consts::FRAC_PI_2 - phi / 2.0).tan();
+        let vk = (0.5 * l * 500.0 * tan_half).sqrt();
+        close(vk, vj, 1e-3); // the same circle, nearly the same speed
+        let e = plan(klipper(500.0, 50.0, 300.0, 0.0), &pts, 150.0);
+        close(e.total.planned, by_hand(n, l, 500.0, 150.0, vk), 1e-9);
+    }
+
+    #[test]
+    fn min_segment_time_caps_short_moves() {
+        // 100 moves of 0.2 mm in a line at 40 mm/s take 5 ms each; Marlin's
+        // 20 ms minimum slows them to 10 mm/s: no corners, so one trapezoid
+        let pts: Vec<DVec3> = (0..=100)
+            .map(|k| DVec3::new(0.2 * k as f64, 0.0, 0.0))
+            .collect();
+        let lim = Limits {
+            min_segment_time: 0.02,
+            ..marlin(1000.0, 0.013, 300.0)
+        };
+        let e = plan(lim, &pts, 40.0);
+        close(e.total.planned, 20.0 / 10.0 + 10.0 / 1000.0, 1e-9);
+        close(e.total.ideal, 0.5, 1e-12);
+        close(e.total.nominal, 2.0, 1e-12);
+    }
+
+    #[test]
+    fn minimum_cruise_ratio_slows_short_moves() {
+        // Klipper's example: a standalone 1.5 mm move with ratio 0.5 cruises
+        // at least 0.75 mm: peak v² = L·a·(1 − ratio) = 1.5·1000·0.5 = 750
+        let e = plan(
+            klipper(1000.0, 5.0, 300.0, 0.5),
+            &[DVec3::ZERO, DVec3::new(1.5, 0.0, 0.0)],
+            100.0,
+        );
+        let v = 750f64.sqrt();
+        let accel_dist = 750.0 / 2000.0;
+        close(1.5 - 2.0 * accel_dist, 0.75, 1e-12);
+        close(e.total.planned, 2.0 * v / 1000.0 + 0.75 / v, 1e-12);
+    }
+
+    #[test]
+    fn minimum_cruise_ratio_spares_moves_that_only_slow_down() {
+        // 100 mm then 0.5 mm straight on, a = 1000, ratio 0.5: the short last
+        // move only decelerates (to rest), as in Klipper it keeps its full
+        // entry v² = 2·a·L = 1000, not the smoothed 2·a_d·L = 500
+        let e = plan(
+            klipper(1000.0, 5.0, 300.0, 0.5),
+            &[
+                DVec3::ZERO,
+                DVec3::new(100.0, 0.0, 0.0),
+                DVec3::new(100.5, 0.0, 0.0),
+            ],
+            100.0,
+        );
+        let v1 = 1000f64.sqrt();
+        let first = 100.0 / 1000.0
+            + (100.0 - v1) / 1000.0
+            + (100.0 - 5.0 - (10000.0 - 1000.0) / 2000.0) / 100.0;
+        close(e.total.planned, first + v1 / 1000.0, 1e-12);
+    }
+
+    #[test]
+    fn retractions_are_e_only_moves_from_rest() {
+        let mut p = Planner::new(marlin(1000.0, 0.013, 300.0));
+        p.move_to(DVec3::ZERO, 0.0, 100.0, MoveKind::Travel);
+        p.begin_part("a");
+        p.move_to(DVec3::new(100.0, 0.0, 0.0), 1.0, 100.0, MoveKind::Extrude);
+        p.extrude_only(0.8, 40.0); // retract
+        p.move_to(DVec3::new(100.0, 100.0, 0.0), 0.0, 100.0, MoveKind::Travel);
+        p.begin_part("b");
+        p.extrude_only(0.8, 40.0); // unretract
+        p.move_to(DVec3::new(0.0, 100.0, 0.0), 1.0, 100.0, MoveKind::Extrude);
+        // E of 0 with no motion is skipped
+        p.move_to(DVec3::new(0.0, 100.0, 0.0), 0.0, 100.0, MoveKind::Extrude);
+        let e = p.finish();
+        let long = 1.0 + 0.1;
+        let retract = 2.0 * (0.8f64 / 1000.0).sqrt(); // triangle: 40² > a·L
+        close(e.parts[0].times.planned, long + retract + long, 1e-12);
+        close(e.parts[1].times.planned, retract + long, 1e-12);
+        close(e.total.planned, 3.0 * long + 2.0 * retract, 1e-12);
+        close(e.total.ideal, 3.0 + 2.0 * 0.8 / 40.0, 1e-12);
+    }
+
+    #[test]
+    fn reversal_stops_and_straight_does_not() {
+        let lim = marlin(1000.0, 0.013, 300.0);
+        let line = [
+            DVec3::ZERO,
+            DVec3::new(50.0, 0.0, 0.0),
+            DVec3::new(100.0, 0.0, 0.0),
+        ];
+        close(
+            plan(lim.clone(), &line, 50.0).total.planned,
+            2.0 + 0.05,
+            1e-12,
+        );
+        let back = [DVec3::ZERO, DVec3::new(50.0, 0.0, 0.0), DVec3::ZERO];
+        close(
+            plan(lim, &back, 50.0).total.planned,
+            2.0 * (1.0 + 0.05),
+            1e-12,
+        );
+    }
+
+    #[test]
+    fn defaults_follow_the_junction_model() {
+        let k = Kinematics::default();
+        k.validate().unwrap();
+        let l = k.limits(200.0);
+        assert_eq!(l.max_velocity, 200.0);
+        assert_eq!(l.junction_deviation, Some(0.013));
+        assert_eq!(l.min_segment_time, 0.02);
+        assert_eq!(l.minimum_cruise_ratio, 0.0);
+        let k = Kinematics {
+            square_corner_velocity: Some(5.0),
+            max_acceleration: 3000.0,
+            ..Kinematics::default()
+        };
+        let l = k.limits(300.0);
+        assert_eq!(l.junction_deviation, None);
+        assert_eq!(l.min_segment_time, 0.0);
+        assert_eq!(l.minimum_cruise_ratio, 0.5);
+        assert_eq!(l.travel_acceleration, 3000.0);
+        let json = serde_json::to_value(&l).unwrap();
+        assert!(json.get("junction_deviation").is_none());
+        assert_eq!(json["square_corner_velocity"], 5.0);
+        let both = Kinematics {
+            junction_deviation: Some(0.02),
+            ..k.clone()
+        };
+        assert!(both
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .contains("not both"));
+        let bad = Kinematics {
+            max_acceleration: -1.0,
+            ..Kinematics::default()
+        };
+        let e = bad.validate().unwrap_err().to_string();
+        assert!(e.contains("kinematics.max_acceleration"), "{e}");
+        let bad = Kinematics {
+            minimum_cruise_ratio: Some(1.0),
+            ..Kinematics::default()
+        };
+        assert!(bad.validate().is_err());
+    }
+
+    #[test]
+    fn dwell_and_stop() {
+        let mut p = Planner::new(marlin(1000.0, 0.013, 300.0));
+        p.move_to(DVec3::ZERO, 0.0, 50.0, MoveKind::Travel);
+        p.begin_part("a");
+        p.move_to(DVec3::new(50.0, 0.0, 0.0), 0.0, 50.0, MoveKind::Travel);
+        p.dwell(2.0);
+        p.move_to(DVec3::new(100.0, 0.0, 0.0), 0.0, 50.0, MoveKind::Travel);
+        let e = p.finish();
+        close(e.total.planned, 2.0 * (1.0 + 0.05) + 2.0, 1e-12);
+        close(e.total.ideal, 4.0, 1e-12);
+    }
+}
