@@ -796,6 +796,16 @@ mod tests {
         );
     }
 
+    /// The closed regular n-gon of radius `r` about the origin, n + 1 points.
+    fn polygon(n: usize, r: f64) -> Vec<DVec3> {
+        (0..=n)
+            .map(|k| {
+                let t = std::f64::consts::TAU * k as f64 / n as f64;
+                DVec3::new(r * t.cos(), r * t.sin(), 0.0)
+            })
+            .collect()
+    }
+
     /// Plans a path through `points` at `feed`, all extruding.
     fn plan(limits: Limits, points: &[DVec3], feed: f64) -> Estimate {
         let mut p = Planner::new(limits);
@@ -929,12 +939,7 @@ mod tests {
         // (v² = v_j² + a·L ≈ 64.6²), so it limits every corner
         let n = 60;
         let r = 10.0;
-        let pts: Vec<DVec3> = (0..=n)
-            .map(|k| {
-                let t = std::f64::consts::TAU * k as f64 / n as f64;
-                DVec3::new(r * t.cos(), r * t.sin(), 0.0)
-            })
-            .collect();
+        let pts = polygon(n, r);
         let l = 2.0 * r * (std::f64::consts::PI / n as f64).sin();
         let s = (87.0f64).to_radians().sin();
         let vj = (500.0 * 0.01 * s / (1.0 - s)).sqrt();
@@ -953,12 +958,7 @@ mod tests {
         // not δ; at a = 500, v ≈ 100 mm/s, below the 150 asked for
         let n = 360;
         let r = 20.0;
-        let pts: Vec<DVec3> = (0..=n)
-            .map(|k| {
-                let t = std::f64::consts::TAU * k as f64 / n as f64;
-                DVec3::new(r * t.cos(), r * t.sin(), 0.0)
-            })
-            .collect();
+        let pts = polygon(n, r);
         let l = 2.0 * r * (std::f64::consts::PI / n as f64).sin();
         let phi = std::f64::consts::TAU / n as f64;
         let vj = (500.0 * l / phi).sqrt();

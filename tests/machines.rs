@@ -7,7 +7,7 @@ mod common;
 use std::f64::consts::PI;
 use std::path::PathBuf;
 
-use common::{p3dp, recipe, root, tmp};
+use common::{p3dp, recipe, root, tmp, Move};
 use glam::DVec3;
 use p3dp::build::{plan, Options};
 use p3dp::printer::{built_in_names, Bed, Printer};
@@ -143,19 +143,7 @@ fn check_dialect(text: &str, flavor: &str) {
 
 // ------------------------------------------------------- reading moves back
 
-/// One move read back: a line (G0/G1) or an arc (G2/G3), machine coordinates.
-#[derive(Clone, Debug)]
-struct Mv {
-    g: u8,
-    from: [f64; 3],
-    to: [f64; 3],
-    /// Arc centre offset from `from` (I, J).
-    ij: [f64; 2],
-    /// Filament fed, mm.
-    de: f64,
-}
-
-impl Mv {
+impl Move {
     /// Points along the move as the firmware runs it (an arc: radius and z
     /// linear in the angle, from start to end).
     fn samples(&self, n: usize) -> Vec<DVec3> {
@@ -187,58 +175,9 @@ impl Mv {
     }
 }
 
-/// Every move of `text`, from the first with X, Y and Z all known (G28
-/// makes them unknown again); E modal as M82/M83 and G92 say.
-fn moves(text: &str) -> Vec<Mv> {
-    let mut pos = [f64::NAN; 3];
-    let (mut e, mut relative) = (0.0, false);
-    let mut out = Vec::new();
-    for raw in text.lines() {
-        let code = raw.split(';').next().unwrap().trim();
-        let mut words = code.split_whitespace();
-        let Some(cmd) = words.next() else { continue };
-        match cmd {
-            "M82" => relative = false,
-            "M83" => relative = true,
-            "G28" => pos = [f64::NAN; 3],
-            "G92" => {
-                for w in words {
-                    if let Some(v) = w.strip_prefix('E') {
-                        e = v.parse().unwrap();
-                    }
-                }
-            }
-            "G0" | "G1" | "G2" | "G3" => {
-                let from = pos;
-                let (mut de, mut ij) = (0.0, [0.0; 2]);
-                for w in words {
-                    let (k, v) = w.split_at(1);
-                    let v: f64 = v.parse().unwrap();
-                    match k {
-                        "X" => pos[0] = v,
-                        "Y" => pos[1] = v,
-                        "Z" => pos[2] = v,
-                        "I" => ij[0] = v,
-                        "J" => ij[1] = v,
-                        "E" => {
-                            de = if relative { v } else { v - e };
-                            e = if relative { e + v } else { v };
-                        }
-                        _ => {}
-                    }
-                }
-                out.push(Mv {
-                    g: cmd[1..].parse().unwrap(),
-                    from,
-                    to: pos,
-                    ij,
-                    de,
-                });
-            }
-            _ => {}
-        }
-    }
-    out
+/// Every move of `text` (G28 makes the position unknown again).
+fn moves(text: &str) -> Vec<Move> {
+    common::parse(text).moves
 }
 
 /// Panics unless every known coordinate of every move (arcs sampled) lies

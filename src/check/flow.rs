@@ -16,6 +16,22 @@ struct Tally {
     hard: bool,
 }
 
+impl Tally {
+    /// Counts string `k` of cross-section `c` into `slot`, keeping the
+    /// extreme by `pick` (max or min) and whether any passed the hard limit.
+    fn count(slot: &mut Option<Tally>, k: usize, c: f64, hard: bool, pick: fn(f64, f64) -> f64) {
+        let t = slot.get_or_insert(Tally {
+            n: 0,
+            first: k,
+            extreme: c,
+            hard: false,
+        });
+        t.n += 1;
+        t.extreme = pick(t.extreme, c);
+        t.hard |= hard;
+    }
+}
+
 /// The `over-extrusion` and `thin-string` findings of one path.
 pub fn cross_sections(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) {
     let p = &recipe.printer;
@@ -30,25 +46,9 @@ pub fn cross_sections(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) {
             continue;
         }
         if s.c > hi {
-            let t = over.get_or_insert(Tally {
-                n: 0,
-                first: k,
-                extreme: s.c,
-                hard: false,
-            });
-            t.n += 1;
-            t.extreme = t.extreme.max(s.c);
-            t.hard |= s.c > hard_hi;
+            Tally::count(&mut over, k, s.c, s.c > hard_hi, f64::max);
         } else if s.c < lo {
-            let t = thin.get_or_insert(Tally {
-                n: 0,
-                first: k,
-                extreme: s.c,
-                hard: false,
-            });
-            t.n += 1;
-            t.extreme = t.extreme.min(s.c);
-            t.hard |= s.c < hard_lo;
+            Tally::count(&mut thin, k, s.c, s.c < hard_lo, f64::min);
         }
     }
     let plural = |n: usize| if n == 1 { "" } else { "s" };

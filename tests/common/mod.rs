@@ -31,15 +31,18 @@ pub fn p3dp(dir: &Path, args: &[&str]) -> Output {
         .expect("run p3dp")
 }
 
-/// One G0/G1 move read back from G-code, in machine coordinates.
+/// One move read back from G-code, in machine coordinates: a line (G0/G1)
+/// or an arc (G2/G3).
 #[derive(Clone, Copy, Debug)]
 pub struct Move {
-    /// G0 or G1.
+    /// 0, 1, 2 or 3: G0, G1, G2, G3.
     pub g: u8,
     /// Position before the move.
     pub from: [f64; 3],
     /// Position after the move.
     pub to: [f64; 3],
+    /// An arc's centre, offset from `from` (I, J); zero for a line.
+    pub ij: [f64; 2],
     /// Filament fed by this move (negative for a retraction), mm.
     pub de: f64,
     /// Feed rate in force, mm/min.
@@ -55,7 +58,8 @@ pub struct Gcode {
     pub lines: Vec<String>,
 }
 
-/// Reads G-code as a firmware would: G90 XYZ, M82/M83 E, G92 E resets, modal F.
+/// Reads G-code as a firmware would: G90 XYZ, M82/M83 E, G92 E resets, modal
+/// F; G28 makes the position unknown (NaN) until the moves name it again.
 pub fn parse(text: &str) -> Gcode {
     let mut pos = [f64::NAN; 3];
     let (mut e, mut f, mut relative) = (0.0, 0.0, false);
@@ -73,6 +77,7 @@ pub fn parse(text: &str) -> Gcode {
         match cmd {
             "M82" => relative = false,
             "M83" => relative = true,
+            "G28" => pos = [f64::NAN; 3],
             "G92" => {
                 for w in words {
                     if let Some(v) = w.strip_prefix('E') {
@@ -80,9 +85,9 @@ pub fn parse(text: &str) -> Gcode {
                     }
                 }
             }
-            "G0" | "G1" => {
+            "G0" | "G1" | "G2" | "G3" => {
                 let from = pos;
-                let mut de = 0.0;
+                let (mut de, mut ij) = (0.0, [0.0; 2]);
                 for w in words {
                     let (axis, v) = w.split_at(1);
                     let v: f64 = v
@@ -92,6 +97,7 @@ pub fn parse(text: &str) -> Gcode {
                         "X" => pos[0] = v,
                         "Y" => pos[1] = v,
                         "Z" => pos[2] = v,
+                        "I" | "J" if cmd == "G2" || cmd == "G3" => ij[usize::from(axis == "J")] = v,
                         "E" => {
                             de = if relative { v } else { v - e };
                             e = if relative { e + v } else { v };
@@ -101,9 +107,10 @@ pub fn parse(text: &str) -> Gcode {
                     }
                 }
                 moves.push(Move {
-                    g: if cmd == "G0" { 0 } else { 1 },
+                    g: cmd[1..].parse().unwrap(),
                     from,
                     to: pos,
+                    ij,
                     de,
                     f,
                     part: parts.len() - 1,
