@@ -51,6 +51,20 @@ pub fn make_part(recipe: &Recipe, k: usize) -> Result<Toolpath> {
 /// Loads, builds and checks a recipe.
 pub fn plan(path: &Path, opts: &Options) -> Result<Plan> {
     let shown = path.display().to_string();
+    // the command line's own mistakes name the option, not the recipe
+    check::validate_allow(&opts.allow, |i| format!("--allow {}", opts.allow[i]))?;
+    if let Some(spec) = &opts.printer {
+        crate::printer::Printer::resolve(spec, Path::new(".")).map_err(|e| {
+            if e.file.is_none() && e.place.as_deref() == Some("printer") {
+                Error {
+                    place: Some(format!("--printer {spec}")),
+                    ..e
+                }
+            } else {
+                e
+            }
+        })?;
+    }
     let recipe = Recipe::load(path, &opts.sets, opts.printer.as_deref())?;
     let mut parts = Vec::with_capacity(recipe.parts.len());
     for k in 0..recipe.parts.len() {
@@ -68,7 +82,6 @@ pub fn plan(path: &Path, opts: &Options) -> Result<Plan> {
     }
     paths.extend(parts);
     let refs: Vec<&Toolpath> = paths.iter().collect();
-    check::validate_allow(&opts.allow, |i| format!("--allow {}", opts.allow[i]))?;
     let mut findings = check::run(&recipe, &refs);
     check::apply_allow(&mut findings, &recipe.allow);
     check::apply_allow(&mut findings, &opts.allow);

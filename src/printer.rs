@@ -279,13 +279,22 @@ impl Printer {
                 ),
             ));
         }
-        let path = base.join(spec);
+        // relative to the recipe's folder, or to the working one for --printer
+        let path = if base == Path::new(".") || base.as_os_str().is_empty() {
+            Path::new(spec).to_path_buf()
+        } else {
+            base.join(spec)
+        };
         if !path.is_file() {
+            let at = if path == Path::new(spec) {
+                String::new()
+            } else {
+                format!(" ({})", path.display())
+            };
             return Err(Error::input(
                 "printer",
                 format!(
-                    "no printer profile at `{spec}` ({}); built-in printers are {}",
-                    path.display(),
+                    "no printer profile at `{spec}`{at}; built-in printers are {}",
                     built_in_names().join(", ")
                 ),
             ));

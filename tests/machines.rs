@@ -401,6 +401,23 @@ fn bad_user_profiles_exit_2_naming_the_key() {
     }
     let e = Printer::from_file(&fixture("bad-key.yaml")).unwrap_err();
     assert_eq!(e.place.as_deref(), Some("retraction.lenght"), "{e}");
+    // a --printer that names nothing is the option's mistake, not the recipe's
+    for (spec, want) in [
+        (
+            "prusa-mk5",
+            "error: --printer prusa-mk5: unknown printer `prusa-mk5`",
+        ),
+        (
+            "missing.yaml",
+            "error: --printer missing.yaml: no printer profile at `missing.yaml`",
+        ),
+    ] {
+        let cup = recipe("cup.yaml");
+        let out = p3dp(&dir, &["check", cup.to_str().unwrap(), "--printer", spec]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{spec}: {err}");
+        assert!(err.starts_with(want), "{spec}: {err}");
+    }
 }
 
 /// A part with every event, written for each flavour: each output passes its
