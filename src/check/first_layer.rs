@@ -59,8 +59,16 @@ fn band(c: f64, h: f64, nozzle: f64) -> f64 {
     }
 }
 
-/// A bed string seen from above: its ends and its nozzle height.
-type BedString = (DVec2, DVec2, f64);
+/// A bed string seen from above: its ends, its nozzle height, and where it
+/// ends along the print (path index, extruded length so far).
+#[derive(Clone, Copy)]
+struct BedString {
+    a: DVec2,
+    b: DVec2,
+    h: f64,
+    path: usize,
+    s: f64,
+}
 
 /// The bed strings laid so far, hashed by the 1 mm squares their ends'
 /// rectangle (grown by `reach`) covers, seen from above.
@@ -77,25 +85,36 @@ impl BedGrid {
         (x0..=x1).flat_map(move |x| (y0..=y1).map(move |y| (x, y)))
     }
 
-    fn insert(&mut self, a: DVec2, b: DVec2, h: f64, reach: f64) {
-        for sq in Self::squares(a, b, reach) {
-            self.cells.entry(sq).or_default().push((a, b, h));
+    fn insert(&mut self, bs: BedString, reach: f64) {
+        for sq in Self::squares(bs.a, bs.b, reach) {
+            self.cells.entry(sq).or_default().push(bs);
         }
     }
 
-    /// Whether a bed string lower than `h` passes within `r` of `p`, seen from above.
-    fn under(&self, p: DVec2, h: f64, r: f64) -> bool {
+    /// Whether the bed under `q` (the middle of a string of width `w`) is
+    /// covered already: an earlier bed string passes within w / 2 of it, seen
+    /// from above, lower than it; or as low, alongside it (the middle's foot
+    /// on that string falls between its ends: not a loop closing end to
+    /// start) and not just before it on the same path (farther back along the
+    /// path than w + 3 × its distance): a second pass over the same line.
+    fn covered(&self, q: &BedString, w: f64) -> bool {
+        let p = q.a.lerp(q.b, 0.5);
         let key = (libm::floor(p.x) as i64, libm::floor(p.y) as i64);
         self.cells.get(&key).is_some_and(|v| {
-            v.iter().any(|&(a, b, hb)| {
-                let ab = b - a;
+            v.iter().any(|e| {
+                let ab = e.b - e.a;
                 let l2 = ab.length_squared();
-                let u = if l2 > 0.0 {
-                    ((p - a).dot(ab) / l2).clamp(0.0, 1.0)
+                let foot = if l2 > 0.0 {
+                    (p - e.a).dot(ab) / l2
                 } else {
                     0.0
                 };
-                hb < h && p.distance(a + ab * u) < r
+                let d = p.distance(e.a + ab * foot.clamp(0.0, 1.0));
+                d < w / 2.0
+                    && (e.h < q.h - 1e-9
+                        || (e.h <= q.h + 1e-9
+                            && (0.0..=1.0).contains(&foot)
+                            && (e.path != q.path || q.s - e.s > w + 3.0 * d)))
             })
         })
     }
@@ -106,9 +125,10 @@ impl BedGrid {
 /// lower than `min_h`, with its height.
 ///
 /// A string lies on the bed when its nozzle height h ≤ its width w and no
-/// earlier bed string passes under its middle within w / 2, seen from above
-/// (so a second layer at 0.4 mm, on the first, does not count, nor a helix's
-/// second turn).
+/// earlier bed string at or below h passes under its middle within w / 2,
+/// seen from above (so a second layer at 0.4 mm, on the first, does not
+/// count, nor a helix's second turn, nor a pass over the same line at the
+/// same height: that bed is covered already).
 #[allow(clippy::type_complexity)]
 fn footprint_all(
     paths: &[&Toolpath],
@@ -117,8 +137,10 @@ fn footprint_all(
 ) -> Vec<(Option<Footprint>, Option<(usize, f64)>)> {
     let mut grid = BedGrid::default();
     let mut out = Vec::with_capacity(paths.len());
-    for tp in paths {
+    for (j, tp) in paths.iter().enumerate() {
         let (mut len, mut area) = (0.0, 0.0);
+        // extruded length along the path up to the current string's middle
+        let mut along = 0.0;
         let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
         let mut lowest = f64::INFINITY;
         let mut scrape = None;
@@ -129,15 +151,24 @@ fn footprint_all(
             let (a, b) = tp.ends(k);
             let w = width(s.c, nozzle);
             let l = a.distance(b);
+            let mid = along + l / 2.0;
+            along += l;
             if a.z > w || b.z > w || l <= 0.0 {
                 continue;
             }
             let h = (a.z + b.z) / 2.0;
             let (a2, b2) = (a.truncate(), b.truncate());
-            if grid.under((a2 + b2) * 0.5, h - 1e-9, w / 2.0) {
+            let here = BedString {
+                a: a2,
+                b: b2,
+                h,
+                path: j,
+                s: mid,
+            };
+            if grid.covered(&here, w) {
                 continue;
             }
-            grid.insert(a2, b2, h, w / 2.0);
+            grid.insert(BedString { s: along, ..here }, w / 2.0);
             len += l;
             area += l * band(s.c, h, nozzle);
             lo = lo.min(a2).min(b2);
@@ -268,5 +299,35 @@ mod tests {
         let all = footprint_all(&[&lower, &beside], 0.4, 0.08);
         let f = all[1].0.as_ref().unwrap();
         assert!((f.contact_area_mm2 - f.contact_length_mm * 0.437).abs() < 0.01);
+    }
+
+    /// `ring` walked `turns` times at the same height, as one path.
+    fn ring_turns(r: f64, z: f64, n: usize, turns: usize) -> Toolpath {
+        let one = ring(r, z, n, 0.15);
+        let mut tp = one.clone();
+        for _ in 1..turns {
+            tp.points.extend_from_slice(&one.points[1..]);
+            tp.strings.extend_from_slice(&one.strings);
+        }
+        tp
+    }
+
+    #[test]
+    fn passes_over_the_same_line_cover_the_bed_once() {
+        // 100 turns of 0.01 mm strings at 0.2 mm cover what one turn covers:
+        // the bed under a line is covered once, however often it is drawn
+        let once = footprint_all(&[&ring_turns(1.6, 0.2, 1000, 1)], 0.4, 0.08).remove(0);
+        let many = footprint_all(&[&ring_turns(1.6, 0.2, 1000, 100)], 0.4, 0.08).remove(0);
+        let (once, many) = (once.0.unwrap(), many.0.unwrap());
+        let perimeter = 1000.0 * 2.0 * 1.6 * libm::sin(std::f64::consts::PI / 1000.0);
+        // every string of the first turn counts, though each lies within w / 2
+        // of the one before it
+        assert!((once.contact_length_mm - perimeter).abs() < 1e-9);
+        assert_eq!(many.contact_length_mm, once.contact_length_mm);
+        assert_eq!(many.contact_area_mm2, once.contact_area_mm2);
+        // a second part drawn over the first at the same height adds nothing
+        let again = ring(1.6, 0.2, 1000, 0.15);
+        let both = footprint_all(&[&ring_turns(1.6, 0.2, 1000, 1), &again], 0.4, 0.08);
+        assert!(both[1].0.is_none());
     }
 }

@@ -313,9 +313,9 @@ fn points_where(
             code,
             severity: Severity::Error,
             message: format!(
-                "{count} point{} of part `{}` {what}; the first, point {i}, is at recipe {} = machine {}",
-                if count == 1 { "" } else { "s" },
+                "part `{}` has {count} point{} {what}; the first, point {i}, is at recipe {} = machine {}",
                 tp.name,
+                if count == 1 { "" } else { "s" },
                 fmt_p(p),
                 fmt_p(recipe.printer.to_machine(p))
             ),
@@ -331,7 +331,7 @@ fn machine_limits(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) {
     points_where(
         tp,
         "non-finite",
-        "are not finite numbers",
+        "that are not finite numbers (NaN or infinite)",
         |p| !p.is_finite(),
         recipe,
         out,
@@ -340,7 +340,7 @@ fn machine_limits(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) {
     points_where(
         tp,
         "out-of-bed",
-        &format!("lie outside the {} bed", bed.describe()),
+        &format!("outside the {} bed", bed.describe()),
         |p| p.is_finite() && !bed.contains_xy(printer.to_machine(p)),
         recipe,
         out,
@@ -348,7 +348,7 @@ fn machine_limits(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) {
     points_where(
         tp,
         "below-bed",
-        "lie below the bed (z < 0)",
+        "below the bed (z < 0)",
         |p| printer.to_machine(p).z < 0.0,
         recipe,
         out,
@@ -357,7 +357,7 @@ fn machine_limits(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) {
     points_where(
         tp,
         "above-max-z",
-        &format!("lie above the highest reachable z of {max_z} mm"),
+        &format!("above the highest reachable z of {max_z} mm"),
         |p| printer.to_machine(p).z > max_z,
         recipe,
         out,
