@@ -358,8 +358,15 @@ fn describe_parse_error(src: &str, e: &meval::ParseError) -> String {
     match e {
         meval::ParseError::UnexpectedToken(at) => {
             let rest: String = src.get(*at..).unwrap_or("").chars().take(12).collect();
+            // comparisons are not operators here: name the functions that do their work
+            let hint = if rest.starts_with(['<', '>', '=', '!', '&', '|']) {
+                "; comparisons are functions here: `x >= a` is step(a, x) (1 or 0), `x < a` is \
+                 1 - step(a, x), and min and max combine them as `and` and `or`"
+            } else {
+                ""
+            };
             format!(
-                "cannot read the expression `{src}`: unexpected `{rest}` at character {}",
+                "cannot read the expression `{src}`: unexpected `{rest}` at character {}{hint}",
                 at + 1
             )
         }
@@ -683,6 +690,17 @@ mod tests {
         v[var::R] = 1.0;
         assert_eq!(e.eval(&v), 26.0);
         assert!(e.uses(var::Z) && e.uses(var::R) && !e.uses(var::X));
+    }
+
+    #[test]
+    fn comparisons_are_refused_with_the_functions_that_replace_them() {
+        let all: Vec<usize> = (0..var::COUNT).collect();
+        for src in ["x > 4", "x*x + y*y >= 4", "x == 1", "x < 1 && y < 1"] {
+            let e = Expr::compile(src, &Params::new(), &all).unwrap_err();
+            assert!(e.contains("step(a, x)"), "{src}: {e}");
+        }
+        let e = Expr::compile("x 4", &Params::new(), &all).unwrap_err();
+        assert!(!e.contains("step"), "{e}");
     }
 
     #[test]
