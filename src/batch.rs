@@ -18,6 +18,9 @@ pub struct Job {
     pub sets: Vec<(String, String)>,
     /// This variant's sweep values, in `--sweep` order.
     pub sweep: Vec<(String, String)>,
+    /// The printer it is built for in place of the recipe's (a lock entry's);
+    /// `--printer` overrides it.
+    pub printer: Option<String>,
 }
 
 /// A number as short as it can be written: `3`, `1.5`, `0.1`.
@@ -104,6 +107,7 @@ pub fn expand(
                 recipe: r.clone(),
                 sets: sets.iter().chain(sweep).cloned().collect(),
                 sweep: sweep.clone(),
+                printer: None,
             })
         })
         .collect()

@@ -94,7 +94,7 @@ impl Common {
     fn checked_plan(&self, job: &Job) -> Result<Plan> {
         let opts = Options {
             sets: job.sets.clone(),
-            printer: self.printer.clone(),
+            printer: self.printer.clone().or_else(|| job.printer.clone()),
             allow: self.allow.clone(),
         };
         let p = plan(&job.recipe, &opts)?;
@@ -530,7 +530,8 @@ pub fn hash(a: &HashArgs) -> Vec<Error> {
                 }
                 println!("{line}");
                 if let Some(lockfile) = &a.lock {
-                    entries.push(lock_entry(lockfile, job, digest, &lines));
+                    let printer = c.printer.as_deref();
+                    entries.push(lock_entry(lockfile, job, printer, digest, &lines));
                 }
             }
             Err(e) => errors.push(e),
@@ -563,27 +564,49 @@ pub fn hash(a: &HashArgs) -> Vec<Error> {
     errors
 }
 
-/// The path of `recipe` relative to the lock file's folder, `/`-separated.
-fn relative_to_lock(lockfile: &Path, recipe: &Path) -> String {
+/// The path of `file` relative to the lock file's folder, `/`-separated
+/// (with `..` where the file lies outside that folder), so the lock and its
+/// recipes can move together.
+fn relative_to_lock(lockfile: &Path, file: &Path) -> String {
+    use std::path::Component;
     let base = lockfile
         .parent()
         .filter(|p| !p.as_os_str().is_empty())
         .unwrap_or(Path::new("."));
-    let rel = match (base.canonicalize(), recipe.canonicalize()) {
-        (Ok(b), Ok(r)) => r.strip_prefix(&b).map(Path::to_path_buf).unwrap_or(r),
-        _ => recipe.to_path_buf(),
+    let words = |p: &Path| -> Vec<String> {
+        p.components()
+            .filter(|c| !matches!(c, Component::RootDir | Component::CurDir))
+            .map(|c| c.as_os_str().to_string_lossy().into_owned())
+            .collect()
     };
-    rel.components()
-        .map(|c| c.as_os_str().to_string_lossy())
-        .collect::<Vec<_>>()
-        .join("/")
+    let (b, f) = match (base.canonicalize(), file.canonicalize()) {
+        (Ok(b), Ok(f)) => (words(&b), words(&f)),
+        _ => return words(file).join("/"),
+    };
+    let common = b.iter().zip(&f).take_while(|(x, y)| x == y).count();
+    let mut rel = vec!["..".to_string(); b.len() - common];
+    rel.extend(f[common..].iter().cloned());
+    rel.join("/")
 }
 
-fn lock_entry(lockfile: &Path, job: &Job, digest: String, lines: &LineHashes) -> Entry {
+fn lock_entry(
+    lockfile: &Path,
+    job: &Job,
+    printer: Option<&str>,
+    digest: String,
+    lines: &LineHashes,
+) -> Entry {
     let b = LineHashes::block_lines(lines.count());
     Entry {
         recipe: relative_to_lock(lockfile, &job.recipe),
         set: job.sets.iter().map(|(n, v)| format!("{n}={v}")).collect(),
+        printer: printer.map(|p| {
+            if crate::printer::Printer::built_in(p).is_some() {
+                p.to_string()
+            } else {
+                relative_to_lock(lockfile, Path::new(p))
+            }
+        }),
         sha256: digest,
         lines: lines.count(),
         block_lines: b,
@@ -609,6 +632,13 @@ fn check_lock(a: &HashArgs, lockfile: &Path) -> Vec<Error> {
                 recipe: base.join(&e.recipe),
                 sets,
                 sweep: Vec::new(),
+                printer: e.printer.as_ref().map(|p| {
+                    if crate::printer::Printer::built_in(p).is_some() {
+                        p.clone()
+                    } else {
+                        base.join(p).to_string_lossy().into_owned()
+                    }
+                }),
             }),
             Err(err) => return vec![err.under(&format!("entries[{k}].set")).in_file(&shown)],
         }
@@ -617,11 +647,13 @@ fn check_lock(a: &HashArgs, lockfile: &Path) -> Vec<Error> {
     let results = batch::run_parallel(jobs.len(), c.threads(), |k| fingerprint(c, &jobs[k]), || {});
     let mut errors = Vec::new();
     for ((entry, job), r) in lock.entries.iter().zip(&jobs).zip(results) {
-        let label = if entry.set.is_empty() {
-            entry.recipe.clone()
-        } else {
-            format!("{} [{}]", entry.recipe, entry.set.join(" "))
-        };
+        let mut label = entry.recipe.clone();
+        if !entry.set.is_empty() {
+            label.push_str(&format!(" [{}]", entry.set.join(" ")));
+        }
+        if let Some(p) = &entry.printer {
+            label.push_str(&format!(" (printer {p})"));
+        }
         match r {
             Ok((digest, _)) if digest == entry.sha256 => println!("ok       {label}"),
             Ok((digest, lines)) => {

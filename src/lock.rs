@@ -1,7 +1,8 @@
 //! Lock files: recipes pinned to the hash of their G-code, for CI.
 //!
 //! `p3dp hash --lock p3dp.lock RECIPE…` records each recipe (path relative to
-//! the lock file), its `--set` values and the SHA-256 of its G-code, with a
+//! the lock file), its `--set` values, the `--printer` it was built for, and
+//! the SHA-256 of its G-code, with a
 //! fingerprint of the G-code's lines: the hashes of at most 512 consecutive
 //! blocks of lines (one line per block when the output is that short).
 //! `p3dp hash --check p3dp.lock` rebuilds every entry and, for each that
@@ -30,6 +31,10 @@ pub struct Entry {
     /// `--set` values, `NAME=VALUE`, in order.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub set: Vec<String>,
+    /// The `--printer` it was built for: a built-in name, or a profile file
+    /// relative to the lock file, `/`-separated; the recipe's own when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub printer: Option<String>,
     /// SHA-256 of the G-code.
     pub sha256: String,
     /// Lines of G-code.

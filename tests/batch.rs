@@ -184,6 +184,58 @@ fn lock_keeps_set_values_and_points_at_the_exact_line_of_short_outputs() {
 }
 
 #[test]
+fn lock_keeps_the_printer_and_paths_outside_its_folder() {
+    let dir = tmp("lock-printer");
+    std::fs::create_dir_all(dir.join("ci")).unwrap();
+    let text = "p3dp: 1\nname: ring\nparts:\n  - primitive: {circle: {radius: 10, center: [0, 0, 0.2], segments: 36}}\n";
+    std::fs::write(dir.join("ring.yaml"), text).unwrap();
+    std::fs::write(
+        dir.join("mine.yaml"),
+        "inherits: prusa-mk4\nname: mine\nnozzle_diameter: 0.6\n",
+    )
+    .unwrap();
+    for (printer, want) in [
+        ("voron-350", "printer: voron-350"),
+        ("mine.yaml", "printer: ../mine.yaml"),
+    ] {
+        let args = [
+            "hash",
+            "--lock",
+            "ci/l.lock",
+            "ring.yaml",
+            "--printer",
+            printer,
+        ];
+        ok(&p3dp(&dir, &args));
+        let lock = std::fs::read_to_string(dir.join("ci/l.lock")).unwrap();
+        assert!(lock.contains("recipe: ../ring.yaml"), "{lock}");
+        assert!(lock.contains(want), "{lock}");
+        // the hash is that of the build for that printer, not the recipe's own
+        let own = p3dp(&dir, &["hash", "ring.yaml"]);
+        let own = String::from_utf8_lossy(&own.stdout)
+            .split_whitespace()
+            .next()
+            .unwrap()
+            .to_string();
+        assert!(
+            !lock.contains(&own),
+            "{printer}: the lock has the recipe's own printer's hash"
+        );
+        // checked from anywhere, the entry is rebuilt for the same printer
+        let check = p3dp(&dir.join("ci"), &["hash", "--check", "l.lock"]);
+        ok(&check);
+        let stdout = String::from_utf8_lossy(&check.stdout);
+        assert!(
+            stdout.contains(&format!(
+                "ok       ../ring.yaml (printer {})",
+                want.trim_start_matches("printer: ")
+            )),
+            "{stdout}"
+        );
+    }
+}
+
+#[test]
 fn the_projects_recipes_match_the_committed_lock() {
     let out = p3dp(&root(), &["hash", "--check", "p3dp.lock"]);
     assert!(
