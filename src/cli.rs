@@ -375,14 +375,13 @@ pub fn build(a: &BuildArgs) -> Vec<Error> {
 
 fn summary_line(job: &Job, s: &Stats, out: &str) -> String {
     format!(
-        "{} → {out}: {} strings, {:.0} mm / {:.2} g, {}, {} warning{}, sha256 {}\n",
+        "{} → {out}: {} strings, {:.0} mm / {:.2} g, {}, {}, sha256 {}\n",
         job_label(job),
         s.strings,
         s.filament_length_mm,
         s.filament_mass_g,
         hms(s.print_time_s),
-        s.warnings.len(),
-        plural(s.warnings.len()),
+        crate::check::summary(&s.warnings),
         &s.gcode_sha256[..12]
     )
 }
@@ -424,7 +423,12 @@ fn write_summary(path: &Path, jobs: &[Job], results: &[Built]) -> Result<()> {
                 format!("{:.3}", s.filament_length_mm),
                 format!("{:.3}", s.filament_mass_g),
                 format!("{:.1}", s.print_time_s),
-                s.warnings.len().to_string(),
+                // warnings and (forced) errors; notes are not counted
+                s.warnings
+                    .iter()
+                    .filter(|f| f.severity >= crate::check::Severity::Warning)
+                    .count()
+                    .to_string(),
                 s.gcode_sha256.clone(),
                 String::new(),
             ]),

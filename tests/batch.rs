@@ -184,6 +184,40 @@ fn lock_keeps_set_values_and_points_at_the_exact_line_of_short_outputs() {
 }
 
 #[test]
+fn batch_lines_count_findings_by_severity() {
+    // the pine tree's branch loops bridge short gaps: notes, not warnings
+    let dir = tmp("batch-severity");
+    let (pine, cup) = (recipe("pine-tree.yaml"), recipe("cup.yaml"));
+    let out = p3dp(
+        &dir,
+        &[
+            "build",
+            pine.to_str().unwrap(),
+            cup.to_str().unwrap(),
+            "-o",
+            "out/",
+        ],
+    );
+    ok(&out);
+    let report = String::from_utf8_lossy(&out.stdout);
+    let line = |name: &str| {
+        report
+            .lines()
+            .find(|l| l.contains(name))
+            .unwrap()
+            .to_string()
+    };
+    assert!(
+        line("pine-tree.yaml").contains(", 0 warnings, 0 errors, 1 note, sha256"),
+        "{report}"
+    );
+    assert!(
+        line("cup.yaml").contains(", 0 warnings, 0 errors, sha256"),
+        "{report}"
+    );
+}
+
+#[test]
 fn lock_keeps_the_printer_and_paths_outside_its_folder() {
     let dir = tmp("lock-printer");
     std::fs::create_dir_all(dir.join("ci")).unwrap();
