@@ -21,4 +21,8 @@ bowl                speed           iso
 lamp-shade-textured cross-section   iso
 twisted-heart-vase  speed           iso
 olympic-rings       order           top
+koch-tower          speed           iso
+pine-tree           speed           iso
+cardioid            order           top
+nonplanar-vase      order           iso
 LIST

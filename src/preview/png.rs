@@ -15,6 +15,7 @@ use tiny_skia::{LineCap, Paint, PathBuilder, Pixmap, Rect, Stroke, Transform};
 use super::{
     colormap, fmt_value, round_diameter, text, Basis, ColorMode, Grid, Options, Scene, Size,
 };
+use crate::check::Severity;
 use crate::gcode::hms;
 use crate::stats::Stats;
 
@@ -511,12 +512,15 @@ fn header(pm: &mut Pixmap, st: &Stats, scene: &Scene, ts: u32) {
         ),
         (format!("time {}", hms(st.print_time_s)), TEXT),
     ];
-    let n = scene.plan.findings.len();
-    if n > 0 {
-        lines.push((
-            format!("{n} finding{}", if n == 1 { "" } else { "s" }),
-            [255, 110, 100],
-        ));
+    // the checks' summary, red with errors, amber with warnings, plain with notes
+    let findings = &scene.plan.findings;
+    if let Some(worst) = findings.iter().map(|f| f.severity).max() {
+        let rgb = match worst {
+            Severity::Error => [255, 110, 100],
+            Severity::Warning => [255, 190, 90],
+            Severity::Info => TEXT,
+        };
+        lines.push((crate::check::summary(findings), rgb));
     }
     let y0 = m + 8.0 * (ts + 1) as f64 + 6.0 * s;
     for (k, (l, rgb)) in lines.iter().enumerate() {
