@@ -219,10 +219,10 @@ pub fn events(recipe: &Recipe, tp: &Toolpath) -> Vec<Finding> {
             code,
             severity: Severity::Error,
             message: format!(
-                "{} {what} command{} of part `{}` ask for more than {limit} °C; the first, before string {k} at {}, for {t} °C",
+                "part `{}` has {} {what} command{} asking for more than {limit} °C; the first, before string {k} at {}, for {t} °C",
+                tp.name,
                 hot.len(),
                 if hot.len() == 1 { "" } else { "s" },
-                tp.name,
                 fmt_p(at)
             ),
             part: Some(tp.name.clone()),
@@ -389,8 +389,9 @@ fn strings(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) {
             code: "speed",
             severity: Severity::Error,
             message: format!(
-                "{n} strings of part `{}` run faster than printer {}'s {} mm/s; the first, string {k} at {}, at {:.1} mm/s",
+                "part `{}` has {n} string{} faster than printer {}'s {} mm/s; the first, string {k} at {}, at {:.1} mm/s",
                 tp.name,
+                if n == 1 { "" } else { "s" },
                 p.name,
                 p.max_speed,
                 fmt_p(m),
@@ -417,8 +418,9 @@ fn strings(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) {
             code: "flow",
             severity,
             message: format!(
-                "{n} strings of part `{}` need more than the hot end's {} mm³/s (up to {worst:.1} mm³/s{beyond}); the first is string {k} at {}",
+                "part `{}` has {n} string{} needing more than the hot end's {} mm³/s (up to {worst:.1} mm³/s{beyond}); the first is string {k} at {}",
                 tp.name,
+                if n == 1 { "" } else { "s" },
                 p.max_flow,
                 fmt_p(m)
             ),
