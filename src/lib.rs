@@ -5,6 +5,8 @@
 //! [`primitive`]) → [`step`]s → [`check`]s → [`gcode`] and [`stats`];
 //! [`build`] runs the pipeline and [`cli`] the commands.
 
+#![warn(missing_docs)]
+
 pub mod arc;
 pub mod batch;
 pub mod build;
