@@ -34,6 +34,8 @@ pub struct Plan {
     pub paths: Vec<Toolpath>,
     /// What the checks found.
     pub findings: Vec<Finding>,
+    /// Each part's hold on the bed, as the first-layer check measured it.
+    pub footprints: Vec<check::first_layer::Footprint>,
 }
 
 /// Makes a part's strings: its primitive, then each step in order.
@@ -82,7 +84,7 @@ pub fn plan(path: &Path, opts: &Options) -> Result<Plan> {
     }
     paths.extend(parts);
     let refs: Vec<&Toolpath> = paths.iter().collect();
-    let mut findings = check::run(&recipe, &refs);
+    let (mut findings, footprints) = check::run(&recipe, &refs);
     check::apply_allow(&mut findings, &recipe.allow);
     check::apply_allow(&mut findings, &opts.allow);
     Ok(Plan {
@@ -90,6 +92,7 @@ pub fn plan(path: &Path, opts: &Options) -> Result<Plan> {
         recipe,
         paths,
         findings,
+        footprints,
     })
 }
 
@@ -152,8 +155,7 @@ impl Plan {
             bytes,
             self.findings.clone(),
         );
-        let refs: Vec<&Toolpath> = self.paths.iter().collect();
-        stats.first_layer = check::first_layer::footprints(&self.recipe, &refs);
+        stats.first_layer = self.footprints.clone();
         Ok(stats)
     }
 }

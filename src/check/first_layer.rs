@@ -192,25 +192,18 @@ fn footprint_all(
     out
 }
 
-/// The footprints of the paths that touch the bed, in print order.
-pub fn footprints(recipe: &Recipe, paths: &[&Toolpath]) -> Vec<Footprint> {
+/// The `first-layer` findings (a warning per part where the nozzle runs too
+/// close to the bed) into `out`; returns the footprints of the paths that
+/// touch the bed, in print order, for the stats.
+pub fn check(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) -> Vec<Footprint> {
     let p = &recipe.printer;
     let min_h = p.checks.first_layer_min * p.nozzle_diameter;
-    footprint_all(paths, p.nozzle_diameter, min_h)
-        .into_iter()
-        .filter_map(|(f, _)| f)
-        .collect()
-}
-
-/// The `first-layer` findings: a warning per part where the nozzle runs too
-/// close to the bed.
-pub fn check(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) {
-    let p = &recipe.printer;
-    let min_h = p.checks.first_layer_min * p.nozzle_diameter;
-    for (tp, (_, scrape)) in paths
+    let mut footprints = Vec::new();
+    for (tp, (f, scrape)) in paths
         .iter()
         .zip(footprint_all(paths, p.nozzle_diameter, min_h))
     {
+        footprints.extend(f);
         if let Some((k, h)) = scrape {
             let at = tp.midpoint(k);
             out.push(Finding {
@@ -229,6 +222,7 @@ pub fn check(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) {
             });
         }
     }
+    footprints
 }
 
 #[cfg(test)]

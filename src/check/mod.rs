@@ -164,12 +164,14 @@ pub(crate) fn fmt_p(p: DVec3) -> String {
     format!("({:.3}, {:.3}, {:.3})", p.x, p.y, p.z)
 }
 
-/// Runs every check on the toolpaths of `recipe` (skirt first, then parts).
+/// Runs every check on the toolpaths of `recipe` (skirt first, then parts):
+/// the findings, and each part's footprint on the bed (none when a point is
+/// not finite or out of reach, where the geometric checks do not run).
 ///
 /// The support check, the costliest, runs on a second thread beside the
 /// others; the findings are put together in one fixed order, so they are the
 /// same whether or not a second core is there.
-pub fn run(recipe: &Recipe, paths: &[&Toolpath]) -> Vec<Finding> {
+pub fn run(recipe: &Recipe, paths: &[&Toolpath]) -> (Vec<Finding>, Vec<first_layer::Footprint>) {
     // the geometric checks need finite points within reach (others are errors)
     let sane = |p: &DVec3| p.is_finite() && p.abs().max_element() < 1e5;
     let geometric = paths.iter().all(|tp| tp.points.iter().all(sane));
@@ -191,8 +193,9 @@ pub fn run(recipe: &Recipe, paths: &[&Toolpath]) -> Vec<Finding> {
         }
         starvation::check(recipe, paths, &mut out);
         let mut collisions = Vec::new();
+        let mut footprints = Vec::new();
         if geometric {
-            first_layer::check(recipe, paths, &mut out);
+            footprints = first_layer::check(recipe, paths, &mut out);
             collision::check(recipe, paths, &mut collisions);
         }
         if let Some(h) = support {
@@ -201,7 +204,7 @@ pub fn run(recipe: &Recipe, paths: &[&Toolpath]) -> Vec<Finding> {
         out.extend(collisions);
         // pattern_helix: parameters outside the paper's ranges, modulated strings
         crate::primitive::pattern::findings(recipe, paths, &mut out);
-        out
+        (out, footprints)
     })
 }
 
