@@ -69,54 +69,76 @@ pub fn pause(flavor: Flavor) -> String {
     }
 }
 
-/// Klipper's set-and-wait for heater `heater` (sensor of the same name).
-fn klipper_heat(heater: &str, what: &str, celsius: f64, wait: bool) -> String {
+/// A heater as each dialect names it.
+struct Heater {
+    /// Its name in comments: `nozzle`, `bed`.
+    what: &'static str,
+    /// Marlin's set code: `M104`, `M140` (RepRapFirmware's too).
+    set: &'static str,
+    /// Marlin's set-and-wait code: `M109`, `M190`.
+    wait: &'static str,
+    /// Klipper's heater (and sensor) name.
+    klipper: &'static str,
+    /// RepRapFirmware's `M116` wait for it alone: `P0` (tool 0), `H0` (bed).
+    reprap_wait: &'static str,
+}
+
+const NOZZLE: Heater = Heater {
+    what: "nozzle",
+    set: "M104",
+    wait: "M109",
+    klipper: "extruder",
+    reprap_wait: "P0",
+};
+
+const BED: Heater = Heater {
+    what: "bed",
+    set: "M140",
+    wait: "M190",
+    klipper: "heater_bed",
+    reprap_wait: "H0",
+};
+
+/// Set (and with `wait`, wait for) heater `h` in `flavor`'s dialect; a target
+/// of 0 (off) is never waited for.
+fn heat(flavor: Flavor, h: &Heater, celsius: f64, wait: bool) -> String {
     let t = fmt_num(celsius);
-    let mut s = format!("SET_HEATER_TEMPERATURE HEATER={heater} TARGET={t} ; {what} temperature");
-    if wait && celsius > 0.0 {
-        s.push_str(&format!(
-            "\nTEMPERATURE_WAIT SENSOR={heater} MINIMUM={t} ; wait for the {what}"
-        ));
+    let what = h.what;
+    let waits = wait && celsius > 0.0;
+    match flavor {
+        Flavor::Marlin | Flavor::Prusa => {
+            let m = if wait { h.wait } else { h.set };
+            format!("{m} S{t} ; {what} temperature")
+        }
+        Flavor::Klipper => {
+            let k = h.klipper;
+            let mut s =
+                format!("SET_HEATER_TEMPERATURE HEATER={k} TARGET={t} ; {what} temperature");
+            if waits {
+                s.push_str(&format!(
+                    "\nTEMPERATURE_WAIT SENSOR={k} MINIMUM={t} ; wait for the {what}"
+                ));
+            }
+            s
+        }
+        Flavor::Reprap => {
+            let mut s = format!("{} S{t} ; {what} temperature", h.set);
+            if waits {
+                s.push_str(&format!("\nM116 {} ; wait for the {what}", h.reprap_wait));
+            }
+            s
+        }
     }
-    s
 }
 
 /// Set (and with `wait`, wait for) the nozzle temperature.
 pub fn nozzle_temp(flavor: Flavor, celsius: f64, wait: bool) -> String {
-    let t = fmt_num(celsius);
-    match flavor {
-        Flavor::Marlin | Flavor::Prusa => {
-            let m = if wait { "M109" } else { "M104" };
-            format!("{m} S{t} ; nozzle temperature")
-        }
-        Flavor::Klipper => klipper_heat("extruder", "nozzle", celsius, wait),
-        Flavor::Reprap => {
-            let mut s = format!("M104 S{t} ; nozzle temperature");
-            if wait && celsius > 0.0 {
-                s.push_str("\nM116 P0 ; wait for the nozzle");
-            }
-            s
-        }
-    }
+    heat(flavor, &NOZZLE, celsius, wait)
 }
 
 /// Set (and with `wait`, wait for) the bed temperature.
 pub fn bed_temp(flavor: Flavor, celsius: f64, wait: bool) -> String {
-    let t = fmt_num(celsius);
-    match flavor {
-        Flavor::Marlin | Flavor::Prusa => {
-            let m = if wait { "M190" } else { "M140" };
-            format!("{m} S{t} ; bed temperature")
-        }
-        Flavor::Klipper => klipper_heat("heater_bed", "bed", celsius, wait),
-        Flavor::Reprap => {
-            let mut s = format!("M140 S{t} ; bed temperature");
-            if wait && celsius > 0.0 {
-                s.push_str("\nM116 H0 ; wait for the bed");
-            }
-            s
-        }
-    }
+    heat(flavor, &BED, celsius, wait)
 }
 
 /// Part-cooling fan at `speed` (0 to 1): `M106 S<0..255>` or `M107` for off;
