@@ -30,6 +30,27 @@ impl Tally {
         t.extreme = pick(t.extreme, c);
         t.hard |= hard;
     }
+
+    /// The finding of these strings of `tp`: an error past the hard limit,
+    /// else a warning; `what` says how their cross-sections are off.
+    fn finding(&self, tp: &Toolpath, code: &'static str, what: &str) -> Finding {
+        let m = tp.midpoint(self.first);
+        Finding {
+            code,
+            severity: if self.hard { Severity::Error } else { Severity::Warning },
+            message: format!(
+                "part `{}` has {} string{} with cross-sections {what}; the first is string {} at {}",
+                tp.name,
+                self.n,
+                if self.n == 1 { "" } else { "s" },
+                self.first,
+                fmt_p(m)
+            ),
+            part: Some(tp.name.clone()),
+            string: Some(self.first),
+            at: Some(m.to_array()),
+        }
+    }
 }
 
 /// The `over-extrusion` and `thin-string` findings of one path.
@@ -51,57 +72,31 @@ pub fn cross_sections(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) {
             Tally::count(&mut thin, k, s.c, s.c < hard_lo, f64::min);
         }
     }
-    let plural = |n: usize| if n == 1 { "" } else { "s" };
+    let nozzle = p.nozzle_diameter;
     if let Some(t) = over {
-        let m = tp.midpoint(t.first);
-        out.push(Finding {
-            code: "over-extrusion",
-            severity: if t.hard { Severity::Error } else { Severity::Warning },
-            message: format!(
-                "part `{}` has {} string{} with cross-sections above {hi:.3} mm² ({} × the {} mm nozzle²), up to {:.3} mm²{}; the first is string {} at {}",
-                tp.name,
-                t.n,
-                plural(t.n),
-                lim.cross_section_max,
-                p.nozzle_diameter,
-                t.extreme,
-                if t.hard {
-                    format!(", past the hard limit of {hard_hi:.3} mm²: the nozzle floods and clogs")
-                } else {
-                    String::new()
-                },
-                t.first,
-                fmt_p(m)
-            ),
-            part: Some(tp.name.clone()),
-            string: Some(t.first),
-            at: Some(m.to_array()),
-        });
+        let hard = if t.hard {
+            format!(", past the hard limit of {hard_hi:.3} mm²: the nozzle floods and clogs")
+        } else {
+            String::new()
+        };
+        let factor = lim.cross_section_max;
+        let what = format!(
+            "above {hi:.3} mm² ({factor} × the {nozzle} mm nozzle²), up to {:.3} mm²{hard}",
+            t.extreme
+        );
+        out.push(t.finding(tp, "over-extrusion", &what));
     }
     if let Some(t) = thin {
-        let m = tp.midpoint(t.first);
-        out.push(Finding {
-            code: "thin-string",
-            severity: if t.hard { Severity::Error } else { Severity::Warning },
-            message: format!(
-                "part `{}` has {} string{} with cross-sections below {lo:.4} mm² ({} × the {} mm nozzle²), down to {:.4} mm²{}; the first is string {} at {}",
-                tp.name,
-                t.n,
-                plural(t.n),
-                lim.cross_section_min,
-                p.nozzle_diameter,
-                t.extreme,
-                if t.hard {
-                    format!(", past the hard limit of {hard_lo:.4} mm²: the string breaks")
-                } else {
-                    ": the string may break".to_string()
-                },
-                t.first,
-                fmt_p(m)
-            ),
-            part: Some(tp.name.clone()),
-            string: Some(t.first),
-            at: Some(m.to_array()),
-        });
+        let hard = if t.hard {
+            format!(", past the hard limit of {hard_lo:.4} mm²: the string breaks")
+        } else {
+            ": the string may break".to_string()
+        };
+        let factor = lim.cross_section_min;
+        let what = format!(
+            "below {lo:.4} mm² ({factor} × the {nozzle} mm nozzle²), down to {:.4} mm²{hard}",
+            t.extreme
+        );
+        out.push(t.finding(tp, "thin-string", &what));
     }
 }
