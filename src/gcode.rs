@@ -446,19 +446,27 @@ impl<'a, W: Write> Emitter<'a, W> {
         let (to_m, f) = (self.written_mm(), self.feed_mm_s());
         self.planner
             .move_to(to_m, filament, f, crate::planner::MoveKind::Extrude);
+        let t = if len > 0.0 { len / f } else { filament / f };
+        self.count_extrusion(len, filament, t, &[from, to]);
+        self.head = Some(to);
+        Ok(())
+    }
+
+    /// Counts one extruding move in the stats: `len` mm through `points`,
+    /// carrying `filament` mm in `t` s.
+    fn count_extrusion(&mut self, len: f64, filament: f64, t: f64, points: &[DVec3]) {
         let st = &mut self.stats;
         st.extrude_moves += 1;
         st.extrude_length += len;
         st.filament += filament;
         st.volume += filament * self.area;
-        let t = if len > 0.0 { len / f } else { filament / f };
         if t > 0.0 {
             st.max_flow = st.max_flow.max(filament * self.area / t);
         }
-        st.bbox_min = st.bbox_min.min(from).min(to);
-        st.bbox_max = st.bbox_max.max(from).max(to);
-        self.head = Some(to);
-        Ok(())
+        for p in points {
+            st.bbox_min = st.bbox_min.min(*p);
+            st.bbox_max = st.bbox_max.max(*p);
+        }
     }
 
     /// One `G2`/`G3` move along `arc` (see [`crate::arc`]), replacing strings
@@ -506,19 +514,7 @@ impl<'a, W: Write> Emitter<'a, W> {
             self.planner
                 .move_to(p, e, f, crate::planner::MoveKind::Extrude);
         }
-        let st = &mut self.stats;
-        st.extrude_moves += 1;
-        st.extrude_length += len;
-        st.filament += filament;
-        st.volume += filament * self.area;
-        let t = len / f;
-        if t > 0.0 {
-            st.max_flow = st.max_flow.max(filament * self.area / t);
-        }
-        for p in &tp.points[arc.start..=arc.end] {
-            st.bbox_min = st.bbox_min.min(*p);
-            st.bbox_max = st.bbox_max.max(*p);
-        }
+        self.count_extrusion(len, filament, len / f, &tp.points[arc.start..=arc.end]);
         self.head = Some(to);
         Ok(())
     }
