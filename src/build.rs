@@ -8,6 +8,7 @@ use sha2::{Digest, Sha256};
 use crate::check::{self, Finding};
 use crate::error::{Error, Result};
 use crate::gcode::{Emitter, MoveStats};
+use crate::printer::Printer;
 use crate::recipe::Recipe;
 use crate::stats::{PartStats, Stats};
 use crate::toolpath::Toolpath;
@@ -55,8 +56,8 @@ pub fn plan(path: &Path, opts: &Options) -> Result<Plan> {
     let shown = path.display().to_string();
     // the command line's own mistakes name the option, not the recipe
     check::validate_allow(&opts.allow, |i| format!("--allow {}", opts.allow[i]))?;
-    if let Some(spec) = &opts.printer {
-        crate::printer::Printer::resolve(spec, Path::new(".")).map_err(|e| {
+    let printer = match &opts.printer {
+        Some(spec) => Some(Printer::resolve(spec, Path::new(".")).map_err(|e| {
             if e.file.is_none() && e.place.as_deref() == Some("printer") {
                 Error {
                     place: Some(format!("--printer {spec}")),
@@ -65,9 +66,10 @@ pub fn plan(path: &Path, opts: &Options) -> Result<Plan> {
             } else {
                 e
             }
-        })?;
-    }
-    let recipe = Recipe::load(path, &opts.sets, opts.printer.as_deref())?;
+        })?),
+        None => None,
+    };
+    let recipe = Recipe::load(path, &opts.sets, printer.as_ref())?;
     let mut parts = Vec::with_capacity(recipe.parts.len());
     for k in 0..recipe.parts.len() {
         parts.push(make_part(&recipe, k).map_err(|e| e.in_file(&shown))?);

@@ -678,7 +678,11 @@ pub fn parse_set(s: &str) -> Result<(String, String)> {
 
 impl Recipe {
     /// Reads and resolves a recipe file. `printer` overrides the recipe's printer.
-    pub fn load(path: &Path, sets: &[(String, String)], printer: Option<&str>) -> Result<Recipe> {
+    pub fn load(
+        path: &Path,
+        sets: &[(String, String)],
+        printer: Option<&Printer>,
+    ) -> Result<Recipe> {
         let shown = path.display().to_string();
         let text = std::fs::read_to_string(path)
             .map_err(|e| Error::io(&shown, format!("cannot read the recipe: {e}")))?;
@@ -691,7 +695,7 @@ impl Recipe {
     pub fn resolve(
         raw: &RawRecipe,
         sets: &[(String, String)],
-        printer: Option<&str>,
+        printer: Option<&Printer>,
         dir: &Path,
     ) -> Result<Recipe> {
         if raw.p3dp != 1 {
@@ -713,13 +717,7 @@ impl Recipe {
             turtle: (0.0, DEFAULT_MAX_STRINGS),
         };
         let printer = match printer {
-            Some(p) => Printer::resolve(p, Path::new(".")).map_err(|e| {
-                if e.file.is_none() {
-                    e.under("--printer")
-                } else {
-                    e
-                }
-            })?,
+            Some(p) => p.clone(),
             None => Printer::resolve(raw.printer.as_deref().unwrap_or("generic-220"), dir)?,
         };
         let material = resolve_material(&ctx, raw.material.as_ref())?;
