@@ -40,8 +40,6 @@ pub struct MoveStats {
     pub volume: f64,
     /// Estimated printing time, s: the planner's (see [`crate::planner`]).
     pub time: f64,
-    /// Planned time of each part (and the skirt), s, in print order.
-    pub part_times: Vec<(String, f64)>,
     /// The planner's estimate in full: planned, ideal and nominal times of
     /// the print and of each part.
     pub estimate: crate::planner::Estimate,
@@ -664,11 +662,6 @@ impl<'a, W: Write> Emitter<'a, W> {
         let limits = self.planner.limits().clone();
         let est = self.planner.finish();
         self.stats.time = est.total.planned;
-        self.stats.part_times = est
-            .parts
-            .iter()
-            .map(|p| (p.name.clone(), p.times.planned))
-            .collect();
         let st = &self.stats;
         let grams = st.volume / 1000.0 * recipe.material.density;
         let mut summary = format!(

@@ -268,16 +268,8 @@ impl Printer {
         if let Some(p) = Printer::built_in(spec) {
             return Ok(p);
         }
-        let looks_like_path =
-            spec.contains('/') || spec.ends_with(".yaml") || spec.ends_with(".yml");
-        if !looks_like_path {
-            return Err(Error::input(
-                "printer",
-                format!(
-                    "unknown printer `{spec}`; built-in printers are {} (or give a path to a printer YAML)",
-                    built_in_names().join(", ")
-                ),
-            ));
+        if !names_a_file(spec) {
+            return Err(unknown_printer("printer", spec));
         }
         // relative to the recipe's folder, or to the working one for --printer
         let path = if base == Path::new(".") || base.as_os_str().is_empty() {
@@ -398,6 +390,23 @@ impl Printer {
     }
 }
 
+/// Whether a printer name that is not built in is meant as a file: it has a
+/// `/` or ends in `.yaml` / `.yml` (anything else is a misspelt name).
+fn names_a_file(spec: &str) -> bool {
+    spec.contains('/') || spec.ends_with(".yaml") || spec.ends_with(".yml")
+}
+
+/// The error for `spec` at key `key`: neither a built-in printer nor a file.
+fn unknown_printer(key: &str, spec: &str) -> Error {
+    Error::input(
+        key,
+        format!(
+            "unknown printer `{spec}`; built-in printers are {} (or give a path to a printer YAML)",
+            built_in_names().join(", ")
+        ),
+    )
+}
+
 /// Deepest chain of `inherits` followed.
 const MAX_INHERITS: usize = 16;
 
@@ -427,7 +436,7 @@ fn inherit(
     }
     let base = if let Some((_, text)) = BUILT_IN.iter().find(|(n, _)| *n == spec) {
         serde_yaml::from_str(text).expect("built-in profiles parse")
-    } else if spec.contains('/') || spec.ends_with(".yaml") || spec.ends_with(".yml") {
+    } else if names_a_file(&spec) {
         let rel = spec.trim_start_matches("./");
         let file = match path.parent() {
             Some(dir) if !dir.as_os_str().is_empty() && dir != Path::new(".") => dir.join(rel),
@@ -455,13 +464,7 @@ fn inherit(
         let v: serde_yaml::Value = crate::recipe::parse_yaml(&text, &shown)?;
         inherit(v, &file, seen).map_err(|e| e.in_file(&shown))?
     } else {
-        return Err(Error::input(
-            "inherits",
-            format!(
-                "unknown printer `{spec}`; built-in printers are {} (or give a path to a printer YAML)",
-                built_in_names().join(", ")
-            ),
-        ));
+        return Err(unknown_printer("inherits", &spec));
     };
     Ok(merge_yaml(base, value))
 }
