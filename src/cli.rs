@@ -9,11 +9,12 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use crate::batch::{self, Job};
-use crate::build::{plan, write_atomic, AtomicFile, HashWriter, Options, Plan};
+use crate::build::{plan, Options, Plan};
 use crate::error::{Error, Result};
-use crate::gcode::hms;
+use crate::format::hms;
 use crate::lock::{self, Entry, LineHashes, Lock};
-use crate::primitive::ca::pattern_png;
+use crate::model::pattern_png;
+use crate::output::{write_atomic, AtomicFile, HashWriter};
 use crate::recipe::{parse_set, parse_yaml, RawRecipe};
 use crate::stats::Stats;
 
@@ -319,7 +320,10 @@ pub fn build(a: &BuildArgs) -> Vec<Error> {
             }?;
             if let Some(pv) = &a.preview {
                 make_parent(pv)?;
-                let line = crate::preview::write(&p, pv, &crate::preview::Options::default())?;
+                let line =
+                    crate::preview::write(&p, pv, &crate::preview::Options::default(), &|w| {
+                        p.render(w)
+                    })?;
                 if built.2 {
                     eprintln!("{line}");
                 } else {
@@ -605,7 +609,7 @@ fn lock_entry(
         recipe: relative_to_lock(lockfile, &job.recipe),
         set: job.sets.iter().map(|(n, v)| format!("{n}={v}")).collect(),
         printer: printer.map(|p| {
-            if crate::printer::Printer::built_in(p).is_some() {
+            if crate::machine::Printer::built_in(p).is_some() {
                 p.to_string()
             } else {
                 relative_to_lock(lockfile, Path::new(p))
@@ -637,7 +641,7 @@ fn check_lock(a: &HashArgs, lockfile: &Path) -> Vec<Error> {
                 sets,
                 sweep: Vec::new(),
                 printer: e.printer.as_ref().map(|p| {
-                    if crate::printer::Printer::built_in(p).is_some() {
+                    if crate::machine::Printer::built_in(p).is_some() {
                         p.clone()
                     } else {
                         base.join(p).to_string_lossy().into_owned()
@@ -767,7 +771,10 @@ pub fn preview(a: &PreviewArgs) -> Vec<Error> {
             },
         )?;
         make_parent(&out)?;
-        println!("{}", crate::preview::write(&p, &out, &opts)?);
+        println!(
+            "{}",
+            crate::preview::write(&p, &out, &opts, &|w| p.render(w))?
+        );
         Ok(())
     };
     match run() {
@@ -779,8 +786,9 @@ pub fn preview(a: &PreviewArgs) -> Vec<Error> {
 /// `p3dp printers`: one line per built-in profile (name, flavour, bed,
 /// origin of recipe (0, 0, 0), nozzle and filament), under a header line.
 pub fn printers() -> String {
-    use crate::gcode::fmt_num;
-    use crate::printer::{built_in_names, Printer};
+    use crate::format::fmt_num;
+    use crate::machine::Printer;
+    use crate::recipe::profile::built_in_names;
     let mut out = format!(
         "{:<13} {:<8} {:<26} {:<14} {:<7} {}\n",
         "NAME", "FLAVOUR", "BED", "ORIGIN", "NOZZLE", "FILAMENT"

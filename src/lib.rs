@@ -1,30 +1,49 @@
 //! p3dp: procedural 3D printing. A YAML recipe describes the path of the
 //! nozzle itself (Kanada's draw3dp); p3dp turns it into G-code and stats.
 //!
-//! Data flows one way: [`recipe`] → parts of strings ([`toolpath`], made by
-//! [`primitive`]) → [`step`]s → [`check`]s → [`gcode`] and [`stats`];
-//! [`build`] runs the pipeline and [`cli`] the commands.
+//! Data flows one way, in layers that never import from a layer above
+//! (`docs/ARCHITECTURE.md`; `tests/layers.rs` checks it):
+//!
+//! 1. plain types and utilities: [`error`], [`toolpath`], [`expr`], [`num`],
+//!    [`finding`], [`format`], [`rng`], [`geom`];
+//! 2. the machine model: [`machine`];
+//! 3. generation: [`primitive`], [`step`], [`skirt`], [`model`];
+//! 4. analysis and output: [`planner`], [`gcode`], [`check`], [`stats`];
+//! 5. the YAML edge: [`recipe`];
+//! 6. orchestration: [`output`], [`plan`], [`preview`], [`build`],
+//!    [`batch`], [`lock`], [`cli`].
 
 #![warn(missing_docs)]
 
-pub mod arc;
-pub mod batch;
-pub mod build;
-pub mod check;
-pub mod cli;
 pub mod error;
 pub mod expr;
-pub mod flavor;
-pub mod gcode;
-pub mod lock;
-pub mod planner;
-pub mod preview;
-pub mod primitive;
-pub mod printer;
-pub mod recipe;
-pub mod skirt;
-pub mod stats;
-pub mod step;
+pub mod finding;
+pub mod format;
+pub mod geom;
+pub mod num;
+pub mod rng;
 pub mod toolpath;
+
+pub mod machine;
+
+pub mod model;
+pub mod primitive;
+pub mod skirt;
+pub mod step;
+
+pub mod check;
+pub mod gcode;
+pub mod planner;
+pub mod stats;
+
+pub mod recipe;
+
+pub mod batch;
+pub mod build;
+pub mod cli;
+pub mod lock;
+pub mod output;
+pub mod plan;
+pub mod preview;
 
 pub use error::{Error, Result};

@@ -3,7 +3,11 @@
 use serde::Serialize;
 
 use crate::check::Finding;
-use crate::gcode::{hms, MoveStats};
+use crate::format::hms;
+use crate::gcode::MoveStats;
+use crate::model::Recipe;
+use crate::primitive::solid::{LayerStats, SolidStats};
+use crate::primitive::Primitive;
 
 /// Corners of the bounding box of the extruding moves, recipe coordinates.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -143,7 +147,7 @@ impl Stats {
             max_flow_mm3_s: m.max_flow,
             parts,
             warnings: findings,
-            solids: crate::primitive::solid::stats(recipe),
+            solids: solid_stats(recipe),
             first_layer: Vec::new(),
         }
     }
@@ -222,4 +226,26 @@ impl Stats {
         }
         s
     }
+}
+
+/// The z-buffers of a recipe's solid parts (before any steps).
+pub fn solid_stats(recipe: &Recipe) -> Vec<SolidStats> {
+    recipe
+        .parts
+        .iter()
+        .filter_map(|p| match &p.primitive {
+            Primitive::Solid(s) => Some(SolidStats {
+                part: p.name.clone(),
+                layers: s
+                    .layers()
+                    .map(|l| LayerStats {
+                        z: l.z,
+                        loops: l.slab.map_or(0, |s| s.region.loops.len()),
+                        area_mm2: l.slab.map_or(0.0, |s| s.region.area()),
+                    })
+                    .collect(),
+            }),
+            _ => None,
+        })
+        .collect()
 }

@@ -6,8 +6,8 @@ mod common;
 
 use common::*;
 use glam::DVec3;
+use p3dp::machine::Printer;
 use p3dp::planner::{MoveKind, Planner};
-use p3dp::printer::Printer;
 
 fn build(recipe_name: &str, printer: Option<&str>) -> (String, p3dp::stats::Stats) {
     let opts = p3dp::build::Options {
@@ -72,7 +72,7 @@ fn globe_estimate_is_the_written_moves_planned() {
         1e-12,
     );
     // the summary comments carry the estimate, per part too
-    let hms = p3dp::gcode::hms;
+    let hms = p3dp::format::hms;
     assert!(gcode.contains(&format!(
         "; estimated printing time = {}\n",
         hms(s.print_time_s)
@@ -108,7 +108,8 @@ fn estimate_is_deterministic() {
 #[test]
 fn klipper_profile_uses_square_corner_velocity() {
     let dir = tmp("planner-klipper");
-    let text = std::fs::read_to_string(root().join("src/printers/generic-220.yaml")).unwrap();
+    let text =
+        std::fs::read_to_string(root().join("src/machine/printers/generic-220.yaml")).unwrap();
     let start = text.find("kinematics:").unwrap();
     let end = start + text[start..].find("start_gcode:").unwrap();
     let klipper = format!(

@@ -10,7 +10,7 @@
 //! highest of their squares, so a look round the head skips low tiles whole. The head's path is walked as the G-code
 //! moves it — strings, travel strings inside parts, and the travel between
 //! parts that [`crate::gcode::Emitter::travel_to`] makes (up to the safe
-//! height [`safe_travel_z`], across, down) — sampled every square; at each
+//! height [`crate::gcode::travel::safe_travel_z`], across, down) — sampled every square; at each
 //! sample, filament higher above the tip than the support tolerance (1.5 ×
 //! the nozzle: the layer a string rests on, pressed by the flat tip on a slope,
 //! is contact, not collision)
@@ -35,7 +35,7 @@
 use glam::{DVec2, DVec3};
 
 use super::{fmt_p, Finding, Severity};
-use crate::printer::Printer;
+
 use crate::recipe::Recipe;
 use crate::toolpath::Toolpath;
 
@@ -47,19 +47,6 @@ const TILE: usize = 16;
 const MAX_CELLS: f64 = 2.0e6;
 /// Path the nozzle travels before the filament it laid is mapped, mm.
 pub const LAG: f64 = 2.0;
-
-/// The height travel between parts rises to (recipe z): above the highest
-/// filament printed so far by the head's clearance, within the printer's
-/// reach, and at least the heights of both ends. A move with no sideways
-/// part is a plain vertical move (`None`).
-pub fn safe_travel_z(printer: &Printer, from: DVec3, to: DVec3, printed_top: f64) -> Option<f64> {
-    if from.x == to.x && from.y == to.y {
-        return None;
-    }
-    let reach = printer.bed.max_z() - printer.origin[2];
-    let want = (printed_top + printer.head.clearance).min(reach);
-    Some(want.max(from.z).max(to.z))
-}
 
 /// Highest filament centre line over each square of the print.
 pub struct HeightMap {
@@ -371,7 +358,7 @@ pub fn check(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) {
         // the travel to the part, as the G-code makes it
         let start = tp.points[0];
         if let Some(h) = head {
-            match safe_travel_z(printer, h, start, printed_top) {
+            match crate::gcode::travel::safe_travel_z(printer, h, start, printed_top) {
                 Some(z) => {
                     let up = DVec3::new(h.x, h.y, z);
                     let over = DVec3::new(start.x, start.y, z);
@@ -548,17 +535,5 @@ mod tests {
         assert!(cone(DVec3::new(2.0, 1.3, 9.5)).is_none());
         // above the wall: nothing
         assert!(cone(DVec3::new(2.0, 0.0, 10.5)).is_none());
-    }
-
-    #[test]
-    fn travel_between_parts_rises_over_the_print() {
-        let p = Printer::built_in("generic-220").unwrap();
-        let a = DVec3::new(0.0, 0.0, 0.2);
-        let b = DVec3::new(30.0, 0.0, 0.2);
-        assert_eq!(safe_travel_z(&p, a, b, 12.0), Some(13.0));
-        assert_eq!(safe_travel_z(&p, a, b.with_z(20.0), 12.0), Some(20.0));
-        assert_eq!(safe_travel_z(&p, a, a.with_z(5.0), 12.0), None);
-        // never above the printer's reach (max_z 250, origin z 0)
-        assert_eq!(safe_travel_z(&p, a, b, 400.0), Some(250.0));
     }
 }

@@ -28,8 +28,8 @@
 
 use glam::DVec3;
 
-use super::grid::{closest, SegGrid};
 use super::{fmt_p, Finding, Severity};
+use crate::geom::grid::{closest, SegGrid};
 use crate::recipe::Recipe;
 use crate::toolpath::Toolpath;
 

@@ -22,7 +22,7 @@ use serde_json::json;
 
 use super::{Grid, Options, Scene};
 use crate::build::Plan;
-use crate::gcode::hms;
+use crate::format::hms;
 use crate::stats::Stats;
 
 /// The viewer page; `__P3DP_TITLE__` and `__P3DP_DATA__` are filled in.

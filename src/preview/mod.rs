@@ -32,8 +32,10 @@ use std::path::Path;
 
 use glam::DVec3;
 
-use crate::build::{write_atomic, Plan};
 use crate::error::{Error, Result};
+pub use crate::machine::Size;
+use crate::output::write_atomic;
+use crate::plan::Plan;
 use crate::stats::Stats;
 
 /// Where the still views look from.
@@ -201,57 +203,6 @@ impl ColorMode {
             ColorMode::Order => "min",
             ColorMode::Findings | ColorMode::Plain => "",
         }
-    }
-
-    /// Whether colours follow a number (and the legend is a scale).
-    pub fn is_scalar(self) -> bool {
-        !matches!(self, ColorMode::Findings | ColorMode::Plain)
-    }
-}
-
-/// An image size in pixels.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Size {
-    /// Width, px.
-    pub width: u32,
-    /// Height, px.
-    pub height: u32,
-}
-
-impl Default for Size {
-    fn default() -> Size {
-        Size {
-            width: 1200,
-            height: 900,
-        }
-    }
-}
-
-impl Size {
-    /// Largest side accepted, px.
-    pub const MAX: u32 = 8192;
-
-    /// Parses `WxH`, e.g. `1200x900`; `what` names the place for errors.
-    pub fn parse(s: &str, what: &str) -> Result<Size> {
-        let bad = || {
-            Error::input(
-                what,
-                format!(
-                    "`{s}` is not a size; expected WIDTHxHEIGHT in pixels, e.g. 1200x900, each 1 to {}",
-                    Size::MAX
-                ),
-            )
-        };
-        let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
-        let w: u32 = w.trim().parse().map_err(|_| bad())?;
-        let h: u32 = h.trim().parse().map_err(|_| bad())?;
-        if !(1..=Size::MAX).contains(&w) || !(1..=Size::MAX).contains(&h) {
-            return Err(bad());
-        }
-        Ok(Size {
-            width: w,
-            height: h,
-        })
     }
 }
 
@@ -730,27 +681,19 @@ impl Format {
     }
 }
 
-/// The plan's stats, its G-code written to nowhere.
-pub fn stats(plan: &Plan) -> Result<Stats> {
-    plan.render(std::io::sink())
-}
-
-/// Renders the plan's G-code into memory: its bytes and stats.
-pub fn gcode(plan: &Plan) -> Result<(Vec<u8>, Stats)> {
-    let mut buf = Vec::new();
-    let stats = plan.render(&mut buf)?;
-    Ok((buf, stats))
-}
+/// Writes a plan's G-code to a writer and returns its stats (the build's
+/// renderer, passed down so that previews need not know how G-code is made).
+pub type Render<'a> = &'a dyn Fn(&mut dyn std::io::Write) -> Result<Stats>;
 
 /// Writes a preview of `plan` to `out` (PNG or HTML by extension, atomically);
-/// returns a line for the report.
-pub fn write(plan: &Plan, out: &Path, opts: &Options) -> Result<String> {
+/// returns a line for the report. `render` writes the plan's G-code.
+pub fn write(plan: &Plan, out: &Path, opts: &Options, render: Render) -> Result<String> {
     let format = Format::of(out)?;
     let shown = out.display().to_string();
     let io = |e: std::io::Error| Error::io(&shown, format!("cannot write the preview: {e}"));
     match format {
         Format::Png => {
-            let stats = stats(plan)?;
+            let stats = render(&mut std::io::sink())?;
             let scene = Scene::new(plan);
             let r = png::render(&scene, Some(&stats), opts);
             let bytes = png::encode(&r.pixmap, false);
@@ -769,7 +712,8 @@ pub fn write(plan: &Plan, out: &Path, opts: &Options) -> Result<String> {
             ))
         }
         Format::Html => {
-            let (code, stats) = gcode(plan)?;
+            let mut code = Vec::new();
+            let stats = render(&mut code)?;
             let text = String::from_utf8_lossy(&code);
             let page = html::page(plan, &text, &stats, opts);
             write_atomic(out, |f| {

@@ -16,7 +16,7 @@ use super::{
     colormap, fmt_value, round_diameter, text, Basis, ColorMode, Grid, Options, Scene, Size,
 };
 use crate::check::Severity;
-use crate::gcode::hms;
+use crate::format::hms;
 use crate::stats::Stats;
 
 /// Where recipe space lands in the image.

@@ -17,19 +17,12 @@
 use base64::Engine;
 
 use super::{png, Scene, Size};
-use crate::build::Plan;
 use crate::error::Result;
+use crate::machine::size::sizes;
+use crate::plan::Plan;
 
 /// Characters of base64 per comment line (PrusaSlicer's).
 pub const LINE: usize = 78;
-
-/// The sizes a profile's `thumbnails` list asks for; errors name `thumbnails[k]`.
-pub fn sizes(list: &[String]) -> Result<Vec<Size>> {
-    list.iter()
-        .enumerate()
-        .map(|(k, s)| Size::parse(s, &format!("thumbnails[{k}]")))
-        .collect()
-}
 
 /// One thumbnail block for a PNG of `size`.
 pub fn block(size: Size, png: &[u8]) -> String {

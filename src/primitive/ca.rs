@@ -54,44 +54,9 @@ use serde::Deserialize;
 
 use super::on_circle;
 use crate::error::{Error, Result};
-use crate::recipe::{Num, Num3, Recipe};
+use crate::num::{Num, Num3, NumFn};
+use crate::rng::SplitMix64;
 use crate::toolpath::Toolpath;
-
-/// SplitMix64: a tiny, portable, seeded generator of 64-bit numbers.
-///
-/// state += 0x9e3779b97f4a7c15, then the output is the state mixed by two
-/// xor-shift-multiply rounds. Seed 1234567 gives 6457827717110365317,
-/// 3203168211198807973, … (the published reference values).
-#[derive(Clone, Debug)]
-pub struct SplitMix64 {
-    state: u64,
-}
-
-impl SplitMix64 {
-    /// A generator starting from `seed`.
-    pub fn new(seed: u64) -> SplitMix64 {
-        SplitMix64 { state: seed }
-    }
-
-    /// The next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.state = self.state.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-
-    /// A uniform number in [0, 1): the top 53 bits times 2^-53, exact.
-    pub fn uniform(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-
-    /// True with probability `p` (always for p ≥ 1, never for p ≤ 0).
-    pub fn chance(&mut self, p: f64) -> bool {
-        self.uniform() < p
-    }
-}
 
 /// Which of the paper's rules decides a cell.
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
@@ -405,32 +370,6 @@ impl CaHelix {
     }
 }
 
-/// The PNG of `--pattern`: the cell array of the recipe's one `ca_helix` part.
-pub fn pattern_png(recipe: &Recipe) -> Result<Vec<u8>> {
-    let models: Vec<&CaHelix> = recipe
-        .parts
-        .iter()
-        .filter_map(|p| match &p.primitive {
-            super::Primitive::CaHelix(h) => Some(h),
-            _ => None,
-        })
-        .collect();
-    match models.as_slice() {
-        [h] => h
-            .model
-            .run()
-            .to_png()
-            .map_err(|m| Error::input("--pattern", m)),
-        _ => Err(Error::input(
-            "--pattern",
-            format!(
-                "the recipe has {} `ca_helix` parts; --pattern writes the cell array of exactly one",
-                models.len()
-            ),
-        )),
-    }
-}
-
 /// `ca_helix:` as written in a recipe. Required: `radius`, `layers` (turns,
 /// the first included), `layer_height`; optional (default): `cells` (288),
 /// `rule` (`basic`), `p0` (0.99), `p1` (1), `consume` (0.5, split_merge only),
@@ -465,9 +404,6 @@ pub struct RawCaHelix {
     #[serde(default)]
     pub center: Option<Num3>,
 }
-
-/// Evaluates a recipe number at a key path (the recipe's own evaluator).
-pub type NumFn<'a> = &'a dyn Fn(&Num, &str) -> Result<f64>;
 
 /// Range-checked numbers for the pattern primitives, errors naming `key.name`.
 pub(super) struct Values<'a> {
@@ -639,28 +575,6 @@ mod tests {
             initial: Initial::Ones,
             seed: 7,
         }
-    }
-
-    #[test]
-    fn splitmix64_matches_the_reference_values() {
-        let mut r = SplitMix64::new(1234567);
-        let want = [
-            6457827717110365317u64,
-            3203168211198807973,
-            9817491932198370423,
-            4593380528125082431,
-            16408922859458223821,
-        ];
-        for w in want {
-            assert_eq!(r.next_u64(), w);
-        }
-        assert_eq!(SplitMix64::new(0).next_u64(), 0xe220_a839_7b1d_cdaf);
-        let mut r = SplitMix64::new(3);
-        for _ in 0..10_000 {
-            let u = r.uniform();
-            assert!((0.0..1.0).contains(&u));
-        }
-        assert!(!r.chance(0.0) && r.chance(1.0));
     }
 
     #[test]

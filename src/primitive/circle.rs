@@ -4,6 +4,10 @@ use glam::DVec3;
 
 use super::on_circle;
 use crate::toolpath::Toolpath;
+use serde::Deserialize;
+
+use crate::error::Result;
+use crate::num::{Num, Num3, Scope};
 
 /// One closed circle at height `center.z`, starting at angle 0, counter-clockwise.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -33,6 +37,29 @@ impl Circle {
             t.draw(at(k), c, v);
         }
         t
+    }
+}
+
+/// `circle:` as written.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawCircle {
+    pub radius: Num,
+    #[serde(default)]
+    pub center: Option<Num3>,
+    #[serde(default)]
+    pub segments: Option<Num>,
+}
+
+impl RawCircle {
+    /// Evaluates every number; errors name `circle.KEY`.
+    pub fn resolve(&self, s: &Scope) -> Result<Circle> {
+        Ok(Circle {
+            radius: s.positive(&self.radius, "circle.radius")?,
+            center: s.center(&self.center, "circle")?,
+            segments: s.segments(&self.segments, "circle")?,
+        })
     }
 }
 

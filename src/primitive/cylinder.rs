@@ -4,6 +4,10 @@ use glam::DVec3;
 
 use super::spiral::{Direction, Spiral};
 use crate::toolpath::Toolpath;
+use serde::Deserialize;
+
+use crate::error::Result;
+use crate::num::{Num, Num3, Scope};
 
 /// Flat spirals every `vpitch`, `hpitch` apart, alternately outward and
 /// inward, so each layer starts where the last one ended, one `vpitch` up.
@@ -60,6 +64,35 @@ impl Cylinder {
             t.append(&layer, v);
         }
         t
+    }
+}
+
+/// `cylinder:` as written.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawCylinder {
+    pub radius: Num,
+    pub height: Num,
+    pub vpitch: Num,
+    pub hpitch: Num,
+    #[serde(default)]
+    pub center: Option<Num3>,
+    #[serde(default)]
+    pub segments: Option<Num>,
+}
+
+impl RawCylinder {
+    /// Evaluates every number; errors name `cylinder.KEY`.
+    pub fn resolve(&self, s: &Scope) -> Result<Cylinder> {
+        Ok(Cylinder {
+            radius: s.positive(&self.radius, "cylinder.radius")?,
+            height: s.positive(&self.height, "cylinder.height")?,
+            vpitch: s.positive(&self.vpitch, "cylinder.vpitch")?,
+            hpitch: s.positive(&self.hpitch, "cylinder.hpitch")?,
+            center: s.center(&self.center, "cylinder")?,
+            segments: s.segments(&self.segments, "cylinder")?,
+        })
     }
 }
 

@@ -4,6 +4,10 @@ use glam::DVec3;
 
 use super::on_circle;
 use crate::toolpath::Toolpath;
+use serde::Deserialize;
+
+use crate::error::Result;
+use crate::num::{Num, Num3, Scope};
 
 /// A helix rising continuously from `center.z` to `center.z + height`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -44,6 +48,33 @@ impl Helix {
             t.draw(at(k), c, v);
         }
         t
+    }
+}
+
+/// `helix:` as written.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawHelix {
+    pub radius: Num,
+    pub height: Num,
+    pub pitch: Num,
+    #[serde(default)]
+    pub center: Option<Num3>,
+    #[serde(default)]
+    pub segments: Option<Num>,
+}
+
+impl RawHelix {
+    /// Evaluates every number; errors name `helix.KEY`.
+    pub fn resolve(&self, s: &Scope) -> Result<Helix> {
+        Ok(Helix {
+            radius: s.positive(&self.radius, "helix.radius")?,
+            height: s.positive(&self.height, "helix.height")?,
+            pitch: s.positive(&self.pitch, "helix.pitch")?,
+            center: s.center(&self.center, "helix")?,
+            segments: s.segments(&self.segments, "helix")?,
+        })
     }
 }
 

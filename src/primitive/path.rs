@@ -3,6 +3,10 @@
 use glam::DVec3;
 
 use crate::toolpath::Toolpath;
+use serde::Deserialize;
+
+use crate::error::{Error, Result};
+use crate::num::{Num, Num3, Scope};
 
 /// One command of a `path` primitive, with numbers resolved.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -66,6 +70,50 @@ pub fn build(cmds: &[PathCmd], c0: f64, v0: f64) -> Toolpath {
         }
     }
     t
+}
+
+/// A `path` command as written.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(rename_all = "snake_case")]
+#[allow(missing_docs)]
+pub enum RawCmd {
+    Move(Num3),
+    Draw(Num3),
+    CrossSection(Num),
+    Speed(Num),
+}
+
+/// `path:` as written.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawPath {
+    /// The commands, in order.
+    pub commands: Vec<RawCmd>,
+}
+
+impl RawPath {
+    /// Evaluates every command; errors name `path.commands[k].KEY`.
+    pub fn resolve(&self, s: &Scope) -> Result<Vec<PathCmd>> {
+        let mut cmds = Vec::with_capacity(self.commands.len());
+        for (k, c) in self.commands.iter().enumerate() {
+            let place = format!("path.commands[{k}]");
+            cmds.push(match c {
+                RawCmd::Move(n) => PathCmd::Move(s.point(n, &format!("{place}.move"))?),
+                RawCmd::Draw(n) => PathCmd::Draw(s.point(n, &format!("{place}.draw"))?),
+                RawCmd::CrossSection(n) => {
+                    PathCmd::CrossSection(s.positive(n, &format!("{place}.cross_section"))?)
+                }
+                RawCmd::Speed(n) => PathCmd::Speed(s.positive(n, &format!("{place}.speed"))?),
+            });
+        }
+        if !cmds.iter().any(|c| matches!(c, PathCmd::Draw(_))) {
+            return Err(Error::input(
+                "path.commands",
+                "expected at least one `draw` command (a path that extrudes nothing prints nothing)",
+            ));
+        }
+        Ok(cmds)
+    }
 }
 
 #[cfg(test)]

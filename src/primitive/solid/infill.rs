@@ -4,7 +4,7 @@
 //! direction), so lines sit at the same places on every layer of the same
 //! direction and in every island. Its crossings with the region's loops come
 //! from exact line–segment and line–circle intersections
-//! ([`super::region::crossings`], which also carries the paper's
+//! ([`crate::geom::region::crossings`], which also carries the paper's
 //! odd-intersection rule); sorted along the line, crossings 1–2, 3–4, … bound
 //! the spans inside the region (even–odd). Spans that meet end to end (a line
 //! through a reflex corner, or touching one) are joined, so no gap opens at a
@@ -14,7 +14,7 @@
 
 use glam::DVec2;
 
-use super::region::{crossings, monotone, Region};
+use crate::geom::region::{crossings, monotone, Region};
 
 /// Unit vector of the infill direction `deg` degrees counter-clockwise from
 /// +x. Multiples of 45° are exact (±1/√2 with the same bits in both
@@ -89,7 +89,7 @@ pub fn spans(region: &Region, u: DVec2, spacing: f64, min_span: f64) -> Vec<(DVe
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::primitive::solid::region::{boolean, Op, Shape};
+    use crate::geom::region::{boolean, Op, Shape};
     use std::f64::consts::PI;
 
     #[test]

@@ -35,15 +35,13 @@
 //! strings is exact before any is made.
 
 pub mod infill;
-pub mod offset;
-pub mod piece;
-pub mod region;
+pub use crate::geom::{offset, piece, region};
 
 use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::recipe::{Num, Num3};
+use crate::num::{Num, Num3};
 use crate::toolpath::Toolpath;
 
 pub use region::{Loop, Op, Region, Shape};
@@ -875,28 +873,6 @@ pub struct SolidStats {
     pub part: String,
     /// Its layers bottom up.
     pub layers: Vec<LayerStats>,
-}
-
-/// The z-buffers of a recipe's solid parts (before any steps).
-pub fn stats(recipe: &crate::recipe::Recipe) -> Vec<SolidStats> {
-    recipe
-        .parts
-        .iter()
-        .filter_map(|p| match &p.primitive {
-            super::Primitive::Solid(s) => Some(SolidStats {
-                part: p.name.clone(),
-                layers: s
-                    .layers()
-                    .map(|l| LayerStats {
-                        z: l.z,
-                        loops: l.slab.map_or(0, |s| s.region.loops.len()),
-                        area_mm2: l.slab.map_or(0.0, |s| s.region.area()),
-                    })
-                    .collect(),
-            }),
-            _ => None,
-        })
-        .collect()
 }
 
 #[cfg(test)]

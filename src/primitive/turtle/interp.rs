@@ -12,7 +12,7 @@ use super::lsystem::{Lsystem, MAX_ITERATIONS};
 use super::program::{Axis, Cmd, Op, Proc, Setting, Val};
 use crate::error::{Error, Result};
 use crate::expr::var;
-use crate::primitive::ca::SplitMix64;
+use crate::rng::SplitMix64;
 use crate::toolpath::{Event, Toolpath};
 
 /// Deepest nesting of procedure calls (a procedure calling itself with no

@@ -28,7 +28,7 @@ pub use program::RawTurtle;
 
 use crate::error::{Error, Result};
 use crate::expr::{self, Params};
-use crate::recipe::{Num, Num3};
+use crate::num::{Num, Num3};
 use crate::toolpath::Toolpath;
 
 /// Stack of the interpreter's thread, bytes (only the pages used are touched).

@@ -11,7 +11,7 @@ use serde::Deserialize;
 
 use crate::error::{Error, Result};
 use crate::expr::{var, Expr, Params};
-use crate::recipe::{Num, Num3};
+use crate::num::{Num, Num3};
 
 /// `turtle:` as written.
 #[derive(Clone, Debug, Deserialize, PartialEq)]

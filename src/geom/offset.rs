@@ -99,7 +99,7 @@ pub fn offset(region: &Region, d: f64) -> Region {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::primitive::solid::region::{boolean, Op, Shape};
+    use crate::geom::region::{boolean, Op, Shape};
     use glam::DVec2;
     use std::f64::consts::PI;
 

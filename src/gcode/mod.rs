@@ -13,14 +13,18 @@
 //! reaches that minimum. The move carries the run's filament exactly, and its
 //! speed is set so that it takes the same time as the strings would.
 
+pub mod flavor;
+pub mod travel;
+
 use std::collections::BTreeMap;
 use std::io::{self, Write};
 
 use glam::DVec3;
 
 use crate::error::Result;
-use crate::printer::{Extrusion, Printer};
-use crate::recipe::Recipe;
+use crate::format::{fmt_num, hms, put_fixed, units};
+use crate::machine::{Extrusion, Printer};
+use crate::model::Recipe;
 use crate::toolpath::{Event, Toolpath};
 
 /// What the written moves add up to; the stats report is made from it.
@@ -55,29 +59,6 @@ pub struct MoveStats {
     pub retractions: u64,
 }
 
-/// Rounds `x` to integer units of 10^-`decimals`.
-#[inline]
-fn units(x: f64, scale: f64) -> i64 {
-    libm::round(x * scale) as i64
-}
-
-/// Appends `v / 10^decimals` in fixed point, e.g. `-12.345`.
-fn put_fixed(buf: &mut Vec<u8>, v: i64, decimals: u32) {
-    let pow = 10i64.pow(decimals);
-    if v < 0 {
-        buf.push(b'-');
-    }
-    let a = v.unsigned_abs();
-    let mut ib = itoa::Buffer::new();
-    buf.extend_from_slice(ib.format(a / pow as u64).as_bytes());
-    buf.push(b'.');
-    let frac = ib.format(a % pow as u64);
-    for _ in frac.len()..decimals as usize {
-        buf.push(b'0');
-    }
-    buf.extend_from_slice(frac.as_bytes());
-}
-
 const XYZ: f64 = 1e3;
 const E: f64 = 1e5;
 
@@ -102,7 +83,7 @@ pub struct Emitter<'a, W: Write> {
     pub stats: MoveStats,
     pending: Pending,
     /// Thumbnail blocks written after the header comments (see
-    /// [`crate::preview::thumbnail`]); empty for none.
+    /// `crate::preview::thumbnail`); empty for none.
     pub thumbnails: String,
     /// Every written move, for the print-time estimate.
     planner: crate::planner::Background,
@@ -164,8 +145,8 @@ impl<'a, W: Write> Emitter<'a, W> {
         let p = &recipe.printer;
         let m = &recipe.material;
         let (bx, by) = match p.bed {
-            crate::printer::Bed::Rectangle { size, .. } => (size[0], size[1]),
-            crate::printer::Bed::Circle { .. } => (0.0, 0.0),
+            crate::machine::Bed::Rectangle { size, .. } => (size[0], size[1]),
+            crate::machine::Bed::Circle { .. } => (0.0, 0.0),
         };
         let park = (p.to_machine(DVec3::new(0.0, 0.0, top_z)).z + 10.0).min(p.bed.max_z());
         let mut v = BTreeMap::new();
@@ -222,7 +203,7 @@ impl<'a, W: Write> Emitter<'a, W> {
             self.text(&format!(
                 "; arcs: G2/G3 within {} mm of the strings ({})",
                 fmt_num(self.printer.arc_tolerance),
-                crate::flavor::arc_note(self.printer.flavor)
+                flavor::arc_note(self.printer.flavor)
             ))
             .map_err(io)?;
         }
@@ -298,7 +279,7 @@ impl<'a, W: Write> Emitter<'a, W> {
         let len = units(r.length, E);
         if self.printer.firmware_retraction {
             // G10: the firmware's length and speed; E is untouched
-            self.text(crate::flavor::retract(self.printer.flavor))?;
+            self.text(flavor::retract(self.printer.flavor))?;
             self.retracted = true;
             self.stats.retractions += 1;
             self.planner.extrude_only(len as f64 / E, r.speed);
@@ -326,7 +307,7 @@ impl<'a, W: Write> Emitter<'a, W> {
         let r = &self.printer.retraction;
         let len = units(r.length, E);
         if self.printer.firmware_retraction {
-            self.text(crate::flavor::unretract(self.printer.flavor))?;
+            self.text(flavor::unretract(self.printer.flavor))?;
             self.retracted = false;
             self.planner.extrude_only(len as f64 / E, r.speed);
             return Ok(());
@@ -377,7 +358,7 @@ impl<'a, W: Write> Emitter<'a, W> {
 
     /// Travel to `to` between parts: up to a safe height (above everything
     /// printed so far by the head's clearance, see
-    /// [`crate::check::collision::safe_travel_z`]), across, then down, so the
+    /// [`travel::safe_travel_z`]), across, then down, so the
     /// head never crosses what is printed; the collision check models the same.
     pub fn travel_to(&mut self, to: DVec3) -> io::Result<()> {
         self.flush()?;
@@ -389,7 +370,7 @@ impl<'a, W: Write> Emitter<'a, W> {
         } else {
             f64::NEG_INFINITY
         };
-        match crate::check::collision::safe_travel_z(self.printer, h, to, top) {
+        match travel::safe_travel_z(self.printer, h, to, top) {
             Some(z) => {
                 self.travel_line(DVec3::new(h.x, h.y, z), [false, false, true])?;
                 self.travel_line(to, [true, true, false])?;
@@ -410,7 +391,7 @@ impl<'a, W: Write> Emitter<'a, W> {
         match self.fan {
             Some((speed, z)) if to.z > z => {
                 self.fan = None;
-                let line = crate::flavor::fan(self.printer.flavor, speed);
+                let line = flavor::fan(self.printer.flavor, speed);
                 self.text(&format!("{line}: above z = {z} mm"))
             }
             _ => Ok(()),
@@ -467,12 +448,12 @@ impl<'a, W: Write> Emitter<'a, W> {
         }
     }
 
-    /// One `G2`/`G3` move along `arc` (see [`crate::arc`]), replacing strings
+    /// One `G2`/`G3` move along `arc` (see [`crate::geom::arc`]), replacing strings
     /// `arc.start..arc.end` of `tp`: E is their exact filament, the speed the
     /// one that keeps their time, I J the centre from the written start. The
     /// planner sees the arc as chords of at most 1 mm, as Marlin
     /// (MAX_ARC_SEGMENT_MM) and Klipper (`resolution`) split it.
-    fn arc_move(&mut self, tp: &Toolpath, arc: &crate::arc::Arc) -> io::Result<()> {
+    fn arc_move(&mut self, tp: &Toolpath, arc: &crate::geom::arc::Arc) -> io::Result<()> {
         self.fan_on_above(tp.points[arc.end])?;
         self.unretract()?;
         let (mut filament, mut time) = (0.0, 0.0);
@@ -556,8 +537,8 @@ impl<'a, W: Write> Emitter<'a, W> {
                     | Event::BedTemp { wait: true, .. } => self.planner.stop(),
                     _ => {}
                 }
-                let line = crate::flavor::event_line(self.printer.flavor, e)
-                    .expect("moves are handled above");
+                let line =
+                    flavor::event_line(self.printer.flavor, e).expect("moves are handled above");
                 self.text(&line)
             }
         }
@@ -593,8 +574,8 @@ impl<'a, W: Write> Emitter<'a, W> {
         let min = self.printer.min_string_length;
         let mut events = tp.events.iter().peekable();
         let arcs = if self.printer.arcs {
-            let fw = crate::flavor::arc_firmware(self.printer.flavor);
-            crate::arc::fit_part(tp, self.printer.arc_tolerance, fw)
+            let fw = flavor::arc_firmware(self.printer.flavor);
+            crate::geom::arc::fit_part(tp, self.printer.arc_tolerance, fw)
         } else {
             Vec::new()
         };
@@ -689,56 +670,5 @@ impl<'a, W: Write> Emitter<'a, W> {
         self.text(&summary).map_err(io)?;
         self.out.flush().map_err(io)?;
         Ok((self.out, self.stats))
-    }
-}
-
-/// A temperature or size for a comment or template: integers without decimals.
-pub fn fmt_num(v: f64) -> String {
-    if v.fract() == 0.0 && v.abs() < 1e15 {
-        format!("{}", v as i64)
-    } else {
-        let s = format!("{v:.3}");
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    }
-}
-
-/// Seconds as `1h 2m 3s` (the form slicers write).
-pub fn hms(t: f64) -> String {
-    let s = libm::round(t) as u64;
-    let (h, m, s) = (s / 3600, s / 60 % 60, s % 60);
-    if h > 0 {
-        format!("{h}h {m}m {s}s")
-    } else if m > 0 {
-        format!("{m}m {s}s")
-    } else {
-        format!("{s}s")
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn fixed(v: f64, d: u32) -> String {
-        let mut b = Vec::new();
-        put_fixed(&mut b, units(v, 10f64.powi(d as i32)), d);
-        String::from_utf8(b).unwrap()
-    }
-
-    #[test]
-    fn fixed_point_never_exponent_nor_negative_zero() {
-        assert_eq!(fixed(3e-5, 5), "0.00003");
-        assert_eq!(fixed(-0.0001, 3), "0.000");
-        assert_eq!(fixed(-0.0, 3), "0.000");
-        assert_eq!(fixed(-12.3456, 3), "-12.346");
-        assert_eq!(fixed(110.0, 3), "110.000");
-        assert_eq!(fixed(1234567.5, 5), "1234567.50000");
-    }
-
-    #[test]
-    fn time_format() {
-        assert_eq!(hms(3723.4), "1h 2m 3s");
-        assert_eq!(hms(59.6), "1m 0s");
-        assert_eq!(hms(5.0), "5s");
     }
 }

@@ -1,10 +1,7 @@
-//! Printer profiles and materials.
-//!
-//! A profile is the spec's printer YAML; built-in profiles are the same YAML
-//! embedded in the binary, parsed by the same code as a user's file.
+//! A printer profile: bed, origin, nozzle, G-code templates and the limits
+//! p3dp checks against (data only; [`crate::recipe::profile`] loads it).
 
 use std::collections::BTreeMap;
-use std::path::Path;
 
 use glam::DVec3;
 use serde::Deserialize;
@@ -168,7 +165,7 @@ pub struct Printer {
     #[serde(default = "d_min_string")]
     pub min_string_length: f64,
     /// Fit `G2`/`G3` arcs to runs of strings on a circle or helix (see
-    /// [`crate::arc`]); off by default.
+    /// [`crate::geom::arc`]); off by default.
     #[serde(default)]
     pub arcs: bool,
     /// Largest distance between an arc and the strings it replaces, mm.
@@ -179,17 +176,17 @@ pub struct Printer {
     #[serde(default)]
     pub thumbnails: Vec<String>,
     /// The firmware planner's limits, for the print-time estimate (see
-    /// [`crate::planner::Kinematics`]).
+    /// [`super::Kinematics`]).
     #[serde(default)]
-    pub kinematics: crate::planner::Kinematics,
+    pub kinematics: super::Kinematics,
     /// The print head's geometry for the collision check and the travel
-    /// height between parts (see [`crate::check::Head`]).
+    /// height between parts (see [`super::Head`]).
     #[serde(default)]
-    pub head: crate::check::Head,
+    pub head: super::Head,
     /// Thresholds of the flow, support and planner checks (see
-    /// [`crate::check::CheckLimits`]).
+    /// [`super::CheckLimits`]).
     #[serde(default)]
-    pub checks: crate::check::CheckLimits,
+    pub checks: super::CheckLimits,
 }
 
 fn d_travel() -> f64 {
@@ -214,88 +211,10 @@ fn d_arc_tolerance() -> f64 {
     0.025
 }
 
-const BUILT_IN: &[(&str, &str)] = &[
-    ("generic-220", include_str!("printers/generic-220.yaml")),
-    ("ender3", include_str!("printers/ender3.yaml")),
-    ("prusa-mk3s", include_str!("printers/prusa-mk3s.yaml")),
-    ("prusa-mk4", include_str!("printers/prusa-mk4.yaml")),
-    ("voron-350", include_str!("printers/voron-350.yaml")),
-    ("rostock-max", include_str!("printers/rostock-max.yaml")),
-];
-
-/// Names of the built-in printer profiles.
-pub fn built_in_names() -> Vec<&'static str> {
-    BUILT_IN.iter().map(|(n, _)| *n).collect()
-}
-
 impl Printer {
-    /// A built-in profile by name.
-    pub fn built_in(name: &str) -> Option<Printer> {
-        let (_, text) = BUILT_IN.iter().find(|(n, _)| *n == name)?;
-        let p: Printer = crate::recipe::parse_yaml(text, name).expect("built-in profiles parse");
-        Some(p)
-    }
-
-    /// A profile from a YAML file. With `inherits: NAME|FILE` the file's keys
-    /// override those of a built-in profile or another file (maps merged key
-    /// by key, see [`merge_yaml`]); a file without it is parsed on its own.
-    pub fn from_file(path: &Path) -> Result<Printer> {
-        let shown = path.display().to_string();
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| Error::io(&shown, format!("cannot read the printer profile: {e}")))?;
-        let value: serde_yaml::Value = crate::recipe::parse_yaml(&text, &shown)?;
-        let p: Printer = if value.get("inherits").is_some() {
-            let named = value.get("name").is_some();
-            let mut seen = vec![path.canonicalize().unwrap_or_else(|_| path.to_path_buf())];
-            let mut merged = inherit(value, path, &mut seen).map_err(|e| e.in_file(&shown))?;
-            if !named {
-                // a profile named after its file, not after its base
-                let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned());
-                if let (Some(m), Some(stem)) = (merged.as_mapping_mut(), stem) {
-                    m.insert("name".into(), stem.into());
-                }
-            }
-            from_value(merged, &shown)?
-        } else {
-            crate::recipe::parse_yaml(&text, &shown)?
-        };
-        p.validate().map_err(|e| e.in_file(&shown))?;
-        Ok(p)
-    }
-
-    /// A built-in name, or else a path (relative paths from `base`).
-    pub fn resolve(spec: &str, base: &Path) -> Result<Printer> {
-        if let Some(p) = Printer::built_in(spec) {
-            return Ok(p);
-        }
-        if !names_a_file(spec) {
-            return Err(unknown_printer("printer", spec));
-        }
-        // relative to the recipe's folder, or to the working one for --printer
-        let path = if base == Path::new(".") || base.as_os_str().is_empty() {
-            Path::new(spec).to_path_buf()
-        } else {
-            base.join(spec)
-        };
-        if !path.is_file() {
-            let at = if path == Path::new(spec) {
-                String::new()
-            } else {
-                format!(" ({})", path.display())
-            };
-            return Err(Error::input(
-                "printer",
-                format!(
-                    "no printer profile at `{spec}`{at}; built-in printers are {}",
-                    built_in_names().join(", ")
-                ),
-            ));
-        }
-        Printer::from_file(&path)
-    }
-
-    fn validate(&self) -> Result<()> {
-        let positive = crate::check::config::positive;
+    /// Checks every value; errors name the key.
+    pub fn validate(&self) -> Result<()> {
+        let positive = super::head::positive;
         positive("nozzle_diameter", self.nozzle_diameter)?;
         positive("filament_diameter", self.filament_diameter)?;
         positive("travel_speed", self.travel_speed)?;
@@ -336,7 +255,7 @@ impl Printer {
                 "expected a length ≥ 0 and a speed > 0",
             ));
         }
-        crate::preview::thumbnail::sizes(&self.thumbnails)?;
+        super::size::sizes(&self.thumbnails)?;
         self.kinematics.validate()?;
         self.head.validate()?;
         self.checks.validate()?;
@@ -390,124 +309,6 @@ impl Printer {
     }
 }
 
-/// Whether a printer name that is not built in is meant as a file: it has a
-/// `/` or ends in `.yaml` / `.yml` (anything else is a misspelt name).
-fn names_a_file(spec: &str) -> bool {
-    spec.contains('/') || spec.ends_with(".yaml") || spec.ends_with(".yml")
-}
-
-/// The error for `spec` at key `key`: neither a built-in printer nor a file.
-fn unknown_printer(key: &str, spec: &str) -> Error {
-    Error::input(
-        key,
-        format!(
-            "unknown printer `{spec}`; built-in printers are {} (or give a path to a printer YAML)",
-            built_in_names().join(", ")
-        ),
-    )
-}
-
-/// Deepest chain of `inherits` followed.
-const MAX_INHERITS: usize = 16;
-
-/// Resolves the `inherits:` of a profile file's YAML `value` (read from
-/// `path`): the base (a built-in name, or a file relative to `path`, itself
-/// resolved) with `value`'s keys merged over it. `seen` holds the files of
-/// the chain so far, to refuse cycles.
-fn inherit(
-    mut value: serde_yaml::Value,
-    path: &Path,
-    seen: &mut Vec<std::path::PathBuf>,
-) -> Result<serde_yaml::Value> {
-    let Some(spec) = value.as_mapping_mut().and_then(|m| m.remove("inherits")) else {
-        return Ok(value);
-    };
-    let Some(spec) = spec.as_str().map(str::to_string) else {
-        return Err(Error::input(
-            "inherits",
-            "expected the name of a built-in printer or the path of a printer YAML",
-        ));
-    };
-    if seen.len() > MAX_INHERITS {
-        return Err(Error::input(
-            "inherits",
-            format!("more than {MAX_INHERITS} profiles inherit one from another"),
-        ));
-    }
-    let base = if let Some((_, text)) = BUILT_IN.iter().find(|(n, _)| *n == spec) {
-        serde_yaml::from_str(text).expect("built-in profiles parse")
-    } else if names_a_file(&spec) {
-        let rel = spec.trim_start_matches("./");
-        let file = match path.parent() {
-            Some(dir) if !dir.as_os_str().is_empty() && dir != Path::new(".") => dir.join(rel),
-            _ => Path::new(rel).to_path_buf(),
-        };
-        let canon = file.canonicalize().map_err(|e| {
-            Error::input(
-                "inherits",
-                format!(
-                    "cannot read the printer profile `{spec}` ({}): {e}",
-                    file.display()
-                ),
-            )
-        })?;
-        if seen.contains(&canon) {
-            return Err(Error::input(
-                "inherits",
-                format!("`{spec}` inherits, directly or not, from itself"),
-            ));
-        }
-        seen.push(canon);
-        let shown = file.display().to_string();
-        let text = std::fs::read_to_string(&file)
-            .map_err(|e| Error::io(&shown, format!("cannot read the printer profile: {e}")))?;
-        let v: serde_yaml::Value = crate::recipe::parse_yaml(&text, &shown)?;
-        inherit(v, &file, seen).map_err(|e| e.in_file(&shown))?
-    } else {
-        return Err(unknown_printer("inherits", &spec));
-    };
-    Ok(merge_yaml(base, value))
-}
-
-/// Deep merge: keys of `over` replace those of `base`, maps are merged key by
-/// key, except two maps whose `shape` differs (a round bed replacing a
-/// rectangle), where `over` replaces `base` whole.
-pub fn merge_yaml(base: serde_yaml::Value, over: serde_yaml::Value) -> serde_yaml::Value {
-    use serde_yaml::Value;
-    match (base, over) {
-        (Value::Mapping(mut b), Value::Mapping(o)) => {
-            let shape = |m: &serde_yaml::Mapping| m.get("shape").cloned();
-            if shape(&o).is_some() && shape(&b).is_some() && shape(&o) != shape(&b) {
-                return Value::Mapping(o);
-            }
-            for (k, v) in o {
-                let merged = match b.remove(&k) {
-                    Some(old) => merge_yaml(old, v),
-                    None => v,
-                };
-                b.insert(k, merged);
-            }
-            Value::Mapping(b)
-        }
-        (_, over) => over,
-    }
-}
-
-/// Deserialises a merged profile, naming the key path of any error.
-fn from_value(value: serde_yaml::Value, file: &str) -> Result<Printer> {
-    let mut track = serde_path_to_error::Track::new();
-    let tracked = serde_path_to_error::Deserializer::new(value, &mut track);
-    Printer::deserialize(tracked).map_err(|e| {
-        let path = track.path().to_string();
-        let mut err = Error::input(
-            if path == "." { String::new() } else { path },
-            e.to_string(),
-        );
-        err.file = Some(file.to_string());
-        err
-    })
-}
-
 /// Placeholders a start or end G-code template may use.
 pub const PLACEHOLDERS: [&str; 8] = [
     "nozzle_temp",
@@ -520,63 +321,13 @@ pub const PLACEHOLDERS: [&str; 8] = [
     "park_z",
 ];
 
-/// A filament material.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Material {
-    /// Name for reports.
-    pub name: String,
-    /// Filament diameter, mm; the printer's when `None`.
-    pub filament_diameter: Option<f64>,
-    /// Density, g/cm³.
-    pub density: f64,
-    /// Printing temperature, °C.
-    pub nozzle_temp: f64,
-    /// Bed temperature, °C.
-    pub bed_temp: f64,
-    /// Hottest safe nozzle for this material, °C.
-    pub max_nozzle_temp: f64,
-    /// Part-cooling fan once the print is above `fan_start_z`, 0 (off) to 1.
-    pub fan_speed: f64,
-    /// Height (recipe z, mm) above which the fan turns on: the first layers
-    /// stick better warm.
-    pub fan_start_z: f64,
-}
-
-/// Height above which the fan of a built-in material turns on, mm: past the
-/// first layer or two.
-pub const FAN_START_Z: f64 = 0.5;
-
-impl Material {
-    /// A built-in material: `pla`, `abs` or `petg`.
-    pub fn built_in(name: &str) -> Option<Material> {
-        // PLA wants full cooling, PETG some (it sticks to itself less when
-        // cold), ABS none (it warps and splits between layers)
-        let (density, nozzle, bed, max, fan) = match name {
-            "pla" => (1.24, 210.0, 60.0, 240.0, 1.0),
-            "abs" => (1.04, 240.0, 100.0, 270.0, 0.0),
-            "petg" => (1.27, 235.0, 80.0, 260.0, 0.5),
-            _ => return None,
-        };
-        Some(Material {
-            name: name.to_string(),
-            filament_diameter: None,
-            density,
-            nozzle_temp: nozzle,
-            bed_temp: bed,
-            max_nozzle_temp: max,
-            fan_speed: fan,
-            fan_start_z: FAN_START_Z,
-        })
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
     fn generic_profile_loads_and_maps_the_centre() {
-        let p = Printer::built_in("generic-220").unwrap();
+        let p = crate::recipe::profile::built_in("generic-220").unwrap();
         p.validate().unwrap();
         assert_eq!(p.to_machine(DVec3::ZERO), DVec3::new(110.0, 110.0, 0.0));
         assert!(p.bed.contains_xy(DVec3::new(220.0, 0.0, 0.0)));
@@ -585,14 +336,14 @@ mod tests {
 
     #[test]
     fn round_bed_and_unknown_keys() {
-        let p: Printer = crate::recipe::parse_yaml(
+        let p: Printer = crate::recipe::yaml::parse_yaml(
             "name: d\nbed: {shape: circle, diameter: 280, max_z: 300}\norigin: [0,0,0]\nnozzle_diameter: 0.4\nfilament_diameter: 1.75\n",
             "d.yaml",
         )
         .unwrap();
         assert!(p.bed.contains_xy(DVec3::new(0.0, 139.9, 0.0)));
         assert!(!p.bed.contains_xy(DVec3::new(100.0, 100.0, 0.0)));
-        let e = crate::recipe::parse_yaml::<Printer>(
+        let e = crate::recipe::yaml::parse_yaml::<Printer>(
             "name: d\nbed: {shape: circle, diameter: 280, max_z: 300, size: 3}\norigin: [0,0,0]\nnozzle_diameter: 0.4\nfilament_diameter: 1.75\n",
             "d.yaml",
         )
@@ -602,7 +353,7 @@ mod tests {
 
     #[test]
     fn templates_fill_and_refuse_unknown_placeholders() {
-        let p = Printer::built_in("generic-220").unwrap();
+        let p = crate::recipe::profile::built_in("generic-220").unwrap();
         let mut v = BTreeMap::new();
         v.insert("nozzle_temp", "210".to_string());
         assert_eq!(p.fill("k", "M104 S{nozzle_temp}", &v).unwrap(), "M104 S210");

@@ -16,8 +16,8 @@
 //! Moves (G0/G1, G2/G3), units (G21), positioning (G90) and the extrusion
 //! mode (M82/M83) are common to all four and written by [`crate::gcode`].
 
-use crate::gcode::fmt_num;
-use crate::printer::Flavor;
+use crate::format::fmt_num;
+use crate::machine::Flavor;
 use crate::toolpath::Event;
 
 impl Flavor {
@@ -186,11 +186,11 @@ pub fn arc_note(flavor: Flavor) -> &'static str {
 }
 
 /// How the dialect's stock firmware cuts an arc into straight moves (see
-/// [`crate::arc::Firmware`]): Marlin 2 in chords of at most 1 mm and at
+/// [`crate::geom::arc::Firmware`]): Marlin 2 in chords of at most 1 mm and at
 /// least 72 a turn; Klipper's `[gcode_arcs]` in 1 mm chords; Prusa's and
 /// RepRapFirmware are taken as 1 mm chords too (the cautious choice).
-pub fn arc_firmware(flavor: Flavor) -> crate::arc::Firmware {
-    crate::arc::Firmware {
+pub fn arc_firmware(flavor: Flavor) -> crate::geom::arc::Firmware {
+    crate::geom::arc::Firmware {
         max_chord: 1.0,
         min_circle_segments: if flavor == Flavor::Marlin { 72 } else { 0 },
     }

@@ -1,0 +1,10 @@
+//! Geometry shared by several stages: arc fitting (G2/G3 output and its
+//! checks), the exact 2D pieces, regions and offsets of the feature-based
+//! solids (paper 003), and one spatial grid of segments for the checks and
+//! the previews.
+
+pub mod arc;
+pub mod grid;
+pub mod offset;
+pub mod piece;
+pub mod region;

@@ -1,0 +1,98 @@
+//! The plan of one build: a recipe loaded, its parts made into strings (skirt
+//! first) and checked, ready to write.
+
+use std::path::Path;
+
+use crate::check::{self, Finding};
+use crate::error::{Error, Result};
+use crate::machine::Printer;
+use crate::model::{make_part, Recipe};
+use crate::toolpath::Toolpath;
+
+/// What the command line says about one build.
+#[derive(Clone, Debug, Default)]
+pub struct Options {
+    /// `--set NAME=VALUE` overrides, in order.
+    pub sets: Vec<(String, String)>,
+    /// `--printer NAME|FILE` overrides the recipe's printer.
+    pub printer: Option<String>,
+    /// `--allow CODE`: check codes silenced for this build.
+    pub allow: Vec<String>,
+}
+
+/// A recipe made into strings and checked, ready to write.
+#[derive(Clone, Debug)]
+pub struct Plan {
+    /// The recipe file as given.
+    pub path: String,
+    /// The resolved recipe.
+    pub recipe: Recipe,
+    /// Skirt, then parts, in print order.
+    pub paths: Vec<Toolpath>,
+    /// What the checks found.
+    pub findings: Vec<Finding>,
+    /// Each part's hold on the bed, as the first-layer check measured it.
+    pub footprints: Vec<check::first_layer::Footprint>,
+}
+
+/// Loads, builds and checks a recipe.
+pub fn plan(path: &Path, opts: &Options) -> Result<Plan> {
+    let shown = path.display().to_string();
+    // the command line's own mistakes name the option, not the recipe
+    check::validate_allow(&opts.allow, |i| format!("--allow {}", opts.allow[i]))?;
+    let printer = match &opts.printer {
+        Some(spec) => Some(Printer::resolve(spec, Path::new(".")).map_err(|e| {
+            if e.file.is_none() && e.place.as_deref() == Some("printer") {
+                Error {
+                    place: Some(format!("--printer {spec}")),
+                    ..e
+                }
+            } else {
+                e
+            }
+        })?),
+        None => None,
+    };
+    let recipe = Recipe::load(path, &opts.sets, printer.as_ref())?;
+    let mut parts = Vec::with_capacity(recipe.parts.len());
+    for k in 0..recipe.parts.len() {
+        parts.push(make_part(&recipe, k).map_err(|e| e.in_file(&shown))?);
+    }
+    let mut paths = Vec::with_capacity(parts.len() + 1);
+    if let Some(s) = &recipe.skirt {
+        let cv = (recipe.parts[0].cross_section, recipe.parts[0].speed);
+        let spacing = recipe.printer.nozzle_diameter;
+        match crate::skirt::make(s, &parts, spacing, cv, recipe.max_strings) {
+            Ok(Some(sk)) => paths.push(sk),
+            Ok(None) => {}
+            Err(m) => return Err(Error::input("skirt", m).in_file(&shown)),
+        }
+    }
+    paths.extend(parts);
+    let refs: Vec<&Toolpath> = paths.iter().collect();
+    let (mut findings, footprints) = check::run(&recipe, &refs);
+    check::apply_allow(&mut findings, &recipe.allow);
+    check::apply_allow(&mut findings, &opts.allow);
+    Ok(Plan {
+        path: shown,
+        recipe,
+        paths,
+        findings,
+        footprints,
+    })
+}
+
+impl Plan {
+    /// Highest point of any part, recipe coordinates.
+    pub fn top_z(&self) -> f64 {
+        self.paths
+            .iter()
+            .flat_map(|t| t.points.iter().map(|p| p.z))
+            .fold(0.0, f64::max)
+    }
+
+    /// The findings that fail the build: errors, and warnings when `strict`.
+    pub fn failing(&self, strict: bool) -> Vec<&Finding> {
+        check::failing(&self.findings, strict)
+    }
+}

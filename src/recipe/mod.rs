@@ -1,0 +1,21 @@
+//! The YAML edge: recipes in the format of `docs/recipe.md` (which extends
+//! `../shared/spec/recipe-v1.md`) and printer profiles, read and resolved.
+//!
+//! Loading is two stages. [`yaml::parse_yaml`] reads the text into the raw
+//! schema ([`schema`]: `Raw*` types, every number still a
+//! number-or-expression), reporting the line and key path of any syntax
+//! error, unknown key or wrong type. Then [`Recipe::resolve`] evaluates params
+//! (with `--set` overrides), every number, compiles step expressions and
+//! loads images, naming the key path of any problem; the result is a
+//! [`crate::model::Recipe`].
+
+pub mod profile;
+pub mod resolve;
+pub mod schema;
+pub mod yaml;
+
+pub use crate::model::{Part, Recipe, Skirt};
+pub use crate::num::{Num, Num3};
+pub use resolve::{eval_params, load_bitmap, parse_set};
+pub use schema::RawRecipe;
+pub use yaml::parse_yaml;

@@ -1,0 +1,500 @@
+//! Resolution: params evaluated in order (with `--set`), every number
+//! evaluated and every expression compiled, images loaded, each error naming
+//! its key path.
+
+use std::path::{Path, PathBuf};
+
+use indexmap::IndexMap;
+
+use super::schema::*;
+use super::yaml::parse_yaml;
+use crate::error::{Error, Result};
+use crate::expr::{self, var, Params};
+use crate::machine::{Material, Printer, FAN_START_Z};
+use crate::model::{
+    Part, Recipe, Skirt, DEFAULT_CROSS_SECTION, DEFAULT_MAX_STRINGS, DEFAULT_SPEED,
+};
+use crate::num::{finite, Num, Scope};
+use crate::primitive::turtle;
+use crate::step::{Bitmap, Deform, Keep, Modulate, ModulateMap, Step};
+
+/// Evaluates numbers of one recipe: its params, and where images and a
+/// turtle's limits come from.
+struct Ctx<'a> {
+    scope: Scope<'a>,
+    dir: &'a Path,
+    /// Filament area (mm²) and max_strings, for a turtle (set once known).
+    turtle: (f64, u64),
+}
+
+impl<'a> std::ops::Deref for Ctx<'a> {
+    type Target = Scope<'a>;
+    fn deref(&self) -> &Scope<'a> {
+        &self.scope
+    }
+}
+
+const POINT_VARS: &[usize] = &[
+    var::X,
+    var::Y,
+    var::Z,
+    var::R,
+    var::THETA,
+    var::I,
+    var::N,
+    var::T,
+];
+const STRING_VARS: &[usize] = &[
+    var::X,
+    var::Y,
+    var::Z,
+    var::R,
+    var::THETA,
+    var::C,
+    var::V,
+    var::I,
+    var::N,
+    var::T,
+];
+
+fn is_identifier(s: &str) -> bool {
+    let mut cs = s.chars();
+    matches!(cs.next(), Some(c) if c.is_ascii_alphabetic() || c == '_')
+        && cs.all(|c| c.is_ascii_alphanumeric() || c == '_')
+}
+
+/// Evaluates params in order, each over the ones before it; `sets` replaces
+/// a param's expression (`--set NAME=VALUE`).
+pub fn eval_params(raw: &IndexMap<String, Num>, sets: &[(String, String)]) -> Result<Params> {
+    let mut params = Params::new();
+    for (name, value) in raw {
+        let place = format!("params.{name}");
+        if !is_identifier(name) {
+            return Err(Error::input(
+                place,
+                "a param name must be letters, digits and `_`, not starting with a digit",
+            ));
+        }
+        if expr::is_reserved(name) {
+            return Err(Error::input(
+                place,
+                format!("`{name}` is a name expressions already use; choose another param name"),
+            ));
+        }
+        let v = match sets.iter().rev().find(|(n, _)| n == name) {
+            Some((_, s)) => expr::eval_const(s, &params)
+                .map_err(|m| Error::input(format!("--set {name}={s}"), m))?,
+            None => match value {
+                Num::Value(v) => finite(*v, &place)?,
+                Num::Expr(s) => {
+                    expr::eval_const(s, &params).map_err(|m| Error::input(&place, m))?
+                }
+            },
+        };
+        params.insert(name.clone(), v);
+    }
+    for (name, s) in sets {
+        if !raw.contains_key(name) {
+            let known: Vec<&str> = raw.keys().map(String::as_str).collect();
+            return Err(Error::input(
+                format!("--set {name}={s}"),
+                if known.is_empty() {
+                    format!("unknown param `{name}`; this recipe has no params")
+                } else {
+                    format!(
+                        "unknown param `{name}`; the recipe's params are {}",
+                        known.join(", ")
+                    )
+                },
+            ));
+        }
+    }
+    Ok(params)
+}
+
+/// Parses a `NAME=VALUE` of `--set`.
+pub fn parse_set(s: &str) -> Result<(String, String)> {
+    match s.split_once('=') {
+        Some((n, v)) if !n.trim().is_empty() && !v.trim().is_empty() => {
+            Ok((n.trim().to_string(), v.trim().to_string()))
+        }
+        _ => Err(Error::input(
+            format!("--set {s}"),
+            "expected NAME=VALUE, e.g. --set radius=30",
+        )),
+    }
+}
+
+impl Recipe {
+    /// Reads and resolves a recipe file. `printer` overrides the recipe's printer.
+    pub fn load(
+        path: &Path,
+        sets: &[(String, String)],
+        printer: Option<&Printer>,
+    ) -> Result<Recipe> {
+        let shown = path.display().to_string();
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| Error::io(&shown, format!("cannot read the recipe: {e}")))?;
+        let raw: RawRecipe = parse_yaml(&text, &shown)?;
+        let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        Recipe::resolve(&raw, sets, printer, &dir).map_err(|e| e.in_file(&shown))
+    }
+
+    /// Resolves a parsed recipe; relative paths are taken from `dir`.
+    pub fn resolve(
+        raw: &RawRecipe,
+        sets: &[(String, String)],
+        printer: Option<&Printer>,
+        dir: &Path,
+    ) -> Result<Recipe> {
+        if raw.p3dp != 1 {
+            return Err(Error::input(
+                "p3dp",
+                format!("format version {} is not known; expected 1", raw.p3dp),
+            ));
+        }
+        if raw.name.trim().is_empty() {
+            return Err(Error::input("name", "expected a non-empty name"));
+        }
+        if raw.parts.is_empty() {
+            return Err(Error::input("parts", "expected at least one part"));
+        }
+        let params = eval_params(&raw.params, sets)?;
+        let ctx = Ctx {
+            scope: Scope::new(&params),
+            dir,
+            turtle: (0.0, DEFAULT_MAX_STRINGS),
+        };
+        let printer = match printer {
+            Some(p) => p.clone(),
+            None => Printer::resolve(raw.printer.as_deref().unwrap_or("generic-220"), dir)?,
+        };
+        let material = resolve_material(&ctx, raw.material.as_ref())?;
+        let c0 = match &raw.defaults.cross_section {
+            Some(n) => ctx.positive(n, "defaults.cross_section")?,
+            None => DEFAULT_CROSS_SECTION,
+        };
+        let v0 = match &raw.defaults.speed {
+            Some(n) => ctx.positive(n, "defaults.speed")?,
+            None => DEFAULT_SPEED,
+        };
+        let skirt = match &raw.skirt {
+            Some(s) => Some(Skirt {
+                distance: ctx.non_negative(&s.distance, "skirt.distance")?,
+                loops: ctx.whole_max(&s.loops, "skirt.loops", 1, 1000)?,
+            }),
+            None => None,
+        };
+        let max_strings = match &raw.max_strings {
+            Some(n) => ctx.whole(n, "max_strings", 1)? as u64,
+            None => DEFAULT_MAX_STRINGS,
+        };
+        let d = material
+            .filament_diameter
+            .unwrap_or(printer.filament_diameter);
+        let ctx = Ctx {
+            turtle: (std::f64::consts::PI * (d / 2.0) * (d / 2.0), max_strings),
+            ..ctx
+        };
+        let mut parts = Vec::with_capacity(raw.parts.len());
+        for (k, p) in raw.parts.iter().enumerate() {
+            let place = format!("parts[{k}]");
+            let part = resolve_part(&ctx, p, c0, v0, k).map_err(|e| e.under(&place))?;
+            let n = part.primitive.string_count();
+            if n > max_strings {
+                return Err(Error::input(
+                    format!("{place}.primitive"),
+                    format!(
+                        "this primitive would make {n} strings, more than the limit of {max_strings}; expected a larger pitch or fewer segments (or raise max_strings)"
+                    ),
+                ));
+            }
+            parts.push(part);
+        }
+        let allow: Vec<String> = raw.allow.iter().map(|a| a.code().to_string()).collect();
+        crate::finding::validate_allow(&allow, |i| format!("allow[{i}]"))?;
+        Ok(Recipe {
+            name: raw.name.clone(),
+            params,
+            printer,
+            material,
+            skirt,
+            parts,
+            max_strings,
+            allow,
+        })
+    }
+}
+
+fn resolve_material(ctx: &Ctx, m: Option<&RawMaterial>) -> Result<Material> {
+    match m {
+        None => Ok(Material::built_in("pla").unwrap()),
+        Some(RawMaterial::Named(n)) => Material::built_in(n).ok_or_else(|| {
+            Error::input(
+                "material",
+                format!("unknown material `{n}`; built-in materials are pla, abs, petg (or give an inline map)"),
+            )
+        }),
+        Some(RawMaterial::Inline(m)) => {
+            let nozzle_temp = ctx.positive(&m.nozzle_temp, "material.nozzle_temp")?;
+            Ok(Material {
+                name: m.name.clone().unwrap_or_else(|| "custom".into()),
+                filament_diameter: match &m.filament_diameter {
+                    Some(n) => Some(ctx.positive(n, "material.filament_diameter")?),
+                    None => None,
+                },
+                density: ctx.positive(&m.density, "material.density")?,
+                nozzle_temp,
+                bed_temp: ctx.non_negative(&m.bed_temp, "material.bed_temp")?,
+                max_nozzle_temp: match &m.max_nozzle_temp {
+                    Some(n) => ctx.positive(n, "material.max_nozzle_temp")?,
+                    None => nozzle_temp + 25.0,
+                },
+                fan_speed: match &m.fan_speed {
+                    Some(n) => {
+                        let f = ctx.non_negative(n, "material.fan_speed")?;
+                        if f > 1.0 {
+                            return Err(Error::input(
+                                "material.fan_speed",
+                                format!("{f} is not allowed; expected a fraction of full speed from 0 to 1"),
+                            ));
+                        }
+                        f
+                    }
+                    None => 0.0,
+                },
+                fan_start_z: match &m.fan_start_z {
+                    Some(n) => ctx.non_negative(n, "material.fan_start_z")?,
+                    None => FAN_START_Z,
+                },
+            })
+        }
+    }
+}
+
+fn resolve_part(ctx: &Ctx, p: &RawPart, c0: f64, v0: f64, k: usize) -> Result<Part> {
+    let cross_section = match &p.cross_section {
+        Some(n) => ctx.positive(n, "cross_section")?,
+        None => c0,
+    };
+    let speed = match &p.speed {
+        Some(n) => ctx.positive(n, "speed")?,
+        None => v0,
+    };
+    // a turtle runs now: its strings start with the part's c and v
+    let env = turtle::Env {
+        cross_section,
+        speed,
+        filament_area: ctx.turtle.0,
+        max_strings: ctx.turtle.1,
+    };
+    let primitive = p
+        .primitive
+        .resolve(&ctx.scope, &env)
+        .map_err(|e| e.under("primitive"))?;
+    let mut steps = Vec::with_capacity(p.steps.len());
+    for (j, s) in p.steps.iter().enumerate() {
+        steps.push(resolve_step(ctx, s).map_err(|e| e.under(&format!("steps[{j}]")))?);
+    }
+    Ok(Part {
+        name: p.name.clone().unwrap_or_else(|| format!("part {}", k + 1)),
+        cross_section,
+        speed,
+        primitive,
+        steps,
+    })
+}
+
+fn keep(k: &Option<RawKeep>) -> Keep {
+    match k {
+        Some(RawKeep::Speed) => Keep::Speed,
+        _ => Keep::Flow,
+    }
+}
+
+fn resolve_deform(ctx: &Ctx, d: &RawDeform, key: &str, cylinder: bool) -> Result<Deform> {
+    let position = match &d.position {
+        Some(p) => Some([
+            ctx.expr(&p[0], POINT_VARS, &format!("{key}.position[0]"))?,
+            ctx.expr(&p[1], POINT_VARS, &format!("{key}.position[1]"))?,
+            ctx.expr(&p[2], POINT_VARS, &format!("{key}.position[2]"))?,
+        ]),
+        None => None,
+    };
+    Ok(Deform {
+        cylinder,
+        position,
+        cross_section: match &d.cross_section {
+            Some(n) => Some(ctx.expr(n, STRING_VARS, &format!("{key}.cross_section"))?),
+            None => None,
+        },
+        speed: match &d.speed {
+            Some(n) => Some(ctx.expr(n, STRING_VARS, &format!("{key}.speed"))?),
+            None => None,
+        },
+    })
+}
+
+fn resolve_step(ctx: &Ctx, s: &RawStep) -> Result<Step> {
+    Ok(match s {
+        RawStep::DeformXyz(d) => Step::DeformXyz(resolve_deform(ctx, d, "deform_xyz", false)?),
+        RawStep::DeformCylinder(d) => {
+            Step::DeformCylinder(resolve_deform(ctx, d, "deform_cylinder", true)?)
+        }
+        RawStep::ModulateCylinder { factor, keep: k } => Step::ModulateCylinder(Modulate {
+            factor: ctx.expr(factor, STRING_VARS, "modulate_cylinder.factor")?,
+            keep: keep(k),
+        }),
+        RawStep::ModulateMap {
+            image,
+            text,
+            u,
+            v,
+            dark,
+            light,
+            threshold,
+            keep: k,
+        } => {
+            let key = "modulate_map";
+            let factor = |n: &Option<Num>, name: &str| match n {
+                Some(n) => ctx.positive(n, &format!("{key}.{name}")),
+                None => Ok(1.0),
+            };
+            let threshold = match threshold {
+                Some(n) => ctx.num(n, &format!("{key}.threshold"))?,
+                None => 0.5,
+            };
+            if !(0.0..=1.0).contains(&threshold) {
+                return Err(Error::input(
+                    format!("{key}.threshold"),
+                    format!("{threshold} is not allowed; expected a number from 0 to 1"),
+                ));
+            }
+            let bitmap = match (image, text) {
+                (Some(image), None) => load_bitmap(&ctx.dir.join(image), image)
+                    .map_err(|m| Error::input(format!("{key}.image"), m))?,
+                (None, Some(text)) => {
+                    Bitmap::from_text(text).map_err(|m| Error::input(format!("{key}.text"), m))?
+                }
+                _ => {
+                    return Err(Error::input(
+                        key,
+                        "expected exactly one of `image` (a picture file) and `text` (letters)",
+                    ))
+                }
+            };
+            Step::ModulateMap(ModulateMap {
+                image: bitmap,
+                u: ctx.expr(u, POINT_VARS, &format!("{key}.u"))?,
+                v: ctx.expr(v, POINT_VARS, &format!("{key}.v"))?,
+                dark: factor(dark, "dark")?,
+                light: factor(light, "light")?,
+                threshold,
+                keep: keep(k),
+            })
+        }
+        RawStep::Subdivide { max_length } => {
+            Step::Subdivide(ctx.positive(max_length, "subdivide.max_length")?)
+        }
+        RawStep::Translate(d) => Step::Translate(ctx.point(d, "translate")?),
+    })
+}
+
+/// Loads an image as grey levels 0..1; the error names the image as written.
+pub fn load_bitmap(path: &PathBuf, shown: &str) -> std::result::Result<Bitmap, String> {
+    let reader = image::ImageReader::open(path)
+        .map_err(|e| format!("cannot open the image `{shown}` ({}): {e}", path.display()))?
+        .with_guessed_format()
+        .map_err(|e| format!("cannot read the image `{shown}`: {e}"))?;
+    let img = reader.decode().map_err(|e| {
+        format!("`{shown}` is not an image p3dp can read (PNG, JPEG, BMP, GIF): {e}")
+    })?;
+    let grey = img.to_luma8();
+    let (w, h) = grey.dimensions();
+    if w == 0 || h == 0 {
+        return Err(format!("the image `{shown}` is empty"));
+    }
+    Ok(Bitmap {
+        width: w as usize,
+        height: h as usize,
+        pixels: grey.as_raw().iter().map(|&p| p as f32 / 255.0).collect(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn load(text: &str) -> Result<Recipe> {
+        let raw: RawRecipe = parse_yaml(text, "t.yaml")?;
+        Recipe::resolve(&raw, &[], None, Path::new("."))
+    }
+
+    const HELIX: &str = "p3dp: 1\nname: h\nparams:\n  radius: 10\n  height: \"2*radius\"\nparts:\n  - primitive: {helix: {radius: radius, height: height, pitch: 0.5}}\n";
+
+    #[test]
+    fn params_chain_and_set_overrides() {
+        let r = load(HELIX).unwrap();
+        assert_eq!(r.params["height"], 20.0);
+        let raw: RawRecipe = parse_yaml(HELIX, "t.yaml").unwrap();
+        let r = Recipe::resolve(
+            &raw,
+            &[("radius".into(), "3*4".into())],
+            None,
+            Path::new("."),
+        )
+        .unwrap();
+        assert_eq!(r.params["height"], 24.0);
+        let e = Recipe::resolve(&raw, &[("radios".into(), "3".into())], None, Path::new("."))
+            .unwrap_err();
+        assert!(e.to_string().contains("unknown param `radios`"), "{e}");
+    }
+
+    #[test]
+    fn unknown_key_names_the_path_and_line() {
+        let e = load(&HELIX.replace("pitch: 0.5", "pitch: 0.5, pich: 1")).unwrap_err();
+        assert_eq!(e.place.as_deref(), Some("parts[0].primitive.helix.pich"));
+        assert_eq!(e.line.map(|l| l.0), Some(7));
+        assert!(e.message.contains("expected one of"), "{e}");
+    }
+
+    #[test]
+    fn bad_values_name_the_key() {
+        let e = load(&HELIX.replace("pitch: 0.5", "pitch: -1")).unwrap_err();
+        assert_eq!(e.place.as_deref(), Some("parts[0].primitive.helix.pitch"));
+        let e = load(&HELIX.replace("pitch: 0.5", "pitch: 0.5, segments: 2.5")).unwrap_err();
+        assert_eq!(
+            e.place.as_deref(),
+            Some("parts[0].primitive.helix.segments")
+        );
+        let e = load(&HELIX.replace("pitch: 0.5", "pitch: 0.0000001")).unwrap_err();
+        assert!(e.message.contains("more than the limit"), "{e}");
+    }
+
+    #[test]
+    fn step_expressions_compile_with_places() {
+        let text = format!(
+            "{HELIX}    steps:\n      - deform_cylinder: {{position: [r, theta, \"z + \"]}}\n"
+        );
+        let e = load(&text).unwrap_err();
+        assert_eq!(
+            e.place.as_deref(),
+            Some("parts[0].steps[0].deform_cylinder.position[2]")
+        );
+        assert!(e.message.contains("z + "), "{e}");
+    }
+
+    #[test]
+    fn materials() {
+        let r = load(&HELIX.replace("name: h", "name: h\nmaterial: petg")).unwrap();
+        assert_eq!(r.material.name, "petg");
+        let r = load(&HELIX.replace(
+            "name: h",
+            "name: h\nmaterial: {filament_diameter: 2.85, density: 1.2, nozzle_temp: 200, bed_temp: 50}",
+        ))
+        .unwrap();
+        assert_eq!(r.material.filament_diameter, Some(2.85));
+        let e = load(&HELIX.replace("name: h", "name: h\nmaterial: wood")).unwrap_err();
+        assert_eq!(e.place.as_deref(), Some("material"));
+    }
+}

@@ -1,0 +1,260 @@
+//! The recipe format as written (`Raw*`: every number still a
+//! number-or-expression), deserialised from YAML with key paths in errors.
+//! The primitives' own raw forms live with them ([`crate::primitive`]).
+
+use std::fmt;
+
+use indexmap::IndexMap;
+use serde::de::{self, Deserializer, MapAccess, Visitor};
+use serde::Deserialize;
+
+use crate::num::{Num, Num3};
+use crate::primitive::RawPrimitive;
+
+/// `material:` a built-in name or an inline map.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RawMaterial {
+    /// `pla`, `abs` or `petg`.
+    Named(String),
+    /// `{filament_diameter, density, nozzle_temp, bed_temp}`.
+    Inline(InlineMaterial),
+}
+
+/// An inline material.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct InlineMaterial {
+    /// Name for reports.
+    #[serde(default)]
+    pub name: Option<String>,
+    /// mm; the printer's when absent.
+    #[serde(default)]
+    pub filament_diameter: Option<Num>,
+    /// g/cm³.
+    pub density: Num,
+    /// °C.
+    pub nozzle_temp: Num,
+    /// °C.
+    pub bed_temp: Num,
+    /// Hottest safe nozzle, °C; `nozzle_temp` + 25 when absent.
+    #[serde(default)]
+    pub max_nozzle_temp: Option<Num>,
+    /// Part-cooling fan, 0 to 1, above `fan_start_z`; 0 (off) when absent.
+    #[serde(default)]
+    pub fan_speed: Option<Num>,
+    /// Height above which the fan turns on, mm; 0.5 when absent.
+    #[serde(default)]
+    pub fan_start_z: Option<Num>,
+}
+
+impl<'de> Deserialize<'de> for RawMaterial {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<RawMaterial, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = RawMaterial;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a material name (pla, abs, petg) or a map {filament_diameter, density, nozzle_temp, bed_temp}")
+            }
+            fn visit_str<E: de::Error>(self, v: &str) -> std::result::Result<RawMaterial, E> {
+                Ok(RawMaterial::Named(v.to_string()))
+            }
+            fn visit_map<A: MapAccess<'de>>(
+                self,
+                m: A,
+            ) -> std::result::Result<RawMaterial, A::Error> {
+                InlineMaterial::deserialize(de::value::MapAccessDeserializer::new(m))
+                    .map(RawMaterial::Inline)
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// `defaults:`.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawDefaults {
+    /// mm².
+    #[serde(default)]
+    pub cross_section: Option<Num>,
+    /// mm/s.
+    #[serde(default)]
+    pub speed: Option<Num>,
+}
+
+/// `skirt:`.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawSkirt {
+    /// mm outside the parts' footprint.
+    pub distance: Num,
+    /// Number of loops.
+    pub loops: Num,
+}
+
+/// The top level of a recipe file.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawRecipe {
+    /// Format version; must be 1.
+    pub p3dp: u32,
+    /// Recipe name.
+    pub name: String,
+    /// Free text.
+    #[serde(default)]
+    pub description: Option<String>,
+    /// Built-in profile name or a path.
+    #[serde(default)]
+    pub printer: Option<String>,
+    /// Built-in material or inline map.
+    #[serde(default)]
+    pub material: Option<RawMaterial>,
+    /// Named params in order.
+    #[serde(default)]
+    pub params: IndexMap<String, Num>,
+    /// Default cross-section and speed.
+    #[serde(default)]
+    pub defaults: RawDefaults,
+    /// Optional skirt.
+    #[serde(default)]
+    pub skirt: Option<RawSkirt>,
+    /// The parts, printed in order.
+    pub parts: Vec<RawPart>,
+    /// Most strings one part may have (default 50 million).
+    #[serde(default)]
+    pub max_strings: Option<Num>,
+    /// Check codes silenced for this recipe (see [`crate::check::CODES`]).
+    #[serde(default)]
+    pub allow: Vec<RawAllow>,
+}
+
+/// An `allow:` entry: a check code, or `{code, reason}`.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RawAllow {
+    /// Just the code.
+    Code(String),
+    /// The code and why it is allowed.
+    WithReason {
+        /// The check code.
+        code: String,
+        /// Why the finding is accepted.
+        reason: Option<String>,
+    },
+}
+
+/// `{code, reason}` of an `allow:` entry.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AllowMap {
+    code: String,
+    #[serde(default)]
+    reason: Option<String>,
+}
+
+impl<'de> Deserialize<'de> for RawAllow {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<RawAllow, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = RawAllow;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a check code, or a map {code, reason}")
+            }
+            fn visit_str<E: de::Error>(self, v: &str) -> std::result::Result<RawAllow, E> {
+                Ok(RawAllow::Code(v.to_string()))
+            }
+            fn visit_map<A: MapAccess<'de>>(self, m: A) -> std::result::Result<RawAllow, A::Error> {
+                let a = AllowMap::deserialize(de::value::MapAccessDeserializer::new(m))?;
+                Ok(RawAllow::WithReason {
+                    code: a.code,
+                    reason: a.reason,
+                })
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+impl RawAllow {
+    /// The check code.
+    pub fn code(&self) -> &str {
+        match self {
+            RawAllow::Code(c) | RawAllow::WithReason { code: c, .. } => c,
+        }
+    }
+}
+
+/// One part.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawPart {
+    /// Name for reports.
+    #[serde(default)]
+    pub name: Option<String>,
+    /// mm², overrides defaults.
+    #[serde(default)]
+    pub cross_section: Option<Num>,
+    /// mm/s, overrides defaults.
+    #[serde(default)]
+    pub speed: Option<Num>,
+    /// Exactly one primitive.
+    pub primitive: RawPrimitive,
+    /// Steps in order.
+    #[serde(default)]
+    pub steps: Vec<RawStep>,
+}
+
+/// `keep:` of a modulation.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(rename_all = "snake_case")]
+#[allow(missing_docs)]
+pub enum RawKeep {
+    Flow,
+    Speed,
+}
+
+/// The keys of `deform_xyz` and `deform_cylinder`.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawDeform {
+    #[serde(default)]
+    pub position: Option<Num3>,
+    #[serde(default)]
+    pub cross_section: Option<Num>,
+    #[serde(default)]
+    pub speed: Option<Num>,
+}
+
+/// A step as written.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+#[allow(missing_docs)]
+pub enum RawStep {
+    DeformXyz(RawDeform),
+    DeformCylinder(RawDeform),
+    ModulateCylinder {
+        factor: Num,
+        #[serde(default)]
+        keep: Option<RawKeep>,
+    },
+    ModulateMap {
+        #[serde(default)]
+        image: Option<String>,
+        #[serde(default)]
+        text: Option<String>,
+        u: Num,
+        v: Num,
+        #[serde(default)]
+        dark: Option<Num>,
+        #[serde(default)]
+        light: Option<Num>,
+        #[serde(default)]
+        threshold: Option<Num>,
+        #[serde(default)]
+        keep: Option<RawKeep>,
+    },
+    Subdivide {
+        max_length: Num,
+    },
+    Translate(Num3),
+}
