@@ -7,7 +7,7 @@
 
 use glam::{DVec2, DVec3};
 
-use crate::recipe::Skirt;
+use crate::model::Skirt;
 use crate::toolpath::Toolpath;
 
 /// Convex hull of `pts`, counter-clockwise, by Andrew's monotone chain.

@@ -102,7 +102,7 @@ impl Stats {
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         recipe_path: &str,
-        recipe: &crate::recipe::Recipe,
+        recipe: &Recipe,
         m: &MoveStats,
         parts: Vec<PartStats>,
         sha256: String,

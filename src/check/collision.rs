@@ -36,7 +36,7 @@ use glam::{DVec2, DVec3};
 
 use super::{fmt_p, Finding, Severity};
 
-use crate::recipe::Recipe;
+use crate::model::Recipe;
 use crate::toolpath::Toolpath;
 
 /// Side of the height map's squares, mm (grown for very large prints).

@@ -26,7 +26,7 @@ use serde::Serialize;
 
 use super::support::width;
 use super::{fmt_p, Finding, Severity};
-use crate::recipe::Recipe;
+use crate::model::Recipe;
 use crate::toolpath::Toolpath;
 
 /// One part's hold on the bed.

@@ -5,7 +5,7 @@
 //! `flow` (the hot end's `max_flow`).
 
 use super::{fmt_p, Finding, Severity};
-use crate::recipe::Recipe;
+use crate::model::Recipe;
 use crate::toolpath::Toolpath;
 
 /// Strings of one kind: count, first, extreme.

@@ -17,7 +17,7 @@
 use glam::DVec3;
 
 use super::{fmt_p, Finding, Severity};
-use crate::recipe::Recipe;
+use crate::model::Recipe;
 use crate::toolpath::Toolpath;
 
 /// Losses below this (s) are not reported.

@@ -30,7 +30,7 @@ use glam::DVec3;
 
 use super::{fmt_p, Finding, Severity};
 use crate::geom::grid::{closest, SegGrid};
-use crate::recipe::Recipe;
+use crate::model::Recipe;
 use crate::toolpath::Toolpath;
 
 /// Width of a string of cross-section `c`: a round bead's diameter, at least the nozzle's.

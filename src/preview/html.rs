@@ -21,8 +21,8 @@ use glam::DVec3;
 use serde_json::json;
 
 use super::{Grid, Options, Scene};
-use crate::build::Plan;
 use crate::format::hms;
+use crate::plan::Plan;
 use crate::stats::Stats;
 
 /// The viewer page; `__P3DP_TITLE__` and `__P3DP_DATA__` are filled in.
