@@ -348,7 +348,7 @@ pub fn flat_tube(basis: &Basis, t: DVec3, n: DVec3, thick: f64, along: f64) -> (
     } else {
         1.0
     };
-    (face.hypot(edge), share)
+    (libm::hypot(face, edge), share)
 }
 
 /// Diffuse and highlight terms of a string under `light` (world direction).
