@@ -21,11 +21,12 @@
 //! closer to the bed than `checks.first_layer_min` × the nozzle's diameter
 //! is a warning: the nozzle scrapes the bed and the filament cannot get out.
 
-use glam::DVec2;
+use glam::{DVec2, DVec3};
 use serde::Serialize;
 
 use super::support::width;
 use super::{fmt_p, Finding, Severity};
+use crate::geom::grid::SegGrid;
 use crate::model::Recipe;
 use crate::toolpath::Toolpath;
 
@@ -70,54 +71,37 @@ struct BedString {
     s: f64,
 }
 
-/// The bed strings laid so far, hashed by the 1 mm squares their ends'
-/// rectangle (grown by `reach`) covers, seen from above.
-#[derive(Default)]
-struct BedGrid {
-    cells: std::collections::HashMap<(i64, i64), Vec<BedString>>,
+/// Whether bed string `e`, laid earlier, covers the bed under `q` (the
+/// middle of a string of width `w`): it passes within w / 2 of it, seen from
+/// above, lower than it; or as low, alongside it (the middle's foot on that
+/// string falls between its ends: not a loop closing end to start) and not
+/// just before it on the same path (farther back along the path than
+/// w + 3 × its distance): a second pass over the same line.
+fn covers(e: &BedString, q: &BedString, w: f64) -> bool {
+    let p = q.a.lerp(q.b, 0.5);
+    let ab = e.b - e.a;
+    let l2 = ab.length_squared();
+    let foot = if l2 > 0.0 {
+        (p - e.a).dot(ab) / l2
+    } else {
+        0.0
+    };
+    let d = p.distance(e.a + ab * foot.clamp(0.0, 1.0));
+    d < w / 2.0
+        && (e.h < q.h - 1e-9
+            || (e.h <= q.h + 1e-9
+                && (0.0..=1.0).contains(&foot)
+                && (e.path != q.path || q.s - e.s > w + 3.0 * d)))
 }
 
-impl BedGrid {
-    fn squares(a: DVec2, b: DVec2, reach: f64) -> impl Iterator<Item = (i64, i64)> {
-        let lo = (a.min(b) - DVec2::splat(reach)).floor();
-        let hi = (a.max(b) + DVec2::splat(reach)).floor();
-        let (x0, x1, y0, y1) = (lo.x as i64, hi.x as i64, lo.y as i64, hi.y as i64);
-        (x0..=x1).flat_map(move |x| (y0..=y1).map(move |y| (x, y)))
-    }
-
-    fn insert(&mut self, bs: BedString, reach: f64) {
-        for sq in Self::squares(bs.a, bs.b, reach) {
-            self.cells.entry(sq).or_default().push(bs);
-        }
-    }
-
-    /// Whether the bed under `q` (the middle of a string of width `w`) is
-    /// covered already: an earlier bed string passes within w / 2 of it, seen
-    /// from above, lower than it; or as low, alongside it (the middle's foot
-    /// on that string falls between its ends: not a loop closing end to
-    /// start) and not just before it on the same path (farther back along the
-    /// path than w + 3 × its distance): a second pass over the same line.
-    fn covered(&self, q: &BedString, w: f64) -> bool {
-        let p = q.a.lerp(q.b, 0.5);
-        let key = (libm::floor(p.x) as i64, libm::floor(p.y) as i64);
-        self.cells.get(&key).is_some_and(|v| {
-            v.iter().any(|e| {
-                let ab = e.b - e.a;
-                let l2 = ab.length_squared();
-                let foot = if l2 > 0.0 {
-                    (p - e.a).dot(ab) / l2
-                } else {
-                    0.0
-                };
-                let d = p.distance(e.a + ab * foot.clamp(0.0, 1.0));
-                d < w / 2.0
-                    && (e.h < q.h - 1e-9
-                        || (e.h <= q.h + 1e-9
-                            && (0.0..=1.0).contains(&foot)
-                            && (e.path != q.path || q.s - e.s > w + 3.0 * d)))
-            })
-        })
-    }
+/// A candidate bed string: as seen at its middle (`here`, `s` the length
+/// along its path to the middle) and as it covers later ones (`laid`, `s` to
+/// its end), with its width and where it is.
+struct Candidate {
+    here: BedString,
+    laid: BedString,
+    w: f64,
+    k: usize,
 }
 
 /// The footprint of each of `paths` on the bed (`None` where none of its
@@ -135,15 +119,13 @@ fn footprint_all(
     nozzle: f64,
     min_h: f64,
 ) -> Vec<(Option<Footprint>, Option<(usize, f64)>)> {
-    let mut grid = BedGrid::default();
-    let mut out = Vec::with_capacity(paths.len());
+    // every string low enough to touch the bed, in print order
+    let mut cands: Vec<Candidate> = Vec::new();
+    let mut starts = Vec::with_capacity(paths.len() + 1);
     for (j, tp) in paths.iter().enumerate() {
-        let (mut len, mut area) = (0.0, 0.0);
+        starts.push(cands.len());
         // extruded length along the path up to the current string's middle
         let mut along = 0.0;
-        let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
-        let mut lowest = f64::INFINITY;
-        let mut scrape = None;
         for (k, s) in tp.strings.iter().enumerate() {
             if s.travel {
                 continue;
@@ -156,27 +138,57 @@ fn footprint_all(
             if a.z > w || b.z > w || l <= 0.0 {
                 continue;
             }
-            let h = (a.z + b.z) / 2.0;
-            let (a2, b2) = (a.truncate(), b.truncate());
             let here = BedString {
-                a: a2,
-                b: b2,
-                h,
+                a: a.truncate(),
+                b: b.truncate(),
+                h: (a.z + b.z) / 2.0,
                 path: j,
                 s: mid,
             };
-            if grid.covered(&here, w) {
+            cands.push(Candidate {
+                here,
+                laid: BedString { s: along, ..here },
+                w,
+                k,
+            });
+        }
+    }
+    starts.push(cands.len());
+    // seen from above: one grid of the candidates (z = 0), ids in print order,
+    // so "laid before g" is the front of each bucket; only the strings kept
+    // (not covered themselves) cover later ones
+    let flat = |p: DVec2| DVec3::new(p.x, p.y, 0.0);
+    let grid = SegGrid::build(cands.len(), 1.0, |i| {
+        (flat(cands[i].laid.a), flat(cands[i].laid.b))
+    });
+    let mut kept = vec![false; cands.len()];
+    let mut out = Vec::with_capacity(paths.len());
+    for (j, tp) in paths.iter().enumerate() {
+        let (mut len, mut area) = (0.0, 0.0);
+        let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+        let mut lowest = f64::INFINITY;
+        let mut scrape = None;
+        for g in starts[j]..starts[j + 1] {
+            let c = &cands[g];
+            let mid = flat(c.here.a.lerp(c.here.b, 0.5));
+            let covered = grid.search(mid, c.w / 2.0, g as u32, |e| {
+                kept[e as usize] && covers(&cands[e as usize].laid, &c.here, c.w)
+            });
+            if covered {
                 continue;
             }
-            grid.insert(BedString { s: along, ..here }, w / 2.0);
+            kept[g] = true;
+            let (a2, b2) = (c.here.a, c.here.b);
+            let (a, b) = tp.ends(c.k);
+            let l = a.distance(b);
             len += l;
-            area += l * band(s.c, h, nozzle);
+            area += l * band(tp.strings[c.k].c, c.here.h, nozzle);
             lo = lo.min(a2).min(b2);
             hi = hi.max(a2).max(b2);
             let low = a.z.min(b.z);
             lowest = f64::min(lowest, low);
             if low < min_h && scrape.is_none() {
-                scrape = Some((k, low));
+                scrape = Some((c.k, low));
             }
         }
         let f = (len > 0.0).then(|| Footprint {
@@ -229,7 +241,6 @@ pub fn check(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) -> Ve
 mod tests {
     use super::*;
     use crate::toolpath::Strand;
-    use glam::DVec3;
 
     fn ring(r: f64, z: f64, n: usize, c: f64) -> Toolpath {
         let mut tp = Toolpath {

@@ -27,7 +27,9 @@ pub mod thumbnail;
 
 mod text;
 
-use std::collections::{HashMap, HashSet};
+use std::collections::HashSet;
+
+use crate::geom::grid::{closest, SegGrid};
 use std::path::Path;
 
 use glam::DVec3;
@@ -418,23 +420,22 @@ fn flags(plan: &Plan) -> Vec<Vec<bool>> {
     out
 }
 
-/// Points in a uniform grid, to find the nearest point of another pass: one
-/// much farther along the path than in space (path distance over 3 ×
-/// straight distance), so that a point's own neighbours on its string do not
-/// count.
+/// The strings of a polyline in the shared segment grid
+/// ([`crate::geom::grid::SegGrid`]), to find the nearest point of another
+/// pass: one much farther along the path than in space (path distance over
+/// 3 × straight distance), so that a point's own neighbours on its string do
+/// not count.
 pub struct Grid<'t> {
     points: &'t [DVec3],
     /// Arc length along the path at each point, mm.
     s: Vec<f64>,
     cell: f64,
-    /// The points' indices, sorted by cell.
-    order: Vec<u32>,
-    /// Each cell's run in `order`: start and length.
-    map: HashMap<(i64, i64, i64), (u32, u32)>,
+    /// String k runs from point k to point k + 1.
+    strings: SegGrid,
 }
 
 impl<'t> Grid<'t> {
-    /// Files the polyline `points` in cubes of `cell` mm.
+    /// Files the strings of the polyline `points` in cubes of `cell` mm.
     pub fn new(points: &'t [DVec3], cell: f64) -> Grid<'t> {
         let mut s = Vec::with_capacity(points.len());
         let mut acc = 0.0;
@@ -447,34 +448,14 @@ impl<'t> Grid<'t> {
             }
             s.push(acc);
         }
-        let mut g = Grid {
+        let n = points.len().saturating_sub(1);
+        let strings = SegGrid::build(n, cell, |k| (points[k], points[k + 1]));
+        Grid {
             points,
             s,
             cell,
-            order: Vec::new(),
-            map: HashMap::new(),
-        };
-        // one sorted list of (cell, index) and a run per cell: compact for
-        // millions of points
-        let mut keyed: Vec<((i64, i64, i64), u32)> = points
-            .iter()
-            .enumerate()
-            .filter(|(_, p)| p.is_finite())
-            .map(|(i, p)| (g.key(*p), i as u32))
-            .collect();
-        keyed.sort_unstable();
-        g.order = keyed.iter().map(|k| k.1).collect();
-        let mut start = 0;
-        while start < keyed.len() {
-            let c = keyed[start].0;
-            let mut end = start;
-            while end < keyed.len() && keyed[end].0 == c {
-                end += 1;
-            }
-            g.map.insert(c, (start as u32, (end - start) as u32));
-            start = end;
+            strings,
         }
-        g
     }
 
     /// A grid to find the passes next to a surface whose passes lie about
@@ -492,59 +473,37 @@ impl<'t> Grid<'t> {
         Grid::new(points, (3.0 * h).max(0.6 * l90 + 1.5 * h).clamp(0.3, 4.0))
     }
 
-    fn key(&self, p: DVec3) -> (i64, i64, i64) {
-        let c = |x: f64| (x / self.cell).floor() as i64;
-        (c(p.x), c(p.y), c(p.z))
-    }
-
     /// Arc length at point k, mm.
     pub fn arc(&self, k: usize) -> f64 {
         self.s[k]
     }
 
     /// The nearest point of another pass to `p` (at arc length `sp`): the
-    /// closest point on the strings next to the points filed near `p`, or
-    /// `None` when none lies within one cell.
+    /// closest point of the strings within one cell of `p`, or `None` when
+    /// none lies that near.
     pub fn nearest_other(&self, p: DVec3, sp: f64) -> Option<DVec3> {
-        let c = self.key(p);
-        let n = self.points.len();
-        let mut best: Option<(f64, DVec3)> = None;
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    let Some(&(at, len)) = self.map.get(&(c.0 + dx, c.1 + dy, c.2 + dz)) else {
-                        continue;
-                    };
-                    for &j in &self.order[at as usize..(at + len) as usize] {
-                        let j = j as usize;
-                        // the strings ending and starting at point j
-                        let ks = [j.checked_sub(1), (j + 1 < n).then_some(j)];
-                        for k in ks.into_iter().flatten() {
-                            let (a, b) = (self.points[k], self.points[k + 1]);
-                            let ab = b - a;
-                            let l2 = ab.length_squared();
-                            // the closest point of the string: a + f·(b − a)
-                            let f = if l2 > 0.0 {
-                                ((p - a).dot(ab) / l2).clamp(0.0, 1.0)
-                            } else {
-                                0.0
-                            };
-                            let q = a + ab * f;
-                            let d = p.distance(q);
-                            let sq = self.s[k] + f * (self.s[k + 1] - self.s[k]);
-                            // 1 µm: a point revisited (a closed loop) is no neighbour
-                            if d > 1e-3
-                                && d < self.cell
-                                && best.is_none_or(|b| d < b.0)
-                                && (sq - sp).abs() > 3.0 * d
-                            {
-                                best = Some((d, q));
-                            }
-                        }
-                    }
-                }
-            }
+        if !p.is_finite() {
+            return None;
         }
+        let mut best: Option<(f64, DVec3)> = None;
+        self.strings.search(p, self.cell, u32::MAX, |k| {
+            let k = k as usize;
+            let (a, b) = (self.points[k], self.points[k + 1]);
+            // the closest point of the string: a + f·(b − a)
+            let f = closest(p, a, b);
+            let q = a + (b - a) * f;
+            let d = p.distance(q);
+            let sq = self.s[k] + f * (self.s[k + 1] - self.s[k]);
+            // 1 µm: a point revisited (a closed loop) is no neighbour
+            if d > 1e-3
+                && d < self.cell
+                && best.is_none_or(|b| d < b.0)
+                && (sq - sp).abs() > 3.0 * d
+            {
+                best = Some((d, q));
+            }
+            false
+        });
         best.map(|(_, q)| q)
     }
 
