@@ -39,14 +39,15 @@ pub struct Plan {
     pub footprints: Vec<check::first_layer::Footprint>,
 }
 
-/// Makes a part's strings: its primitive, then each step in order.
+/// Makes a part's strings: its primitives, then each of its own steps in
+/// order (a group's steps are [`crate::assembly::make_parts`]'s).
 pub fn make_part(recipe: &Recipe, k: usize) -> Result<Toolpath> {
     let part = &recipe.parts[k];
-    let mut tp = part.primitive.build(part.cross_section, part.speed);
+    let mut tp = part.build_primitives();
     tp.name = part.name.clone();
     for (j, step) in part.steps.iter().enumerate() {
         step.apply(&mut tp, recipe.max_strings)
-            .map_err(|m| Error::input(format!("parts[{k}].steps[{j}].{}", step.key()), m))?;
+            .map_err(|m| Error::input(format!("{}.steps[{j}].{}", part.place, step.key()), m))?;
     }
     Ok(tp)
 }
@@ -70,10 +71,8 @@ pub fn plan(path: &Path, opts: &Options) -> Result<Plan> {
         None => None,
     };
     let recipe = Recipe::load(path, &opts.sets, printer.as_ref())?;
-    let mut parts = Vec::with_capacity(recipe.parts.len());
-    for k in 0..recipe.parts.len() {
-        parts.push(make_part(&recipe, k).map_err(|e| e.in_file(&shown))?);
-    }
+    // each part with its own steps, then the steps of groups (issue 15)
+    let parts = crate::assembly::make_parts(&recipe).map_err(|e| e.in_file(&shown))?;
     let mut paths = Vec::with_capacity(parts.len() + 1);
     if let Some(s) = &recipe.skirt {
         let cv = (recipe.parts[0].cross_section, recipe.parts[0].speed);

@@ -8,11 +8,13 @@
 #![warn(missing_docs)]
 
 pub mod arc;
+pub mod assembly;
 pub mod batch;
 pub mod build;
 pub mod check;
 pub mod cli;
 pub mod error;
+pub mod expand;
 pub mod expr;
 pub mod flavor;
 pub mod gcode;

@@ -219,6 +219,12 @@ pub struct RawRecipe {
     /// Check codes silenced for this recipe (see [`crate::check::CODES`]).
     #[serde(default)]
     pub allow: Vec<RawAllow>,
+    /// Named, parameterised part trees (issue 15, see [`crate::expand`]).
+    #[serde(default)]
+    pub templates: IndexMap<String, crate::expand::RawTemplate>,
+    /// Files whose params and templates this recipe uses, relative to it.
+    #[serde(default)]
+    pub include: Vec<String>,
 }
 
 /// An `allow:` entry: a check code, or `{code, reason}`.
@@ -289,11 +295,24 @@ pub struct RawPart {
     /// mm/s, overrides defaults.
     #[serde(default)]
     pub speed: Option<Num>,
-    /// Exactly one primitive.
-    pub primitive: RawPrimitive,
+    /// One primitive, or a list whose strings follow each other (issue 15).
+    #[serde(default)]
+    pub primitive: Option<crate::expand::RawPrimitives>,
     /// Steps in order.
     #[serde(default)]
     pub steps: Vec<RawStep>,
+    /// Child parts, making this part a group (see [`crate::expand`]).
+    #[serde(default)]
+    pub parts: Option<Vec<RawPart>>,
+    /// A template to use instead of `primitive` or `parts`.
+    #[serde(default)]
+    pub template: Option<String>,
+    /// The template's params for this use.
+    #[serde(default)]
+    pub with: IndexMap<String, Num>,
+    /// Repeat the part once per value of each name (`for:` in a recipe).
+    #[serde(default, rename = "for")]
+    pub repeat: IndexMap<String, crate::expand::RawLoop>,
 }
 
 /// A primitive as written.
@@ -453,10 +472,15 @@ pub struct Part {
     pub cross_section: f64,
     /// Speed, mm/s.
     pub speed: f64,
-    /// The primitive.
+    /// The primitive (the first, when the part has several).
     pub primitive: Primitive,
     /// The steps.
     pub steps: Vec<Step>,
+    /// The primitives after the first, in order (see [`crate::assembly`]).
+    pub more: Vec<crate::assembly::Piece>,
+    /// Where the part is written, through templates and loops
+    /// (`parts[1].parts[0] (template ring, k = 3)`), for error places.
+    pub place: String,
 }
 
 /// A recipe resolved and ready to build.
@@ -478,6 +502,8 @@ pub struct Recipe {
     pub max_strings: u64,
     /// Check codes the recipe silences (`allow:`).
     pub allow: Vec<String>,
+    /// Steps of groups of parts, in the order they run (see [`crate::assembly`]).
+    pub groups: Vec<crate::assembly::Group>,
 }
 
 /// Default cross-section when a recipe gives none: Kanada's 0.196 mm² (Fig. 9).
@@ -688,7 +714,7 @@ impl Recipe {
             .map_err(|e| Error::io(&shown, format!("cannot read the recipe: {e}")))?;
         let raw: RawRecipe = parse_yaml(&text, &shown)?;
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-        Recipe::resolve(&raw, sets, printer, &dir).map_err(|e| e.in_file(&shown))
+        Recipe::resolve_in(&raw, sets, printer, &dir, Some(path)).map_err(|e| e.in_file(&shown))
     }
 
     /// Resolves a parsed recipe; relative paths are taken from `dir`.
@@ -697,6 +723,18 @@ impl Recipe {
         sets: &[(String, String)],
         printer: Option<&Printer>,
         dir: &Path,
+    ) -> Result<Recipe> {
+        Recipe::resolve_in(raw, sets, printer, dir, None)
+    }
+
+    /// [`Recipe::resolve`] for the recipe read from `file` (so that an
+    /// include cycle through it is named).
+    fn resolve_in(
+        raw: &RawRecipe,
+        sets: &[(String, String)],
+        printer: Option<&Printer>,
+        dir: &Path,
+        file: Option<&Path>,
     ) -> Result<Recipe> {
         if raw.p3dp != 1 {
             return Err(Error::input(
@@ -710,7 +748,8 @@ impl Recipe {
         if raw.parts.is_empty() {
             return Err(Error::input("parts", "expected at least one part"));
         }
-        let params = eval_params(&raw.params, sets)?;
+        let library = crate::expand::load_library(raw, file, dir)?;
+        let params = library.eval_params(sets)?;
         let ctx = Ctx {
             params: &params,
             dir,
@@ -747,11 +786,24 @@ impl Recipe {
             turtle: (std::f64::consts::PI * (d / 2.0) * (d / 2.0), max_strings),
             ..ctx
         };
-        let mut parts = Vec::with_capacity(raw.parts.len());
-        for (k, p) in raw.parts.iter().enumerate() {
-            let place = format!("parts[{k}]");
-            let part = resolve_part(&ctx, p, c0, v0, k).map_err(|e| e.under(&place))?;
-            let n = part.primitive.string_count();
+        // templates, loops and groups expanded into leaf parts (issue 15)
+        let expansion = crate::expand::expand(&raw.parts, &library.templates, &params, dir)?;
+        let total_limit = max_strings.max(DEFAULT_MAX_STRINGS);
+        let mut total = 0u64;
+        let mut parts = Vec::with_capacity(expansion.leaves.len());
+        for (k, leaf) in expansion.leaves.iter().enumerate() {
+            let place = &leaf.place;
+            let ctx = Ctx {
+                params: &leaf.params,
+                dir: leaf.dir,
+                turtle: ctx.turtle,
+            };
+            let mut part = resolve_part(&ctx, leaf.part, c0, v0, k).map_err(|e| e.under(place))?;
+            if let Some(name) = &leaf.name {
+                part.name.clone_from(name);
+            }
+            part.place.clone_from(place);
+            let n = part.string_count();
             if n > max_strings {
                 return Err(Error::input(
                     format!("{place}.primitive"),
@@ -760,7 +812,37 @@ impl Recipe {
                     ),
                 ));
             }
+            total = total.saturating_add(n);
+            if total > total_limit {
+                return Err(Error::input(
+                    format!("{place}.primitive"),
+                    format!(
+                        "with the parts before it the recipe would have {total} strings, more than the limit of {total_limit} for all parts together; expected fewer parts or strings"
+                    ),
+                ));
+            }
             parts.push(part);
+        }
+        let mut groups = Vec::with_capacity(expansion.groups.len());
+        for g in &expansion.groups {
+            let ctx = Ctx {
+                params: &g.params,
+                dir: g.dir,
+                turtle: ctx.turtle,
+            };
+            let mut steps = Vec::with_capacity(g.steps.len());
+            for (j, s) in g.steps.iter().enumerate() {
+                steps.push(
+                    resolve_step(&ctx, s)
+                        .map_err(|e| e.under(&format!("steps[{j}]")).under(&g.place))?,
+                );
+            }
+            groups.push(crate::assembly::Group {
+                first: g.first,
+                end: g.end,
+                steps,
+                place: g.place.clone(),
+            });
         }
         let allow: Vec<String> = raw.allow.iter().map(|a| a.code().to_string()).collect();
         crate::check::validate_allow(&allow, |i| format!("allow[{i}]"))?;
@@ -773,6 +855,7 @@ impl Recipe {
             parts,
             max_strings,
             allow,
+            groups,
         })
     }
 }
@@ -832,7 +915,47 @@ fn resolve_part(ctx: &Ctx, p: &RawPart, c0: f64, v0: f64, k: usize) -> Result<Pa
         Some(n) => ctx.positive(n, "speed")?,
         None => v0,
     };
-    let primitive = match &p.primitive {
+    // one primitive or a list (issue 15), each maybe with its own c and v
+    let items = p.primitive.as_ref().map(|p| p.items()).unwrap_or_default();
+    if items.is_empty() {
+        return Err(Error::input("primitive", "expected at least one primitive"));
+    }
+    let mut pieces = Vec::with_capacity(items.len());
+    for (key, item) in items {
+        let c = match &item.cross_section {
+            Some(n) => ctx.positive(n, &format!("{key}.cross_section"))?,
+            None => cross_section,
+        };
+        let v = match &item.speed {
+            Some(n) => ctx.positive(n, &format!("{key}.speed"))?,
+            None => speed,
+        };
+        let primitive = resolve_item(ctx, &item.primitive, c, v).map_err(|e| e.under(&key))?;
+        pieces.push(crate::assembly::Piece {
+            primitive,
+            cross_section: c,
+            speed: v,
+        });
+    }
+    let first = pieces.remove(0);
+    let mut steps = Vec::with_capacity(p.steps.len());
+    for (j, s) in p.steps.iter().enumerate() {
+        steps.push(resolve_step(ctx, s).map_err(|e| e.under(&format!("steps[{j}]")))?);
+    }
+    Ok(Part {
+        name: p.name.clone().unwrap_or_else(|| format!("part {}", k + 1)),
+        cross_section: first.cross_section,
+        speed: first.speed,
+        primitive: first.primitive,
+        steps,
+        more: pieces,
+        place: format!("parts[{k}]"),
+    })
+}
+
+/// One primitive with the cross-section and speed its strings start with.
+fn resolve_item(ctx: &Ctx, p: &RawPrimitive, cross_section: f64, speed: f64) -> Result<Primitive> {
+    match p {
         // a turtle runs now: its strings start with the part's c and v
         RawPrimitive::Turtle(t) => {
             let env = crate::primitive::turtle::Env {
@@ -846,18 +969,6 @@ fn resolve_part(ctx: &Ctx, p: &RawPart, c0: f64, v0: f64, k: usize) -> Result<Pa
         }
         other => resolve_primitive(ctx, other),
     }
-    .map_err(|e| e.under("primitive"))?;
-    let mut steps = Vec::with_capacity(p.steps.len());
-    for (j, s) in p.steps.iter().enumerate() {
-        steps.push(resolve_step(ctx, s).map_err(|e| e.under(&format!("steps[{j}]")))?);
-    }
-    Ok(Part {
-        name: p.name.clone().unwrap_or_else(|| format!("part {}", k + 1)),
-        cross_section,
-        speed,
-        primitive,
-        steps,
-    })
 }
 
 fn resolve_primitive(ctx: &Ctx, p: &RawPrimitive) -> Result<Primitive> {
@@ -988,7 +1099,7 @@ fn resolve_primitive(ctx: &Ctx, p: &RawPrimitive) -> Result<Primitive> {
             s,
             &|n: &Num, place: &str| ctx.num(n, place),
         )?),
-        RawPrimitive::Turtle(_) => unreachable!("a turtle is resolved by resolve_part"),
+        RawPrimitive::Turtle(_) => unreachable!("a turtle is resolved by resolve_item"),
     })
 }
 

@@ -410,7 +410,8 @@ pub fn pattern_png(recipe: &Recipe) -> Result<Vec<u8>> {
     let models: Vec<&CaHelix> = recipe
         .parts
         .iter()
-        .filter_map(|p| match &p.primitive {
+        .flat_map(|p| p.primitives())
+        .filter_map(|p| match p {
             super::Primitive::CaHelix(h) => Some(h),
             _ => None,
         })

@@ -882,7 +882,8 @@ pub fn stats(recipe: &crate::recipe::Recipe) -> Vec<SolidStats> {
     recipe
         .parts
         .iter()
-        .filter_map(|p| match &p.primitive {
+        .flat_map(|p| p.primitives().map(move |q| (p, q)))
+        .filter_map(|(p, q)| match q {
             super::Primitive::Solid(s) => Some(SolidStats {
                 part: p.name.clone(),
                 layers: s
