@@ -161,9 +161,9 @@ impl<'a> Walker<'a> {
             return Err(Error::input(
                 format!("{place}.for"),
                 format!(
-                    "this `for` makes {} copies ({}){}, more than the limit of {MAX_PARTS} parts in a recipe; expected fewer values",
+                    "this `for` makes {} copies{}{}, more than the limit of {MAX_PARTS} parts in a recipe; expected fewer values",
                     if copies == usize::MAX { "too many".to_string() } else { copies.to_string() },
-                    sizes.join(" × "),
+                    if sizes.len() > 1 { format!(" ({})", sizes.join(" × ")) } else { String::new() },
                     if before > 0 { format!(" after {before} parts") } else { String::new() },
                 ),
             ));
@@ -386,9 +386,11 @@ impl<'a> Walker<'a> {
             };
             params.insert(pn.clone(), v);
         }
-        let name = match &p.name {
-            Some(n) => Some(fill_name(n, &scope.params, &format!("{here}.name"))?),
-            None => name,
+        // a name given where the template is used wins over the one inside it
+        let name = match (name, &p.name) {
+            (Some(n), _) => Some(n),
+            (None, Some(n)) => Some(fill_name(n, &scope.params, &format!("{here}.name"))?),
+            (None, None) => None,
         };
         let from = match &tpl.file {
             Some(f) => format!(" from {f}"),
@@ -541,13 +543,13 @@ pub fn fill_name(name: &str, params: &Params, place: &str) -> Result<String> {
             Error::input(
                 place,
                 format!(
-                    "`{name}` has a `{{` without its `}}`; expected `{{EXPR}}`, e.g. `ring-{{k}}`"
+                    "the name {name:?} has a `{{` without its `}}`; expected `{{EXPR}}`, e.g. `ring-{{k}}`"
                 ),
             )
         })?;
         let src = &after[..close];
         let v = expr::eval_const(src, params)
-            .map_err(|m| Error::input(place, format!("in the name `{name}`: {m}")))?;
+            .map_err(|m| Error::input(place, format!("in the name {name:?}: {m}")))?;
         out.push_str(&fmt_value(v));
         rest = &after[close + 1..];
     }
