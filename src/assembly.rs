@@ -131,6 +131,10 @@ fn apply(g: &Group, parts: &mut [Toolpath], max_strings: u64) -> Result<()> {
     for (j, step) in g.steps.iter().enumerate() {
         step.apply(&mut all, max_strings)
             .map_err(|m| Error::input(format!("{}.steps[{j}].{}", g.place, step.key()), m))?;
+        if matches!(step, Step::Subdivide(_)) {
+            // one string again between two parts, for the steps after it
+            all = join(&split(all));
+        }
     }
     for (tp, (part, name)) in parts.iter_mut().zip(split(all).into_iter().zip(names)) {
         *tp = Toolpath { name, ..part };

@@ -179,6 +179,27 @@ fn a_group_subdivides_its_parts_and_keeps_them_apart() {
 }
 
 #[test]
+fn after_a_groups_subdivide_n_counts_the_parts_points_only() {
+    let (head, _) = TWO_HELICES.split_once("      - deform_cylinder").unwrap();
+    let text = format!(
+        "{head}      - subdivide: {{max_length: 0.2}}\n      - deform_xyz: {{position: [x, y, \"z + 0.000001*n\"]}}\n"
+    );
+    let recipe = resolve(&text);
+    let before = without_groups(&recipe);
+    let after = make_parts(&recipe).unwrap();
+    let n: usize = after.iter().map(|t| t.points.len()).sum();
+    for (p0, p1) in before.iter().zip(&after) {
+        assert!(p1.points.len() > 2 * p0.points.len());
+        for (p, q) in [
+            (p0.points[0], p1.points[0]),
+            (*p0.points.last().unwrap(), *p1.points.last().unwrap()),
+        ] {
+            assert!((q.z - (p.z + 1e-6 * n as f64)).abs() < 1e-12, "{p} {q} {n}");
+        }
+    }
+}
+
+#[test]
 fn names_of_copies_and_template_params() {
     let recipe = resolve(
         "p3dp: 1
