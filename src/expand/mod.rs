@@ -615,8 +615,8 @@ mod tests {
         assert!(range("k", &p).unwrap_err().contains("not a range"));
         assert!(range("0..1e9", &p).unwrap_err().contains("limit"));
         let mut q = Params::new();
-        q.insert("n".into(), 3.0);
-        assert_eq!(range("n..2*n", &q).unwrap(), vec![3.0, 4.0, 5.0, 6.0]);
+        q.insert("m".into(), 3.0);
+        assert_eq!(range("m..2*m", &q).unwrap(), vec![3.0, 4.0, 5.0, 6.0]);
     }
 
     #[test]
