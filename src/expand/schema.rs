@@ -87,6 +87,20 @@ impl<'de> Deserialize<'de> for RawPrimitiveItem {
     }
 }
 
+/// The primitives' keys, for messages.
+const PRIMITIVES: [&str; 10] = [
+    "path",
+    "circle",
+    "arc",
+    "spiral",
+    "helix",
+    "cylinder",
+    "pattern_helix",
+    "ca_helix",
+    "solid",
+    "turtle",
+];
+
 /// Reads `{KIND: {…}, cross_section: c, speed: v}`: exactly one primitive key.
 fn item_from_map<'de, A: MapAccess<'de>>(mut m: A) -> Result<RawPrimitiveItem, A::Error> {
     let (mut primitive, mut cross_section, mut speed) = (None, None, None);
@@ -96,9 +110,11 @@ fn item_from_map<'de, A: MapAccess<'de>>(mut m: A) -> Result<RawPrimitiveItem, A
             "speed" => speed = Some(m.next_value::<Num>()?),
             _ => {
                 if primitive.is_some() {
-                    return Err(de::Error::custom(format!(
-                        "a second primitive `{key}` here; expected one primitive per entry (give several as a list)"
-                    )));
+                    return Err(de::Error::custom(if PRIMITIVES.contains(&key.as_str()) {
+                        format!("a second primitive `{key}` here; expected one primitive per entry (give several as a list)")
+                    } else {
+                        format!("unknown key `{key}` beside the primitive; expected `cross_section` or `speed`")
+                    }));
                 }
                 primitive = Some(RawPrimitive::deserialize(KeyedEnum { key, map: &mut m })?);
             }
@@ -281,4 +297,58 @@ pub struct RawLibrary {
     /// Files it includes in turn.
     #[serde(default)]
     pub include: Vec<String>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::recipe::parse_yaml;
+
+    #[test]
+    fn one_primitive_or_a_list_with_cross_section_and_speed_beside() {
+        let one: RawPrimitives = parse_yaml("{circle: {radius: 5}}", "t").unwrap();
+        assert!(matches!(one, RawPrimitives::One(ref p) if p.speed.is_none()));
+        let list: RawPrimitives = parse_yaml(
+            "- {spiral: {radius: 5, pitch: 0.4}, cross_section: 0.1, speed: 20}\n- helix: {radius: 5, height: 2, pitch: 0.3}\n",
+            "t",
+        )
+        .unwrap();
+        let items = list.items();
+        assert_eq!(items[1].0, "primitive[1]");
+        assert_eq!(items[0].1.cross_section, Some(Num::Value(0.1)));
+        assert!(matches!(items[1].1.primitive, RawPrimitive::Helix { .. }));
+        let e = parse_yaml::<RawPrimitives>("{circle: {radius: 5}, sped: 3}", "t").unwrap_err();
+        assert!(e.message.contains("unknown key `sped`"), "{e}");
+        let e = parse_yaml::<RawPrimitives>("{circle: {radius: 5}, helix: {}}", "t").unwrap_err();
+        assert!(e.message.contains("a second primitive `helix`"), "{e}");
+        let e = parse_yaml::<RawPrimitives>("[{helix: {radius: 5, height: 2, pich: 1}}]", "t")
+            .unwrap_err();
+        assert_eq!(e.place.as_deref(), Some("[0].helix.pich"));
+    }
+
+    #[test]
+    fn the_primitive_keys_are_the_primitives() {
+        for key in PRIMITIVES {
+            let e = parse_yaml::<RawPrimitive>(&format!("{{{key}: 1}}"), "t").unwrap_err();
+            assert!(!e.message.contains("unknown variant"), "{key}: {e}");
+        }
+        let e = parse_yaml::<RawPrimitive>("{blob: 1}", "t").unwrap_err();
+        for key in PRIMITIVES {
+            assert!(e.message.contains(&format!("`{key}`")), "{key}: {e}");
+        }
+    }
+
+    #[test]
+    fn a_loop_is_a_range_or_a_list() {
+        assert_eq!(
+            parse_yaml::<RawLoop>("\"0..4\"", "t").unwrap(),
+            RawLoop::Range("0..4".into())
+        );
+        assert_eq!(
+            parse_yaml::<RawLoop>("[1, \"2*a\"]", "t").unwrap(),
+            RawLoop::List(vec![Num::Value(1.0), Num::Expr("2*a".into())])
+        );
+        let e = parse_yaml::<RawLoop>("5", "t").unwrap_err();
+        assert!(e.message.contains("expected a range"), "{e}");
+    }
 }
