@@ -463,3 +463,69 @@ fn lamp_shade_tiers_follow_their_templates_profile() {
         .iter()
         .all(|p| (polar(*p).0 - 45.0).abs() < 1e-9));
 }
+
+#[test]
+fn include_errors_name_both_files_and_the_missing_one() {
+    let dir = tmp("procedural-include");
+    std::fs::create_dir_all(dir.join("lib")).unwrap();
+    std::fs::write(
+        dir.join("lib/a.yaml"),
+        "p3dp: 1\nparams: {size: 4}\ntemplates:\n  dot:\n    part: {primitive: {circle: {radius: size, center: [0, 0, 0.2]}}}\n",
+    )
+    .unwrap();
+    let main = |extra: &str| {
+        format!("p3dp: 1\nname: m\ninclude: [lib/a.yaml]\n{extra}parts:\n  - {{template: dot}}\n")
+    };
+    let run = |text: &str| {
+        std::fs::write(dir.join("m.yaml"), text).unwrap();
+        let o = p3dp(&dir, &["build", "m.yaml", "-o", "m.gcode"]);
+        (
+            o.status.code(),
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+        )
+    };
+    // the library's param and template, and --set reaches the param
+    let (code, err) = run(&main(""));
+    assert_eq!(code, Some(0), "{err}");
+    let o = p3dp(
+        &dir,
+        &["build", "m.yaml", "-o", "m.gcode", "--set", "size=6"],
+    );
+    assert!(o.status.success());
+    let g = common::parse(&std::fs::read_to_string(dir.join("m.gcode")).unwrap());
+    let far = g
+        .moves
+        .iter()
+        .filter(|m| m.de > 0.0)
+        .map(|m| (m.to[0] - 110.0).hypot(m.to[1] - 110.0))
+        .fold(0.0, f64::max);
+    assert!((far - 6.0).abs() < 1e-3, "{far}");
+    let (code, err) = run(&main("params: {size: 5}\n"));
+    assert_eq!(code, Some(2));
+    assert!(
+        err.contains("m.yaml: params.size: the param `size` is also defined in lib/a.yaml"),
+        "{err}"
+    );
+    let (code, err) = run(&main(
+        "templates:\n  dot: {part: {primitive: {circle: {radius: 1}}}}\n",
+    ));
+    assert_eq!(code, Some(2));
+    assert!(
+        err.contains("templates.dot: the template `dot` is also defined in lib/a.yaml"),
+        "{err}"
+    );
+    let (code, err) = run(&main("").replace("lib/a.yaml", "lib/nope.yaml"));
+    assert_eq!(code, Some(2));
+    assert!(
+        err.contains("m.yaml: include[0]: cannot read the included file `lib/nope.yaml`"),
+        "{err}"
+    );
+    std::fs::write(dir.join("lib/a.yaml"), "p3dp: 1\nparams: {size: \"2*q\"}\n").unwrap();
+    let (code, err) = run(&main(""));
+    assert_eq!(code, Some(2));
+    assert!(
+        err.contains("lib/a.yaml: params.size: unknown name `q`"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
