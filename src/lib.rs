@@ -7,7 +7,7 @@
 //! 1. plain types and utilities: [`error`], [`toolpath`], [`expr`], [`num`],
 //!    [`finding`], [`format`], [`rng`], [`geom`];
 //! 2. the machine model: [`machine`];
-//! 3. generation: [`primitive`], [`step`], [`skirt`], [`model`];
+//! 3. generation: [`primitive`], [`step`], [`model`], [`assembly`], [`skirt`];
 //! 4. analysis and output: [`planner`], [`gcode`], [`check`], [`stats`];
 //! 5. the YAML edge: [`recipe`];
 //! 6. orchestration: [`output`], [`plan`], [`preview`], [`build`],
@@ -26,6 +26,7 @@ pub mod toolpath;
 
 pub mod machine;
 
+pub mod assembly;
 pub mod model;
 pub mod primitive;
 pub mod skirt;

@@ -30,10 +30,15 @@ pub struct Part {
     pub cross_section: f64,
     /// Speed, mm/s.
     pub speed: f64,
-    /// The primitive.
+    /// The primitive (the first, when the part has several).
     pub primitive: Primitive,
     /// The steps.
     pub steps: Vec<Step>,
+    /// The primitives after the first, in order (see [`crate::assembly`]).
+    pub more: Vec<Piece>,
+    /// Where the part is written, through templates and loops
+    /// (`parts[1].parts[0] (template ring, k = 3)`), for error places.
+    pub place: String,
 }
 
 /// A recipe resolved and ready to build.
@@ -55,6 +60,8 @@ pub struct Recipe {
     pub max_strings: u64,
     /// Check codes the recipe silences (`allow:`).
     pub allow: Vec<String>,
+    /// Steps of groups of parts, in the order they run (see [`crate::assembly`]).
+    pub groups: Vec<Group>,
 }
 
 /// Default cross-section when a recipe gives none: Kanada's 0.196 mm² (Fig. 9).
@@ -62,14 +69,65 @@ pub const DEFAULT_CROSS_SECTION: f64 = 0.196;
 /// Default speed when a recipe gives none: Kanada's 40 mm/s (Fig. 9).
 pub const DEFAULT_SPEED: f64 = 40.0;
 
-/// Makes a part's strings: its primitive, then each step in order.
+/// A primitive after the first of a part, with its cross-section and speed.
+#[derive(Clone, Debug)]
+pub struct Piece {
+    /// The primitive.
+    pub primitive: Primitive,
+    /// Cross-section of its strings where it sets none, mm².
+    pub cross_section: f64,
+    /// Speed of its strings where it sets none, mm/s.
+    pub speed: f64,
+}
+
+/// The steps of a group, run on parts `first..end` of the recipe as one set.
+#[derive(Clone, Debug)]
+pub struct Group {
+    /// First part of the group.
+    pub first: usize,
+    /// One past its last part.
+    pub end: usize,
+    /// The steps, in order.
+    pub steps: Vec<Step>,
+    /// Where the group is written (through templates and loops), for errors.
+    pub place: String,
+}
+
+impl Part {
+    /// The part's primitives in order: `primitive`, then `more`.
+    pub fn primitives(&self) -> impl Iterator<Item = &Primitive> {
+        std::iter::once(&self.primitive).chain(self.more.iter().map(|p| &p.primitive))
+    }
+
+    /// How many strings its primitives make, counting a joining travel
+    /// between each two.
+    pub fn string_count(&self) -> u64 {
+        self.primitives()
+            .map(Primitive::string_count)
+            .fold(self.more.len() as u64, u64::saturating_add)
+    }
+
+    /// Builds the primitives in order, joined by travel strings where one
+    /// ends away from the next one's start.
+    pub fn build_primitives(&self) -> Toolpath {
+        let mut tp = self.primitive.build(self.cross_section, self.speed);
+        for p in &self.more {
+            let next = p.primitive.build(p.cross_section, p.speed);
+            tp.append(&next, p.speed);
+        }
+        tp
+    }
+}
+
+/// Makes a part's strings: its primitives, then each of its own steps in
+/// order (a group's steps are [`crate::assembly::make_parts`]'s).
 pub fn make_part(recipe: &Recipe, k: usize) -> Result<Toolpath> {
     let part = &recipe.parts[k];
-    let mut tp = part.primitive.build(part.cross_section, part.speed);
+    let mut tp = part.build_primitives();
     tp.name = part.name.clone();
     for (j, step) in part.steps.iter().enumerate() {
         step.apply(&mut tp, recipe.max_strings)
-            .map_err(|m| Error::input(format!("parts[{k}].steps[{j}].{}", step.key()), m))?;
+            .map_err(|m| Error::input(format!("{}.steps[{j}].{}", part.place, step.key()), m))?;
     }
     Ok(tp)
 }
@@ -79,7 +137,8 @@ pub fn pattern_png(recipe: &Recipe) -> Result<Vec<u8>> {
     let models: Vec<&CaHelix> = recipe
         .parts
         .iter()
-        .filter_map(|p| match &p.primitive {
+        .flat_map(|p| p.primitives())
+        .filter_map(|p| match p {
             Primitive::CaHelix(h) => Some(h),
             _ => None,
         })

@@ -6,7 +6,7 @@ use std::path::Path;
 use crate::check::{self, Finding};
 use crate::error::{Error, Result};
 use crate::machine::Printer;
-use crate::model::{make_part, Recipe};
+use crate::model::Recipe;
 use crate::toolpath::Toolpath;
 
 /// What the command line says about one build.
@@ -54,10 +54,8 @@ pub fn plan(path: &Path, opts: &Options) -> Result<Plan> {
         None => None,
     };
     let recipe = Recipe::load(path, &opts.sets, printer.as_ref())?;
-    let mut parts = Vec::with_capacity(recipe.parts.len());
-    for k in 0..recipe.parts.len() {
-        parts.push(make_part(&recipe, k).map_err(|e| e.in_file(&shown))?);
-    }
+    // each part with its own steps, then the steps of groups
+    let parts = crate::assembly::make_parts(&recipe).map_err(|e| e.in_file(&shown))?;
     let mut paths = Vec::with_capacity(parts.len() + 1);
     if let Some(s) = &recipe.skirt {
         let cv = (recipe.parts[0].cross_section, recipe.parts[0].speed);

@@ -233,7 +233,8 @@ pub fn solid_stats(recipe: &Recipe) -> Vec<SolidStats> {
     recipe
         .parts
         .iter()
-        .filter_map(|p| match &p.primitive {
+        .flat_map(|p| p.primitives().map(move |q| (p, q)))
+        .filter_map(|(p, q)| match q {
             Primitive::Solid(s) => Some(SolidStats {
                 part: p.name.clone(),
                 layers: s

@@ -282,7 +282,7 @@ fn safety_limits_cannot_be_allowed_only_forced() {
 
 #[test]
 fn the_cup_holds_on_to_the_bed_by_its_first_layer_only() {
-    // cup.yaml: a bottom of 3 spiral layers, radius 30, the first at h = 0.2 mm
+    // cup.yaml: one part whose bottom is 3 spiral layers, radius 30, the first at h = 0.2 mm
     // with c = 0.1 mm² and turns 0.45 mm apart: its filament covers
     // (pi 30² / 0.45) mm of spiral × c / h = 0.5 mm of band; the two layers
     // above it, the wall and the skirt's second loop add nothing
@@ -306,7 +306,7 @@ fn the_cup_holds_on_to_the_bed_by_its_first_layer_only() {
         serde_json::from_str(&std::fs::read_to_string(dir.join("c.json")).unwrap()).unwrap();
     let fl = json["first_layer"].as_array().unwrap();
     let names: Vec<&str> = fl.iter().map(|f| f["part"].as_str().unwrap()).collect();
-    assert_eq!(names, ["skirt", "bottom"], "{fl:#?}");
+    assert_eq!(names, ["skirt", "cup"], "{fl:#?}");
     let bottom = &fl[1];
     let length = std::f64::consts::PI * 30.0 * 30.0 / 0.45;
     let got_l = bottom["contact_length_mm"].as_f64().unwrap();

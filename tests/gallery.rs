@@ -6,7 +6,8 @@ use std::f64::consts::{PI, TAU};
 use std::path::PathBuf;
 
 use glam::DVec3;
-use p3dp::build::{make_part, plan};
+use p3dp::assembly::make_parts;
+use p3dp::build::plan;
 use p3dp::check::Severity;
 use p3dp::recipe::Recipe;
 use p3dp::toolpath::{polar, Toolpath};
@@ -62,18 +63,68 @@ fn index(recipe: &Recipe, name: &str) -> usize {
         .unwrap_or_else(|| panic!("no part `{name}`"))
 }
 
-/// Part `name` with all its steps.
+/// Part `name` with all its steps (and those of the groups around it).
 fn part(recipe: &Recipe, name: &str) -> Toolpath {
-    make_part(recipe, index(recipe, name)).unwrap()
+    let k = index(recipe, name);
+    make_parts(recipe).unwrap().swap_remove(k)
 }
 
-/// Part `name` with only its first `steps` steps (0: the bare primitive).
+/// Part `name` with only its first `steps` steps (0: the bare primitives).
 fn part_upto(recipe: &Recipe, name: &str, steps: usize) -> Toolpath {
     let k = index(recipe, name);
     let mut r = recipe.clone();
-    assert!(steps <= r.parts[k].steps.len());
+    assert!(steps <= r.parts[k].steps.len() && r.groups.is_empty());
     r.parts[k].steps.truncate(steps);
-    make_part(&r, k).unwrap()
+    make_parts(&r).unwrap().swap_remove(k)
+}
+
+/// Part `name` as its primitives make it, before any step.
+fn undeformed(recipe: &Recipe, name: &str) -> Toolpath {
+    let k = index(recipe, name);
+    let mut r = recipe.clone();
+    r.groups.clear();
+    r.parts[k].steps.clear();
+    make_parts(&r).unwrap().swap_remove(k)
+}
+
+/// The strings of a part's first primitive and those of the rest (for a
+/// part whose primitives meet end to start, without a joining travel).
+fn split_first(recipe: &Recipe, k: usize, tp: &Toolpath) -> (Toolpath, Toolpath) {
+    let n = recipe.parts[k].primitive.string_count() as usize;
+    assert_eq!(tp.len() as u64, recipe.parts[k].string_count() - 1);
+    let first = Toolpath {
+        name: tp.name.clone(),
+        points: tp.points[..=n].to_vec(),
+        strings: tp.strings[..n].to_vec(),
+        events: Vec::new(),
+    };
+    let rest = Toolpath {
+        name: tp.name.clone(),
+        points: tp.points[n..].to_vec(),
+        strings: tp.strings[n..].to_vec(),
+        events: Vec::new(),
+    };
+    (first, rest)
+}
+
+/// The bottom and the wall: two parts, or (cup, plate: Fig. 6 literally)
+/// the two primitives of one part, with all their steps or with none.
+fn bottom_and_wall(recipe: &Recipe, deformed: bool) -> (Toolpath, Toolpath) {
+    if recipe.parts.iter().any(|p| p.name == "bottom") {
+        if deformed {
+            return (part(recipe, "bottom"), part(recipe, "wall"));
+        }
+        return (undeformed(recipe, "bottom"), undeformed(recipe, "wall"));
+    }
+    assert_eq!(recipe.parts.len(), 1);
+    let name = recipe.parts[0].name.clone();
+    assert_eq!(recipe.parts[0].more.len(), 1, "{name}: a bottom and a wall");
+    let tp = if deformed {
+        part(recipe, &name)
+    } else {
+        undeformed(recipe, &name)
+    };
+    split_first(recipe, 0, &tp)
 }
 
 /// Points of extruding strings (both ends).
@@ -173,8 +224,7 @@ fn the_binary_checks_every_gallery_recipe_clean() {
 fn walls_stand_on_the_rim_of_their_bottoms() {
     for name in ON_A_BOTTOM {
         let recipe = load(name, &[]);
-        let bottom = part(&recipe, "bottom");
-        let wall = part(&recipe, "wall");
+        let (bottom, wall) = bottom_and_wall(&recipe, true);
         let top = bottom.points.iter().map(|p| p.z).fold(f64::MIN, f64::max);
         assert!(
             (top - param(&recipe, "bottom_top")).abs() < 1e-9,
@@ -213,14 +263,31 @@ fn walls_stand_on_the_rim_of_their_bottoms() {
     }
 }
 
+/// Strings per turn of the wall (plate.yaml's own, else the cup's).
 fn segments(recipe: &Recipe) -> usize {
-    param(recipe, "segments") as usize
+    match recipe.params.get("wall_segments") {
+        Some(&s) => s as usize,
+        None => param(recipe, "segments") as usize,
+    }
 }
 
 #[test]
 fn cup_wall_is_a_helix_of_the_bottoms_radius() {
     let recipe = load("cup.yaml", &[]);
-    let wall = part(&recipe, "wall");
+    // Fig. 6a: one part, its primitives the bottom and then the wall
+    assert_eq!(recipe.parts.len(), 1);
+    assert_eq!(recipe.parts[0].name, "cup");
+    let (bottom, wall) = bottom_and_wall(&recipe, true);
+    let extruding = |t: &Toolpath| {
+        t.strings
+            .iter()
+            .filter(|s| !s.travel)
+            .copied()
+            .collect::<Vec<_>>()
+    };
+    assert!(extruding(&bottom).iter().all(|s| s.c == 0.1 && s.v == 25.0));
+    assert_eq!(extruding(&wall).len(), wall.len());
+    assert!(wall.strings.iter().all(|s| s.c == 0.15 && s.v == 30.0));
     let (radius, pitch, top) = (
         param(&recipe, "radius"),
         param(&recipe, "pitch"),
@@ -234,28 +301,33 @@ fn cup_wall_is_a_helix_of_the_bottoms_radius() {
     let last = wall.points.last().unwrap().z;
     assert!((last - top - param(&recipe, "height")).abs() < 1e-9);
     // 2 to 3 bottom layers
-    let bottom = part(&recipe, "bottom");
     let mut zs: Vec<f64> = bottom.points.iter().map(|p| p.z).collect();
     zs.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
     assert!((2..=3).contains(&zs.len()), "{} bottom layers", zs.len());
 }
 
-/// The wall of plate.yaml against its helix: r' = r + 1.05 z, z' = 0.3 z plus
-/// the wave A (z / H) sin(m theta), lifted onto the bottom.
+/// The wall of plate.yaml against the cup's helix, standing on the bottom at
+/// z = lift: of its height z = h - lift above the foot, r' = r + 1.05 z,
+/// z' = lift + 0.3 z plus the wave A (z / H) sin(m theta); the bottom is
+/// left in place, its c too scaled by 0.96.
 fn plate_wall_matches(sets: &[(&str, &str)]) -> (Recipe, Toolpath) {
     let recipe = load("plate.yaml", sets);
-    let helix = part_upto(&recipe, "wall", 0);
-    let wall = part(&recipe, "wall");
+    let (bottom0, helix) = bottom_and_wall(&recipe, false);
+    let (bottom, wall) = bottom_and_wall(&recipe, true);
     let (a, m, h, lift) = (
         param(&recipe, "amplitude"),
         param(&recipe, "cycles"),
         param(&recipe, "height"),
         param(&recipe, "bottom_top"),
     );
+    assert_eq!(bottom0.points, bottom.points);
+    for (s, t) in bottom0.strings.iter().zip(&bottom.strings) {
+        assert!(t.travel || ((t.c - 0.96 * s.c).abs() < 1e-12 && t.v == s.v));
+    }
     assert_eq!(helix.points.len(), wall.points.len());
     for (p, q) in helix.points.iter().zip(&wall.points) {
         let (r, theta) = polar(*p);
-        let z = p.z;
+        let z = p.z - lift;
         let want_r = r + 1.05 * z;
         let want_z = 0.3 * z + a * (z / h) * libm::sin(m * theta) + lift;
         assert!(
@@ -278,10 +350,10 @@ fn plate_is_the_cup_deformed_by_the_papers_function() {
     // without the wave the deformation is exactly the paper's
     let (recipe, wall) = plate_wall_matches(&[("amplitude", "0")]);
     let lift = param(&recipe, "bottom_top");
-    let helix = part_upto(&recipe, "wall", 0);
+    let (_, helix) = bottom_and_wall(&recipe, false);
     for (p, q) in helix.points.iter().zip(&wall.points) {
-        assert!((q.z - (0.3 * p.z + lift)).abs() < 1e-9);
-        assert!((r_of(*q) - (r_of(*p) + 1.05 * p.z)).abs() < 1e-9);
+        assert!((q.z - (0.3 * (p.z - lift) + lift)).abs() < 1e-9);
+        assert!((r_of(*q) - (r_of(*p) + 1.05 * (p.z - lift))).abs() < 1e-9);
     }
     // with it, only by the wave term
     plate_wall_matches(&[]);
@@ -296,7 +368,7 @@ fn plate_is_the_cup_deformed_by_the_papers_function() {
 fn plate_rim_has_as_many_waves_as_cycles() {
     for (cycles, want) in [("4", 4), ("3", 3), ("5", 5)] {
         let recipe = load("plate.yaml", &[("cycles", cycles)]);
-        let wall = part(&recipe, "wall");
+        let (_, wall) = bottom_and_wall(&recipe, true);
         let seg = segments(&recipe);
         let top = &wall.points[wall.points.len() - 1 - seg..];
         let z: Vec<f64> = top.iter().map(|p| p.z).collect();
@@ -318,8 +390,7 @@ fn plate_bottom_fits_the_deformed_wall_for_any_size() {
         vec![("bottom_layers", "1")],
     ] {
         let recipe = load("plate.yaml", &sets);
-        let bottom = part(&recipe, "bottom");
-        let wall = part(&recipe, "wall");
+        let (bottom, wall) = bottom_and_wall(&recipe, true);
         let top = bottom.points.iter().map(|p| p.z).fold(f64::MIN, f64::max);
         let rim = bottom.points.iter().map(|&p| r_of(p)).fold(0.0, f64::max);
         assert!((wall.points[0].z - top).abs() < 1e-9, "{sets:?}");

@@ -15,7 +15,10 @@ const LAYERS: &[(&str, &[&str])] = &[
         ],
     ),
     ("machine model", &["machine"]),
-    ("generation", &["primitive", "step", "model", "skirt"]),
+    (
+        "generation",
+        &["primitive", "step", "model", "assembly", "skirt"],
+    ),
     (
         "analysis and output",
         &["planner", "gcode", "check", "stats"],

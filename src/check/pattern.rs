@@ -17,7 +17,10 @@ fn outside(v: f64, lo: f64, hi: f64) -> bool {
 pub fn findings(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) {
     let offset = paths.len().saturating_sub(recipe.parts.len());
     for (k, part) in recipe.parts.iter().enumerate() {
-        let Primitive::PatternHelix(p) = &part.primitive else {
+        let Some(p) = part.primitives().find_map(|p| match p {
+            Primitive::PatternHelix(p) => Some(p),
+            _ => None,
+        }) else {
             continue;
         };
         let name = &part.name;

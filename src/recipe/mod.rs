@@ -9,6 +9,7 @@
 //! loads images, naming the key path of any problem; the result is a
 //! [`crate::model::Recipe`].
 
+pub mod expand;
 pub mod profile;
 pub mod resolve;
 pub mod schema;

@@ -12,7 +12,7 @@ use crate::error::{Error, Result};
 use crate::expr::{self, var, Params};
 use crate::machine::{Material, Printer, FAN_START_Z};
 use crate::model::{
-    Part, Recipe, Skirt, DEFAULT_CROSS_SECTION, DEFAULT_MAX_STRINGS, DEFAULT_SPEED,
+    Group, Part, Piece, Recipe, Skirt, DEFAULT_CROSS_SECTION, DEFAULT_MAX_STRINGS, DEFAULT_SPEED,
 };
 use crate::num::{finite, Num, Scope};
 use crate::primitive::turtle;
@@ -137,7 +137,7 @@ impl Recipe {
             .map_err(|e| Error::io(&shown, format!("cannot read the recipe: {e}")))?;
         let raw: RawRecipe = parse_yaml(&text, &shown)?;
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-        Recipe::resolve(&raw, sets, printer, &dir).map_err(|e| e.in_file(&shown))
+        Recipe::resolve_in(&raw, sets, printer, &dir, Some(path)).map_err(|e| e.in_file(&shown))
     }
 
     /// Resolves a parsed recipe; relative paths are taken from `dir`.
@@ -146,6 +146,18 @@ impl Recipe {
         sets: &[(String, String)],
         printer: Option<&Printer>,
         dir: &Path,
+    ) -> Result<Recipe> {
+        Recipe::resolve_in(raw, sets, printer, dir, None)
+    }
+
+    /// [`Recipe::resolve`] for the recipe read from `file` (so that an
+    /// include cycle through it is named).
+    fn resolve_in(
+        raw: &RawRecipe,
+        sets: &[(String, String)],
+        printer: Option<&Printer>,
+        dir: &Path,
+        file: Option<&Path>,
     ) -> Result<Recipe> {
         if raw.p3dp != 1 {
             return Err(Error::input(
@@ -159,7 +171,8 @@ impl Recipe {
         if raw.parts.is_empty() {
             return Err(Error::input("parts", "expected at least one part"));
         }
-        let params = eval_params(&raw.params, sets)?;
+        let library = super::expand::load_library(raw, file, dir)?;
+        let params = library.eval_params(sets)?;
         let ctx = Ctx {
             scope: Scope::new(&params),
             dir,
@@ -196,11 +209,24 @@ impl Recipe {
             turtle: (std::f64::consts::PI * (d / 2.0) * (d / 2.0), max_strings),
             ..ctx
         };
-        let mut parts = Vec::with_capacity(raw.parts.len());
-        for (k, p) in raw.parts.iter().enumerate() {
-            let place = format!("parts[{k}]");
-            let part = resolve_part(&ctx, p, c0, v0, k).map_err(|e| e.under(&place))?;
-            let n = part.primitive.string_count();
+        // templates, loops and groups expanded into leaf parts
+        let expansion = super::expand::expand(&raw.parts, &library.templates, &params, dir)?;
+        let total_limit = max_strings.max(DEFAULT_MAX_STRINGS);
+        let mut total = 0u64;
+        let mut parts = Vec::with_capacity(expansion.leaves.len());
+        for (k, leaf) in expansion.leaves.iter().enumerate() {
+            let place = &leaf.place;
+            let ctx = Ctx {
+                scope: Scope::new(&leaf.params),
+                dir: leaf.dir,
+                turtle: ctx.turtle,
+            };
+            let mut part = resolve_part(&ctx, leaf.part, c0, v0, k).map_err(|e| e.under(place))?;
+            if let Some(name) = &leaf.name {
+                part.name.clone_from(name);
+            }
+            part.place.clone_from(place);
+            let n = part.string_count();
             if n > max_strings {
                 return Err(Error::input(
                     format!("{place}.primitive"),
@@ -209,7 +235,37 @@ impl Recipe {
                     ),
                 ));
             }
+            total = total.saturating_add(n);
+            if total > total_limit {
+                return Err(Error::input(
+                    format!("{place}.primitive"),
+                    format!(
+                        "with the parts before it the recipe would have {total} strings, more than the limit of {total_limit} for all parts together; expected fewer parts or strings"
+                    ),
+                ));
+            }
             parts.push(part);
+        }
+        let mut groups = Vec::with_capacity(expansion.groups.len());
+        for g in &expansion.groups {
+            let ctx = Ctx {
+                scope: Scope::new(&g.params),
+                dir: g.dir,
+                turtle: ctx.turtle,
+            };
+            let mut steps = Vec::with_capacity(g.steps.len());
+            for (j, s) in g.steps.iter().enumerate() {
+                steps.push(
+                    resolve_step(&ctx, s)
+                        .map_err(|e| e.under(&format!("steps[{j}]")).under(&g.place))?,
+                );
+            }
+            groups.push(Group {
+                first: g.first,
+                end: g.end,
+                steps,
+                place: g.place.clone(),
+            });
         }
         let allow: Vec<String> = raw.allow.iter().map(|a| a.code().to_string()).collect();
         crate::finding::validate_allow(&allow, |i| format!("allow[{i}]"))?;
@@ -222,6 +278,7 @@ impl Recipe {
             parts,
             max_strings,
             allow,
+            groups,
         })
     }
 }
@@ -281,27 +338,51 @@ fn resolve_part(ctx: &Ctx, p: &RawPart, c0: f64, v0: f64, k: usize) -> Result<Pa
         Some(n) => ctx.positive(n, "speed")?,
         None => v0,
     };
-    // a turtle runs now: its strings start with the part's c and v
-    let env = turtle::Env {
-        cross_section,
-        speed,
-        filament_area: ctx.turtle.0,
-        max_strings: ctx.turtle.1,
-    };
-    let primitive = p
-        .primitive
-        .resolve(&ctx.scope, &env)
-        .map_err(|e| e.under("primitive"))?;
+    // one primitive or a list, each maybe with its own c and v
+    let items = p.primitive.as_ref().map(|p| p.items()).unwrap_or_default();
+    if items.is_empty() {
+        return Err(Error::input("primitive", "expected at least one primitive"));
+    }
+    let mut pieces = Vec::with_capacity(items.len());
+    for (key, item) in items {
+        let c = match &item.cross_section {
+            Some(n) => ctx.positive(n, &format!("{key}.cross_section"))?,
+            None => cross_section,
+        };
+        let v = match &item.speed {
+            Some(n) => ctx.positive(n, &format!("{key}.speed"))?,
+            None => speed,
+        };
+        // a turtle runs now: its strings start with the part's c and v
+        let env = turtle::Env {
+            cross_section: c,
+            speed: v,
+            filament_area: ctx.turtle.0,
+            max_strings: ctx.turtle.1,
+        };
+        let primitive = item
+            .primitive
+            .resolve(&ctx.scope, &env)
+            .map_err(|e| e.under(&key))?;
+        pieces.push(Piece {
+            primitive,
+            cross_section: c,
+            speed: v,
+        });
+    }
+    let first = pieces.remove(0);
     let mut steps = Vec::with_capacity(p.steps.len());
     for (j, s) in p.steps.iter().enumerate() {
         steps.push(resolve_step(ctx, s).map_err(|e| e.under(&format!("steps[{j}]")))?);
     }
     Ok(Part {
         name: p.name.clone().unwrap_or_else(|| format!("part {}", k + 1)),
-        cross_section,
-        speed,
-        primitive,
+        cross_section: first.cross_section,
+        speed: first.speed,
+        primitive: first.primitive,
         steps,
+        more: pieces,
+        place: format!("parts[{k}]"),
     })
 }
 

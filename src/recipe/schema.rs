@@ -9,7 +9,6 @@ use serde::de::{self, Deserializer, MapAccess, Visitor};
 use serde::Deserialize;
 
 use crate::num::{Num, Num3};
-use crate::primitive::RawPrimitive;
 
 /// `material:` a built-in name or an inline map.
 #[derive(Clone, Debug, PartialEq)]
@@ -123,9 +122,15 @@ pub struct RawRecipe {
     /// Most strings one part may have (default 50 million).
     #[serde(default)]
     pub max_strings: Option<Num>,
-    /// Check codes silenced for this recipe (see [`crate::check::CODES`]).
+    /// Check codes silenced for this recipe (see [`crate::finding::CODES`]).
     #[serde(default)]
     pub allow: Vec<RawAllow>,
+    /// Named, parameterised part trees (see [`super::expand`]).
+    #[serde(default)]
+    pub templates: IndexMap<String, super::expand::RawTemplate>,
+    /// Files whose params and templates this recipe uses, relative to it.
+    #[serde(default)]
+    pub include: Vec<String>,
 }
 
 /// An `allow:` entry: a check code, or `{code, reason}`.
@@ -196,11 +201,24 @@ pub struct RawPart {
     /// mm/s, overrides defaults.
     #[serde(default)]
     pub speed: Option<Num>,
-    /// Exactly one primitive.
-    pub primitive: RawPrimitive,
+    /// One primitive, or a list whose strings follow each other.
+    #[serde(default)]
+    pub primitive: Option<super::expand::RawPrimitives>,
     /// Steps in order.
     #[serde(default)]
     pub steps: Vec<RawStep>,
+    /// Child parts, making this part a group (see [`super::expand`]).
+    #[serde(default)]
+    pub parts: Option<Vec<RawPart>>,
+    /// A template to use instead of `primitive` or `parts`.
+    #[serde(default)]
+    pub template: Option<String>,
+    /// The template's params for this use.
+    #[serde(default)]
+    pub with: IndexMap<String, Num>,
+    /// Repeat the part once per value of each name (`for:` in a recipe).
+    #[serde(default, rename = "for")]
+    pub repeat: IndexMap<String, super::expand::RawLoop>,
 }
 
 /// `keep:` of a modulation.

@@ -1,0 +1,356 @@
+//! The raw schema of procedural recipes (issue 15): primitive lists,
+//! templates, `for` loops and included libraries. Each type reads as
+//! `crate::recipe::parse_yaml` does (enums as one-key maps, exact key paths).
+
+use std::fmt;
+
+use indexmap::IndexMap;
+use serde::de::{self, DeserializeSeed, Deserializer, IgnoredAny, MapAccess, SeqAccess, Visitor};
+use serde::Deserialize;
+
+use crate::num::Num;
+use crate::primitive::RawPrimitive;
+use crate::recipe::schema::RawPart;
+
+/// `primitive:` one primitive, or a list whose strings follow each other in
+/// order (draw3dp's `Trace`).
+#[derive(Clone, Debug, PartialEq)]
+pub enum RawPrimitives {
+    /// `primitive: {helix: {…}}`, as in v1.
+    One(Box<RawPrimitiveItem>),
+    /// `primitive: [{spiral: {…}}, {helix: {…}}]`.
+    List(Vec<RawPrimitiveItem>),
+}
+
+impl RawPrimitives {
+    /// The primitives in order, each with its key path below the part
+    /// (`primitive` for one, `primitive[k]` in a list).
+    pub fn items(&self) -> Vec<(String, &RawPrimitiveItem)> {
+        match self {
+            RawPrimitives::One(p) => vec![("primitive".to_string(), &**p)],
+            RawPrimitives::List(v) => v
+                .iter()
+                .enumerate()
+                .map(|(k, p)| (format!("primitive[{k}]"), p))
+                .collect(),
+        }
+    }
+}
+
+/// One primitive, with an optional `cross_section` and `speed` beside its key
+/// that replace the part's for this primitive's strings
+/// (`{cylinder: {…}, cross_section: 0.1, speed: 25}`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RawPrimitiveItem {
+    /// The primitive.
+    pub primitive: RawPrimitive,
+    /// mm², the part's when absent.
+    pub cross_section: Option<Num>,
+    /// mm/s, the part's when absent.
+    pub speed: Option<Num>,
+}
+
+impl<'de> Deserialize<'de> for RawPrimitives {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<RawPrimitives, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = RawPrimitives;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a primitive such as {helix: {…}}, or a list of them")
+            }
+            fn visit_map<A: MapAccess<'de>>(self, m: A) -> Result<RawPrimitives, A::Error> {
+                item_from_map(m).map(|p| RawPrimitives::One(Box::new(p)))
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut s: A) -> Result<RawPrimitives, A::Error> {
+                let mut v = Vec::new();
+                while let Some(item) = s.next_element::<RawPrimitiveItem>()? {
+                    v.push(item);
+                }
+                Ok(RawPrimitives::List(v))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+impl<'de> Deserialize<'de> for RawPrimitiveItem {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<RawPrimitiveItem, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = RawPrimitiveItem;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a primitive such as {helix: {…}}")
+            }
+            fn visit_map<A: MapAccess<'de>>(self, m: A) -> Result<RawPrimitiveItem, A::Error> {
+                item_from_map(m)
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// The primitives' keys, for messages.
+const PRIMITIVES: [&str; 10] = [
+    "path",
+    "circle",
+    "arc",
+    "spiral",
+    "helix",
+    "cylinder",
+    "pattern_helix",
+    "ca_helix",
+    "solid",
+    "turtle",
+];
+
+/// Reads `{KIND: {…}, cross_section: c, speed: v}`: exactly one primitive key.
+fn item_from_map<'de, A: MapAccess<'de>>(mut m: A) -> Result<RawPrimitiveItem, A::Error> {
+    let (mut primitive, mut cross_section, mut speed) = (None, None, None);
+    while let Some(key) = m.next_key::<String>()? {
+        match key.as_str() {
+            "cross_section" => cross_section = Some(m.next_value::<Num>()?),
+            "speed" => speed = Some(m.next_value::<Num>()?),
+            _ => {
+                if primitive.is_some() {
+                    return Err(de::Error::custom(if PRIMITIVES.contains(&key.as_str()) {
+                        format!("a second primitive `{key}` here; expected one primitive per entry (give several as a list)")
+                    } else {
+                        format!("unknown key `{key}` beside the primitive; expected `cross_section` or `speed`")
+                    }));
+                }
+                primitive = Some(RawPrimitive::deserialize(KeyedEnum { key, map: &mut m })?);
+            }
+        }
+    }
+    match primitive {
+        Some(primitive) => Ok(RawPrimitiveItem {
+            primitive,
+            cross_section,
+            speed,
+        }),
+        None => Err(de::Error::custom(
+            "no primitive here; expected a primitive such as {helix: {…}}",
+        )),
+    }
+}
+
+/// The enum whose variant is a map key already read and whose content is
+/// that key's value: lets a map hold one variant beside other keys.
+struct KeyedEnum<'m, A> {
+    key: String,
+    map: &'m mut A,
+}
+
+impl<'de, A: MapAccess<'de>> Deserializer<'de> for KeyedEnum<'_, A> {
+    type Error = A::Error;
+
+    fn deserialize_any<V: Visitor<'de>>(self, v: V) -> Result<V::Value, A::Error> {
+        v.visit_enum(self)
+    }
+
+    fn deserialize_enum<V: Visitor<'de>>(
+        self,
+        _name: &'static str,
+        _variants: &'static [&'static str],
+        v: V,
+    ) -> Result<V::Value, A::Error> {
+        v.visit_enum(self)
+    }
+
+    serde::forward_to_deserialize_any! {
+        bool i8 i16 i32 i64 i128 u8 u16 u32 u64 u128 f32 f64 char str string
+        bytes byte_buf option unit unit_struct newtype_struct seq tuple
+        tuple_struct map struct identifier ignored_any
+    }
+}
+
+impl<'de, 'm, A: MapAccess<'de>> de::EnumAccess<'de> for KeyedEnum<'m, A> {
+    type Error = A::Error;
+    type Variant = Content<'m, A>;
+
+    fn variant_seed<S: DeserializeSeed<'de>>(
+        self,
+        seed: S,
+    ) -> Result<(S::Value, Content<'m, A>), A::Error> {
+        let key: de::value::StringDeserializer<A::Error> =
+            de::IntoDeserializer::into_deserializer(self.key);
+        Ok((seed.deserialize(key)?, Content(self.map)))
+    }
+}
+
+/// The value of a [`KeyedEnum`]'s key, read as the variant's content.
+struct Content<'m, A>(&'m mut A);
+
+impl<'de, A: MapAccess<'de>> de::VariantAccess<'de> for Content<'_, A> {
+    type Error = A::Error;
+
+    fn unit_variant(self) -> Result<(), A::Error> {
+        self.0.next_value::<IgnoredAny>().map(|_| ())
+    }
+
+    fn newtype_variant_seed<S: DeserializeSeed<'de>>(self, seed: S) -> Result<S::Value, A::Error> {
+        self.0.next_value_seed(seed)
+    }
+
+    fn tuple_variant<V: Visitor<'de>>(self, len: usize, v: V) -> Result<V::Value, A::Error> {
+        struct Seed<V>(usize, V);
+        impl<'de, V: Visitor<'de>> DeserializeSeed<'de> for Seed<V> {
+            type Value = V::Value;
+            fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<V::Value, D::Error> {
+                d.deserialize_tuple(self.0, self.1)
+            }
+        }
+        self.0.next_value_seed(Seed(len, v))
+    }
+
+    fn struct_variant<V: Visitor<'de>>(
+        self,
+        fields: &'static [&'static str],
+        v: V,
+    ) -> Result<V::Value, A::Error> {
+        struct Seed<V>(&'static [&'static str], V);
+        impl<'de, V: Visitor<'de>> DeserializeSeed<'de> for Seed<V> {
+            type Value = V::Value;
+            fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<V::Value, D::Error> {
+                d.deserialize_struct("", self.0, self.1)
+            }
+        }
+        self.0.next_value_seed(Seed(fields, v))
+    }
+}
+
+/// The values of one name of a `for`: a range string or a list.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RawLoop {
+    /// `"a..b"` or `"a..b:step"`, a and b (and step) expressions, b included.
+    Range(String),
+    /// `[v1, v2, …]`, numbers or expressions.
+    List(Vec<Num>),
+}
+
+impl<'de> Deserialize<'de> for RawLoop {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<RawLoop, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = RawLoop;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a range \"a..b\" or \"a..b:step\" (b included), or a list of values [v1, v2, …]")
+            }
+            fn visit_str<E: de::Error>(self, v: &str) -> Result<RawLoop, E> {
+                Ok(RawLoop::Range(v.to_string()))
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut s: A) -> Result<RawLoop, A::Error> {
+                let mut v = Vec::new();
+                while let Some(n) = s.next_element::<Num>()? {
+                    v.push(n);
+                }
+                Ok(RawLoop::List(v))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// A named, parameterised part tree (draw3dp's part-assembly functions).
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawTemplate {
+    /// The params and their defaults, in order; a default may use the
+    /// recipe's params and the template params before it.
+    #[serde(default)]
+    pub params: IndexMap<String, Num>,
+    /// The part (or group) it makes.
+    pub part: RawPart,
+}
+
+/// An included file: a recipe or a library of params and templates. Only
+/// `params`, `templates` and `include` are taken; a recipe's other keys are
+/// allowed and ignored, so any recipe can serve as a library.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawLibrary {
+    /// Format version; must be 1.
+    pub p3dp: u32,
+    #[serde(default)]
+    pub name: Option<IgnoredAny>,
+    #[serde(default)]
+    pub description: Option<IgnoredAny>,
+    #[serde(default)]
+    pub printer: Option<IgnoredAny>,
+    #[serde(default)]
+    pub material: Option<IgnoredAny>,
+    #[serde(default)]
+    pub defaults: Option<IgnoredAny>,
+    #[serde(default)]
+    pub skirt: Option<IgnoredAny>,
+    #[serde(default)]
+    pub parts: Option<IgnoredAny>,
+    #[serde(default)]
+    pub max_strings: Option<IgnoredAny>,
+    #[serde(default)]
+    pub allow: Option<IgnoredAny>,
+    /// Params, in order.
+    #[serde(default)]
+    pub params: IndexMap<String, Num>,
+    /// Templates.
+    #[serde(default)]
+    pub templates: IndexMap<String, RawTemplate>,
+    /// Files it includes in turn.
+    #[serde(default)]
+    pub include: Vec<String>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::recipe::yaml::parse_yaml;
+
+    #[test]
+    fn one_primitive_or_a_list_with_cross_section_and_speed_beside() {
+        let one: RawPrimitives = parse_yaml("{circle: {radius: 5}}", "t").unwrap();
+        assert!(matches!(one, RawPrimitives::One(ref p) if p.speed.is_none()));
+        let list: RawPrimitives = parse_yaml(
+            "- {spiral: {radius: 5, pitch: 0.4}, cross_section: 0.1, speed: 20}\n- helix: {radius: 5, height: 2, pitch: 0.3}\n",
+            "t",
+        )
+        .unwrap();
+        let items = list.items();
+        assert_eq!(items[1].0, "primitive[1]");
+        assert_eq!(items[0].1.cross_section, Some(Num::Value(0.1)));
+        assert!(matches!(items[1].1.primitive, RawPrimitive::Helix { .. }));
+        let e = parse_yaml::<RawPrimitives>("{circle: {radius: 5}, sped: 3}", "t").unwrap_err();
+        assert!(e.message.contains("unknown key `sped`"), "{e}");
+        let e = parse_yaml::<RawPrimitives>("{circle: {radius: 5}, helix: {}}", "t").unwrap_err();
+        assert!(e.message.contains("a second primitive `helix`"), "{e}");
+        let e = parse_yaml::<RawPrimitives>("[{helix: {radius: 5, height: 2, pich: 1}}]", "t")
+            .unwrap_err();
+        assert_eq!(e.place.as_deref(), Some("[0].helix.pich"));
+    }
+
+    #[test]
+    fn the_primitive_keys_are_the_primitives() {
+        for key in PRIMITIVES {
+            let e = parse_yaml::<RawPrimitive>(&format!("{{{key}: 1}}"), "t").unwrap_err();
+            assert!(!e.message.contains("unknown variant"), "{key}: {e}");
+        }
+        let e = parse_yaml::<RawPrimitive>("{blob: 1}", "t").unwrap_err();
+        for key in PRIMITIVES {
+            assert!(e.message.contains(&format!("`{key}`")), "{key}: {e}");
+        }
+    }
+
+    #[test]
+    fn a_loop_is_a_range_or_a_list() {
+        assert_eq!(
+            parse_yaml::<RawLoop>("\"0..4\"", "t").unwrap(),
+            RawLoop::Range("0..4".into())
+        );
+        assert_eq!(
+            parse_yaml::<RawLoop>("[1, \"2*a\"]", "t").unwrap(),
+            RawLoop::List(vec![Num::Value(1.0), Num::Expr("2*a".into())])
+        );
+        let e = parse_yaml::<RawLoop>("5", "t").unwrap_err();
+        assert!(e.message.contains("expected a range"), "{e}");
+    }
+}
