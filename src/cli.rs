@@ -17,6 +17,7 @@ use crate::model::pattern_png;
 use crate::output::{write_atomic, AtomicFile, HashWriter};
 use crate::recipe::{parse_set, parse_yaml, RawRecipe};
 use crate::stats::Stats;
+use crate::threads::Threads;
 
 /// Flags every command shares.
 #[derive(Clone, Debug, Default)]
@@ -33,7 +34,7 @@ pub struct Common {
     pub strict: bool,
     /// Write even when checks fail.
     pub force: bool,
-    /// `-j N`: at most N builds at once (default: one per core).
+    /// `-j N`: the thread budget, shared by concurrent builds (default: one per core).
     pub jobs: Option<usize>,
     /// `--allow CODE`: check codes silenced for these builds.
     pub allow: Vec<String>,
@@ -86,17 +87,23 @@ impl Common {
         Ok(batch::expand(&self.recipes, &sets, &sweeps))
     }
 
-    fn threads(&self) -> usize {
-        self.jobs
-            .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+    /// The one thread budget of `-j N` (default: one per core) for `jobs`
+    /// builds: min(N, jobs) workers, each build given N / workers threads.
+    fn budget(&self, jobs: usize) -> (usize, Threads) {
+        let n = self
+            .jobs
+            .map_or_else(|| Threads::available().get(), |n| n.max(1));
+        let workers = n.min(jobs).max(1);
+        (workers, Threads::new(n / workers))
     }
 
-    /// Plans a job and refuses it when its checks fail (unless forced).
-    fn checked_plan(&self, job: &Job) -> Result<Plan> {
+    /// Plans a job on `threads` and refuses it when its checks fail (unless forced).
+    fn checked_plan(&self, job: &Job, threads: Threads) -> Result<Plan> {
         let opts = Options {
             sets: job.sets.clone(),
             printer: self.printer.clone().or_else(|| job.printer.clone()),
             allow: self.allow.clone(),
+            threads,
         };
         let p = plan(&job.recipe, &opts)?;
         let failing = p.failing(self.strict);
@@ -293,12 +300,13 @@ pub fn build(a: &BuildArgs) -> Vec<Error> {
         Err(e) => return vec![e],
     };
     let bar = progress(jobs.len());
+    let (workers, threads) = a.common.budget(jobs.len());
     let results = batch::run_parallel(
         jobs.len(),
-        a.common.threads(),
+        workers,
         |k| {
             let target = targets[k].clone()?;
-            let p = a.common.checked_plan(&jobs[k])?;
+            let p = a.common.checked_plan(&jobs[k], threads)?;
             // the cell array of --pattern, made before any file is written
             let pattern = match &a.pattern {
                 Some(f) => Some((f, pattern_png(&p.recipe).map_err(|e| e.in_file(&p.path))?)),
@@ -472,14 +480,16 @@ pub fn check(c: &Common) -> Vec<Error> {
         Ok(j) => j,
         Err(e) => return vec![e],
     };
+    let (workers, threads) = c.budget(jobs.len());
     let opts = |job: &Job| Options {
         sets: job.sets.clone(),
         printer: c.printer.clone(),
         allow: c.allow.clone(),
+        threads,
     };
     let results = batch::run_parallel(
         jobs.len(),
-        c.threads(),
+        workers,
         |k| plan(&jobs[k].recipe, &opts(&jobs[k])),
         || {},
     );
@@ -505,9 +515,9 @@ pub fn check(c: &Common) -> Vec<Error> {
     errors
 }
 
-/// Builds a job into nothing but its hash and line fingerprint.
-fn fingerprint(c: &Common, job: &Job) -> Result<(String, LineHashes)> {
-    let p = c.checked_plan(job)?;
+/// Builds a job on `threads` into nothing but its hash and line fingerprint.
+fn fingerprint(c: &Common, job: &Job, threads: Threads) -> Result<(String, LineHashes)> {
+    let p = c.checked_plan(job, threads)?;
     let (hw, _) = p.write_gcode(HashWriter::new(LineHashes::default()))?;
     let (digest, _, lines) = hw.finish_into();
     Ok((digest, lines))
@@ -524,7 +534,13 @@ pub fn hash(a: &HashArgs) -> Vec<Error> {
         Ok(j) => j,
         Err(e) => return vec![e],
     };
-    let results = batch::run_parallel(jobs.len(), c.threads(), |k| fingerprint(c, &jobs[k]), || {});
+    let (workers, threads) = c.budget(jobs.len());
+    let results = batch::run_parallel(
+        jobs.len(),
+        workers,
+        |k| fingerprint(c, &jobs[k], threads),
+        || {},
+    );
     let mut errors = Vec::new();
     let mut entries = Vec::new();
     for (job, r) in jobs.iter().zip(results) {
@@ -652,7 +668,13 @@ fn check_lock(a: &HashArgs, lockfile: &Path) -> Vec<Error> {
         }
     }
     let c = &a.common;
-    let results = batch::run_parallel(jobs.len(), c.threads(), |k| fingerprint(c, &jobs[k]), || {});
+    let (workers, threads) = c.budget(jobs.len());
+    let results = batch::run_parallel(
+        jobs.len(),
+        workers,
+        |k| fingerprint(c, &jobs[k], threads),
+        || {},
+    );
     let mut errors = Vec::new();
     for ((entry, job), r) in lock.entries.iter().zip(&jobs).zip(results) {
         let mut label = entry.recipe.clone();
@@ -669,8 +691,8 @@ fn check_lock(a: &HashArgs, lockfile: &Path) -> Vec<Error> {
                 let place = match lock::first_difference(&entry.blocks, &new) {
                     Some(k) => {
                         let first = k as u64 * entry.block_lines;
-                        let text =
-                            new_line(c, job, first).unwrap_or_else(|| "(end of file)".into());
+                        let text = new_line(c, job, first, threads)
+                            .unwrap_or_else(|| "(end of file)".into());
                         if entry.block_lines == 1 {
                             format!("first differing line {}: `{text}`", first + 1)
                         } else {
@@ -698,9 +720,9 @@ fn check_lock(a: &HashArgs, lockfile: &Path) -> Vec<Error> {
     errors
 }
 
-/// Line `k` (0-based) of the job's G-code, rebuilt.
-fn new_line(c: &Common, job: &Job, k: u64) -> Option<String> {
-    let p = c.checked_plan(job).ok()?;
+/// Line `k` (0-based) of the job's G-code, rebuilt on `threads`.
+fn new_line(c: &Common, job: &Job, k: u64, threads: Threads) -> Option<String> {
+    let p = c.checked_plan(job, threads).ok()?;
     let (buf, _) = p.write_gcode(Vec::new()).ok()?;
     let text = String::from_utf8(buf).ok()?;
     text.lines().nth(k as usize).map(str::to_string)
@@ -768,6 +790,7 @@ pub fn preview(a: &PreviewArgs) -> Vec<Error> {
                 sets,
                 printer: a.printer.clone(),
                 allow: a.allow.clone(),
+                threads: Threads::available(),
             },
         )?;
         make_parent(&out)?;

@@ -7,6 +7,7 @@ use crate::expr::Params;
 use crate::machine::{Material, Printer};
 use crate::primitive::{CaHelix, Primitive};
 use crate::step::Step;
+use crate::threads::Threads;
 use crate::toolpath::Toolpath;
 
 /// The default limit on strings in one part (a recipe may change it).
@@ -62,13 +63,14 @@ pub const DEFAULT_CROSS_SECTION: f64 = 0.196;
 /// Default speed when a recipe gives none: Kanada's 40 mm/s (Fig. 9).
 pub const DEFAULT_SPEED: f64 = 40.0;
 
-/// Makes a part's strings: its primitive, then each step in order.
-pub fn make_part(recipe: &Recipe, k: usize) -> Result<Toolpath> {
+/// Makes a part's strings: its primitive, then each step in order, on up to
+/// `threads` threads.
+pub fn make_part(recipe: &Recipe, k: usize, threads: Threads) -> Result<Toolpath> {
     let part = &recipe.parts[k];
     let mut tp = part.primitive.build(part.cross_section, part.speed);
     tp.name = part.name.clone();
     for (j, step) in part.steps.iter().enumerate() {
-        step.apply(&mut tp, recipe.max_strings)
+        step.apply(&mut tp, recipe.max_strings, threads)
             .map_err(|m| Error::input(format!("parts[{k}].steps[{j}].{}", step.key()), m))?;
     }
     Ok(tp)

@@ -35,6 +35,8 @@
 
 use glam::DVec3;
 
+use crate::threads::Threads;
+
 pub use crate::machine::kinematics::{
     Kinematics, Limits, KLIPPER_MINIMUM_CRUISE_RATIO, MARLIN_JUNCTION_DEVIATION,
     MARLIN_MIN_SEGMENT_TIME,
@@ -479,31 +481,50 @@ enum Call {
 /// Calls sent to the planner's thread at a time.
 const BATCH: usize = 4096;
 
+/// Replays one recorded call on `planner`.
+fn replay(planner: &mut Planner, call: Call) {
+    match call {
+        Call::BeginPart(name) => planner.begin_part(&name),
+        Call::Stop => planner.stop(),
+        Call::Dwell(s) => planner.dwell(s),
+        Call::MoveTo(to, e, feed, kind) => planner.move_to(to, e, feed, kind),
+        Call::ExtrudeOnly(l, feed) => planner.extrude_only(l, feed),
+    }
+}
+
 /// A [`Planner`] on its own thread: the same calls, recorded in batches and
 /// replayed there in order while the G-code is written, so the estimate is
-/// exactly the one planner's and costs the writer almost nothing.
+/// exactly the one planner's and costs the writer almost nothing. With a
+/// budget of one thread it runs inline instead: the same calls, in the same
+/// order, on the caller's thread.
 pub struct Background {
     limits: Limits,
     batch: Vec<Call>,
     tx: Option<std::sync::mpsc::SyncSender<Vec<Call>>>,
     worker: Option<std::thread::JoinHandle<Estimate>>,
+    /// The planner itself when it runs inline (a budget of one thread).
+    inline: Option<Planner>,
 }
 
 impl Background {
-    /// A planner with these limits, started on a thread of its own.
-    pub fn new(limits: Limits) -> Background {
-        let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<Call>>(64);
+    /// A planner with these limits, started on a thread of its own when
+    /// `threads` allows a second one, else run inline.
+    pub fn new(limits: Limits, threads: Threads) -> Background {
         let mut planner = Planner::new(limits.clone());
+        if !threads.parallel() {
+            return Background {
+                limits,
+                batch: Vec::new(),
+                tx: None,
+                worker: None,
+                inline: Some(planner),
+            };
+        }
+        let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<Call>>(64);
         let worker = std::thread::spawn(move || {
             for batch in rx {
                 for call in batch {
-                    match call {
-                        Call::BeginPart(name) => planner.begin_part(&name),
-                        Call::Stop => planner.stop(),
-                        Call::Dwell(s) => planner.dwell(s),
-                        Call::MoveTo(to, e, feed, kind) => planner.move_to(to, e, feed, kind),
-                        Call::ExtrudeOnly(l, feed) => planner.extrude_only(l, feed),
-                    }
+                    replay(&mut planner, call);
                 }
             }
             planner.finish()
@@ -513,10 +534,15 @@ impl Background {
             batch: Vec::with_capacity(BATCH),
             tx: Some(tx),
             worker: Some(worker),
+            inline: None,
         }
     }
 
     fn call(&mut self, c: Call) {
+        if let Some(p) = &mut self.inline {
+            replay(p, c);
+            return;
+        }
         self.batch.push(c);
         if self.batch.len() >= BATCH && self.tx.is_some() {
             self.send();
@@ -564,6 +590,9 @@ impl Background {
     /// Sends what is left, waits for the thread and returns its estimate;
     /// calls after it are ignored.
     pub fn finish(&mut self) -> Estimate {
+        if let Some(p) = self.inline.take() {
+            return p.finish();
+        }
         self.send();
         self.tx = None;
         let worker = self.worker.take().expect("finish is called once");

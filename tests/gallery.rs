@@ -9,6 +9,7 @@ use glam::DVec3;
 use p3dp::build::{make_part, plan};
 use p3dp::check::Severity;
 use p3dp::recipe::Recipe;
+use p3dp::threads::Threads;
 use p3dp::toolpath::{polar, Toolpath};
 
 /// Every recipe of the gallery.
@@ -64,7 +65,7 @@ fn index(recipe: &Recipe, name: &str) -> usize {
 
 /// Part `name` with all its steps.
 fn part(recipe: &Recipe, name: &str) -> Toolpath {
-    make_part(recipe, index(recipe, name)).unwrap()
+    make_part(recipe, index(recipe, name), Threads::available()).unwrap()
 }
 
 /// Part `name` with only its first `steps` steps (0: the bare primitive).
@@ -73,7 +74,7 @@ fn part_upto(recipe: &Recipe, name: &str, steps: usize) -> Toolpath {
     let mut r = recipe.clone();
     assert!(steps <= r.parts[k].steps.len());
     r.parts[k].steps.truncate(steps);
-    make_part(&r, k).unwrap()
+    make_part(&r, k, Threads::available()).unwrap()
 }
 
 /// Points of extruding strings (both ends).

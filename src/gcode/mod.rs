@@ -25,6 +25,7 @@ use crate::error::Result;
 use crate::format::{fmt_num, hms, put_fixed, units};
 use crate::machine::{Extrusion, Printer};
 use crate::model::Recipe;
+use crate::threads::Threads;
 use crate::toolpath::{Event, Toolpath};
 
 /// What the written moves add up to; the stats report is made from it.
@@ -103,8 +104,9 @@ struct Pending {
 }
 
 impl<'a, W: Write> Emitter<'a, W> {
-    /// An emitter writing to `out` for `recipe`'s printer and material.
-    pub fn new(out: W, recipe: &'a Recipe) -> Emitter<'a, W> {
+    /// An emitter writing to `out` for `recipe`'s printer and material; its
+    /// print-time planner runs on a thread of its own if `threads` allows.
+    pub fn new(out: W, recipe: &'a Recipe, threads: Threads) -> Emitter<'a, W> {
         let d = recipe
             .material
             .filament_diameter
@@ -129,6 +131,7 @@ impl<'a, W: Write> Emitter<'a, W> {
             thumbnails: String::new(),
             planner: crate::planner::Background::new(
                 recipe.printer.kinematics.limits(recipe.printer.max_speed),
+                threads,
             ),
             fan: (recipe.material.fan_speed > 0.0)
                 .then_some((recipe.material.fan_speed, recipe.material.fan_start_z)),

@@ -4,6 +4,7 @@ use glam::DVec3;
 
 use super::{not_finite, par_chunks, vars_at};
 use crate::expr::{var, Expr};
+use crate::threads::Threads;
 use crate::toolpath::Toolpath;
 
 /// A deformation: new positions and/or new cross-sections and speeds.
@@ -24,23 +25,24 @@ impl Deform {
         exprs.iter().any(|e| e.uses(var::R) || e.uses(var::THETA))
     }
 
-    /// Applies the deformation: c and v first, at the old midpoints, then the points.
-    pub fn apply(&self, tp: &mut Toolpath) -> Result<(), String> {
+    /// Applies the deformation: c and v first, at the old midpoints, then the
+    /// points; on up to `threads` threads (the output is the same for any).
+    pub fn apply(&self, tp: &mut Toolpath, threads: Threads) -> Result<(), String> {
         if self.cross_section.is_some() || self.speed.is_some() {
-            self.apply_strings(tp)?;
+            self.apply_strings(tp, threads)?;
         }
         if let Some(pos) = &self.position {
-            self.apply_points(tp, pos)?;
+            self.apply_points(tp, pos, threads)?;
         }
         Ok(())
     }
 
-    fn apply_strings(&self, tp: &mut Toolpath) -> Result<(), String> {
+    fn apply_strings(&self, tp: &mut Toolpath, threads: Threads) -> Result<(), String> {
         let exprs: Vec<&Expr> = self.cross_section.iter().chain(&self.speed).collect();
         let polar_too = self.needs_polar(&exprs);
         let n = tp.len();
         let points = &tp.points;
-        par_chunks(&mut tp.strings, |start, chunk| {
+        par_chunks(&mut tp.strings, threads, |start, chunk| {
             for (j, s) in chunk.iter_mut().enumerate() {
                 if s.travel {
                     continue;
@@ -69,14 +71,19 @@ impl Deform {
         })
     }
 
-    fn apply_points(&self, tp: &mut Toolpath, pos: &[Expr; 3]) -> Result<(), String> {
+    fn apply_points(
+        &self,
+        tp: &mut Toolpath,
+        pos: &[Expr; 3],
+        threads: Threads,
+    ) -> Result<(), String> {
         let n = tp.points.len();
         let [f0, f1, f2] = pos;
         let cylinder = self.cylinder;
         // theta' = theta needs no trigonometry: (x, y) scales by r'/r.
         let keep_theta = f1.is_var(var::THETA);
         let polar_too = cylinder || self.needs_polar(&[f0, f1, f2]);
-        par_chunks(&mut tp.points, |start, chunk| {
+        par_chunks(&mut tp.points, threads, |start, chunk| {
             for (j, point) in chunk.iter_mut().enumerate() {
                 let i = start + j;
                 let p = *point;
@@ -160,7 +167,7 @@ mod tests {
             speed: None,
         };
         let mut t = line();
-        d.apply(&mut t).unwrap();
+        d.apply(&mut t, Threads::new(4)).unwrap();
         assert!((t.points[1] - DVec3::new(0.0, 2.0, 2.0)).length() < 1e-12);
         // c evaluated at the old midpoint of string 0 (z = 0.5)
         assert!((t.strings[0].c - 0.1).abs() < 1e-12);
@@ -175,7 +182,7 @@ mod tests {
             speed: None,
         };
         let mut t = line();
-        d.apply(&mut t).unwrap();
+        d.apply(&mut t, Threads::new(4)).unwrap();
         assert!((t.points[0] - DVec3::new(0.0, 1.0, 0.0)).length() < 1e-12);
     }
 
@@ -187,7 +194,7 @@ mod tests {
             cross_section: None,
             speed: None,
         };
-        let e = d.apply(&mut line()).unwrap_err();
+        let e = d.apply(&mut line(), Threads::new(4)).unwrap_err();
         assert!(
             e.contains("position[1] `sqrt(y - 0.5)`") && e.contains("point 0"),
             "{e}"
@@ -223,7 +230,7 @@ mod tests {
         };
         let mut t = long_helix(n);
         let old = t.clone();
-        d.apply(&mut t).unwrap();
+        d.apply(&mut t, Threads::new(4)).unwrap();
         let [f0, _, f2] = d.position.as_ref().unwrap();
         for (i, p) in old.points.iter().enumerate() {
             let vars = vars_at(*p, i, n + 1, true);
@@ -245,7 +252,7 @@ mod tests {
             cross_section: None,
             speed: None,
         };
-        let e = bad.apply(&mut long_helix(n)).unwrap_err();
+        let e = bad.apply(&mut long_helix(n), Threads::new(4)).unwrap_err();
         assert!(e.contains("at point 30001,"), "{e}");
     }
 }

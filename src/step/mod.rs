@@ -16,6 +16,7 @@ pub use modulate::{Bitmap, Modulate, ModulateMap};
 use glam::DVec3;
 
 use crate::expr::{var, Vars};
+use crate::threads::Threads;
 use crate::toolpath::{polar, Toolpath};
 
 /// What `modulate_*` keeps when it scales the cross-section.
@@ -57,10 +58,16 @@ impl Step {
         }
     }
 
-    /// Applies the step in place. `max_strings` bounds what `subdivide` may make.
-    pub fn apply(&self, tp: &mut Toolpath, max_strings: u64) -> Result<(), String> {
+    /// Applies the step in place, on up to `threads` threads. `max_strings`
+    /// bounds what `subdivide` may make.
+    pub fn apply(
+        &self,
+        tp: &mut Toolpath,
+        max_strings: u64,
+        threads: Threads,
+    ) -> Result<(), String> {
         match self {
-            Step::DeformXyz(d) | Step::DeformCylinder(d) => d.apply(tp),
+            Step::DeformXyz(d) | Step::DeformCylinder(d) => d.apply(tp, threads),
             Step::ModulateCylinder(m) => m.apply(tp),
             Step::ModulateMap(m) => m.apply(tp),
             Step::Subdivide(max) => subdivide::apply(tp, *max, max_strings),
@@ -78,21 +85,18 @@ impl Step {
 const PAR_MIN: usize = 50_000;
 
 /// Calls `f(start, chunk)` on consecutive chunks of `items` (chunk j starts at
-/// item `start`), on up to `available_parallelism` (at most 4) scoped
-/// threads, and returns the error of the earliest failing chunk. Every item
+/// item `start`), on up to `threads` scoped threads (the caller's budget;
+/// one below [`PAR_MIN`] items), and returns the error of the earliest failing chunk. Every item
 /// is computed by the same code whatever the split, and each chunk stops at
 /// its own first error, so results and error are those of one thread: the
 /// output cannot depend on the thread count.
 pub(crate) fn par_chunks<T: Send>(
     items: &mut [T],
+    threads: Threads,
     f: impl Fn(usize, &mut [T]) -> Result<(), String> + Sync,
 ) -> Result<(), String> {
     let n = items.len();
-    let threads = if n < PAR_MIN {
-        1
-    } else {
-        std::thread::available_parallelism().map_or(1, |t| t.get().min(4))
-    };
+    let threads = if n < PAR_MIN { 1 } else { threads.get() };
     if threads <= 1 {
         return f(0, items);
     }

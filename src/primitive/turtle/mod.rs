@@ -124,7 +124,10 @@ fn resolve_inner(raw: &RawTurtle, params: &Params, env: &Env) -> Result<Turtle> 
         max_steps: env.max_strings.saturating_mul(8).saturating_add(1_000_000),
     };
     // the interpreter recurses (blocks, calls, L-system derivations): give it
-    // a stack deep enough for MAX_CALL_DEPTH calls whatever thread we are on
+    // a stack deep enough for MAX_CALL_DEPTH calls whatever thread we are on.
+    // This thread exists only for its stack: the caller waits on it, so it
+    // runs alone and takes no share of the build's thread budget
+    // (`crate::threads::Threads`), which is why it is not passed one.
     let path = std::thread::scope(|s| {
         std::thread::Builder::new()
             .name("turtle".into())
