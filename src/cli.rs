@@ -258,17 +258,23 @@ fn write_pattern(file: &Path, png: &[u8]) -> Result<()> {
     })
 }
 
-/// `p3dp build`: writes G-code and prints a report per job.
-pub fn build(a: &BuildArgs) -> Vec<Error> {
-    let jobs = match a.common.jobs() {
-        Ok(j) => j,
-        Err(e) => return vec![e],
-    };
+/// What `build` settles before any job runs: the jobs, where each writes,
+/// the batch folder and the stats file opened early.
+struct Prepared {
+    jobs: Vec<Job>,
+    targets: Vec<Result<Target>>,
+    dir: PathBuf,
+    stats_file: Option<AtomicFile>,
+}
+
+/// Expands the jobs and refuses flag combinations before anything is built.
+fn prepare(a: &BuildArgs) -> Result<Prepared> {
+    let jobs = a.common.jobs()?;
     if a.pattern.is_some() && jobs.len() > 1 {
-        return vec![Error::input(
+        return Err(Error::input(
             "--pattern",
             "writes the cell array of one build; expected one recipe and no --sweep",
-        )];
+        ));
     }
     // open the stats file first where its folder exists: if it cannot be
     // written, no G-code is; a missing folder is made only after a build
@@ -278,78 +284,75 @@ pub fn build(a: &BuildArgs) -> Vec<Error> {
             .parent()
             .is_none_or(|d| d.as_os_str().is_empty() || d.is_dir());
         if folder_exists {
-            match AtomicFile::create(p) {
-                Ok(f) => stats_file = Some(f),
-                Err(e) => return vec![e],
-            }
+            stats_file = Some(AtomicFile::create(p)?);
         }
     }
     if let Some(pv) = &a.preview {
         if jobs.len() > 1 {
-            return vec![Error::input(
+            return Err(Error::input(
                 "--preview",
                 "a preview is of one build; give one recipe (or run `p3dp preview` per recipe)",
-            )];
+            ));
         }
-        if let Err(e) = crate::preview::Format::of(pv) {
-            return vec![e];
+        crate::preview::Format::of(pv)?;
+    }
+    let (targets, dir) = targets(a, &jobs)?;
+    Ok(Prepared {
+        jobs,
+        targets,
+        dir,
+        stats_file,
+    })
+}
+
+/// Builds one job to its target (with its preview and pattern, if asked):
+/// the stats, where it went, and whether that was standard output.
+fn build_job(a: &BuildArgs, job: &Job, target: Result<Target>, threads: Threads) -> Built {
+    let target = target?;
+    let p = a.common.checked_plan(job, threads)?;
+    // the cell array of --pattern, made before any file is written
+    let pattern = match &a.pattern {
+        Some(f) => Some((f, pattern_png(&p.recipe).map_err(|e| e.in_file(&p.path))?)),
+        None => None,
+    };
+    let built = match &target {
+        Target::Stdout => p
+            .render(std::io::stdout().lock())
+            .map(|s| (s, "standard output".to_string(), true)),
+        Target::File(f) => {
+            make_parent(f)?;
+            let mut stats = None;
+            write_atomic(f, |file| {
+                stats = Some(p.render(file)?);
+                Ok(())
+            })
+            .map(|_| (stats.expect("rendered"), f.display().to_string(), false))
+        }
+    }?;
+    if let Some(pv) = &a.preview {
+        make_parent(pv)?;
+        let line = crate::preview::write(&p, pv, &crate::preview::Options::default(), &|w| {
+            p.render(w)
+        })?;
+        if built.2 {
+            eprintln!("{line}");
+        } else {
+            println!("{line}");
         }
     }
-    let (targets, dir) = match targets(a, &jobs) {
-        Ok(t) => t,
-        Err(e) => return vec![e],
-    };
-    let bar = progress(jobs.len());
-    let (workers, threads) = a.common.budget(jobs.len());
-    let results = batch::run_parallel(
-        jobs.len(),
-        workers,
-        |k| {
-            let target = targets[k].clone()?;
-            let p = a.common.checked_plan(&jobs[k], threads)?;
-            // the cell array of --pattern, made before any file is written
-            let pattern = match &a.pattern {
-                Some(f) => Some((f, pattern_png(&p.recipe).map_err(|e| e.in_file(&p.path))?)),
-                None => None,
-            };
-            let built = match &target {
-                Target::Stdout => p
-                    .render(std::io::stdout().lock())
-                    .map(|s| (s, "standard output".to_string(), true)),
-                Target::File(f) => {
-                    make_parent(f)?;
-                    let mut stats = None;
-                    write_atomic(f, |file| {
-                        stats = Some(p.render(file)?);
-                        Ok(())
-                    })
-                    .map(|_| (stats.expect("rendered"), f.display().to_string(), false))
-                }
-            }?;
-            if let Some(pv) = &a.preview {
-                make_parent(pv)?;
-                let line =
-                    crate::preview::write(&p, pv, &crate::preview::Options::default(), &|w| {
-                        p.render(w)
-                    })?;
-                if built.2 {
-                    eprintln!("{line}");
-                } else {
-                    println!("{line}");
-                }
-            }
-            if let Some((f, png)) = &pattern {
-                write_pattern(f, png)?;
-            }
-            Ok::<_, Error>(built)
-        },
-        || bar.inc(1),
-    );
-    bar.finish_and_clear();
+    if let Some((f, png)) = &pattern {
+        write_pattern(f, png)?;
+    }
+    Ok(built)
+}
+
+/// Prints each job's report (or summary line) and returns the errors met
+/// and the stats of the jobs that succeeded.
+fn report_builds(jobs: &[Job], results: &[Built]) -> (Vec<Error>, Vec<Stats>) {
     let mut errors = Vec::new();
     let mut all_stats = Vec::new();
     let single = jobs.len() == 1;
-    for (job, r) in jobs.iter().zip(&results) {
+    for (job, r) in jobs.iter().zip(results) {
         match r {
             Ok((stats, shown, to_stdout)) => {
                 let text = if single {
@@ -367,21 +370,61 @@ pub fn build(a: &BuildArgs) -> Vec<Error> {
             Err(e) => errors.push(e.clone()),
         }
     }
+    (errors, all_stats)
+}
+
+/// Writes `--stats-json` and a sweep's `summary.csv`; the errors met.
+fn write_batch_files(
+    a: &BuildArgs,
+    stats_file: Option<AtomicFile>,
+    dir: &Path,
+    jobs: &[Job],
+    results: &[Built],
+    all_stats: &[Stats],
+) -> Vec<Error> {
+    let mut errors = Vec::new();
     if let (Some(path), false) = (&a.stats_json, all_stats.is_empty()) {
         let file = match stats_file {
             Some(f) => Ok(f),
             None => make_parent(path).and_then(|_| AtomicFile::create(path)),
         };
-        if let Err(e) = file.and_then(|f| write_stats(f, &all_stats)) {
+        if let Err(e) = file.and_then(|f| write_stats(f, all_stats)) {
             errors.push(e);
         }
     }
     if !a.common.sweeps.is_empty() && !all_stats.is_empty() {
         let csv = dir.join("summary.csv");
-        if let Err(e) = make_parent(&csv).and_then(|_| write_summary(&csv, &jobs, &results)) {
+        if let Err(e) = make_parent(&csv).and_then(|_| write_summary(&csv, jobs, results)) {
             errors.push(e);
         }
     }
+    errors
+}
+
+/// `p3dp build`: writes G-code and prints a report per job.
+pub fn build(a: &BuildArgs) -> Vec<Error> {
+    let Prepared {
+        jobs,
+        targets,
+        dir,
+        stats_file,
+    } = match prepare(a) {
+        Ok(p) => p,
+        Err(e) => return vec![e],
+    };
+    let bar = progress(jobs.len());
+    let (workers, threads) = a.common.budget(jobs.len());
+    let results = batch::run_parallel(
+        jobs.len(),
+        workers,
+        |k| build_job(a, &jobs[k], targets[k].clone(), threads),
+        || bar.inc(1),
+    );
+    bar.finish_and_clear();
+    let (mut errors, all_stats) = report_builds(&jobs, &results);
+    errors.extend(write_batch_files(
+        a, stats_file, &dir, &jobs, &results, &all_stats,
+    ));
     errors
 }
 
