@@ -171,7 +171,7 @@ enum Target {
 fn recipe_name(path: &Path) -> Result<String> {
     let shown = path.display().to_string();
     let text = std::fs::read_to_string(path)
-        .map_err(|e| Error::io(&shown, format!("cannot read the recipe: {e}")))?;
+        .map_err(|e| Error::io_from(&shown, format!("cannot read the recipe: {e}"), &e))?;
     Ok(parse_yaml::<RawRecipe>(&text, &shown)?.name)
 }
 
@@ -240,9 +240,10 @@ fn progress(n: usize) -> indicatif::ProgressBar {
 fn make_parent(file: &Path) -> Result<()> {
     match file.parent() {
         Some(d) if !d.as_os_str().is_empty() => std::fs::create_dir_all(d).map_err(|e| {
-            Error::io(
+            Error::io_from(
                 d.display().to_string(),
                 format!("cannot create the folder: {e}"),
+                &e,
             )
         }),
         _ => Ok(()),
@@ -254,7 +255,7 @@ fn write_pattern(file: &Path, png: &[u8]) -> Result<()> {
     make_parent(file)?;
     write_atomic(file, |f| {
         f.write_all(png)
-            .map_err(|e| Error::io(file.display().to_string(), e.to_string()))
+            .map_err(|e| Error::io_from(file.display().to_string(), e.to_string(), &e))
     })
 }
 
@@ -499,7 +500,7 @@ fn write_summary(path: &Path, jobs: &[Job], results: &[Built]) -> Result<()> {
     }
     write_atomic(path, |f| {
         f.write_all(text.as_bytes())
-            .map_err(|e| Error::io(path.display().to_string(), e.to_string()))
+            .map_err(|e| Error::io_from(path.display().to_string(), e.to_string(), &e))
     })
 }
 
@@ -513,7 +514,7 @@ fn write_stats(mut file: AtomicFile, stats: &[Stats]) -> Result<()> {
     file.file()
         .write_all(json.as_bytes())
         .and_then(|_| file.file().write_all(b"\n"))
-        .map_err(|e| Error::io("--stats-json", e.to_string()))?;
+        .map_err(|e| Error::io_from("--stats-json", e.to_string(), &e))?;
     file.commit()
 }
 
@@ -623,7 +624,7 @@ pub fn hash(a: &HashArgs) -> Vec<Error> {
         );
         if let Err(e) = write_atomic(lockfile, |f| {
             f.write_all(text.as_bytes())
-                .map_err(|e| Error::io(lockfile.display().to_string(), e.to_string()))
+                .map_err(|e| Error::io_from(lockfile.display().to_string(), e.to_string(), &e))
         }) {
             errors.push(e);
         }
@@ -684,7 +685,7 @@ fn lock_entry(
 fn check_lock(a: &HashArgs, lockfile: &Path) -> Vec<Error> {
     let shown = lockfile.display().to_string();
     let lock: Lock = match std::fs::read_to_string(lockfile)
-        .map_err(|e| Error::io(&shown, format!("cannot read the lock file: {e}")))
+        .map_err(|e| Error::io_from(&shown, format!("cannot read the lock file: {e}"), &e))
         .and_then(|t| parse_yaml(&t, &shown))
     {
         Ok(l) => l,

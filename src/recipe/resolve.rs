@@ -134,7 +134,7 @@ impl Recipe {
     ) -> Result<Recipe> {
         let shown = path.display().to_string();
         let text = std::fs::read_to_string(path)
-            .map_err(|e| Error::io(&shown, format!("cannot read the recipe: {e}")))?;
+            .map_err(|e| Error::io_from(&shown, format!("cannot read the recipe: {e}"), &e))?;
         let raw: RawRecipe = parse_yaml(&text, &shown)?;
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         Recipe::resolve(&raw, sets, printer, &dir).map_err(|e| e.in_file(&shown))
