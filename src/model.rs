@@ -71,7 +71,7 @@ pub fn make_part(recipe: &Recipe, k: usize, threads: Threads) -> Result<Toolpath
     tp.name = part.name.clone();
     for (j, step) in part.steps.iter().enumerate() {
         step.apply(&mut tp, recipe.max_strings, threads)
-            .map_err(|m| Error::input(format!("parts[{k}].steps[{j}].{}", step.key()), m))?;
+            .map_err(|e| e.under(&format!("parts[{k}].steps[{j}].{}", step.key())))?;
     }
     Ok(tp)
 }

@@ -374,7 +374,7 @@ fn resolve_step(ctx: &Ctx, s: &RawStep) -> Result<Step> {
                 (Some(image), None) => load_bitmap(&ctx.dir.join(image), image)
                     .map_err(|m| Error::input(format!("{key}.image"), m))?,
                 (None, Some(text)) => {
-                    Bitmap::from_text(text).map_err(|m| Error::input(format!("{key}.text"), m))?
+                    Bitmap::from_text(text).map_err(|e| e.under(&format!("{key}.text")))?
                 }
                 _ => {
                     return Err(Error::input(

@@ -3,6 +3,7 @@
 use glam::DVec3;
 
 use super::{not_finite, par_chunks, vars_at};
+use crate::error::{Error, Result};
 use crate::expr::{var, Expr};
 use crate::threads::Threads;
 use crate::toolpath::Toolpath;
@@ -27,7 +28,7 @@ impl Deform {
 
     /// Applies the deformation: c and v first, at the old midpoints, then the
     /// points; on up to `threads` threads (the output is the same for any).
-    pub fn apply(&self, tp: &mut Toolpath, threads: Threads) -> Result<(), String> {
+    pub fn apply(&self, tp: &mut Toolpath, threads: Threads) -> Result<()> {
         if self.cross_section.is_some() || self.speed.is_some() {
             self.apply_strings(tp, threads)?;
         }
@@ -37,7 +38,7 @@ impl Deform {
         Ok(())
     }
 
-    fn apply_strings(&self, tp: &mut Toolpath, threads: Threads) -> Result<(), String> {
+    fn apply_strings(&self, tp: &mut Toolpath, threads: Threads) -> Result<()> {
         let exprs: Vec<&Expr> = self.cross_section.iter().chain(&self.speed).collect();
         let polar_too = self.needs_polar(&exprs);
         let n = tp.len();
@@ -71,12 +72,7 @@ impl Deform {
         })
     }
 
-    fn apply_points(
-        &self,
-        tp: &mut Toolpath,
-        pos: &[Expr; 3],
-        threads: Threads,
-    ) -> Result<(), String> {
+    fn apply_points(&self, tp: &mut Toolpath, pos: &[Expr; 3], threads: Threads) -> Result<()> {
         let n = tp.points.len();
         let [f0, f1, f2] = pos;
         let cylinder = self.cylinder;
@@ -127,15 +123,16 @@ fn worst<'a>(pos: &'a [Expr; 3], vars: &crate::expr::Vars) -> (String, &'a str, 
         })
 }
 
-fn bad_value(key: &str, e: &Expr, value: f64, k: usize, m: DVec3, expected: &str) -> String {
+/// The error for a cross-section or speed out of range at string `k`.
+fn bad_value(key: &str, e: &Expr, value: f64, k: usize, m: DVec3, expected: &str) -> Error {
     if value.is_finite() {
-        format!(
+        Error::input("", format!(
             "{key} `{}` gives {value} at string {k}, midpoint (x, y, z) = ({:.3}, {:.3}, {:.3}); expected {expected}",
             e.src(),
             m.x,
             m.y,
             m.z
-        )
+        ))
     } else {
         not_finite(key, e.src(), value, "string", k, m)
     }
@@ -196,7 +193,7 @@ mod tests {
         };
         let e = d.apply(&mut line(), Threads::new(4)).unwrap_err();
         assert!(
-            e.contains("position[1] `sqrt(y - 0.5)`") && e.contains("point 0"),
+            e.message.contains("position[1] `sqrt(y - 0.5)`") && e.message.contains("point 0"),
             "{e}"
         );
     }
@@ -253,6 +250,6 @@ mod tests {
             speed: None,
         };
         let e = bad.apply(&mut long_helix(n), Threads::new(4)).unwrap_err();
-        assert!(e.contains("at point 30001,"), "{e}");
+        assert!(e.message.contains("at point 30001,"), "{e}");
     }
 }

@@ -15,6 +15,7 @@ pub use modulate::{Bitmap, Modulate, ModulateMap};
 
 use glam::DVec3;
 
+use crate::error::{Error, Result};
 use crate::expr::{var, Vars};
 use crate::threads::Threads;
 use crate::toolpath::{polar, Toolpath};
@@ -60,12 +61,7 @@ impl Step {
 
     /// Applies the step in place, on up to `threads` threads. `max_strings`
     /// bounds what `subdivide` may make.
-    pub fn apply(
-        &self,
-        tp: &mut Toolpath,
-        max_strings: u64,
-        threads: Threads,
-    ) -> Result<(), String> {
+    pub fn apply(&self, tp: &mut Toolpath, max_strings: u64, threads: Threads) -> Result<()> {
         match self {
             Step::DeformXyz(d) | Step::DeformCylinder(d) => d.apply(tp, threads),
             Step::ModulateCylinder(m) => m.apply(tp),
@@ -93,15 +89,15 @@ const PAR_MIN: usize = 50_000;
 pub(crate) fn par_chunks<T: Send>(
     items: &mut [T],
     threads: Threads,
-    f: impl Fn(usize, &mut [T]) -> Result<(), String> + Sync,
-) -> Result<(), String> {
+    f: impl Fn(usize, &mut [T]) -> Result<()> + Sync,
+) -> Result<()> {
     let n = items.len();
     let threads = if n < PAR_MIN { 1 } else { threads.get() };
     if threads <= 1 {
         return f(0, items);
     }
     let size = n.div_ceil(threads);
-    let results: Vec<Result<(), String>> = std::thread::scope(|s| {
+    let results: Vec<Result<()>> = std::thread::scope(|s| {
         let f = &f;
         let handles: Vec<_> = items
             .chunks_mut(size)
@@ -139,7 +135,8 @@ pub(crate) fn vars_at(p: DVec3, i: usize, n: usize, polar_too: bool) -> Vars {
     v
 }
 
-/// The error for an expression that gave NaN or infinity.
+/// The error for an expression that gave NaN or infinity (no place yet:
+/// [`crate::model::make_part`] names the step).
 pub(crate) fn not_finite(
     what: &str,
     src: &str,
@@ -147,9 +144,12 @@ pub(crate) fn not_finite(
     kind: &str,
     i: usize,
     p: DVec3,
-) -> String {
-    format!(
-        "{what} `{src}` gives {value} at {kind} {i}, (x, y, z) = ({:.3}, {:.3}, {:.3}); expected a finite number",
-        p.x, p.y, p.z
+) -> Error {
+    Error::input(
+        "",
+        format!(
+            "{what} `{src}` gives {value} at {kind} {i}, (x, y, z) = ({:.3}, {:.3}, {:.3}); expected a finite number",
+            p.x, p.y, p.z
+        ),
     )
 }
