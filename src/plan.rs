@@ -70,7 +70,7 @@ pub fn plan(path: &Path, opts: &Options) -> Result<Plan> {
         match crate::skirt::make(s, &parts, spacing, cv, recipe.max_strings) {
             Ok(Some(sk)) => paths.push(sk),
             Ok(None) => {}
-            Err(m) => return Err(Error::input("skirt", m).in_file(&shown)),
+            Err(e) => return Err(e.under("skirt").in_file(&shown)),
         }
     }
     paths.extend(parts);
