@@ -96,7 +96,7 @@ fn resolve_inner(raw: &RawTurtle, params: &Params, env: &Env) -> Result<Turtle> 
     let pos = point(&start.position, params, "start.position", DVec3::ZERO)?;
     let heading = point(&start.heading, params, "start.heading", DVec3::X)?;
     let up = point(&start.up, params, "start.up", DVec3::Z)?;
-    let frame = Frame::new(pos, heading, up).map_err(|m| Error::input("start", m))?;
+    let frame = Frame::new(pos, heading, up).map_err(|e| Error::input("start", e.to_string()))?;
     let seed = match &raw.seed {
         Some(n) => {
             let s = constant(n, params, "seed")?;
