@@ -91,7 +91,7 @@ pub fn pattern_png(recipe: &Recipe) -> Result<Vec<u8>> {
             .model
             .run()
             .to_png()
-            .map_err(|m| Error::input("--pattern", m)),
+            .map_err(|e| e.under("--pattern")),
         _ => Err(Error::input(
             "--pattern",
             format!(
