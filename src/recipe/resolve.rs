@@ -82,13 +82,12 @@ pub fn eval_params(raw: &IndexMap<String, Num>, sets: &[(String, String)]) -> Re
             ));
         }
         let v = match sets.iter().rev().find(|(n, _)| n == name) {
-            Some((_, s)) => expr::eval_const(s, &params)
-                .map_err(|m| Error::input(format!("--set {name}={s}"), m))?,
+            Some((_, s)) => {
+                expr::eval_const(s, &params).map_err(|e| e.at(format!("--set {name}={s}")))?
+            }
             None => match value {
                 Num::Value(v) => finite(*v, &place)?,
-                Num::Expr(s) => {
-                    expr::eval_const(s, &params).map_err(|m| Error::input(&place, m))?
-                }
+                Num::Expr(s) => expr::eval_const(s, &params).map_err(|e| e.at(&place))?,
             },
         };
         params.insert(name.clone(), v);

@@ -73,7 +73,7 @@ fn constant(n: &Num, params: &Params, place: &str) -> Result<f64> {
             place,
             format!("{v} is not allowed; expected a finite number"),
         )),
-        Num::Expr(s) => expr::eval_const(s, params).map_err(|m| Error::input(place, m)),
+        Num::Expr(s) => expr::eval_const(s, params).map_err(|e| e.at(place)),
     }
 }
 

@@ -10,7 +10,7 @@ use serde::de::{self, Deserializer, MapAccess, Visitor};
 use serde::Deserialize;
 
 use crate::error::{Error, Result};
-use crate::expr::{var, Expr, Params};
+use crate::expr::{var, Expr, ExprErrorKind, Params};
 use crate::num::{Num, Num3};
 
 /// `turtle:` as written.
@@ -485,8 +485,9 @@ impl<'a> Compiler<'a> {
     pub fn val(&self, n: &Num, scope: &Arc<Vec<String>>, place: &str) -> Result<Val> {
         let names: Vec<&str> = scope.iter().map(String::as_str).collect();
         let expr = Expr::compile_ext(&n.src(), self.params, &[var::X, var::Y, var::Z], &names)
-            .map_err(|m| {
-                let m = if !scope.is_empty() && m.contains("it may use") {
+            .map_err(|e| {
+                let m = e.message;
+                let m = if !scope.is_empty() && e.kind == ExprErrorKind::Name {
                     format!(
                         "{m}, the counters and parameters {} and rand()",
                         scope.join(", ")
