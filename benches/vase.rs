@@ -10,6 +10,8 @@
 use std::path::Path;
 use std::time::Instant;
 
+use p3dp::threads::Threads;
+
 fn peak_rss_mb() -> Option<f64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
     let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
@@ -60,7 +62,7 @@ fn checks_against_generation(path: &Path, runs: usize) {
     let mut found = 0;
     for _ in 0..runs {
         let t0 = Instant::now();
-        let part = p3dp::build::make_part(&recipe, 0).expect("part");
+        let part = p3dp::build::make_part(&recipe, 0, Threads::available()).expect("part");
         gen.push(t0.elapsed().as_secs_f64());
         let refs = [&part];
         let mut out = Vec::new();

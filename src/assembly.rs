@@ -17,6 +17,7 @@
 use crate::error::{Error, Result};
 use crate::model::{make_part, Group, Recipe, DEFAULT_MAX_STRINGS};
 use crate::step::Step;
+use crate::threads::Threads;
 use crate::toolpath::{Strand, Toolpath};
 
 /// Most strings all parts of a recipe may have together, before and after
@@ -26,12 +27,12 @@ pub fn total_limit(recipe: &Recipe) -> u64 {
 }
 
 /// Makes every part with its own steps, then runs the group steps.
-pub fn make_parts(recipe: &Recipe) -> Result<Vec<Toolpath>> {
+pub fn make_parts(recipe: &Recipe, threads: Threads) -> Result<Vec<Toolpath>> {
     let limit = total_limit(recipe);
     let mut parts = Vec::with_capacity(recipe.parts.len());
     let mut total = 0u64;
     for k in 0..recipe.parts.len() {
-        let tp = make_part(recipe, k)?;
+        let tp = make_part(recipe, k, threads)?;
         total = total.saturating_add(tp.len() as u64);
         if total > limit {
             return Err(over_total(&recipe.parts[k].place, total, limit));
@@ -39,7 +40,7 @@ pub fn make_parts(recipe: &Recipe) -> Result<Vec<Toolpath>> {
         parts.push(tp);
     }
     for g in &recipe.groups {
-        apply(g, &mut parts[g.first..g.end], recipe.max_strings)?;
+        apply(g, &mut parts[g.first..g.end], recipe.max_strings, threads)?;
     }
     if recipe.groups.iter().any(|g| has_subdivide(&g.steps)) {
         let total: u64 = parts.iter().map(|t| t.len() as u64).sum();
@@ -73,12 +74,12 @@ fn is_join(s: &Strand) -> bool {
 }
 
 /// Runs a group's steps on `parts` as one string set.
-fn apply(g: &Group, parts: &mut [Toolpath], max_strings: u64) -> Result<()> {
+fn apply(g: &Group, parts: &mut [Toolpath], max_strings: u64, threads: Threads) -> Result<()> {
     let names: Vec<String> = parts.iter().map(|t| t.name.clone()).collect();
     let mut all = join(parts);
     for (j, step) in g.steps.iter().enumerate() {
-        step.apply(&mut all, max_strings)
-            .map_err(|m| Error::input(format!("{}.steps[{j}].{}", g.place, step.key()), m))?;
+        step.apply(&mut all, max_strings, threads)
+            .map_err(|e| e.under(&format!("{}.steps[{j}].{}", g.place, step.key())))?;
         if matches!(step, Step::Subdivide(_)) {
             // one string again between two parts, for the steps after it
             all = join(&split(all));
@@ -182,7 +183,7 @@ mod tests {
         let parts = vec![line(0.0, 2), line(30.0, 1)];
         let mut all = join(&parts);
         crate::step::Step::Subdivide(1.0)
-            .apply(&mut all, 1000)
+            .apply(&mut all, 1000, Threads::ONE)
             .unwrap();
         let back = split(all);
         assert_eq!(back.len(), 2);

@@ -14,9 +14,10 @@ use crate::toolpath::Toolpath;
 impl Plan {
     /// Writes the G-code to `out`.
     pub fn write_gcode<W: Write>(&self, out: W) -> Result<(W, MoveStats)> {
-        let io = |e: io::Error| Error::io(&self.path, format!("cannot write the G-code: {e}"));
+        let io =
+            |e: io::Error| Error::io_from(&self.path, format!("cannot write the G-code: {e}"), &e);
         let top = self.top_z();
-        let mut em = Emitter::new(out, &self.recipe);
+        let mut em = Emitter::new(out, &self.recipe, self.threads);
         em.thumbnails = crate::preview::thumbnail::blocks(self)?;
         let fan_events = |t: &Toolpath| {
             t.events

@@ -17,6 +17,7 @@ use crate::model::pattern_png;
 use crate::output::{write_atomic, AtomicFile, HashWriter};
 use crate::recipe::{parse_set, parse_yaml, RawRecipe};
 use crate::stats::Stats;
+use crate::threads::Threads;
 
 /// Flags every command shares.
 #[derive(Clone, Debug, Default)]
@@ -33,7 +34,7 @@ pub struct Common {
     pub strict: bool,
     /// Write even when checks fail.
     pub force: bool,
-    /// `-j N`: at most N builds at once (default: one per core).
+    /// `-j N`: the thread budget, shared by concurrent builds (default: one per core).
     pub jobs: Option<usize>,
     /// `--allow CODE`: check codes silenced for these builds.
     pub allow: Vec<String>,
@@ -86,17 +87,23 @@ impl Common {
         Ok(batch::expand(&self.recipes, &sets, &sweeps))
     }
 
-    fn threads(&self) -> usize {
-        self.jobs
-            .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+    /// The one thread budget of `-j N` (default: one per core) for `jobs`
+    /// builds: min(N, jobs) workers, each build given N / workers threads.
+    fn budget(&self, jobs: usize) -> (usize, Threads) {
+        let n = self
+            .jobs
+            .map_or_else(|| Threads::available().get(), |n| n.max(1));
+        let workers = n.min(jobs).max(1);
+        (workers, Threads::new(n / workers))
     }
 
-    /// Plans a job and refuses it when its checks fail (unless forced).
-    fn checked_plan(&self, job: &Job) -> Result<Plan> {
+    /// Plans a job on `threads` and refuses it when its checks fail (unless forced).
+    fn checked_plan(&self, job: &Job, threads: Threads) -> Result<Plan> {
         let opts = Options {
             sets: job.sets.clone(),
             printer: self.printer.clone().or_else(|| job.printer.clone()),
             allow: self.allow.clone(),
+            threads,
         };
         let p = plan(&job.recipe, &opts)?;
         let failing = p.failing(self.strict);
@@ -164,7 +171,7 @@ enum Target {
 fn recipe_name(path: &Path) -> Result<String> {
     let shown = path.display().to_string();
     let text = std::fs::read_to_string(path)
-        .map_err(|e| Error::io(&shown, format!("cannot read the recipe: {e}")))?;
+        .map_err(|e| Error::io_from(&shown, format!("cannot read the recipe: {e}"), &e))?;
     Ok(parse_yaml::<RawRecipe>(&text, &shown)?.name)
 }
 
@@ -233,9 +240,10 @@ fn progress(n: usize) -> indicatif::ProgressBar {
 fn make_parent(file: &Path) -> Result<()> {
     match file.parent() {
         Some(d) if !d.as_os_str().is_empty() => std::fs::create_dir_all(d).map_err(|e| {
-            Error::io(
+            Error::io_from(
                 d.display().to_string(),
                 format!("cannot create the folder: {e}"),
+                &e,
             )
         }),
         _ => Ok(()),
@@ -247,21 +255,27 @@ fn write_pattern(file: &Path, png: &[u8]) -> Result<()> {
     make_parent(file)?;
     write_atomic(file, |f| {
         f.write_all(png)
-            .map_err(|e| Error::io(file.display().to_string(), e.to_string()))
+            .map_err(|e| Error::io_from(file.display().to_string(), e.to_string(), &e))
     })
 }
 
-/// `p3dp build`: writes G-code and prints a report per job.
-pub fn build(a: &BuildArgs) -> Vec<Error> {
-    let jobs = match a.common.jobs() {
-        Ok(j) => j,
-        Err(e) => return vec![e],
-    };
+/// What `build` settles before any job runs: the jobs, where each writes,
+/// the batch folder and the stats file opened early.
+struct Prepared {
+    jobs: Vec<Job>,
+    targets: Vec<Result<Target>>,
+    dir: PathBuf,
+    stats_file: Option<AtomicFile>,
+}
+
+/// Expands the jobs and refuses flag combinations before anything is built.
+fn prepare(a: &BuildArgs) -> Result<Prepared> {
+    let jobs = a.common.jobs()?;
     if a.pattern.is_some() && jobs.len() > 1 {
-        return vec![Error::input(
+        return Err(Error::input(
             "--pattern",
             "writes the cell array of one build; expected one recipe and no --sweep",
-        )];
+        ));
     }
     // open the stats file first where its folder exists: if it cannot be
     // written, no G-code is; a missing folder is made only after a build
@@ -271,77 +285,75 @@ pub fn build(a: &BuildArgs) -> Vec<Error> {
             .parent()
             .is_none_or(|d| d.as_os_str().is_empty() || d.is_dir());
         if folder_exists {
-            match AtomicFile::create(p) {
-                Ok(f) => stats_file = Some(f),
-                Err(e) => return vec![e],
-            }
+            stats_file = Some(AtomicFile::create(p)?);
         }
     }
     if let Some(pv) = &a.preview {
         if jobs.len() > 1 {
-            return vec![Error::input(
+            return Err(Error::input(
                 "--preview",
                 "a preview is of one build; give one recipe (or run `p3dp preview` per recipe)",
-            )];
+            ));
         }
-        if let Err(e) = crate::preview::Format::of(pv) {
-            return vec![e];
+        crate::preview::Format::of(pv)?;
+    }
+    let (targets, dir) = targets(a, &jobs)?;
+    Ok(Prepared {
+        jobs,
+        targets,
+        dir,
+        stats_file,
+    })
+}
+
+/// Builds one job to its target (with its preview and pattern, if asked):
+/// the stats, where it went, and whether that was standard output.
+fn build_job(a: &BuildArgs, job: &Job, target: Result<Target>, threads: Threads) -> Built {
+    let target = target?;
+    let p = a.common.checked_plan(job, threads)?;
+    // the cell array of --pattern, made before any file is written
+    let pattern = match &a.pattern {
+        Some(f) => Some((f, pattern_png(&p.recipe).map_err(|e| e.in_file(&p.path))?)),
+        None => None,
+    };
+    let built = match &target {
+        Target::Stdout => p
+            .render(std::io::stdout().lock())
+            .map(|s| (s, "standard output".to_string(), true)),
+        Target::File(f) => {
+            make_parent(f)?;
+            let mut stats = None;
+            write_atomic(f, |file| {
+                stats = Some(p.render(file)?);
+                Ok(())
+            })
+            .map(|_| (stats.expect("rendered"), f.display().to_string(), false))
+        }
+    }?;
+    if let Some(pv) = &a.preview {
+        make_parent(pv)?;
+        let line = crate::preview::write(&p, pv, &crate::preview::Options::default(), &|w| {
+            p.render(w)
+        })?;
+        if built.2 {
+            eprintln!("{line}");
+        } else {
+            println!("{line}");
         }
     }
-    let (targets, dir) = match targets(a, &jobs) {
-        Ok(t) => t,
-        Err(e) => return vec![e],
-    };
-    let bar = progress(jobs.len());
-    let results = batch::run_parallel(
-        jobs.len(),
-        a.common.threads(),
-        |k| {
-            let target = targets[k].clone()?;
-            let p = a.common.checked_plan(&jobs[k])?;
-            // the cell array of --pattern, made before any file is written
-            let pattern = match &a.pattern {
-                Some(f) => Some((f, pattern_png(&p.recipe).map_err(|e| e.in_file(&p.path))?)),
-                None => None,
-            };
-            let built = match &target {
-                Target::Stdout => p
-                    .render(std::io::stdout().lock())
-                    .map(|s| (s, "standard output".to_string(), true)),
-                Target::File(f) => {
-                    make_parent(f)?;
-                    let mut stats = None;
-                    write_atomic(f, |file| {
-                        stats = Some(p.render(file)?);
-                        Ok(())
-                    })
-                    .map(|_| (stats.expect("rendered"), f.display().to_string(), false))
-                }
-            }?;
-            if let Some(pv) = &a.preview {
-                make_parent(pv)?;
-                let line =
-                    crate::preview::write(&p, pv, &crate::preview::Options::default(), &|w| {
-                        p.render(w)
-                    })?;
-                if built.2 {
-                    eprintln!("{line}");
-                } else {
-                    println!("{line}");
-                }
-            }
-            if let Some((f, png)) = &pattern {
-                write_pattern(f, png)?;
-            }
-            Ok::<_, Error>(built)
-        },
-        || bar.inc(1),
-    );
-    bar.finish_and_clear();
+    if let Some((f, png)) = &pattern {
+        write_pattern(f, png)?;
+    }
+    Ok(built)
+}
+
+/// Prints each job's report (or summary line) and returns the errors met
+/// and the stats of the jobs that succeeded.
+fn report_builds(jobs: &[Job], results: &[Built]) -> (Vec<Error>, Vec<Stats>) {
     let mut errors = Vec::new();
     let mut all_stats = Vec::new();
     let single = jobs.len() == 1;
-    for (job, r) in jobs.iter().zip(&results) {
+    for (job, r) in jobs.iter().zip(results) {
         match r {
             Ok((stats, shown, to_stdout)) => {
                 let text = if single {
@@ -359,21 +371,61 @@ pub fn build(a: &BuildArgs) -> Vec<Error> {
             Err(e) => errors.push(e.clone()),
         }
     }
+    (errors, all_stats)
+}
+
+/// Writes `--stats-json` and a sweep's `summary.csv`; the errors met.
+fn write_batch_files(
+    a: &BuildArgs,
+    stats_file: Option<AtomicFile>,
+    dir: &Path,
+    jobs: &[Job],
+    results: &[Built],
+    all_stats: &[Stats],
+) -> Vec<Error> {
+    let mut errors = Vec::new();
     if let (Some(path), false) = (&a.stats_json, all_stats.is_empty()) {
         let file = match stats_file {
             Some(f) => Ok(f),
             None => make_parent(path).and_then(|_| AtomicFile::create(path)),
         };
-        if let Err(e) = file.and_then(|f| write_stats(f, &all_stats)) {
+        if let Err(e) = file.and_then(|f| write_stats(f, all_stats)) {
             errors.push(e);
         }
     }
     if !a.common.sweeps.is_empty() && !all_stats.is_empty() {
         let csv = dir.join("summary.csv");
-        if let Err(e) = make_parent(&csv).and_then(|_| write_summary(&csv, &jobs, &results)) {
+        if let Err(e) = make_parent(&csv).and_then(|_| write_summary(&csv, jobs, results)) {
             errors.push(e);
         }
     }
+    errors
+}
+
+/// `p3dp build`: writes G-code and prints a report per job.
+pub fn build(a: &BuildArgs) -> Vec<Error> {
+    let Prepared {
+        jobs,
+        targets,
+        dir,
+        stats_file,
+    } = match prepare(a) {
+        Ok(p) => p,
+        Err(e) => return vec![e],
+    };
+    let bar = progress(jobs.len());
+    let (workers, threads) = a.common.budget(jobs.len());
+    let results = batch::run_parallel(
+        jobs.len(),
+        workers,
+        |k| build_job(a, &jobs[k], targets[k].clone(), threads),
+        || bar.inc(1),
+    );
+    bar.finish_and_clear();
+    let (mut errors, all_stats) = report_builds(&jobs, &results);
+    errors.extend(write_batch_files(
+        a, stats_file, &dir, &jobs, &results, &all_stats,
+    ));
     errors
 }
 
@@ -448,7 +500,7 @@ fn write_summary(path: &Path, jobs: &[Job], results: &[Built]) -> Result<()> {
     }
     write_atomic(path, |f| {
         f.write_all(text.as_bytes())
-            .map_err(|e| Error::io(path.display().to_string(), e.to_string()))
+            .map_err(|e| Error::io_from(path.display().to_string(), e.to_string(), &e))
     })
 }
 
@@ -462,7 +514,7 @@ fn write_stats(mut file: AtomicFile, stats: &[Stats]) -> Result<()> {
     file.file()
         .write_all(json.as_bytes())
         .and_then(|_| file.file().write_all(b"\n"))
-        .map_err(|e| Error::io("--stats-json", e.to_string()))?;
+        .map_err(|e| Error::io_from("--stats-json", e.to_string(), &e))?;
     file.commit()
 }
 
@@ -472,14 +524,16 @@ pub fn check(c: &Common) -> Vec<Error> {
         Ok(j) => j,
         Err(e) => return vec![e],
     };
+    let (workers, threads) = c.budget(jobs.len());
     let opts = |job: &Job| Options {
         sets: job.sets.clone(),
         printer: c.printer.clone(),
         allow: c.allow.clone(),
+        threads,
     };
     let results = batch::run_parallel(
         jobs.len(),
-        c.threads(),
+        workers,
         |k| plan(&jobs[k].recipe, &opts(&jobs[k])),
         || {},
     );
@@ -505,9 +559,9 @@ pub fn check(c: &Common) -> Vec<Error> {
     errors
 }
 
-/// Builds a job into nothing but its hash and line fingerprint.
-fn fingerprint(c: &Common, job: &Job) -> Result<(String, LineHashes)> {
-    let p = c.checked_plan(job)?;
+/// Builds a job on `threads` into nothing but its hash and line fingerprint.
+fn fingerprint(c: &Common, job: &Job, threads: Threads) -> Result<(String, LineHashes)> {
+    let p = c.checked_plan(job, threads)?;
     let (hw, _) = p.write_gcode(HashWriter::new(LineHashes::default()))?;
     let (digest, _, lines) = hw.finish_into();
     Ok((digest, lines))
@@ -524,7 +578,13 @@ pub fn hash(a: &HashArgs) -> Vec<Error> {
         Ok(j) => j,
         Err(e) => return vec![e],
     };
-    let results = batch::run_parallel(jobs.len(), c.threads(), |k| fingerprint(c, &jobs[k]), || {});
+    let (workers, threads) = c.budget(jobs.len());
+    let results = batch::run_parallel(
+        jobs.len(),
+        workers,
+        |k| fingerprint(c, &jobs[k], threads),
+        || {},
+    );
     let mut errors = Vec::new();
     let mut entries = Vec::new();
     for (job, r) in jobs.iter().zip(results) {
@@ -564,7 +624,7 @@ pub fn hash(a: &HashArgs) -> Vec<Error> {
         );
         if let Err(e) = write_atomic(lockfile, |f| {
             f.write_all(text.as_bytes())
-                .map_err(|e| Error::io(lockfile.display().to_string(), e.to_string()))
+                .map_err(|e| Error::io_from(lockfile.display().to_string(), e.to_string(), &e))
         }) {
             errors.push(e);
         }
@@ -625,7 +685,7 @@ fn lock_entry(
 fn check_lock(a: &HashArgs, lockfile: &Path) -> Vec<Error> {
     let shown = lockfile.display().to_string();
     let lock: Lock = match std::fs::read_to_string(lockfile)
-        .map_err(|e| Error::io(&shown, format!("cannot read the lock file: {e}")))
+        .map_err(|e| Error::io_from(&shown, format!("cannot read the lock file: {e}"), &e))
         .and_then(|t| parse_yaml(&t, &shown))
     {
         Ok(l) => l,
@@ -652,7 +712,13 @@ fn check_lock(a: &HashArgs, lockfile: &Path) -> Vec<Error> {
         }
     }
     let c = &a.common;
-    let results = batch::run_parallel(jobs.len(), c.threads(), |k| fingerprint(c, &jobs[k]), || {});
+    let (workers, threads) = c.budget(jobs.len());
+    let results = batch::run_parallel(
+        jobs.len(),
+        workers,
+        |k| fingerprint(c, &jobs[k], threads),
+        || {},
+    );
     let mut errors = Vec::new();
     for ((entry, job), r) in lock.entries.iter().zip(&jobs).zip(results) {
         let mut label = entry.recipe.clone();
@@ -669,8 +735,8 @@ fn check_lock(a: &HashArgs, lockfile: &Path) -> Vec<Error> {
                 let place = match lock::first_difference(&entry.blocks, &new) {
                     Some(k) => {
                         let first = k as u64 * entry.block_lines;
-                        let text =
-                            new_line(c, job, first).unwrap_or_else(|| "(end of file)".into());
+                        let text = new_line(c, job, first, threads)
+                            .unwrap_or_else(|| "(end of file)".into());
                         if entry.block_lines == 1 {
                             format!("first differing line {}: `{text}`", first + 1)
                         } else {
@@ -698,9 +764,9 @@ fn check_lock(a: &HashArgs, lockfile: &Path) -> Vec<Error> {
     errors
 }
 
-/// Line `k` (0-based) of the job's G-code, rebuilt.
-fn new_line(c: &Common, job: &Job, k: u64) -> Option<String> {
-    let p = c.checked_plan(job).ok()?;
+/// Line `k` (0-based) of the job's G-code, rebuilt on `threads`.
+fn new_line(c: &Common, job: &Job, k: u64, threads: Threads) -> Option<String> {
+    let p = c.checked_plan(job, threads).ok()?;
     let (buf, _) = p.write_gcode(Vec::new()).ok()?;
     let text = String::from_utf8(buf).ok()?;
     text.lines().nth(k as usize).map(str::to_string)
@@ -768,6 +834,7 @@ pub fn preview(a: &PreviewArgs) -> Vec<Error> {
                 sets,
                 printer: a.printer.clone(),
                 allow: a.allow.clone(),
+                threads: Threads::available(),
             },
         )?;
         make_parent(&out)?;

@@ -4,6 +4,7 @@
 //! printability check (see `../shared/spec/recipe-v1.md`, "Exit status").
 
 use std::fmt;
+use std::io;
 
 /// What kind of failure this is; decides the exit status.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -29,6 +30,9 @@ pub struct Error {
     pub place: Option<String>,
     /// What went wrong and what was expected.
     pub message: String,
+    /// The kind of the I/O error behind it, when there is one (so a caller
+    /// can tell, say, a broken pipe on `-o -`).
+    pub io_kind: Option<io::ErrorKind>,
 }
 
 /// Result type of the library.
@@ -44,6 +48,7 @@ impl Error {
             line: None,
             place: if place.is_empty() { None } else { Some(place) },
             message: message.into(),
+            io_kind: None,
         }
     }
 
@@ -55,6 +60,7 @@ impl Error {
             line: None,
             place: None,
             message: message.into(),
+            io_kind: None,
         }
     }
 
@@ -66,6 +72,15 @@ impl Error {
             line: None,
             place: None,
             message: message.into(),
+            io_kind: None,
+        }
+    }
+
+    /// An I/O error about a file, caused by `e` (whose kind it keeps).
+    pub fn io_from(file: impl Into<String>, message: impl Into<String>, e: &io::Error) -> Error {
+        Error {
+            io_kind: Some(e.kind()),
+            ..Error::io(file, message)
         }
     }
 
@@ -129,5 +144,15 @@ mod tests {
         );
         assert_eq!(e.exit_code(), 2);
         assert_eq!(Error::check("a.yaml", "x").exit_code(), 1);
+    }
+
+    #[test]
+    fn io_errors_keep_their_kind() {
+        let cause = io::Error::new(io::ErrorKind::BrokenPipe, "pipe closed");
+        let e = Error::io_from("-", format!("cannot write: {cause}"), &cause);
+        assert_eq!(e.io_kind, Some(io::ErrorKind::BrokenPipe));
+        assert_eq!(e.to_string(), "-: cannot write: pipe closed");
+        assert_eq!(e.exit_code(), 2);
+        assert_eq!(Error::io("a", "b").io_kind, None);
     }
 }

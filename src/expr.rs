@@ -10,6 +10,56 @@
 use indexmap::IndexMap;
 use meval::tokenizer::{Operation, Token};
 
+use crate::error::Error;
+
+/// What is wrong with an expression, for a caller that must tell.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ExprErrorKind {
+    /// The text does not parse.
+    Syntax,
+    /// A name is unknown or not available here (the message lists those that are).
+    Name,
+    /// A function is unknown or given the wrong number of arguments.
+    Function,
+    /// The expression is nested too deeply to run.
+    TooDeep,
+    /// A constant expression evaluates to NaN or infinity.
+    NotFinite,
+}
+
+/// An expression that cannot be compiled or evaluated: a sentence naming it
+/// and what is wrong with it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ExprError {
+    /// What kind of problem.
+    pub kind: ExprErrorKind,
+    /// The sentence.
+    pub message: String,
+}
+
+impl ExprError {
+    /// An error of `kind` saying `message`.
+    fn new(kind: ExprErrorKind, message: impl Into<String>) -> ExprError {
+        ExprError {
+            kind,
+            message: message.into(),
+        }
+    }
+
+    /// The input error at key path `place` (empty for none).
+    pub fn at(self, place: impl Into<String>) -> Error {
+        Error::input(place, self.message)
+    }
+}
+
+impl std::fmt::Display for ExprError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for ExprError {}
+
 /// Named params of a recipe, in the order they were defined.
 pub type Params = IndexMap<String, f64>;
 
@@ -395,7 +445,7 @@ impl Expr {
     /// Compiles `src`, resolving params to constants and only the `allowed`
     /// variable slots (see [`var`]) to variables. The error is a sentence
     /// naming the expression and what is wrong with it.
-    pub fn compile(src: &str, params: &Params, allowed: &[usize]) -> Result<Expr, String> {
+    pub fn compile(src: &str, params: &Params, allowed: &[usize]) -> Result<Expr, ExprError> {
         Expr::compile_inner(src, params, allowed, None)
     }
 
@@ -409,7 +459,7 @@ impl Expr {
         params: &Params,
         allowed: &[usize],
         names: &[&str],
-    ) -> Result<Expr, String> {
+    ) -> Result<Expr, ExprError> {
         Expr::compile_inner(src, params, allowed, Some(names))
     }
 
@@ -418,23 +468,30 @@ impl Expr {
         params: &Params,
         allowed: &[usize],
         names: Option<&[&str]>,
-    ) -> Result<Expr, String> {
+    ) -> Result<Expr, ExprError> {
         // Kanada's Python recipes write powers as `**`; meval's operator is `^`.
         let mut text = src.replace("**", "^");
         if names.is_some() {
             text = mark_rand(&text);
         }
         let mut rands = 0u16;
-        let tokens =
-            meval::tokenizer::tokenize(&text).map_err(|e| describe_parse_error(src, &e))?;
-        let rpn = meval::shunting_yard::to_rpn(&tokens)
-            .map_err(|e| format!("cannot read the expression `{src}`: {e}"))?;
+        let tokens = meval::tokenizer::tokenize(&text)
+            .map_err(|e| ExprError::new(ExprErrorKind::Syntax, describe_parse_error(src, &e)))?;
+        let rpn = meval::shunting_yard::to_rpn(&tokens).map_err(|e| {
+            ExprError::new(
+                ExprErrorKind::Syntax,
+                format!("cannot read the expression `{src}`: {e}"),
+            )
+        })?;
         let mut stack: Vec<Node> = Vec::new();
         let mut used = 0u32;
-        let pop = |stack: &mut Vec<Node>| -> Result<Node, String> {
-            stack
-                .pop()
-                .ok_or_else(|| format!("cannot read the expression `{src}`: an operand is missing"))
+        let pop = |stack: &mut Vec<Node>| -> Result<Node, ExprError> {
+            stack.pop().ok_or_else(|| {
+                ExprError::new(
+                    ExprErrorKind::Syntax,
+                    format!("cannot read the expression `{src}`: an operand is missing"),
+                )
+            })
         };
         for tok in rpn {
             let node = match tok {
@@ -448,9 +505,12 @@ impl Expr {
                         Node::Ext((names.unwrap_or(&[]).len() + rands as usize - 1) as u16)
                     } else if let Some(k) = VAR_NAMES.iter().position(|n| *n == name) {
                         if !allowed.contains(&k) {
-                            return Err(format!(
-                                "`{name}` is not available in `{src}` here; it may use {}",
-                                allowed_names(allowed, params)
+                            return Err(ExprError::new(
+                                ExprErrorKind::Name,
+                                format!(
+                                    "`{name}` is not available in `{src}` here; it may use {}",
+                                    allowed_names(allowed, params)
+                                ),
                             ));
                         }
                         used |= 1 << k;
@@ -462,9 +522,12 @@ impl Expr {
                     } else if name == "e" {
                         Node::Num(std::f64::consts::E)
                     } else {
-                        return Err(format!(
-                            "unknown name `{name}` in `{src}`; it may use {}",
-                            allowed_names(allowed, params)
+                        return Err(ExprError::new(
+                            ExprErrorKind::Name,
+                            format!(
+                                "unknown name `{name}` in `{src}`; it may use {}",
+                                allowed_names(allowed, params)
+                            ),
                         ));
                     }
                 }
@@ -504,42 +567,53 @@ impl Expr {
                             } else {
                                 None
                             };
-                            return Err(match arity {
-                                Some(a) => format!(
-                                    "`{n}` takes {a} argument{} but is given {k} in `{src}`",
-                                    if a == 1 { "" } else { "s" }
-                                ),
-                                None => format!(
+                            return Err(ExprError::new(
+                                ExprErrorKind::Function,
+                                match arity {
+                                    Some(a) => format!(
+                                        "`{n}` takes {a} argument{} but is given {k} in `{src}`",
+                                        if a == 1 { "" } else { "s" }
+                                    ),
+                                    None => format!(
                                     "unknown function `{n}` in `{src}`; functions are: {FUNCTIONS}"
                                 ),
-                            });
+                                },
+                            ));
                         }
                     };
                     if stack.len() < k {
-                        return Err(format!(
-                            "cannot read the expression `{src}`: `{name}` lacks arguments"
+                        return Err(ExprError::new(
+                            ExprErrorKind::Syntax,
+                            format!("cannot read the expression `{src}`: `{name}` lacks arguments"),
                         ));
                     }
                     let args = stack.split_off(stack.len() - k);
                     Node::Call(op, args)
                 }
                 other => {
-                    return Err(format!(
-                        "cannot read the expression `{src}`: unexpected {other:?}"
+                    return Err(ExprError::new(
+                        ExprErrorKind::Syntax,
+                        format!("cannot read the expression `{src}`: unexpected {other:?}"),
                     ))
                 }
             };
             stack.push(fold(node));
         }
         if stack.len() != 1 {
-            return Err(format!(
-                "cannot read the expression `{src}`: expected one value, found {}",
-                stack.len()
+            return Err(ExprError::new(
+                ExprErrorKind::Syntax,
+                format!(
+                    "cannot read the expression `{src}`: expected one value, found {}",
+                    stack.len()
+                ),
             ));
         }
         let root = stack.pop().unwrap();
         if root.depth() > STACK {
-            return Err(format!("the expression `{src}` is nested too deeply"));
+            return Err(ExprError::new(
+                ExprErrorKind::TooDeep,
+                format!("the expression `{src}` is nested too deeply"),
+            ));
         }
         let mut ops = Vec::new();
         root.emit(&mut ops);
@@ -651,13 +725,16 @@ fn mark_rand(text: &str) -> String {
 }
 
 /// Evaluates an expression over params only (a number written as text).
-pub fn eval_const(src: &str, params: &Params) -> Result<f64, String> {
+pub fn eval_const(src: &str, params: &Params) -> Result<f64, ExprError> {
     let e = Expr::compile(src, params, &[])?;
     let v = e.eval(&[0.0; var::COUNT]);
     if v.is_finite() {
         Ok(v)
     } else {
-        Err(format!("`{src}` evaluates to {v}, not a finite number"))
+        Err(ExprError::new(
+            ExprErrorKind::NotFinite,
+            format!("`{src}` evaluates to {v}, not a finite number"),
+        ))
     }
 }
 
@@ -697,10 +774,10 @@ mod tests {
         let all: Vec<usize> = (0..var::COUNT).collect();
         for src in ["x > 4", "x*x + y*y >= 4", "x == 1", "x < 1 && y < 1"] {
             let e = Expr::compile(src, &Params::new(), &all).unwrap_err();
-            assert!(e.contains("step(a, x)"), "{src}: {e}");
+            assert!(e.message.contains("step(a, x)"), "{src}: {e}");
         }
         let e = Expr::compile("x 4", &Params::new(), &all).unwrap_err();
-        assert!(!e.contains("step"), "{e}");
+        assert!(!e.message.contains("step"), "{e}");
     }
 
     #[test]
@@ -743,7 +820,7 @@ mod tests {
         );
         assert!(Expr::compile("rand()", &p, &[]).is_err());
         let e = Expr::compile_ext("operand(1)", &p, &[], &[]).unwrap_err();
-        assert!(e.contains("operand"), "{e}");
+        assert!(e.message.contains("operand"), "{e}");
     }
 
     #[test]
@@ -775,18 +852,25 @@ mod tests {
     fn errors_name_the_problem() {
         let p = Params::new();
         let e = Expr::compile("sin(", &p, &[]).unwrap_err();
-        assert!(e.contains("sin("), "{e}");
+        assert!(e.message.contains("sin("), "{e}");
         let e = Expr::compile("foo + 1", &p, &[var::X]).unwrap_err();
-        assert!(e.contains("unknown name `foo`") && e.contains("x"), "{e}");
+        assert!(
+            e.message.contains("unknown name `foo`") && e.message.contains("x"),
+            "{e}"
+        );
         let e = Expr::compile("bar(1)", &p, &[]).unwrap_err();
-        assert!(e.contains("unknown function `bar`"), "{e}");
+        assert!(e.message.contains("unknown function `bar`"), "{e}");
         let many = format!("max({})", vec!["1"; 40].join(","));
         let e = Expr::compile(&many, &p, &[]).unwrap_err();
-        assert!(e.contains("nested too deeply"), "{e}");
+        assert!(e.message.contains("nested too deeply"), "{e}");
         let e = Expr::compile("atan2(1)", &p, &[]).unwrap_err();
-        assert!(e.contains("takes 2 arguments"), "{e}");
+        assert!(e.message.contains("takes 2 arguments"), "{e}");
         let e = Expr::compile("c*2", &p, &[var::X]).unwrap_err();
-        assert!(e.contains("`c` is not available"), "{e}");
-        assert!(eval_const("1/0", &p).is_err());
+        assert!(e.message.contains("`c` is not available"), "{e}");
+        assert_eq!(e.kind, ExprErrorKind::Name);
+        assert_eq!(
+            eval_const("1/0", &p).unwrap_err().kind,
+            ExprErrorKind::NotFinite
+        );
     }
 }

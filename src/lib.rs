@@ -4,8 +4,8 @@
 //! Data flows one way, in layers that never import from a layer above
 //! (`docs/ARCHITECTURE.md`; `tests/layers.rs` checks it):
 //!
-//! 1. plain types and utilities: [`error`], [`toolpath`], [`expr`], [`num`],
-//!    [`finding`], [`format`], [`rng`], [`geom`];
+//! 1. plain types and utilities: [`error`], [`threads`], [`toolpath`],
+//!    [`expr`], [`num`], [`finding`], [`format`], [`rng`], [`geom`];
 //! 2. the machine model: [`machine`];
 //! 3. generation: [`primitive`], [`step`], [`model`], [`assembly`], [`skirt`];
 //! 4. analysis and output: [`planner`], [`gcode`], [`check`], [`stats`];
@@ -22,6 +22,7 @@ pub mod format;
 pub mod geom;
 pub mod num;
 pub mod rng;
+pub mod threads;
 pub mod toolpath;
 
 pub mod machine;

@@ -26,7 +26,7 @@ struct CommonArgs {
     /// Build every combination of values: NAME=v1,v2,… or NAME=a..b:step; repeatable.
     #[arg(long = "sweep", value_name = "NAME=VALUES")]
     sweeps: Vec<String>,
-    /// At most N builds at once (default: one per core).
+    /// At most N threads in all, shared by the builds run at once (default: one per core).
     #[arg(short = 'j', long = "jobs", value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
     jobs: Option<u16>,
     /// Use this printer (built-in name or YAML file) instead of the recipe's.

@@ -7,6 +7,7 @@ use crate::expr::Params;
 use crate::machine::{Material, Printer};
 use crate::primitive::{CaHelix, Primitive};
 use crate::step::Step;
+use crate::threads::Threads;
 use crate::toolpath::Toolpath;
 
 /// The default limit on strings in one part (a recipe may change it).
@@ -120,14 +121,15 @@ impl Part {
 }
 
 /// Makes a part's strings: its primitives, then each of its own steps in
-/// order (a group's steps are [`crate::assembly::make_parts`]'s).
-pub fn make_part(recipe: &Recipe, k: usize) -> Result<Toolpath> {
+/// order (a group's steps are [`crate::assembly::make_parts`]'s), on up to
+/// `threads` threads.
+pub fn make_part(recipe: &Recipe, k: usize, threads: Threads) -> Result<Toolpath> {
     let part = &recipe.parts[k];
     let mut tp = part.build_primitives();
     tp.name = part.name.clone();
     for (j, step) in part.steps.iter().enumerate() {
-        step.apply(&mut tp, recipe.max_strings)
-            .map_err(|m| Error::input(format!("{}.steps[{j}].{}", part.place, step.key()), m))?;
+        step.apply(&mut tp, recipe.max_strings, threads)
+            .map_err(|e| e.under(&format!("{}.steps[{j}].{}", part.place, step.key())))?;
     }
     Ok(tp)
 }
@@ -148,7 +150,7 @@ pub fn pattern_png(recipe: &Recipe) -> Result<Vec<u8>> {
             .model
             .run()
             .to_png()
-            .map_err(|m| Error::input("--pattern", m)),
+            .map_err(|e| e.under("--pattern")),
         _ => Err(Error::input(
             "--pattern",
             format!(

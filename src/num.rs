@@ -78,7 +78,7 @@ impl<'a> Scope<'a> {
     pub fn num(&self, n: &Num, place: &str) -> Result<f64> {
         match n {
             Num::Value(v) => finite(*v, place),
-            Num::Expr(s) => expr::eval_const(s, self.params).map_err(|m| Error::input(place, m)),
+            Num::Expr(s) => expr::eval_const(s, self.params).map_err(|e| e.at(place)),
         }
     }
 
@@ -159,7 +159,7 @@ impl<'a> Scope<'a> {
 
     /// An expression compiled over the params, with only the `allowed` variables.
     pub fn expr(&self, n: &Num, allowed: &[usize], place: &str) -> Result<Expr> {
-        Expr::compile(&n.src(), self.params, allowed).map_err(|m| Error::input(place, m))
+        Expr::compile(&n.src(), self.params, allowed).map_err(|e| e.at(place))
     }
 }
 

@@ -79,9 +79,10 @@ impl AtomicFile {
             builder.permissions(std::fs::Permissions::from_mode(0o666));
         }
         let tmp = builder.tempfile_in(dir).map_err(|e| {
-            Error::io(
+            Error::io_from(
                 &shown,
                 format!("cannot create a file in {}: {e}", dir.display()),
+                &e,
             )
         })?;
         Ok(AtomicFile {
@@ -101,10 +102,10 @@ impl AtomicFile {
         self.tmp
             .as_file_mut()
             .sync_all()
-            .map_err(|e| Error::io(&shown, format!("cannot write: {e}")))?;
+            .map_err(|e| Error::io_from(&shown, format!("cannot write: {e}"), &e))?;
         self.tmp
             .persist(&self.target)
-            .map_err(|e| Error::io(&shown, format!("cannot write: {}", e.error)))?;
+            .map_err(|e| Error::io_from(&shown, format!("cannot write: {}", e.error), &e.error))?;
         Ok(())
     }
 }

@@ -7,6 +7,7 @@ use crate::check::{self, Finding};
 use crate::error::{Error, Result};
 use crate::machine::Printer;
 use crate::model::Recipe;
+use crate::threads::Threads;
 use crate::toolpath::Toolpath;
 
 /// What the command line says about one build.
@@ -18,6 +19,8 @@ pub struct Options {
     pub printer: Option<String>,
     /// `--allow CODE`: check codes silenced for this build.
     pub allow: Vec<String>,
+    /// How many threads the build may use (default: one per core).
+    pub threads: Threads,
 }
 
 /// A recipe made into strings and checked, ready to write.
@@ -33,6 +36,8 @@ pub struct Plan {
     pub findings: Vec<Finding>,
     /// Each part's hold on the bed, as the first-layer check measured it.
     pub footprints: Vec<check::first_layer::Footprint>,
+    /// How many threads making, checking and writing it may use.
+    pub threads: Threads,
 }
 
 /// Loads, builds and checks a recipe.
@@ -55,7 +60,8 @@ pub fn plan(path: &Path, opts: &Options) -> Result<Plan> {
     };
     let recipe = Recipe::load(path, &opts.sets, printer.as_ref())?;
     // each part with its own steps, then the steps of groups
-    let parts = crate::assembly::make_parts(&recipe).map_err(|e| e.in_file(&shown))?;
+    let parts =
+        crate::assembly::make_parts(&recipe, opts.threads).map_err(|e| e.in_file(&shown))?;
     let mut paths = Vec::with_capacity(parts.len() + 1);
     if let Some(s) = &recipe.skirt {
         let cv = (recipe.parts[0].cross_section, recipe.parts[0].speed);
@@ -63,12 +69,12 @@ pub fn plan(path: &Path, opts: &Options) -> Result<Plan> {
         match crate::skirt::make(s, &parts, spacing, cv, recipe.max_strings) {
             Ok(Some(sk)) => paths.push(sk),
             Ok(None) => {}
-            Err(m) => return Err(Error::input("skirt", m).in_file(&shown)),
+            Err(e) => return Err(e.under("skirt").in_file(&shown)),
         }
     }
     paths.extend(parts);
     let refs: Vec<&Toolpath> = paths.iter().collect();
-    let (mut findings, footprints) = check::run(&recipe, &refs);
+    let (mut findings, footprints) = check::run(&recipe, &refs, opts.threads);
     check::apply_allow(&mut findings, &recipe.allow);
     check::apply_allow(&mut findings, &opts.allow);
     Ok(Plan {
@@ -77,6 +83,7 @@ pub fn plan(path: &Path, opts: &Options) -> Result<Plan> {
         paths,
         findings,
         footprints,
+        threads: opts.threads,
     })
 }
 

@@ -35,6 +35,8 @@
 
 use glam::DVec3;
 
+use crate::threads::Threads;
+
 pub use crate::machine::kinematics::{
     Kinematics, Limits, KLIPPER_MINIMUM_CRUISE_RATIO, MARLIN_JUNCTION_DEVIATION,
     MARLIN_MIN_SEGMENT_TIME,
@@ -350,70 +352,19 @@ impl Planner {
 
     /// Plans every move (the passes of the module comment) and sums the times.
     pub fn finish(mut self) -> Estimate {
-        let n = self.blocks.len();
-        let b = &mut self.blocks;
-        // Klipper's smoothed look-ahead: the same passes at the virtual
-        // acceleration a_d = a·(1 − minimum_cruise_ratio) ("accel_to_decel")
-        // give smoothed corner speeds s_i; a move that can speed up in that
-        // profile (s_i < s_{i+1} + 2·a_d·L) cruises no faster than its peak,
-        // (s_i + s_{i+1} + 2·a_d·L)/2, which leaves at least the ratio of it
-        // at cruising speed; a move that only slows down keeps its speed.
         let ratio = self.limits.minimum_cruise_ratio;
-        if ratio > 0.0 && n > 0 {
-            let k = 1.0 - ratio;
-            let mut sm = vec![0.0f64; n + 1];
-            for i in (0..n).rev() {
-                sm[i] = b[i]
-                    .entry_v2
-                    .min(sm[i + 1] + 2.0 * k * b[i].accel * b[i].len);
-            }
-            for i in 1..n {
-                let reach = sm[i - 1] + 2.0 * k * b[i - 1].accel * b[i - 1].len;
-                sm[i] = sm[i].min(reach);
-            }
-            for i in 0..n {
-                let reach = sm[i + 1] + 2.0 * k * b[i].accel * b[i].len;
-                if sm[i] < reach {
-                    let peak = 0.5 * (sm[i] + reach);
-                    b[i].cruise_v2 = b[i].cruise_v2.min(peak);
-                }
-            }
+        if ratio > 0.0 {
+            smooth_cruise(&mut self.blocks, ratio);
         }
-        // backward pass (exit of the last block: rest); junctions also under
-        // both blocks' (possibly lowered) cruise speeds
-        let mut next = 0.0f64;
-        for i in (0..n).rev() {
-            let mut cap = b[i].entry_v2.min(b[i].cruise_v2);
-            if i > 0 {
-                cap = cap.min(b[i - 1].cruise_v2);
-            }
-            let e = cap.min(next + 2.0 * b[i].accel * b[i].len);
-            b[i].entry_v2 = e;
-            next = e;
-        }
-        // forward pass (entry of the first block: rest), with each block's
-        // time summed into its part's (parts are consecutive ranges)
-        if n > 0 {
-            b[0].entry_v2 = 0.0;
-        }
+        backward_pass(&mut self.blocks);
         let mut ends: Vec<usize> = self.parts.iter().map(|p| p.first).collect();
-        ends.push(n);
-        let mut planned = vec![0.0f64; ends.len()]; // [before the parts, part 0, …]
-        let mut slot = 0;
-        for i in 0..n {
-            while i >= ends[slot] {
-                slot += 1;
-            }
-            let exit = if i + 1 < n {
-                let reach = b[i].entry_v2 + 2.0 * b[i].accel * b[i].len;
-                b[i + 1].entry_v2 = b[i + 1].entry_v2.min(reach);
-                b[i + 1].entry_v2
-            } else {
-                0.0
-            };
-            planned[slot] +=
-                trapezoid_time(b[i].len, b[i].accel, b[i].entry_v2, exit, b[i].cruise_v2);
-        }
+        ends.push(self.blocks.len());
+        let planned = forward_pass(&mut self.blocks, &ends);
+        self.estimate(&planned)
+    }
+
+    /// The estimate from the planned time before the parts and of each part.
+    fn estimate(&self, planned: &[f64]) -> Estimate {
         let mut est = Estimate {
             total: Times {
                 planned: planned[0] + self.pre.2,
@@ -438,6 +389,81 @@ impl Planner {
         }
         est
     }
+}
+
+/// Caps cruise speeds by Klipper's minimum cruise ratio (`ratio` > 0).
+fn smooth_cruise(b: &mut [Block], ratio: f64) {
+    let n = b.len();
+    // Klipper's smoothed look-ahead: the same passes at the virtual
+    // acceleration a_d = a·(1 − minimum_cruise_ratio) ("accel_to_decel")
+    // give smoothed corner speeds s_i; a move that can speed up in that
+    // profile (s_i < s_{i+1} + 2·a_d·L) cruises no faster than its peak,
+    // (s_i + s_{i+1} + 2·a_d·L)/2, which leaves at least the ratio of it
+    // at cruising speed; a move that only slows down keeps its speed.
+    if n == 0 {
+        return;
+    }
+    let k = 1.0 - ratio;
+    let mut sm = vec![0.0f64; n + 1];
+    for i in (0..n).rev() {
+        sm[i] = b[i]
+            .entry_v2
+            .min(sm[i + 1] + 2.0 * k * b[i].accel * b[i].len);
+    }
+    for i in 1..n {
+        let reach = sm[i - 1] + 2.0 * k * b[i - 1].accel * b[i - 1].len;
+        sm[i] = sm[i].min(reach);
+    }
+    for i in 0..n {
+        let reach = sm[i + 1] + 2.0 * k * b[i].accel * b[i].len;
+        if sm[i] < reach {
+            let peak = 0.5 * (sm[i] + reach);
+            b[i].cruise_v2 = b[i].cruise_v2.min(peak);
+        }
+    }
+}
+
+/// The backward pass: entry speeds the blocks after can brake from.
+fn backward_pass(b: &mut [Block]) {
+    // exit of the last block: rest; junctions also under both blocks'
+    // (possibly lowered) cruise speeds
+    let mut next = 0.0f64;
+    for i in (0..b.len()).rev() {
+        let mut cap = b[i].entry_v2.min(b[i].cruise_v2);
+        if i > 0 {
+            cap = cap.min(b[i - 1].cruise_v2);
+        }
+        let e = cap.min(next + 2.0 * b[i].accel * b[i].len);
+        b[i].entry_v2 = e;
+        next = e;
+    }
+}
+
+/// The forward pass and the blocks' times, summed per range: `ends` are the
+/// first blocks of the parts then the block count; returns [before the
+/// parts, part 0, …].
+fn forward_pass(b: &mut [Block], ends: &[usize]) -> Vec<f64> {
+    let n = b.len();
+    // entry of the first block: rest (parts are consecutive ranges)
+    if n > 0 {
+        b[0].entry_v2 = 0.0;
+    }
+    let mut planned = vec![0.0f64; ends.len()];
+    let mut slot = 0;
+    for i in 0..n {
+        while i >= ends[slot] {
+            slot += 1;
+        }
+        let exit = if i + 1 < n {
+            let reach = b[i].entry_v2 + 2.0 * b[i].accel * b[i].len;
+            b[i + 1].entry_v2 = b[i + 1].entry_v2.min(reach);
+            b[i + 1].entry_v2
+        } else {
+            0.0
+        };
+        planned[slot] += trapezoid_time(b[i].len, b[i].accel, b[i].entry_v2, exit, b[i].cruise_v2);
+    }
+    planned
 }
 
 /// Time of one block of length `len` at acceleration `a`, entering at v0²,
@@ -479,31 +505,50 @@ enum Call {
 /// Calls sent to the planner's thread at a time.
 const BATCH: usize = 4096;
 
+/// Replays one recorded call on `planner`.
+fn replay(planner: &mut Planner, call: Call) {
+    match call {
+        Call::BeginPart(name) => planner.begin_part(&name),
+        Call::Stop => planner.stop(),
+        Call::Dwell(s) => planner.dwell(s),
+        Call::MoveTo(to, e, feed, kind) => planner.move_to(to, e, feed, kind),
+        Call::ExtrudeOnly(l, feed) => planner.extrude_only(l, feed),
+    }
+}
+
 /// A [`Planner`] on its own thread: the same calls, recorded in batches and
 /// replayed there in order while the G-code is written, so the estimate is
-/// exactly the one planner's and costs the writer almost nothing.
+/// exactly the one planner's and costs the writer almost nothing. With a
+/// budget of one thread it runs inline instead: the same calls, in the same
+/// order, on the caller's thread.
 pub struct Background {
     limits: Limits,
     batch: Vec<Call>,
     tx: Option<std::sync::mpsc::SyncSender<Vec<Call>>>,
     worker: Option<std::thread::JoinHandle<Estimate>>,
+    /// The planner itself when it runs inline (a budget of one thread).
+    inline: Option<Planner>,
 }
 
 impl Background {
-    /// A planner with these limits, started on a thread of its own.
-    pub fn new(limits: Limits) -> Background {
-        let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<Call>>(64);
+    /// A planner with these limits, started on a thread of its own when
+    /// `threads` allows a second one, else run inline.
+    pub fn new(limits: Limits, threads: Threads) -> Background {
         let mut planner = Planner::new(limits.clone());
+        if !threads.parallel() {
+            return Background {
+                limits,
+                batch: Vec::new(),
+                tx: None,
+                worker: None,
+                inline: Some(planner),
+            };
+        }
+        let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<Call>>(64);
         let worker = std::thread::spawn(move || {
             for batch in rx {
                 for call in batch {
-                    match call {
-                        Call::BeginPart(name) => planner.begin_part(&name),
-                        Call::Stop => planner.stop(),
-                        Call::Dwell(s) => planner.dwell(s),
-                        Call::MoveTo(to, e, feed, kind) => planner.move_to(to, e, feed, kind),
-                        Call::ExtrudeOnly(l, feed) => planner.extrude_only(l, feed),
-                    }
+                    replay(&mut planner, call);
                 }
             }
             planner.finish()
@@ -513,10 +558,15 @@ impl Background {
             batch: Vec::with_capacity(BATCH),
             tx: Some(tx),
             worker: Some(worker),
+            inline: None,
         }
     }
 
     fn call(&mut self, c: Call) {
+        if let Some(p) = &mut self.inline {
+            replay(p, c);
+            return;
+        }
         self.batch.push(c);
         if self.batch.len() >= BATCH && self.tx.is_some() {
             self.send();
@@ -564,6 +614,9 @@ impl Background {
     /// Sends what is left, waits for the thread and returns its estimate;
     /// calls after it are ignored.
     pub fn finish(&mut self) -> Estimate {
+        if let Some(p) = self.inline.take() {
+            return p.finish();
+        }
         self.send();
         self.tx = None;
         let worker = self.worker.take().expect("finish is called once");

@@ -7,6 +7,7 @@
 
 use glam::{DVec2, DVec3};
 
+use crate::error::{Error, Result};
 use crate::model::Skirt;
 use crate::toolpath::Toolpath;
 
@@ -75,14 +76,15 @@ fn offset(hull: &[DVec2], d: f64) -> Vec<DVec2> {
 }
 
 /// The skirt around `parts`, or `None` when they extrude nothing; an error
-/// when it would have more than `max_strings` strings.
+/// (with no place: the caller names the key) when it would have more than
+/// `max_strings` strings.
 pub fn make(
     skirt: &Skirt,
     parts: &[Toolpath],
     spacing: f64,
     (c, v): (f64, f64),
     max_strings: u64,
-) -> Result<Option<Toolpath>, String> {
+) -> Result<Option<Toolpath>> {
     let mut pts = Vec::new();
     let mut z = f64::INFINITY;
     for tp in parts {
@@ -102,9 +104,12 @@ pub fn make(
     // every loop has about as many strings as the first
     let per_loop = offset(&hull, skirt.distance.max(spacing)).len() as u64 + 1;
     if per_loop * skirt.loops as u64 > max_strings {
-        return Err(format!(
-            "{} loops of about {per_loop} strings each exceed the limit of {max_strings} strings; expected fewer loops",
-            skirt.loops
+        return Err(Error::input(
+            "",
+            format!(
+                "{} loops of about {per_loop} strings each exceed the limit of {max_strings} strings; expected fewer loops",
+                skirt.loops
+            ),
         ));
     }
     let mut tp: Option<Toolpath> = None;

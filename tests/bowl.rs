@@ -12,15 +12,16 @@ mod common;
 use common::*;
 use p3dp::recipe::Recipe;
 use p3dp::step::Bitmap;
+use p3dp::threads::Threads;
 
 const TEXT: &str = "PROCEDURAL 3D PRINTING  ";
 
 fn letter_strings() -> (p3dp::toolpath::Toolpath, Vec<bool>, f64) {
     let mut recipe = Recipe::load(&recipe("bowl.yaml"), &[], None).unwrap();
     let repeat = recipe.params["repeat"];
-    let fin = p3dp::build::make_part(&recipe, 0).unwrap();
+    let fin = p3dp::build::make_part(&recipe, 0, Threads::available()).unwrap();
     assert_eq!(recipe.parts[0].steps.pop().unwrap().key(), "modulate_map");
-    let base = p3dp::build::make_part(&recipe, 0).unwrap();
+    let base = p3dp::build::make_part(&recipe, 0, Threads::available()).unwrap();
     let letter = fin
         .strings
         .iter()

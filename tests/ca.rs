@@ -12,6 +12,7 @@ use p3dp::build::make_part;
 use p3dp::primitive::ca::{Automaton, CaHelix, Initial, Pattern, Rule};
 use p3dp::primitive::{PatternHelix, Primitive};
 use p3dp::recipe::Recipe;
+use p3dp::threads::Threads;
 use sha2::{Digest, Sha256};
 
 const N: usize = 288;
@@ -266,7 +267,7 @@ fn pattern_helix_is_constant_after_the_first_turn() {
         ..
     } = p;
     let seg = segments as usize;
-    let t = make_part(&r, 0).unwrap();
+    let t = make_part(&r, 0, Threads::available()).unwrap();
     assert_eq!(t.len(), layers as usize * seg);
     let first = t.strings[0];
     let after = t.strings[seg];

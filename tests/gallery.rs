@@ -10,6 +10,7 @@ use p3dp::assembly::make_parts;
 use p3dp::build::plan;
 use p3dp::check::Severity;
 use p3dp::recipe::Recipe;
+use p3dp::threads::Threads;
 use p3dp::toolpath::{polar, Toolpath};
 
 /// Every recipe of the gallery.
@@ -66,7 +67,9 @@ fn index(recipe: &Recipe, name: &str) -> usize {
 /// Part `name` with all its steps (and those of the groups around it).
 fn part(recipe: &Recipe, name: &str) -> Toolpath {
     let k = index(recipe, name);
-    make_parts(recipe).unwrap().swap_remove(k)
+    make_parts(recipe, Threads::available())
+        .unwrap()
+        .swap_remove(k)
 }
 
 /// Part `name` with only its first `steps` steps (0: the bare primitives).
@@ -75,7 +78,7 @@ fn part_upto(recipe: &Recipe, name: &str, steps: usize) -> Toolpath {
     let mut r = recipe.clone();
     assert!(steps <= r.parts[k].steps.len() && r.groups.is_empty());
     r.parts[k].steps.truncate(steps);
-    make_parts(&r).unwrap().swap_remove(k)
+    make_parts(&r, Threads::available()).unwrap().swap_remove(k)
 }
 
 /// Part `name` as its primitives make it, before any step.
@@ -84,7 +87,7 @@ fn undeformed(recipe: &Recipe, name: &str) -> Toolpath {
     let mut r = recipe.clone();
     r.groups.clear();
     r.parts[k].steps.clear();
-    make_parts(&r).unwrap().swap_remove(k)
+    make_parts(&r, Threads::available()).unwrap().swap_remove(k)
 }
 
 /// The strings of a part's first primitive and those of the rest (for a

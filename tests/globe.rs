@@ -8,6 +8,7 @@ mod common;
 
 use common::*;
 use p3dp::recipe::Recipe;
+use p3dp::threads::Threads;
 use p3dp::toolpath::Toolpath;
 
 const SEA: f64 = 0.65;
@@ -23,10 +24,10 @@ struct Globe {
 
 fn globe() -> Globe {
     let mut recipe = Recipe::load(&recipe("globe.yaml"), &[], None).unwrap();
-    let fin = p3dp::build::make_part(&recipe, 0).unwrap();
+    let fin = p3dp::build::make_part(&recipe, 0, Threads::available()).unwrap();
     let last = recipe.parts[0].steps.pop().unwrap();
     assert_eq!(last.key(), "modulate_map");
-    let base = p3dp::build::make_part(&recipe, 0).unwrap();
+    let base = p3dp::build::make_part(&recipe, 0, Threads::available()).unwrap();
     assert_eq!(fin.points, base.points, "modulation must not move points");
     let factor = fin
         .strings

@@ -11,7 +11,7 @@ const LAYERS: &[(&str, &[&str])] = &[
     (
         "plain types and utilities",
         &[
-            "error", "toolpath", "expr", "num", "finding", "format", "rng", "geom",
+            "error", "threads", "toolpath", "expr", "num", "finding", "format", "rng", "geom",
         ],
     ),
     ("machine model", &["machine"]),

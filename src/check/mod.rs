@@ -22,6 +22,7 @@ pub use crate::finding::{
     apply_allow, failing, is_code, summary, validate_allow, Finding, Severity, CODES, SAFETY,
 };
 use crate::model::Recipe;
+use crate::threads::Threads;
 use crate::toolpath::Toolpath;
 
 pub use crate::machine::{CheckLimits, Head};
@@ -35,20 +36,23 @@ pub(crate) fn fmt_p(p: DVec3) -> String {
 /// not finite or out of reach, where the geometric checks do not run).
 ///
 /// The support check, the costliest, runs on a second thread beside the
-/// others; the findings are put together in one fixed order, so they are the
-/// same whether or not a second core is there.
-pub fn run(recipe: &Recipe, paths: &[&Toolpath]) -> (Vec<Finding>, Vec<first_layer::Footprint>) {
+/// others when `threads` allows two; the findings are put together in one
+/// fixed order, so they are the same whether or not it does.
+pub fn run(
+    recipe: &Recipe,
+    paths: &[&Toolpath],
+    threads: Threads,
+) -> (Vec<Finding>, Vec<first_layer::Footprint>) {
     // the geometric checks need finite points within reach (others are errors)
     let sane = |p: &DVec3| p.is_finite() && p.abs().max_element() < 1e5;
     let geometric = paths.iter().all(|tp| tp.points.iter().all(sane));
     std::thread::scope(|s| {
-        let support = geometric.then(|| {
-            s.spawn(|| {
-                let mut v = Vec::new();
-                support::check(recipe, paths, &mut v);
-                v
-            })
-        });
+        let support_check = || {
+            let mut v = Vec::new();
+            support::check(recipe, paths, &mut v);
+            v
+        };
+        let support = (geometric && threads.parallel()).then(|| s.spawn(support_check));
         let mut out = Vec::new();
         temperatures(recipe, &mut out);
         for tp in paths {
@@ -66,6 +70,8 @@ pub fn run(recipe: &Recipe, paths: &[&Toolpath]) -> (Vec<Finding>, Vec<first_lay
         }
         if let Some(h) = support {
             out.extend(h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)));
+        } else if geometric {
+            out.extend(support_check());
         }
         out.extend(collisions);
         // pattern_helix: parameters outside the paper's ranges, modulated strings

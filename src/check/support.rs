@@ -174,138 +174,184 @@ impl Tally {
 /// The support check: `unsupported` and `bridge` findings, one per part and kind.
 pub fn check(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) {
     let p = &recipe.printer;
-    let nozzle = p.nozzle_diameter;
-    let tol = p.checks.support_tolerance;
-    let dep = Deposits::new(paths, nozzle, tol);
+    let dep = Deposits::new(paths, p.nozzle_diameter, p.checks.support_tolerance);
     let mut budget = GAP_BUDGET;
     let mut g = 0u32; // global id of the current string
     for (pi, tp) in paths.iter().enumerate() {
-        let arc = &dep.arc[pi];
-        let mut unsup = Tally::default();
-        let mut bridges = Tally::default();
-        let mut bridge_max = 0usize; // bridges longer than max_bridge
-        let mut run: Option<Run> = None;
-        let mut run_pts: Vec<DVec3> = Vec::new();
-        let mut last_ok: Option<DVec3> = None;
-        let mut hint: Option<u32> = None;
-        let mut close = |run: &mut Option<Run>, pts: &mut Vec<DVec3>, after: Option<DVec3>| {
-            let Some(r) = run.take() else { return };
-            let middle = pts[pts.len() / 2];
-            pts.clear();
-            if r.len <= r.width {
-                return; // a string may hang out by its own width
-            }
-            match (r.before, after) {
-                (Some(a), Some(b)) => {
-                    let span = a.distance(b);
-                    if span > p.checks.max_bridge {
-                        bridge_max += 1;
-                    }
-                    bridges.add(&r, span, middle);
-                }
-                _ => unsup.add(&r, r.len, r.first),
-            }
-        };
-        for (k, s) in tp.strings.iter().enumerate() {
-            let (a, b) = tp.ends(k);
-            let l = a.distance(b);
-            if s.travel {
-                close(&mut run, &mut run_pts, None);
-                last_ok = None;
-                hint = None;
-                continue;
-            }
-            if l <= 0.0 {
-                continue;
-            }
-            let w = width(s.c, nozzle);
-            let n = libm::ceil(l / w).clamp(1.0, 1e6) as usize;
-            for i in 0..n {
-                let u = (i as f64 + 0.5) / n as f64;
-                let q = a.lerp(b, u);
-                let sq = arc[k] + u * l;
-                let ok = q.z <= tol * w || {
-                    hint = rests(&dep, g, pi as u32, sq, q, w, tol, hint);
-                    hint.is_some()
-                };
-                if ok {
-                    close(&mut run, &mut run_pts, Some(q));
-                    last_ok = Some(q);
-                    continue;
-                }
-                let gap = if budget > 0 {
-                    budget -= 1;
-                    gap(&dep, g, pi as u32, sq, q, w)
-                } else {
-                    q.z
-                };
-                let r = run.get_or_insert(Run {
-                    first: q,
-                    first_k: k,
-                    len: 0.0,
-                    before: last_ok,
-                    width: w,
-                    worst: gap,
-                    worst_at: q,
-                });
-                r.len += l / n as f64;
-                if gap > r.worst {
-                    r.worst = gap;
-                    r.worst_at = q;
-                }
-                run_pts.push(q);
-            }
-            g += 1;
-        }
-        close(&mut run, &mut run_pts, None);
-        if let Some((k, at)) = unsup.first {
-            out.push(Finding {
-                code: "unsupported",
-                severity: Severity::Error,
-                message: format!(
-                    "{} run{} of part `{}` ({:.1} mm of filament) rest{} on neither the bed nor earlier filament; the first starts at string {k}, {}; worst overhang {:.2} mm from any support, at {}",
-                    unsup.runs,
-                    if unsup.runs == 1 { "" } else { "s" },
-                    tp.name,
-                    unsup.len,
-                    if unsup.runs == 1 { "s" } else { "" },
-                    fmt_p(at),
-                    unsup.worst,
-                    fmt_p(unsup.worst_at)
-                ),
-                part: Some(tp.name.clone()),
-                string: Some(k),
-                at: Some(at.to_array()),
-            });
-        }
-        if let Some((k, _)) = bridges.first {
-            let long = bridge_max > 0;
-            out.push(Finding {
-                code: "bridge",
-                severity: if long { Severity::Warning } else { Severity::Info },
-                message: format!(
-                    "part `{}` bridges {} gap{} ({:.1} mm of filament with nothing under it); the longest spans {:.1} mm, its middle at {}{}",
-                    tp.name,
-                    bridges.runs,
-                    if bridges.runs == 1 { "" } else { "s" },
-                    bridges.len,
-                    bridges.longest,
-                    fmt_p(bridges.longest_at),
-                    if long {
-                        format!(
-                            "; {bridge_max} longer than the {} mm a bridge holds (checks.max_bridge): print slowly with the fan on, or add support",
-                            p.checks.max_bridge
-                        )
-                    } else {
-                        String::new()
-                    }
-                ),
-                part: Some(tp.name.clone()),
-                string: Some(k),
-                at: Some(bridges.longest_at.to_array()),
-            });
-        }
+        let t = scan_part(recipe, &dep, pi, tp, &mut g, &mut budget);
+        out.extend(unsupported_finding(tp, &t.unsup));
+        out.extend(bridge_finding(
+            tp,
+            &t.bridges,
+            t.bridge_max,
+            p.checks.max_bridge,
+        ));
     }
+}
+
+/// What the support check found in one part.
+struct PartTally {
+    unsup: Tally,
+    bridges: Tally,
+    /// Bridges longer than `checks.max_bridge`.
+    bridge_max: usize,
+}
+
+/// Samples every extruding string of part `pi` for support, counting the
+/// part's strings on from `g` and spending the gap `budget`.
+fn scan_part(
+    recipe: &Recipe,
+    dep: &Deposits,
+    pi: usize,
+    tp: &Toolpath,
+    g: &mut u32,
+    budget: &mut usize,
+) -> PartTally {
+    let p = &recipe.printer;
+    let nozzle = p.nozzle_diameter;
+    let tol = p.checks.support_tolerance;
+    let arc = &dep.arc[pi];
+    let mut unsup = Tally::default();
+    let mut bridges = Tally::default();
+    let mut bridge_max = 0usize; // bridges longer than max_bridge
+    let mut run: Option<Run> = None;
+    let mut run_pts: Vec<DVec3> = Vec::new();
+    let mut last_ok: Option<DVec3> = None;
+    let mut hint: Option<u32> = None;
+    let mut close = |run: &mut Option<Run>, pts: &mut Vec<DVec3>, after: Option<DVec3>| {
+        let Some(r) = run.take() else { return };
+        let middle = pts[pts.len() / 2];
+        pts.clear();
+        if r.len <= r.width {
+            return; // a string may hang out by its own width
+        }
+        match (r.before, after) {
+            (Some(a), Some(b)) => {
+                let span = a.distance(b);
+                if span > p.checks.max_bridge {
+                    bridge_max += 1;
+                }
+                bridges.add(&r, span, middle);
+            }
+            _ => unsup.add(&r, r.len, r.first),
+        }
+    };
+    for (k, s) in tp.strings.iter().enumerate() {
+        let (a, b) = tp.ends(k);
+        let l = a.distance(b);
+        if s.travel {
+            close(&mut run, &mut run_pts, None);
+            last_ok = None;
+            hint = None;
+            continue;
+        }
+        if l <= 0.0 {
+            continue;
+        }
+        let w = width(s.c, nozzle);
+        let n = libm::ceil(l / w).clamp(1.0, 1e6) as usize;
+        for i in 0..n {
+            let u = (i as f64 + 0.5) / n as f64;
+            let q = a.lerp(b, u);
+            let sq = arc[k] + u * l;
+            let ok = q.z <= tol * w || {
+                hint = rests(dep, *g, pi as u32, sq, q, w, tol, hint);
+                hint.is_some()
+            };
+            if ok {
+                close(&mut run, &mut run_pts, Some(q));
+                last_ok = Some(q);
+                continue;
+            }
+            let gap = if *budget > 0 {
+                *budget -= 1;
+                gap(dep, *g, pi as u32, sq, q, w)
+            } else {
+                q.z
+            };
+            let r = run.get_or_insert(Run {
+                first: q,
+                first_k: k,
+                len: 0.0,
+                before: last_ok,
+                width: w,
+                worst: gap,
+                worst_at: q,
+            });
+            r.len += l / n as f64;
+            if gap > r.worst {
+                r.worst = gap;
+                r.worst_at = q;
+            }
+            run_pts.push(q);
+        }
+        *g += 1;
+    }
+    close(&mut run, &mut run_pts, None);
+    PartTally {
+        unsup,
+        bridges,
+        bridge_max,
+    }
+}
+
+/// The `unsupported` finding of a part, if it has unsupported runs.
+fn unsupported_finding(tp: &Toolpath, unsup: &Tally) -> Option<Finding> {
+    let (k, at) = unsup.first?;
+    Some(Finding {
+        code: "unsupported",
+        severity: Severity::Error,
+        message: format!(
+            "{} run{} of part `{}` ({:.1} mm of filament) rest{} on neither the bed nor earlier filament; the first starts at string {k}, {}; worst overhang {:.2} mm from any support, at {}",
+            unsup.runs,
+            if unsup.runs == 1 { "" } else { "s" },
+            tp.name,
+            unsup.len,
+            if unsup.runs == 1 { "s" } else { "" },
+            fmt_p(at),
+            unsup.worst,
+            fmt_p(unsup.worst_at)
+        ),
+        part: Some(tp.name.clone()),
+        string: Some(k),
+        at: Some(at.to_array()),
+    })
+}
+
+/// The `bridge` finding of a part, if it bridges gaps; a warning when
+/// `bridge_max` of them are longer than `max_bridge` mm.
+fn bridge_finding(
+    tp: &Toolpath,
+    bridges: &Tally,
+    bridge_max: usize,
+    max_bridge: f64,
+) -> Option<Finding> {
+    let (k, _) = bridges.first?;
+    let long = bridge_max > 0;
+    Some(Finding {
+        code: "bridge",
+        severity: if long { Severity::Warning } else { Severity::Info },
+        message: format!(
+            "part `{}` bridges {} gap{} ({:.1} mm of filament with nothing under it); the longest spans {:.1} mm, its middle at {}{}",
+            tp.name,
+            bridges.runs,
+            if bridges.runs == 1 { "" } else { "s" },
+            bridges.len,
+            bridges.longest,
+            fmt_p(bridges.longest_at),
+            if long {
+                format!(
+                    "; {bridge_max} longer than the {} mm a bridge holds (checks.max_bridge): print slowly with the fan on, or add support",
+                    max_bridge
+                )
+            } else {
+                String::new()
+            }
+        ),
+        part: Some(tp.name.clone()),
+        string: Some(k),
+        at: Some(bridges.longest_at.to_array()),
+    })
 }
 
 /// Whether deposit `j` holds up a sample at `q` (width `w`) that lies `sq`

@@ -170,6 +170,65 @@ pub fn page(plan: &Plan, gcode: &str, stats: &Stats, opts: &Options) -> Page {
         .filament_diameter
         .unwrap_or(printer.filament_diameter);
     let area = std::f64::consts::PI * d * d / 4.0;
+    let flagged = flagged_ends(plan, &scene);
+    let n = mv.len();
+    let a = per_move(&mv, &flagged, area);
+    let mut h = vec![0.0; n];
+    let mut normal = vec![0i8; 3 * n];
+    surfaces(&mv, &a.kind, &scene, &mut h, &mut normal);
+    let (cmax, cq) = quantize(&a.c);
+    let (hmax, hq) = quantize(&h);
+    let nq: Vec<u8> = normal.iter().map(|&x| x as u8).collect();
+    let ranges = color_ranges(&mv, &a.kind, &a.c);
+    let size = [0, 1, 2].map(|k| stats.bbox.max[k] - stats.bbox.min[k]);
+    let findings: Vec<_> = plan
+        .findings
+        .iter()
+        .map(|f| json!({"code": f.code, "severity": f.severity.word(), "message": f.message}))
+        .collect();
+    let data = json!({
+        "format": "p3dp-preview 1",
+        "name": stats.name,
+        "view": opts.view.name(),
+        "color": opts.color.name(),
+        "points": n,
+        "pos": b64(&a.pos),
+        "feed": b64(&a.feed),
+        "cq": b64(&cq),
+        "cmax": cmax,
+        "hq": b64(&hq),
+        "hmax": hmax,
+        "nq": b64(&nq),
+        "kind": b64(&a.kind),
+        "bbox": {"min": a.bmin.to_array(), "max": a.bmax.to_array()},
+        "ranges": {"speed": ranges[0], "cross-section": ranges[1], "flow": ranges[2]},
+        "stats": {
+            "size_mm": size,
+            "filament_m": stats.filament_length_mm / 1000.0,
+            "filament_g": stats.filament_mass_g,
+            "material": stats.material,
+            "printer": stats.printer,
+            "time": hms(stats.print_time_s),
+            "time_s": stats.print_time_s,
+            "strings": stats.strings,
+            "extrude_moves": stats.extrude_moves,
+            "travel_moves": stats.travel_moves,
+            "max_flow": stats.max_flow_mm3_s,
+            "spacing_mm": scene.typical_spacing(),
+        },
+        "findings": findings,
+    });
+    // JSON inside <script>: no `</` may close the element early
+    let data = data.to_string().replace("</", "<\\/");
+    let html = TEMPLATE
+        .replace("__P3DP_TITLE__", &escape_html(&stats.name))
+        .replacen("__P3DP_DATA__", &data, 1);
+    Page { html, points: n }
+}
+
+/// The machine end points (µm) of the strings the checks flagged.
+fn flagged_ends(plan: &Plan, scene: &Scene) -> HashSet<[i64; 3]> {
+    let printer = &plan.recipe.printer;
     // a move is flagged when it ends where a flagged string ends (the writer
     // ends every move, merged or not, at the end point of a string)
     let mut flagged_ends = HashSet::new();
@@ -181,13 +240,27 @@ pub fn page(plan: &Plan, gcode: &str, stats: &Stats, opts: &Options) -> Page {
             }
         }
     }
+    flagged_ends
+}
+
+/// The per-move arrays of the page, and the box of what is extruded.
+struct MoveArrays {
+    pos: Vec<u8>,
+    feed: Vec<u8>,
+    kind: Vec<u8>,
+    c: Vec<f64>,
+    bmin: DVec3,
+    bmax: DVec3,
+}
+
+/// Positions, feeds, kinds (0 travel, 1 extrude, 2 flagged, 3 dry) and laid
+/// cross-sections of the moves, with a filament of `area` mm².
+fn per_move(mv: &[Move], flagged_ends: &HashSet<[i64; 3]>, area: f64) -> MoveArrays {
     let n = mv.len();
     let mut pos = Vec::with_capacity(12 * n);
     let mut feed = Vec::with_capacity(2 * n);
     let mut kind = Vec::with_capacity(n);
     let mut c = vec![0.0; n];
-    let mut h = vec![0.0; n];
-    let mut normal = vec![0i8; 3 * n];
     let mut bmin = DVec3::splat(f64::INFINITY);
     let mut bmax = DVec3::splat(f64::NEG_INFINITY);
     for (k, m) in mv.iter().enumerate() {
@@ -227,85 +300,55 @@ pub fn page(plan: &Plan, gcode: &str, stats: &Stats, opts: &Options) -> Page {
     if bmin.x > bmax.x {
         (bmin, bmax) = (DVec3::ZERO, DVec3::ZERO);
     }
-    let quant = |v: &[f64]| {
-        let max = v.iter().fold(0.0f64, |a, &b| a.max(b));
-        let mut out = Vec::with_capacity(2 * v.len());
-        for x in v {
-            let q = if max > 0.0 {
-                libm::round(x / max * 65535.0) as u16
-            } else {
-                0
-            };
-            out.extend_from_slice(&q.to_le_bytes());
-        }
-        (max, out)
-    };
-    surfaces(&mv, &kind, &scene, &mut h, &mut normal);
-    let (cmax, cq) = quant(&c);
-    let (hmax, hq) = quant(&h);
-    let nq: Vec<u8> = normal.iter().map(|&x| x as u8).collect();
+    MoveArrays {
+        pos,
+        feed,
+        kind,
+        c,
+        bmin,
+        bmax,
+    }
+}
+
+/// The largest value and every value as a little-endian u16 fraction of it.
+fn quantize(v: &[f64]) -> (f64, Vec<u8>) {
+    let max = v.iter().fold(0.0f64, |a, &b| a.max(b));
+    let mut out = Vec::with_capacity(2 * v.len());
+    for x in v {
+        let q = if max > 0.0 {
+            libm::round(x / max * 65535.0) as u16
+        } else {
+            0
+        };
+        out.extend_from_slice(&q.to_le_bytes());
+    }
+    (max, out)
+}
+
+/// The 0.2 % and 99.8 % quantiles of the finite values ([0, 0] for none).
+fn spread(vals: Vec<f64>) -> [f64; 2] {
+    let mut v: Vec<f64> = vals.into_iter().filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        return [0.0, 0.0];
+    }
+    v.sort_by(f64::total_cmp);
+    let at = |q: f64| v[((v.len() - 1) as f64 * q).round() as usize];
+    [at(0.002), at(0.998)]
+}
+
+/// The colour scales of speed, cross-section and flow over the extruding moves.
+fn color_ranges(mv: &[Move], kind: &[u8], c: &[f64]) -> [[f64; 2]; 3] {
     // the scales span the middle 99.6 % of the extruding moves, so that a few
     // merged moves near a pole (their chord shorter than their path) do not
     // squeeze the colours of all the others
-    let spread = |vals: Vec<f64>| {
-        let mut v: Vec<f64> = vals.into_iter().filter(|x| x.is_finite()).collect();
-        if v.is_empty() {
-            return [0.0, 0.0];
-        }
-        v.sort_by(f64::total_cmp);
-        let at = |q: f64| v[((v.len() - 1) as f64 * q).round() as usize];
-        [at(0.002), at(0.998)]
-    };
-    let ext: Vec<usize> = (0..n).filter(|&k| kind[k] == 1 || kind[k] == 2).collect();
-    let ranges = [
+    let ext: Vec<usize> = (0..mv.len())
+        .filter(|&k| kind[k] == 1 || kind[k] == 2)
+        .collect();
+    [
         spread(ext.iter().map(|&k| mv[k].feed / 60.0).collect()),
         spread(ext.iter().map(|&k| c[k]).collect()),
         spread(ext.iter().map(|&k| c[k] * mv[k].feed / 60.0).collect()),
-    ];
-    let size = [0, 1, 2].map(|k| stats.bbox.max[k] - stats.bbox.min[k]);
-    let findings: Vec<_> = plan
-        .findings
-        .iter()
-        .map(|f| json!({"code": f.code, "severity": f.severity.word(), "message": f.message}))
-        .collect();
-    let data = json!({
-        "format": "p3dp-preview 1",
-        "name": stats.name,
-        "view": opts.view.name(),
-        "color": opts.color.name(),
-        "points": n,
-        "pos": b64(&pos),
-        "feed": b64(&feed),
-        "cq": b64(&cq),
-        "cmax": cmax,
-        "hq": b64(&hq),
-        "hmax": hmax,
-        "nq": b64(&nq),
-        "kind": b64(&kind),
-        "bbox": {"min": bmin.to_array(), "max": bmax.to_array()},
-        "ranges": {"speed": ranges[0], "cross-section": ranges[1], "flow": ranges[2]},
-        "stats": {
-            "size_mm": size,
-            "filament_m": stats.filament_length_mm / 1000.0,
-            "filament_g": stats.filament_mass_g,
-            "material": stats.material,
-            "printer": stats.printer,
-            "time": hms(stats.print_time_s),
-            "time_s": stats.print_time_s,
-            "strings": stats.strings,
-            "extrude_moves": stats.extrude_moves,
-            "travel_moves": stats.travel_moves,
-            "max_flow": stats.max_flow_mm3_s,
-            "spacing_mm": scene.typical_spacing(),
-        },
-        "findings": findings,
-    });
-    // JSON inside <script>: no `</` may close the element early
-    let data = data.to_string().replace("</", "<\\/");
-    let html = TEMPLATE
-        .replace("__P3DP_TITLE__", &escape_html(&stats.name))
-        .replacen("__P3DP_DATA__", &data, 1);
-    Page { html, points: n }
+    ]
 }
 
 #[cfg(test)]

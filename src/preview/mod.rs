@@ -649,7 +649,8 @@ pub type Render<'a> = &'a dyn Fn(&mut dyn std::io::Write) -> Result<Stats>;
 pub fn write(plan: &Plan, out: &Path, opts: &Options, render: Render) -> Result<String> {
     let format = Format::of(out)?;
     let shown = out.display().to_string();
-    let io = |e: std::io::Error| Error::io(&shown, format!("cannot write the preview: {e}"));
+    let io =
+        |e: std::io::Error| Error::io_from(&shown, format!("cannot write the preview: {e}"), &e);
     match format {
         Format::Png => {
             let stats = render(&mut std::io::sink())?;

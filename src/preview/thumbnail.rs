@@ -69,53 +69,83 @@ pub struct Thumbnail {
     pub png: Vec<u8>,
 }
 
+/// Why thumbnail blocks could not be read back: `line N: message`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ThumbnailError {
+    /// The 1-based line at fault (`None`: the end of the G-code).
+    pub line: Option<usize>,
+    /// What is wrong there.
+    pub message: String,
+}
+
+impl std::fmt::Display for ThumbnailError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if let Some(l) = self.line {
+            write!(f, "line {l}: ")?;
+        }
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for ThumbnailError {}
+
 /// Reads every thumbnail block of `gcode` back, checking what printers rely
 /// on: LEN is the length of the base64 text, data lines are `; ` comments of
 /// at most [`LINE`] characters, and every block is closed.
-pub fn parse(gcode: &str) -> std::result::Result<Vec<Thumbnail>, String> {
+pub fn parse(gcode: &str) -> std::result::Result<Vec<Thumbnail>, ThumbnailError> {
+    let bad = |line: usize, message: String| ThumbnailError {
+        line: Some(line),
+        message,
+    };
     let mut out = Vec::new();
     let mut cur: Option<(u32, u32, usize, String)> = None;
     for (k, line) in gcode.lines().enumerate() {
         let at = k + 1;
         if let Some(rest) = line.strip_prefix("; thumbnail begin ") {
-            let header = || format!("line {at}: expected `; thumbnail begin WxH LEN`");
+            let header = || bad(at, "expected `; thumbnail begin WxH LEN`".into());
             let (wh, len) = rest.split_once(' ').ok_or_else(header)?;
             let (w, h) = wh.split_once('x').ok_or_else(header)?;
             let num = |t: &str| t.parse::<u32>().map_err(|_| header());
             let len = len.parse::<usize>().map_err(|_| header())?;
             if cur.is_some() {
-                return Err(format!("line {at}: a block begins inside another"));
+                return Err(bad(at, "a block begins inside another".into()));
             }
             cur = Some((num(w)?, num(h)?, len, String::new()));
         } else if line == "; thumbnail end" {
             let (width, height, len, b64) = cur
                 .take()
-                .ok_or_else(|| format!("line {at}: an end without a begin"))?;
+                .ok_or_else(|| bad(at, "an end without a begin".into()))?;
             if b64.len() != len {
-                return Err(format!(
-                    "line {at}: the block holds {} base64 characters, its header says {len}",
-                    b64.len()
+                return Err(bad(
+                    at,
+                    format!(
+                        "the block holds {} base64 characters, its header says {len}",
+                        b64.len()
+                    ),
                 ));
             }
             let png = base64::engine::general_purpose::STANDARD
                 .decode(b64)
-                .map_err(|e| format!("line {at}: not base64: {e}"))?;
+                .map_err(|e| bad(at, format!("not base64: {e}")))?;
             out.push(Thumbnail { width, height, png });
         } else if let Some((.., b64)) = cur.as_mut() {
             let data = line
                 .strip_prefix("; ")
-                .ok_or_else(|| format!("line {at}: a data line is not a `; ` comment"))?;
+                .ok_or_else(|| bad(at, "a data line is not a `; ` comment".into()))?;
             if data.len() > LINE {
-                return Err(format!(
-                    "line {at}: {} characters of base64, more than {LINE}",
-                    data.len()
+                return Err(bad(
+                    at,
+                    format!("{} characters of base64, more than {LINE}", data.len()),
                 ));
             }
             b64.push_str(data);
         }
     }
     match cur {
-        Some(_) => Err("a thumbnail block is not closed".into()),
+        Some(_) => Err(ThumbnailError {
+            line: None,
+            message: "a thumbnail block is not closed".into(),
+        }),
         None => Ok(out),
     }
 }
@@ -158,14 +188,20 @@ mod tests {
             .unwrap()
             .to_string();
         let wrong_len = good.replacen(&format!(" {len}\n"), " 3\n", 1);
-        assert!(parse(&wrong_len).unwrap_err().contains("header says 3"));
+        assert!(parse(&wrong_len)
+            .unwrap_err()
+            .to_string()
+            .contains("header says 3"));
         let unclosed = good.replace("; thumbnail end\n;\n", "");
-        assert!(parse(&unclosed).unwrap_err().contains("not closed"));
+        assert_eq!(parse(&unclosed).unwrap_err().line, None);
         let long = format!(
             "; thumbnail begin 1x1 80\n; {}\n; thumbnail end\n",
             "A".repeat(80)
         );
-        assert!(parse(&long).unwrap_err().contains("more than 78"));
+        assert!(parse(&long)
+            .unwrap_err()
+            .to_string()
+            .contains("more than 78"));
     }
 
     #[test]

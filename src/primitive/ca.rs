@@ -305,8 +305,9 @@ impl Pattern {
     /// The cell array as a grey PNG: one row per turn, the first turn at the
     /// bottom (as the wall stands), cell 0 on the left (the head runs
     /// counter-clockwise seen from above, so left to right seen from outside);
-    /// filled cells black, empty ones white.
-    pub fn to_png(&self) -> std::result::Result<Vec<u8>, String> {
+    /// filled cells black, empty ones white. Errors have no place (the caller
+    /// names the option).
+    pub fn to_png(&self) -> Result<Vec<u8>> {
         let mut px = Vec::with_capacity(self.cell.len());
         for l in (0..self.layers).rev() {
             px.extend(
@@ -316,10 +317,10 @@ impl Pattern {
             );
         }
         let img = image::GrayImage::from_raw(self.cells as u32, self.layers as u32, px)
-            .ok_or("the cell array does not fit an image")?;
+            .ok_or_else(|| Error::input("", "the cell array does not fit an image"))?;
         let mut out = std::io::Cursor::new(Vec::new());
         img.write_to(&mut out, image::ImageFormat::Png)
-            .map_err(|e| format!("cannot encode the PNG: {e}"))?;
+            .map_err(|e| Error::input("", format!("cannot encode the PNG: {e}")))?;
         Ok(out.into_inner())
     }
 }

@@ -82,13 +82,12 @@ pub fn eval_params(raw: &IndexMap<String, Num>, sets: &[(String, String)]) -> Re
             ));
         }
         let v = match sets.iter().rev().find(|(n, _)| n == name) {
-            Some((_, s)) => expr::eval_const(s, &params)
-                .map_err(|m| Error::input(format!("--set {name}={s}"), m))?,
+            Some((_, s)) => {
+                expr::eval_const(s, &params).map_err(|e| e.at(format!("--set {name}={s}")))?
+            }
             None => match value {
                 Num::Value(v) => finite(*v, &place)?,
-                Num::Expr(s) => {
-                    expr::eval_const(s, &params).map_err(|m| Error::input(&place, m))?
-                }
+                Num::Expr(s) => expr::eval_const(s, &params).map_err(|e| e.at(&place))?,
             },
         };
         params.insert(name.clone(), v);
@@ -134,7 +133,7 @@ impl Recipe {
     ) -> Result<Recipe> {
         let shown = path.display().to_string();
         let text = std::fs::read_to_string(path)
-            .map_err(|e| Error::io(&shown, format!("cannot read the recipe: {e}")))?;
+            .map_err(|e| Error::io_from(&shown, format!("cannot read the recipe: {e}"), &e))?;
         let raw: RawRecipe = parse_yaml(&text, &shown)?;
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         Recipe::resolve_in(&raw, sets, printer, &dir, Some(path)).map_err(|e| e.in_file(&shown))
@@ -453,9 +452,9 @@ fn resolve_step(ctx: &Ctx, s: &RawStep) -> Result<Step> {
             }
             let bitmap = match (image, text) {
                 (Some(image), None) => load_bitmap(&ctx.dir.join(image), image)
-                    .map_err(|m| Error::input(format!("{key}.image"), m))?,
+                    .map_err(|e| e.under(&format!("{key}.image")))?,
                 (None, Some(text)) => {
-                    Bitmap::from_text(text).map_err(|m| Error::input(format!("{key}.text"), m))?
+                    Bitmap::from_text(text).map_err(|e| e.under(&format!("{key}.text")))?
                 }
                 _ => {
                     return Err(Error::input(
@@ -481,19 +480,33 @@ fn resolve_step(ctx: &Ctx, s: &RawStep) -> Result<Step> {
     })
 }
 
-/// Loads an image as grey levels 0..1; the error names the image as written.
-pub fn load_bitmap(path: &PathBuf, shown: &str) -> std::result::Result<Bitmap, String> {
+/// Loads an image as grey levels 0..1; the error names the image as written
+/// (an input error with no place: the caller names the key; an I/O failure
+/// keeps its [`std::io::ErrorKind`]).
+pub fn load_bitmap(path: &PathBuf, shown: &str) -> Result<Bitmap> {
+    let io = |message: String, e: &std::io::Error| Error {
+        io_kind: Some(e.kind()),
+        ..Error::input("", message)
+    };
     let reader = image::ImageReader::open(path)
-        .map_err(|e| format!("cannot open the image `{shown}` ({}): {e}", path.display()))?
+        .map_err(|e| {
+            io(
+                format!("cannot open the image `{shown}` ({}): {e}", path.display()),
+                &e,
+            )
+        })?
         .with_guessed_format()
-        .map_err(|e| format!("cannot read the image `{shown}`: {e}"))?;
+        .map_err(|e| io(format!("cannot read the image `{shown}`: {e}"), &e))?;
     let img = reader.decode().map_err(|e| {
-        format!("`{shown}` is not an image p3dp can read (PNG, JPEG, BMP, GIF): {e}")
+        Error::input(
+            "",
+            format!("`{shown}` is not an image p3dp can read (PNG, JPEG, BMP, GIF): {e}"),
+        )
     })?;
     let grey = img.to_luma8();
     let (w, h) = grey.dimensions();
     if w == 0 || h == 0 {
-        return Err(format!("the image `{shown}` is empty"));
+        return Err(Error::input("", format!("the image `{shown}` is empty")));
     }
     Ok(Bitmap {
         width: w as usize,

@@ -3,7 +3,9 @@
 use glam::DVec3;
 
 use super::{not_finite, par_chunks, vars_at};
+use crate::error::{Error, Result};
 use crate::expr::{var, Expr};
+use crate::threads::Threads;
 use crate::toolpath::Toolpath;
 
 /// A deformation: new positions and/or new cross-sections and speeds.
@@ -24,23 +26,24 @@ impl Deform {
         exprs.iter().any(|e| e.uses(var::R) || e.uses(var::THETA))
     }
 
-    /// Applies the deformation: c and v first, at the old midpoints, then the points.
-    pub fn apply(&self, tp: &mut Toolpath) -> Result<(), String> {
+    /// Applies the deformation: c and v first, at the old midpoints, then the
+    /// points; on up to `threads` threads (the output is the same for any).
+    pub fn apply(&self, tp: &mut Toolpath, threads: Threads) -> Result<()> {
         if self.cross_section.is_some() || self.speed.is_some() {
-            self.apply_strings(tp)?;
+            self.apply_strings(tp, threads)?;
         }
         if let Some(pos) = &self.position {
-            self.apply_points(tp, pos)?;
+            self.apply_points(tp, pos, threads)?;
         }
         Ok(())
     }
 
-    fn apply_strings(&self, tp: &mut Toolpath) -> Result<(), String> {
+    fn apply_strings(&self, tp: &mut Toolpath, threads: Threads) -> Result<()> {
         let exprs: Vec<&Expr> = self.cross_section.iter().chain(&self.speed).collect();
         let polar_too = self.needs_polar(&exprs);
         let n = tp.len();
         let points = &tp.points;
-        par_chunks(&mut tp.strings, |start, chunk| {
+        par_chunks(&mut tp.strings, threads, |start, chunk| {
             for (j, s) in chunk.iter_mut().enumerate() {
                 if s.travel {
                     continue;
@@ -69,14 +72,14 @@ impl Deform {
         })
     }
 
-    fn apply_points(&self, tp: &mut Toolpath, pos: &[Expr; 3]) -> Result<(), String> {
+    fn apply_points(&self, tp: &mut Toolpath, pos: &[Expr; 3], threads: Threads) -> Result<()> {
         let n = tp.points.len();
         let [f0, f1, f2] = pos;
         let cylinder = self.cylinder;
         // theta' = theta needs no trigonometry: (x, y) scales by r'/r.
         let keep_theta = f1.is_var(var::THETA);
         let polar_too = cylinder || self.needs_polar(&[f0, f1, f2]);
-        par_chunks(&mut tp.points, |start, chunk| {
+        par_chunks(&mut tp.points, threads, |start, chunk| {
             for (j, point) in chunk.iter_mut().enumerate() {
                 let i = start + j;
                 let p = *point;
@@ -120,15 +123,16 @@ fn worst<'a>(pos: &'a [Expr; 3], vars: &crate::expr::Vars) -> (String, &'a str, 
         })
 }
 
-fn bad_value(key: &str, e: &Expr, value: f64, k: usize, m: DVec3, expected: &str) -> String {
+/// The error for a cross-section or speed out of range at string `k`.
+fn bad_value(key: &str, e: &Expr, value: f64, k: usize, m: DVec3, expected: &str) -> Error {
     if value.is_finite() {
-        format!(
+        Error::input("", format!(
             "{key} `{}` gives {value} at string {k}, midpoint (x, y, z) = ({:.3}, {:.3}, {:.3}); expected {expected}",
             e.src(),
             m.x,
             m.y,
             m.z
-        )
+        ))
     } else {
         not_finite(key, e.src(), value, "string", k, m)
     }
@@ -160,7 +164,7 @@ mod tests {
             speed: None,
         };
         let mut t = line();
-        d.apply(&mut t).unwrap();
+        d.apply(&mut t, Threads::new(4)).unwrap();
         assert!((t.points[1] - DVec3::new(0.0, 2.0, 2.0)).length() < 1e-12);
         // c evaluated at the old midpoint of string 0 (z = 0.5)
         assert!((t.strings[0].c - 0.1).abs() < 1e-12);
@@ -175,7 +179,7 @@ mod tests {
             speed: None,
         };
         let mut t = line();
-        d.apply(&mut t).unwrap();
+        d.apply(&mut t, Threads::new(4)).unwrap();
         assert!((t.points[0] - DVec3::new(0.0, 1.0, 0.0)).length() < 1e-12);
     }
 
@@ -187,9 +191,9 @@ mod tests {
             cross_section: None,
             speed: None,
         };
-        let e = d.apply(&mut line()).unwrap_err();
+        let e = d.apply(&mut line(), Threads::new(4)).unwrap_err();
         assert!(
-            e.contains("position[1] `sqrt(y - 0.5)`") && e.contains("point 0"),
+            e.message.contains("position[1] `sqrt(y - 0.5)`") && e.message.contains("point 0"),
             "{e}"
         );
     }
@@ -223,7 +227,7 @@ mod tests {
         };
         let mut t = long_helix(n);
         let old = t.clone();
-        d.apply(&mut t).unwrap();
+        d.apply(&mut t, Threads::new(4)).unwrap();
         let [f0, _, f2] = d.position.as_ref().unwrap();
         for (i, p) in old.points.iter().enumerate() {
             let vars = vars_at(*p, i, n + 1, true);
@@ -245,7 +249,7 @@ mod tests {
             cross_section: None,
             speed: None,
         };
-        let e = bad.apply(&mut long_helix(n)).unwrap_err();
-        assert!(e.contains("at point 30001,"), "{e}");
+        let e = bad.apply(&mut long_helix(n), Threads::new(4)).unwrap_err();
+        assert!(e.message.contains("at point 30001,"), "{e}");
     }
 }

@@ -15,7 +15,9 @@ pub use modulate::{Bitmap, Modulate, ModulateMap};
 
 use glam::DVec3;
 
+use crate::error::{Error, Result};
 use crate::expr::{var, Vars};
+use crate::threads::Threads;
 use crate::toolpath::{polar, Toolpath};
 
 /// What `modulate_*` keeps when it scales the cross-section.
@@ -57,10 +59,11 @@ impl Step {
         }
     }
 
-    /// Applies the step in place. `max_strings` bounds what `subdivide` may make.
-    pub fn apply(&self, tp: &mut Toolpath, max_strings: u64) -> Result<(), String> {
+    /// Applies the step in place, on up to `threads` threads. `max_strings`
+    /// bounds what `subdivide` may make.
+    pub fn apply(&self, tp: &mut Toolpath, max_strings: u64, threads: Threads) -> Result<()> {
         match self {
-            Step::DeformXyz(d) | Step::DeformCylinder(d) => d.apply(tp),
+            Step::DeformXyz(d) | Step::DeformCylinder(d) => d.apply(tp, threads),
             Step::ModulateCylinder(m) => m.apply(tp),
             Step::ModulateMap(m) => m.apply(tp),
             Step::Subdivide(max) => subdivide::apply(tp, *max, max_strings),
@@ -78,26 +81,23 @@ impl Step {
 const PAR_MIN: usize = 50_000;
 
 /// Calls `f(start, chunk)` on consecutive chunks of `items` (chunk j starts at
-/// item `start`), on up to `available_parallelism` (at most 4) scoped
-/// threads, and returns the error of the earliest failing chunk. Every item
+/// item `start`), on up to `threads` scoped threads (the caller's budget;
+/// one below [`PAR_MIN`] items), and returns the error of the earliest failing chunk. Every item
 /// is computed by the same code whatever the split, and each chunk stops at
 /// its own first error, so results and error are those of one thread: the
 /// output cannot depend on the thread count.
 pub(crate) fn par_chunks<T: Send>(
     items: &mut [T],
-    f: impl Fn(usize, &mut [T]) -> Result<(), String> + Sync,
-) -> Result<(), String> {
+    threads: Threads,
+    f: impl Fn(usize, &mut [T]) -> Result<()> + Sync,
+) -> Result<()> {
     let n = items.len();
-    let threads = if n < PAR_MIN {
-        1
-    } else {
-        std::thread::available_parallelism().map_or(1, |t| t.get().min(4))
-    };
+    let threads = if n < PAR_MIN { 1 } else { threads.get() };
     if threads <= 1 {
         return f(0, items);
     }
     let size = n.div_ceil(threads);
-    let results: Vec<Result<(), String>> = std::thread::scope(|s| {
+    let results: Vec<Result<()>> = std::thread::scope(|s| {
         let f = &f;
         let handles: Vec<_> = items
             .chunks_mut(size)
@@ -135,7 +135,8 @@ pub(crate) fn vars_at(p: DVec3, i: usize, n: usize, polar_too: bool) -> Vars {
     v
 }
 
-/// The error for an expression that gave NaN or infinity.
+/// The error for an expression that gave NaN or infinity (no place yet:
+/// [`crate::model::make_part`] names the step).
 pub(crate) fn not_finite(
     what: &str,
     src: &str,
@@ -143,9 +144,12 @@ pub(crate) fn not_finite(
     kind: &str,
     i: usize,
     p: DVec3,
-) -> String {
-    format!(
-        "{what} `{src}` gives {value} at {kind} {i}, (x, y, z) = ({:.3}, {:.3}, {:.3}); expected a finite number",
-        p.x, p.y, p.z
+) -> Error {
+    Error::input(
+        "",
+        format!(
+            "{what} `{src}` gives {value} at {kind} {i}, (x, y, z) = ({:.3}, {:.3}, {:.3}); expected a finite number",
+            p.x, p.y, p.z
+        ),
     )
 }

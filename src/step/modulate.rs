@@ -6,6 +6,7 @@
 use glam::DVec3;
 
 use super::{not_finite, vars_at, Keep};
+use crate::error::{Error, Result};
 use crate::expr::{var, Expr};
 use crate::toolpath::Toolpath;
 
@@ -43,10 +44,13 @@ impl Bitmap {
     /// `text` in one line of 8 × 8 glyphs (the `font8x8` crate's), one light
     /// column between letters and a light border of one pixel all round, so
     /// that looking up outside the text (clamped to the edge) finds background.
-    pub fn from_text(text: &str) -> Result<Bitmap, String> {
+    pub fn from_text(text: &str) -> Result<Bitmap> {
         use font8x8::UnicodeFonts;
         if text.is_empty() {
-            return Err("the text is empty; expected at least one character".into());
+            return Err(Error::input(
+                "",
+                "the text is empty; expected at least one character",
+            ));
         }
         let chars: Vec<char> = text.chars().collect();
         let width = 1 + 9 * chars.len();
@@ -57,7 +61,10 @@ impl Bitmap {
                 .get(*ch)
                 .or_else(|| font8x8::LATIN_FONTS.get(*ch))
                 .ok_or_else(|| {
-                    format!("no glyph for `{ch}` in the 8x8 font (Basic Latin and Latin-1)")
+                    Error::input(
+                        "",
+                        format!("no glyph for `{ch}` in the 8x8 font (Basic Latin and Latin-1)"),
+                    )
                 })?;
             for (row, bits) in glyph.iter().enumerate() {
                 for col in 0..8 {
@@ -105,7 +112,7 @@ fn scale(tp: &mut Toolpath, k: usize, f: f64, keep: Keep) {
 
 impl Modulate {
     /// Scales every extruding string.
-    pub fn apply(&self, tp: &mut Toolpath) -> Result<(), String> {
+    pub fn apply(&self, tp: &mut Toolpath) -> Result<()> {
         let n = tp.len();
         for k in 0..n {
             let s = tp.strings[k];
@@ -124,17 +131,20 @@ impl Modulate {
     }
 }
 
-fn check_factor(e: &Expr, f: f64, k: usize, m: DVec3) -> Result<(), String> {
+fn check_factor(e: &Expr, f: f64, k: usize, m: DVec3) -> Result<()> {
     if !f.is_finite() {
         return Err(not_finite("factor", e.src(), f, "string", k, m));
     }
     if f <= 0.0 {
-        return Err(format!(
-            "factor `{}` gives {f} at string {k}, midpoint (x, y, z) = ({:.3}, {:.3}, {:.3}); expected a factor > 0",
-            e.src(),
-            m.x,
-            m.y,
-            m.z
+        return Err(Error::input(
+            "",
+            format!(
+                "factor `{}` gives {f} at string {k}, midpoint (x, y, z) = ({:.3}, {:.3}, {:.3}); expected a factor > 0",
+                e.src(),
+                m.x,
+                m.y,
+                m.z
+            ),
         ));
     }
     Ok(())
@@ -142,7 +152,7 @@ fn check_factor(e: &Expr, f: f64, k: usize, m: DVec3) -> Result<(), String> {
 
 impl ModulateMap {
     /// Looks up each extruding string's midpoint in the image and scales it.
-    pub fn apply(&self, tp: &mut Toolpath) -> Result<(), String> {
+    pub fn apply(&self, tp: &mut Toolpath) -> Result<()> {
         let n = tp.len();
         for k in 0..n {
             if tp.strings[k].travel {
@@ -243,6 +253,6 @@ mod tests {
             keep: Keep::Flow,
         };
         let e = m.apply(&mut two_strings()).unwrap_err();
-        assert!(e.contains("expected a factor > 0"), "{e}");
+        assert!(e.message.contains("expected a factor > 0"), "{e}");
     }
 }

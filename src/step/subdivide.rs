@@ -1,10 +1,11 @@
 //! `subdivide`: split long strings so later deformations bend the path smoothly.
 
+use crate::error::{Error, Result};
 use crate::toolpath::Toolpath;
 
 /// Splits every string longer than `max` into `ceil(L / max)` equal pieces,
 /// refusing when the part would exceed `max_strings`.
-pub fn apply(tp: &mut Toolpath, max: f64, max_strings: u64) -> Result<(), String> {
+pub fn apply(tp: &mut Toolpath, max: f64, max_strings: u64) -> Result<()> {
     let pieces = |k: usize| -> u64 {
         let l = tp.length(k);
         if l > max {
@@ -15,8 +16,11 @@ pub fn apply(tp: &mut Toolpath, max: f64, max_strings: u64) -> Result<(), String
     };
     let total: u64 = (0..tp.len()).map(pieces).sum();
     if total > max_strings {
-        return Err(format!(
-            "max_length {max} would make {total} strings, more than the limit of {max_strings}; expected a larger max_length"
+        return Err(Error::input(
+            "",
+            format!(
+                "max_length {max} would make {total} strings, more than the limit of {max_strings}; expected a larger max_length"
+            ),
         ));
     }
     if total == tp.len() as u64 {

@@ -16,7 +16,29 @@
 //! frame is made orthonormal again after every turn (Gram–Schmidt), so
 //! rounding never accumulates into a skewed frame.
 
+use std::fmt;
+
 use glam::DVec3;
+
+/// Why a frame cannot face the way asked.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FrameError {
+    /// The heading is the zero vector.
+    ZeroHeading,
+    /// `up` is zero or parallel to the heading.
+    BadUp,
+}
+
+impl fmt::Display for FrameError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            FrameError::ZeroHeading => "the heading must not be zero",
+            FrameError::BadUp => "`up` must not be zero nor parallel to the heading",
+        })
+    }
+}
+
+impl std::error::Error for FrameError {}
 
 /// Where the turtle is and which way it faces.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -57,16 +79,14 @@ fn turn(a: DVec3, b: DVec3, deg: f64) -> (DVec3, DVec3) {
 
 impl Frame {
     /// A frame at `pos` facing `heading`, with `up` made perpendicular to it.
-    pub fn new(pos: DVec3, heading: DVec3, up: DVec3) -> Result<Frame, String> {
-        let h = heading
-            .try_normalize()
-            .ok_or("the heading must not be zero")?;
+    pub fn new(pos: DVec3, heading: DVec3, up: DVec3) -> Result<Frame, FrameError> {
+        let h = heading.try_normalize().ok_or(FrameError::ZeroHeading)?;
         // the part of `up` across the heading; none when they are parallel
         let across = h.cross(up).length() > 1e-9 * up.length();
         let u = (up - h * up.dot(h))
             .try_normalize()
             .filter(|_| across)
-            .ok_or("`up` must not be zero nor parallel to the heading")?;
+            .ok_or(FrameError::BadUp)?;
         let mut f = Frame {
             pos,
             heading: h,
@@ -108,14 +128,12 @@ impl Frame {
     /// Faces `heading`; with `up`, the up axis is `up` made perpendicular to
     /// it, else the frame turns by the smallest rotation taking the old
     /// heading to the new one (about up when they are opposite).
-    pub fn set_heading(&mut self, heading: DVec3, up: Option<DVec3>) -> Result<(), String> {
+    pub fn set_heading(&mut self, heading: DVec3, up: Option<DVec3>) -> Result<(), FrameError> {
         if let Some(up) = up {
             *self = Frame::new(self.pos, heading, up)?;
             return Ok(());
         }
-        let h = heading
-            .try_normalize()
-            .ok_or("the heading must not be zero")?;
+        let h = heading.try_normalize().ok_or(FrameError::ZeroHeading)?;
         let axis = self.heading.cross(h);
         let (sin, cos) = (axis.length(), self.heading.dot(h));
         let l = if sin < 1e-12 {
@@ -205,7 +223,13 @@ mod tests {
         f.set_heading(DVec3::X, Some(DVec3::new(0.0, 1.0, 1.0)))
             .unwrap();
         assert!((f.up - DVec3::new(0.0, 1.0, 1.0).normalize()).length() < 1e-15);
-        assert!(f.set_heading(DVec3::X, Some(DVec3::X)).is_err());
-        assert!(f.set_heading(DVec3::ZERO, None).is_err());
+        assert_eq!(
+            f.set_heading(DVec3::X, Some(DVec3::X)),
+            Err(FrameError::BadUp)
+        );
+        assert_eq!(
+            f.set_heading(DVec3::ZERO, None),
+            Err(FrameError::ZeroHeading)
+        );
     }
 }

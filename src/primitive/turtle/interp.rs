@@ -389,7 +389,7 @@ impl Run<'_> {
                 };
                 self.frame
                     .set_heading(h, up)
-                    .map_err(|m| Error::input(place, m))?;
+                    .map_err(|e| Error::input(place, e.to_string()))?;
             }
             Op::PenUp => {
                 if self.pen_down {

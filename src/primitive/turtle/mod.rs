@@ -73,7 +73,7 @@ fn constant(n: &Num, params: &Params, place: &str) -> Result<f64> {
             place,
             format!("{v} is not allowed; expected a finite number"),
         )),
-        Num::Expr(s) => expr::eval_const(s, params).map_err(|m| Error::input(place, m)),
+        Num::Expr(s) => expr::eval_const(s, params).map_err(|e| e.at(place)),
     }
 }
 
@@ -96,7 +96,7 @@ fn resolve_inner(raw: &RawTurtle, params: &Params, env: &Env) -> Result<Turtle> 
     let pos = point(&start.position, params, "start.position", DVec3::ZERO)?;
     let heading = point(&start.heading, params, "start.heading", DVec3::X)?;
     let up = point(&start.up, params, "start.up", DVec3::Z)?;
-    let frame = Frame::new(pos, heading, up).map_err(|m| Error::input("start", m))?;
+    let frame = Frame::new(pos, heading, up).map_err(|e| Error::input("start", e.to_string()))?;
     let seed = match &raw.seed {
         Some(n) => {
             let s = constant(n, params, "seed")?;
@@ -124,7 +124,10 @@ fn resolve_inner(raw: &RawTurtle, params: &Params, env: &Env) -> Result<Turtle> 
         max_steps: env.max_strings.saturating_mul(8).saturating_add(1_000_000),
     };
     // the interpreter recurses (blocks, calls, L-system derivations): give it
-    // a stack deep enough for MAX_CALL_DEPTH calls whatever thread we are on
+    // a stack deep enough for MAX_CALL_DEPTH calls whatever thread we are on.
+    // This thread exists only for its stack: the caller waits on it, so it
+    // runs alone and takes no share of the build's thread budget
+    // (`crate::threads::Threads`), which is why it is not passed one.
     let path = std::thread::scope(|s| {
         std::thread::Builder::new()
             .name("turtle".into())

@@ -10,7 +10,7 @@ use serde::de::{self, Deserializer, MapAccess, Visitor};
 use serde::Deserialize;
 
 use crate::error::{Error, Result};
-use crate::expr::{var, Expr, Params};
+use crate::expr::{var, Expr, ExprErrorKind, Params};
 use crate::num::{Num, Num3};
 
 /// `turtle:` as written.
@@ -190,7 +190,7 @@ impl<'de> Visitor<'de> for CommandVisitor {
         while let Some(key) = m.next_key::<String>()? {
             match key.as_str() {
                 w if find(SCALAR, w).is_some() => {
-                    set(&mut k.cmd, find(SCALAR, w).unwrap()).map_err(de::Error::custom)?;
+                    set(&mut k.cmd, find(SCALAR, w).unwrap())?;
                     k.num = Some(m.next_value()?);
                 }
                 "repeat" | "if" | "extrude" | "nozzle_temp" | "bed_temp" => {
@@ -201,20 +201,20 @@ impl<'de> Visitor<'de> for CommandVisitor {
                         "nozzle_temp" => "nozzle_temp",
                         _ => "bed_temp",
                     };
-                    set(&mut k.cmd, name).map_err(de::Error::custom)?;
+                    set(&mut k.cmd, name)?;
                     k.num = Some(m.next_value()?);
                 }
                 "goto" | "set_heading" => {
                     let name = if key == "goto" { "goto" } else { "set_heading" };
-                    set(&mut k.cmd, name).map_err(de::Error::custom)?;
+                    set(&mut k.cmd, name)?;
                     k.vec = Some(m.next_value()?);
                 }
                 "call" => {
-                    set(&mut k.cmd, "call").map_err(de::Error::custom)?;
+                    set(&mut k.cmd, "call")?;
                     k.name = Some(m.next_value()?);
                 }
                 "lsystem" => {
-                    set(&mut k.cmd, "lsystem").map_err(de::Error::custom)?;
+                    set(&mut k.cmd, "lsystem")?;
                     k.lsystem = Some(m.next_value()?);
                 }
                 "as" => k.var = Some(m.next_value()?),
@@ -236,26 +236,30 @@ impl<'de> Visitor<'de> for CommandVisitor {
                 }
             }
         }
-        k.build().map_err(de::Error::custom)
+        k.build()
     }
 }
 
 /// Records the command key of an item; a second one is an error.
-fn set(cmd: &mut Option<&'static str>, name: &'static str) -> std::result::Result<(), String> {
+fn set<E: de::Error>(
+    cmd: &mut Option<&'static str>,
+    name: &'static str,
+) -> std::result::Result<(), E> {
     match cmd.replace(name) {
-        Some(first) => Err(format!(
+        Some(first) => Err(E::custom(format!(
             "one command per list item, found `{first}` and `{name}`; write them as two items"
-        )),
+        ))),
         None => Ok(()),
     }
 }
 
 impl Keys {
-    fn build(self) -> std::result::Result<RawCommand, String> {
+    /// The command the keys of one list item make, or the deserializer's error.
+    fn build<E: de::Error>(self) -> std::result::Result<RawCommand, E> {
         let Some(cmd) = self.cmd else {
-            return Err(format!(
+            return Err(E::custom(format!(
                 "expected a command key (one of {COMMANDS}) beside `as`, `do`, `else`, `args`, `up`, `feed` or `wait`"
-            ));
+            )));
         };
         let allowed: &[&str] = match cmd {
             "repeat" => &["as", "do"],
@@ -277,18 +281,20 @@ impl Keys {
         ];
         for (key, here) in present {
             if here && !allowed.contains(&key) {
-                return Err(if allowed.is_empty() {
+                return Err(E::custom(if allowed.is_empty() {
                     format!("`{cmd}` takes no `{key}`; it stands alone")
                 } else {
                     format!(
                         "`{cmd}` takes no `{key}`; its other keys are {}",
                         allowed.join(", ")
                     )
-                });
+                }));
             }
         }
         if matches!(cmd, "repeat" | "if") && self.body.is_none() {
-            return Err(format!("`{cmd}` needs `do: [ … ]`, the commands it runs"));
+            return Err(E::custom(format!(
+                "`{cmd}` needs `do: [ … ]`, the commands it runs"
+            )));
         }
         Ok(match cmd {
             "goto" => RawCommand::Goto(self.vec.unwrap()),
@@ -479,8 +485,9 @@ impl<'a> Compiler<'a> {
     pub fn val(&self, n: &Num, scope: &Arc<Vec<String>>, place: &str) -> Result<Val> {
         let names: Vec<&str> = scope.iter().map(String::as_str).collect();
         let expr = Expr::compile_ext(&n.src(), self.params, &[var::X, var::Y, var::Z], &names)
-            .map_err(|m| {
-                let m = if !scope.is_empty() && m.contains("it may use") {
+            .map_err(|e| {
+                let m = e.message;
+                let m = if !scope.is_empty() && e.kind == ExprErrorKind::Name {
                     format!(
                         "{m}, the counters and parameters {} and rand()",
                         scope.join(", ")

@@ -487,10 +487,10 @@ fn range(s: &str, params: &Params) -> std::result::Result<Vec<f64>, String> {
     if a.trim().is_empty() || b.trim().is_empty() {
         return Err(not_range());
     }
-    let a = expr::eval_const(a, params)?;
-    let b = expr::eval_const(b, params)?;
+    let a = expr::eval_const(a, params).map_err(|e| e.message)?;
+    let b = expr::eval_const(b, params).map_err(|e| e.message)?;
     let step = match step {
-        Some(st) => expr::eval_const(st, params)?,
+        Some(st) => expr::eval_const(st, params).map_err(|e| e.message)?,
         None => 1.0,
     };
     if step == 0.0 {
@@ -520,7 +520,7 @@ fn range(s: &str, params: &Params) -> std::result::Result<Vec<f64>, String> {
 fn eval(n: &Num, params: &Params, place: &str) -> Result<f64> {
     let v = match n {
         Num::Value(v) => *v,
-        Num::Expr(s) => expr::eval_const(s, params).map_err(|m| Error::input(place, m))?,
+        Num::Expr(s) => expr::eval_const(s, params).map_err(|e| e.at(place))?,
     };
     if v.is_finite() {
         Ok(v)

@@ -1,0 +1,154 @@
+//! The resolved solid: features, infill settings and the z-buffer of slabs.
+
+use super::*;
+
+/// The solid of one feature.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Body {
+    /// An axis-aligned prism: centre and sizes.
+    Box {
+        /// Centre.
+        center: DVec3,
+        /// Sizes along x, y, z.
+        size: DVec3,
+    },
+    /// A vertical cylinder standing on `center`.
+    Cylinder {
+        /// Centre of the bottom face.
+        center: DVec3,
+        /// Radius.
+        radius: f64,
+        /// Height.
+        height: f64,
+    },
+}
+
+/// A feature: a body and how it combines with those before it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Feature {
+    /// The body.
+    pub body: Body,
+    /// The boolean operation.
+    pub op: Op,
+}
+
+impl Feature {
+    /// Lowest and highest z.
+    pub fn z_range(&self) -> (f64, f64) {
+        match self.body {
+            Body::Box { center, size } => (center.z - size.z / 2.0, center.z + size.z / 2.0),
+            Body::Cylinder { center, height, .. } => (center.z, center.z + height),
+        }
+    }
+
+    /// The cross-section in the plane z (`None` outside z0 ≤ z < z1).
+    pub fn section(&self, z: f64) -> Option<Shape> {
+        let (z0, z1) = self.z_range();
+        if !(z0 <= z && z < z1) {
+            return None;
+        }
+        Some(match self.body {
+            Body::Box { center, size } => {
+                let (c, h) = (center.truncate(), size.truncate() / 2.0);
+                Shape::Rect {
+                    min: c - h,
+                    max: c + h,
+                }
+            }
+            Body::Cylinder { center, radius, .. } => Shape::Disc {
+                c: center.truncate(),
+                r: radius,
+            },
+        })
+    }
+
+    /// Bounding box in plan: lowest and highest corner.
+    pub(super) fn footprint(&self) -> [DVec2; 2] {
+        match self.body {
+            Body::Box { center, size } => {
+                let (c, h) = (center.truncate(), size.truncate() / 2.0);
+                [c - h, c + h]
+            }
+            Body::Cylinder { center, radius, .. } => {
+                let c = center.truncate();
+                [c - DVec2::splat(radius), c + DVec2::splat(radius)]
+            }
+        }
+    }
+}
+
+/// Infill settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Infill {
+    /// Degrees from +x.
+    pub angle: f64,
+    /// mm between lines.
+    pub spacing: f64,
+    /// +angle on odd layers, −angle on even ones.
+    pub alternate: bool,
+}
+
+/// What one island of a section becomes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct IslandPlan {
+    /// The island: one outer loop and its holes.
+    pub region: Region,
+    /// The perimeters' centre lines, outermost first (exact loops).
+    pub perimeters: Vec<Region>,
+    /// The area the infill fills.
+    pub infill_region: Region,
+    /// Infill spans at +angle and at −angle.
+    pub infill: [Vec<(DVec2, DVec2)>; 2],
+}
+
+/// The strings of one layer in the plane: polylines, each reached by travel.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(super) struct Program {
+    pub(super) paths: Vec<Vec<DVec2>>,
+    /// Draws plus the travels between paths.
+    pub(super) strings: u64,
+}
+
+/// One entry of the z-buffer: a cross-section shared by consecutive layers.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Slab {
+    /// The exact cross-section.
+    pub region: Region,
+    /// Its islands, perimeters and infill.
+    pub islands: Vec<IslandPlan>,
+    pub(super) programs: [Program; 2],
+}
+
+/// One layer of a solid, for reports and tests.
+#[derive(Clone, Copy, Debug)]
+pub struct Layer<'a> {
+    /// 1 for the first layer on the bed.
+    pub index: u64,
+    /// Height the layer is printed at, mm.
+    pub z: f64,
+    /// Its cross-section and what it becomes (`None`: nothing at this height).
+    pub slab: Option<&'a Slab>,
+    /// Which infill direction: 0 for +angle, 1 for −angle.
+    pub parity: usize,
+}
+
+/// A `solid` primitive resolved, with its z-buffer computed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Solid {
+    /// mm.
+    pub layer_height: f64,
+    /// Perimeter loops per layer.
+    pub perimeters: u32,
+    /// Extrusion width, mm.
+    pub line_width: f64,
+    /// Most a chord may stray from an arc, mm.
+    pub chord_tolerance: f64,
+    /// Infill settings.
+    pub infill: Infill,
+    /// Features in order.
+    pub features: Vec<Feature>,
+    pub(super) slabs: Vec<Slab>,
+    /// Slab of layer j + 1.
+    pub(super) layer_slab: Vec<Option<usize>>,
+    pub(super) count: u64,
+}

@@ -1,0 +1,444 @@
+//! The plan of a solid: its layers, islands and strings.
+
+use super::*;
+
+impl Solid {
+    /// A solid with its z-buffer computed; the error names the key at fault
+    /// (relative to the primitive, as [`resolve`] does).
+    pub fn new(
+        layer_height: f64,
+        perimeters: u32,
+        line_width: f64,
+        chord_tolerance: f64,
+        infill: Infill,
+        features: Vec<Feature>,
+    ) -> Result<Solid> {
+        // nothing but a union adds material: the top is the highest union's
+        let top = features
+            .iter()
+            .filter(|f| f.op == Op::Union)
+            .map(|f| f.z_range().1)
+            .fold(f64::NEG_INFINITY, f64::max);
+        // layers whose middle (j − ½)·h lies below the top
+        let layers = (libm::ceil(top / layer_height + 0.5) - 1.0).max(0.0);
+        if layers > MAX_LAYERS as f64 {
+            return Err(Error::input(
+                "solid.layer_height",
+                format!(
+                    "{layer_height} would make {layers} layers up to z = {top}; expected at most {MAX_LAYERS}"
+                ),
+            ));
+        }
+        let layers = layers as u64;
+        let mut lo = DVec2::splat(f64::INFINITY);
+        let mut hi = DVec2::splat(f64::NEG_INFINITY);
+        for f in &features {
+            let [a, b] = f.footprint();
+            lo = lo.min(a);
+            hi = hi.max(b);
+        }
+        let diag = (hi - lo).length();
+        if diag / infill.spacing > MAX_LINES {
+            return Err(Error::input(
+                "solid.infill.spacing",
+                format!(
+                    "{} would need more than {MAX_LINES} infill lines across the part ({diag:.1} mm); expected a larger spacing",
+                    infill.spacing
+                ),
+            ));
+        }
+        if piece::chords(diag, std::f64::consts::TAU, chord_tolerance) as f64 > MAX_LINES {
+            return Err(Error::input(
+                "solid.chord_tolerance",
+                format!("{chord_tolerance} would cut a circle into more than {MAX_LINES} strings; expected a larger tolerance"),
+            ));
+        }
+        let mut s = Solid {
+            layer_height,
+            perimeters,
+            line_width,
+            chord_tolerance,
+            infill,
+            features,
+            slabs: Vec::new(),
+            layer_slab: Vec::with_capacity(layers as usize),
+            count: 0,
+        };
+        // slab boundaries: every feature's ends
+        let mut events: Vec<f64> = s
+            .features
+            .iter()
+            .flat_map(|f| {
+                let (a, b) = f.z_range();
+                [a, b]
+            })
+            .collect();
+        events.sort_by(f64::total_cmp);
+        events.dedup();
+        let mut current: Option<(usize, Option<usize>)> = None; // (event interval, slab)
+        for j in 1..=layers {
+            let zm = (j as f64 - 0.5) * layer_height;
+            let interval = events.partition_point(|&e| e <= zm);
+            let slab = match current {
+                Some((iv, slab)) if iv == interval => slab,
+                _ => {
+                    let slab = s.make_slab(zm);
+                    current = Some((interval, slab));
+                    slab
+                }
+            };
+            s.layer_slab.push(slab);
+        }
+        s.count = s.count();
+        if s.count == 0 {
+            return Err(Error::input(
+                "solid.features",
+                "the features leave nothing to print: every layer's cross-section above the bed is empty or thinner than line_width",
+            ));
+        }
+        Ok(s)
+    }
+
+    /// Computes the slab whose middle plane is `zm`; `None` when empty.
+    fn make_slab(&mut self, zm: f64) -> Option<usize> {
+        let shapes: Vec<(Option<Shape>, Op)> = self
+            .features
+            .iter()
+            .map(|f| (f.section(zm), f.op))
+            .collect();
+        let region = region::boolean(&shapes);
+        if region.is_empty() {
+            return None;
+        }
+        let w = self.line_width;
+        let dirs = [
+            infill::direction(self.infill.angle),
+            infill::direction(-self.infill.angle),
+        ];
+        let islands: Vec<IslandPlan> = region
+            .islands()
+            .into_iter()
+            .map(|isl| {
+                let perimeters = (0..self.perimeters)
+                    .map(|k| offset::offset(&isl, (k as f64 + 0.5) * w))
+                    .collect();
+                let inset = if self.perimeters == 0 {
+                    0.5 * w
+                } else {
+                    self.perimeters as f64 * w
+                };
+                let infill_region = offset::offset(&isl, inset);
+                let min_span = 0.5 * w;
+                let plus = infill::spans(&infill_region, dirs[0], self.infill.spacing, min_span);
+                let minus = if self.infill.alternate {
+                    infill::spans(&infill_region, dirs[1], self.infill.spacing, min_span)
+                } else {
+                    plus.clone()
+                };
+                IslandPlan {
+                    region: isl,
+                    perimeters,
+                    infill_region,
+                    infill: [plus, minus],
+                }
+            })
+            .collect();
+        let (lo, _) = bbox(&region);
+        let p0 = self.program(&islands, 0, lo);
+        let start1 = p0
+            .paths
+            .last()
+            .and_then(|p| p.last())
+            .copied()
+            .unwrap_or(lo);
+        let p1 = if self.infill.alternate {
+            self.program(&islands, 1, start1)
+        } else {
+            p0.clone()
+        };
+        self.slabs.push(Slab {
+            region,
+            islands,
+            programs: [p0, p1],
+        });
+        Some(self.slabs.len() - 1)
+    }
+
+    /// Orders a layer's strings from `head`: island by island (nearest
+    /// first), perimeters outside in (each level's loops nearest first, each
+    /// loop from its vertex nearest the head), then the infill spans (nearest
+    /// end first).
+    fn program(&self, islands: &[IslandPlan], parity: usize, mut head: DVec2) -> Program {
+        let w = self.line_width;
+        let tol = self.chord_tolerance;
+        // per island: the polylines of each perimeter level, and the spans
+        let mut todo: Vec<Todo> = islands
+            .iter()
+            .map(|isl| {
+                let levels = isl
+                    .perimeters
+                    .iter()
+                    .map(|r| {
+                        r.loops
+                            .iter()
+                            .filter(|l| l.length() >= w)
+                            .map(|l| l.discretise(tol))
+                            .collect()
+                    })
+                    .collect();
+                (levels, isl.infill[parity].clone())
+            })
+            .collect();
+        let mut paths: Vec<Vec<DVec2>> = Vec::new();
+        let entry = |t: &Todo, h: DVec2| -> f64 {
+            let mut best = f64::INFINITY;
+            for level in &t.0 {
+                for poly in level {
+                    for p in poly {
+                        best = best.min(p.distance(h));
+                    }
+                }
+                if best.is_finite() {
+                    return best;
+                }
+            }
+            for (a, b) in &t.1 {
+                best = best.min(a.distance(h)).min(b.distance(h));
+            }
+            best
+        };
+        while !todo.is_empty() {
+            let k = nearest(todo.iter().map(|t| entry(t, head)));
+            let (levels, spans) = todo.remove(k);
+            if levels.iter().all(Vec::is_empty) && spans.is_empty() {
+                continue;
+            }
+            for mut level in levels {
+                while !level.is_empty() {
+                    let k = nearest(level.iter().map(|poly| {
+                        poly.iter()
+                            .map(|p| p.distance(head))
+                            .fold(f64::INFINITY, f64::min)
+                    }));
+                    let poly = level.remove(k);
+                    let n = poly.len() - 1; // distinct points; poly[n] == poly[0]
+                    let i = nearest(poly[..n].iter().map(|p| p.distance(head)));
+                    let mut path = Vec::with_capacity(n + 1);
+                    path.extend_from_slice(&poly[i..n]);
+                    path.extend_from_slice(&poly[..=i]);
+                    head = path[n];
+                    paths.push(path);
+                }
+            }
+            let u = infill::direction(if parity == 0 {
+                self.infill.angle
+            } else {
+                -self.infill.angle
+            });
+            head = order_spans(spans, u, self.infill.spacing, head, &mut paths);
+        }
+        let mut strings = 0;
+        for (i, p) in paths.iter().enumerate() {
+            strings += p.len() as u64 - 1;
+            if i > 0 && paths[i - 1].last() != p.first() {
+                strings += 1;
+            }
+        }
+        Program { paths, strings }
+    }
+
+    /// The number of strings [`Solid::walk`] makes, from each layer's
+    /// program without making them: its strings, and between layers one
+    /// travel up plus one across when the next layer starts elsewhere.
+    fn count(&self) -> u64 {
+        let mut n = 0;
+        let mut prev: Option<DVec2> = None;
+        for layer in self.layers() {
+            let Some(slab) = layer.slab else { continue };
+            let prog = &slab.programs[layer.parity];
+            let (Some(first), Some(last)) = (prog.paths.first(), prog.paths.last()) else {
+                continue;
+            };
+            if let Some(end) = prev {
+                n += 1 + u64::from(end != first[0]);
+            }
+            n += prog.strings;
+            prev = Some(last[last.len() - 1]);
+        }
+        n
+    }
+
+    /// Runs through every point of the part in order, calling
+    /// `f(point, travel)`; the first call is the start point (its `travel`
+    /// meaningless), each later one a string to that point.
+    fn walk(&self, mut f: impl FnMut(DVec3, bool)) {
+        let mut head: Option<DVec3> = None;
+        for layer in self.layers() {
+            let Some(slab) = layer.slab else { continue };
+            let prog = &slab.programs[layer.parity];
+            for (i, path) in prog.paths.iter().enumerate() {
+                let start = path[0].extend(layer.z);
+                match head {
+                    None => f(start, true),
+                    Some(h) => {
+                        if i == 0 && h.z != layer.z {
+                            // up first, then across
+                            let up = DVec3::new(h.x, h.y, layer.z);
+                            f(up, true);
+                            if up != start {
+                                f(start, true);
+                            }
+                        } else if h != start {
+                            f(start, true);
+                        }
+                    }
+                }
+                for p in &path[1..] {
+                    f(p.extend(layer.z), false);
+                }
+                head = Some(path[path.len() - 1].extend(layer.z));
+            }
+        }
+    }
+
+    /// The layers bottom up, each with its slab of the z-buffer.
+    pub fn layers(&self) -> impl Iterator<Item = Layer<'_>> + '_ {
+        self.layer_slab.iter().enumerate().map(|(k, s)| {
+            let index = k as u64 + 1;
+            Layer {
+                index,
+                z: index as f64 * self.layer_height,
+                slab: s.map(|s| &self.slabs[s]),
+                parity: if self.infill.alternate && index.is_multiple_of(2) {
+                    1
+                } else {
+                    0
+                },
+            }
+        })
+    }
+
+    /// The z-buffer: the distinct cross-sections.
+    pub fn slabs(&self) -> &[Slab] {
+        &self.slabs
+    }
+
+    /// Exactly how many strings [`Solid::build`] makes.
+    pub fn string_count(&self) -> u64 {
+        self.count
+    }
+
+    /// Makes the strings: cross-section layer_height × line_width, speed `v`
+    /// (the part's cross-section `_c` is not used: a solid's beads are as
+    /// high as its layers and as wide as its lines).
+    pub fn build(&self, _c: f64, v: f64) -> Toolpath {
+        let c = self.layer_height * self.line_width;
+        let mut t: Option<Toolpath> = None;
+        self.walk(|p, travel| match &mut t {
+            None => t = Some(Toolpath::with_capacity(p, self.count as usize)),
+            Some(t) if travel => t.travel(p, v),
+            Some(t) => t.draw(p, c, v),
+        });
+        t.unwrap_or_default()
+    }
+}
+
+/// An island still to print: its perimeter levels' closed polylines, its infill spans.
+type Todo = (Vec<Vec<Vec<DVec2>>>, Vec<(DVec2, DVec2)>);
+
+/// Appends the infill `spans` (lines along `u`, `spacing` apart) to `paths`
+/// nearest first from `head`, each from its nearer end; returns the new head.
+///
+/// The nearest span is found as by trying them all (ties to the earlier
+/// span), but spans are bucketed by scanline and buckets are searched
+/// outwards from the head's own: a bucket r lines away is at least
+/// (r − ½)·spacing from the head (whose own line is within ½ of it), so the
+/// search stops once that exceeds the best distance found. Filling a region line after line, that is a bucket
+/// or two per span instead of every span.
+pub(super) fn order_spans(
+    spans: Vec<(DVec2, DVec2)>,
+    u: DVec2,
+    spacing: f64,
+    mut head: DVec2,
+    paths: &mut Vec<Vec<DVec2>>,
+) -> DVec2 {
+    if spans.is_empty() {
+        return head;
+    }
+    let n = DVec2::new(-u.y, u.x);
+    let line = |p: DVec2| libm::round(p.dot(n) / spacing) as i64;
+    let k0 = spans.iter().map(|s| line(s.0)).min().unwrap();
+    let k1 = spans.iter().map(|s| line(s.0)).max().unwrap();
+    let mut buckets: Vec<Vec<usize>> = vec![Vec::new(); (k1 - k0 + 1) as usize];
+    for (i, s) in spans.iter().enumerate() {
+        buckets[(line(s.0) - k0) as usize].push(i);
+    }
+    for _ in 0..spans.len() {
+        let here = head.dot(n) / spacing - k0 as f64;
+        let c = libm::round(here).clamp(0.0, (buckets.len() - 1) as f64) as i64;
+        let mut best: Option<(f64, usize, usize)> = None; // (distance, span, bucket)
+        let mut r = 0i64;
+        loop {
+            let (lo, hi) = (c - r, c + r);
+            if lo < 0 && hi >= buckets.len() as i64 {
+                break;
+            }
+            let ring: &[i64] = if r == 0 { &[lo] } else { &[lo, hi] };
+            for &b in ring {
+                if b < 0 || b >= buckets.len() as i64 {
+                    continue;
+                }
+                for &i in &buckets[b as usize] {
+                    let (a, e) = spans[i];
+                    let d = a.distance(head).min(e.distance(head));
+                    if best.is_none_or(|(bd, bi, _)| d < bd || (d == bd && i < bi)) {
+                        best = Some((d, i, b as usize));
+                    }
+                }
+            }
+            if let Some((bd, _, _)) = best {
+                // every bucket further out is farther than this one
+                if bd < (r as f64 + 1.0 - (here - c as f64).abs() - 1e-9) * spacing {
+                    break;
+                }
+            }
+            r += 1;
+        }
+        let (_, i, b) = best.expect("a span is left");
+        buckets[b].retain(|&j| j != i);
+        let (a, e) = spans[i];
+        let path = if a.distance(head) <= e.distance(head) {
+            vec![a, e]
+        } else {
+            vec![e, a]
+        };
+        head = path[1];
+        paths.push(path);
+    }
+    head
+}
+
+/// Index of the smallest value (the first of equals).
+pub(super) fn nearest(values: impl Iterator<Item = f64>) -> usize {
+    let mut best = (0, f64::INFINITY);
+    for (k, v) in values.enumerate() {
+        if v < best.1 {
+            best = (k, v);
+        }
+    }
+    best.0
+}
+
+/// Corners of a region's bounding box (of its pieces' end points and circles).
+fn bbox(r: &Region) -> (DVec2, DVec2) {
+    let mut lo = DVec2::splat(f64::INFINITY);
+    let mut hi = DVec2::splat(f64::NEG_INFINITY);
+    for l in &r.loops {
+        for p in &l.pieces {
+            let [a, b] = p.bbox(0.0);
+            lo = lo.min(a);
+            hi = hi.max(b);
+        }
+    }
+    (lo, hi)
+}
