@@ -466,7 +466,7 @@ fn loop_values<'p>(
                 }
                 vals
             }
-            RawLoop::Range(s) => range(s, params).map_err(|m| Error::input(at, m))?,
+            RawLoop::Range(s) => range(s, params, &at)?,
         };
         out.push((var.as_str(), values));
     }
@@ -475,9 +475,9 @@ fn loop_values<'p>(
 
 /// The values of `"a..b"` or `"a..b:step"`: a, a + step, … up to b
 /// included (within 1e-9 of a step, so 0..1:0.1 ends at 1).
-fn range(s: &str, params: &Params) -> std::result::Result<Vec<f64>, String> {
+fn range(s: &str, params: &Params, place: &str) -> Result<Vec<f64>> {
     let not_range = || {
-        format!("`{s}` is not a range; expected \"a..b\" or \"a..b:step\" (b included), or a list [v1, v2, …]")
+        Error::input(place, format!("`{s}` is not a range; expected \"a..b\" or \"a..b:step\" (b included), or a list [v1, v2, …]"))
     };
     let (a, rest) = s.split_once("..").ok_or_else(not_range)?;
     let (b, step) = match rest.split_once(':') {
@@ -487,32 +487,33 @@ fn range(s: &str, params: &Params) -> std::result::Result<Vec<f64>, String> {
     if a.trim().is_empty() || b.trim().is_empty() {
         return Err(not_range());
     }
-    let a = expr::eval_const(a, params).map_err(|e| e.message)?;
-    let b = expr::eval_const(b, params).map_err(|e| e.message)?;
+    let a = expr::eval_const(a, params).map_err(|e| e.at(place))?;
+    let b = expr::eval_const(b, params).map_err(|e| e.at(place))?;
     let step = match step {
-        Some(st) => expr::eval_const(st, params).map_err(|e| e.message)?,
+        Some(st) => expr::eval_const(st, params).map_err(|e| e.at(place))?,
         None => 1.0,
     };
     if step == 0.0 {
-        return Err(format!(
-            "the step of `{s}` is 0; expected a step that moves from a to b"
+        return Err(Error::input(
+            place,
+            format!("the step of `{s}` is 0; expected a step that moves from a to b"),
         ));
     }
     let span = (b - a) / step;
     if span < -1e-9 {
-        return Err(format!(
+        return Err(Error::input(place, format!(
             "`{s}` is empty: from {} the step {} never reaches {}; expected a step with the sign of b - a",
             fmt_value(a),
             fmt_value(step),
             fmt_value(b)
-        ));
+        )));
     }
     let n = libm::floor(span + 1e-9 * span.abs().max(1.0)) + 1.0;
     if !n.is_finite() || n > MAX_PARTS as f64 {
-        return Err(format!(
+        return Err(Error::input(place, format!(
             "`{s}` has {} values, more than the limit of {MAX_PARTS} parts in a recipe; expected a shorter range or a larger step",
             if n.is_finite() { format!("{n}") } else { "endless".into() }
-        ));
+        )));
     }
     Ok((0..n as usize).map(|k| a + k as f64 * step).collect())
 }
@@ -606,18 +607,36 @@ mod tests {
     #[test]
     fn ranges_include_their_end() {
         let p = Params::new();
-        assert_eq!(range("0..4", &p).unwrap(), vec![0.0, 1.0, 2.0, 3.0, 4.0]);
-        assert_eq!(range("1..2:0.5", &p).unwrap(), vec![1.0, 1.5, 2.0]);
-        assert_eq!(range("0..1:0.1", &p).unwrap().len(), 11);
-        assert_eq!(range("3..1:-1", &p).unwrap(), vec![3.0, 2.0, 1.0]);
-        assert_eq!(range("2..2", &p).unwrap(), vec![2.0]);
-        assert!(range("3..1", &p).unwrap_err().contains("empty"));
-        assert!(range("0..1:0", &p).unwrap_err().contains("step"));
-        assert!(range("k", &p).unwrap_err().contains("not a range"));
-        assert!(range("0..1e9", &p).unwrap_err().contains("limit"));
+        assert_eq!(
+            range("0..4", &p, "for.k").unwrap(),
+            vec![0.0, 1.0, 2.0, 3.0, 4.0]
+        );
+        assert_eq!(range("1..2:0.5", &p, "for.k").unwrap(), vec![1.0, 1.5, 2.0]);
+        assert_eq!(range("0..1:0.1", &p, "for.k").unwrap().len(), 11);
+        assert_eq!(range("3..1:-1", &p, "for.k").unwrap(), vec![3.0, 2.0, 1.0]);
+        assert_eq!(range("2..2", &p, "for.k").unwrap(), vec![2.0]);
+        assert!(range("3..1", &p, "for.k")
+            .unwrap_err()
+            .message
+            .contains("empty"));
+        assert!(range("0..1:0", &p, "for.k")
+            .unwrap_err()
+            .message
+            .contains("step"));
+        assert!(range("k", &p, "for.k")
+            .unwrap_err()
+            .message
+            .contains("not a range"));
+        assert!(range("0..1e9", &p, "for.k")
+            .unwrap_err()
+            .message
+            .contains("limit"));
         let mut q = Params::new();
         q.insert("m".into(), 3.0);
-        assert_eq!(range("m..2*m", &q).unwrap(), vec![3.0, 4.0, 5.0, 6.0]);
+        assert_eq!(
+            range("m..2*m", &q, "for.k").unwrap(),
+            vec![3.0, 4.0, 5.0, 6.0]
+        );
     }
 
     #[test]
