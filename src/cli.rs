@@ -1,4 +1,5 @@
-//! The commands `build`, `check` and `hash`, as the spec's command-line contract says.
+//! The command line: its clap definition ([`Cli`]) and the commands `build`,
+//! `preview`, `check`, `printers` and `hash`, as the spec's contract says.
 //!
 //! A command expands its recipes and `--sweep`s into jobs (see [`crate::batch`])
 //! and runs them in parallel. Each returns the errors it met (one per failed
@@ -7,6 +8,8 @@
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
+
+use clap::{Args, Parser, Subcommand};
 
 use crate::batch::{self, Job};
 use crate::build::{plan, Options, Plan};
@@ -19,50 +22,109 @@ use crate::recipe::{parse_set, parse_yaml, RawRecipe};
 use crate::stats::Stats;
 use crate::threads::Threads;
 
+/// Procedural 3D printing: YAML recipes of nozzle paths to G-code.
+#[derive(Parser, Debug)]
+#[command(name = "p3dp", version, about)]
+pub struct Cli {
+    /// The command to run.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The commands.
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Write G-code (default ./NAME.gcode) and print a stats report.
+    Build(BuildArgs),
+    /// Draw the toolpath: a PNG image, or a self-contained HTML file with a 3D viewer.
+    Preview(PreviewArgs),
+    /// Run every printability check without writing G-code.
+    Check {
+        /// Shared flags.
+        #[command(flatten)]
+        common: Common,
+    },
+    /// List the built-in printer profiles: flavour, bed, origin, nozzle and filament.
+    Printers,
+    /// Print `SHA256  RECIPE`: the hash of exactly the bytes `build` would write.
+    Hash(HashArgs),
+}
+
+/// Runs a parsed command line; returns the errors met (the binary prints
+/// them and exits with the worst status).
+pub fn run(cli: Cli) -> Vec<Error> {
+    match cli.command {
+        Command::Build(a) => build(&a),
+        Command::Preview(a) => preview(&a),
+        Command::Check { common } => check(&common),
+        Command::Printers => {
+            print!("{}", printers());
+            Vec::new()
+        }
+        Command::Hash(a) => hash(&a),
+    }
+}
+
 /// Flags every command shares.
-#[derive(Clone, Debug, Default)]
+#[derive(Args, Clone, Debug, Default)]
 pub struct Common {
-    /// Recipe files.
+    /// Recipe files (YAML).
+    #[arg(value_name = "RECIPE")]
     pub recipes: Vec<PathBuf>,
-    /// `--set NAME=VALUE`, as typed.
+    /// Override a param: NAME=VALUE (VALUE may be an expression); repeatable.
+    #[arg(long = "set", value_name = "NAME=VALUE")]
     pub sets: Vec<String>,
-    /// `--sweep NAME=v1,v2` or `NAME=a..b:step`, as typed.
+    /// Build every combination of values: NAME=v1,v2,… or NAME=a..b:step; repeatable.
+    #[arg(long = "sweep", value_name = "NAME=VALUES")]
     pub sweeps: Vec<String>,
-    /// `--printer NAME|FILE`.
+    /// At most N threads in all (default: one per core), shared by the builds running at once.
+    #[arg(short = 'j', long = "jobs", value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
+    pub jobs: Option<u16>,
+    /// Use this printer (built-in name or YAML file) instead of the recipe's.
+    #[arg(long, value_name = "NAME|FILE")]
     pub printer: Option<String>,
-    /// Warnings fail too.
+    /// Warnings fail the build too.
+    #[arg(long)]
     pub strict: bool,
     /// Write even when checks fail.
+    #[arg(long)]
     pub force: bool,
-    /// `-j N`: the thread budget, shared by concurrent builds (default: one per core).
-    pub jobs: Option<usize>,
-    /// `--allow CODE`: check codes silenced for these builds.
+    /// Silence a check for this build: its code, e.g. `bridge`; repeatable.
+    #[arg(long = "allow", value_name = "CODE")]
     pub allow: Vec<String>,
 }
 
 /// Flags of `build`.
-#[derive(Clone, Debug, Default)]
+#[derive(Args, Clone, Debug, Default)]
 pub struct BuildArgs {
     /// Shared flags.
+    #[command(flatten)]
     pub common: Common,
-    /// `-o OUT`: a file, a folder, or `-` for standard output.
+    /// Output file; a folder with several recipes; `-` for standard output.
+    #[arg(short, long, value_name = "OUT")]
     pub output: Option<String>,
-    /// `--stats-json FILE`.
+    /// Also write the stats as JSON to FILE.
+    #[arg(long, value_name = "FILE")]
     pub stats_json: Option<PathBuf>,
-    /// `--pattern FILE`: also write the `ca_helix` cell array as a PNG.
+    /// Also write the cell array of the recipe's ca_helix as a PNG: one row per layer, filled cells dark.
+    #[arg(long, value_name = "FILE")]
     pub pattern: Option<PathBuf>,
-    /// `--preview FILE`: also write a preview (`.png` or `.html`) of the build.
+    /// Also write a preview of the build: FILE.png (an image) or FILE.html (a 3D viewer).
+    #[arg(long, value_name = "FILE")]
     pub preview: Option<PathBuf>,
 }
 
 /// Flags of `hash`.
-#[derive(Clone, Debug, Default)]
+#[derive(Args, Clone, Debug, Default)]
 pub struct HashArgs {
     /// Shared flags.
+    #[command(flatten)]
     pub common: Common,
-    /// `--lock FILE`: write a lock file of the hashes.
+    /// Write the hashes (with recipe paths and --set values) to a lock file.
+    #[arg(long, value_name = "FILE", conflicts_with = "check")]
     pub lock: Option<PathBuf>,
-    /// `--check FILE`: verify every entry of a lock file.
+    /// Rebuild every entry of a lock file; exit 1 naming each that changed.
+    #[arg(long, value_name = "FILE")]
     pub check: Option<PathBuf>,
 }
 
@@ -92,7 +154,7 @@ impl Common {
     fn budget(&self, jobs: usize) -> (usize, Threads) {
         let n = self
             .jobs
-            .map_or_else(|| Threads::available().get(), |n| n.max(1));
+            .map_or_else(|| Threads::available().get(), |n| usize::from(n).max(1));
         let workers = n.min(jobs).max(1);
         (workers, Threads::new(n / workers))
     }
@@ -773,25 +835,34 @@ fn new_line(c: &Common, job: &Job, k: u64, threads: Threads) -> Option<String> {
 }
 
 /// Flags of `preview`.
-#[derive(Clone, Debug, Default)]
+#[derive(Args, Clone, Debug, Default)]
 pub struct PreviewArgs {
-    /// The recipe.
+    /// Recipe file (YAML).
+    #[arg(value_name = "RECIPE")]
     pub recipe: PathBuf,
-    /// `--set NAME=VALUE`, as typed.
+    /// Override a param: NAME=VALUE (VALUE may be an expression); repeatable.
+    #[arg(long = "set", value_name = "NAME=VALUE")]
     pub sets: Vec<String>,
-    /// `--printer NAME|FILE`.
+    /// Use this printer (built-in name or YAML file) instead of the recipe's.
+    #[arg(long, value_name = "NAME|FILE")]
     pub printer: Option<String>,
-    /// `-o FILE`: `.png` or `.html` (default `./NAME.png`).
+    /// Output: FILE.png or FILE.html (default ./NAME.png).
+    #[arg(short, long, value_name = "FILE")]
     pub output: Option<PathBuf>,
-    /// `--view iso|top|front|side`.
+    /// Where to look from: iso, top, front or side (the viewer starts there).
+    #[arg(long, value_name = "VIEW")]
     pub view: Option<String>,
-    /// `--color speed|cross-section|flow|order|findings|plain`.
+    /// Colour by speed, cross-section, flow, order, findings or plain.
+    #[arg(long, value_name = "MODE")]
     pub color: Option<String>,
-    /// `--size WxH` (PNG).
+    /// Image size WIDTHxHEIGHT in pixels (PNG; default 1200x900).
+    #[arg(long, value_name = "WxH")]
     pub size: Option<String>,
-    /// `--bare`: the model alone, no text or legend (PNG).
+    /// The model alone: no name, stats or legend (PNG).
+    #[arg(long)]
     pub bare: bool,
-    /// `--allow CODE`: check codes silenced for this build.
+    /// Silence a check for this build: its code, e.g. `bridge`; repeatable.
+    #[arg(long = "allow", value_name = "CODE")]
     pub allow: Vec<String>,
 }
 
