@@ -22,6 +22,7 @@ pub mod preview;
 pub mod primitive;
 pub mod printer;
 pub mod recipe;
+pub mod safe_text;
 pub mod skirt;
 pub mod stats;
 pub mod step;

@@ -295,6 +295,7 @@ impl Printer {
     }
 
     fn validate(&self) -> Result<()> {
+        crate::safe_text::check("name", &self.name)?;
         let positive = crate::check::config::positive;
         positive("nozzle_diameter", self.nozzle_diameter)?;
         positive("filament_diameter", self.filament_diameter)?;

@@ -707,6 +707,17 @@ impl Recipe {
         if raw.name.trim().is_empty() {
             return Err(Error::input("name", "expected a non-empty name"));
         }
+        // names reach G-code comments: one line each, no control characters
+        crate::safe_text::check("name", &raw.name)?;
+        if let Some(d) = &raw.description {
+            // a block scalar's final line break is no line of its own
+            crate::safe_text::check("description", d.trim_end_matches(['\n', '\r']))?;
+        }
+        for (k, p) in raw.parts.iter().enumerate() {
+            if let Some(n) = &p.name {
+                crate::safe_text::check(&format!("parts[{k}].name"), n)?;
+            }
+        }
         if raw.parts.is_empty() {
             return Err(Error::input("parts", "expected at least one part"));
         }
@@ -787,6 +798,9 @@ fn resolve_material(ctx: &Ctx, m: Option<&RawMaterial>) -> Result<Material> {
             )
         }),
         Some(RawMaterial::Inline(m)) => {
+            if let Some(n) = &m.name {
+                crate::safe_text::check("material.name", n)?;
+            }
             let nozzle_temp = ctx.positive(&m.nozzle_temp, "material.nozzle_temp")?;
             Ok(Material {
                 name: m.name.clone().unwrap_or_else(|| "custom".into()),
