@@ -1,7 +1,7 @@
 //! The pipeline: recipe → parts of strings → steps → checks → G-code and stats.
 
 use std::io::{self, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use sha2::{Digest, Sha256};
 
@@ -209,63 +209,6 @@ impl<W: Write> Write for HashWriter<W> {
     }
 }
 
-/// A file being written: a temp file beside its target, renamed into place by
-/// [`AtomicFile::commit`]; dropped uncommitted, it leaves nothing behind.
-pub struct AtomicFile {
-    tmp: tempfile::NamedTempFile,
-    target: PathBuf,
-}
-
-impl AtomicFile {
-    /// Opens a temp file in `target`'s folder (which must exist).
-    pub fn create(target: &Path) -> Result<AtomicFile> {
-        let shown = target.display().to_string();
-        let dir = match target.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d,
-            _ => Path::new("."),
-        };
-        let mut builder = tempfile::Builder::new();
-        builder.prefix(".p3dp-").suffix(".tmp");
-        #[cfg(unix)]
-        {
-            // an ordinary file (0666 less the umask), not tempfile's private 0600
-            use std::os::unix::fs::PermissionsExt;
-            builder.permissions(std::fs::Permissions::from_mode(0o666));
-        }
-        let tmp = builder.tempfile_in(dir).map_err(|e| {
-            Error::io(
-                &shown,
-                format!("cannot create a file in {}: {e}", dir.display()),
-            )
-        })?;
-        Ok(AtomicFile {
-            tmp,
-            target: target.to_path_buf(),
-        })
-    }
-
-    /// The temp file, to write to.
-    pub fn file(&mut self) -> &mut std::fs::File {
-        self.tmp.as_file_mut()
-    }
-
-    /// Flushes to disk and renames the temp file to the target.
-    pub fn commit(mut self) -> Result<()> {
-        let shown = self.target.display().to_string();
-        self.tmp
-            .as_file_mut()
-            .sync_all()
-            .map_err(|e| Error::io(&shown, format!("cannot write: {e}")))?;
-        self.tmp
-            .persist(&self.target)
-            .map_err(|e| Error::io(&shown, format!("cannot write: {}", e.error)))?;
-        Ok(())
-    }
-}
-
-/// Writes `target` atomically: a temp file beside it, renamed on success.
-pub fn write_atomic(target: &Path, f: impl FnOnce(&mut std::fs::File) -> Result<()>) -> Result<()> {
-    let mut a = AtomicFile::create(target)?;
-    f(a.file())?;
-    a.commit()
-}
+// moved to `crate::output` (special files, symlinks, signals); re-exported
+// here for the callers that import them from `build`
+pub use crate::output::{write_atomic, AtomicFile};

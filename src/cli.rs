@@ -186,18 +186,21 @@ fn targets(a: &BuildArgs, jobs: &[Job]) -> Result<(Vec<Result<Target>>, PathBuf)
     let mut out: Vec<Result<Target>> = Vec::with_capacity(jobs.len());
     let mut seen: Vec<(PathBuf, String)> = Vec::new();
     for job in jobs {
-        let t = recipe_name(&job.recipe).and_then(|name| {
-            let file = dir.join(format!("{}.gcode", variant_stem(&name, &job.sweep)));
-            let file = if dir == Path::new(".") {
-                PathBuf::from(file.file_name().unwrap())
+        let t = recipe_name(&job.recipe).map(|name| {
+            let file = format!("{}.gcode", variant_stem(&name, &job.sweep));
+            if dir == Path::new(".") {
+                PathBuf::from(file)
             } else {
-                file
-            };
-            if let Some((_, other)) = seen.iter().find(|(f, _)| *f == file) {
+                dir.join(file)
+            }
+        });
+        // two jobs writing one file: refused before any is built
+        if let Ok(file) = &t {
+            if let Some((_, other)) = seen.iter().find(|(f, _)| f == file) {
                 return Err(Error::input(
                     "name",
                     format!(
-                        "{} and {other} would both write {}; give the recipes different names",
+                        "{} and {other} would both write {}; give the recipes different names (nothing was written)",
                         job_label(job),
                         file.display()
                     ),
@@ -205,9 +208,8 @@ fn targets(a: &BuildArgs, jobs: &[Job]) -> Result<(Vec<Result<Target>>, PathBuf)
                 .in_file(&job.recipe.display().to_string()));
             }
             seen.push((file.clone(), job_label(job)));
-            Ok(Target::File(file))
-        });
-        out.push(t);
+        }
+        out.push(t.map(Target::File));
     }
     Ok((out, dir))
 }
@@ -241,13 +243,48 @@ fn make_parent(file: &Path) -> Result<()> {
     }
 }
 
-/// Writes the PNG of `--pattern` (after the G-code, so a failed build writes neither).
-fn write_pattern(file: &Path, png: &[u8]) -> Result<()> {
+/// An option naming a file must not be empty (`-o ''`).
+fn non_empty(option: &str, value: Option<&Path>) -> Result<()> {
+    match value {
+        Some(v) if v.as_os_str().is_empty() => Err(Error::input(
+            option,
+            "an empty file name; expected the name of a file to write",
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// The files a command reads: its recipes and a `--printer` file.
+fn inputs(c: &Common) -> Vec<(String, PathBuf)> {
+    let mut v: Vec<(String, PathBuf)> = c
+        .recipes
+        .iter()
+        .map(|r| ("the recipe".to_string(), r.clone()))
+        .collect();
+    if let Some(p) = &c.printer {
+        if crate::printer::Printer::built_in(p).is_none() {
+            v.push(("the --printer profile".to_string(), PathBuf::from(p)));
+        }
+    }
+    v
+}
+
+/// What one job of `build` made: its report and its files, not yet committed
+/// when the build is a single job (all its outputs are committed together).
+struct Done {
+    built: (Stats, String, bool),
+    files: Vec<AtomicFile>,
+    lines: Vec<String>,
+}
+
+/// A file's bytes into an uncommitted [`AtomicFile`] (its folder made first).
+fn stage(file: &Path, bytes: &[u8]) -> Result<AtomicFile> {
     make_parent(file)?;
-    write_atomic(file, |f| {
-        f.write_all(png)
-            .map_err(|e| Error::io(file.display().to_string(), e.to_string()))
-    })
+    let mut f = AtomicFile::create(file)?;
+    f.file()
+        .write_all(bytes)
+        .map_err(|e| Error::io(file.display().to_string(), format!("cannot write: {e}")))?;
+    Ok(f)
 }
 
 /// `p3dp build`: writes G-code and prints a report per job.
@@ -256,25 +293,21 @@ pub fn build(a: &BuildArgs) -> Vec<Error> {
         Ok(j) => j,
         Err(e) => return vec![e],
     };
+    for (option, value) in [
+        ("-o", a.output.as_deref().map(Path::new)),
+        ("--stats-json", a.stats_json.as_deref()),
+        ("--preview", a.preview.as_deref()),
+        ("--pattern", a.pattern.as_deref()),
+    ] {
+        if let Err(e) = non_empty(option, value) {
+            return vec![e];
+        }
+    }
     if a.pattern.is_some() && jobs.len() > 1 {
         return vec![Error::input(
             "--pattern",
             "writes the cell array of one build; expected one recipe and no --sweep",
         )];
-    }
-    // open the stats file first where its folder exists: if it cannot be
-    // written, no G-code is; a missing folder is made only after a build
-    let mut stats_file = None;
-    if let Some(p) = &a.stats_json {
-        let folder_exists = p
-            .parent()
-            .is_none_or(|d| d.as_os_str().is_empty() || d.is_dir());
-        if folder_exists {
-            match AtomicFile::create(p) {
-                Ok(f) => stats_file = Some(f),
-                Err(e) => return vec![e],
-            }
-        }
     }
     if let Some(pv) = &a.preview {
         if jobs.len() > 1 {
@@ -291,8 +324,49 @@ pub fn build(a: &BuildArgs) -> Vec<Error> {
         Ok(t) => t,
         Err(e) => return vec![e],
     };
+    // no output over another, nor over an input: refused before any is written
+    let mut outs: Vec<(String, PathBuf)> = targets
+        .iter()
+        .filter_map(|t| match t {
+            Ok(Target::File(f)) => Some(("-o".to_string(), f.clone())),
+            _ => None,
+        })
+        .collect();
+    for (option, value) in [
+        ("--stats-json", &a.stats_json),
+        ("--preview", &a.preview),
+        ("--pattern", &a.pattern),
+    ] {
+        if let Some(v) = value {
+            outs.push((option.to_string(), v.clone()));
+        }
+    }
+    if !a.common.sweeps.is_empty() {
+        outs.push((
+            "summary.csv of --sweep".to_string(),
+            dir.join("summary.csv"),
+        ));
+    }
+    if let Err(e) = crate::output::check_distinct(&outs, &inputs(&a.common)) {
+        return vec![e];
+    }
+    // open the stats file first where its folder exists: if it cannot be
+    // written, no G-code is; a missing folder is made only after a build
+    let mut stats_file = None;
+    if let Some(p) = &a.stats_json {
+        let folder_exists = p
+            .parent()
+            .is_none_or(|d| d.as_os_str().is_empty() || d.is_dir());
+        if folder_exists {
+            match AtomicFile::create(p) {
+                Ok(f) => stats_file = Some(f),
+                Err(e) => return vec![e],
+            }
+        }
+    }
+    let single = jobs.len() == 1;
     let bar = progress(jobs.len());
-    let results = batch::run_parallel(
+    let done = batch::run_parallel(
         jobs.len(),
         a.common.threads(),
         |k| {
@@ -303,68 +377,122 @@ pub fn build(a: &BuildArgs) -> Vec<Error> {
                 Some(f) => Some((f, pattern_png(&p.recipe).map_err(|e| e.in_file(&p.path))?)),
                 None => None,
             };
+            let mut files = Vec::new();
+            let mut lines = Vec::new();
             let built = match &target {
                 Target::Stdout => p
-                    .render(std::io::stdout().lock())
+                    .render(crate::output::Stdout)
                     .map(|s| (s, "standard output".to_string(), true)),
                 Target::File(f) => {
                     make_parent(f)?;
-                    let mut stats = None;
-                    write_atomic(f, |file| {
-                        stats = Some(p.render(file)?);
-                        Ok(())
-                    })
-                    .map(|_| (stats.expect("rendered"), f.display().to_string(), false))
+                    let mut file = AtomicFile::create(f)?;
+                    let stats = p.render(file.file())?;
+                    files.push(file);
+                    Ok((stats, f.display().to_string(), false))
                 }
             }?;
             if let Some(pv) = &a.preview {
-                make_parent(pv)?;
-                let line = crate::preview::write(&p, pv, &crate::preview::Options::default())?;
-                if built.2 {
+                let (bytes, line) =
+                    crate::preview::render(&p, pv, &crate::preview::Options::default())?;
+                files.push(stage(pv, &bytes)?);
+                lines.push(line);
+            }
+            if let Some((f, png)) = &pattern {
+                files.push(stage(f, png)?);
+            }
+            // a batch keeps each variant that built; one build commits all
+            // its outputs together, after the stats file is written too
+            if !single {
+                for f in files.drain(..) {
+                    f.commit()?;
+                }
+            }
+            Ok::<_, Error>(Done {
+                built,
+                files,
+                lines,
+            })
+        },
+        || bar.inc(1),
+    );
+    bar.finish_and_clear();
+    if crate::output::stdout_closed() {
+        // the reader of `-o -` has all it wanted: end quietly, write nothing
+        return Vec::new();
+    }
+    let mut pending = Vec::new();
+    let mut preview_lines = Vec::new();
+    let results: Vec<Built> = done
+        .into_iter()
+        .map(|r| {
+            r.map(|d| {
+                pending.extend(d.files);
+                preview_lines.extend(d.lines);
+                d.built
+            })
+        })
+        .collect();
+    let mut errors = Vec::new();
+    let mut all_stats = Vec::new();
+    for r in &results {
+        match r {
+            Ok((stats, _, _)) => all_stats.push(stats.clone()),
+            Err(e) => errors.push(e.clone()),
+        }
+    }
+    // the stats file, then every pending output: all committed, or none
+    let mut committed = true;
+    let stats_file = match (&a.stats_json, all_stats.is_empty()) {
+        (Some(path), false) => {
+            let file = match stats_file.take() {
+                Some(f) => Ok(f),
+                None => make_parent(path).and_then(|_| AtomicFile::create(path)),
+            };
+            match file.and_then(|f| write_stats(f, &all_stats)) {
+                Ok(f) => Some(f),
+                Err(e) => {
+                    errors.push(e);
+                    committed = false;
+                    None
+                }
+            }
+        }
+        _ => None,
+    };
+    if committed {
+        for f in pending.into_iter().chain(stats_file) {
+            if let Err(e) = f.commit() {
+                errors.push(e);
+                committed = false;
+                break;
+            }
+        }
+    }
+    for (job, r) in jobs.iter().zip(&results) {
+        if !committed && single {
+            break;
+        }
+        if let Ok((stats, shown, to_stdout)) = r {
+            let text = if single {
+                stats.report(shown)
+            } else {
+                summary_line(job, stats, shown)
+            };
+            for line in &preview_lines {
+                if *to_stdout {
                     eprintln!("{line}");
                 } else {
                     println!("{line}");
                 }
             }
-            if let Some((f, png)) = &pattern {
-                write_pattern(f, png)?;
+            if *to_stdout {
+                eprint!("{text}");
+            } else {
+                print!("{text}");
             }
-            Ok::<_, Error>(built)
-        },
-        || bar.inc(1),
-    );
-    bar.finish_and_clear();
-    let mut errors = Vec::new();
-    let mut all_stats = Vec::new();
-    let single = jobs.len() == 1;
-    for (job, r) in jobs.iter().zip(&results) {
-        match r {
-            Ok((stats, shown, to_stdout)) => {
-                let text = if single {
-                    stats.report(shown)
-                } else {
-                    summary_line(job, stats, shown)
-                };
-                if *to_stdout {
-                    eprint!("{text}");
-                } else {
-                    print!("{text}");
-                }
-                all_stats.push(stats.clone());
-            }
-            Err(e) => errors.push(e.clone()),
         }
     }
-    if let (Some(path), false) = (&a.stats_json, all_stats.is_empty()) {
-        let file = match stats_file {
-            Some(f) => Ok(f),
-            None => make_parent(path).and_then(|_| AtomicFile::create(path)),
-        };
-        if let Err(e) = file.and_then(|f| write_stats(f, &all_stats)) {
-            errors.push(e);
-        }
-    }
-    if !a.common.sweeps.is_empty() && !all_stats.is_empty() {
+    if !a.common.sweeps.is_empty() {
         let csv = dir.join("summary.csv");
         if let Err(e) = make_parent(&csv).and_then(|_| write_summary(&csv, &jobs, &results)) {
             errors.push(e);
@@ -448,7 +576,8 @@ fn write_summary(path: &Path, jobs: &[Job], results: &[Built]) -> Result<()> {
     })
 }
 
-fn write_stats(mut file: AtomicFile, stats: &[Stats]) -> Result<()> {
+/// The stats as JSON into `file`, returned uncommitted.
+fn write_stats(mut file: AtomicFile, stats: &[Stats]) -> Result<AtomicFile> {
     let json = if stats.len() == 1 {
         serde_json::to_string_pretty(&stats[0])
     } else {
@@ -459,7 +588,7 @@ fn write_stats(mut file: AtomicFile, stats: &[Stats]) -> Result<()> {
         .write_all(json.as_bytes())
         .and_then(|_| file.file().write_all(b"\n"))
         .map_err(|e| Error::io("--stats-json", e.to_string()))?;
-    file.commit()
+    Ok(file)
 }
 
 /// `p3dp check`: runs every check and prints the findings; writes nothing.
@@ -520,6 +649,14 @@ pub fn hash(a: &HashArgs) -> Vec<Error> {
         Ok(j) => j,
         Err(e) => return vec![e],
     };
+    if let Some(lockfile) = &a.lock {
+        let outs = [("--lock".to_string(), lockfile.clone())];
+        if let Err(e) = non_empty("--lock", Some(lockfile))
+            .and_then(|_| crate::output::check_distinct(&outs, &inputs(c)))
+        {
+            return vec![e];
+        }
+    }
     let results = batch::run_parallel(jobs.len(), c.threads(), |k| fingerprint(c, &jobs[k]), || {});
     let mut errors = Vec::new();
     let mut entries = Vec::new();
@@ -758,6 +895,16 @@ pub fn preview(a: &PreviewArgs) -> Vec<Error> {
             None => PathBuf::from(format!("{}.png", file_stem(&recipe_name(&a.recipe)?))),
         };
         crate::preview::Format::of(&out)?;
+        non_empty("-o", Some(&out))?;
+        let mut ins = vec![("the recipe".to_string(), a.recipe.clone())];
+        if let Some(p) = a
+            .printer
+            .as_ref()
+            .filter(|p| crate::printer::Printer::built_in(p).is_none())
+        {
+            ins.push(("the --printer profile".to_string(), PathBuf::from(p)));
+        }
+        crate::output::check_distinct(&[("-o".to_string(), out.clone())], &ins)?;
         let p = plan(
             &a.recipe,
             &Options {

@@ -17,6 +17,7 @@ pub mod expr;
 pub mod flavor;
 pub mod gcode;
 pub mod lock;
+pub mod output;
 pub mod planner;
 pub mod preview;
 pub mod primitive;

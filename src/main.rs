@@ -129,6 +129,7 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    p3dp::output::remove_temp_files_on_signals();
     let errors = match cli.command {
         Command::Build {
             common,
