@@ -82,6 +82,7 @@ impl Common {
                 "no recipe given; expected one or more RECIPE files",
             ));
         }
+        batch::check_count(self.recipes.len(), &sweeps)?;
         Ok(batch::expand(&self.recipes, &sets, &sweeps))
     }
 
@@ -759,7 +760,8 @@ fn check_lock(a: &HashArgs, lockfile: &Path) -> Vec<Error> {
     let shown = lockfile.display().to_string();
     let lock: Lock = match std::fs::read_to_string(lockfile)
         .map_err(|e| Error::io(&shown, format!("cannot read the lock file: {e}")))
-        .and_then(|t| parse_yaml(&t, &shown))
+        .and_then(|t| parse_yaml::<Lock>(&t, &shown))
+        .and_then(|l| l.validate().map(|_| l).map_err(|e| e.in_file(&shown)))
     {
         Ok(l) => l,
         Err(e) => return vec![e],
@@ -767,6 +769,31 @@ fn check_lock(a: &HashArgs, lockfile: &Path) -> Vec<Error> {
     let base = lockfile.parent().unwrap_or(Path::new(".")).to_path_buf();
     let mut jobs = Vec::new();
     for (k, e) in lock.entries.iter().enumerate() {
+        // a missing recipe or printer is the lock's mistake: name its entry
+        let recipe = base.join(&e.recipe);
+        if !recipe.is_file() {
+            return vec![Error::input(
+                format!("entries[{k}].recipe"),
+                format!(
+                    "no recipe file at `{}` ({}); expected a path relative to the lock file",
+                    e.recipe,
+                    recipe.display()
+                ),
+            )
+            .in_file(&shown)];
+        }
+        if let Some(p) = &e.printer {
+            if crate::printer::Printer::built_in(p).is_none() && !base.join(p).is_file() {
+                return vec![Error::input(
+                    format!("entries[{k}].printer"),
+                    format!(
+                        "`{p}` is neither a built-in printer ({}) nor a profile file relative to the lock file",
+                        crate::printer::built_in_names().join(", ")
+                    ),
+                )
+                .in_file(&shown)];
+            }
+        }
         let sets: Result<Vec<(String, String)>> = e.set.iter().map(|s| parse_set(s)).collect();
         match sets {
             Ok(sets) => jobs.push(Job {

@@ -52,6 +52,13 @@ pub fn is_reserved(name: &str) -> bool {
 
 const STACK: usize = 32;
 
+/// Longest expression text, in bytes: a bound on the work of compiling one.
+pub const MAX_LEN: usize = 4096;
+
+/// Deepest expression tree (operations and calls inside one another):
+/// compiling and evaluating recurse this deep.
+pub const MAX_DEPTH: u32 = 256;
+
 type F1 = fn(f64) -> f64;
 type F2 = fn(f64, f64) -> f64;
 type F3 = fn(f64, f64, f64) -> f64;
@@ -419,6 +426,13 @@ impl Expr {
         allowed: &[usize],
         names: Option<&[&str]>,
     ) -> Result<Expr, String> {
+        if src.len() > MAX_LEN {
+            return Err(format!(
+                "the expression `{}…` is {} characters long; expected at most {MAX_LEN}",
+                src.chars().take(24).collect::<String>(),
+                src.len()
+            ));
+        }
         // Kanada's Python recipes write powers as `**`; meval's operator is `^`.
         let mut text = src.replace("**", "^");
         if names.is_some() {
@@ -430,6 +444,8 @@ impl Expr {
         let rpn = meval::shunting_yard::to_rpn(&tokens)
             .map_err(|e| format!("cannot read the expression `{src}`: {e}"))?;
         let mut stack: Vec<Node> = Vec::new();
+        // the height of each tree on `stack`, to refuse one nested too deeply
+        let mut heights: Vec<u32> = Vec::new();
         let mut used = 0u32;
         let pop = |stack: &mut Vec<Node>| -> Result<Node, String> {
             stack
@@ -437,6 +453,21 @@ impl Expr {
                 .ok_or_else(|| format!("cannot read the expression `{src}`: an operand is missing"))
         };
         for tok in rpn {
+            let takes = match &tok {
+                Token::Unary(_) => 1,
+                Token::Binary(_) => 2,
+                Token::Func(_, n) => n.unwrap_or(0),
+                _ => 0,
+            };
+            let below = heights.len().saturating_sub(takes);
+            let height = 1 + heights.drain(below..).max().unwrap_or(0);
+            if height > MAX_DEPTH {
+                return Err(format!(
+                    "the expression `{}…` nests operations and calls more than {MAX_DEPTH} deep; expected a simpler expression",
+                    src.chars().take(24).collect::<String>()
+                ));
+            }
+            heights.push(height);
             let node = match tok {
                 Token::Number(v) => Node::Num(v),
                 Token::Var(name) => {
@@ -488,6 +519,11 @@ impl Expr {
                     let op = match (name.as_str(), k) {
                         ("min", 1..=255) => Op::Min(k as u8),
                         ("max", 1..=255) => Op::Max(k as u8),
+                        ("min" | "max", _) => {
+                            return Err(format!(
+                                "`{name}` takes 1 to 255 arguments but is given {k} in `{src}`"
+                            ))
+                        }
                         (n, 1) if lookup1(n).is_some() => Op::F1(lookup1(n).unwrap()),
                         (n, 2) if lookup2(n).is_some() => Op::F2(lookup2(n).unwrap()),
                         (n, 3) if lookup3(n).is_some() => Op::F3(lookup3(n).unwrap()),

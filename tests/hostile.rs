@@ -558,3 +558,170 @@ fn a_terminated_build_leaves_no_temp_file() {
         entries(&dir.join("out"))
     );
 }
+
+// ---------------------------------------------------------------------------
+// Defect 3: panics and stack overflows.
+
+/// No panic, no abort: exit 2 with the place named.
+fn refused(out: &std::process::Output, place: &str) {
+    assert_eq!(code(out), Some(2), "{}", describe(out));
+    let e = stderr(out);
+    assert!(!e.contains("panicked") && !e.contains("overflow"), "{e}");
+    assert!(e.contains(place), "expected `{place}` in: {e}");
+}
+
+#[test]
+fn sweeps_that_panicked_or_built_nothing_are_refused() {
+    let dir = tmp("bad-sweeps");
+    let r = recipe("sphere.yaml");
+    let r = r.to_str().unwrap();
+    for (sweep, says) in [
+        ("x=1:..2", "a range is written a..b:step"),
+        ("radius=0..1:1e-320", "values; expected at most 10000"),
+        (
+            "radius=1e20..1.00000000000001e20:100",
+            "too small to tell the values apart",
+        ),
+    ] {
+        let out = p3dp(&dir, &["build", r, "--sweep", sweep, "-o", "out/"]);
+        refused(&out, &format!("--sweep {sweep}: "));
+        assert!(stderr(&out).contains(says), "{sweep}: {}", describe(&out));
+    }
+    // three sweeps of 1000 values: 1e9 builds, refused before any is made
+    let thousand: Vec<String> = (0..1000).map(|k| k.to_string()).collect();
+    let s = |n: &str| format!("{n}={}", thousand.join(","));
+    let (a, b, c) = (s("a"), s("b"), s("c"));
+    let out = p3dp(
+        &dir,
+        &[
+            "build", r, "--sweep", &a, "--sweep", &b, "--sweep", &c, "-o", "out/",
+        ],
+    );
+    refused(
+        &out,
+        "--sweep: 1 recipe(s) × 1000 × 1000 × 1000 values make 1000000000 builds",
+    );
+    assert!(entries(&dir).is_empty(), "{:?}", entries(&dir));
+}
+
+#[test]
+fn long_and_deep_expressions_are_refused_not_overflowing() {
+    let dir = tmp("deep-expr");
+    let cases = [
+        (
+            "terms",
+            (0..50_000).map(|_| "x").collect::<Vec<_>>().join("+"),
+        ),
+        ("minus", format!("{}x", "-".repeat(50_000))),
+        (
+            "calls",
+            format!("{}x{}", "abs(".repeat(50_000), ")".repeat(50_000)),
+        ),
+        (
+            "parens",
+            format!("{}x{}", "(".repeat(50_000), ")".repeat(50_000)),
+        ),
+        ("minus-short", format!("{}x", "-".repeat(4000))),
+        (
+            "terms-short",
+            (0..2000).map(|_| "x").collect::<Vec<_>>().join("+"),
+        ),
+    ];
+    for (tag, e) in cases {
+        let text = format!(
+            "p3dp: 1\nname: deep\nparts:\n  - primitive: {{helix: {{radius: 10, height: 2, pitch: 0.5}}}}\n    steps:\n      - deform_xyz: {{position: [\"{e}\", y, z]}}\n"
+        );
+        std::fs::write(dir.join(format!("{tag}.yaml")), text).unwrap();
+        let out = p3dp(&dir, &["check", &format!("{tag}.yaml")]);
+        refused(
+            &out,
+            "parts[0].steps[0].deform_xyz.position[0]: the expression",
+        );
+    }
+}
+
+/// A lock with one entry for `sphere.yaml`, its fields as given.
+fn lock_text(version: &str, sha: &str, lines: &str, block_lines: &str, blocks: &str) -> String {
+    format!(
+        "p3dp_lock: {version}\nentries:\n- recipe: r.yaml\n  sha256: {sha}\n  lines: {lines}\n  block_lines: {block_lines}\n  blocks: {blocks}\n"
+    )
+}
+
+#[test]
+fn every_broken_lock_is_refused_with_its_place() {
+    let dir = tmp("bad-locks");
+    std::fs::copy(recipe("sphere.yaml"), dir.join("r.yaml")).unwrap();
+    let out = p3dp(&dir, &["hash", "r.yaml", "--lock", "good.lock"]);
+    assert_eq!(code(&out), Some(0), "{}", describe(&out));
+    let good = std::fs::read_to_string(dir.join("good.lock")).unwrap();
+    let field = |k: &str| {
+        good.lines()
+            .find_map(|l| l.trim().strip_prefix(&format!("{k}: ")))
+            .unwrap()
+            .to_string()
+    };
+    let (sha, lines, bl, blocks) = (
+        field("sha256"),
+        field("lines"),
+        field("block_lines"),
+        field("blocks"),
+    );
+    let other = "0".repeat(64);
+    let cases = [
+        (
+            lock_text("1", "abc", &lines, &bl, &blocks),
+            "entries[0].sha256",
+        ),
+        (
+            lock_text("1", "ééééééé", &lines, &bl, &blocks),
+            "entries[0].sha256",
+        ),
+        (
+            lock_text("1", &other, &lines, "0", &blocks),
+            "entries[0].block_lines",
+        ),
+        (
+            lock_text(
+                "1",
+                &other,
+                "18446744073709551615",
+                "36028797018963968",
+                &blocks,
+            ),
+            "entries[0].lines",
+        ),
+        (
+            lock_text("1", &other, &lines, &bl, "zz"),
+            "entries[0].blocks",
+        ),
+        (
+            lock_text("7", &sha, &lines, &bl, &blocks),
+            "p3dp_lock: lock format version 7",
+        ),
+        (
+            "p3dp_lock: 1\nentries: []\n".to_string(),
+            "entries: no entries",
+        ),
+        (
+            lock_text("1", &sha, &lines, &bl, &blocks).replace("r.yaml", "missing.yaml"),
+            "entries[0].recipe: no recipe file at `missing.yaml`",
+        ),
+        (
+            lock_text("1", &sha, &lines, &bl, &blocks)
+                .replace("  sha256", "  printer: nope.yaml\n  sha256"),
+            "entries[0].printer",
+        ),
+    ];
+    for (k, (text, place)) in cases.iter().enumerate() {
+        let f = format!("bad{k}.lock");
+        std::fs::write(dir.join(&f), text).unwrap();
+        let out = p3dp(&dir, &["hash", "--check", &f]);
+        refused(&out, &format!("{f}: {place}"));
+    }
+    // the good lock still checks, and a changed one names the change
+    let out = p3dp(&dir, &["hash", "--check", "good.lock"]);
+    assert_eq!(code(&out), Some(0), "{}", describe(&out));
+    std::fs::write(dir.join("changed.lock"), good.replace(&sha, &other)).unwrap();
+    let out = p3dp(&dir, &["hash", "--check", "changed.lock"]);
+    assert_eq!(code(&out), Some(1), "{}", describe(&out));
+}
