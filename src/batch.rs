@@ -93,7 +93,7 @@ pub fn parse_sweep(s: &str) -> Result<(String, Vec<String>)> {
         }
         // as a float first: a tiny step makes more values than u64 holds
         let steps = libm::floor((b - a) / step + 1e-9);
-        if !(steps < MAX_VARIANTS as f64) {
+        if steps.is_nan() || steps >= MAX_VARIANTS as f64 {
             return Err(Error::input(
                 &place,
                 format!(
