@@ -802,7 +802,7 @@ fn resolve_material(ctx: &Ctx, m: Option<&RawMaterial>) -> Result<Material> {
                 crate::safe_text::check("material.name", n)?;
             }
             let nozzle_temp = ctx.positive(&m.nozzle_temp, "material.nozzle_temp")?;
-            Ok(Material {
+            let material = Material {
                 name: m.name.clone().unwrap_or_else(|| "custom".into()),
                 filament_diameter: match &m.filament_diameter {
                     Some(n) => Some(ctx.positive(n, "material.filament_diameter")?),
@@ -832,9 +832,36 @@ fn resolve_material(ctx: &Ctx, m: Option<&RawMaterial>) -> Result<Material> {
                     Some(n) => ctx.non_negative(n, "material.fan_start_z")?,
                     None => crate::printer::FAN_START_Z,
                 },
-            })
+            };
+            material_ranges(&material)?;
+            Ok(material)
         }
     }
+}
+
+/// Refuses an inline material's values outside what a machine can do (see
+/// [`crate::limits`]); the nozzle temperature against the printer's own
+/// limit is the `nozzle-temp` check's (a failed check, not unusable input).
+fn material_ranges(m: &Material) -> Result<()> {
+    use crate::limits::*;
+    if let Some(d) = m.filament_diameter {
+        range("material.filament_diameter", d, FILAMENT_DIAMETER, "mm")?;
+    }
+    range("material.density", m.density, DENSITY, "g/cm³")?;
+    at_most("material.nozzle_temp", m.nozzle_temp, NOZZLE_TEMP_MAX, "°C")?;
+    at_most(
+        "material.max_nozzle_temp",
+        m.max_nozzle_temp,
+        NOZZLE_TEMP_MAX,
+        "°C",
+    )?;
+    at_most("material.bed_temp", m.bed_temp, BED_TEMP_MAX, "°C")?;
+    at_most(
+        "material.fan_start_z",
+        m.fan_start_z,
+        MACHINE_LENGTH_MAX,
+        "mm",
+    )
 }
 
 fn resolve_part(ctx: &Ctx, p: &RawPart, c0: f64, v0: f64, k: usize) -> Result<Part> {

@@ -725,3 +725,67 @@ fn every_broken_lock_is_refused_with_its_place() {
     let out = p3dp(&dir, &["hash", "--check", "changed.lock"]);
     assert_eq!(code(&out), Some(1), "{}", describe(&out));
 }
+
+// ---------------------------------------------------------------------------
+// Defect 4: machine and material values outside a sane range.
+
+#[test]
+fn profiles_outside_physical_ranges_are_refused_with_the_key() {
+    let dir = tmp("profile-ranges");
+    let cases = [
+        (
+            "filament_diameter: 1e-9",
+            "filament_diameter: 0.000000001 mm is not allowed; expected 1 to 3.5 mm",
+        ),
+        (
+            "nozzle_diameter: 5",
+            "nozzle_diameter: 5 mm is not allowed; expected 0.1 to 2 mm",
+        ),
+        (
+            "max_nozzle_temp: 1000",
+            "max_nozzle_temp: 1000 °C is not allowed; expected at most 500 °C",
+        ),
+        ("max_bed_temp: 300", "max_bed_temp: 300 °C is not allowed"),
+        (
+            "travel_speed: 1e9",
+            "travel_speed: 1000000000 mm/s is not allowed; expected at most 2000 mm/s",
+        ),
+        (
+            "max_speed: 1e9",
+            "max_speed: 1000000000 mm/s is not allowed",
+        ),
+        (
+            "retraction: {length: 1e6, speed: 35}",
+            "retraction.length: 1000000 mm is not allowed; expected at most 20 mm",
+        ),
+        (
+            "kinematics: {max_acceleration: 1e9}",
+            "kinematics.max_acceleration: 1000000000 mm/s² is not allowed",
+        ),
+        (
+            "max_flow: 1e12",
+            "max_flow: 1000000000000 mm³/s is not allowed",
+        ),
+        (
+            "bed: {shape: rectangle, size: [1e9, 220], max_z: 250}",
+            "bed.size[0]",
+        ),
+    ];
+    for (k, (line, says)) in cases.iter().enumerate() {
+        let f = format!("p{k}.yaml");
+        std::fs::write(dir.join(&f), format!("inherits: generic-220\n{line}\n")).unwrap();
+        let out = p3dp(
+            &dir,
+            &[
+                "build",
+                recipe("sphere.yaml").to_str().unwrap(),
+                "--printer",
+                &f,
+                "-o",
+                "x.gcode",
+            ],
+        );
+        refused(&out, &format!("{f}: {says}"));
+        assert!(!dir.join("x.gcode").exists(), "{line}: G-code written");
+    }
+}
