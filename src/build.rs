@@ -41,11 +41,17 @@ pub struct Plan {
 
 /// Makes a part's strings: its primitive, then each step in order.
 pub fn make_part(recipe: &Recipe, k: usize) -> Result<Toolpath> {
+    make_part_within(recipe, k, recipe.max_strings)
+}
+
+/// Makes a part as [`make_part`] does, its steps refused past `budget`
+/// strings (what the recipe's limit leaves after the parts before it).
+fn make_part_within(recipe: &Recipe, k: usize, budget: u64) -> Result<Toolpath> {
     let part = &recipe.parts[k];
     let mut tp = part.primitive.build(part.cross_section, part.speed);
     tp.name = part.name.clone();
     for (j, step) in part.steps.iter().enumerate() {
-        step.apply(&mut tp, recipe.max_strings)
+        step.apply(&mut tp, budget)
             .map_err(|m| Error::input(format!("parts[{k}].steps[{j}].{}", step.key()), m))?;
     }
     Ok(tp)
@@ -70,9 +76,14 @@ pub fn plan(path: &Path, opts: &Options) -> Result<Plan> {
         None => None,
     };
     let recipe = Recipe::load(path, &opts.sets, printer.as_ref())?;
-    let mut parts = Vec::with_capacity(recipe.parts.len());
+    let mut parts: Vec<Toolpath> = Vec::with_capacity(recipe.parts.len());
+    let mut used = 0u64;
     for k in 0..recipe.parts.len() {
-        parts.push(make_part(&recipe, k).map_err(|e| e.in_file(&shown))?);
+        // max_strings bounds the whole recipe: each part's steps get what is left
+        let budget = recipe.max_strings.saturating_sub(used);
+        let tp = make_part_within(&recipe, k, budget).map_err(|e| e.in_file(&shown))?;
+        used = used.saturating_add(tp.len() as u64);
+        parts.push(tp);
     }
     let mut paths = Vec::with_capacity(parts.len() + 1);
     if let Some(s) = &recipe.skirt {

@@ -163,8 +163,7 @@ enum Target {
 /// The recipe's name, read without building it.
 fn recipe_name(path: &Path) -> Result<String> {
     let shown = path.display().to_string();
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| Error::io(&shown, format!("cannot read the recipe: {e}")))?;
+    let text = crate::input::read_text(path, "recipe")?;
     Ok(parse_yaml::<RawRecipe>(&text, &shown)?.name)
 }
 
@@ -758,8 +757,7 @@ fn lock_entry(
 
 fn check_lock(a: &HashArgs, lockfile: &Path) -> Vec<Error> {
     let shown = lockfile.display().to_string();
-    let lock: Lock = match std::fs::read_to_string(lockfile)
-        .map_err(|e| Error::io(&shown, format!("cannot read the lock file: {e}")))
+    let lock: Lock = match crate::input::read_text(lockfile, "lock file")
         .and_then(|t| parse_yaml::<Lock>(&t, &shown))
         .and_then(|l| l.validate().map(|_| l).map_err(|e| e.in_file(&shown)))
     {
@@ -771,7 +769,7 @@ fn check_lock(a: &HashArgs, lockfile: &Path) -> Vec<Error> {
     for (k, e) in lock.entries.iter().enumerate() {
         // a missing recipe or printer is the lock's mistake: name its entry
         let recipe = base.join(&e.recipe);
-        if !recipe.is_file() {
+        if !recipe.exists() {
             return vec![Error::input(
                 format!("entries[{k}].recipe"),
                 format!(
@@ -783,7 +781,7 @@ fn check_lock(a: &HashArgs, lockfile: &Path) -> Vec<Error> {
             .in_file(&shown)];
         }
         if let Some(p) = &e.printer {
-            if crate::printer::Printer::built_in(p).is_none() && !base.join(p).is_file() {
+            if crate::printer::Printer::built_in(p).is_none() && !base.join(p).exists() {
                 return vec![Error::input(
                     format!("entries[{k}].printer"),
                     format!(

@@ -16,6 +16,7 @@ pub mod error;
 pub mod expr;
 pub mod flavor;
 pub mod gcode;
+pub mod input;
 pub mod limits;
 pub mod lock;
 pub mod output;

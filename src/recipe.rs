@@ -50,11 +50,104 @@ pub fn parse_yaml<T: de::DeserializeOwned>(text: &str, file: &str) -> Result<T> 
                 msg = rest.to_string();
             }
         }
-        let mut err = Error::input(if path == "." { String::new() } else { path }, msg);
+        let mut err = Error::input(
+            if path == "." { String::new() } else { path },
+            shorten_quoted(&msg),
+        );
         err.file = Some(file.to_string());
         err.line = e.location().map(|l| (l.line(), l.column()));
+        if err.line.is_none() && msg.contains("more than one document") {
+            // serde_yaml gives no place: the second `---` is where it begins
+            err.line = second_document(text).map(|l| (l, 1));
+            err.message = "a second YAML document begins here; expected one document".into();
+        }
         err
     })
+}
+
+/// The line (1-based) of the `---` that starts a second YAML document.
+fn second_document(text: &str) -> Option<usize> {
+    let mut content = false;
+    for (k, line) in text.lines().enumerate() {
+        let t = line.trim_end();
+        if t == "---" || t.starts_with("--- ") {
+            if content {
+                return Some(k + 1);
+            }
+            content = true;
+        } else if !t.is_empty() && !t.starts_with('#') {
+            content = true;
+        }
+    }
+    None
+}
+
+/// Cuts each quoted text of a message to 40 characters: an error about a
+/// file that is no recipe (`/etc/passwd`) names it, not prints it.
+fn shorten_quoted(msg: &str) -> String {
+    const KEEP: usize = 40;
+    // a whole file read as one string (a text file that is no YAML map):
+    // say what it is, not what it says
+    if let Some(rest) = msg.strip_prefix("invalid type: string \"") {
+        if let Some(k) = rest.rfind("\", expected") {
+            return format!("invalid type: text{}", &rest[k + 1..]);
+        }
+    }
+    let mut out = String::with_capacity(msg.len().min(400));
+    let mut rest = msg;
+    while let Some(open) = rest.find('"') {
+        out.push_str(&rest[..=open]);
+        let after = &rest[open + 1..];
+        let close = after.find('"').unwrap_or(after.len());
+        let inner = &after[..close];
+        if inner.chars().count() > KEEP {
+            out.extend(inner.chars().take(KEEP));
+            out.push('…');
+        } else {
+            out.push_str(inner);
+        }
+        rest = &after[close..];
+        if let Some(r) = rest.strip_prefix('"') {
+            out.push('"');
+            rest = r;
+        }
+    }
+    out.push_str(rest);
+    if out.chars().count() > 400 {
+        out = out.chars().take(400).collect::<String>() + "…";
+    }
+    out
+}
+
+/// Deserializes a map that refuses a key given twice (an `IndexMap` would
+/// silently keep the last), as struct fields are refused.
+fn unique_map<'de, D: Deserializer<'de>>(
+    d: D,
+) -> std::result::Result<IndexMap<String, Num>, D::Error> {
+    struct V;
+    impl<'de> Visitor<'de> for V {
+        type Value = IndexMap<String, Num>;
+        fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+            f.write_str("a map of param names to numbers or expressions")
+        }
+        fn visit_map<A: MapAccess<'de>>(
+            self,
+            mut m: A,
+        ) -> std::result::Result<Self::Value, A::Error> {
+            let mut out = IndexMap::new();
+            while let Some(k) = m.next_key::<String>()? {
+                if out.contains_key(&k) {
+                    return Err(de::Error::custom(format!(
+                        "duplicate param `{k}`; expected each param once"
+                    )));
+                }
+                let v: Num = m.next_value()?;
+                out.insert(k, v);
+            }
+            Ok(out)
+        }
+    }
+    d.deserialize_map(V)
 }
 
 /// A number, or an expression over params written as a string.
@@ -203,7 +296,7 @@ pub struct RawRecipe {
     #[serde(default)]
     pub material: Option<RawMaterial>,
     /// Named params in order.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "unique_map")]
     pub params: IndexMap<String, Num>,
     /// Default cross-section and speed.
     #[serde(default)]
@@ -213,7 +306,7 @@ pub struct RawRecipe {
     pub skirt: Option<RawSkirt>,
     /// The parts, printed in order.
     pub parts: Vec<RawPart>,
-    /// Most strings one part may have (default 50 million).
+    /// Most strings one part, and all parts together, may have (default 50 million).
     #[serde(default)]
     pub max_strings: Option<Num>,
     /// Check codes silenced for this recipe (see [`crate::check::CODES`]).
@@ -684,8 +777,7 @@ impl Recipe {
         printer: Option<&Printer>,
     ) -> Result<Recipe> {
         let shown = path.display().to_string();
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| Error::io(&shown, format!("cannot read the recipe: {e}")))?;
+        let text = crate::input::read_text(path, "recipe")?;
         let raw: RawRecipe = parse_yaml(&text, &shown)?;
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         Recipe::resolve(&raw, sets, printer, &dir).map_err(|e| e.in_file(&shown))
@@ -759,10 +851,21 @@ impl Recipe {
             ..ctx
         };
         let mut parts = Vec::with_capacity(raw.parts.len());
+        let mut total = 0u64;
         for (k, p) in raw.parts.iter().enumerate() {
             let place = format!("parts[{k}]");
             let part = resolve_part(&ctx, p, c0, v0, k).map_err(|e| e.under(&place))?;
             let n = part.primitive.string_count();
+            // the limit holds for all parts together too (YAML aliases repeat a part)
+            total = total.saturating_add(n);
+            if n <= max_strings && total > max_strings {
+                return Err(Error::input(
+                    format!("{place}.primitive"),
+                    format!(
+                        "the parts up to this one make {total} strings, more than the limit of {max_strings} for the whole recipe; expected fewer or smaller parts (or raise max_strings)"
+                    ),
+                ));
+            }
             if n > max_strings {
                 return Err(Error::input(
                     format!("{place}.primitive"),
@@ -1130,10 +1233,23 @@ fn resolve_step(ctx: &Ctx, s: &RawStep) -> Result<Step> {
 
 /// Loads an image as grey levels 0..1; the error names the image as written.
 pub fn load_bitmap(path: &PathBuf, shown: &str) -> std::result::Result<Bitmap, String> {
-    let reader = image::ImageReader::open(path)
-        .map_err(|e| format!("cannot open the image `{shown}` ({}): {e}", path.display()))?
-        .with_guessed_format()
-        .map_err(|e| format!("cannot read the image `{shown}`: {e}"))?;
+    let open = || {
+        image::ImageReader::open(path)
+            .map_err(|e| format!("cannot open the image `{shown}` ({}): {e}", path.display()))?
+            .with_guessed_format()
+            .map_err(|e| format!("cannot read the image `{shown}`: {e}"))
+    };
+    // the header's size first: a small file may declare a huge image
+    let (w, h) = open()?.into_dimensions().map_err(|e| {
+        format!("`{shown}` is not an image p3dp can read (PNG, JPEG, BMP, GIF): {e}")
+    })?;
+    crate::input::check_image_size(w, h).map_err(|m| format!("the image `{shown}` {m}"))?;
+    let mut reader = open()?;
+    let mut limits = image::Limits::default();
+    limits.max_image_width = Some(w.max(1));
+    limits.max_image_height = Some(h.max(1));
+    limits.max_alloc = Some(crate::input::MAX_IMAGE_PIXELS * 8);
+    reader.limits(limits);
     let img = reader.decode().map_err(|e| {
         format!("`{shown}` is not an image p3dp can read (PNG, JPEG, BMP, GIF): {e}")
     })?;

@@ -789,3 +789,119 @@ fn profiles_outside_physical_ranges_are_refused_with_the_key() {
         assert!(!dir.join("x.gcode").exists(), "{line}: G-code written");
     }
 }
+
+// ---------------------------------------------------------------------------
+// Defects 6 and 8: bounded reads and parsing, places in every error.
+
+#[cfg(unix)]
+#[test]
+fn endless_inputs_are_refused_not_read_until_memory_runs_out() {
+    let dir = tmp("dev-zero");
+    std::fs::write(dir.join("p.yaml"), "inherits: /dev/zero\n").unwrap();
+    let text = std::fs::read_to_string(recipe("sphere.yaml")).unwrap();
+    std::fs::write(dir.join("r.yaml"), text).unwrap();
+    std::fs::write(
+        dir.join("z.lock"),
+        "p3dp_lock: 1\nentries:\n- recipe: /dev/zero\n  sha256: 0000000000000000000000000000000000000000000000000000000000000000\n  lines: 1\n  block_lines: 1\n  blocks: '00000000'\n",
+    )
+    .unwrap();
+    let cases: [(&[&str], &str); 5] = [
+        (
+            &["check", "/dev/zero"],
+            "/dev/zero: the recipe is larger than 16 MB",
+        ),
+        (
+            &["check", "r.yaml", "--printer", "p.yaml"],
+            "the printer profile is larger than 16 MB",
+        ),
+        (
+            &["hash", "--check", "/dev/zero"],
+            "/dev/zero: the lock file is larger than 16 MB",
+        ),
+        (
+            &["hash", "--check", "z.lock"],
+            "the recipe is larger than 16 MB",
+        ),
+        (
+            &["build", "/dev/zero", "-o", "x.gcode"],
+            "/dev/zero: the recipe is larger than 16 MB",
+        ),
+    ];
+    for (args, says) in cases {
+        let out = p3dp(&dir, args);
+        refused(&out, says);
+    }
+    assert!(!dir.join("x.gcode").exists());
+}
+
+#[test]
+fn a_byte_order_mark_is_no_part_of_the_first_key() {
+    let dir = tmp("bom");
+    // the first key right after the mark (a comment first hid the problem)
+    let text =
+        "name: bom\np3dp: 1\nparts:\n  - primitive: {helix: {radius: 10, height: 2, pitch: 0.5}}\n";
+    std::fs::write(dir.join("bom.yaml"), format!("\u{feff}{text}")).unwrap();
+    std::fs::write(dir.join("plain.yaml"), text).unwrap();
+    let a = p3dp(&dir, &["build", "bom.yaml", "-o", "a.gcode", "--force"]);
+    assert_eq!(code(&a), Some(0), "{}", describe(&a));
+    let b = p3dp(&dir, &["build", "plain.yaml", "-o", "b.gcode", "--force"]);
+    assert_eq!(code(&b), Some(0), "{}", describe(&b));
+    assert_eq!(
+        std::fs::read(dir.join("a.gcode")).unwrap(),
+        std::fs::read(dir.join("b.gcode")).unwrap()
+    );
+}
+
+#[test]
+fn unreadable_text_and_deep_yaml_name_a_line_and_column() {
+    let dir = tmp("bad-text");
+    std::fs::write(
+        dir.join("latin1.yaml"),
+        b"p3dp: 1\nname: caf\xe9\nparts: []\n",
+    )
+    .unwrap();
+    let out = p3dp(&dir, &["check", "latin1.yaml"]);
+    refused(&out, "latin1.yaml:2:10: byte 0xe9 is not UTF-8");
+    let deep = format!(
+        "p3dp: 1\nname: {}1{}\n",
+        "[".repeat(200_000),
+        "]".repeat(200_000)
+    );
+    std::fs::write(dir.join("deep.yaml"), deep).unwrap();
+    let t = std::time::Instant::now();
+    let out = p3dp(&dir, &["check", "deep.yaml"]);
+    refused(&out, "deep.yaml:2:71: brackets nest more than 64 deep");
+    assert!(t.elapsed().as_secs() < 10, "took {:?}", t.elapsed());
+    let long = "A".repeat(20_000);
+    std::fs::write(
+        dir.join("text.yaml"),
+        format!("p3dp: 1\nname: t\nparts:\n  - primitive: {{helix: {{radius: 10, height: 2, pitch: 0.5}}}}\n    steps:\n      - modulate_map: {{text: \"{long}\", u: \"theta\", v: z}}\n"),
+    )
+    .unwrap();
+    let out = p3dp(&dir, &["check", "text.yaml"]);
+    refused(&out, "parts[0].steps[0].modulate_map.text: the text has 20000 characters; expected at most 10000");
+}
+
+#[cfg(unix)]
+#[test]
+fn an_error_about_a_system_file_names_it_without_printing_it() {
+    let dir = tmp("system-file");
+    std::fs::write(
+        dir.join("etc.lock"),
+        "p3dp_lock: 1\nentries:\n- recipe: /etc/passwd\n  sha256: 0000000000000000000000000000000000000000000000000000000000000000\n  lines: 1\n  block_lines: 1\n  blocks: '00000000'\n",
+    )
+    .unwrap();
+    let passwd = std::fs::read_to_string("/etc/passwd").unwrap_or_default();
+    let first = passwd.lines().next().unwrap_or("root:x:0:0");
+    for args in [
+        &["hash", "--check", "etc.lock"][..],
+        &["check", "/etc/passwd"][..],
+    ] {
+        let out = p3dp(&dir, args);
+        assert_eq!(code(&out), Some(2), "{}", describe(&out));
+        let e = stderr(&out);
+        assert!(e.contains("/etc/passwd"), "{e}");
+        let head: String = first.chars().take(12).collect();
+        assert!(!e.contains(&head), "the error prints the file: {e}");
+    }
+}

@@ -49,6 +49,13 @@ impl Bitmap {
             return Err("the text is empty; expected at least one character".into());
         }
         let chars: Vec<char> = text.chars().collect();
+        if chars.len() > crate::input::MAX_MAP_TEXT_CHARS {
+            return Err(format!(
+                "the text has {} characters; expected at most {}",
+                chars.len(),
+                crate::input::MAX_MAP_TEXT_CHARS
+            ));
+        }
         let width = 1 + 9 * chars.len();
         let height = 10;
         let mut pixels = vec![1.0f32; width * height];
