@@ -97,7 +97,8 @@ pub fn plan(path: &Path, opts: &Options) -> Result<Plan> {
     }
     paths.extend(parts);
     let refs: Vec<&Toolpath> = paths.iter().collect();
-    let (mut findings, footprints) = check::run(&recipe, &refs);
+    let allowed: Vec<String> = recipe.allow.iter().chain(&opts.allow).cloned().collect();
+    let (mut findings, footprints) = check::run_allowing(&recipe, &refs, &allowed);
     check::apply_allow(&mut findings, &recipe.allow);
     check::apply_allow(&mut findings, &opts.allow);
     Ok(Plan {

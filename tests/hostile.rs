@@ -905,3 +905,70 @@ fn an_error_about_a_system_file_names_it_without_printing_it() {
         assert!(!e.contains(&head), "the error prints the file: {e}");
     }
 }
+
+/// Runs `p3dp ARGS` in `dir`, killed after `secs`; `None` when it was killed.
+fn p3dp_within(dir: &Path, args: &[&str], secs: u64) -> Option<std::process::Output> {
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_p3dp"))
+        .args(args)
+        .current_dir(dir)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let id = child.id();
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(child.wait_with_output());
+    });
+    match rx.recv_timeout(std::time::Duration::from_secs(secs)) {
+        Ok(out) => Some(out.unwrap()),
+        Err(_) => {
+            let _ = std::process::Command::new("kill")
+                .args(["-KILL", &id.to_string()])
+                .status();
+            None
+        }
+    }
+}
+
+#[test]
+fn cheap_checks_refuse_before_expensive_ones_run() {
+    let dir = tmp("cheap-first");
+    let cases = [
+        (
+            "wide.yaml",
+            "  - primitive: {helix: {radius: 1e4, height: 2, pitch: 0.5}}\n",
+            "[out-of-bed]",
+        ),
+        (
+            "thick.yaml",
+            "  - cross_section: 1e7\n    primitive: {helix: {radius: 10, height: 2, pitch: 0.5}}\n",
+            "[over-extrusion]",
+        ),
+    ];
+    for (f, part, code_) in cases {
+        std::fs::write(dir.join(f), format!("p3dp: 1\nname: big\nparts:\n{part}")).unwrap();
+        // 42 s and 5 GB before (debug build)
+        let out = p3dp_within(&dir, &["check", f], 10)
+            .unwrap_or_else(|| panic!("{f}: still running after 10 s"));
+        assert_eq!(code(&out), Some(1), "{f}: {}", describe(&out));
+        assert!(
+            String::from_utf8_lossy(&out.stdout).contains(code_),
+            "{f}: {}",
+            describe(&out)
+        );
+    }
+}
+
+#[test]
+fn an_automaton_a_million_rows_deep_per_point_is_computed_once() {
+    let dir = tmp("eca-rows");
+    std::fs::write(
+        dir.join("eca.yaml"),
+        "p3dp: 1\nname: eca\nparts:\n  - primitive: {helix: {radius: 10, height: 50, pitch: 0.2, segments: 288}}\n    steps:\n      - deform_cylinder: {position: [\"r + 0.2 * eca(30, 64, 1000000, i)\", theta, z]}\n",
+    )
+    .unwrap();
+    let out = p3dp_within(&dir, &["check", "eca.yaml"], 20)
+        .expect("still running after 20 s (minutes before)");
+    assert!(matches!(code(&out), Some(0 | 1)), "{}", describe(&out));
+}
