@@ -446,6 +446,10 @@ impl Expr {
                 src.len()
             ));
         }
+        // meval's tokenizer panics on text of only white space (found by fuzz/)
+        if src.trim().is_empty() {
+            return Err("an empty expression; expected a number or an expression".into());
+        }
         // Kanada's Python recipes write powers as `**`; meval's operator is `^`.
         let mut text = src.replace("**", "^");
         if names.is_some() {
@@ -818,6 +822,14 @@ mod tests {
         assert!(eca(30.5, 8.0, 1.0, 0.0).is_nan());
         // wraps: column -1 is column width-1
         assert_eq!(eca(30.0, 8.0, 1.0, -1.0), eca(30.0, 8.0, 1.0, 7.0));
+    }
+
+    #[test]
+    fn blank_text_is_an_error_not_a_panic() {
+        for s in [" ", "\t", "\n", " \n\t "] {
+            let e = Expr::compile(s, &Params::new(), &[]).unwrap_err();
+            assert!(e.contains("empty expression"), "{e}");
+        }
     }
 
     #[test]
