@@ -15,15 +15,15 @@
 //! part alone.
 
 use crate::error::{Error, Result};
-use crate::model::{make_part, Group, Recipe, DEFAULT_MAX_STRINGS};
+use crate::model::{make_part_within, Group, Recipe};
 use crate::step::Step;
 use crate::threads::Threads;
 use crate::toolpath::{Strand, Toolpath};
 
 /// Most strings all parts of a recipe may have together, before and after
-/// their steps: the recipe's `max_strings` or 50 million, the larger.
+/// their steps: the recipe's `max_strings` (50 million unless it says).
 pub fn total_limit(recipe: &Recipe) -> u64 {
-    recipe.max_strings.max(DEFAULT_MAX_STRINGS)
+    recipe.max_strings
 }
 
 /// Makes every part with its own steps, then runs the group steps.
@@ -32,7 +32,9 @@ pub fn make_parts(recipe: &Recipe, threads: Threads) -> Result<Vec<Toolpath>> {
     let mut parts = Vec::with_capacity(recipe.parts.len());
     let mut total = 0u64;
     for k in 0..recipe.parts.len() {
-        let tp = make_part(recipe, k, threads)?;
+        // each part's steps get what the limits leave after the parts before it
+        let budget = recipe.max_strings.min(limit.saturating_sub(total));
+        let tp = make_part_within(recipe, k, budget, threads)?;
         total = total.saturating_add(tp.len() as u64);
         if total > limit {
             return Err(over_total(&recipe.parts[k].place, total, limit));

@@ -34,6 +34,27 @@ pub fn format_value(v: f64) -> String {
     }
 }
 
+/// Most builds one command may make: recipes × the product of the sweeps.
+pub const MAX_VARIANTS: u64 = 10_000;
+
+/// Refuses a batch of more than [`MAX_VARIANTS`] builds, before any is made.
+pub fn check_count(recipes: usize, sweeps: &[(String, Vec<String>)]) -> Result<()> {
+    let n = sweeps
+        .iter()
+        .fold(recipes as u64, |n, (_, v)| n.saturating_mul(v.len() as u64));
+    if n > MAX_VARIANTS {
+        let sizes: Vec<String> = sweeps.iter().map(|(_, v)| v.len().to_string()).collect();
+        return Err(Error::input(
+            "--sweep",
+            format!(
+                "{recipes} recipe(s) × {} values make {n} builds; expected at most {MAX_VARIANTS}",
+                sizes.join(" × ")
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// Parses `NAME=v1,v2,…` or `NAME=a..b:step` (b included when reached).
 pub fn parse_sweep(s: &str) -> Result<(String, Vec<String>)> {
     let place = format!("--sweep {s}");
@@ -47,8 +68,17 @@ pub fn parse_sweep(s: &str) -> Result<(String, Vec<String>)> {
             )
         })?;
     let spec = spec.trim();
-    let values = if let Some((range, step)) = spec.split_once(':').filter(|_| spec.contains("..")) {
-        let (a, b) = range.split_once("..").unwrap();
+    let range = spec
+        .split_once(':')
+        .filter(|_| spec.contains(".."))
+        .map(|(range, step)| (range.split_once(".."), step));
+    let values = if let Some((range, step)) = range {
+        let (a, b) = range.ok_or_else(|| {
+            Error::input(
+                &place,
+                "a range is written a..b:step, e.g. --sweep pitch=0.3..0.5:0.1",
+            )
+        })?;
         let num = |t: &str, what: &str| -> Result<f64> {
             t.trim().parse::<f64>().map_err(|_| {
                 Error::input(
@@ -61,16 +91,30 @@ pub fn parse_sweep(s: &str) -> Result<(String, Vec<String>)> {
         if step.is_nan() || step <= 0.0 || b < a || !a.is_finite() || !b.is_finite() {
             return Err(Error::input(&place, "expected start ≤ end and a step > 0"));
         }
-        let count = libm::floor((b - a) / step + 1e-9) as u64 + 1;
-        if count > 10_000 {
+        // as a float first: a tiny step makes more values than u64 holds
+        let steps = libm::floor((b - a) / step + 1e-9);
+        if steps.is_nan() || steps >= MAX_VARIANTS as f64 {
             return Err(Error::input(
                 &place,
-                format!("{count} values; expected at most 10000"),
+                format!(
+                    "{} values; expected at most {MAX_VARIANTS}",
+                    format_value(steps + 1.0)
+                ),
             ));
         }
-        (0..count)
+        let values: Vec<String> = (0..steps as u64 + 1)
             .map(|k| format_value(a + step * k as f64))
-            .collect()
+            .collect();
+        if let Some(w) = values.windows(2).find(|w| w[0] == w[1]) {
+            return Err(Error::input(
+                &place,
+                format!(
+                    "the step {step} is too small to tell the values apart ({} twice); expected a larger step",
+                    w[0]
+                ),
+            ));
+        }
+        values
     } else {
         let vals: Vec<String> = spec.split(',').map(|v| v.trim().to_string()).collect();
         if vals.iter().any(String::is_empty) {

@@ -146,6 +146,7 @@ impl Common {
                 "no recipe given; expected one or more RECIPE files",
             ));
         }
+        batch::check_count(self.recipes.len(), &sweeps)?;
         Ok(batch::expand(&self.recipes, &sets, &sweeps))
     }
 
@@ -232,8 +233,7 @@ enum Target {
 /// The recipe's name, read without building it.
 fn recipe_name(path: &Path) -> Result<String> {
     let shown = path.display().to_string();
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| Error::io_from(&shown, format!("cannot read the recipe: {e}"), &e))?;
+    let text = crate::input::read_text(path, "recipe")?;
     Ok(parse_yaml::<RawRecipe>(&text, &shown)?.name)
 }
 
@@ -256,18 +256,21 @@ fn targets(a: &BuildArgs, jobs: &[Job]) -> Result<(Vec<Result<Target>>, PathBuf)
     let mut out: Vec<Result<Target>> = Vec::with_capacity(jobs.len());
     let mut seen: Vec<(PathBuf, String)> = Vec::new();
     for job in jobs {
-        let t = recipe_name(&job.recipe).and_then(|name| {
-            let file = dir.join(format!("{}.gcode", variant_stem(&name, &job.sweep)));
-            let file = if dir == Path::new(".") {
-                PathBuf::from(file.file_name().unwrap())
+        let t = recipe_name(&job.recipe).map(|name| {
+            let file = format!("{}.gcode", variant_stem(&name, &job.sweep));
+            if dir == Path::new(".") {
+                PathBuf::from(file)
             } else {
-                file
-            };
-            if let Some((_, other)) = seen.iter().find(|(f, _)| *f == file) {
+                dir.join(file)
+            }
+        });
+        // two jobs writing one file: refused before any is built
+        if let Ok(file) = &t {
+            if let Some((_, other)) = seen.iter().find(|(f, _)| f == file) {
                 return Err(Error::input(
                     "name",
                     format!(
-                        "{} and {other} would both write {}; give the recipes different names",
+                        "{} and {other} would both write {}; give the recipes different names (nothing was written)",
                         job_label(job),
                         file.display()
                     ),
@@ -275,9 +278,8 @@ fn targets(a: &BuildArgs, jobs: &[Job]) -> Result<(Vec<Result<Target>>, PathBuf)
                 .in_file(&job.recipe.display().to_string()));
             }
             seen.push((file.clone(), job_label(job)));
-            Ok(Target::File(file))
-        });
-        out.push(t);
+        }
+        out.push(t.map(Target::File));
     }
     Ok((out, dir))
 }
@@ -312,13 +314,48 @@ fn make_parent(file: &Path) -> Result<()> {
     }
 }
 
-/// Writes the PNG of `--pattern` (after the G-code, so a failed build writes neither).
-fn write_pattern(file: &Path, png: &[u8]) -> Result<()> {
+/// An option naming a file must not be empty (`-o ''`).
+fn non_empty(option: &str, value: Option<&Path>) -> Result<()> {
+    match value {
+        Some(v) if v.as_os_str().is_empty() => Err(Error::input(
+            option,
+            "an empty file name; expected the name of a file to write",
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// The files a command reads: its recipes and a `--printer` file.
+fn inputs(c: &Common) -> Vec<(String, PathBuf)> {
+    let mut v: Vec<(String, PathBuf)> = c
+        .recipes
+        .iter()
+        .map(|r| ("the recipe".to_string(), r.clone()))
+        .collect();
+    if let Some(p) = &c.printer {
+        if crate::machine::Printer::built_in(p).is_none() {
+            v.push(("the --printer profile".to_string(), PathBuf::from(p)));
+        }
+    }
+    v
+}
+
+/// What one job of `build` made: its report and its files, not yet committed
+/// when the build is a single job (all its outputs are committed together).
+struct Done {
+    built: (Stats, String, bool),
+    files: Vec<AtomicFile>,
+    lines: Vec<String>,
+}
+
+/// A file's bytes into an uncommitted [`AtomicFile`] (its folder made first).
+fn stage(file: &Path, bytes: &[u8]) -> Result<AtomicFile> {
     make_parent(file)?;
-    write_atomic(file, |f| {
-        f.write_all(png)
-            .map_err(|e| Error::io_from(file.display().to_string(), e.to_string(), &e))
-    })
+    let mut f = AtomicFile::create(file)?;
+    f.file().write_all(bytes).map_err(|e| {
+        Error::io_from(file.display().to_string(), format!("cannot write: {e}"), &e)
+    })?;
+    Ok(f)
 }
 
 /// What `build` settles before any job runs: the jobs, where each writes,
@@ -333,22 +370,19 @@ struct Prepared {
 /// Expands the jobs and refuses flag combinations before anything is built.
 fn prepare(a: &BuildArgs) -> Result<Prepared> {
     let jobs = a.common.jobs()?;
+    for (option, value) in [
+        ("-o", a.output.as_deref().map(Path::new)),
+        ("--stats-json", a.stats_json.as_deref()),
+        ("--preview", a.preview.as_deref()),
+        ("--pattern", a.pattern.as_deref()),
+    ] {
+        non_empty(option, value)?;
+    }
     if a.pattern.is_some() && jobs.len() > 1 {
         return Err(Error::input(
             "--pattern",
             "writes the cell array of one build; expected one recipe and no --sweep",
         ));
-    }
-    // open the stats file first where its folder exists: if it cannot be
-    // written, no G-code is; a missing folder is made only after a build
-    let mut stats_file = None;
-    if let Some(p) = &a.stats_json {
-        let folder_exists = p
-            .parent()
-            .is_none_or(|d| d.as_os_str().is_empty() || d.is_dir());
-        if folder_exists {
-            stats_file = Some(AtomicFile::create(p)?);
-        }
     }
     if let Some(pv) = &a.preview {
         if jobs.len() > 1 {
@@ -360,6 +394,41 @@ fn prepare(a: &BuildArgs) -> Result<Prepared> {
         crate::preview::Format::of(pv)?;
     }
     let (targets, dir) = targets(a, &jobs)?;
+    // no output over another, nor over an input: refused before any is written
+    let mut outs: Vec<(String, PathBuf)> = targets
+        .iter()
+        .filter_map(|t| match t {
+            Ok(Target::File(f)) => Some(("-o".to_string(), f.clone())),
+            _ => None,
+        })
+        .collect();
+    for (option, value) in [
+        ("--stats-json", &a.stats_json),
+        ("--preview", &a.preview),
+        ("--pattern", &a.pattern),
+    ] {
+        if let Some(v) = value {
+            outs.push((option.to_string(), v.clone()));
+        }
+    }
+    if !a.common.sweeps.is_empty() {
+        outs.push((
+            "summary.csv of --sweep".to_string(),
+            dir.join("summary.csv"),
+        ));
+    }
+    crate::output::check_distinct(&outs, &inputs(&a.common))?;
+    // open the stats file first where its folder exists: if it cannot be
+    // written, no G-code is; a missing folder is made only after a build
+    let mut stats_file = None;
+    if let Some(p) = &a.stats_json {
+        let folder_exists = p
+            .parent()
+            .is_none_or(|d| d.as_os_str().is_empty() || d.is_dir());
+        if folder_exists {
+            stats_file = Some(AtomicFile::create(p)?);
+        }
+    }
     Ok(Prepared {
         jobs,
         targets,
@@ -370,7 +439,13 @@ fn prepare(a: &BuildArgs) -> Result<Prepared> {
 
 /// Builds one job to its target (with its preview and pattern, if asked):
 /// the stats, where it went, and whether that was standard output.
-fn build_job(a: &BuildArgs, job: &Job, target: Result<Target>, threads: Threads) -> Built {
+fn build_job(
+    a: &BuildArgs,
+    job: &Job,
+    target: Result<Target>,
+    threads: Threads,
+    single: bool,
+) -> Result<Done> {
     let target = target?;
     let p = a.common.checked_plan(job, threads)?;
     // the cell array of --pattern, made before any file is written
@@ -378,90 +453,100 @@ fn build_job(a: &BuildArgs, job: &Job, target: Result<Target>, threads: Threads)
         Some(f) => Some((f, pattern_png(&p.recipe).map_err(|e| e.in_file(&p.path))?)),
         None => None,
     };
+    let mut files = Vec::new();
+    let mut lines = Vec::new();
     let built = match &target {
         Target::Stdout => p
-            .render(std::io::stdout().lock())
+            .render(crate::output::Stdout)
             .map(|s| (s, "standard output".to_string(), true)),
         Target::File(f) => {
             make_parent(f)?;
-            let mut stats = None;
-            write_atomic(f, |file| {
-                stats = Some(p.render(file)?);
-                Ok(())
-            })
-            .map(|_| (stats.expect("rendered"), f.display().to_string(), false))
+            let mut file = AtomicFile::create(f)?;
+            let stats = p.render(file.file())?;
+            files.push(file);
+            Ok((stats, f.display().to_string(), false))
         }
     }?;
     if let Some(pv) = &a.preview {
-        make_parent(pv)?;
-        let line = crate::preview::write(&p, pv, &crate::preview::Options::default(), &|w| {
-            p.render(w)
-        })?;
-        if built.2 {
-            eprintln!("{line}");
-        } else {
-            println!("{line}");
-        }
+        let (bytes, line) =
+            crate::preview::bytes(&p, pv, &crate::preview::Options::default(), &|w| {
+                p.render(w)
+            })?;
+        files.push(stage(pv, &bytes)?);
+        lines.push(line);
     }
     if let Some((f, png)) = &pattern {
-        write_pattern(f, png)?;
+        files.push(stage(f, png)?);
     }
-    Ok(built)
-}
-
-/// Prints each job's report (or summary line) and returns the errors met
-/// and the stats of the jobs that succeeded.
-fn report_builds(jobs: &[Job], results: &[Built]) -> (Vec<Error>, Vec<Stats>) {
-    let mut errors = Vec::new();
-    let mut all_stats = Vec::new();
-    let single = jobs.len() == 1;
-    for (job, r) in jobs.iter().zip(results) {
-        match r {
-            Ok((stats, shown, to_stdout)) => {
-                let text = if single {
-                    stats.report(shown)
-                } else {
-                    summary_line(job, stats, shown)
-                };
-                if *to_stdout {
-                    eprint!("{text}");
-                } else {
-                    print!("{text}");
-                }
-                all_stats.push(stats.clone());
-            }
-            Err(e) => errors.push(e.clone()),
+    // a batch keeps each variant that built; one build commits all its
+    // outputs together, after the stats file is written too
+    if !single {
+        for f in files.drain(..) {
+            f.commit()?;
         }
     }
-    (errors, all_stats)
+    Ok(Done {
+        built,
+        files,
+        lines,
+    })
 }
 
-/// Writes `--stats-json` and a sweep's `summary.csv`; the errors met.
-fn write_batch_files(
+/// Writes `--stats-json`, then commits every pending output of a single
+/// build: all committed, or none. The errors met, and whether they were.
+fn commit_outputs(
     a: &BuildArgs,
     stats_file: Option<AtomicFile>,
-    dir: &Path,
-    jobs: &[Job],
-    results: &[Built],
+    pending: Vec<AtomicFile>,
     all_stats: &[Stats],
-) -> Vec<Error> {
+) -> (Vec<Error>, bool) {
     let mut errors = Vec::new();
-    if let (Some(path), false) = (&a.stats_json, all_stats.is_empty()) {
-        let file = match stats_file {
-            Some(f) => Ok(f),
-            None => make_parent(path).and_then(|_| AtomicFile::create(path)),
-        };
-        if let Err(e) = file.and_then(|f| write_stats(f, all_stats)) {
+    let stats_file = match (&a.stats_json, all_stats.is_empty()) {
+        (Some(path), false) => {
+            let file = match stats_file {
+                Some(f) => Ok(f),
+                None => make_parent(path).and_then(|_| AtomicFile::create(path)),
+            };
+            match file.and_then(|f| write_stats(f, all_stats)) {
+                Ok(f) => Some(f),
+                Err(e) => return (vec![e], false),
+            }
+        }
+        _ => None,
+    };
+    for f in pending.into_iter().chain(stats_file) {
+        if let Err(e) = f.commit() {
             errors.push(e);
+            return (errors, false);
         }
     }
-    if !a.common.sweeps.is_empty() && !all_stats.is_empty() {
-        let csv = dir.join("summary.csv");
-        if let Err(e) = make_parent(&csv).and_then(|_| write_summary(&csv, jobs, results)) {
-            errors.push(e);
+    (errors, true)
+}
+
+/// Prints each job's report (or summary line), with its preview lines.
+fn report_builds(jobs: &[Job], results: &[Built], preview_lines: &[String]) {
+    let single = jobs.len() == 1;
+    for (job, r) in jobs.iter().zip(results) {
+        if let Ok((stats, shown, to_stdout)) = r {
+            let text = if single {
+                stats.report(shown)
+            } else {
+                summary_line(job, stats, shown)
+            };
+            for line in preview_lines {
+                if *to_stdout {
+                    eprintln!("{line}");
+                } else {
+                    println!("{line}");
+                }
+            }
+            if *to_stdout {
+                eprint!("{text}");
+            } else {
+                print!("{text}");
+            }
         }
     }
-    errors
 }
 
 /// `p3dp build`: writes G-code and prints a report per job.
@@ -475,19 +560,49 @@ pub fn build(a: &BuildArgs) -> Vec<Error> {
         Ok(p) => p,
         Err(e) => return vec![e],
     };
+    let single = jobs.len() == 1;
     let bar = progress(jobs.len());
     let (workers, threads) = a.common.budget(jobs.len());
-    let results = batch::run_parallel(
+    let done = batch::run_parallel(
         jobs.len(),
         workers,
-        |k| build_job(a, &jobs[k], targets[k].clone(), threads),
+        |k| build_job(a, &jobs[k], targets[k].clone(), threads, single),
         || bar.inc(1),
     );
     bar.finish_and_clear();
-    let (mut errors, all_stats) = report_builds(&jobs, &results);
-    errors.extend(write_batch_files(
-        a, stats_file, &dir, &jobs, &results, &all_stats,
-    ));
+    if crate::output::stdout_closed() {
+        // the reader of `-o -` has all it wanted: end quietly, write nothing
+        return Vec::new();
+    }
+    let mut pending = Vec::new();
+    let mut preview_lines = Vec::new();
+    let results: Vec<Built> = done
+        .into_iter()
+        .map(|r| {
+            r.map(|d| {
+                pending.extend(d.files);
+                preview_lines.extend(d.lines);
+                d.built
+            })
+        })
+        .collect();
+    let mut errors: Vec<Error> = results.iter().filter_map(|r| r.clone().err()).collect();
+    let all_stats: Vec<Stats> = results
+        .iter()
+        .filter_map(|r| r.as_ref().ok().map(|(s, _, _)| s.clone()))
+        .collect();
+    let (errs, committed) = commit_outputs(a, stats_file, pending, &all_stats);
+    errors.extend(errs);
+    if committed || !single {
+        report_builds(&jobs, &results, &preview_lines);
+    }
+    if !a.common.sweeps.is_empty() {
+        // every variant has a row, those that failed with their error
+        let csv = dir.join("summary.csv");
+        if let Err(e) = make_parent(&csv).and_then(|_| write_summary(&csv, &jobs, &results)) {
+            errors.push(e);
+        }
+    }
     errors
 }
 
@@ -566,7 +681,8 @@ fn write_summary(path: &Path, jobs: &[Job], results: &[Built]) -> Result<()> {
     })
 }
 
-fn write_stats(mut file: AtomicFile, stats: &[Stats]) -> Result<()> {
+/// The stats as JSON into `file`, returned uncommitted.
+fn write_stats(mut file: AtomicFile, stats: &[Stats]) -> Result<AtomicFile> {
     let json = if stats.len() == 1 {
         serde_json::to_string_pretty(&stats[0])
     } else {
@@ -577,7 +693,7 @@ fn write_stats(mut file: AtomicFile, stats: &[Stats]) -> Result<()> {
         .write_all(json.as_bytes())
         .and_then(|_| file.file().write_all(b"\n"))
         .map_err(|e| Error::io_from("--stats-json", e.to_string(), &e))?;
-    file.commit()
+    Ok(file)
 }
 
 /// `p3dp check`: runs every check and prints the findings; writes nothing.
@@ -640,6 +756,14 @@ pub fn hash(a: &HashArgs) -> Vec<Error> {
         Ok(j) => j,
         Err(e) => return vec![e],
     };
+    if let Some(lockfile) = &a.lock {
+        let outs = [("--lock".to_string(), lockfile.clone())];
+        if let Err(e) = non_empty("--lock", Some(lockfile))
+            .and_then(|_| crate::output::check_distinct(&outs, &inputs(c)))
+        {
+            return vec![e];
+        }
+    }
     let (workers, threads) = c.budget(jobs.len());
     let results = batch::run_parallel(
         jobs.len(),
@@ -746,9 +870,9 @@ fn lock_entry(
 
 fn check_lock(a: &HashArgs, lockfile: &Path) -> Vec<Error> {
     let shown = lockfile.display().to_string();
-    let lock: Lock = match std::fs::read_to_string(lockfile)
-        .map_err(|e| Error::io_from(&shown, format!("cannot read the lock file: {e}"), &e))
-        .and_then(|t| parse_yaml(&t, &shown))
+    let lock: Lock = match crate::input::read_text(lockfile, "lock file")
+        .and_then(|t| parse_yaml::<Lock>(&t, &shown))
+        .and_then(|l| l.validate().map(|_| l).map_err(|e| e.in_file(&shown)))
     {
         Ok(l) => l,
         Err(e) => return vec![e],
@@ -756,6 +880,31 @@ fn check_lock(a: &HashArgs, lockfile: &Path) -> Vec<Error> {
     let base = lockfile.parent().unwrap_or(Path::new(".")).to_path_buf();
     let mut jobs = Vec::new();
     for (k, e) in lock.entries.iter().enumerate() {
+        // a missing recipe or printer is the lock's mistake: name its entry
+        let recipe = base.join(&e.recipe);
+        if !recipe.exists() {
+            return vec![Error::input(
+                format!("entries[{k}].recipe"),
+                format!(
+                    "no recipe file at `{}` ({}); expected a path relative to the lock file",
+                    e.recipe,
+                    recipe.display()
+                ),
+            )
+            .in_file(&shown)];
+        }
+        if let Some(p) = &e.printer {
+            if crate::machine::Printer::built_in(p).is_none() && !base.join(p).exists() {
+                return vec![Error::input(
+                    format!("entries[{k}].printer"),
+                    format!(
+                        "`{p}` is neither a built-in printer ({}) nor a profile file relative to the lock file",
+                        crate::recipe::profile::built_in_names().join(", ")
+                    ),
+                )
+                .in_file(&shown)];
+            }
+        }
         let sets: Result<Vec<(String, String)>> = e.set.iter().map(|s| parse_set(s)).collect();
         match sets {
             Ok(sets) => jobs.push(Job {
@@ -899,6 +1048,16 @@ pub fn preview(a: &PreviewArgs) -> Vec<Error> {
             None => PathBuf::from(format!("{}.png", file_stem(&recipe_name(&a.recipe)?))),
         };
         crate::preview::Format::of(&out)?;
+        non_empty("-o", Some(&out))?;
+        let mut ins = vec![("the recipe".to_string(), a.recipe.clone())];
+        if let Some(p) = a
+            .printer
+            .as_ref()
+            .filter(|p| crate::machine::Printer::built_in(p).is_none())
+        {
+            ins.push(("the --printer profile".to_string(), PathBuf::from(p)));
+        }
+        crate::output::check_distinct(&[("-o".to_string(), out.clone())], &ins)?;
         let p = plan(
             &a.recipe,
             &Options {

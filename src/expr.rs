@@ -102,6 +102,13 @@ pub fn is_reserved(name: &str) -> bool {
 
 const STACK: usize = 32;
 
+/// Longest expression text, in bytes: a bound on the work of compiling one.
+pub const MAX_LEN: usize = 4096;
+
+/// Deepest expression tree (operations and calls inside one another):
+/// compiling and evaluating recurse this deep.
+pub const MAX_DEPTH: u32 = 256;
+
 type F1 = fn(f64) -> f64;
 type F2 = fn(f64, f64) -> f64;
 type F3 = fn(f64, f64, f64) -> f64;
@@ -230,6 +237,11 @@ fn lookup2(name: &str) -> Option<F2> {
     })
 }
 
+thread_local! {
+    /// The last row [`eca`] computed: rule, width, row and its cells.
+    static ECA_LAST: std::cell::Cell<Option<(u8, u32, u64, u64)>> = const { std::cell::Cell::new(None) };
+}
+
 /// `eca(rule, width, row, col)`: the cell (0 or 1) at `row` and `col` of
 /// Wolfram's elementary cellular automaton `rule` (0–255) on a ring of
 /// `width` cells (1–64) whose row 0 has one live cell, at column 0; columns
@@ -242,10 +254,17 @@ pub fn eca(rule: f64, width: f64, row: f64, col: f64) -> f64 {
     if !col.is_finite() || col.fract() != 0.0 {
         return f64::NAN;
     }
-    let (rule, w) = (rule as u8, width as u32);
+    let (rule, w, row) = (rule as u8, width as u32, row as u64);
     let mask = if w == 64 { u64::MAX } else { (1u64 << w) - 1 };
-    let mut cells = 1u64;
-    for _ in 0..row as u64 {
+    // go on from the last row computed on this thread when it is of the same
+    // automaton and not past `row`: an expression evaluated per point asks
+    // for the same or a later row again and again (a million rows per point
+    // of a 72,000-point helix ran for minutes)
+    let (from, mut cells) = match ECA_LAST.get() {
+        Some((r, wl, at, c)) if r == rule && wl == w && at <= row => (at, c),
+        _ => (0, 1u64),
+    };
+    for _ in from..row {
         // each cell's neighbourhood (left, self, right) as a 3-bit number
         let left = (cells << 1 | cells >> (w - 1)) & mask;
         let right = (cells >> 1 | cells << (w - 1)) & mask;
@@ -260,6 +279,7 @@ pub fn eca(rule: f64, width: f64, row: f64, col: f64) -> f64 {
         }
         cells = next & mask;
     }
+    ECA_LAST.set(Some((rule, w, row, cells)));
     let c = f_mod(col, width) as u32;
     (cells >> c & 1) as f64
 }
@@ -469,6 +489,23 @@ impl Expr {
         allowed: &[usize],
         names: Option<&[&str]>,
     ) -> Result<Expr, ExprError> {
+        if src.len() > MAX_LEN {
+            return Err(ExprError::new(
+                ExprErrorKind::TooDeep,
+                format!(
+                    "the expression `{}…` is {} characters long; expected at most {MAX_LEN}",
+                    src.chars().take(24).collect::<String>(),
+                    src.len()
+                ),
+            ));
+        }
+        // meval's tokenizer panics on text of only white space (found by fuzz/)
+        if src.trim().is_empty() {
+            return Err(ExprError::new(
+                ExprErrorKind::Syntax,
+                "an empty expression; expected a number or an expression",
+            ));
+        }
         // Kanada's Python recipes write powers as `**`; meval's operator is `^`.
         let mut text = src.replace("**", "^");
         if names.is_some() {
@@ -484,6 +521,8 @@ impl Expr {
             )
         })?;
         let mut stack: Vec<Node> = Vec::new();
+        // the height of each tree on `stack`, to refuse one nested too deeply
+        let mut heights: Vec<u32> = Vec::new();
         let mut used = 0u32;
         let pop = |stack: &mut Vec<Node>| -> Result<Node, ExprError> {
             stack.pop().ok_or_else(|| {
@@ -494,6 +533,24 @@ impl Expr {
             })
         };
         for tok in rpn {
+            let takes = match &tok {
+                Token::Unary(_) => 1,
+                Token::Binary(_) => 2,
+                Token::Func(_, n) => n.unwrap_or(0),
+                _ => 0,
+            };
+            let below = heights.len().saturating_sub(takes);
+            let height = 1 + heights.drain(below..).max().unwrap_or(0);
+            if height > MAX_DEPTH {
+                return Err(ExprError::new(
+                    ExprErrorKind::TooDeep,
+                    format!(
+                        "the expression `{}…` nests operations and calls more than {MAX_DEPTH} deep; expected a simpler expression",
+                        src.chars().take(24).collect::<String>()
+                    ),
+                ));
+            }
+            heights.push(height);
             let node = match tok {
                 Token::Number(v) => Node::Num(v),
                 Token::Var(name) => {
@@ -548,39 +605,46 @@ impl Expr {
                 }
                 Token::Func(name, nargs) => {
                     let k = nargs.unwrap_or(0);
-                    let op = match (name.as_str(), k) {
-                        ("min", 1..=255) => Op::Min(k as u8),
-                        ("max", 1..=255) => Op::Max(k as u8),
-                        (n, 1) if lookup1(n).is_some() => Op::F1(lookup1(n).unwrap()),
-                        (n, 2) if lookup2(n).is_some() => Op::F2(lookup2(n).unwrap()),
-                        (n, 3) if lookup3(n).is_some() => Op::F3(lookup3(n).unwrap()),
-                        (n, 4) if lookup4(n).is_some() => Op::F4(lookup4(n).unwrap()),
-                        (n, _) => {
-                            let arity = if lookup1(n).is_some() {
-                                Some(1)
-                            } else if lookup2(n).is_some() {
-                                Some(2)
-                            } else if lookup3(n).is_some() {
-                                Some(3)
-                            } else if lookup4(n).is_some() {
-                                Some(4)
-                            } else {
-                                None
-                            };
-                            return Err(ExprError::new(
+                    let op =
+                        match (name.as_str(), k) {
+                            ("min", 1..=255) => Op::Min(k as u8),
+                            ("max", 1..=255) => Op::Max(k as u8),
+                            ("min" | "max", _) => return Err(ExprError::new(
                                 ExprErrorKind::Function,
-                                match arity {
-                                    Some(a) => format!(
+                                format!(
+                                    "`{name}` takes 1 to 255 arguments but is given {k} in `{src}`"
+                                ),
+                            )),
+                            (n, 1) if lookup1(n).is_some() => Op::F1(lookup1(n).unwrap()),
+                            (n, 2) if lookup2(n).is_some() => Op::F2(lookup2(n).unwrap()),
+                            (n, 3) if lookup3(n).is_some() => Op::F3(lookup3(n).unwrap()),
+                            (n, 4) if lookup4(n).is_some() => Op::F4(lookup4(n).unwrap()),
+                            (n, _) => {
+                                let arity = if lookup1(n).is_some() {
+                                    Some(1)
+                                } else if lookup2(n).is_some() {
+                                    Some(2)
+                                } else if lookup3(n).is_some() {
+                                    Some(3)
+                                } else if lookup4(n).is_some() {
+                                    Some(4)
+                                } else {
+                                    None
+                                };
+                                return Err(ExprError::new(
+                                    ExprErrorKind::Function,
+                                    match arity {
+                                        Some(a) => format!(
                                         "`{n}` takes {a} argument{} but is given {k} in `{src}`",
                                         if a == 1 { "" } else { "s" }
                                     ),
-                                    None => format!(
+                                        None => format!(
                                     "unknown function `{n}` in `{src}`; functions are: {FUNCTIONS}"
                                 ),
-                                },
-                            ));
-                        }
-                    };
+                                    },
+                                ));
+                            }
+                        };
                     if stack.len() < k {
                         return Err(ExprError::new(
                             ExprErrorKind::Syntax,
@@ -846,6 +910,14 @@ mod tests {
         assert!(eca(30.5, 8.0, 1.0, 0.0).is_nan());
         // wraps: column -1 is column width-1
         assert_eq!(eca(30.0, 8.0, 1.0, -1.0), eca(30.0, 8.0, 1.0, 7.0));
+    }
+
+    #[test]
+    fn blank_text_is_an_error_not_a_panic() {
+        for s in [" ", "\t", "\n", " \n\t "] {
+            let e = Expr::compile(s, &Params::new(), &[]).unwrap_err();
+            assert!(e.message.contains("empty expression"), "{e}");
+        }
     }
 
     #[test]

@@ -20,11 +20,14 @@ pub mod expr;
 pub mod finding;
 pub mod format;
 pub mod geom;
+pub mod input;
 pub mod num;
 pub mod rng;
+pub mod safe_text;
 pub mod threads;
 pub mod toolpath;
 
+pub mod limits;
 pub mod machine;
 
 pub mod assembly;

@@ -12,6 +12,8 @@ use std::io::{self, Write};
 
 use serde::{Deserialize, Serialize};
 
+use crate::error::{Error, Result};
+
 /// The lock file.
 #[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -43,6 +45,73 @@ pub struct Entry {
     pub block_lines: u64,
     /// Hash of each block, 8 hex digits each, space-separated.
     pub blocks: String,
+}
+
+/// Most lines a locked G-code may have: far more than any build writes,
+/// few enough that no block arithmetic overflows.
+pub const MAX_LINES: u64 = 1 << 40;
+
+impl Lock {
+    /// Refuses what `hash --check` cannot use, naming the key: another
+    /// version, no entries, a hash that is not 64 hex digits, blocks that do
+    /// not fit the line count.
+    pub fn validate(&self) -> Result<()> {
+        if self.p3dp_lock != 1 {
+            return Err(Error::input(
+                "p3dp_lock",
+                format!(
+                    "lock format version {} is not known; expected 1",
+                    self.p3dp_lock
+                ),
+            ));
+        }
+        if self.entries.is_empty() {
+            return Err(Error::input(
+                "entries",
+                "no entries: a lock without recipes checks nothing; expected at least one (write it with `p3dp hash --lock FILE RECIPE…`)",
+            ));
+        }
+        for (k, e) in self.entries.iter().enumerate() {
+            let place = |key: &str| format!("entries[{k}].{key}");
+            if e.recipe.trim().is_empty() {
+                return Err(Error::input(place("recipe"), "expected a recipe path"));
+            }
+            let hex = |s: &str| {
+                s.bytes()
+                    .all(|b| b.is_ascii_digit() || (b'a'..=b'f').contains(&b))
+            };
+            if e.sha256.len() != 64 || !hex(&e.sha256) {
+                return Err(Error::input(
+                    place("sha256"),
+                    "expected a SHA-256: 64 lowercase hex digits",
+                ));
+            }
+            if e.lines > MAX_LINES {
+                return Err(Error::input(
+                    place("lines"),
+                    format!("{} lines; expected at most {MAX_LINES}", e.lines),
+                ));
+            }
+            let b = LineHashes::block_lines(e.lines);
+            if e.block_lines != b {
+                return Err(Error::input(
+                    place("block_lines"),
+                    format!(
+                        "{} is not allowed; {} lines make blocks of {b} lines",
+                        e.block_lines, e.lines
+                    ),
+                ));
+            }
+            let words: Vec<&str> = e.blocks.split_whitespace().collect();
+            if words.len() as u64 > MAX_BLOCKS || words.iter().any(|w| w.len() != 8 || !hex(w)) {
+                return Err(Error::input(
+                    place("blocks"),
+                    format!("expected at most {MAX_BLOCKS} block hashes of 8 lowercase hex digits"),
+                ));
+            }
+        }
+        Ok(())
+    }
 }
 
 /// Most blocks one fingerprint has.

@@ -7,7 +7,9 @@ use clap::Parser;
 use p3dp::cli::{self, Cli};
 
 fn main() -> ExitCode {
-    let errors = cli::run(Cli::parse());
+    let cli = Cli::parse();
+    p3dp::output::remove_temp_files_on_signals();
+    let errors = cli::run(cli);
     let mut code = 0;
     for e in &errors {
         eprintln!("error: {e}");

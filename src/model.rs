@@ -124,11 +124,22 @@ impl Part {
 /// order (a group's steps are [`crate::assembly::make_parts`]'s), on up to
 /// `threads` threads.
 pub fn make_part(recipe: &Recipe, k: usize, threads: Threads) -> Result<Toolpath> {
+    make_part_within(recipe, k, recipe.max_strings, threads)
+}
+
+/// Makes a part as [`make_part`] does, its steps refused past `budget`
+/// strings (what the recipe's limits leave after the parts before it).
+pub fn make_part_within(
+    recipe: &Recipe,
+    k: usize,
+    budget: u64,
+    threads: Threads,
+) -> Result<Toolpath> {
     let part = &recipe.parts[k];
     let mut tp = part.build_primitives();
     tp.name = part.name.clone();
     for (j, step) in part.steps.iter().enumerate() {
-        step.apply(&mut tp, recipe.max_strings, threads)
+        step.apply(&mut tp, budget, threads)
             .map_err(|e| e.under(&format!("{}.steps[{j}].{}", part.place, step.key())))?;
     }
     Ok(tp)

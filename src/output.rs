@@ -1,12 +1,144 @@
-//! Outputs: files written whole or not at all, and a writer that hashes what
-//! passes through it.
+//! Output files: written whole or not at all, never replacing a special
+//! file, never one of the command's own inputs.
+//!
+//! A regular file (or a missing one) is written to a temp file beside it,
+//! renamed over it on [`AtomicFile::commit`]. A symlink is followed and its
+//! final target written that way (the link stays a link). A character device
+//! (`/dev/null`) or a FIFO is written to directly; a folder, a block device
+//! or a socket is refused. Temp files are named `.p3dp-XXXXXX.tmp`; those of
+//! a run stopped by SIGINT, SIGTERM or SIGHUP are removed (see
+//! [`remove_temp_files_on_signals`]), and those a SIGKILL left behind are
+//! swept from a folder the next time p3dp writes there once they are
+//! [`STALE_AFTER`] old.
 
 use std::io::{self, Write};
-use std::path::{Path, PathBuf};
+use std::path::{Component, Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Mutex;
+use std::time::{Duration, SystemTime};
 
 use sha2::{Digest, Sha256};
 
 use crate::error::{Error, Result};
+
+/// How old a temp file of our own naming must be before a later run removes it.
+pub const STALE_AFTER: Duration = Duration::from_secs(3600);
+
+/// Temp files being written now, removed when a signal stops the process.
+static LIVE: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// Folders already swept of stale temp files by this process.
+static SWEPT: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn live() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
+    LIVE.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// Removes every temp file being written and exits (128 + the signal) on
+/// SIGINT, SIGTERM or SIGHUP. Called once by the binary.
+pub fn remove_temp_files_on_signals() {
+    #[cfg(unix)]
+    {
+        use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+        let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) else {
+            return;
+        };
+        let _ = std::thread::Builder::new()
+            .name("p3dp-signals".into())
+            .spawn(move || {
+                if let Some(sig) = signals.forever().next() {
+                    // held until exit: no temp file is made or renamed after this
+                    let files = live();
+                    for f in files.iter() {
+                        let _ = std::fs::remove_file(f);
+                    }
+                    std::process::exit(128 + sig);
+                }
+            });
+    }
+}
+
+/// Whether `name` is one of our temp files: `.p3dp-` + 6 letters or digits + `.tmp`.
+pub fn is_temp_name(name: &str) -> bool {
+    name.strip_prefix(".p3dp-")
+        .and_then(|r| r.strip_suffix(".tmp"))
+        .is_some_and(|mid| mid.len() == 6 && mid.bytes().all(|b| b.is_ascii_alphanumeric()))
+}
+
+/// Removes temp files of our naming in `dir` older than [`STALE_AFTER`]
+/// (left by a killed run); each folder once per process.
+fn sweep_stale(dir: &Path) {
+    let key = dir.canonicalize().unwrap_or_else(|_| dir.to_path_buf());
+    {
+        let mut swept = SWEPT.lock().unwrap_or_else(|e| e.into_inner());
+        if swept.contains(&key) {
+            return;
+        }
+        swept.push(key);
+    }
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    let now = SystemTime::now();
+    for e in entries.flatten() {
+        if !e.file_name().to_str().is_some_and(is_temp_name) {
+            continue;
+        }
+        let Ok(meta) = e.path().symlink_metadata() else {
+            continue;
+        };
+        let old = meta
+            .modified()
+            .ok()
+            .and_then(|m| now.duration_since(m).ok())
+            .is_some_and(|age| age > STALE_AFTER);
+        if meta.is_file() && old {
+            let _ = std::fs::remove_file(e.path());
+        }
+    }
+}
+
+/// Follows symlinks from `path` to the file they end at (which may be
+/// missing); also returns its metadata when it exists.
+fn follow(path: &Path) -> io::Result<(PathBuf, Option<std::fs::Metadata>)> {
+    let mut p = path.to_path_buf();
+    for _ in 0..40 {
+        match p.symlink_metadata() {
+            Ok(m) if m.file_type().is_symlink() => {
+                let to = std::fs::read_link(&p)?;
+                p = if to.is_absolute() {
+                    to
+                } else {
+                    p.parent().unwrap_or(Path::new("")).join(to)
+                };
+            }
+            Ok(m) => return Ok((p, Some(m))),
+            Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok((p, None)),
+            Err(e) => return Err(e),
+        }
+    }
+    Err(io::Error::other("too many levels of symbolic links"))
+}
+
+/// Whether the metadata is of a file written to directly: a character device or a FIFO.
+fn is_stream(m: &std::fs::Metadata) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        let t = m.file_type();
+        t.is_char_device() || t.is_fifo()
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = m;
+        false
+    }
+}
+
+enum Inner {
+    Temp(tempfile::NamedTempFile),
+    Direct(std::fs::File),
+}
 
 /// A writer that hashes and counts what passes through it.
 pub struct HashWriter<W: Write> {
@@ -56,57 +188,116 @@ impl<W: Write> Write for HashWriter<W> {
 }
 
 /// A file being written: a temp file beside its target, renamed into place by
-/// [`AtomicFile::commit`]; dropped uncommitted, it leaves nothing behind.
+/// [`AtomicFile::commit`]; dropped uncommitted, it leaves nothing behind. A
+/// character device or FIFO is written directly instead.
 pub struct AtomicFile {
-    tmp: tempfile::NamedTempFile,
+    inner: Option<Inner>,
+    /// The file renamed over: the target with its symlinks followed.
     target: PathBuf,
+    shown: String,
 }
 
 impl AtomicFile {
-    /// Opens a temp file in `target`'s folder (which must exist).
+    /// Opens a temp file in `target`'s folder (which must exist), or the
+    /// target itself when it is a character device or a FIFO.
     pub fn create(target: &Path) -> Result<AtomicFile> {
         let shown = target.display().to_string();
-        let dir = match target.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d,
-            _ => Path::new("."),
+        if target.as_os_str().is_empty() {
+            return Err(Error::input(
+                "",
+                "an empty file name; expected the name of a file to write",
+            ));
+        }
+        let (real, meta) =
+            follow(target).map_err(|e| Error::io(&shown, format!("cannot write: {e}")))?;
+        if let Some(m) = &meta {
+            if m.is_dir() {
+                return Err(Error::io(
+                    &shown,
+                    "cannot write: it is a folder; expected a file",
+                ));
+            }
+            if is_stream(m) {
+                let f = std::fs::OpenOptions::new()
+                    .write(true)
+                    .open(&real)
+                    .map_err(|e| Error::io(&shown, format!("cannot write: {e}")))?;
+                return Ok(AtomicFile {
+                    inner: Some(Inner::Direct(f)),
+                    target: real,
+                    shown,
+                });
+            }
+            if !m.is_file() {
+                return Err(Error::io(
+                    &shown,
+                    "cannot write: it is neither a regular file, a character device nor a FIFO",
+                ));
+            }
+        }
+        let dir = match real.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+            _ => PathBuf::from("."),
         };
+        sweep_stale(&dir);
         let mut builder = tempfile::Builder::new();
-        builder.prefix(".p3dp-").suffix(".tmp");
+        builder.prefix(".p3dp-").suffix(".tmp").rand_bytes(6);
         #[cfg(unix)]
         {
             // an ordinary file (0666 less the umask), not tempfile's private 0600
             use std::os::unix::fs::PermissionsExt;
             builder.permissions(std::fs::Permissions::from_mode(0o666));
         }
-        let tmp = builder.tempfile_in(dir).map_err(|e| {
-            Error::io_from(
+        let mut files = live();
+        let tmp = builder.tempfile_in(&dir).map_err(|e| {
+            Error::io(
                 &shown,
                 format!("cannot create a file in {}: {e}", dir.display()),
-                &e,
             )
         })?;
+        files.push(tmp.path().to_path_buf());
         Ok(AtomicFile {
-            tmp,
-            target: target.to_path_buf(),
+            inner: Some(Inner::Temp(tmp)),
+            target: real,
+            shown,
         })
     }
 
-    /// The temp file, to write to.
+    /// The file to write to.
     pub fn file(&mut self) -> &mut std::fs::File {
-        self.tmp.as_file_mut()
+        match self.inner.as_mut().expect("not committed") {
+            Inner::Temp(t) => t.as_file_mut(),
+            Inner::Direct(f) => f,
+        }
     }
 
     /// Flushes to disk and renames the temp file to the target.
     pub fn commit(mut self) -> Result<()> {
-        let shown = self.target.display().to_string();
-        self.tmp
-            .as_file_mut()
-            .sync_all()
-            .map_err(|e| Error::io_from(&shown, format!("cannot write: {e}"), &e))?;
-        self.tmp
-            .persist(&self.target)
-            .map_err(|e| Error::io_from(&shown, format!("cannot write: {}", e.error), &e.error))?;
-        Ok(())
+        let shown = self.shown.clone();
+        let io = |e: io::Error| Error::io_from(&shown, format!("cannot write: {e}"), &e);
+        match self.inner.take().expect("committed once") {
+            Inner::Direct(mut f) => f.flush().map_err(io),
+            Inner::Temp(mut t) => {
+                let path = t.path().to_path_buf();
+                let r = t
+                    .as_file_mut()
+                    .sync_all()
+                    .map_err(io)
+                    .and_then(|_| t.persist(&self.target).map(|_| ()).map_err(|e| io(e.error)));
+                live().retain(|p| *p != path);
+                r
+            }
+        }
+    }
+}
+
+impl Drop for AtomicFile {
+    fn drop(&mut self) {
+        if let Some(Inner::Temp(t)) = self.inner.take() {
+            let path = t.path().to_path_buf();
+            drop(t); // removes the temp file
+            live().retain(|p| *p != path);
+        }
     }
 }
 
@@ -115,4 +306,131 @@ pub fn write_atomic(target: &Path, f: impl FnOnce(&mut std::fs::File) -> Result<
     let mut a = AtomicFile::create(target)?;
     f(a.file())?;
     a.commit()
+}
+
+/// What `path` names once symlinks, `.` and `..` are resolved, whether or
+/// not it exists: two paths with the same identity are the same file.
+pub fn identity(path: &Path) -> PathBuf {
+    let followed = follow(path)
+        .map(|(p, _)| p)
+        .unwrap_or_else(|_| path.to_path_buf());
+    if let Ok(c) = followed.canonicalize() {
+        return c;
+    }
+    let abs = if followed.is_absolute() {
+        followed
+    } else {
+        std::env::current_dir().unwrap_or_default().join(followed)
+    };
+    // the longest existing ancestor, canonical, then the rest lexically
+    let comps: Vec<Component> = abs.components().collect();
+    for k in (0..comps.len()).rev() {
+        let head: PathBuf = comps[..k].iter().collect();
+        if let Ok(mut out) = head.canonicalize() {
+            for c in &comps[k..] {
+                match c {
+                    Component::ParentDir => {
+                        out.pop();
+                    }
+                    Component::CurDir => {}
+                    other => out.push(other.as_os_str()),
+                }
+            }
+            return out;
+        }
+    }
+    abs
+}
+
+/// Whether `path` is a character device or FIFO (written directly, so
+/// several outputs may share it, like `/dev/null`).
+fn is_shared_stream(path: &Path) -> bool {
+    matches!(follow(path), Ok((_, Some(m))) if is_stream(&m))
+}
+
+/// Refuses outputs that resolve to the same file as another output or as
+/// one of the command's `inputs`; each is `(option, path)`, e.g.
+/// `("--stats-json", "s.json")`. Called before anything is written.
+pub fn check_distinct(outputs: &[(String, PathBuf)], inputs: &[(String, PathBuf)]) -> Result<()> {
+    let ids: Vec<Option<PathBuf>> = outputs
+        .iter()
+        .map(|(_, p)| (!is_shared_stream(p)).then(|| identity(p)))
+        .collect();
+    let inputs: Vec<(&String, &PathBuf, PathBuf)> =
+        inputs.iter().map(|(l, p)| (l, p, identity(p))).collect();
+    for (k, (label, path)) in outputs.iter().enumerate() {
+        let Some(id) = &ids[k] else { continue };
+        if let Some((what, input, _)) = inputs.iter().find(|(_, _, i)| i == id) {
+            return Err(Error::input(
+                label.as_str(),
+                format!(
+                    "`{}` is {what} `{}`, which this command reads; expected another file to write",
+                    path.display(),
+                    input.display()
+                ),
+            ));
+        }
+        if let Some(j) = (0..k).find(|&j| ids[j].as_ref() == Some(id)) {
+            return Err(Error::input(
+                label.as_str(),
+                format!(
+                    "`{}` is the file {} `{}` writes too; expected a different file for each output",
+                    path.display(),
+                    outputs[j].0,
+                    outputs[j].1.display()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Set once standard output is a closed pipe (`p3dp build … -o - | head -1`).
+static STDOUT_CLOSED: AtomicBool = AtomicBool::new(false);
+
+/// Whether a write to [`Stdout`] found the pipe closed: the reader has all it
+/// wanted, and the command ends quietly with status 0, as `rg` does.
+pub fn stdout_closed() -> bool {
+    STDOUT_CLOSED.load(Ordering::Relaxed)
+}
+
+/// Standard output that notes a closed pipe (see [`stdout_closed`]).
+pub struct Stdout;
+
+impl Write for Stdout {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        io::stdout().lock().write(buf).inspect_err(note_closed)
+    }
+    fn flush(&mut self) -> io::Result<()> {
+        io::stdout().lock().flush().inspect_err(note_closed)
+    }
+}
+
+fn note_closed(e: &io::Error) {
+    if e.kind() == io::ErrorKind::BrokenPipe {
+        STDOUT_CLOSED.store(true, Ordering::Relaxed);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn temp_names_are_ours_only() {
+        assert!(is_temp_name(".p3dp-a1B2c3.tmp"));
+        assert!(!is_temp_name(".p3dp-a1B2c.tmp"));
+        assert!(!is_temp_name("p3dp-a1B2c3.tmp"));
+        assert!(!is_temp_name(".p3dp-a1B2c3.tmp.gcode"));
+    }
+
+    #[test]
+    fn identity_resolves_dots_of_missing_paths() {
+        let d = std::env::temp_dir().canonicalize().unwrap();
+        assert_eq!(
+            identity(&d.join("no-such-p3dp-dir/../x.gcode")),
+            d.join("x.gcode")
+        );
+        assert_eq!(identity(&d.join("./y/./z")), d.join("y/z"));
+    }
 }

@@ -74,7 +74,8 @@ pub fn plan(path: &Path, opts: &Options) -> Result<Plan> {
     }
     paths.extend(parts);
     let refs: Vec<&Toolpath> = paths.iter().collect();
-    let (mut findings, footprints) = check::run(&recipe, &refs, opts.threads);
+    let allowed: Vec<String> = recipe.allow.iter().chain(&opts.allow).cloned().collect();
+    let (mut findings, footprints) = check::run(&recipe, &refs, &allowed, opts.threads);
     check::apply_allow(&mut findings, &recipe.allow);
     check::apply_allow(&mut findings, &opts.allow);
     Ok(Plan {

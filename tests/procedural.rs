@@ -285,7 +285,7 @@ parts:
     );
     let e = resolve_err(&base.replace("name: row", "name: \"row\\nG28\""));
     assert!(
-        e.contains("parts[0].name: the name \"row\\nG28\" contains a control character"),
+        e.contains("parts[0].name: contains a line break (U+000A)"),
         "{e}"
     );
     let e = resolve_err(&base.replace("name: ring\n", "name: \"ring\\r{k0}\"\n"));
@@ -347,7 +347,7 @@ parts:
   - {for: {a: \"1..100\"}, primitive: {helix: {radius: 10, height: 100, pitch: 0.001}}}
 ",
     );
-    assert!(e.contains("for all parts together"), "{e}");
+    assert!(e.contains("for the whole recipe"), "{e}");
 }
 
 /// The sampler: four plates of plate.yaml, named by their cycles, each where

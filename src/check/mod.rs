@@ -33,19 +33,36 @@ pub(crate) fn fmt_p(p: DVec3) -> String {
 
 /// Runs every check on the toolpaths of `recipe` (skirt first, then parts):
 /// the findings, and each part's footprint on the bed (none when a point is
-/// not finite or out of reach, where the geometric checks do not run).
+/// not finite or out of reach, or a cheap check found an error that is not
+/// in `allowed`, where the geometric checks do not run).
 ///
-/// The support check, the costliest, runs on a second thread beside the
-/// others when `threads` allows two; the findings are put together in one
-/// fixed order, so they are the same whether or not it does.
+/// The cheap checks run first, and the geometric ones (support, first layer,
+/// collision: their grids grow with the extent and the cross-sections) only
+/// when the cheap ones found no error that is not allowed (a helix of radius
+/// 1e4 mm or a cross-section of 1e7 mm² took 25 s and 5 GB before they
+/// refused it). The support check, the costliest, runs on a second thread
+/// beside the others when `threads` allows two; the findings are put
+/// together in one fixed order, so they are the same whether or not it does.
 pub fn run(
     recipe: &Recipe,
     paths: &[&Toolpath],
+    allowed: &[String],
     threads: Threads,
 ) -> (Vec<Finding>, Vec<first_layer::Footprint>) {
+    let mut out = Vec::new();
+    temperatures(recipe, &mut out);
+    for tp in paths {
+        machine_limits(recipe, tp, &mut out);
+        strings(recipe, tp, &mut out);
+        flow::cross_sections(recipe, tp, &mut out);
+        out.extend(events(recipe, tp));
+    }
+    let cheap_error = out
+        .iter()
+        .any(|f| f.severity == Severity::Error && !allowed.iter().any(|a| a == f.code));
     // the geometric checks need finite points within reach (others are errors)
     let sane = |p: &DVec3| p.is_finite() && p.abs().max_element() < 1e5;
-    let geometric = paths.iter().all(|tp| tp.points.iter().all(sane));
+    let geometric = !cheap_error && paths.iter().all(|tp| tp.points.iter().all(sane));
     std::thread::scope(|s| {
         let support_check = || {
             let mut v = Vec::new();
@@ -53,14 +70,6 @@ pub fn run(
             v
         };
         let support = (geometric && threads.parallel()).then(|| s.spawn(support_check));
-        let mut out = Vec::new();
-        temperatures(recipe, &mut out);
-        for tp in paths {
-            machine_limits(recipe, tp, &mut out);
-            strings(recipe, tp, &mut out);
-            flow::cross_sections(recipe, tp, &mut out);
-            out.extend(events(recipe, tp));
-        }
         starvation::check(recipe, paths, &mut out);
         let mut collisions = Vec::new();
         let mut footprints = Vec::new();

@@ -214,6 +214,7 @@ fn d_arc_tolerance() -> f64 {
 impl Printer {
     /// Checks every value; errors name the key.
     pub fn validate(&self) -> Result<()> {
+        crate::safe_text::check("name", &self.name)?;
         let positive = super::head::positive;
         positive("nozzle_diameter", self.nozzle_diameter)?;
         positive("filament_diameter", self.filament_diameter)?;
@@ -255,12 +256,82 @@ impl Printer {
                 "expected a length ≥ 0 and a speed > 0",
             ));
         }
+        self.physical_ranges()?;
         super::size::sizes(&self.thumbnails)?;
         self.kinematics.validate()?;
         self.head.validate()?;
         self.checks.validate()?;
         self.fill("start_gcode", &self.start_gcode, &BTreeMap::new())?;
         self.fill("end_gcode", &self.end_gcode, &BTreeMap::new())?;
+        Ok(())
+    }
+
+    /// Refuses values outside what a machine can be (see [`crate::limits`]).
+    fn physical_ranges(&self) -> Result<()> {
+        use crate::limits::*;
+        range(
+            "nozzle_diameter",
+            self.nozzle_diameter,
+            NOZZLE_DIAMETER,
+            "mm",
+        )?;
+        range(
+            "filament_diameter",
+            self.filament_diameter,
+            FILAMENT_DIAMETER,
+            "mm",
+        )?;
+        at_most(
+            "max_nozzle_temp",
+            self.max_nozzle_temp,
+            NOZZLE_TEMP_MAX,
+            "°C",
+        )?;
+        at_most("max_bed_temp", self.max_bed_temp, BED_TEMP_MAX, "°C")?;
+        at_most("travel_speed", self.travel_speed, SPEED_MAX, "mm/s")?;
+        at_most("max_speed", self.max_speed, SPEED_MAX, "mm/s")?;
+        at_most("max_flow", self.max_flow, FLOW_MAX, "mm³/s")?;
+        at_most(
+            "retraction.length",
+            self.retraction.length,
+            RETRACTION_MAX,
+            "mm",
+        )?;
+        at_most("retraction.speed", self.retraction.speed, SPEED_MAX, "mm/s")?;
+        let long = |key: &str, v: f64| at_most(key, v.abs(), MACHINE_LENGTH_MAX, "mm");
+        long("retraction.min_travel", self.retraction.min_travel)?;
+        long("bed.max_z", self.bed.max_z())?;
+        match self.bed {
+            Bed::Rectangle { size, .. } => {
+                long("bed.size[0]", size[0])?;
+                long("bed.size[1]", size[1])?;
+            }
+            Bed::Circle { diameter, .. } => long("bed.diameter", diameter)?,
+        }
+        for (k, o) in self.origin.iter().enumerate() {
+            long(&format!("origin[{k}]"), *o)?;
+        }
+        long("min_string_length", self.min_string_length)?;
+        long("arc_tolerance", self.arc_tolerance)?;
+        let k = &self.kinematics;
+        if let Some(v) = k.max_velocity {
+            at_most("kinematics.max_velocity", v, SPEED_MAX, "mm/s")?;
+        }
+        for (key, v) in [
+            ("kinematics.max_acceleration", Some(k.max_acceleration)),
+            ("kinematics.travel_acceleration", k.travel_acceleration),
+            ("kinematics.retract_acceleration", k.retract_acceleration),
+        ] {
+            if let Some(v) = v {
+                at_most(key, v, ACCELERATION_MAX, "mm/s²")?;
+            }
+        }
+        if let Some(v) = k.square_corner_velocity {
+            at_most("kinematics.square_corner_velocity", v, SPEED_MAX, "mm/s")?;
+        }
+        if let Some(v) = k.junction_deviation {
+            long("kinematics.junction_deviation", v)?;
+        }
         Ok(())
     }
 

@@ -647,44 +647,49 @@ pub type Render<'a> = &'a dyn Fn(&mut dyn std::io::Write) -> Result<Stats>;
 /// Writes a preview of `plan` to `out` (PNG or HTML by extension, atomically);
 /// returns a line for the report. `render` writes the plan's G-code.
 pub fn write(plan: &Plan, out: &Path, opts: &Options, render: Render) -> Result<String> {
+    let (bytes, line) = bytes(plan, out, opts, render)?;
+    let shown = out.display().to_string();
+    write_atomic(out, |f| {
+        use std::io::Write;
+        f.write_all(&bytes)
+            .map_err(|e| Error::io_from(&shown, format!("cannot write the preview: {e}"), &e))
+    })?;
+    Ok(line)
+}
+
+/// The bytes of the preview [`write`] writes to `out` (its format by the
+/// extension), and the line reporting it; writes nothing, so a build can
+/// commit the preview with its other outputs.
+pub fn bytes(plan: &Plan, out: &Path, opts: &Options, render: Render) -> Result<(Vec<u8>, String)> {
     let format = Format::of(out)?;
     let shown = out.display().to_string();
-    let io =
-        |e: std::io::Error| Error::io_from(&shown, format!("cannot write the preview: {e}"), &e);
     match format {
         Format::Png => {
             let stats = render(&mut std::io::sink())?;
             let scene = Scene::new(plan);
             let r = png::render(&scene, Some(&stats), opts);
             let bytes = png::encode(&r.pixmap, false);
-            write_atomic(out, |f| {
-                use std::io::Write;
-                f.write_all(&bytes).map_err(io)
-            })?;
             let (x, y) = r.frame.pixel(DVec3::ZERO);
-            Ok(format!(
+            Ok((bytes, format!(
                 "preview → {shown}: {} × {} px, {} view, colour {}, scale {:.4} px/mm, recipe (0, 0, 0) at pixel ({x:.2}, {y:.2})",
                 opts.size.width,
                 opts.size.height,
                 opts.view.name(),
                 opts.color.name(),
                 r.frame.scale
-            ))
+            )))
         }
         Format::Html => {
             let mut code = Vec::new();
             let stats = render(&mut code)?;
             let text = String::from_utf8_lossy(&code);
             let page = html::page(plan, &text, &stats, opts);
-            write_atomic(out, |f| {
-                use std::io::Write;
-                f.write_all(page.html.as_bytes()).map_err(io)
-            })?;
-            Ok(format!(
+            let line = format!(
                 "preview → {shown}: HTML viewer, {} points, {} kB",
                 page.points,
                 (page.html.len() + 512) / 1024
-            ))
+            );
+            Ok((page.html.into_bytes(), line))
         }
     }
 }

@@ -50,8 +50,10 @@ impl Cylinder {
 
     /// Spiral strings of every layer plus one vertical step between layers.
     pub fn string_count(&self) -> u64 {
+        // saturating: a huge height must reach the string limit, not wrap
         let l = self.layers();
-        l * self.layer(0).string_count() + (l - 1)
+        l.saturating_mul(self.layer(0).string_count())
+            .saturating_add(l - 1)
     }
 
     /// Makes the layers; the step up between two layers is a travel string

@@ -57,9 +57,7 @@ impl Printer {
     /// by key, see [`merge_yaml`]); a file without it is parsed on its own.
     pub fn from_file(path: &Path) -> Result<Printer> {
         let shown = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| {
-            Error::io_from(&shown, format!("cannot read the printer profile: {e}"), &e)
-        })?;
+        let text = crate::input::read_text(path, "printer profile")?;
         let value: serde_yaml::Value = parse_yaml(&text, &shown)?;
         let p: Printer = if value.get("inherits").is_some() {
             let named = value.get("name").is_some();
@@ -181,9 +179,7 @@ fn inherit(
         }
         seen.push(canon);
         let shown = file.display().to_string();
-        let text = std::fs::read_to_string(&file).map_err(|e| {
-            Error::io_from(&shown, format!("cannot read the printer profile: {e}"), &e)
-        })?;
+        let text = crate::input::read_text(&file, "printer profile")?;
         let v: serde_yaml::Value = parse_yaml(&text, &shown)?;
         inherit(v, &file, seen).map_err(|e| e.in_file(&shown))?
     } else {

@@ -132,8 +132,7 @@ impl Recipe {
         printer: Option<&Printer>,
     ) -> Result<Recipe> {
         let shown = path.display().to_string();
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| Error::io_from(&shown, format!("cannot read the recipe: {e}"), &e))?;
+        let text = crate::input::read_text(path, "recipe")?;
         let raw: RawRecipe = parse_yaml(&text, &shown)?;
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         Recipe::resolve_in(&raw, sets, printer, &dir, Some(path)).map_err(|e| e.in_file(&shown))
@@ -166,6 +165,12 @@ impl Recipe {
         }
         if raw.name.trim().is_empty() {
             return Err(Error::input("name", "expected a non-empty name"));
+        }
+        // names reach G-code comments: one line each, no control characters
+        crate::safe_text::check("name", &raw.name)?;
+        if let Some(d) = &raw.description {
+            // a block scalar's final line break is no line of its own
+            crate::safe_text::check("description", d.trim_end_matches(['\n', '\r']))?;
         }
         if raw.parts.is_empty() {
             return Err(Error::input("parts", "expected at least one part"));
@@ -210,7 +215,8 @@ impl Recipe {
         };
         // templates, loops and groups expanded into leaf parts
         let expansion = super::expand::expand(&raw.parts, &library.templates, &params, dir)?;
-        let total_limit = max_strings.max(DEFAULT_MAX_STRINGS);
+        // the limit holds for all parts together too (YAML aliases, loops)
+        let total_limit = max_strings;
         let mut total = 0u64;
         let mut parts = Vec::with_capacity(expansion.leaves.len());
         for (k, leaf) in expansion.leaves.iter().enumerate() {
@@ -225,6 +231,7 @@ impl Recipe {
                 part.name.clone_from(name);
             }
             part.place.clone_from(place);
+            crate::safe_text::check(&format!("{place}.name"), &part.name)?;
             let n = part.string_count();
             if n > max_strings {
                 return Err(Error::input(
@@ -239,7 +246,7 @@ impl Recipe {
                 return Err(Error::input(
                     format!("{place}.primitive"),
                     format!(
-                        "with the parts before it the recipe would have {total} strings, more than the limit of {total_limit} for all parts together; expected fewer parts or strings"
+                        "the parts up to this one make {total} strings, more than the limit of {total_limit} for the whole recipe (all parts together); expected fewer or smaller parts (or raise max_strings)"
                     ),
                 ));
             }
@@ -292,8 +299,11 @@ fn resolve_material(ctx: &Ctx, m: Option<&RawMaterial>) -> Result<Material> {
             )
         }),
         Some(RawMaterial::Inline(m)) => {
+            if let Some(n) = &m.name {
+                crate::safe_text::check("material.name", n)?;
+            }
             let nozzle_temp = ctx.positive(&m.nozzle_temp, "material.nozzle_temp")?;
-            Ok(Material {
+            let material = Material {
                 name: m.name.clone().unwrap_or_else(|| "custom".into()),
                 filament_diameter: match &m.filament_diameter {
                     Some(n) => Some(ctx.positive(n, "material.filament_diameter")?),
@@ -323,9 +333,36 @@ fn resolve_material(ctx: &Ctx, m: Option<&RawMaterial>) -> Result<Material> {
                     Some(n) => ctx.non_negative(n, "material.fan_start_z")?,
                     None => FAN_START_Z,
                 },
-            })
+            };
+            material_ranges(&material)?;
+            Ok(material)
         }
     }
+}
+
+/// Refuses an inline material's values outside what a machine can do (see
+/// [`crate::limits`]); the nozzle temperature against the printer's own
+/// limit is the `nozzle-temp` check's (a failed check, not unusable input).
+fn material_ranges(m: &Material) -> Result<()> {
+    use crate::limits::*;
+    if let Some(d) = m.filament_diameter {
+        range("material.filament_diameter", d, FILAMENT_DIAMETER, "mm")?;
+    }
+    range("material.density", m.density, DENSITY, "g/cm³")?;
+    at_most("material.nozzle_temp", m.nozzle_temp, NOZZLE_TEMP_MAX, "°C")?;
+    at_most(
+        "material.max_nozzle_temp",
+        m.max_nozzle_temp,
+        NOZZLE_TEMP_MAX,
+        "°C",
+    )?;
+    at_most("material.bed_temp", m.bed_temp, BED_TEMP_MAX, "°C")?;
+    at_most(
+        "material.fan_start_z",
+        m.fan_start_z,
+        MACHINE_LENGTH_MAX,
+        "mm",
+    )
 }
 
 fn resolve_part(ctx: &Ctx, p: &RawPart, c0: f64, v0: f64, k: usize) -> Result<Part> {
@@ -488,15 +525,32 @@ pub fn load_bitmap(path: &PathBuf, shown: &str) -> Result<Bitmap> {
         io_kind: Some(e.kind()),
         ..Error::input("", message)
     };
-    let reader = image::ImageReader::open(path)
-        .map_err(|e| {
-            io(
-                format!("cannot open the image `{shown}` ({}): {e}", path.display()),
-                &e,
-            )
-        })?
-        .with_guessed_format()
-        .map_err(|e| io(format!("cannot read the image `{shown}`: {e}"), &e))?;
+    let open = || {
+        image::ImageReader::open(path)
+            .map_err(|e| {
+                io(
+                    format!("cannot open the image `{shown}` ({}): {e}", path.display()),
+                    &e,
+                )
+            })?
+            .with_guessed_format()
+            .map_err(|e| io(format!("cannot read the image `{shown}`: {e}"), &e))
+    };
+    // the header's size first: a small file may declare a huge image
+    let (w, h) = open()?.into_dimensions().map_err(|e| {
+        Error::input(
+            "",
+            format!("`{shown}` is not an image p3dp can read (PNG, JPEG, BMP, GIF): {e}"),
+        )
+    })?;
+    crate::input::check_image_size(w, h)
+        .map_err(|m| Error::input("", format!("the image `{shown}` {m}")))?;
+    let mut reader = open()?;
+    let mut limits = image::Limits::default();
+    limits.max_image_width = Some(w.max(1));
+    limits.max_image_height = Some(h.max(1));
+    limits.max_alloc = Some(crate::input::MAX_IMAGE_PIXELS * 8);
+    reader.limits(limits);
     let img = reader.decode().map_err(|e| {
         Error::input(
             "",

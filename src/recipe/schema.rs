@@ -109,7 +109,7 @@ pub struct RawRecipe {
     #[serde(default)]
     pub material: Option<RawMaterial>,
     /// Named params in order.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "unique_map")]
     pub params: IndexMap<String, Num>,
     /// Default cross-section and speed.
     #[serde(default)]
@@ -275,4 +275,35 @@ pub enum RawStep {
         max_length: Num,
     },
     Translate(Num3),
+}
+
+/// Deserializes a map that refuses a key given twice (an `IndexMap` would
+/// silently keep the last), as struct fields are refused.
+fn unique_map<'de, D: Deserializer<'de>>(
+    d: D,
+) -> std::result::Result<IndexMap<String, Num>, D::Error> {
+    struct V;
+    impl<'de> Visitor<'de> for V {
+        type Value = IndexMap<String, Num>;
+        fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+            f.write_str("a map of param names to numbers or expressions")
+        }
+        fn visit_map<A: MapAccess<'de>>(
+            self,
+            mut m: A,
+        ) -> std::result::Result<Self::Value, A::Error> {
+            let mut out = IndexMap::new();
+            while let Some(k) = m.next_key::<String>()? {
+                if out.contains_key(&k) {
+                    return Err(de::Error::custom(format!(
+                        "duplicate param `{k}`; expected each param once"
+                    )));
+                }
+                let v: Num = m.next_value()?;
+                out.insert(k, v);
+            }
+            Ok(out)
+        }
+    }
+    d.deserialize_map(V)
 }

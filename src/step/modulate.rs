@@ -53,6 +53,16 @@ impl Bitmap {
             ));
         }
         let chars: Vec<char> = text.chars().collect();
+        if chars.len() > crate::input::MAX_MAP_TEXT_CHARS {
+            return Err(Error::input(
+                "",
+                format!(
+                    "the text has {} characters; expected at most {}",
+                    chars.len(),
+                    crate::input::MAX_MAP_TEXT_CHARS
+                ),
+            ));
+        }
         let width = 1 + 9 * chars.len();
         let height = 10;
         let mut pixels = vec![1.0f32; width * height];

@@ -14,7 +14,10 @@ pub fn apply(tp: &mut Toolpath, max: f64, max_strings: u64) -> Result<()> {
             1
         }
     };
-    let total: u64 = (0..tp.len()).map(pieces).sum();
+    // saturating: two strings of 1e300 mm must not wrap around to a few pieces
+    let total: u64 = (0..tp.len())
+        .map(pieces)
+        .fold(0u64, |a, b| a.saturating_add(b));
     if total > max_strings {
         return Err(Error::input(
             "",

@@ -121,6 +121,9 @@ impl Program {
     }
 }
 
+/// Most frames `push` may save before a `pop`.
+pub const MAX_SAVED: usize = 100_000;
+
 /// A lower bound of the steps `cmds` run, known without running them: every
 /// command is a step, a `repeat` of a constant count runs its body that many
 /// times, an `if` at least its shorter branch, an L-system of constant
@@ -399,7 +402,16 @@ impl Run<'_> {
             }
             Op::PenDown => self.pen_down = true,
             Op::Pause => self.event(Event::Pause, place)?,
-            Op::Push => self.saved.push(self.frame),
+            Op::Push => {
+                // each saved frame is memory: a push without a pop is bounded
+                if self.saved.len() >= MAX_SAVED {
+                    return Err(Error::input(
+                        place,
+                        format!("more than {MAX_SAVED} frames pushed and not popped; expected a `pop` for each `push`"),
+                    ));
+                }
+                self.saved.push(self.frame)
+            }
             Op::Pop => {
                 let Some(f) = self.saved.pop() else {
                     return Err(Error::input(

@@ -561,15 +561,7 @@ pub fn fill_name(name: &str, params: &Params, place: &str) -> Result<String> {
 
 /// Refuses names that would break the G-code comment they are written into.
 pub fn check_name(name: &str, place: &str) -> Result<()> {
-    if name.chars().any(char::is_control) {
-        return Err(Error::input(
-            place,
-            format!(
-                "the name {name:?} contains a control character (a line break or tab); expected one line of text, as it is written into G-code comments"
-            ),
-        ));
-    }
-    Ok(())
+    crate::safe_text::check(place, name)
 }
 
 /// A value in a name or a place: integers without decimals, others with up
