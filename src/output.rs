@@ -358,6 +358,8 @@ pub fn check_distinct(outputs: &[(String, PathBuf)], inputs: &[(String, PathBuf)
         .collect();
     let inputs: Vec<(&String, &PathBuf, PathBuf)> =
         inputs.iter().map(|(l, p)| (l, p, identity(p))).collect();
+    // the first output of each identity (a batch may have 10,000)
+    let mut first: std::collections::HashMap<&PathBuf, usize> = std::collections::HashMap::new();
     for (k, (label, path)) in outputs.iter().enumerate() {
         let Some(id) = &ids[k] else { continue };
         if let Some((what, input, _)) = inputs.iter().find(|(_, _, i)| i == id) {
@@ -370,7 +372,7 @@ pub fn check_distinct(outputs: &[(String, PathBuf)], inputs: &[(String, PathBuf)
                 ),
             ));
         }
-        if let Some(j) = (0..k).find(|&j| ids[j].as_ref() == Some(id)) {
+        if let Some(&j) = first.get(id) {
             return Err(Error::input(
                 label.as_str(),
                 format!(
@@ -381,6 +383,7 @@ pub fn check_distinct(outputs: &[(String, PathBuf)], inputs: &[(String, PathBuf)
                 ),
             ));
         }
+        first.insert(id, k);
     }
     Ok(())
 }

@@ -457,7 +457,14 @@ impl Run<'_> {
                 self.event(Event::Fan { speed }, place)?;
             }
             Op::Temp { bed, celsius, wait } => {
-                let t = self.within(celsius, vals, place, 0.0, 1000.0)?;
+                // the physical bounds of crate::limits: a hotter one is
+                // refused, not left to a check that --force skips
+                let max = if *bed {
+                    crate::limits::BED_TEMP_MAX
+                } else {
+                    crate::limits::NOZZLE_TEMP_MAX
+                };
+                let t = self.within(celsius, vals, place, 0.0, max)?;
                 let e = if *bed {
                     Event::BedTemp {
                         celsius: t,
