@@ -11,5 +11,5 @@ fuzz_target!(|data: &[u8]| {
     if std::fs::write(&file, data).is_err() {
         return;
     }
-    let _ = p3dp::printer::Printer::from_file(&file);
+    let _ = p3dp::machine::Printer::from_file(&file);
 });

@@ -35,11 +35,11 @@ fuzz_target!(|data: &[u8]| {
     }
     let mut paths = Vec::new();
     for k in 0..recipe.parts.len() {
-        match p3dp::build::make_part(&recipe, k) {
+        match p3dp::build::make_part(&recipe, k, p3dp::threads::Threads::ONE) {
             Ok(tp) => paths.push(tp),
             Err(_) => return,
         }
     }
     let refs: Vec<&p3dp::toolpath::Toolpath> = paths.iter().collect();
-    let _ = p3dp::check::run(&recipe, &refs);
+    let _ = p3dp::check::run(&recipe, &refs, &recipe.allow, p3dp::threads::Threads::ONE);
 });
