@@ -137,6 +137,10 @@ pub struct Finding {
     /// Recipe coordinates of the first place concerned.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub at: Option<[f64; 3]>,
+    /// Every string concerned in `part`, as ranges [first, end) of string
+    /// indices (empty: only `string`), so a preview can show them all.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub strings: Vec<[usize; 2]>,
 }
 
 /// Errors, and warnings when `strict`: the findings that fail a build (infos never do).

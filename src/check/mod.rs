@@ -103,6 +103,7 @@ pub fn events(recipe: &Recipe, tp: &Toolpath) -> Vec<Finding> {
             part: Some(tp.name.clone()),
             string: Some(k),
             at: Some(at.to_array()),
+            strings: Vec::new(),
         });
     };
     let pick = |bed: bool, limit: f64| -> Vec<(usize, f64)> {
@@ -148,6 +149,7 @@ fn temperatures(recipe: &Recipe, out: &mut Vec<Finding>) {
             part: None,
             string: None,
             at: None,
+            strings: Vec::new(),
         });
     }
     if m.bed_temp > p.max_bed_temp {
@@ -161,6 +163,7 @@ fn temperatures(recipe: &Recipe, out: &mut Vec<Finding>) {
             part: None,
             string: None,
             at: None,
+            strings: Vec::new(),
         });
     }
 }
@@ -197,6 +200,7 @@ fn points_where(
             part: Some(tp.name.clone()),
             string: Some(i.saturating_sub(1)),
             at: Some(p.to_array()),
+            strings: Vec::new(),
         });
     }
 }
@@ -275,6 +279,7 @@ fn strings(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) {
             part: Some(tp.name.clone()),
             string: Some(k),
             at: Some(m.to_array()),
+            strings: Vec::new(),
         });
     }
     if let Some((k, n, worst)) = flow {
@@ -302,6 +307,7 @@ fn strings(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) {
             part: Some(tp.name.clone()),
             string: Some(k),
             at: Some(m.to_array()),
+            strings: Vec::new(),
         });
     }
 }

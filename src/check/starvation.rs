@@ -135,6 +135,7 @@ pub fn check(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) {
             part: Some(tp.name.clone()),
             string: Some(k),
             at: Some(at.to_array()),
+            strings: Vec::new(),
         });
     }
 }
