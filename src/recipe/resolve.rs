@@ -363,6 +363,27 @@ fn resolve_part(ctx: &Ctx, p: &RawPart, c0: f64, v0: f64, k: usize) -> Result<Pa
             .primitive
             .resolve(&ctx.scope, &env)
             .map_err(|e| e.under(&key))?;
+        // a solid's beads are layer_height × line_width: a cross_section the
+        // recipe gives for it would be silently ignored, so refuse it
+        if let crate::primitive::Primitive::Solid(sol) = &primitive {
+            let bead = sol.layer_height * sol.line_width;
+            let given = item.cross_section.is_some() || p.cross_section.is_some();
+            if given && (c - bead).abs() > 1e-9 * bead {
+                let at = if item.cross_section.is_some() {
+                    format!("{key}.cross_section")
+                } else {
+                    "cross_section".to_string()
+                };
+                return Err(Error::input(
+                    at,
+                    format!(
+                        "{c} is not used by a solid: its beads are layer_height × line_width = {} mm² (infill squeezed to its spacing); remove cross_section or set it to {}",
+                        crate::format::fmt_num(bead),
+                        crate::format::fmt_num(bead)
+                    ),
+                ));
+            }
+        }
         pieces.push(Piece {
             primitive,
             cross_section: c,
