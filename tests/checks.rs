@@ -378,3 +378,34 @@ fn bed_contact_does_not_depend_on_the_segment_count() {
         "{coarse} mm² vs {fine} mm²"
     );
 }
+
+/// The codes `p3dp check` reports for `text` written as a recipe file.
+fn check_codes(tag: &str, text: &str) -> String {
+    let dir = tmp(&format!("checks-{tag}"));
+    std::fs::write(dir.join("r.yaml"), text).unwrap();
+    let out = p3dp(&dir, &["check", "r.yaml"]);
+    let _ = std::fs::remove_dir_all(&dir);
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    )
+}
+
+#[test]
+fn the_sphere_and_the_globe_need_their_brims() {
+    for name in ["sphere", "globe"] {
+        let text = std::fs::read_to_string(root().join(format!("recipes/{name}.yaml")))
+            .unwrap()
+            .replace("../maps/", &format!("{}/maps/", root().display()));
+        assert!(text.contains("brim: {loops: 8}"), "{name}");
+        let with = check_codes(&format!("{name}-brim"), &text);
+        assert!(!with.contains("small-contact"), "{with}");
+        let without = check_codes(
+            &format!("{name}-no-brim"),
+            &text.replace("brim: {loops: 8}", ""),
+        );
+        assert!(without.contains("warning [small-contact]"), "{without}");
+        assert!(without.contains("add a `brim:`"), "{without}");
+    }
+}

@@ -327,6 +327,9 @@ pub fn check(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) -> Ve
         .iter()
         .zip(footprint_all(paths, p.nozzle_diameter, min_h))
     {
+        if let Some(f) = &f {
+            small_contact(recipe, tp, f, out);
+        }
         footprints.extend(f);
         if let Some((k, h)) = scrape {
             let at = tp.midpoint(k);
@@ -348,6 +351,40 @@ pub fn check(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) -> Ve
         }
     }
     footprints
+}
+
+/// The `small-contact` warning of part `tp` with footprint `f`: its bed
+/// contact is less than `checks.min_contact_per_height` × its height plus
+/// `checks.min_contact_per_gram` × its filament's mass (a tall or heavy part
+/// on a pole tips or comes off under the nozzle).
+fn small_contact(recipe: &Recipe, tp: &Toolpath, f: &Footprint, out: &mut Vec<Finding>) {
+    let lim = &recipe.printer.checks;
+    let height = tp.points.iter().map(|p| p.z).fold(0.0, f64::max);
+    let grams = tp.volume() / 1000.0 * recipe.material.density;
+    let need = lim.min_contact_per_height * height + lim.min_contact_per_gram * grams;
+    if f.contact_area_mm2 >= need {
+        return;
+    }
+    let at = DVec3::new(
+        (f.min[0] + f.max[0]) / 2.0,
+        (f.min[1] + f.max[1]) / 2.0,
+        0.0,
+    );
+    out.push(Finding {
+        code: "small-contact",
+        severity: Severity::Warning,
+        message: format!(
+            "part `{}` stands on {:.1} mm² of bed for {height:.1} mm of height and {grams:.1} g: less than the {need:.1} mm² it needs ({} mm²/mm of height + {} mm²/g, checks.min_contact_per_height, min_contact_per_gram); it may tip or come off the bed: add a `brim:` to the part",
+            tp.name,
+            f.contact_area_mm2,
+            lim.min_contact_per_height,
+            lim.min_contact_per_gram,
+        ),
+        part: Some(tp.name.clone()),
+        string: None,
+        at: Some(at.to_array()),
+        strings: Vec::new(),
+    });
 }
 
 #[cfg(test)]

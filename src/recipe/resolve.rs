@@ -403,6 +403,35 @@ fn resolve_part(ctx: &Ctx, p: &RawPart, c0: f64, v0: f64, k: usize) -> Result<Pa
         steps,
         more: pieces,
         place: format!("parts[{k}]"),
+        brim: match &p.brim {
+            Some(b) => {
+                Some(crate::model::Brim {
+                    loops: {
+                        let n = ctx.positive(&b.loops, "brim.loops")?;
+                        if n.fract() != 0.0 || n > 1000.0 {
+                            return Err(Error::input(
+                            "brim.loops",
+                            format!("{n} is not allowed; expected a whole number of loops, 1 to 1000"),
+                        ));
+                        }
+                        n as u32
+                    },
+                    line_width: match &b.line_width {
+                        Some(n) => ctx.positive(n, "brim.line_width")?,
+                        None => 0.45,
+                    },
+                    layer_height: match &b.layer_height {
+                        Some(n) => ctx.positive(n, "brim.layer_height")?,
+                        None => 0.2,
+                    },
+                    speed: match &b.speed {
+                        Some(n) => ctx.positive(n, "brim.speed")?,
+                        None => speed,
+                    },
+                })
+            }
+            None => None,
+        },
     })
 }
 
