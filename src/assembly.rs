@@ -44,6 +44,12 @@ pub fn make_parts(recipe: &Recipe, threads: Threads) -> Result<Vec<Toolpath>> {
     for g in &recipe.groups {
         apply(g, &mut parts[g.first..g.end], recipe.max_strings, threads)?;
     }
+    // brims last: round each part's first contact as printed, undeformed
+    for (tp, part) in parts.iter_mut().zip(&recipe.parts) {
+        if let Some(b) = &part.brim {
+            *tp = b.around(tp);
+        }
+    }
     if recipe.groups.iter().any(|g| has_subdivide(&g.steps)) {
         let total: u64 = parts.iter().map(|t| t.len() as u64).sum();
         if total > limit {

@@ -40,6 +40,88 @@ pub struct Part {
     /// Where the part is written, through templates and loops
     /// (`parts[1].parts[0] (template ring, k = 3)`), for error places.
     pub place: String,
+    /// Loops on the bed round its first contact, printed first.
+    pub brim: Option<Brim>,
+}
+
+/// A part's brim: `loops` closed circles on the bed round the part's first
+/// contact, from the outside in, then the part (a remedy for a part that
+/// stands on a small contact, as Kanada's sphere and globe on their poles).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Brim {
+    /// Number of loops.
+    pub loops: u32,
+    /// Width of a loop and the step between loops, mm.
+    pub line_width: f64,
+    /// Height of the loops (their nozzle height over the bed), mm.
+    pub layer_height: f64,
+    /// Speed, mm/s.
+    pub speed: f64,
+}
+
+impl Brim {
+    /// Longest chord of a brim loop, mm.
+    const CHORD: f64 = 0.5;
+
+    /// The brim round `tp`'s first contact, then `tp`: the contact is the
+    /// extruding strings within one brim layer of the part's lowest; the
+    /// loops are circles about the middle of their bounding rectangle, the
+    /// innermost 0.9 × line_width outside the farthest contact point (its
+    /// bead overlaps the part's), each next one line_width further out,
+    /// printed outermost first so the head ends inside, next to the part.
+    pub fn around(&self, tp: &Toolpath) -> Toolpath {
+        if tp.is_empty() || self.loops == 0 {
+            return tp.clone();
+        }
+        let drawn = || {
+            (0..tp.len())
+                .filter(|&k| !tp.strings[k].travel)
+                .flat_map(|k| {
+                    let (a, b) = tp.ends(k);
+                    [a, b]
+                })
+        };
+        let z0 = drawn().map(|p| p.z).fold(f64::INFINITY, f64::min);
+        let (mut lo, mut hi) = (
+            glam::DVec2::splat(f64::INFINITY),
+            glam::DVec2::splat(f64::NEG_INFINITY),
+        );
+        for p in drawn().filter(|p| p.z <= z0 + self.layer_height) {
+            lo = lo.min(p.truncate());
+            hi = hi.max(p.truncate());
+        }
+        if !lo.is_finite() {
+            let p = tp.points[0].truncate();
+            (lo, hi) = (p, p);
+        }
+        let centre = (lo + hi) * 0.5;
+        let reach = drawn()
+            .filter(|p| p.z <= z0 + self.layer_height)
+            .map(|p| p.truncate().distance(centre))
+            .fold(0.0, f64::max);
+        let (w, h) = (self.line_width, self.layer_height);
+        let c = w * h;
+        let r_in = reach + 0.9 * w;
+        let on_circle = |r: f64, t: f64| {
+            glam::DVec3::new(centre.x + r * libm::cos(t), centre.y + r * libm::sin(t), h)
+        };
+        let r_out = r_in + (self.loops - 1) as f64 * w;
+        let mut out = Toolpath::new(on_circle(r_out, 0.0));
+        out.name = tp.name.clone();
+        for k in (0..self.loops).rev() {
+            let r = r_in + k as f64 * w;
+            let n = (libm::ceil(std::f64::consts::TAU * r / Self::CHORD) as usize).max(24);
+            if k + 1 < self.loops {
+                out.travel(on_circle(r, 0.0), self.speed);
+            }
+            for i in 1..=n {
+                let t = std::f64::consts::TAU * i as f64 / n as f64;
+                out.draw(on_circle(r, if i == n { 0.0 } else { t }), c, self.speed);
+            }
+        }
+        out.append(tp, self.speed);
+        out
+    }
 }
 
 /// A recipe resolved and ready to build.
@@ -120,7 +202,8 @@ impl Part {
     }
 }
 
-/// Makes a part's strings: its primitives, then each of its own steps in
+/// Makes a part's strings (without its brim, which
+/// [`crate::assembly::make_parts`] adds last): its primitives, then each of its own steps in
 /// order (a group's steps are [`crate::assembly::make_parts`]'s), on up to
 /// `threads` threads.
 pub fn make_part(recipe: &Recipe, k: usize, threads: Threads) -> Result<Toolpath> {
@@ -169,5 +252,42 @@ pub fn pattern_png(recipe: &Recipe) -> Result<Vec<u8>> {
                 models.len()
             ),
         )),
+    }
+}
+
+#[cfg(test)]
+mod brim_tests {
+    use super::*;
+    use glam::DVec3;
+
+    #[test]
+    fn a_brim_circles_the_first_contact_outside_in_then_prints_the_part() {
+        let mut tp = Toolpath::new(DVec3::new(0.0, 0.0, 0.2));
+        tp.name = "pole".into();
+        tp.draw(DVec3::new(1.0, 0.0, 0.2), 0.1, 30.0);
+        tp.draw(DVec3::new(1.0, 0.0, 5.0), 0.1, 30.0);
+        let b = Brim {
+            loops: 3,
+            line_width: 0.5,
+            layer_height: 0.2,
+            speed: 20.0,
+        };
+        let out = b.around(&tp);
+        assert_eq!(out.name, "pole");
+        // the contact: the first string (within 0.2 of the lowest), centre
+        // (0.5, 0), reach 0.5; loops at 0.5 + 0.45 + k·0.5, outermost first
+        let centre = glam::DVec2::new(0.5, 0.0);
+        let r_of = |p: DVec3| p.truncate().distance(centre);
+        assert!((r_of(out.points[0]) - (0.95 + 1.0)).abs() < 1e-12);
+        let drawn: Vec<usize> = (0..out.len()).filter(|&k| !out.strings[k].travel).collect();
+        let last_brim = drawn[drawn.len() - 3]; // before the part's two strings
+        assert!((r_of(out.ends(last_brim).1) - 0.95).abs() < 1e-12);
+        for &k in &drawn[..drawn.len() - 2] {
+            let (a, c) = (out.ends(k), out.strings[k].c);
+            assert!((a.0.z - 0.2).abs() < 1e-12 && (c - 0.1).abs() < 1e-12);
+        }
+        // the part follows whole
+        assert_eq!(out.points[out.points.len() - 1], DVec3::new(1.0, 0.0, 5.0));
+        assert!(out.volume() > tp.volume() + 0.1 * std::f64::consts::TAU * 3.0 * 0.95);
     }
 }

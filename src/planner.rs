@@ -6,10 +6,14 @@
 //! alone, its filament length), an acceleration `a` and a nominal speed
 //!
 //! ```text
-//! v_nom = min(F, max_velocity, L / min_segment_time)
+//! v_nom = min(F, max_velocity, max_z_velocity · L/|dz|)
 //! ```
 //!
-//! (`max_velocity` does not cap E-only moves, which run at their own F). The
+//! (`max_velocity` does not cap E-only moves, which run at their own F, under
+//! Klipper at most `max_extrude_only_velocity` and accelerating at most at
+//! `max_extrude_only_accel`; a move with Z accelerates at most at
+//! `max_z_acceleration · L/|dz|`), then slowed by Marlin's minimum segment
+//! time while its buffer drains (see [`Planner::slowdown`]). The
 //! head starts and ends at rest. Between two XYZ blocks the speed may not
 //! exceed the *junction speed* of the corner (see [`Planner::junction_v2`]),
 //! nor either block's nominal speed; around an E-only block (a retraction) the
@@ -18,6 +22,8 @@
 //!
 //! - backward pass, from the end at rest: `e_i = min(j_i, e_{i+1} + 2·a_i·L_i)`
 //!   (every block can decelerate to what follows);
+//!   under Klipper the junction is also held to (icv / |Δr|)² where r is the
+//!   filament per mm of path (`instantaneous_corner_velocity`: G1 ↔ G0);
 //! - forward pass, from the start at rest: `e_i = min(e_i, e_{i-1} + 2·a_{i-1}·L_{i-1})`
 //!   (every block can be reached by accelerating);
 //! - each block is a trapezoid: it accelerates at `a` from its entry speed,
@@ -115,6 +121,20 @@ struct Last {
     len: f64,
     accel: f64,
     cruise_v2: f64,
+    /// Filament per mm of path (0 for travel), for Klipper's extruder corner.
+    e_per_mm: f64,
+}
+
+/// Marlin's block buffer as the SD reader fills it and the steppers empty it
+/// (see [`Planner::slowdown`]): times in s from the first move.
+#[derive(Clone, Debug, Default)]
+struct Queue {
+    /// When the reader has the next line ready.
+    read: f64,
+    /// When the last queued block finishes.
+    busy_until: f64,
+    /// End times of the blocks in the buffer, oldest first.
+    ends: std::collections::VecDeque<f64>,
 }
 
 struct Part {
@@ -134,6 +154,7 @@ pub struct Planner {
     parts: Vec<Part>,
     /// Before any part: (ideal, nominal, dwell).
     pre: (f64, f64, f64),
+    queue: Queue,
 }
 
 impl Planner {
@@ -146,6 +167,7 @@ impl Planner {
             last: None,
             parts: Vec::new(),
             pre: (0.0, 0.0, 0.0),
+            queue: Queue::default(),
         }
     }
 
@@ -184,19 +206,30 @@ impl Planner {
     /// starts from rest.
     pub fn stop(&mut self) {
         self.last = None;
+        self.drain(0.0);
+    }
+
+    /// The buffer empties (the firmware waits for its moves, then `seconds`
+    /// more) before the reader goes on.
+    fn drain(&mut self, seconds: f64) {
+        let q = &mut self.queue;
+        q.read = q.read.max(q.busy_until) + seconds;
+        q.busy_until = q.read;
+        q.ends.clear();
     }
 
     /// The head stands still for `seconds` (e.g. `G4`): counted in every time.
     pub fn dwell(&mut self, seconds: f64) {
-        self.stop();
+        self.last = None;
+        self.drain(seconds.max(0.0));
         if seconds > 0.0 {
             self.add(seconds, seconds, seconds);
         }
     }
 
     /// Nominal speed: F capped by `max_velocity` (XYZ moves) and by
-    /// `min_segment_time` (Marlin slows a move so it lasts at least that long).
-    fn nominal(&self, len: f64, feed: f64, xyz: bool) -> f64 {
+    /// `cap`, then by `min_segment_time` (see [`Planner::slowdown`]).
+    fn nominal(&mut self, len: f64, feed: f64, xyz: bool, cap: f64) -> f64 {
         let mut v = if feed.is_finite() && feed > 0.0 {
             feed
         } else {
@@ -205,10 +238,56 @@ impl Planner {
         if xyz {
             v = v.min(self.limits.max_velocity);
         }
-        if self.limits.min_segment_time > 0.0 {
-            v = v.min(len / self.limits.min_segment_time);
+        v = v.min(cap);
+        self.slowdown(len, v)
+    }
+
+    /// Marlin's minimum segment time, as `planner.cpp` (`_populate_block`,
+    /// `#if ENABLED(SLOWDOWN)`) applies it: only while the buffer is draining,
+    /// with `moves_queued` blocks in it and `2 ≤ moves_queued ≤
+    /// BLOCK_BUFFER_SIZE/2 − 1`, a move of nominal time t < min_segment_time
+    /// gets `t + 2·(min_segment_time − t)/moves_queued`; a full buffer (the
+    /// reader keeping ahead) or an empty one slows nothing. The buffer is
+    /// modelled as filled by a reader that makes a line ready every
+    /// 1/`command_rate` s (when there is room: BLOCK_BUFFER_SIZE − 1 blocks)
+    /// and emptied by the steppers at each block's nominal time (its
+    /// acceleration is left out). With `min_segment_time_floor` every move
+    /// lasts at least `min_segment_time` instead. Returns the speed.
+    fn slowdown(&mut self, len: f64, v: f64) -> f64 {
+        let lim = &self.limits;
+        let m = lim.min_segment_time;
+        if m <= 0.0 {
+            return v;
         }
-        v
+        if lim.min_segment_time_floor {
+            return v.min(len / m);
+        }
+        let size = lim.block_buffer_size as usize;
+        let q = &mut self.queue;
+        let mut ready = q.read + 1.0 / lim.command_rate;
+        while q.ends.front().is_some_and(|&e| e <= ready) {
+            q.ends.pop_front();
+        }
+        if q.ends.len() + 1 >= size {
+            // full: the reader waits for the oldest block to finish
+            ready = ready.max(q.ends.pop_front().unwrap_or(ready));
+            while q.ends.front().is_some_and(|&e| e <= ready) {
+                q.ends.pop_front();
+            }
+        }
+        let queued = q.ends.len();
+        let mut t = len / v;
+        if (2..size / 2).contains(&queued) && t < m {
+            t += 2.0 * (m - t) / queued as f64;
+        }
+        q.read = ready;
+        q.busy_until = q.busy_until.max(ready) + t;
+        q.ends.push_back(q.busy_until);
+        if t > 0.0 {
+            len / t
+        } else {
+            v
+        }
     }
 
     /// A move to `to` (machine coordinates, mm) at `feed` mm/s, feeding `e` mm
@@ -224,15 +303,43 @@ impl Planner {
         let d = to - from;
         let len = d.length();
         if len > 0.0 {
-            let accel = match kind {
+            let mut accel = match kind {
                 MoveKind::Extrude => self.limits.max_acceleration,
                 MoveKind::Travel => self.limits.travel_acceleration,
             };
-            let v = self.nominal(len, feed, true);
+            // the Z axis's own limits, scaled to the move as both firmwares
+            // do (Klipper's cartesian check_move: z_ratio = L / |dz|)
+            let mut cap = f64::INFINITY;
+            if d.z != 0.0 {
+                let z_ratio = len / d.z.abs();
+                if let Some(vz) = self.limits.max_z_velocity {
+                    cap = vz * z_ratio;
+                }
+                if let Some(az) = self.limits.max_z_acceleration {
+                    accel = accel.min(az * z_ratio);
+                }
+            }
+            let v = self.nominal(len, feed, true, cap);
             let cruise_v2 = v * v;
             let dir = d / len;
+            let e_per_mm = if kind == MoveKind::Extrude {
+                e / len
+            } else {
+                0.0
+            };
             let entry_v2 = match self.last {
-                Some(prev) => self.junction_v2(&prev, dir, len, accel, cruise_v2),
+                Some(prev) => {
+                    let mut j = self.junction_v2(&prev, dir, len, accel, cruise_v2);
+                    // Klipper's extruder.py calc_junction: the E speed may
+                    // change at once by at most instantaneous_corner_velocity
+                    if let Some(icv) = self.limits.instantaneous_corner_velocity {
+                        let dr = (e_per_mm - prev.e_per_mm).abs();
+                        if dr > 0.0 {
+                            j = j.min((icv / dr) * (icv / dr));
+                        }
+                    }
+                    j
+                }
                 None => 0.0,
             };
             self.blocks.push(Block {
@@ -246,6 +353,7 @@ impl Planner {
                 len,
                 accel,
                 cruise_v2,
+                e_per_mm,
             });
             self.pos = Some(to);
             let ideal = if feed.is_finite() && feed > 0.0 {
@@ -266,10 +374,20 @@ impl Planner {
         if length <= 0.0 || !length.is_finite() {
             return;
         }
-        let v = self.nominal(length, feed, false);
+        // Klipper's extruder.py check_move: an extrude-only move is held to
+        // max_extrude_only_velocity and max_extrude_only_accel
+        let cap = self
+            .limits
+            .max_extrude_only_velocity
+            .unwrap_or(f64::INFINITY);
+        let accel = match self.limits.max_extrude_only_accel {
+            Some(a) => a.min(self.limits.retract_acceleration),
+            None => self.limits.retract_acceleration,
+        };
+        let v = self.nominal(length, feed, false, cap);
         self.blocks.push(Block {
             len: length,
-            accel: self.limits.retract_acceleration,
+            accel,
             cruise_v2: v * v,
             entry_v2: 0.0,
         });
@@ -650,6 +768,14 @@ mod tests {
             square_corner_velocity: None,
             min_segment_time: 0.0,
             minimum_cruise_ratio: 0.0,
+            max_z_velocity: None,
+            max_z_acceleration: None,
+            instantaneous_corner_velocity: None,
+            max_extrude_only_velocity: None,
+            max_extrude_only_accel: None,
+            min_segment_time_floor: false,
+            block_buffer_size: 16,
+            command_rate: 500.0,
         }
     }
 
@@ -847,7 +973,7 @@ mod tests {
     }
 
     #[test]
-    fn min_segment_time_caps_short_moves() {
+    fn min_segment_time_floor_caps_short_moves() {
         // 100 moves of 0.2 mm in a line at 40 mm/s take 5 ms each; Marlin's
         // 20 ms minimum slows them to 10 mm/s: no corners, so one trapezoid
         let pts: Vec<DVec3> = (0..=100)
@@ -855,12 +981,156 @@ mod tests {
             .collect();
         let lim = Limits {
             min_segment_time: 0.02,
+            min_segment_time_floor: true,
             ..marlin(1000.0, 0.013, 300.0)
         };
         let e = plan(lim, &pts, 40.0);
         close(e.total.planned, 20.0 / 10.0 + 10.0 / 1000.0, 1e-9);
         close(e.total.ideal, 0.5, 1e-12);
         close(e.total.nominal, 2.0, 1e-12);
+    }
+
+    /// `n` collinear moves of `l` mm along x, all at `feed`, extruding.
+    fn line(n: usize, l: f64) -> Vec<DVec3> {
+        (0..=n)
+            .map(|k| DVec3::new(l * k as f64, 0.0, 0.0))
+            .collect()
+    }
+
+    #[test]
+    fn marlin_slowdown_only_while_the_buffer_drains() {
+        // 30 moves of 0.2 mm at 40 mm/s (5 ms each), min segment time 20 ms
+        let mst = 0.02;
+        let t = 0.005;
+        let base = Limits {
+            min_segment_time: mst,
+            ..marlin(1000.0, 0.013, 300.0)
+        };
+        // a reader far quicker than the moves: the buffer fills at once, so
+        // block k sees k blocks queued; planner.cpp slows blocks with 2..=7
+        // queued (BLOCK_BUFFER_SIZE 16) by 2·(mst − t)/k, none after
+        let fast = Limits {
+            command_rate: f64::INFINITY,
+            ..base.clone()
+        };
+        let e = plan(fast, &line(30, 0.2), 40.0);
+        let extra: f64 = (2..=7).map(|k| 2.0 * (mst - t) / k as f64).sum();
+        close(e.total.nominal, 30.0 * t + extra, 1e-12);
+        close(e.total.ideal, 30.0 * t, 1e-12);
+        // a reader slower than the moves (10 ms a line): each block finds the
+        // buffer empty, so nothing is slowed
+        let slow = Limits {
+            command_rate: 100.0,
+            ..base.clone()
+        };
+        let e = plan(slow, &line(30, 0.2), 40.0);
+        close(e.total.nominal, 30.0 * t, 1e-12);
+        // moves longer than the minimum are never slowed
+        let e = plan(
+            Limits {
+                command_rate: f64::INFINITY,
+                ..base
+            },
+            &line(30, 1.0),
+            40.0,
+        );
+        close(e.total.nominal, 30.0 * 0.025, 1e-12);
+    }
+
+    /// Time of a block of `l` mm at `a` from v0 to v1 cruising at `vc`, by
+    /// hand (a trapezoid that reaches vc).
+    fn trapezoid(l: f64, a: f64, v0: f64, v1: f64, vc: f64) -> f64 {
+        let ramps = (vc - v0) / a + (vc - v1) / a;
+        let ramp_len = (2.0 * vc * vc - v0 * v0 - v1 * v1) / (2.0 * a);
+        assert!(ramp_len <= l);
+        ramps + (l - ramp_len) / vc
+    }
+
+    #[test]
+    fn klipper_instantaneous_corner_velocity_at_g1_g0_changes() {
+        // a straight line of 10 mm moves alternating G1 (0.33 mm of filament:
+        // r = 0.033 mm/mm) and G0 at 100 mm/s, a = 1000: Klipper's extruder
+        // junction holds each change of r to v = icv / |Δr| = 1/0.033
+        let lim = Limits {
+            instantaneous_corner_velocity: Some(1.0),
+            ..klipper(1000.0, 5.0, 300.0, 0.0)
+        };
+        let mut p = Planner::new(lim.clone());
+        p.move_to(DVec3::ZERO, 0.0, 100.0, MoveKind::Travel);
+        p.begin_part("p");
+        let n = 6;
+        for k in 1..=n {
+            let to = DVec3::new(10.0 * k as f64, 0.0, 0.0);
+            if k % 2 == 1 {
+                p.move_to(to, 0.33, 100.0, MoveKind::Extrude);
+            } else {
+                p.move_to(to, 0.0, 100.0, MoveKind::Travel);
+            }
+        }
+        let e = p.finish();
+        let vj = 1.0 / 0.033;
+        let want = trapezoid(10.0, 1000.0, 0.0, vj, 100.0)
+            + (n - 2) as f64 * trapezoid(10.0, 1000.0, vj, vj, 100.0)
+            + trapezoid(10.0, 1000.0, vj, 0.0, 100.0);
+        close(e.total.planned, want, 1e-12);
+        // without it the line is one trapezoid
+        let plain = Limits {
+            instantaneous_corner_velocity: None,
+            ..lim
+        };
+        let e = plan(plain, &line(6, 10.0), 100.0);
+        close(e.total.planned, 60.0 / 100.0 + 100.0 / 1000.0, 1e-12);
+    }
+
+    #[test]
+    fn z_moves_keep_to_the_z_axis_limits() {
+        let lim = Limits {
+            max_z_velocity: Some(5.0),
+            max_z_acceleration: Some(100.0),
+            ..marlin(1000.0, 0.013, 300.0)
+        };
+        // a 2 mm hop asked at 120 mm/s runs at 5 mm/s, accelerating at 100
+        let mut p = Planner::new(lim.clone());
+        p.move_to(DVec3::ZERO, 0.0, 120.0, MoveKind::Travel);
+        p.move_to(DVec3::new(0.0, 0.0, 2.0), 0.0, 120.0, MoveKind::Travel);
+        close(p.finish().total.planned, 2.0 / 5.0 + 5.0 / 100.0, 1e-12);
+        // a slanted move: the limits scale by L/|dz|
+        let mut p = Planner::new(lim);
+        p.move_to(DVec3::ZERO, 0.0, 120.0, MoveKind::Travel);
+        p.move_to(DVec3::new(10.0, 0.0, 2.0), 0.0, 120.0, MoveKind::Travel);
+        let l = 104f64.sqrt();
+        let (v, a) = (5.0 * l / 2.0, 100.0 * l / 2.0);
+        assert!(v * v < a * l);
+        close(p.finish().total.planned, l / v + v / a, 1e-12);
+    }
+
+    #[test]
+    fn klipper_extrude_only_limits() {
+        // a 0.8 mm retraction at 35 mm/s with max_extrude_only_velocity 10
+        // and max_extrude_only_accel 500: a trapezoid at 10 mm/s, a = 500
+        let lim = Limits {
+            max_extrude_only_velocity: Some(10.0),
+            max_extrude_only_accel: Some(500.0),
+            ..klipper(3000.0, 5.0, 300.0, 0.5)
+        };
+        let mut p = Planner::new(lim);
+        p.extrude_only(0.8, 35.0);
+        close(p.finish().total.planned, 0.8 / 10.0 + 10.0 / 500.0, 1e-12);
+        // Klipper's defaults: 4·nozzle² over the filament's area, ≈ 0.266
+        let r = crate::machine::kinematics::extrude_ratio(0.4, 1.75);
+        close(r, 0.64 / (std::f64::consts::PI * 0.875 * 0.875), 1e-12);
+        let k = Kinematics {
+            square_corner_velocity: Some(5.0),
+            max_acceleration: 3000.0,
+            ..Kinematics::default()
+        };
+        let l = k.limits(300.0, r);
+        close(l.max_extrude_only_accel.unwrap(), 3000.0 * r, 1e-12);
+        close(l.max_extrude_only_velocity.unwrap(), 300.0 * r, 1e-12);
+        assert_eq!(l.instantaneous_corner_velocity, Some(1.0));
+        let m = Kinematics::default().limits(200.0, r);
+        assert_eq!(m.instantaneous_corner_velocity, None);
+        assert_eq!(m.max_extrude_only_accel, None);
     }
 
     #[test]
@@ -946,7 +1216,7 @@ mod tests {
     fn defaults_follow_the_junction_model() {
         let k = Kinematics::default();
         k.validate().unwrap();
-        let l = k.limits(200.0);
+        let l = k.limits(200.0, 0.266);
         assert_eq!(l.max_velocity, 200.0);
         assert_eq!(l.junction_deviation, Some(0.013));
         assert_eq!(l.min_segment_time, 0.02);
@@ -956,7 +1226,7 @@ mod tests {
             max_acceleration: 3000.0,
             ..Kinematics::default()
         };
-        let l = k.limits(300.0);
+        let l = k.limits(300.0, 0.266);
         assert_eq!(l.junction_deviation, None);
         assert_eq!(l.min_segment_time, 0.0);
         assert_eq!(l.minimum_cruise_ratio, 0.5);

@@ -142,7 +142,7 @@ impl Stats {
             print_time_ideal_s: m.estimate.total.ideal,
             time_lost_to_acceleration_s: m.estimate.total.lost_to_acceleration(),
             time_lost_to_speed_limits_s: m.estimate.total.lost_to_speed_limits(),
-            planner: recipe.printer.kinematics.limits(recipe.printer.max_speed),
+            planner: recipe.printer.limits(),
             bbox,
             max_flow_mm3_s: m.max_flow,
             parts,

@@ -26,7 +26,7 @@ fn replan(gcode: &str, printer: &Printer) -> p3dp::planner::Estimate {
     let first_end_line = printer.end_gcode.lines().next().unwrap();
     let body = &gcode[..gcode.find(first_end_line).unwrap()];
     let g = parse(body);
-    let mut p = Planner::new(printer.kinematics.limits(printer.max_speed));
+    let mut p = Planner::new(printer.limits());
     let mut part = 0;
     for m in &g.moves {
         if m.part != part {
@@ -62,8 +62,10 @@ fn globe_estimate_is_the_written_moves_planned() {
     // parts add up to the print
     let sum: f64 = s.parts.iter().map(|p| p.print_time_s).sum();
     close(sum, s.print_time_s, 1e-12);
-    // the globe's short strings are slower than distance / speed
-    assert!(s.print_time_s > 1.1 * s.print_time_ideal_s, "{s:?}");
+    // the globe's short strings are slower than distance / speed (its
+    // moves of about 15 ms keep Marlin's buffer full: no slowdown for the
+    // minimum segment time, see the planner's unit tests)
+    assert!(s.print_time_s > s.print_time_ideal_s, "{s:?}");
     assert!(s.time_lost_to_acceleration_s > 0.0);
     assert!(s.time_lost_to_speed_limits_s > 0.0);
     close(
@@ -138,4 +140,29 @@ fn klipper_profile_uses_square_corner_velocity() {
     .unwrap();
     let e = Printer::from_file(&path).unwrap_err().to_string();
     assert!(e.contains("kinematics.max_acceleration"), "{e}");
+}
+
+#[test]
+fn z_hops_are_written_at_a_feed_the_z_axis_can_do() {
+    // generic-220's Z: 5 mm/s; the olympic rings hop between rings
+    for (recipe, printer, vz) in [
+        ("olympic-rings.yaml", "generic-220", 5.0),
+        ("olympic-rings.yaml", "voron-350", 15.0),
+    ] {
+        let (gcode, _) = build(recipe, Some(printer));
+        let g = parse(&gcode);
+        let mut hops = 0;
+        for m in g.moves.iter().filter(|m| m.g == 0) {
+            let dz = (m.to[2] - m.from[2]).abs();
+            if dz == 0.0 || dz.is_nan() {
+                continue;
+            }
+            let d = DVec3::from_array(m.to).distance(DVec3::from_array(m.from));
+            // the Z component of the written feed
+            let z_speed = m.f / 60.0 * dz / d;
+            assert!(z_speed <= vz + 1e-9, "{printer}: {m:?}");
+            hops += 1;
+        }
+        assert!(hops > 0, "{recipe} on {printer} has no Z travel");
+    }
 }

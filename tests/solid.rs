@@ -601,3 +601,51 @@ fn random_features_on_a_grid_agree_with_point_tests() {
         }
     }
 }
+
+#[test]
+fn solid_infill_fills_each_layer_with_its_area_times_height() {
+    // the plate: 40 × 30 × 2 mm with an 8 mm hole, line width 0.45;
+    // for infill spacing ≤ line width the filament of each layer is its area
+    // × layer height within 3 % (lines closer than their width are squeezed
+    // to their spacing)
+    for spacing in [0.45, 0.4, 0.3] {
+        let path = recipe_file(
+            &format!("plate-{}", (spacing * 100.0) as u32),
+            &format!("{{layer_height: 0.2, perimeters: 2, line_width: 0.45, infill: {{angle: 45, spacing: {spacing}}}, features: [{{box: {{center: [0, 0, 1], size: [40, 30, 2]}}}}, {{cylinder: {{center: [0, 0, 0], radius: 4, height: 2, op: subtract}}}}]}}"),
+        );
+        let r = load(&path);
+        let s = solid_of(&r, 0);
+        let t = make_part(&r, 0, Threads::available()).unwrap();
+        for layer in s.layers() {
+            let Some(slab) = layer.slab else { continue };
+            let area = slab.region.area();
+            let volume: f64 = (0..t.len())
+                .filter(|&k| !t.strings[k].travel)
+                .filter(|&k| {
+                    let (a, b) = t.ends(k);
+                    (a.z - layer.z).abs() < 1e-9 && (b.z - layer.z).abs() < 1e-9
+                })
+                .map(|k| t.strings[k].c * t.length(k))
+                .sum();
+            let want = area * s.layer_height;
+            assert!(
+                rel(volume, want) < 0.03,
+                "spacing {spacing}, z {}: {volume} mm³ vs {want} mm³",
+                layer.z
+            );
+        }
+    }
+}
+
+#[test]
+fn a_solid_refuses_a_cross_section_it_would_ignore() {
+    let dir = common::tmp("solid-cross-section");
+    let path = dir.join("c.yaml");
+    let text = "p3dp: 1\nname: c\nprinter: generic-220\nmaterial: pla\nparts:\n  - name: solid\n    cross_section: 0.15\n    primitive:\n      solid: {layer_height: 0.2, line_width: 0.45, features: [{box: {center: [0, 0, 1], size: [10, 10, 2]}}]}\n";
+    std::fs::write(&path, text).unwrap();
+    let e = Recipe::load(&path, &[], None).unwrap_err().to_string();
+    assert!(e.contains("cross_section") && e.contains("0.09"), "{e}");
+    // the bead's own value is accepted
+    std::fs::write(&path, text.replace("0.15", "0.09")).unwrap();
+    Recipe::load(&path, &[], None).unwrap();
+}

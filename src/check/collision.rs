@@ -473,6 +473,7 @@ fn report(
         part: Some(tp.name.clone()),
         string,
         at: Some(at.to_array()),
+        strings: Vec::new(),
     });
 }
 

@@ -10,9 +10,13 @@
 //! (h = the string's mean height), covers a band of width c / h: a first layer
 //! of c = 0.15 mm² at h = 0.2 mm sticks along a 0.75 mm band. The band is
 //! taken at least the round bead's width and at most three nozzles (where the
-//! nozzle nearly touches the bed, c / h runs away). The contact area is
-//! Σ L·(c / h) over the part's bed strings, and the footprint is their
-//! bounding rectangle seen from above.
+//! nozzle nearly touches the bed, c / h runs away). The contact area is the
+//! area of the union of the bands (each a capsule round its string, seen from
+//! above) of the part's strings low enough to touch the bed, less what earlier
+//! parts cover: measured on a grid of [`CELL`] mm squares, it does not depend
+//! on how finely the path is cut (a helix's pole of 100,000 strings a turn
+//! covers what one of 240 does). The footprint is the bounding rectangle of
+//! the strings that lie on the bed, seen from above.
 //!
 //! The report and the stats JSON (`first_layer`) give each part's contact
 //! length, area and footprint: the adhesion the papers leave to the designer
@@ -37,7 +41,7 @@ pub struct Footprint {
     pub part: String,
     /// Length of extruding strings lying on the bed, mm.
     pub contact_length_mm: f64,
-    /// Area of bed the filament covers, Σ L·(c / h), mm².
+    /// Area of bed the filament covers: the union of the bands of width c / h, mm².
     pub contact_area_mm2: f64,
     /// Lowest corner of the contact's bounding rectangle, recipe x and y.
     pub min: [f64; 2],
@@ -58,6 +62,112 @@ fn band(c: f64, h: f64, nozzle: f64) -> f64 {
     } else {
         hi
     }
+}
+
+/// Side of the squares the contact area is measured on, mm.
+pub const CELL: f64 = 0.025;
+
+/// Squares per side of a tile of the [`Cover`].
+const TILE: i64 = 64;
+
+/// The bed squares covered so far: tiles of 64 × 64 squares of [`CELL`] mm,
+/// one bit each, made as they are first touched.
+#[derive(Default)]
+struct Cover {
+    tiles: std::collections::HashMap<(i64, i64), Box<[u64; (TILE * TILE / 64) as usize]>>,
+}
+
+impl Cover {
+    /// Covers the squares of row `j` from column `i0` to `i1` (inclusive);
+    /// returns how many were not covered before.
+    fn row(&mut self, j: i64, i0: i64, i1: i64) -> u64 {
+        let mut new = 0;
+        let (tj, rj) = (j.div_euclid(TILE), j.rem_euclid(TILE));
+        let mut i = i0;
+        while i <= i1 {
+            let (ti, ri) = (i.div_euclid(TILE), i.rem_euclid(TILE));
+            let end = (i1 - i).min(TILE - 1 - ri); // squares after i in this tile
+            let tile = self
+                .tiles
+                .entry((ti, tj))
+                .or_insert_with(|| Box::new([0; (TILE * TILE / 64) as usize]));
+            // one row of a tile is one u64
+            let word = &mut tile[rj as usize];
+            let mask = if end + 1 >= 64 {
+                u64::MAX
+            } else {
+                ((1u64 << (end + 1)) - 1) << ri
+            };
+            new += (mask & !*word).count_ones() as u64;
+            *word |= mask;
+            i += end + 1;
+        }
+        new
+    }
+
+    /// Covers the squares whose centres lie within `r` of the segment `a`–`b`
+    /// (a capsule); returns how many were not covered before.
+    fn capsule(&mut self, a: DVec2, b: DVec2, r: f64) -> u64 {
+        let lo = a.min(b) - r;
+        let hi = a.max(b) + r;
+        let j0 = libm::ceil(lo.y / CELL - 0.5) as i64;
+        let j1 = libm::floor(hi.y / CELL - 0.5) as i64;
+        let mut new = 0;
+        for j in j0..=j1 {
+            let y = (j as f64 + 0.5) * CELL;
+            if let Some((x0, x1)) = capsule_row(a, b, r, y) {
+                let i0 = libm::ceil(x0 / CELL - 0.5) as i64;
+                let i1 = libm::floor(x1 / CELL - 0.5) as i64;
+                if i0 <= i1 {
+                    new += self.row(j, i0, i1);
+                }
+            }
+        }
+        new
+    }
+}
+
+/// The x-interval of the line at height `y` within `r` of the segment
+/// `a`–`b` (a capsule is convex: the union of the intervals of its two end
+/// discs and its rectangle).
+fn capsule_row(a: DVec2, b: DVec2, r: f64, y: f64) -> Option<(f64, f64)> {
+    let mut out: Option<(f64, f64)> = None;
+    let mut join = |lo: f64, hi: f64| {
+        if lo <= hi {
+            out = Some(match out {
+                Some((l, h)) => (l.min(lo), h.max(hi)),
+                None => (lo, hi),
+            });
+        }
+    };
+    for c in [a, b] {
+        let dy = y - c.y;
+        if dy.abs() <= r {
+            let s = (r * r - dy * dy).sqrt();
+            join(c.x - s, c.x + s);
+        }
+    }
+    let d = b - a;
+    let len = d.length();
+    if len > 0.0 {
+        let u = d / len;
+        // α·x + β within [lo, hi], for the distance across and the place along
+        let solve = |alpha: f64, beta: f64, lo: f64, hi: f64| -> Option<(f64, f64)> {
+            if alpha.abs() < 1e-12 {
+                return (lo..=hi)
+                    .contains(&beta)
+                    .then_some((f64::NEG_INFINITY, f64::INFINITY));
+            }
+            let (p, q) = ((lo - beta) / alpha, (hi - beta) / alpha);
+            Some((p.min(q), p.max(q)))
+        };
+        let across = solve(-u.y, u.x * (y - a.y) + u.y * a.x, -r, r);
+        let along = solve(u.x, -u.x * a.x + u.y * (y - a.y), 0.0, len);
+        if let (Some(p), Some(q)) = (across, along) {
+            join(p.0.max(q.0), p.1.min(q.1));
+        }
+    }
+    out
 }
 
 /// A bed string seen from above: its ends, its nozzle height, and where it
@@ -163,14 +273,17 @@ fn footprint_all(
     });
     let mut kept = vec![false; cands.len()];
     let mut out = Vec::with_capacity(paths.len());
+    let mut cover = Cover::default();
     for (j, tp) in paths.iter().enumerate() {
-        let (mut len, mut area) = (0.0, 0.0);
+        let (mut len, mut cells) = (0.0, 0u64);
         let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
         let mut lowest = f64::INFINITY;
         let mut scrape = None;
         for g in starts[j]..starts[j + 1] {
             let c = &cands[g];
             let mid = flat(c.here.a.lerp(c.here.b, 0.5));
+            let band = band(tp.strings[c.k].c, c.here.h, nozzle);
+            cells += cover.capsule(c.here.a, c.here.b, band / 2.0);
             let covered = grid.search(mid, c.w / 2.0, g as u32, |e| {
                 kept[e as usize] && covers(&cands[e as usize].laid, &c.here, c.w)
             });
@@ -182,7 +295,6 @@ fn footprint_all(
             let (a, b) = tp.ends(c.k);
             let l = a.distance(b);
             len += l;
-            area += l * band(tp.strings[c.k].c, c.here.h, nozzle);
             lo = lo.min(a2).min(b2);
             hi = hi.max(a2).max(b2);
             let low = a.z.min(b.z);
@@ -194,7 +306,7 @@ fn footprint_all(
         let f = (len > 0.0).then(|| Footprint {
             part: tp.name.clone(),
             contact_length_mm: len,
-            contact_area_mm2: area,
+            contact_area_mm2: cells as f64 * CELL * CELL,
             min: lo.to_array(),
             max: hi.to_array(),
             min_height_mm: lowest,
@@ -215,6 +327,9 @@ pub fn check(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) -> Ve
         .iter()
         .zip(footprint_all(paths, p.nozzle_diameter, min_h))
     {
+        if let Some(f) = &f {
+            small_contact(recipe, tp, f, out);
+        }
         footprints.extend(f);
         if let Some((k, h)) = scrape {
             let at = tp.midpoint(k);
@@ -231,10 +346,45 @@ pub fn check(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) -> Ve
                 part: Some(tp.name.clone()),
                 string: Some(k),
                 at: Some(at.to_array()),
+                strings: Vec::new(),
             });
         }
     }
     footprints
+}
+
+/// The `small-contact` warning of part `tp` with footprint `f`: its bed
+/// contact is less than `checks.min_contact_per_height` × its height plus
+/// `checks.min_contact_per_gram` × its filament's mass (a tall or heavy part
+/// on a pole tips or comes off under the nozzle).
+fn small_contact(recipe: &Recipe, tp: &Toolpath, f: &Footprint, out: &mut Vec<Finding>) {
+    let lim = &recipe.printer.checks;
+    let height = tp.points.iter().map(|p| p.z).fold(0.0, f64::max);
+    let grams = tp.volume() / 1000.0 * recipe.material.density;
+    let need = lim.min_contact_per_height * height + lim.min_contact_per_gram * grams;
+    if f.contact_area_mm2 >= need {
+        return;
+    }
+    let at = DVec3::new(
+        (f.min[0] + f.max[0]) / 2.0,
+        (f.min[1] + f.max[1]) / 2.0,
+        0.0,
+    );
+    out.push(Finding {
+        code: "small-contact",
+        severity: Severity::Warning,
+        message: format!(
+            "part `{}` stands on {:.1} mm² of bed for {height:.1} mm of height and {grams:.1} g: less than the {need:.1} mm² it needs ({} mm²/mm of height + {} mm²/g, checks.min_contact_per_height, min_contact_per_gram); it may tip or come off the bed: add a `brim:` to the part",
+            tp.name,
+            f.contact_area_mm2,
+            lim.min_contact_per_height,
+            lim.min_contact_per_gram,
+        ),
+        part: Some(tp.name.clone()),
+        string: None,
+        at: Some(at.to_array()),
+        strings: Vec::new(),
+    });
 }
 
 #[cfg(test)]
@@ -271,7 +421,9 @@ mod tests {
         let f = f.unwrap();
         let perimeter = 360.0 * 2.0 * 10.0 * libm::sin(std::f64::consts::PI / 360.0);
         assert!((f.contact_length_mm - perimeter).abs() < 1e-9);
-        assert!((f.contact_area_mm2 - perimeter * 0.75).abs() < 1e-9);
+        // the annulus 0.75 mm wide round the circle: 2πr·0.75
+        let annulus = std::f64::consts::TAU * 10.0 * 0.75;
+        assert!((f.contact_area_mm2 / annulus - 1.0).abs() < 0.005, "{f:?}");
         assert!((f.min[0] + 10.0).abs() < 1e-9 && (f.max[1] - 10.0).abs() < 1e-3);
         assert_eq!(f.min_height_mm, 0.2);
         assert!(scrape.is_none());
@@ -289,7 +441,7 @@ mod tests {
         // at 0.05 mm the band is capped at three nozzles, and the nozzle scrapes
         let (f, scrape) = footprint_all(&[&ring(10.0, 0.05, 36, 0.15)], 0.4, 0.08).remove(0);
         let f = f.unwrap();
-        assert!((f.contact_area_mm2 - f.contact_length_mm * 1.2).abs() < 1e-9);
+        assert!((f.contact_area_mm2 / (f.contact_length_mm * 1.2) - 1.0).abs() < 0.01);
         assert_eq!(scrape, Some((0, 0.05)));
     }
 
@@ -303,7 +455,15 @@ mod tests {
         let beside = ring(11.0, 0.4, 72, 0.15);
         let all = footprint_all(&[&lower, &beside], 0.4, 0.08);
         let f = all[1].0.as_ref().unwrap();
-        assert!((f.contact_area_mm2 - f.contact_length_mm * 0.437).abs() < 0.01);
+        // its band, less the 0.75 mm band of the lower ring (to 10.375) it
+        // overlaps: from 10.78 to 11.22
+        let band = width(0.15, 0.4);
+        let want =
+            std::f64::consts::PI * ((11.0 + band / 2.0).powi(2) - (11.0 - band / 2.0).powi(2));
+        assert!(
+            (f.contact_area_mm2 / want - 1.0).abs() < 0.01,
+            "{f:?} {want}"
+        );
     }
 
     /// `ring` walked `turns` times at the same height, as one path.
@@ -330,9 +490,24 @@ mod tests {
         assert!((once.contact_length_mm - perimeter).abs() < 1e-9);
         assert_eq!(many.contact_length_mm, once.contact_length_mm);
         assert_eq!(many.contact_area_mm2, once.contact_area_mm2);
+        // the area does not depend on how the circle is cut
+        let coarse = footprint_all(&[&ring_turns(1.6, 0.2, 24, 1)], 0.4, 0.08).remove(0);
+        let coarse = coarse.0.unwrap().contact_area_mm2;
+        assert!((coarse / once.contact_area_mm2 - 1.0).abs() < 0.02);
         // a second part drawn over the first at the same height adds nothing
         let again = ring(1.6, 0.2, 1000, 0.15);
         let both = footprint_all(&[&ring_turns(1.6, 0.2, 1000, 1), &again], 0.4, 0.08);
         assert!(both[1].0.is_none());
+    }
+
+    #[test]
+    fn capsule_rows_cover_a_disc_and_a_rectangle() {
+        // a 10 × 1 capsule: 10 + π·0.25 mm²
+        let mut c = Cover::default();
+        let n = c.capsule(DVec2::ZERO, DVec2::new(3.0, 4.0) * 2.0, 0.5);
+        let area = n as f64 * CELL * CELL;
+        assert!((area / (10.0 + std::f64::consts::PI * 0.25) - 1.0).abs() < 0.005);
+        // drawn again: nothing new
+        assert_eq!(c.capsule(DVec2::ZERO, DVec2::new(6.0, 8.0), 0.5), 0);
     }
 }

@@ -14,6 +14,8 @@ struct Tally {
     first: usize,
     extreme: f64,
     hard: bool,
+    /// The strings counted, as runs [first, end).
+    spans: Vec<[usize; 2]>,
 }
 
 impl Tally {
@@ -25,7 +27,12 @@ impl Tally {
             first: k,
             extreme: c,
             hard: false,
+            spans: Vec::new(),
         });
+        match t.spans.last_mut() {
+            Some(last) if last[1] == k => last[1] = k + 1,
+            _ => t.spans.push([k, k + 1]),
+        }
         t.n += 1;
         t.extreme = pick(t.extreme, c);
         t.hard |= hard;
@@ -49,6 +56,7 @@ impl Tally {
             part: Some(tp.name.clone()),
             string: Some(self.first),
             at: Some(m.to_array()),
+            strings: self.spans.clone(),
         }
     }
 }

@@ -112,6 +112,7 @@ pub fn events(recipe: &Recipe, tp: &Toolpath) -> Vec<Finding> {
             part: Some(tp.name.clone()),
             string: Some(k),
             at: Some(at.to_array()),
+            strings: Vec::new(),
         });
     };
     let pick = |bed: bool, limit: f64| -> Vec<(usize, f64)> {
@@ -157,6 +158,7 @@ fn temperatures(recipe: &Recipe, out: &mut Vec<Finding>) {
             part: None,
             string: None,
             at: None,
+            strings: Vec::new(),
         });
     }
     if m.bed_temp > p.max_bed_temp {
@@ -170,6 +172,7 @@ fn temperatures(recipe: &Recipe, out: &mut Vec<Finding>) {
             part: None,
             string: None,
             at: None,
+            strings: Vec::new(),
         });
     }
 }
@@ -206,6 +209,7 @@ fn points_where(
             part: Some(tp.name.clone()),
             string: Some(i.saturating_sub(1)),
             at: Some(p.to_array()),
+            strings: Vec::new(),
         });
     }
 }
@@ -284,6 +288,7 @@ fn strings(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) {
             part: Some(tp.name.clone()),
             string: Some(k),
             at: Some(m.to_array()),
+            strings: Vec::new(),
         });
     }
     if let Some((k, n, worst)) = flow {
@@ -311,6 +316,7 @@ fn strings(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) {
             part: Some(tp.name.clone()),
             string: Some(k),
             at: Some(m.to_array()),
+            strings: Vec::new(),
         });
     }
 }

@@ -32,6 +32,7 @@ pub fn findings(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) {
                 part: Some(name.clone()),
                 string: None,
                 at: None,
+                strings: Vec::new(),
             })
         };
         let range = "the paper reports self-organised patterns for";

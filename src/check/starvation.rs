@@ -68,7 +68,7 @@ impl Runs {
 pub fn check(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) {
     let p = &recipe.printer;
     let t_min = p.checks.min_move_time;
-    let stretch = p.kinematics.limits(p.max_speed).min_segment_time.max(t_min);
+    let stretch = p.limits().min_segment_time.max(t_min);
     let lim = (t_min, stretch);
     let buffer = p.checks.planner_buffer as usize;
     let min = p.min_string_length;
@@ -135,6 +135,7 @@ pub fn check(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) {
             part: Some(tp.name.clone()),
             string: Some(k),
             at: Some(at.to_array()),
+            strings: Vec::new(),
         });
     }
 }

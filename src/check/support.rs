@@ -22,9 +22,11 @@
 //! supported ends is a `bridge` (a note up to `checks.max_bridge`, a warning
 //! beyond), any other run longer than the string's width is `unsupported`
 //! (an error: the string hangs from one end or floats). Findings are one per
-//! part and kind, with the run count, the total length, the place of the
-//! first run and the worst overhang: how far the farthest sample lies from
-//! the bed or the nearest earlier filament.
+//! part and kind, with the run count, the total length of path (and the
+//! filament it carries), the longest run, the place of the first run and the
+//! worst overhang: how far sideways a sample reaches past the edge of the
+//! nearest earlier filament at or below it (within [`GAP_SEARCH`] mm; a run
+//! with nothing below it that close is reported as floating, with its height).
 
 use glam::DVec3;
 
@@ -136,11 +138,18 @@ impl<'a> Deposits<'a> {
 struct Run {
     first: DVec3,
     first_k: usize,
+    /// The last string of the run.
+    last_k: usize,
     len: f64,
+    /// Filament the run carries, as mm³ (c × length).
+    vol: f64,
     before: Option<DVec3>,
     width: f64,
     worst: f64,
     worst_at: DVec3,
+    /// The largest height over the filament below, mm.
+    drop: f64,
+    floating: Option<(f64, DVec3)>,
 }
 
 /// Unsupported runs or bridges of one part.
@@ -148,7 +157,16 @@ struct Run {
 struct Tally {
     runs: usize,
     len: f64,
+    vol: f64,
+    /// The longest run's length of path, mm.
+    longest_run: f64,
+    /// The largest height of a sample over the filament below it, mm.
+    drop: f64,
+    /// The highest sample with no filament below it within reach: (height, place).
+    floating: Option<(f64, DVec3)>,
     first: Option<(usize, DVec3)>,
+    /// The runs' strings, [first, end).
+    spans: Vec<[usize; 2]>,
     worst: f64,
     worst_at: DVec3,
     longest: f64,
@@ -158,7 +176,16 @@ struct Tally {
 impl Tally {
     fn add(&mut self, r: &Run, span: f64, middle: DVec3) {
         self.runs += 1;
+        self.spans.push([r.first_k, r.last_k + 1]);
         self.len += r.len;
+        self.vol += r.vol;
+        self.longest_run = self.longest_run.max(r.len);
+        self.drop = self.drop.max(r.drop);
+        if let Some((h, at)) = r.floating {
+            if self.floating.is_none_or(|(f, _)| h > f) {
+                self.floating = Some((h, at));
+            }
+        }
         self.first.get_or_insert((r.first_k, r.first));
         if r.worst > self.worst || self.runs == 1 {
             self.worst = r.worst;
@@ -179,14 +206,25 @@ pub fn check(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) {
     let mut g = 0u32; // global id of the current string
     for (pi, tp) in paths.iter().enumerate() {
         let t = scan_part(recipe, &dep, pi, tp, &mut g, &mut budget);
-        out.extend(unsupported_finding(tp, &t.unsup));
+        let area = filament_area(recipe);
+        out.extend(unsupported_finding(tp, &t.unsup, area));
         out.extend(bridge_finding(
             tp,
             &t.bridges,
             t.bridge_max,
             p.checks.max_bridge,
+            area,
         ));
     }
+}
+
+/// The filament's cross-section, mm² (the material's diameter, else the printer's).
+pub fn filament_area(recipe: &Recipe) -> f64 {
+    let d = recipe
+        .material
+        .filament_diameter
+        .unwrap_or(recipe.printer.filament_diameter);
+    std::f64::consts::PI * 0.25 * d * d
 }
 
 /// What the support check found in one part.
@@ -263,25 +301,42 @@ fn scan_part(
                 last_ok = Some(q);
                 continue;
             }
-            let gap = if *budget > 0 {
+            // the sideways reach past the nearest filament below; None when
+            // nothing lies below within GAP_SEARCH (or the budget is spent)
+            let reach = if *budget > 0 {
                 *budget -= 1;
-                gap(dep, *g, pi as u32, sq, q, w)
+                overhang(dep, *g, pi as u32, sq, q, w)
             } else {
-                q.z
+                None
             };
             let r = run.get_or_insert(Run {
                 first: q,
                 first_k: k,
+                last_k: k,
                 len: 0.0,
+                vol: 0.0,
                 before: last_ok,
                 width: w,
-                worst: gap,
+                worst: 0.0,
                 worst_at: q,
+                drop: 0.0,
+                floating: None,
             });
+            r.last_k = k;
             r.len += l / n as f64;
-            if gap > r.worst {
-                r.worst = gap;
-                r.worst_at = q;
+            r.vol += s.c * l / n as f64;
+            match reach {
+                Some((x, drop)) => {
+                    if x > r.worst || r.worst_at == q {
+                        r.worst = x;
+                        r.worst_at = q;
+                    }
+                    r.drop = r.drop.max(drop);
+                }
+                None if *budget > 0 && r.floating.is_none_or(|(h, _)| q.z > h) => {
+                    r.floating = Some((q.z, q));
+                }
+                _ => {}
             }
             run_pts.push(q);
         }
@@ -295,26 +350,44 @@ fn scan_part(
     }
 }
 
-/// The `unsupported` finding of a part, if it has unsupported runs.
-fn unsupported_finding(tp: &Toolpath, unsup: &Tally) -> Option<Finding> {
+/// The `unsupported` finding of a part, if it has unsupported runs;
+/// `area` is the filament's cross-section, mm².
+fn unsupported_finding(tp: &Toolpath, unsup: &Tally, area: f64) -> Option<Finding> {
     let (k, at) = unsup.first?;
+    let mut worst = Vec::new();
+    if unsup.drop > 0.0 {
+        worst.push(format!(
+            "at worst it reaches {:.2} mm sideways past the edge of the filament below, at {}, and hangs up to {:.2} mm over it",
+            unsup.worst,
+            fmt_p(unsup.worst_at),
+            unsup.drop
+        ));
+    }
+    if let Some((h, p)) = unsup.floating {
+        worst.push(format!(
+            "with nothing printed within {GAP_SEARCH} mm below, it hangs up to {h:.2} mm over the bed, at {}",
+            fmt_p(p)
+        ));
+    }
+    let worst = worst.join("; ");
     Some(Finding {
         code: "unsupported",
         severity: Severity::Error,
         message: format!(
-            "{} run{} of part `{}` ({:.1} mm of filament) rest{} on neither the bed nor earlier filament; the first starts at string {k}, {}; worst overhang {:.2} mm from any support, at {}",
+            "{} run{} of part `{}` ({:.1} mm of path, {:.1} mm of filament; the longest run {:.1} mm) rest{} on neither the bed nor earlier filament; the first starts at string {k}, {}; {worst}",
             unsup.runs,
             if unsup.runs == 1 { "" } else { "s" },
             tp.name,
             unsup.len,
+            unsup.vol / area,
+            unsup.longest_run,
             if unsup.runs == 1 { "s" } else { "" },
             fmt_p(at),
-            unsup.worst,
-            fmt_p(unsup.worst_at)
         ),
         part: Some(tp.name.clone()),
         string: Some(k),
         at: Some(at.to_array()),
+        strings: unsup.spans.clone(),
     })
 }
 
@@ -325,6 +398,7 @@ fn bridge_finding(
     bridges: &Tally,
     bridge_max: usize,
     max_bridge: f64,
+    area: f64,
 ) -> Option<Finding> {
     let (k, _) = bridges.first?;
     let long = bridge_max > 0;
@@ -332,11 +406,12 @@ fn bridge_finding(
         code: "bridge",
         severity: if long { Severity::Warning } else { Severity::Info },
         message: format!(
-            "part `{}` bridges {} gap{} ({:.1} mm of filament with nothing under it); the longest spans {:.1} mm, its middle at {}{}",
+            "part `{}` bridges {} gap{} ({:.1} mm of path, {:.1} mm of filament, with nothing under it); the longest spans {:.1} mm, its middle at {}{}",
             tp.name,
             bridges.runs,
             if bridges.runs == 1 { "" } else { "s" },
             bridges.len,
+            bridges.vol / area,
             bridges.longest,
             fmt_p(bridges.longest_at),
             if long {
@@ -351,6 +426,7 @@ fn bridge_finding(
         part: Some(tp.name.clone()),
         string: Some(k),
         at: Some(bridges.longest_at.to_array()),
+        strings: bridges.spans.clone(),
     })
 }
 
@@ -414,30 +490,41 @@ fn rests(
     found
 }
 
-/// How far an unsupported sample hangs: its distance (centre lines) to the
-/// nearest earlier filament within [`GAP_SEARCH`] mm, or its height above the bed.
-fn gap(dep: &Deposits, g: u32, pi: u32, sq: f64, q: DVec3, w: f64) -> f64 {
-    let mut best = q.z.max(0.0);
-    let r = GAP_SEARCH.min(best);
-    if r <= 0.0 {
-        return best;
-    }
-    dep.search(q, r, g, |j| {
+/// How far an unsupported sample of width `w` overhangs: the least
+/// horizontal distance from its centre to the edge of earlier filament below
+/// it (lower by at least w / 2, within [`GAP_SEARCH`] mm), less half its own
+/// width, at least 0, and its height over that filament (centre lines);
+/// `None` when no earlier filament lies below it that close.
+fn overhang(dep: &Deposits, g: u32, pi: u32, sq: f64, q: DVec3, w: f64) -> Option<(f64, f64)> {
+    // (3D distance, reach, drop) of the one reached past least
+    let mut best: Option<(f64, f64, f64)> = None;
+    dep.search(q, GAP_SEARCH, g, |j| {
         let (pj, kj) = dep.ids[j as usize];
         let k = kj as usize;
-        let (a, b) = dep.paths[pj as usize].ends(k);
+        let tp = dep.paths[pj as usize];
+        let (a, b) = tp.ends(k);
         let u = closest(q, a, b);
-        let d = q.distance(a.lerp(b, u));
+        let x = a.lerp(b, u);
+        let d = q.distance(x);
+        // below: lower by at least half the width (not the string's own
+        // earlier part at nearly its height)
+        if x.z > q.z - w / 2.0 || d > GAP_SEARCH {
+            return false;
+        }
         let own_tail = pj == pi && {
             let arc = &dep.arc[pj as usize];
             sq - (arc[k] + u * (arc[k + 1] - arc[k])) <= (3.0 * d).max(w)
         };
-        if d < best && !own_tail {
-            best = d;
+        if !own_tail {
+            let wj = width(tp.strings[k].c, dep.nozzle);
+            let reach = (q.truncate().distance(x.truncate()) - (w + wj) / 2.0).max(0.0);
+            if best.is_none_or(|b| (reach, d) < (b.1, b.0)) {
+                best = Some((d, reach, q.z - x.z));
+            }
         }
         false
     });
-    best
+    best.map(|b| (b.1, b.2))
 }
 
 #[cfg(test)]
@@ -499,6 +586,69 @@ mod tests {
         // the first turn leaves the bed at 1.5 × its width (0.437 mm) and hangs from there
         let at = f[0].at.unwrap();
         assert!(at[2] > 0.64 && at[2] < 0.7, "{at:?}");
+        assert!(f[0].message.contains("mm of path"), "{}", f[0].message);
+    }
+
+    /// A ring of radius 10 on the bed, then a helix from `z0` whose radius
+    /// grows by `grow` a turn, `pitch` a turn, 3 turns, c = 0.15.
+    fn ring_and_helix(z0: f64, pitch: f64, grow: f64) -> Vec<Toolpath> {
+        let mut ring = Toolpath::new(DVec3::new(10.0, 0.0, 0.2));
+        ring.name = "ring".into();
+        let mut tp = Toolpath::new(DVec3::new(10.0, 0.0, z0));
+        tp.name = "h".into();
+        let n = 72;
+        for i in 1..=3 * n {
+            let t = i as f64 / n as f64;
+            let th = std::f64::consts::TAU * t;
+            let r = 10.0 + grow * t;
+            tp.draw(
+                DVec3::new(r * libm::cos(th), r * libm::sin(th), z0 + pitch * t),
+                0.15,
+                30.0,
+            );
+            if i <= n {
+                ring.draw(
+                    DVec3::new(10.0 * libm::cos(th), 10.0 * libm::sin(th), 0.2),
+                    0.15,
+                    30.0,
+                );
+            }
+        }
+        vec![ring, tp]
+    }
+
+    /// The number after `key` in `m`.
+    fn after(m: &str, key: &str) -> f64 {
+        let rest = m
+            .split(key)
+            .nth(1)
+            .unwrap_or_else(|| panic!("{key} in {m}"));
+        rest.split(' ').next().unwrap().parse().unwrap()
+    }
+
+    #[test]
+    fn overhang_is_the_reach_past_the_filament_below() {
+        // turns 1.5 mm apart straight over each other: no sideways reach;
+        // the first turn climbs from 1.5 to 3 mm over the flat ring (its
+        // last sample, half a string of 72 a turn short of it); lengths are
+        // of path and the filament is c / area of it
+        let f = run(&ring_and_helix(1.7, 1.5, 0.0));
+        assert_eq!(f.len(), 1, "{f:?}");
+        let m = &f[0].message;
+        assert_eq!(after(m, "reaches "), 0.0, "{m}");
+        let top = 1.5 + 1.5 * (1.0 - 0.5 / 72.0 / 2.0);
+        assert!((after(m, "hangs up to ") - top).abs() < 0.02, "{m}");
+        let path = after(m, "(");
+        let filament = after(m, "mm of path, ");
+        let area = std::f64::consts::PI * 0.875 * 0.875;
+        assert!((filament - path * 0.15 / area).abs() < 0.1, "{m}");
+        assert!(path > 3.0 * std::f64::consts::TAU * 10.0 * 0.95, "{m}");
+        // a helix that widens by 2 mm a turn, 0.3 mm up a turn, reaches out
+        // past the turn below by 2 − (0.437 + 0.437)/2 mm
+        let f = run(&ring_and_helix(0.5, 0.3, 2.0));
+        let m = &f[0].message;
+        let want = 2.0 - width(0.15, 0.4);
+        assert!((after(m, "reaches ") - want).abs() < 0.02, "{m}");
     }
 
     #[test]

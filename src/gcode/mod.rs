@@ -130,10 +130,7 @@ impl<'a, W: Write> Emitter<'a, W> {
             },
             pending: Pending::default(),
             thumbnails: String::new(),
-            planner: crate::planner::Background::new(
-                recipe.printer.kinematics.limits(recipe.printer.max_speed),
-                threads,
-            ),
+            planner: crate::planner::Background::new(recipe.printer.limits(), threads),
             fan: (recipe.material.fan_speed > 0.0)
                 .then_some((recipe.material.fan_speed, recipe.material.fan_start_z)),
         }
@@ -348,7 +345,7 @@ impl<'a, W: Write> Emitter<'a, W> {
             self.head = Some(target);
             return Ok(());
         }
-        let tv = self.printer.travel_speed;
+        let tv = self.travel_feed(from, target, dist);
         self.set_feed(tv);
         self.end_line()?;
         self.stats.travel_moves += 1;
@@ -358,6 +355,28 @@ impl<'a, W: Write> Emitter<'a, W> {
             .move_to(to_m, 0.0, f, crate::planner::MoveKind::Travel);
         self.head = Some(target);
         Ok(())
+    }
+
+    /// The feed of a travel move from `from` to `to` (`dist` mm apart): the
+    /// profile's `travel_speed`, but no quicker than the Z axis can follow
+    /// (`kinematics.max_z_speed` scaled by L/|dz|, rounded down to a whole
+    /// mm/min), so hops and Z-only moves are written at a feed the firmware
+    /// need not clamp.
+    fn travel_feed(&self, from: Option<DVec3>, to: DVec3, dist: f64) -> f64 {
+        let tv = self.printer.travel_speed;
+        let (Some(f), Some(vz)) = (from, self.printer.kinematics.max_z_speed) else {
+            return tv;
+        };
+        let dz = (to.z - f.z).abs();
+        if dz <= 0.0 {
+            return tv;
+        }
+        let cap = vz * dist / dz;
+        if cap < tv {
+            (libm::floor(cap * 60.0) / 60.0).max(1.0 / 60.0)
+        } else {
+            tv
+        }
     }
 
     /// Travel to `to` between parts: up to a safe height (above everything

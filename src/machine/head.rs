@@ -75,6 +75,10 @@ pub struct CheckLimits {
     /// A `first-layer` warning where the nozzle lays filament closer to the
     /// bed than this × the nozzle's diameter.
     pub first_layer_min: f64,
+    /// `small-contact`: bed contact a part needs per mm of its height, mm²/mm.
+    pub min_contact_per_height: f64,
+    /// `small-contact`: bed contact a part needs per gram of its filament, mm²/g.
+    pub min_contact_per_gram: f64,
 }
 
 impl Default for CheckLimits {
@@ -90,6 +94,8 @@ impl Default for CheckLimits {
             min_move_time: 0.005,
             planner_buffer: 16,
             first_layer_min: 0.2,
+            min_contact_per_height: 0.4,
+            min_contact_per_gram: 0.1,
         }
     }
 }
@@ -158,6 +164,8 @@ impl CheckLimits {
             ("checks.support_tolerance", self.support_tolerance),
             ("checks.min_move_time", self.min_move_time),
             ("checks.first_layer_min", self.first_layer_min),
+            ("checks.min_contact_per_height", self.min_contact_per_height),
+            ("checks.min_contact_per_gram", self.min_contact_per_gram),
         ] {
             positive(k, v)?;
         }

@@ -11,6 +11,13 @@ pub const MARLIN_JUNCTION_DEVIATION: f64 = 0.013;
 pub const MARLIN_MIN_SEGMENT_TIME: f64 = 0.02;
 /// Klipper's default `minimum_cruise_ratio`.
 pub const KLIPPER_MINIMUM_CRUISE_RATIO: f64 = 0.5;
+/// Klipper's default `instantaneous_corner_velocity` of `[extruder]`, mm/s.
+pub const KLIPPER_INSTANTANEOUS_CORNER_VELOCITY: f64 = 1.0;
+/// Marlin's default `BLOCK_BUFFER_SIZE` (moves).
+pub const MARLIN_BLOCK_BUFFER_SIZE: u32 = 16;
+/// Assumed rate at which Marlin reads, parses and plans G-code lines from SD
+/// (lines/s): about 2 ms a line on an 8-bit board; an assumption, not a measurement.
+pub const MARLIN_COMMAND_RATE: f64 = 500.0;
 
 fn d_accel() -> f64 {
     1000.0
@@ -49,6 +56,38 @@ pub struct Kinematics {
     /// 0.5 with square-corner velocity, 0 with junction deviation (Marlin has none).
     #[serde(default)]
     pub minimum_cruise_ratio: Option<f64>,
+    /// Highest speed of the Z axis, mm/s (Marlin's `M203 Z`, Klipper's
+    /// `max_z_velocity`); none when absent.
+    #[serde(default)]
+    pub max_z_speed: Option<f64>,
+    /// Highest acceleration of the Z axis, mm/s² (Marlin's `M201 Z`,
+    /// Klipper's `max_z_accel`); none when absent.
+    #[serde(default)]
+    pub max_z_acceleration: Option<f64>,
+    /// Klipper's `[extruder] instantaneous_corner_velocity`, mm/s of filament:
+    /// the largest instant change of E speed at a junction; 1 with
+    /// square-corner velocity, none with junction deviation.
+    #[serde(default)]
+    pub instantaneous_corner_velocity: Option<f64>,
+    /// Klipper's `[extruder] max_extrude_only_velocity`, mm/s of filament;
+    /// Klipper's default with square-corner velocity, none with junction deviation.
+    #[serde(default)]
+    pub max_extrude_only_velocity: Option<f64>,
+    /// Klipper's `[extruder] max_extrude_only_accel`, mm/s² of filament;
+    /// Klipper's default with square-corner velocity, none with junction deviation.
+    #[serde(default)]
+    pub max_extrude_only_accel: Option<f64>,
+    /// Hold every move to at least `min_segment_time` (the old, pessimistic
+    /// model) instead of Marlin's buffer-draining slowdown; off by default.
+    #[serde(default)]
+    pub min_segment_time_floor: bool,
+    /// Marlin's `BLOCK_BUFFER_SIZE`, moves (16 by default).
+    #[serde(default)]
+    pub block_buffer_size: Option<u32>,
+    /// Lines per second the firmware reads, parses and plans from SD (500 by
+    /// default, an assumption): what refills Marlin's buffer.
+    #[serde(default)]
+    pub command_rate: Option<f64>,
 }
 
 impl Default for Kinematics {
@@ -62,6 +101,14 @@ impl Default for Kinematics {
             square_corner_velocity: None,
             min_segment_time: None,
             minimum_cruise_ratio: None,
+            max_z_speed: None,
+            max_z_acceleration: None,
+            instantaneous_corner_velocity: None,
+            max_extrude_only_velocity: None,
+            max_extrude_only_accel: None,
+            min_segment_time_floor: false,
+            block_buffer_size: None,
+            command_rate: None,
         }
     }
 }
@@ -91,6 +138,26 @@ impl Kinematics {
         check("square_corner_velocity", self.square_corner_velocity, true)?;
         check("min_segment_time", self.min_segment_time, true)?;
         check("minimum_cruise_ratio", self.minimum_cruise_ratio, true)?;
+        check("max_z_speed", self.max_z_speed, false)?;
+        check("max_z_acceleration", self.max_z_acceleration, false)?;
+        check(
+            "instantaneous_corner_velocity",
+            self.instantaneous_corner_velocity,
+            true,
+        )?;
+        check(
+            "max_extrude_only_velocity",
+            self.max_extrude_only_velocity,
+            false,
+        )?;
+        check("max_extrude_only_accel", self.max_extrude_only_accel, false)?;
+        check("command_rate", self.command_rate, false)?;
+        if self.block_buffer_size.is_some_and(|n| n < 2) {
+            return Err(Error::input(
+                "kinematics.block_buffer_size",
+                "expected at least 2 moves",
+            ));
+        }
         if self.minimum_cruise_ratio.is_some_and(|r| r >= 1.0) {
             return Err(Error::input(
                 "kinematics.minimum_cruise_ratio",
@@ -106,12 +173,21 @@ impl Kinematics {
         Ok(())
     }
 
-    /// The limits with every default filled in; `max_speed` is the profile's.
-    pub fn limits(&self, max_speed: f64) -> Limits {
+    /// The limits with every default filled in; `max_speed` is the profile's,
+    /// `extrude_ratio` Klipper's `max_extrude_cross_section` over the
+    /// filament's area (4·nozzle² / area by default, see [`extrude_ratio`]).
+    pub fn limits(&self, max_speed: f64, extrude_ratio: f64) -> Limits {
         let klipper = self.square_corner_velocity.is_some();
         let accel = self.max_acceleration;
+        let max_velocity = self.max_velocity.unwrap_or(max_speed);
+        // Klipper config reference, [extruder]: max_extrude_only_velocity and
+        // max_extrude_only_accel default to "the limit an XY printing move
+        // with a cross section of 4.0·nozzle_diameter² would have"
+        // (extruder.py: max_velocity·ratio and max_accel·ratio, ratio =
+        // max_extrude_cross_section / filament area)
+        let klipper_only = |given: Option<f64>, default: f64| given.or(klipper.then_some(default));
         Limits {
-            max_velocity: self.max_velocity.unwrap_or(max_speed),
+            max_velocity,
             max_acceleration: accel,
             travel_acceleration: self.travel_acceleration.unwrap_or(accel),
             retract_acceleration: self.retract_acceleration.unwrap_or(accel),
@@ -131,8 +207,32 @@ impl Kinematics {
             } else {
                 0.0
             }),
+            max_z_velocity: self.max_z_speed,
+            max_z_acceleration: self.max_z_acceleration,
+            instantaneous_corner_velocity: klipper_only(
+                self.instantaneous_corner_velocity,
+                KLIPPER_INSTANTANEOUS_CORNER_VELOCITY,
+            ),
+            max_extrude_only_velocity: klipper_only(
+                self.max_extrude_only_velocity,
+                max_velocity * extrude_ratio,
+            ),
+            max_extrude_only_accel: klipper_only(
+                self.max_extrude_only_accel,
+                accel * extrude_ratio,
+            ),
+            min_segment_time_floor: self.min_segment_time_floor,
+            block_buffer_size: self.block_buffer_size.unwrap_or(MARLIN_BLOCK_BUFFER_SIZE),
+            command_rate: self.command_rate.unwrap_or(MARLIN_COMMAND_RATE),
         }
     }
+}
+
+/// Klipper's default extrude-only ratio: a cross-section of 4·nozzle² over the
+/// filament's area (`[extruder] max_extrude_cross_section`).
+pub fn extrude_ratio(nozzle_diameter: f64, filament_diameter: f64) -> f64 {
+    let area = std::f64::consts::PI * 0.25 * filament_diameter * filament_diameter;
+    4.0 * nozzle_diameter * nozzle_diameter / area
 }
 
 /// The limits the planner uses (written into the stats JSON as `planner`).
@@ -156,6 +256,27 @@ pub struct Limits {
     pub min_segment_time: f64,
     /// Share of each move that must cruise (Klipper), 0 for none.
     pub minimum_cruise_ratio: f64,
+    /// Highest Z speed, mm/s (none: no limit of its own).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_z_velocity: Option<f64>,
+    /// Highest Z acceleration, mm/s² (none: no limit of its own).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_z_acceleration: Option<f64>,
+    /// Klipper's largest instant change of E speed at a junction, mm/s.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub instantaneous_corner_velocity: Option<f64>,
+    /// Klipper's speed limit of E-only moves, mm/s of filament.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_extrude_only_velocity: Option<f64>,
+    /// Klipper's acceleration limit of E-only moves, mm/s² of filament.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_extrude_only_accel: Option<f64>,
+    /// `min_segment_time` as a hard floor on every move (else Marlin's slowdown).
+    pub min_segment_time_floor: bool,
+    /// Marlin's block buffer, moves.
+    pub block_buffer_size: u32,
+    /// Lines per second the firmware reads and plans (refills the buffer).
+    pub command_rate: f64,
 }
 
 impl Limits {
@@ -170,10 +291,35 @@ impl Limits {
             "{junction}, acceleration {} mm/s² (travel {}), max {} mm/s",
             self.max_acceleration, self.travel_acceleration, self.max_velocity
         );
+        if let Some(vz) = self.max_z_velocity {
+            s.push_str(&format!(", Z max {vz} mm/s"));
+        }
+        if let Some(az) = self.max_z_acceleration {
+            s.push_str(&format!(" at {az} mm/s²"));
+        }
         if self.min_segment_time > 0.0 {
+            let how = if self.min_segment_time_floor {
+                "on every move".to_string()
+            } else {
+                format!(
+                    "while the {}-move buffer drains, {} lines/s",
+                    self.block_buffer_size,
+                    crate::format::fmt_num(self.command_rate)
+                )
+            };
             s.push_str(&format!(
-                ", min segment time {} ms",
+                ", min segment time {} ms {how}",
                 crate::format::fmt_num(self.min_segment_time * 1000.0)
+            ));
+        }
+        if let Some(icv) = self.instantaneous_corner_velocity {
+            s.push_str(&format!(", extruder corner velocity {icv} mm/s"));
+        }
+        if let (Some(v), Some(a)) = (self.max_extrude_only_velocity, self.max_extrude_only_accel) {
+            s.push_str(&format!(
+                ", extrude-only max {} mm/s at {} mm/s²",
+                crate::format::fmt_num(v),
+                crate::format::fmt_num(a)
             ));
         }
         if self.minimum_cruise_ratio > 0.0 {

@@ -212,6 +212,15 @@ fn d_arc_tolerance() -> f64 {
 }
 
 impl Printer {
+    /// The planner's limits: the profile's `kinematics:` with every default
+    /// filled in (Klipper's extrude-only limits from the nozzle and filament).
+    pub fn limits(&self) -> super::kinematics::Limits {
+        self.kinematics.limits(
+            self.max_speed,
+            super::kinematics::extrude_ratio(self.nozzle_diameter, self.filament_diameter),
+        )
+    }
+
     /// Checks every value; errors name the key.
     pub fn validate(&self) -> Result<()> {
         crate::safe_text::check("name", &self.name)?;

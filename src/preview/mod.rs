@@ -376,7 +376,8 @@ impl<'a> Scene<'a> {
 
 /// Which strings the findings concern, per path.
 ///
-/// A finding names its first string only; for the checks that judge each
+/// A finding names its first string and, for runs (unsupported, bridges),
+/// every string of them (`Finding::strings`); for the checks that judge each
 /// string by itself (bed limits, speed, flow, finite numbers) every string that
 /// fails the same test is marked, with the printer's limits the checks use.
 fn flags(plan: &Plan) -> Vec<Vec<bool>> {
@@ -413,6 +414,12 @@ fn flags(plan: &Plan) -> Vec<Vec<bool>> {
             for (pi, tp) in plan.paths.iter().enumerate() {
                 if &tp.name == part && k < tp.len() {
                     out[pi][k] = true;
+                    // every string the finding names (an unsupported run, a bridge)
+                    for &[a, b] in &f.strings {
+                        for flag in &mut out[pi][a.min(tp.len())..b.min(tp.len())] {
+                            *flag = true;
+                        }
+                    }
                 }
             }
         }
@@ -782,5 +789,34 @@ mod tests {
         assert_eq!(Format::of(Path::new("x.html")).unwrap(), Format::Html);
         assert!(Format::of(Path::new("x.jpg")).is_err());
         assert!(Format::of(Path::new("x")).is_err());
+    }
+}
+
+#[cfg(test)]
+mod flag_tests {
+    use super::*;
+
+    #[test]
+    fn every_string_of_an_unsupported_run_is_flagged() {
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/checks/pitch-gap.yaml");
+        let plan = crate::build::plan(&path, &crate::build::Options::default()).unwrap();
+        let f = plan
+            .findings
+            .iter()
+            .find(|f| f.code == "unsupported")
+            .expect("pitch-gap is unsupported");
+        let spans = f.strings.clone();
+        let named: usize = spans.iter().map(|[a, b]| b - a).sum();
+        assert!(named > 10, "{spans:?}");
+        let flags = flags(&plan);
+        let pi = plan
+            .paths
+            .iter()
+            .position(|tp| Some(&tp.name) == f.part.as_ref())
+            .unwrap();
+        for [a, b] in spans {
+            assert!(flags[pi][a..b].iter().all(|&x| x));
+        }
     }
 }

@@ -400,6 +400,27 @@ fn resolve_part(ctx: &Ctx, p: &RawPart, c0: f64, v0: f64, k: usize) -> Result<Pa
             .primitive
             .resolve(&ctx.scope, &env)
             .map_err(|e| e.under(&key))?;
+        // a solid's beads are layer_height × line_width: a cross_section the
+        // recipe gives for it would be silently ignored, so refuse it
+        if let crate::primitive::Primitive::Solid(sol) = &primitive {
+            let bead = sol.layer_height * sol.line_width;
+            let given = item.cross_section.is_some() || p.cross_section.is_some();
+            if given && (c - bead).abs() > 1e-9 * bead {
+                let at = if item.cross_section.is_some() {
+                    format!("{key}.cross_section")
+                } else {
+                    "cross_section".to_string()
+                };
+                return Err(Error::input(
+                    at,
+                    format!(
+                        "{c} is not used by a solid: its beads are layer_height × line_width = {} mm² (infill squeezed to its spacing); remove cross_section or set it to {}",
+                        crate::format::fmt_num(bead),
+                        crate::format::fmt_num(bead)
+                    ),
+                ));
+            }
+        }
         pieces.push(Piece {
             primitive,
             cross_section: c,
@@ -419,6 +440,35 @@ fn resolve_part(ctx: &Ctx, p: &RawPart, c0: f64, v0: f64, k: usize) -> Result<Pa
         steps,
         more: pieces,
         place: format!("parts[{k}]"),
+        brim: match &p.brim {
+            Some(b) => {
+                Some(crate::model::Brim {
+                    loops: {
+                        let n = ctx.positive(&b.loops, "brim.loops")?;
+                        if n.fract() != 0.0 || n > 1000.0 {
+                            return Err(Error::input(
+                            "brim.loops",
+                            format!("{n} is not allowed; expected a whole number of loops, 1 to 1000"),
+                        ));
+                        }
+                        n as u32
+                    },
+                    line_width: match &b.line_width {
+                        Some(n) => ctx.positive(n, "brim.line_width")?,
+                        None => 0.45,
+                    },
+                    layer_height: match &b.layer_height {
+                        Some(n) => ctx.positive(n, "brim.layer_height")?,
+                        None => 0.2,
+                    },
+                    speed: match &b.speed {
+                        Some(n) => ctx.positive(n, "brim.speed")?,
+                        None => speed,
+                    },
+                })
+            }
+            None => None,
+        },
     })
 }
 

@@ -207,6 +207,9 @@ pub struct RawPart {
     /// Steps in order.
     #[serde(default)]
     pub steps: Vec<RawStep>,
+    /// Loops on the bed round the part's first contact, printed first.
+    #[serde(default)]
+    pub brim: Option<RawBrim>,
     /// Child parts, making this part a group (see [`super::expand`]).
     #[serde(default)]
     pub parts: Option<Vec<RawPart>>,
@@ -219,6 +222,23 @@ pub struct RawPart {
     /// Repeat the part once per value of each name (`for:` in a recipe).
     #[serde(default, rename = "for")]
     pub repeat: IndexMap<String, super::expand::RawLoop>,
+}
+
+/// `brim:` of a part: loops on the bed round its first contact.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawBrim {
+    /// Number of loops.
+    pub loops: Num,
+    /// Width of a loop and the step between loops, mm (0.45).
+    #[serde(default)]
+    pub line_width: Option<Num>,
+    /// Height of the loops' bead, mm (0.2).
+    #[serde(default)]
+    pub layer_height: Option<Num>,
+    /// mm/s (the part's speed).
+    #[serde(default)]
+    pub speed: Option<Num>,
 }
 
 /// `keep:` of a modulation.

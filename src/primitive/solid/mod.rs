@@ -29,9 +29,12 @@
 //! Each perimeter loop starts at its vertex nearest the head; loops, islands
 //! and infill lines are taken nearest first, joined by travel moves. A layer
 //! ends by rising straight up one layer before travelling to the next start.
-//! Every string has the cross-section layer_height × line_width (a
-//! rectangular bead) and the part's speed; the part's cross_section is not
-//! used. All this is computed when the recipe is resolved, so the number of
+//! Perimeter strings have the cross-section layer_height × line_width (a
+//! rectangular bead), infill strings layer_height × min(spacing, line_width)
+//! (lines closer than their width are squeezed to their spacing, so a solid
+//! layer's filament is its area × height), all at the part's speed. A part's
+//! cross_section other than layer_height × line_width is refused when the
+//! recipe is resolved (it would be ignored). All this is computed when the recipe is resolved, so the number of
 //! strings is exact before any is made.
 
 pub mod infill;

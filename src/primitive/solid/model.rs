@@ -105,6 +105,8 @@ pub struct IslandPlan {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub(super) struct Program {
     pub(super) paths: Vec<Vec<DVec2>>,
+    /// Per path: whether it is infill (else a perimeter loop).
+    pub(super) infill: Vec<bool>,
     /// Draws plus the travels between paths.
     pub(super) strings: u64,
 }

@@ -190,6 +190,7 @@ impl Solid {
             })
             .collect();
         let mut paths: Vec<Vec<DVec2>> = Vec::new();
+        let mut is_infill: Vec<bool> = Vec::new();
         let entry = |t: &Todo, h: DVec2| -> f64 {
             let mut best = f64::INFINITY;
             for level in &t.0 {
@@ -235,7 +236,9 @@ impl Solid {
             } else {
                 -self.infill.angle
             });
+            is_infill.resize(paths.len(), false);
             head = order_spans(spans, u, self.infill.spacing, head, &mut paths);
+            is_infill.resize(paths.len(), true);
         }
         let mut strings = 0;
         for (i, p) in paths.iter().enumerate() {
@@ -244,7 +247,11 @@ impl Solid {
                 strings += 1;
             }
         }
-        Program { paths, strings }
+        Program {
+            paths,
+            infill: is_infill,
+            strings,
+        }
     }
 
     /// The number of strings [`Solid::walk`] makes, from each layer's
@@ -269,32 +276,34 @@ impl Solid {
     }
 
     /// Runs through every point of the part in order, calling
-    /// `f(point, travel)`; the first call is the start point (its `travel`
-    /// meaningless), each later one a string to that point.
-    fn walk(&self, mut f: impl FnMut(DVec3, bool)) {
+    /// `f(point, travel, infill)`; the first call is the start point (its
+    /// `travel` meaningless), each later one a string to that point, `infill`
+    /// when it belongs to an infill path.
+    fn walk(&self, mut f: impl FnMut(DVec3, bool, bool)) {
         let mut head: Option<DVec3> = None;
         for layer in self.layers() {
             let Some(slab) = layer.slab else { continue };
             let prog = &slab.programs[layer.parity];
             for (i, path) in prog.paths.iter().enumerate() {
                 let start = path[0].extend(layer.z);
+                let infill = prog.infill[i];
                 match head {
-                    None => f(start, true),
+                    None => f(start, true, false),
                     Some(h) => {
                         if i == 0 && h.z != layer.z {
                             // up first, then across
                             let up = DVec3::new(h.x, h.y, layer.z);
-                            f(up, true);
+                            f(up, true, false);
                             if up != start {
-                                f(start, true);
+                                f(start, true, false);
                             }
                         } else if h != start {
-                            f(start, true);
+                            f(start, true, false);
                         }
                     }
                 }
                 for p in &path[1..] {
-                    f(p.extend(layer.z), false);
+                    f(p.extend(layer.z), false, infill);
                 }
                 head = Some(path[path.len() - 1].extend(layer.z));
             }
@@ -328,16 +337,20 @@ impl Solid {
         self.count
     }
 
-    /// Makes the strings: cross-section layer_height × line_width, speed `v`
-    /// (the part's cross-section `_c` is not used: a solid's beads are as
-    /// high as its layers and as wide as its lines).
+    /// Makes the strings at speed `v`: perimeters of cross-section
+    /// layer_height × line_width, infill of layer_height × min(spacing,
+    /// line_width), so a solid layer's filament fills its area × height (lines
+    /// closer than their width are squeezed to their spacing, not piled on
+    /// each other). The part's cross-section `_c` is not used: the recipe's
+    /// resolution refuses one that differs from layer_height × line_width.
     pub fn build(&self, _c: f64, v: f64) -> Toolpath {
         let c = self.layer_height * self.line_width;
+        let c_infill = self.layer_height * self.line_width.min(self.infill.spacing);
         let mut t: Option<Toolpath> = None;
-        self.walk(|p, travel| match &mut t {
+        self.walk(|p, travel, infill| match &mut t {
             None => t = Some(Toolpath::with_capacity(p, self.count as usize)),
             Some(t) if travel => t.travel(p, v),
-            Some(t) => t.draw(p, c, v),
+            Some(t) => t.draw(p, if infill { c_infill } else { c }, v),
         });
         t.unwrap_or_default()
     }
