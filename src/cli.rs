@@ -735,16 +735,12 @@ fn check_lock(a: &HashArgs, lockfile: &Path) -> Vec<Error> {
                 let place = match lock::first_difference(&entry.blocks, &new) {
                     Some(k) => {
                         let first = k as u64 * entry.block_lines;
-                        let text = new_line(c, job, first, threads)
-                            .unwrap_or_else(|| "(end of file)".into());
+                        let block = new_lines(c, job, first, entry.block_lines, threads);
+                        let text = block.first().map_or("(end of file)", String::as_str);
                         if entry.block_lines == 1 {
                             format!("first differing line {}: `{text}`", first + 1)
                         } else {
-                            format!(
-                                "first difference in lines {}–{}, which now begin `{text}`",
-                                first + 1,
-                                first + entry.block_lines
-                            )
+                            changed_block(first, entry.block_lines, &block)
                         }
                     }
                     None => "the lines hash alike block by block (a hash collision?)".into(),
@@ -764,12 +760,50 @@ fn check_lock(a: &HashArgs, lockfile: &Path) -> Vec<Error> {
     errors
 }
 
-/// Line `k` (0-based) of the job's G-code, rebuilt on `threads`.
-fn new_line(c: &Common, job: &Job, k: u64, threads: Threads) -> Option<String> {
-    let p = c.checked_plan(job, threads).ok()?;
-    let (buf, _) = p.write_gcode(Vec::new()).ok()?;
-    let text = String::from_utf8(buf).ok()?;
-    text.lines().nth(k as usize).map(str::to_string)
+/// Lines `k..k + n` (0-based) of the job's G-code, rebuilt on `threads`.
+fn new_lines(c: &Common, job: &Job, k: u64, n: u64, threads: Threads) -> Vec<String> {
+    let Some(text) = c
+        .checked_plan(job, threads)
+        .ok()
+        .and_then(|p| p.write_gcode(Vec::new()).ok())
+        .and_then(|(buf, _)| String::from_utf8(buf).ok())
+    else {
+        return Vec::new();
+    };
+    text.lines()
+        .skip(k as usize)
+        .take(n as usize)
+        .map(str::to_string)
+        .collect()
+}
+
+/// Where a block of `n` lines from line `first` (0-based) changed: the lock
+/// keeps one hash per block, so the changed line is one of them; a short
+/// block is quoted whole, a long one by its first and last lines and the
+/// `; param` comments between them (where a changed param shows).
+fn changed_block(first: u64, n: u64, block: &[String]) -> String {
+    let range = format!("lines {}–{}", first + 1, first + n);
+    if block.is_empty() {
+        return format!("first difference in {range}, now past the end of the file");
+    }
+    let quote = |k: usize| format!("{}: `{}`", first + 1 + k as u64, block[k]);
+    let picked: Vec<String> = if block.len() <= 4 {
+        (0..block.len()).map(quote).collect()
+    } else {
+        let last = block.len() - 1;
+        let mut v = vec![quote(0)];
+        v.extend(
+            (1..last)
+                .filter(|&k| block[k].starts_with("; param "))
+                .map(quote),
+        );
+        v.extend(["…".to_string(), quote(last)]);
+        v
+    };
+    format!(
+        "first difference in {range} (the lock keeps one hash per {n} lines, so it cannot tell which of them changed); they now read {}",
+        picked.join(", ")
+    )
 }
 
 /// Flags of `preview`.
@@ -874,5 +908,15 @@ pub fn printers() -> String {
         ));
     }
     out.push_str("Use one with --printer NAME, or a YAML file (--printer FILE; `inherits: NAME` starts from a built-in one).\n");
+    out
+}
+
+/// An error as the binary prints it: `error: FILE:LINE:COL: PATH: message`,
+/// then a `help:` line when one is known.
+pub fn render_error(e: &Error) -> String {
+    let mut out = format!("error: {e}\n");
+    if let Some(h) = &e.help {
+        out.push_str(&format!("help: {h}\n"));
+    }
     out
 }

@@ -181,7 +181,7 @@ fn main() -> ExitCode {
     };
     let mut code = 0;
     for e in &errors {
-        eprintln!("error: {e}");
+        eprint!("{}", cli::render_error(e));
         code = code.max(e.exit_code());
     }
     ExitCode::from(code as u8)
