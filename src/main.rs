@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use clap::{Args, Parser, Subcommand};
+use clap::{Args, CommandFactory, Parser, Subcommand};
 use p3dp::cli::{self, BuildArgs, Common, HashArgs, PreviewArgs};
 
 /// Procedural 3D printing: YAML recipes of nozzle paths to G-code.
@@ -125,6 +125,24 @@ enum Command {
         #[arg(long, value_name = "FILE")]
         check: Option<PathBuf>,
     },
+    /// Write a commented starter recipe, NAME.yaml, that builds as it is.
+    New {
+        /// The recipe's name (and file: NAME.yaml, or NAME itself when it ends in .yaml).
+        #[arg(value_name = "NAME")]
+        name: String,
+        /// What to start from.
+        #[arg(long, value_name = "KIND", default_value = "sphere",
+              value_parser = ["sphere", "globe", "plate", "turtle", "solid"])]
+        from: String,
+    },
+    /// Print a shell completion script: bash, zsh, fish, powershell or elvish.
+    Completions {
+        /// The shell.
+        #[arg(value_name = "SHELL")]
+        shell: clap_complete::Shell,
+    },
+    /// Print the manual page (roff; `p3dp man | man -l -`).
+    Man,
 }
 
 fn main() -> ExitCode {
@@ -178,6 +196,31 @@ fn main() -> ExitCode {
             lock,
             check,
         }),
+        Command::New { name, from } => match cli::new_recipe(&name, &from) {
+            Ok(line) => {
+                println!("{line}");
+                Vec::new()
+            }
+            Err(e) => vec![e],
+        },
+        Command::Completions { shell } => {
+            clap_complete::generate(shell, &mut Cli::command(), "p3dp", &mut std::io::stdout());
+            Vec::new()
+        }
+        Command::Man => {
+            let mut out = Vec::new();
+            match clap_mangen::Man::new(Cli::command()).render(&mut out) {
+                Ok(()) => {
+                    use std::io::Write;
+                    let _ = std::io::stdout().write_all(&out);
+                    Vec::new()
+                }
+                Err(e) => vec![p3dp::error::Error::io(
+                    "-",
+                    format!("cannot write the manual: {e}"),
+                )],
+            }
+        }
     };
     let mut code = 0;
     for e in &errors {

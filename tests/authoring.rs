@@ -1,4 +1,5 @@
-//! The authoring loop: plain-worded errors for a newcomer's mistakes.
+//! The authoring loop: plain-worded errors for a newcomer's mistakes, starter
+//! recipes that build, shell completions and the manual page.
 
 mod common;
 
@@ -8,6 +9,10 @@ use std::process::Output;
 
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
 }
 
 /// Writes `text` as `name` in `dir` and runs `p3dp check` on it.
@@ -96,4 +101,60 @@ fn a_sweep_range_without_a_step_asks_for_one() {
     assert!(e.contains("cycles=3..5:1"), "{e}");
     assert!(!e.contains("--set"), "{e}");
     assert!(!dir.join("out").exists());
+}
+
+#[test]
+fn every_starter_builds_and_passes_its_checks() {
+    let dir = tmp("authoring-new");
+    for kind in ["sphere", "globe", "plate", "turtle", "solid"] {
+        let name = format!("my-{kind}");
+        let o = p3dp(&dir, &["new", &name, "--from", kind]);
+        assert!(o.status.success(), "new --from {kind}: {}", stderr(&o));
+        let file = format!("{name}.yaml");
+        let text = std::fs::read_to_string(dir.join(&file)).unwrap();
+        assert!(text.contains(&format!("name: {name}")), "{text}");
+        assert!(!text.contains("__NAME__"), "{text}");
+        assert!(
+            text.lines().filter(|l| l.contains('#')).count() > 5,
+            "commented"
+        );
+        let c = p3dp(&dir, &["check", &file]);
+        assert!(
+            c.status.success(),
+            "check {file}: {}{}",
+            stdout(&c),
+            stderr(&c)
+        );
+        let b = p3dp(&dir, &["build", &file]);
+        assert!(b.status.success(), "build {file}: {}", stderr(&b));
+        assert!(dir.join(format!("{name}.gcode")).is_file());
+    }
+    // never over an existing file
+    let o = p3dp(&dir, &["new", "my-sphere"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("already exists"), "{}", stderr(&o));
+    // an unknown kind is refused by the argument parser, naming the kinds
+    let o = p3dp(&dir, &["new", "x", "--from", "cube"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("turtle"), "{}", stderr(&o));
+}
+
+#[test]
+fn completions_and_the_manual_name_the_subcommands() {
+    let dir = tmp("authoring-completions");
+    for shell in ["bash", "zsh", "fish", "powershell"] {
+        let o = p3dp(&dir, &["completions", shell]);
+        assert!(o.status.success(), "{shell}: {}", stderr(&o));
+        let text = stdout(&o);
+        for sub in ["build", "check", "hash", "preview", "new", "completions"] {
+            assert!(text.contains(sub), "{shell} completions lack {sub}");
+        }
+    }
+    let o = p3dp(&dir, &["man"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let man = stdout(&o);
+    assert!(man.starts_with(".ie") || man.contains(".TH"), "{man}");
+    for sub in ["build", "check", "hash", "preview", "new", "man"] {
+        assert!(man.contains(sub), "the manual lacks {sub}");
+    }
 }
