@@ -54,7 +54,8 @@ pub fn parse_sweep(s: &str) -> Result<(String, Vec<String>)> {
                 "a range needs a step: NAME=a..b:step, e.g. --sweep {}={spec}:1 (or list the values: NAME=v1,v2,…)",
                 name.trim()
             ),
-        ));
+        )
+        .with_help("a sweep is NAME=v1,v2,… (a list) or NAME=a..b:step (a range, b included)"));
     }
     let values = if let Some((range, step)) = spec.split_once(':').filter(|_| spec.contains("..")) {
         let (a, b) = range.split_once("..").unwrap();

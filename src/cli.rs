@@ -987,11 +987,9 @@ pub fn new_recipe(name: &str, from: &str) -> Result<String> {
 }
 
 /// An error as the binary prints it: `error: FILE:LINE:COL: PATH: message`,
-/// then a `help:` line when one is known.
+/// then (see [`crate::diagnostic`]) the source line underlined at the place
+/// and a `help:` line when one is known; coloured only on a terminal without
+/// `NO_COLOR`.
 pub fn render_error(e: &Error) -> String {
-    let mut out = format!("error: {e}\n");
-    if let Some(h) = &e.help {
-        out.push_str(&format!("help: {h}\n"));
-    }
-    out
+    crate::diagnostic::render(e, crate::diagnostic::stderr_color())
 }

@@ -131,8 +131,40 @@ fn misplaced_key(text: &str, path: &serde_path_to_error::Path, message: &str) ->
     ))
 }
 
-/// Puts the parser's terse messages in plain words: an empty file, a tab.
+/// For ``unknown field `pich`, expected one of `radius`, `pitch` `` (or an
+/// unknown variant): `did you mean `pitch`?` when a key is close, and the
+/// allowed keys.
+fn did_you_mean(message: &str) -> Option<String> {
+    let (head, allowed) = message.split_once(", expected one of ")?;
+    let wrong = head
+        .strip_prefix("unknown field `")
+        .or_else(|| head.strip_prefix("unknown variant `"))?
+        .strip_suffix('`')?;
+    let keys: Vec<&str> = allowed.split(", ").map(|k| k.trim_matches('`')).collect();
+    let best = keys
+        .iter()
+        .map(|k| (strsim::damerau_levenshtein(wrong, k), *k))
+        .filter(|(d, k)| *d <= 2.max(k.len() / 3) && *d < k.len())
+        .min();
+    let list = keys
+        .iter()
+        .map(|k| format!("`{k}`"))
+        .collect::<Vec<_>>()
+        .join(", ");
+    Some(match best {
+        Some((_, k)) => format!("did you mean `{k}`? the keys allowed here are {list}"),
+        None => format!("the keys allowed here are {list}"),
+    })
+}
+
+/// Puts the parser's terse messages in plain words: an empty file, a tab, a
+/// misspelt key.
 fn explain(mut err: Error, text: &str) -> Error {
+    if err.help.is_none() {
+        if let Some(h) = did_you_mean(&err.message) {
+            err = err.with_help(h);
+        }
+    }
     let blank = text
         .lines()
         .all(|l| l.trim().is_empty() || l.trim_start().starts_with('#'));
@@ -144,7 +176,9 @@ fn explain(mut err: Error, text: &str) -> Error {
         } else {
             "the file has only comments; expected YAML keys (a recipe starts with `p3dp: 1`)".into()
         };
-        return err;
+        return err.with_help(
+            "a recipe starts with `p3dp: 1`, `name:` and `parts:`; `p3dp new NAME` writes a starter to edit",
+        );
     }
     if let Some((l, c)) = err.line {
         let at = |l: usize| text.lines().nth(l.wrapping_sub(1)).unwrap_or("");
