@@ -1,7 +1,7 @@
 //! Errors that name the file, the place in it and what was expected.
 //!
 //! Every error carries an exit status: 2 for unusable input, 1 for a failed
-//! printability check (see `../shared/spec/recipe-v1.md`, "Exit status").
+//! printability check (see `docs/recipe.md` and the README, "Exit status").
 
 use std::fmt;
 use std::io;
