@@ -143,6 +143,8 @@ enum Command {
     },
     /// Print the manual page (roff; `p3dp man | man -l -`).
     Man,
+    /// Print the JSON Schema (draft 2020-12) of the recipe format, for editors.
+    Schema,
 }
 
 fn main() -> ExitCode {
@@ -205,6 +207,14 @@ fn main() -> ExitCode {
         },
         Command::Completions { shell } => {
             clap_complete::generate(shell, &mut Cli::command(), "p3dp", &mut std::io::stdout());
+            Vec::new()
+        }
+        Command::Schema => {
+            let s = p3dp::recipe::schema::json_schema();
+            println!(
+                "{}",
+                serde_json::to_string_pretty(&s).expect("a schema serialises")
+            );
             Vec::new()
         }
         Command::Man => {
