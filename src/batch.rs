@@ -68,6 +68,16 @@ pub fn parse_sweep(s: &str) -> Result<(String, Vec<String>)> {
             )
         })?;
     let spec = spec.trim();
+    if spec.contains("..") && !spec.contains(':') {
+        return Err(Error::input(
+            &place,
+            format!(
+                "a range needs a step: NAME=a..b:step, e.g. --sweep {}={spec}:1 (or list the values: NAME=v1,v2,…)",
+                name.trim()
+            ),
+        )
+        .with_help("a sweep is NAME=v1,v2,… (a list) or NAME=a..b:step (a range, b included)"));
+    }
     let range = spec
         .split_once(':')
         .filter(|_| spec.contains(".."))
@@ -203,6 +213,15 @@ mod tests {
         assert!(parse_sweep("a=3..1:1").is_err());
         assert!(parse_sweep("a=1..2:0").is_err());
         assert!(parse_sweep("a").is_err());
+    }
+
+    #[test]
+    fn a_range_without_a_step_says_it_needs_one() {
+        let e = parse_sweep("ripples=1..3").unwrap_err();
+        assert_eq!(e.place.as_deref(), Some("--sweep ripples=1..3"));
+        assert!(e.message.contains("a range needs a step"), "{e}");
+        assert!(e.message.contains("ripples=1..3:1"), "{e}");
+        assert!(!e.to_string().contains("--set"), "{e}");
     }
 
     #[test]

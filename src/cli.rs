@@ -9,7 +9,7 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use clap::{Args, Parser, Subcommand};
+use clap::{Args, CommandFactory, Parser, Subcommand};
 
 use crate::batch::{self, Job};
 use crate::build::{plan, Options, Plan};
@@ -48,6 +48,26 @@ pub enum Command {
     Printers,
     /// Print `SHA256  RECIPE`: the hash of exactly the bytes `build` would write.
     Hash(HashArgs),
+    /// Write a commented starter recipe, NAME.yaml, that builds as it is.
+    New {
+        /// The recipe's name (and file: NAME.yaml, or NAME itself when it ends in .yaml).
+        #[arg(value_name = "NAME")]
+        name: String,
+        /// What to start from.
+        #[arg(long, value_name = "KIND", default_value = "sphere",
+              value_parser = ["sphere", "globe", "plate", "turtle", "solid"])]
+        from: String,
+    },
+    /// Print a shell completion script: bash, zsh, fish, powershell or elvish.
+    Completions {
+        /// The shell.
+        #[arg(value_name = "SHELL")]
+        shell: clap_complete::Shell,
+    },
+    /// Print the manual page (roff; `p3dp man | man -l -`).
+    Man,
+    /// Print the JSON Schema (draft 2020-12) of the recipe format, for editors.
+    Schema,
 }
 
 /// Runs a parsed command line; returns the errors met (the binary prints
@@ -62,6 +82,35 @@ pub fn run(cli: Cli) -> Vec<Error> {
             Vec::new()
         }
         Command::Hash(a) => hash(&a),
+        Command::New { name, from } => match new_recipe(&name, &from) {
+            Ok(line) => {
+                println!("{line}");
+                Vec::new()
+            }
+            Err(e) => vec![e],
+        },
+        Command::Completions { shell } => {
+            clap_complete::generate(shell, &mut Cli::command(), "p3dp", &mut std::io::stdout());
+            Vec::new()
+        }
+        Command::Schema => {
+            let s = crate::recipe::schema::json_schema();
+            println!(
+                "{}",
+                serde_json::to_string_pretty(&s).expect("a schema serialises")
+            );
+            Vec::new()
+        }
+        Command::Man => {
+            let mut out = Vec::new();
+            match clap_mangen::Man::new(Cli::command()).render(&mut out) {
+                Ok(()) => {
+                    let _ = std::io::stdout().write_all(&out);
+                    Vec::new()
+                }
+                Err(e) => vec![Error::io("-", format!("cannot write the manual: {e}"))],
+            }
+        }
     }
 }
 
@@ -946,16 +995,12 @@ fn check_lock(a: &HashArgs, lockfile: &Path) -> Vec<Error> {
                 let place = match lock::first_difference(&entry.blocks, &new) {
                     Some(k) => {
                         let first = k as u64 * entry.block_lines;
-                        let text = new_line(c, job, first, threads)
-                            .unwrap_or_else(|| "(end of file)".into());
+                        let block = new_lines(c, job, first, entry.block_lines, threads);
+                        let text = block.first().map_or("(end of file)", String::as_str);
                         if entry.block_lines == 1 {
                             format!("first differing line {}: `{text}`", first + 1)
                         } else {
-                            format!(
-                                "first difference in lines {}–{}, which now begin `{text}`",
-                                first + 1,
-                                first + entry.block_lines
-                            )
+                            changed_block(first, entry.block_lines, &block)
                         }
                     }
                     None => "the lines hash alike block by block (a hash collision?)".into(),
@@ -975,12 +1020,50 @@ fn check_lock(a: &HashArgs, lockfile: &Path) -> Vec<Error> {
     errors
 }
 
-/// Line `k` (0-based) of the job's G-code, rebuilt on `threads`.
-fn new_line(c: &Common, job: &Job, k: u64, threads: Threads) -> Option<String> {
-    let p = c.checked_plan(job, threads).ok()?;
-    let (buf, _) = p.write_gcode(Vec::new()).ok()?;
-    let text = String::from_utf8(buf).ok()?;
-    text.lines().nth(k as usize).map(str::to_string)
+/// Lines `k..k + n` (0-based) of the job's G-code, rebuilt on `threads`.
+fn new_lines(c: &Common, job: &Job, k: u64, n: u64, threads: Threads) -> Vec<String> {
+    let Some(text) = c
+        .checked_plan(job, threads)
+        .ok()
+        .and_then(|p| p.write_gcode(Vec::new()).ok())
+        .and_then(|(buf, _)| String::from_utf8(buf).ok())
+    else {
+        return Vec::new();
+    };
+    text.lines()
+        .skip(k as usize)
+        .take(n as usize)
+        .map(str::to_string)
+        .collect()
+}
+
+/// Where a block of `n` lines from line `first` (0-based) changed: the lock
+/// keeps one hash per block, so the changed line is one of them; a short
+/// block is quoted whole, a long one by its first and last lines and the
+/// `; param` comments between them (where a changed param shows).
+fn changed_block(first: u64, n: u64, block: &[String]) -> String {
+    let range = format!("lines {}–{}", first + 1, first + n);
+    if block.is_empty() {
+        return format!("first difference in {range}, now past the end of the file");
+    }
+    let quote = |k: usize| format!("{}: `{}`", first + 1 + k as u64, block[k]);
+    let picked: Vec<String> = if block.len() <= 4 {
+        (0..block.len()).map(quote).collect()
+    } else {
+        let last = block.len() - 1;
+        let mut v = vec![quote(0)];
+        v.extend(
+            (1..last)
+                .filter(|&k| block[k].starts_with("; param "))
+                .map(quote),
+        );
+        v.extend(["…".to_string(), quote(last)]);
+        v
+    };
+    format!(
+        "first difference in {range} (the lock keeps one hash per {n} lines, so it cannot tell which of them changed); they now read {}",
+        picked.join(", ")
+    )
 }
 
 /// Flags of `preview`.
@@ -1105,4 +1188,87 @@ pub fn printers() -> String {
     }
     out.push_str("Use one with --printer NAME, or a YAML file (--printer FILE; `inherits: NAME` starts from a built-in one).\n");
     out
+}
+
+/// The starter recipes of `p3dp new --from KIND`: each kind and its text,
+/// with `__NAME__` where the recipe's name goes.
+pub const STARTERS: &[(&str, &str)] = &[
+    ("sphere", include_str!("starters/sphere.yaml")),
+    ("globe", include_str!("starters/globe.yaml")),
+    ("plate", include_str!("starters/plate.yaml")),
+    ("turtle", include_str!("starters/turtle.yaml")),
+    ("solid", include_str!("starters/solid.yaml")),
+];
+
+/// The text of starter `from` for a recipe called `name`, built from `file`.
+pub fn starter_text(name: &str, from: &str, file: &str) -> Result<String> {
+    let text = STARTERS
+        .iter()
+        .find(|(k, _)| *k == from)
+        .map(|(_, t)| *t)
+        .ok_or_else(|| {
+            let kinds: Vec<&str> = STARTERS.iter().map(|(k, _)| *k).collect();
+            Error::input(
+                format!("--from {from}"),
+                format!("no starter `{from}`; expected one of {}", kinds.join(", ")),
+            )
+        })?;
+    let plain = !name.is_empty()
+        && name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || "._-".contains(c));
+    let yaml_name = if plain {
+        name.to_string()
+    } else {
+        serde_json::to_string(name).expect("a string serialises")
+    };
+    Ok(text
+        .replace("__NAME__.yaml", file)
+        .replace("__NAME__.gcode", &format!("{}.gcode", file_stem(name)))
+        .replace("name: __NAME__", &format!("name: {yaml_name}"))
+        .replace("__NAME__", name))
+}
+
+/// `p3dp new NAME [--from KIND]`: writes the starter recipe `NAME.yaml` (or
+/// NAME itself when it ends in `.yaml`/`.yml`), never over an existing file;
+/// returns the line to print.
+pub fn new_recipe(name: &str, from: &str) -> Result<String> {
+    let path = if name.ends_with(".yaml") || name.ends_with(".yml") {
+        PathBuf::from(name)
+    } else {
+        PathBuf::from(format!("{name}.yaml"))
+    };
+    let shown = path.display().to_string();
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .filter(|s| !s.trim().is_empty())
+        .ok_or_else(|| Error::input(format!("new {name}"), "expected a recipe name"))?;
+    let text = starter_text(&stem, from, &shown)?;
+    make_parent(&path)?;
+    let mut file = std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&path)
+        .map_err(|e| {
+            let why = if e.kind() == std::io::ErrorKind::AlreadyExists {
+                "already exists; not overwritten (choose another name or remove it)".to_string()
+            } else {
+                format!("cannot create the recipe: {e}")
+            };
+            Error::io_from(&shown, why, &e)
+        })?;
+    file.write_all(text.as_bytes())
+        .map_err(|e| Error::io_from(&shown, format!("cannot write the recipe: {e}"), &e))?;
+    Ok(format!(
+        "wrote {shown} (a {from} to start from); build it with: p3dp build {shown}"
+    ))
+}
+
+/// An error as the binary prints it: `error: FILE:LINE:COL: PATH: message`,
+/// then (see [`crate::diagnostic`]) the source line underlined at the place
+/// and a `help:` line when one is known; coloured only on a terminal without
+/// `NO_COLOR`.
+pub fn render_error(e: &Error) -> String {
+    crate::diagnostic::render(e, crate::diagnostic::stderr_color())
 }

@@ -1,7 +1,7 @@
 //! Errors that name the file, the place in it and what was expected.
 //!
 //! Every error carries an exit status: 2 for unusable input, 1 for a failed
-//! printability check (see `../shared/spec/recipe-v1.md`, "Exit status").
+//! printability check (see `docs/recipe.md` and the README, "Exit status").
 
 use std::fmt;
 use std::io;
@@ -33,6 +33,10 @@ pub struct Error {
     /// The kind of the I/O error behind it, when there is one (so a caller
     /// can tell, say, a broken pipe on `-o -`).
     pub io_kind: Option<io::ErrorKind>,
+    /// A hint shown below the message as `help: …` (did you mean, the allowed
+    /// keys, use spaces…), when one is known; not part of [`fmt::Display`]
+    /// (boxed: keeps `Error` small).
+    pub help: Option<Box<str>>,
 }
 
 /// Result type of the library.
@@ -49,6 +53,7 @@ impl Error {
             place: if place.is_empty() { None } else { Some(place) },
             message: message.into(),
             io_kind: None,
+            help: None,
         }
     }
 
@@ -61,6 +66,7 @@ impl Error {
             place: None,
             message: message.into(),
             io_kind: None,
+            help: None,
         }
     }
 
@@ -73,6 +79,7 @@ impl Error {
             place: None,
             message: message.into(),
             io_kind: None,
+            help: None,
         }
     }
 
@@ -82,6 +89,12 @@ impl Error {
             io_kind: Some(e.kind()),
             ..Error::io(file, message)
         }
+    }
+
+    /// Adds a `help:` hint (replacing any earlier one).
+    pub fn with_help(mut self, help: impl Into<String>) -> Error {
+        self.help = Some(help.into().into_boxed_str());
+        self
     }
 
     /// Sets the file when none is set yet.

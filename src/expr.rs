@@ -605,46 +605,47 @@ impl Expr {
                 }
                 Token::Func(name, nargs) => {
                     let k = nargs.unwrap_or(0);
-                    let op =
-                        match (name.as_str(), k) {
-                            ("min", 1..=255) => Op::Min(k as u8),
-                            ("max", 1..=255) => Op::Max(k as u8),
-                            ("min" | "max", _) => return Err(ExprError::new(
+                    let op = match (name.as_str(), k) {
+                        ("min", 1..=255) => Op::Min(k as u8),
+                        ("max", 1..=255) => Op::Max(k as u8),
+                        ("min" | "max", _) => {
+                            return Err(ExprError::new(
                                 ExprErrorKind::Function,
                                 format!(
                                     "`{name}` takes 1 to 255 arguments but is given {k} in `{src}`"
                                 ),
-                            )),
-                            (n, 1) if lookup1(n).is_some() => Op::F1(lookup1(n).unwrap()),
-                            (n, 2) if lookup2(n).is_some() => Op::F2(lookup2(n).unwrap()),
-                            (n, 3) if lookup3(n).is_some() => Op::F3(lookup3(n).unwrap()),
-                            (n, 4) if lookup4(n).is_some() => Op::F4(lookup4(n).unwrap()),
-                            (n, _) => {
-                                let arity = if lookup1(n).is_some() {
-                                    Some(1)
-                                } else if lookup2(n).is_some() {
-                                    Some(2)
-                                } else if lookup3(n).is_some() {
-                                    Some(3)
-                                } else if lookup4(n).is_some() {
-                                    Some(4)
-                                } else {
-                                    None
-                                };
-                                return Err(ExprError::new(
-                                    ExprErrorKind::Function,
-                                    match arity {
-                                        Some(a) => format!(
+                            ))
+                        }
+                        (n, 1) if lookup1(n).is_some() => Op::F1(lookup1(n).unwrap()),
+                        (n, 2) if lookup2(n).is_some() => Op::F2(lookup2(n).unwrap()),
+                        (n, 3) if lookup3(n).is_some() => Op::F3(lookup3(n).unwrap()),
+                        (n, 4) if lookup4(n).is_some() => Op::F4(lookup4(n).unwrap()),
+                        (n, _) => {
+                            let arity = if lookup1(n).is_some() {
+                                Some(1)
+                            } else if lookup2(n).is_some() {
+                                Some(2)
+                            } else if lookup3(n).is_some() {
+                                Some(3)
+                            } else if lookup4(n).is_some() {
+                                Some(4)
+                            } else {
+                                None
+                            };
+                            return Err(ExprError::new(
+                                ExprErrorKind::Function,
+                                match arity {
+                                    Some(a) => format!(
                                         "`{n}` takes {a} argument{} but is given {k} in `{src}`",
                                         if a == 1 { "" } else { "s" }
                                     ),
-                                        None => format!(
+                                    None => format!(
                                     "unknown function `{n}` in `{src}`; functions are: {FUNCTIONS}"
                                 ),
-                                    },
-                                ));
-                            }
-                        };
+                                },
+                            ));
+                        }
+                    };
                     if stack.len() < k {
                         return Err(ExprError::new(
                             ExprErrorKind::Syntax,

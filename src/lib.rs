@@ -46,6 +46,7 @@ pub mod recipe;
 pub mod batch;
 pub mod build;
 pub mod cli;
+pub mod diagnostic;
 pub mod lock;
 pub mod output;
 pub mod plan;

@@ -57,6 +57,18 @@ impl<'de> Deserialize<'de> for Num {
 /// A point or vector of three numbers.
 pub type Num3 = [Num; 3];
 
+impl schemars::JsonSchema for Num {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "Num".into()
+    }
+    fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        schemars::json_schema!({
+            "description": "A number, or an expression string over the params before it (e.g. \"pi/2*radius\").",
+            "type": ["number", "string"]
+        })
+    }
+}
+
 /// Evaluates one number with the place named (a primitive's view of a [`Scope`]).
 pub type NumFn<'a> = &'a dyn Fn(&Num, &str) -> Result<f64>;
 

@@ -156,6 +156,8 @@ fn lock_check_names_the_recipe_whose_default_changed() {
     );
     // it points at the first difference: the param comment in the header
     assert!(stderr.contains("lines 1–"), "{stderr}");
+    // the changed param's line is quoted, not only the block's first line
+    assert!(stderr.contains("`; param lift = 0.5`"), "{stderr}");
     assert!(stderr.contains("G-code changed"), "{stderr}");
 }
 

@@ -37,7 +37,16 @@ const LAYERS: &[(&str, &[&str])] = &[
     ("YAML edge", &["recipe"]),
     (
         "orchestration",
-        &["output", "plan", "preview", "build", "batch", "lock", "cli"],
+        &[
+            "output",
+            "plan",
+            "preview",
+            "build",
+            "batch",
+            "lock",
+            "diagnostic",
+            "cli",
+        ],
     ),
 ];
 

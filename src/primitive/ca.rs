@@ -59,7 +59,7 @@ use crate::rng::SplitMix64;
 use crate::toolpath::Toolpath;
 
 /// Which of the paper's rules decides a cell.
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Rule {
     /// Fig. 5: straight up at p0, else on the next cell (i + 1) at p1.
@@ -69,7 +69,7 @@ pub enum Rule {
 }
 
 /// `initial:` as written.
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum RawInitial {
     /// Every cell of the first turn filled (the paper's usual start).
@@ -377,7 +377,7 @@ impl CaHelix {
 /// `e1` (0.3), `initial` (`ones`), `noise` (0.5, `initial: random` only),
 /// `seed` (0), `center` ([0, 0, layer_height]). Filled cells are extruded at
 /// the part's cross-section and speed.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 #[allow(missing_docs)]
 pub struct RawCaHelix {

@@ -36,7 +36,7 @@ use crate::num::{Num, Scope};
 use crate::toolpath::Toolpath;
 
 /// A primitive as written: each kind owns its raw form and its resolution.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
 #[allow(missing_docs)]
 pub enum RawPrimitive {

@@ -73,7 +73,7 @@ pub fn build(cmds: &[PathCmd], c0: f64, v0: f64) -> Toolpath {
 }
 
 /// A `path` command as written.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 #[allow(missing_docs)]
 pub enum RawCmd {
@@ -84,7 +84,7 @@ pub enum RawCmd {
 }
 
 /// `path:` as written.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawPath {
     /// The commands, in order.

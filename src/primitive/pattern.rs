@@ -97,7 +97,7 @@ impl PatternHelix {
 /// (turns, the first included), `layer_height`; optional (default):
 /// `segments` (72), `cross_section` and `speed` (the part's), `first_layer:
 /// {cross_section, speed}` ({0.2, 15}), `center` ([0, 0, layer_height]).
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 #[allow(missing_docs)]
 pub struct RawPatternHelix {
@@ -117,7 +117,7 @@ pub struct RawPatternHelix {
 }
 
 /// `first_layer:` of a `pattern_helix`.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 #[allow(missing_docs)]
 pub struct RawFirstLayer {

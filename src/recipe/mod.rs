@@ -1,5 +1,5 @@
-//! The YAML edge: recipes in the format of `docs/recipe.md` (which extends
-//! `../shared/spec/recipe-v1.md`) and printer profiles, read and resolved.
+//! The YAML edge: recipes in the format of `docs/recipe.md` (which keeps every
+//! key of the v1 contract) and printer profiles, read and resolved.
 //!
 //! Loading is two stages. [`yaml::parse_yaml`] reads the text into the raw
 //! schema ([`schema`]: `Raw*` types, every number still a

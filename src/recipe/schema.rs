@@ -20,7 +20,7 @@ pub enum RawMaterial {
 }
 
 /// An inline material.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct InlineMaterial {
     /// Name for reports.
@@ -70,7 +70,7 @@ impl<'de> Deserialize<'de> for RawMaterial {
 }
 
 /// `defaults:`.
-#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Default, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawDefaults {
     /// mm².
@@ -82,7 +82,7 @@ pub struct RawDefaults {
 }
 
 /// `skirt:`.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawSkirt {
     /// mm outside the parts' footprint.
@@ -92,7 +92,7 @@ pub struct RawSkirt {
 }
 
 /// The top level of a recipe file.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawRecipe {
     /// Format version; must be 1.
@@ -133,6 +133,22 @@ pub struct RawRecipe {
     pub include: Vec<String>,
 }
 
+/// The JSON Schema (draft 2020-12) of a recipe, made from the same `Raw*`
+/// types the loader reads (so it cannot drift from them), for editors:
+/// `# yaml-language-server: $schema=…` at the top of a recipe.
+pub fn json_schema() -> serde_json::Value {
+    let mut s = serde_json::to_value(schemars::schema_for!(RawRecipe)).unwrap_or_default();
+    if let Some(o) = s.as_object_mut() {
+        o.insert("title".into(), "p3dp recipe (format version 1)".into());
+        o.insert(
+            "description".into(),
+            "A p3dp recipe: the nozzle's path as primitives and steps. Reference: docs/recipe.md."
+                .into(),
+        );
+    }
+    s
+}
+
 /// An `allow:` entry: a check code, or `{code, reason}`.
 #[derive(Clone, Debug, PartialEq)]
 pub enum RawAllow {
@@ -148,10 +164,12 @@ pub enum RawAllow {
 }
 
 /// `{code, reason}` of an `allow:` entry.
-#[derive(Deserialize)]
+#[derive(Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 struct AllowMap {
+    /// The check code.
     code: String,
+    /// Why the finding is accepted.
     #[serde(default)]
     reason: Option<String>,
 }
@@ -179,6 +197,32 @@ impl<'de> Deserialize<'de> for RawAllow {
     }
 }
 
+impl schemars::JsonSchema for RawMaterial {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "RawMaterial".into()
+    }
+    fn json_schema(g: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        let inline = g.subschema_for::<InlineMaterial>();
+        schemars::json_schema!({
+            "description": "A built-in material (pla, abs, petg) or an inline map.",
+            "anyOf": [{"type": "string", "examples": ["pla", "abs", "petg"]}, inline]
+        })
+    }
+}
+
+impl schemars::JsonSchema for RawAllow {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "RawAllow".into()
+    }
+    fn json_schema(g: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        let map = g.subschema_for::<AllowMap>();
+        schemars::json_schema!({
+            "description": "A check code to silence, or {code, reason}.",
+            "anyOf": [{"type": "string"}, map]
+        })
+    }
+}
+
 impl RawAllow {
     /// The check code.
     pub fn code(&self) -> &str {
@@ -189,7 +233,7 @@ impl RawAllow {
 }
 
 /// One part.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawPart {
     /// Name for reports.
@@ -225,7 +269,7 @@ pub struct RawPart {
 }
 
 /// `brim:` of a part: loops on the bed round its first contact.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawBrim {
     /// Number of loops.
@@ -242,7 +286,7 @@ pub struct RawBrim {
 }
 
 /// `keep:` of a modulation.
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 #[allow(missing_docs)]
 pub enum RawKeep {
@@ -251,7 +295,7 @@ pub enum RawKeep {
 }
 
 /// The keys of `deform_xyz` and `deform_cylinder`.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 #[allow(missing_docs)]
 pub struct RawDeform {
@@ -264,7 +308,7 @@ pub struct RawDeform {
 }
 
 /// A step as written.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
 #[allow(missing_docs)]
 pub enum RawStep {

@@ -13,7 +13,8 @@ pub fn parse_yaml<T: de::DeserializeOwned>(text: &str, file: &str) -> Result<T> 
     let tracked = serde_path_to_error::Deserializer::new(de, &mut track);
     serde_yaml::with::singleton_map_recursive::deserialize(tracked).map_err(|e| {
         // a syntax error leaves `?` segments where the parser lost track
-        let mut path = track.path().to_string();
+        let segments = track.path();
+        let mut path = segments.to_string();
         while let Some(p) = path.strip_suffix(".?").or(path.strip_suffix("?")) {
             path = p.to_string();
         }
@@ -41,8 +42,174 @@ pub fn parse_yaml<T: de::DeserializeOwned>(text: &str, file: &str) -> Result<T> 
             err.line = second_document(text).map(|l| (l, 1));
             err.message = "a second YAML document begins here; expected one document".into();
         }
-        err
+        if err.message.contains("expected map with a single key") {
+            if let Some((variant, extra, line)) = extra_key(text, &segments, err.line) {
+                err.message = format!(
+                    "`{extra}` beside `{variant}`: this map takes the one key `{variant}`; is `{extra}` indented too little?"
+                );
+                err = err.with_help(format!(
+                    "if `{extra}` belongs to `{variant}`, indent it as far as the keys under `{variant}`"
+                ));
+                err.line = line.or(err.line);
+            }
+        }
+        if let Some(help) = misplaced_key(text, &segments, &err.message) {
+            err = err.with_help(help);
+        }
+        explain(err, text)
     })
+}
+
+/// A line and column, 1-based.
+type LineCol = (usize, usize);
+
+/// Where a one-key map (`{deform_xyz: {…}}`) met a second key: the first key,
+/// the second, and the second's line and column.
+fn extra_key(
+    text: &str,
+    path: &serde_path_to_error::Path,
+    near: Option<(usize, usize)>,
+) -> Option<(String, String, Option<LineCol>)> {
+    let chain = node_chain(text, path)?;
+    let map = chain.last()?.1.as_mapping()?;
+    let mut keys = map.keys().filter_map(serde_yaml::Value::as_str);
+    let (variant, extra) = (keys.next()?.to_string(), keys.next()?.to_string());
+    let near = near.map_or(0, |(l, _)| l);
+    let line = key_lines(text, &extra).min_by_key(|(l, _)| (l.abs_diff(near), *l > near));
+    Some((variant, extra, line))
+}
+
+/// The lines and columns where `key:` is written, 1-based.
+fn key_lines<'a>(text: &'a str, key: &'a str) -> impl Iterator<Item = (usize, usize)> + 'a {
+    text.lines().enumerate().filter_map(move |(k, l)| {
+        let t = l.trim_start();
+        let t = t.strip_prefix("- ").unwrap_or(t).trim_start();
+        let rest = t.strip_prefix(key)?;
+        rest.trim_start()
+            .starts_with(':')
+            .then(|| (k + 1, l.len() - t.len() + 1))
+    })
+}
+
+/// The YAML nodes along a key path, each with its name, the document first.
+fn node_chain(
+    text: &str,
+    path: &serde_path_to_error::Path,
+) -> Option<Vec<(String, serde_yaml::Value)>> {
+    use serde_path_to_error::Segment;
+    let mut node: serde_yaml::Value = serde_yaml::from_str(text).ok()?;
+    let mut chain = vec![("the top level".to_string(), node.clone())];
+    for seg in path.iter() {
+        let (name, next) = match seg {
+            Segment::Seq { index } => (format!("[{index}]"), node.get(*index)?),
+            Segment::Map { key } | Segment::Enum { variant: key } => {
+                (format!("`{key}`"), node.get(key.as_str())?)
+            }
+            Segment::Unknown => return None,
+        };
+        node = next.clone();
+        chain.push((name, node.clone()));
+    }
+    Some(chain)
+}
+
+/// A help for a key that is missing where it was expected but written at an
+/// outer level (indented too little), or unknown beside a primitive.
+fn misplaced_key(text: &str, path: &serde_path_to_error::Path, message: &str) -> Option<String> {
+    let quoted = |after: &str| -> Option<String> {
+        let rest = message.split_once(after)?.1;
+        Some(rest.split('`').next()?.to_string())
+    };
+    if let Some(key) = quoted("unknown key `").filter(|_| message.contains("beside the primitive"))
+    {
+        return Some(format!(
+            "if `{key}` belongs to the primitive, indent it as far as the primitive's own keys"
+        ));
+    }
+    let key = quoted("missing field `")?;
+    let chain = node_chain(text, path)?;
+    let (here, _) = chain.last()?;
+    let outer = chain[..chain.len() - 1]
+        .iter()
+        .rev()
+        .find(|(_, n)| n.get(key.as_str()).is_some())?;
+    Some(format!(
+        "`{key}:` is written under {} instead of {here}: indent it as far as the keys of {here}",
+        outer.0
+    ))
+}
+
+/// For ``unknown field `pich`, expected one of `radius`, `pitch` `` (or an
+/// unknown variant): `did you mean `pitch`?` when a key is close, and the
+/// allowed keys.
+fn did_you_mean(message: &str) -> Option<String> {
+    let (head, allowed) = message.split_once(", expected one of ")?;
+    let wrong = head
+        .strip_prefix("unknown field `")
+        .or_else(|| head.strip_prefix("unknown variant `"))?
+        .strip_suffix('`')?;
+    let keys: Vec<&str> = allowed.split(", ").map(|k| k.trim_matches('`')).collect();
+    let best = keys
+        .iter()
+        .map(|k| (strsim::damerau_levenshtein(wrong, k), *k))
+        .filter(|(d, k)| *d <= 2.max(k.len() / 3) && *d < k.len())
+        .min();
+    let list = keys
+        .iter()
+        .map(|k| format!("`{k}`"))
+        .collect::<Vec<_>>()
+        .join(", ");
+    Some(match best {
+        Some((_, k)) => format!("did you mean `{k}`? the keys allowed here are {list}"),
+        None => format!("the keys allowed here are {list}"),
+    })
+}
+
+/// Puts the parser's terse messages in plain words: an empty file, a tab, a
+/// misspelt key.
+fn explain(mut err: Error, text: &str) -> Error {
+    if err.help.is_none() {
+        if let Some(h) = did_you_mean(&err.message) {
+            err = err.with_help(h);
+        }
+    }
+    let blank = text
+        .lines()
+        .all(|l| l.trim().is_empty() || l.trim_start().starts_with('#'));
+    if blank {
+        err.place = None;
+        err.line = None;
+        err.message = if text.trim().is_empty() {
+            "the file is empty; expected YAML keys (a recipe starts with `p3dp: 1`)".into()
+        } else {
+            "the file has only comments; expected YAML keys (a recipe starts with `p3dp: 1`)".into()
+        };
+        return err.with_help(
+            "a recipe starts with `p3dp: 1`, `name:` and `parts:`; `p3dp new NAME` writes a starter to edit",
+        );
+    }
+    if let Some((l, c)) = err.line {
+        let at = |l: usize| text.lines().nth(l.wrapping_sub(1)).unwrap_or("");
+        // the tab is where the parser stopped, or indents that line or the one before
+        let tab_at = at(l).chars().nth(c.saturating_sub(1)) == Some('\t');
+        let indent_tab = |line: &str| line[..line.len() - line.trim_start().len()].contains('\t');
+        let tab_line = if tab_at || indent_tab(at(l)) {
+            Some(l)
+        } else if l > 1 && indent_tab(at(l - 1)) {
+            Some(l - 1)
+        } else {
+            None
+        };
+        if let Some(t) = tab_line {
+            if t != l {
+                err.line = Some((t, at(t).find('\t').map_or(1, |k| k + 1)));
+            }
+            err.place = None;
+            err.message = "a tab in the indentation; YAML indents with spaces only".into();
+            err = err.with_help("tabs are not allowed in YAML indentation; use spaces");
+        }
+    }
+    err
 }
 
 /// The line (1-based) of the `---` that starts a second YAML document.

@@ -3,7 +3,7 @@
 use super::*;
 
 /// `solid:` as written.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawSolid {
     /// mm (0.2).
@@ -26,7 +26,7 @@ pub struct RawSolid {
 }
 
 /// `infill:` as written.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawInfill {
     /// Degrees from +x (45).
@@ -41,7 +41,7 @@ pub struct RawInfill {
 }
 
 /// A feature as written: `{box: {…}}` or `{cylinder: {…}}`.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum RawFeature {
     /// An axis-aligned rectangular prism.
@@ -51,7 +51,7 @@ pub enum RawFeature {
 }
 
 /// `box:` keys.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawBox {
     /// Centre of the box.
@@ -64,7 +64,7 @@ pub struct RawBox {
 }
 
 /// `cylinder:` keys.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawCylinder {
     /// Centre of the bottom face.
@@ -79,7 +79,7 @@ pub struct RawCylinder {
 }
 
 /// `op:` of a feature.
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum RawOp {
     /// Adds material.

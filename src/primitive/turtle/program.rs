@@ -14,7 +14,7 @@ use crate::expr::{var, Expr, ExprErrorKind, Params};
 use crate::num::{Num, Num3};
 
 /// `turtle:` as written.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawTurtle {
     /// Start position and frame.
@@ -31,7 +31,7 @@ pub struct RawTurtle {
 }
 
 /// `start:` of a turtle.
-#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Default, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawStart {
     /// Where the turtle starts ([0, 0, 0]).
@@ -46,7 +46,7 @@ pub struct RawStart {
 }
 
 /// A procedure: parameter names and a body.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawProcedure {
     /// Parameter names, bound in order to a call's `args`.
@@ -58,7 +58,7 @@ pub struct RawProcedure {
 }
 
 /// `lsystem:` as written.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawLsystem {
     /// The starting word.
@@ -135,6 +135,23 @@ pub const SCALAR: &[&str] = &[
 pub const COMMANDS: &str = "forward, backward, lift, goto, yaw, pitch, roll, left, right, \
 set_heading, pen_up, pen_down, extrude_rate, cross_section, speed, extrude, dwell, pause, \
 nozzle_temp, bed_temp, fan, push, pop, repeat, if, call, lsystem";
+
+impl schemars::JsonSchema for RawCommand {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "RawCommand".into()
+    }
+    fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        let mut keys: Vec<&str> = COMMANDS.split(", ").collect();
+        keys.extend(["as", "do", "else", "args", "up", "feed", "wait"]);
+        schemars::json_schema!({
+            "description": "A turtle command: a one-key map such as {forward: 10} (with companion keys for a few), or a bare word such as pen_up.",
+            "anyOf": [
+                {"type": "string", "enum": BARE},
+                {"type": "object", "minProperties": 1, "propertyNames": {"enum": keys}}
+            ]
+        })
+    }
+}
 
 fn find(list: &[&'static str], word: &str) -> Option<&'static str> {
     list.iter().copied().find(|w| *w == word)

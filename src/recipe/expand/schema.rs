@@ -89,6 +89,54 @@ impl<'de> Deserialize<'de> for RawPrimitiveItem {
     }
 }
 
+impl schemars::JsonSchema for RawPrimitives {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "RawPrimitives".into()
+    }
+    fn json_schema(g: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        let item = g.subschema_for::<RawPrimitiveItem>();
+        schemars::json_schema!({
+            "description": "One primitive such as {helix: {…}}, or a list of them whose strings follow each other.",
+            "anyOf": [item, {"type": "array", "items": item}]
+        })
+    }
+}
+
+impl schemars::JsonSchema for RawPrimitiveItem {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "RawPrimitiveItem".into()
+    }
+    fn json_schema(g: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        // the primitive's one key beside an optional cross_section and speed
+        let variants = <RawPrimitive as schemars::JsonSchema>::json_schema(g);
+        let mut properties = serde_json::Map::new();
+        let mut one_of = Vec::new();
+        for v in variants
+            .get("oneOf")
+            .and_then(|v| v.as_array())
+            .into_iter()
+            .flatten()
+        {
+            if let Some(p) = v.get("properties").and_then(|p| p.as_object()) {
+                for (k, s) in p {
+                    properties.insert(k.clone(), s.clone());
+                    one_of.push(serde_json::json!({"required": [k]}));
+                }
+            }
+        }
+        let num = serde_json::to_value(g.subschema_for::<Num>()).unwrap_or_default();
+        properties.insert("cross_section".into(), num.clone());
+        properties.insert("speed".into(), num);
+        schemars::json_schema!({
+            "description": "One primitive: its key, and optionally `cross_section` and `speed` for its strings.",
+            "type": "object",
+            "properties": properties,
+            "additionalProperties": false,
+            "oneOf": one_of
+        })
+    }
+}
+
 /// The primitives' keys, for messages.
 const PRIMITIVES: [&str; 10] = [
     "path",
@@ -228,6 +276,19 @@ pub enum RawLoop {
     List(Vec<Num>),
 }
 
+impl schemars::JsonSchema for RawLoop {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "RawLoop".into()
+    }
+    fn json_schema(g: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        let num = g.subschema_for::<Num>();
+        schemars::json_schema!({
+            "description": "A range \"a..b\" or \"a..b:step\" (b included), or a list of values.",
+            "anyOf": [{"type": "string"}, {"type": "array", "items": num}]
+        })
+    }
+}
+
 impl<'de> Deserialize<'de> for RawLoop {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<RawLoop, D::Error> {
         struct V;
@@ -252,7 +313,7 @@ impl<'de> Deserialize<'de> for RawLoop {
 }
 
 /// A named, parameterised part tree (draw3dp's part-assembly functions).
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawTemplate {
     /// The params and their defaults, in order; a default may use the
