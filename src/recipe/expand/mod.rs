@@ -518,19 +518,10 @@ fn range(s: &str, params: &Params, place: &str) -> Result<Vec<f64>> {
     Ok((0..n as usize).map(|k| a + k as f64 * step).collect())
 }
 
+/// A number of a template's `with:` or a loop's list, evaluated in `params`.
 fn eval(n: &Num, params: &Params, place: &str) -> Result<f64> {
-    let v = match n {
-        Num::Value(v) => *v,
-        Num::Expr(s) => expr::eval_const(s, params).map_err(|e| e.at(place))?,
-    };
-    if v.is_finite() {
-        Ok(v)
-    } else {
-        Err(Error::input(
-            place,
-            format!("{v} is not allowed; expected a finite number"),
-        ))
-    }
+    let v = crate::num::Scope::new(params).num(n, place)?;
+    crate::num::finite(v, place)
 }
 
 /// `name` with each `{EXPR}` replaced by the expression's value in `params`
