@@ -787,6 +787,17 @@ pub fn check(c: &Common) -> Vec<Error> {
 }
 
 /// Builds a job on `threads` into nothing but its hash and line fingerprint.
+/// The fingerprints of `jobs`, built in parallel within `-j`'s budget.
+fn fingerprints(c: &Common, jobs: &[Job]) -> Vec<Result<(String, LineHashes)>> {
+    let (workers, threads) = c.budget(jobs.len());
+    batch::run_parallel(
+        jobs.len(),
+        workers,
+        |k| fingerprint(c, &jobs[k], threads),
+        || {},
+    )
+}
+
 fn fingerprint(c: &Common, job: &Job, threads: Threads) -> Result<(String, LineHashes)> {
     let p = c.checked_plan(job, threads)?;
     let (hw, _) = p.write_gcode(HashWriter::new(LineHashes::default()))?;
@@ -813,13 +824,7 @@ pub fn hash(a: &HashArgs) -> Vec<Error> {
             return vec![e];
         }
     }
-    let (workers, threads) = c.budget(jobs.len());
-    let results = batch::run_parallel(
-        jobs.len(),
-        workers,
-        |k| fingerprint(c, &jobs[k], threads),
-        || {},
-    );
+    let results = fingerprints(c, &jobs);
     let mut errors = Vec::new();
     let mut entries = Vec::new();
     for (job, r) in jobs.iter().zip(results) {
@@ -972,13 +977,9 @@ fn check_lock(a: &HashArgs, lockfile: &Path) -> Vec<Error> {
         }
     }
     let c = &a.common;
-    let (workers, threads) = c.budget(jobs.len());
-    let results = batch::run_parallel(
-        jobs.len(),
-        workers,
-        |k| fingerprint(c, &jobs[k], threads),
-        || {},
-    );
+    let results = fingerprints(c, &jobs);
+    // the changed entries are rebuilt one at a time, each with the whole budget
+    let (_, threads) = c.budget(1);
     let mut errors = Vec::new();
     for ((entry, job), r) in lock.entries.iter().zip(&jobs).zip(results) {
         let mut label = entry.recipe.clone();
