@@ -15,7 +15,7 @@ seed() { # TARGET FILE…
   if [ -d "$here/findings/$t" ]; then cp "$here/findings/$t"/* "$here/corpus/$t/" 2>/dev/null || true; fi
 }
 seed recipe "$root"/recipes/*.yaml "$root"/tests/bad/*.yaml "$root"/tests/fixtures/*.yaml "$root"/tests/checks/*.yaml
-seed printer "$root"/src/printers/*.yaml "$root"/tests/fixtures/printers/*.yaml
+seed printer "$root"/src/machine/printers/*.yaml "$root"/tests/fixtures/printers/*.yaml
 seed lock "$root"/p3dp.lock
 seed image "$root"/maps/* "$root"/tests/bad/*.png
 # expressions: every quoted string of the recipes, one a file

@@ -78,24 +78,27 @@ pub fn run(cli: Cli) -> Vec<Error> {
         Command::Preview(a) => preview(&a),
         Command::Check { common } => check(&common),
         Command::Printers => {
-            print!("{}", printers());
+            crate::say!("{}", printers());
             Vec::new()
         }
         Command::Hash(a) => hash(&a),
         Command::New { name, from } => match new_recipe(&name, &from) {
             Ok(line) => {
-                println!("{line}");
+                crate::sayln!("{line}");
                 Vec::new()
             }
             Err(e) => vec![e],
         },
         Command::Completions { shell } => {
-            clap_complete::generate(shell, &mut Cli::command(), "p3dp", &mut std::io::stdout());
+            // into memory first: clap_complete panics on a failed write
+            let mut out = Vec::new();
+            clap_complete::generate(shell, &mut Cli::command(), "p3dp", &mut out);
+            let _ = crate::output::Stdout.write_all(&out);
             Vec::new()
         }
         Command::Schema => {
             let s = crate::recipe::schema::json_schema();
-            println!(
+            crate::sayln!(
                 "{}",
                 serde_json::to_string_pretty(&s).expect("a schema serialises")
             );
@@ -105,7 +108,7 @@ pub fn run(cli: Cli) -> Vec<Error> {
             let mut out = Vec::new();
             match clap_mangen::Man::new(Cli::command()).render(&mut out) {
                 Ok(()) => {
-                    let _ = std::io::stdout().write_all(&out);
+                    let _ = crate::output::Stdout.write_all(&out);
                     Vec::new()
                 }
                 Err(e) => vec![Error::io("-", format!("cannot write the manual: {e}"))],
@@ -584,15 +587,15 @@ fn report_builds(jobs: &[Job], results: &[Built], preview_lines: &[String]) {
             };
             for line in preview_lines {
                 if *to_stdout {
-                    eprintln!("{line}");
+                    crate::tellln!("{line}");
                 } else {
-                    println!("{line}");
+                    crate::sayln!("{line}");
                 }
             }
             if *to_stdout {
-                eprint!("{text}");
+                crate::tell!("{text}");
             } else {
-                print!("{text}");
+                crate::say!("{text}");
             }
         }
     }
@@ -768,9 +771,9 @@ pub fn check(c: &Common) -> Vec<Error> {
     for (job, r) in jobs.iter().zip(results) {
         match r {
             Ok(p) => {
-                println!("{}: {}", job_label(job), crate::check::summary(&p.findings));
+                crate::sayln!("{}: {}", job_label(job), crate::check::summary(&p.findings));
                 for f in &p.findings {
-                    println!("  {} [{}]: {}", f.severity.word(), f.code, f.message);
+                    crate::sayln!("  {} [{}]: {}", f.severity.word(), f.code, f.message);
                 }
                 let failing = p.failing(c.strict).len();
                 if failing > 0 {
@@ -836,7 +839,7 @@ pub fn hash(a: &HashArgs) -> Vec<Error> {
                         job.sweep.iter().map(|(n, v)| format!("{n}={v}")).collect();
                     line.push_str(&format!("  {}", v.join(" ")));
                 }
-                println!("{line}");
+                crate::sayln!("{line}");
                 if let Some(lockfile) = &a.lock {
                     let printer = c.printer.as_deref();
                     entries.push(lock_entry(lockfile, job, printer, digest, &lines));
@@ -990,7 +993,7 @@ fn check_lock(a: &HashArgs, lockfile: &Path) -> Vec<Error> {
             label.push_str(&format!(" (printer {p})"));
         }
         match r {
-            Ok((digest, _)) if digest == entry.sha256 => println!("ok       {label}"),
+            Ok((digest, _)) if digest == entry.sha256 => crate::sayln!("ok       {label}"),
             Ok((digest, lines)) => {
                 let new = lines.blocks(entry.block_lines);
                 let place = match lock::first_difference(&entry.blocks, &new) {
@@ -1006,7 +1009,7 @@ fn check_lock(a: &HashArgs, lockfile: &Path) -> Vec<Error> {
                     }
                     None => "the lines hash alike block by block (a hash collision?)".into(),
                 };
-                println!("CHANGED  {label}");
+                crate::sayln!("CHANGED  {label}");
                 errors.push(Error::check(
                     &entry.recipe,
                     format!(
@@ -1152,7 +1155,7 @@ pub fn preview(a: &PreviewArgs) -> Vec<Error> {
             },
         )?;
         make_parent(&out)?;
-        println!(
+        crate::sayln!(
             "{}",
             crate::preview::write(&p, &out, &opts, &|w| p.render(w))?
         );

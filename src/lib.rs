@@ -14,6 +14,9 @@
 //!    [`batch`], [`lock`], [`cli`].
 
 #![warn(missing_docs)]
+// print!/println! panic on a closed pipe (`p3dp check r.yaml | head -1`):
+// the library writes through `say!`/`tell!` (src/output.rs) instead
+#![deny(clippy::print_stdout, clippy::print_stderr)]
 
 pub mod error;
 pub mod expr;

@@ -12,7 +12,7 @@ fn main() -> ExitCode {
     let errors = cli::run(cli);
     let mut code = 0;
     for e in &errors {
-        eprint!("{}", cli::render_error(e));
+        p3dp::tell!("{}", cli::render_error(e));
         code = code.max(e.exit_code());
     }
     ExitCode::from(code as u8)

@@ -409,6 +409,44 @@ impl Write for Stdout {
     }
 }
 
+/// Writes to standard output through [`Stdout`]: a closed pipe
+/// (`p3dp check … | head -1`) is noted, never a panic as `print!`'s is.
+pub fn say_fmt(args: std::fmt::Arguments) {
+    if !stdout_closed() {
+        let _ = Stdout.write_fmt(args);
+    }
+}
+
+/// Writes to standard error; a closed one is ignored, never a panic as
+/// `eprint!`'s is.
+pub fn tell_fmt(args: std::fmt::Arguments) {
+    let _ = io::stderr().lock().write_fmt(args);
+}
+
+/// `print!` that ends quietly on a closed pipe (see [`say_fmt`]).
+#[macro_export]
+macro_rules! say {
+    ($($t:tt)*) => { $crate::output::say_fmt(format_args!($($t)*)) };
+}
+
+/// `println!` that ends quietly on a closed pipe (see [`say_fmt`]).
+#[macro_export]
+macro_rules! sayln {
+    ($($t:tt)*) => { $crate::output::say_fmt(format_args!("{}\n", format_args!($($t)*))) };
+}
+
+/// `eprint!` that never panics (see [`tell_fmt`]).
+#[macro_export]
+macro_rules! tell {
+    ($($t:tt)*) => { $crate::output::tell_fmt(format_args!($($t)*)) };
+}
+
+/// `eprintln!` that never panics (see [`tell_fmt`]).
+#[macro_export]
+macro_rules! tellln {
+    ($($t:tt)*) => { $crate::output::tell_fmt(format_args!("{}\n", format_args!($($t)*))) };
+}
+
 fn note_closed(e: &io::Error) {
     if e.kind() == io::ErrorKind::BrokenPipe {
         STDOUT_CLOSED.store(true, Ordering::Relaxed);

@@ -295,6 +295,49 @@ fn standard_output_closed_early_ends_quietly() {
     assert!(stderr(&out).is_empty(), "{}", describe(&out));
 }
 
+#[test]
+fn reports_into_a_closed_pipe_end_quietly() {
+    // `p3dp check r.yaml | true`: println! panicked with exit 101
+    let dir = tmp("closed-report");
+    let globe = recipe("globe.yaml");
+    let out_file = dir.join("g.gcode");
+    let cases: Vec<Vec<&str>> = vec![
+        vec!["check", globe.to_str().unwrap()],
+        vec![
+            "build",
+            globe.to_str().unwrap(),
+            "-o",
+            out_file.to_str().unwrap(),
+        ],
+        vec!["printers"],
+        vec!["schema"],
+        vec!["completions", "bash"],
+        vec!["hash", globe.to_str().unwrap()],
+    ];
+    for args in cases {
+        let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_p3dp"))
+            .args(&args)
+            .current_dir(&dir)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        // the reader is gone before the command writes a byte
+        drop(child.stdout.take());
+        let out = child.wait_with_output().unwrap();
+        assert!(
+            matches!(code(&out), Some(0 | 1)),
+            "{args:?}: {}",
+            describe(&out)
+        );
+        assert!(
+            !stderr(&out).contains("panicked"),
+            "{args:?}: {}",
+            describe(&out)
+        );
+    }
+}
+
 // ---------------------------------------------------------------------------
 // Defects 5 and 7: outputs over each other or over inputs; all or nothing;
 // temp files of a stopped run.
@@ -973,4 +1016,35 @@ fn an_automaton_a_million_rows_deep_per_point_is_computed_once() {
     let out = p3dp_within(&dir, &["check", "eca.yaml"], 20)
         .expect("still running after 20 s (minutes before)");
     assert!(matches!(code(&out), Some(0 | 1)), "{}", describe(&out));
+    // rows going down, from a million: every point started again from row
+    // 0 before (72,000 × a million generations)
+    std::fs::write(
+        dir.join("down.yaml"),
+        "p3dp: 1\nname: down\nparts:\n  - primitive: {helix: {radius: 10, height: 50, pitch: 0.2, segments: 288}}\n    steps:\n      - deform_cylinder: {position: [\"r + 0.2 * eca(30, 64, 1000000 - i, i)\", theta, z]}\n",
+    )
+    .unwrap();
+    let out = p3dp_within(&dir, &["check", "down.yaml"], 20)
+        .expect("still running after 20 s (hours before)");
+    assert!(matches!(code(&out), Some(0 | 1)), "{}", describe(&out));
+}
+
+#[test]
+fn a_turtle_that_works_without_drawing_is_stopped_early() {
+    // a procedure calling itself twice, 60 deep, drawing nothing: 2^61
+    // steps; the absolute step limit (400 million) stopped it after 44 s
+    let dir = tmp("turtle-idle");
+    std::fs::write(
+        dir.join("tree.yaml"),
+        "p3dp: 1\nname: tree\nparts:\n  - primitive:\n      turtle:\n        procedures:\n          tree:\n            params: [d]\n            do:\n              - if: d\n                do:\n                  - {call: tree, args: [\"d - 1\"]}\n                  - {call: tree, args: [\"d - 1\"]}\n        program:\n          - {call: tree, args: [60]}\n",
+    )
+    .unwrap();
+    let out = p3dp_within(&dir, &["check", "tree.yaml"], 20).expect("still running after 20 s");
+    assert_eq!(code(&out), Some(2), "{}", describe(&out));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("tree.yaml")
+            && err.contains("procedures.tree.do[0]")
+            && err.contains("made only 0 strings"),
+        "{err}"
+    );
 }

@@ -121,6 +121,12 @@ impl Program {
     }
 }
 
+/// Steps a program may run before it has made anything (about 0.4 s).
+pub const IDLE_STEPS: u64 = 4_000_000;
+/// Steps allowed for each string or event made, on top of [`IDLE_STEPS`]:
+/// the gallery's L-systems and recursive procedures need fewer than 8.
+pub const STEPS_PER_STRING: u64 = 16;
+
 /// Most frames `push` may save before a `pop`.
 pub const MAX_SAVED: usize = 100_000;
 
@@ -206,6 +212,24 @@ fn least_steps(cmds: &[Cmd], max_steps: u64) -> Result<u64> {
 impl Run<'_> {
     fn step(&mut self, place: &str) -> Result<()> {
         self.steps += 1;
+        // work is budgeted by what it makes: a program may run IDLE_STEPS
+        // steps, and STEPS_PER_STRING more for every string or event it has
+        // made. A procedure calling itself twice, 60 deep, that draws
+        // nothing ran 400 million steps (44 s) before the absolute limit
+        // below stopped it; now it stops within a second.
+        let made = self.strings.saturating_add(self.events);
+        let allowed = STEPS_PER_STRING
+            .saturating_mul(made)
+            .saturating_add(IDLE_STEPS);
+        if self.steps > allowed && self.steps <= self.limits.max_steps {
+            return Err(Error::input(
+                place,
+                format!(
+                    "the program has run {} steps (commands and L-system symbols) here but made only {made} strings and events; expected at most {STEPS_PER_STRING} steps per string after the first {IDLE_STEPS} (a procedure that calls itself without drawing?)",
+                    self.steps
+                ),
+            ));
+        }
         if self.steps > self.limits.max_steps {
             return Err(Error::input(
                 place,
