@@ -142,6 +142,27 @@ fn no_module_imports_from_a_layer_above_it() {
     let mut files = Vec::new();
     rs_files(&src, &mut files);
     files.sort();
+    // `#[macro_export]` macros live at the crate root (`crate::say!`):
+    // count each as a use of the module that defines it
+    let mut macros = std::collections::HashMap::new();
+    for f in &files {
+        let text = std::fs::read_to_string(f).unwrap();
+        let top = f.strip_prefix(&src).unwrap().components().next().unwrap();
+        let top = top
+            .as_os_str()
+            .to_string_lossy()
+            .trim_end_matches(".rs")
+            .to_string();
+        for line in text.lines() {
+            if let Some(rest) = line.trim().strip_prefix("macro_rules! ") {
+                let name: String = rest
+                    .chars()
+                    .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+                    .collect();
+                macros.insert(name, top.clone());
+            }
+        }
+    }
     let mut seen = 0;
     let mut wrong = Vec::new();
     for f in &files {
@@ -161,6 +182,7 @@ fn no_module_imports_from_a_layer_above_it() {
             rank(&top).unwrap_or_else(|| panic!("src/{top} is in no layer of tests/layers.rs"));
         let text = std::fs::read_to_string(f).unwrap();
         for name in crate_refs(&code(&text)) {
+            let name = macros.get(&name).cloned().unwrap_or(name);
             if name == top || name == "self" {
                 continue;
             }
