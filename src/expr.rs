@@ -506,7 +506,8 @@ impl Expr {
     }
 
     /// Compiles `src` as [`Expr::compile`] does, with `names` as extra
-    /// variables (they shadow nothing: a caller keeps them apart from params)
+    /// variables (they shadow nothing: a caller keeps them apart from params;
+    /// a name `f()` is a function of no arguments, called as `f()`)
     /// and `rand()` allowed: name k reads extra slot k, and the j-th `rand()`
     /// of the text reads slot `names.len() + j`, which the caller fills with a
     /// fresh random number before each [`Expr::eval_ext`] (see [`Expr::rands`]).
@@ -544,8 +545,11 @@ impl Expr {
         }
         // Kanada's Python recipes write powers as `**`; meval's operator is `^`.
         let mut text = src.replace("**", "^");
-        if names.is_some() {
+        if let Some(ns) = names {
             text = mark_rand(&text);
+            for base in ns.iter().filter_map(|n| n.strip_suffix("()")) {
+                text = mark_call(&text, base);
+            }
         }
         let mut rands = 0u16;
         let tokens = meval::tokenizer::tokenize(&text)
@@ -590,7 +594,12 @@ impl Expr {
             let node = match tok {
                 Token::Number(v) => Node::Num(v),
                 Token::Var(name) => {
-                    let ext = names.and_then(|ns| ns.iter().position(|n| *n == name));
+                    let ext = names.and_then(|ns| {
+                        ns.iter().position(|n| match n.strip_suffix("()") {
+                            Some(base) => is_mark(&name, base),
+                            None => *n == name,
+                        })
+                    });
                     if let Some(k) = ext {
                         Node::Ext(k as u16)
                     } else if names.is_some() && is_rand_mark(&name) {
@@ -752,6 +761,13 @@ impl Expr {
         }
     }
 
+    /// Whether the expression reads extra slot `k` of [`Expr::compile_ext`].
+    pub fn uses_ext(&self, k: usize) -> bool {
+        self.ops
+            .iter()
+            .any(|o| matches!(o, Op::Ext(s) if *s as usize == k))
+    }
+
     /// Whether the expression reads variable slot `k`.
     pub fn uses(&self, k: usize) -> bool {
         self.used & (1 << k) != 0
@@ -783,36 +799,45 @@ fn fold(node: Node) -> Node {
     Node::Num(run(&ops, &[0.0; var::COUNT], &[]))
 }
 
-/// The variable name `rand()` becomes before tokenizing (then numbered).
-const RAND_MARK: &str = "rand_";
-
 fn is_rand_mark(name: &str) -> bool {
-    name.strip_prefix(RAND_MARK)
-        .is_some_and(|rest| rest.bytes().all(|c| c == b'_'))
+    is_mark(name, "rand")
+}
+
+/// Whether `name` is the variable a call `base()` became (see [`mark_call`]).
+fn is_mark(name: &str, base: &str) -> bool {
+    name.strip_prefix(base)
+        .is_some_and(|rest| rest.len() >= 2 && rest.bytes().all(|c| c == b'_'))
 }
 
 /// Rewrites each `rand()` (spaces allowed inside) as a variable `rand_…` of
 /// the same length, so error positions stay those of the text as written.
 fn mark_rand(text: &str) -> String {
+    mark_call(text, "rand")
+}
+
+/// Rewrites each call `base()` (spaces allowed inside) as a variable
+/// `base__…` of the same length: meval has no functions of no arguments, and
+/// error positions stay those of the text as written.
+fn mark_call(text: &str, base: &str) -> String {
     let b = text.as_bytes();
     let mut out = String::with_capacity(text.len());
     let (mut k, mut copied) = (0, 0);
     while k < b.len() {
         let word_start = k == 0 || !(b[k - 1].is_ascii_alphanumeric() || b[k - 1] == b'_');
-        if word_start && b[k..].starts_with(b"rand") {
+        if word_start && b[k..].starts_with(base.as_bytes()) {
             let skip = |mut j: usize| {
                 while j < b.len() && b[j] == b' ' {
                     j += 1;
                 }
                 j
             };
-            let j = skip(k + 4);
+            let j = skip(k + base.len());
             if b.get(j) == Some(&b'(') {
                 let m = skip(j + 1);
                 if b.get(m) == Some(&b')') {
                     out.push_str(&text[copied..k]);
-                    out.push_str(RAND_MARK);
-                    out.extend(std::iter::repeat_n('_', m + 1 - k - RAND_MARK.len()));
+                    out.push_str(base);
+                    out.extend(std::iter::repeat_n('_', m + 1 - k - base.len()));
                     k = m + 1;
                     copied = k;
                     continue;

@@ -106,6 +106,20 @@ impl Frame {
         self.up = h.cross(l);
     }
 
+    /// The frame's Tait–Bryan angles in degrees, `[yaw, pitch, roll]`: the
+    /// turns `yaw(a)`, `pitch(b)`, `roll(c)` from the start frame (heading
+    /// +x, up +z) in that order give back `[a, b, c]` for |b| < 90°.
+    /// yaw = atan2(h_y, h_x), pitch = asin(h_z), roll = atan2(l_z, u_z)
+    /// (the left axis rises by sin c · cos b, up keeps cos c · cos b).
+    pub fn angles(&self) -> [f64; 3] {
+        let h = self.heading;
+        [
+            libm::atan2(h.y, h.x).to_degrees(),
+            libm::asin(h.z.clamp(-1.0, 1.0)).to_degrees(),
+            libm::atan2(self.left.z, self.up.z).to_degrees(),
+        ]
+    }
+
     /// Turns about the up axis; positive turns left.
     pub fn yaw(&mut self, deg: f64) {
         (self.heading, self.left) = turn(self.heading, self.left, deg);
@@ -231,5 +245,25 @@ mod tests {
             f.set_heading(DVec3::ZERO, None),
             Err(FrameError::ZeroHeading)
         );
+    }
+
+    #[test]
+    fn angles_give_back_the_turns() {
+        for (a, b, c) in [
+            (0.0, 0.0, 0.0),
+            (30.0, 0.0, 0.0),
+            (-135.0, 20.0, 0.0),
+            (60.0, -45.0, 15.0),
+            (170.0, 80.0, -100.0),
+        ] {
+            let mut f = Frame::new(DVec3::ZERO, DVec3::X, DVec3::Z).unwrap();
+            f.yaw(a);
+            f.pitch(b);
+            f.roll(c);
+            let got = f.angles();
+            for (g, w) in got.iter().zip([a, b, c]) {
+                assert!((g - w).abs() < 1e-9, "{a} {b} {c}: {got:?}");
+            }
+        }
     }
 }

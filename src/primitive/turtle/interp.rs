@@ -262,6 +262,14 @@ impl Run<'_> {
         vars[var::Y] = self.frame.pos.y;
         vars[var::Z] = self.frame.pos.z;
         let n = vals.len();
+        // the turtle's state (program::STATE), after the scope's slots
+        let state = if val.reads_state {
+            self.frame.angles()
+        } else {
+            [0.0; 3]
+        };
+        vals.extend(state);
+        vals.push(if self.pen_down { 1.0 } else { 0.0 });
         for _ in 0..val.expr.rands() {
             vals.push(self.rng.uniform());
         }
@@ -408,7 +416,8 @@ impl Run<'_> {
                     Axis::Roll => self.frame.roll(a),
                 }
             }
-            Op::SetHeading(h, up) => {
+            Op::SetHeading(hu) => {
+                let (h, up) = &**hu;
                 let h = self.eval3(h, vals, place)?;
                 let up = match up {
                     Some(u) => Some(self.eval3(u, vals, place)?),

@@ -180,6 +180,28 @@ mod tests {
     }
 
     #[test]
+    fn expressions_read_the_turtles_state() {
+        // each `forward` goes as far as the state it reads: yaw 30, pitch
+        // -20, roll 45, pen 0 then 1 (ExtruderTurtle's getYaw() and friends)
+        let t = run("program:\n  - {left: 30}\n  - {forward: \"yaw()\"}\n  - {pitch: -20}\n  - {forward: \"-pitch()\"}\n  - {roll: 45}\n  - {forward: \"roll ( )\"}\n  - pen_up\n  - {forward: \"1 + pen()\"}\n  - pen_down\n  - {forward: \"pen()*2 + rand()*0\"}\n");
+        let lens: Vec<f64> = t.points.windows(2).map(|w| w[0].distance(w[1])).collect();
+        let want = [30.0, 20.0, 45.0, 1.0, 2.0];
+        assert_eq!(lens.len(), want.len(), "{lens:?}");
+        for (got, w) in lens.iter().zip(want) {
+            assert!((got - w).abs() < 1e-9, "{lens:?}");
+        }
+        // a counter or parameter keeps its own name beside them
+        let t = run("program:\n  - repeat: 2\n    as: yaw\n    do: [{forward: \"yaw + 1\"}]\n");
+        assert!((t.points[2].x - 3.0).abs() < 1e-12, "{:?}", t.points);
+        // an unknown name lists what a turtle has
+        let e = err("program:\n  - {forward: \"heading\"}\n");
+        assert!(
+            e.message.contains("yaw(), pitch(), roll(), pen(), rand()"),
+            "{e}"
+        );
+    }
+
+    #[test]
     fn closed_polygons_return_to_their_start() {
         for (sides, turn) in [(3, "right"), (6, "left"), (7, "left"), (17, "right")] {
             let t = run(&format!(

@@ -355,7 +355,17 @@ pub struct Val {
     pub expr: Expr,
     /// Names of the loop counters and procedure parameters in scope, in slot order.
     pub scope: Arc<Vec<String>>,
+    /// Whether it reads the turtle's state ([`STATE`]), in the slots after
+    /// the scope's.
+    pub reads_state: bool,
 }
+
+/// The turtle's state an expression may read, as functions of no arguments
+/// (ExtruderTurtle's `getYaw()` and friends): the heading's `yaw()` (degrees
+/// from +x, counter-clockwise seen from above) and `pitch()` (degrees above
+/// the bed's plane), the `roll()` about it (degrees, the left side lifted),
+/// and `pen()` (1 down, 0 up). The position is `x`, `y`, `z`.
+pub const STATE: [&str; 4] = ["yaw()", "pitch()", "roll()", "pen()"];
 
 /// Which axis a turn is about.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -389,7 +399,7 @@ pub enum Op {
     Goto([Val; 3]),
     /// A turn by sign × value degrees (`right` is yaw with sign −1).
     Turn(Axis, Val, f64),
-    SetHeading([Val; 3], Option<[Val; 3]>),
+    SetHeading(Box<([Val; 3], Option<[Val; 3]>)>),
     PenUp,
     PenDown,
     Pause,
@@ -500,23 +510,26 @@ impl<'a> Compiler<'a> {
 
     /// Compiles `src` in `scope` (turtle position x, y, z; counters; `rand()`).
     pub fn val(&self, n: &Num, scope: &Arc<Vec<String>>, place: &str) -> Result<Val> {
-        let names: Vec<&str> = scope.iter().map(String::as_str).collect();
+        let mut names: Vec<&str> = scope.iter().map(String::as_str).collect();
+        names.extend(STATE);
         let expr = Expr::compile_ext(&n.src(), self.params, &[var::X, var::Y, var::Z], &names)
             .map_err(|e| {
                 let m = e.message;
-                let m = if !scope.is_empty() && e.kind == ExprErrorKind::Name {
-                    format!(
-                        "{m}, the counters and parameters {} and rand()",
-                        scope.join(", ")
-                    )
+                let m = if e.kind == ExprErrorKind::Name {
+                    let mut more: Vec<&str> = scope.iter().map(String::as_str).collect();
+                    more.extend(STATE);
+                    more.push("rand()");
+                    format!("{m}; a turtle also has {}", more.join(", "))
                 } else {
                     m
                 };
                 Error::input(place, m)
             })?;
+        let reads_state = (0..STATE.len()).any(|k| expr.uses_ext(scope.len() + k));
         Ok(Val {
             expr,
             scope: scope.clone(),
+            reads_state,
         })
     }
 
@@ -577,13 +590,13 @@ impl<'a> Compiler<'a> {
             RawCommand::Goto(p) => (at("goto"), Op::Goto(self.val3(p, scope, &at("goto"))?)),
             RawCommand::SetHeading { heading, up } => (
                 at("set_heading"),
-                Op::SetHeading(
+                Op::SetHeading(Box::new((
                     self.val3(heading, scope, &at("set_heading"))?,
                     match up {
                         Some(u) => Some(self.val3(u, scope, &at("up"))?),
                         None => None,
                     },
-                ),
+                ))),
             ),
             RawCommand::Extrude { filament, feed } => (
                 at("extrude"),
