@@ -9,7 +9,7 @@ use std::path::Path;
 
 use common::{p3dp, parse, recipe, tmp};
 use p3dp::build::make_part;
-use p3dp::primitive::ca::{Automaton, CaHelix, Initial, Pattern, Rule};
+use p3dp::primitive::ca::{Automaton, CaHelix, Initial, Layout, Pattern, Rule};
 use p3dp::primitive::{PatternHelix, Primitive};
 use p3dp::recipe::Recipe;
 use p3dp::threads::Threads;
@@ -38,6 +38,7 @@ fn basic_model(p0: f64, p1: f64, layers: u32, seed: u64) -> Automaton {
         cells: N as u32,
         layers,
         rule: Rule::Basic,
+        layout: Layout::Helix,
         p0,
         p1,
         consume: 0.5,
@@ -202,6 +203,106 @@ fn the_same_seed_gives_the_same_cells_on_every_machine() {
         "b3e2b6183e4330119a458782f76210f1f6c5005314810a3ee36dc0a56c8364b1".to_string(),
     );
     assert_eq!(got, want);
+}
+
+/// Fig. 11a's "layered-circle-based (non-helical) algorithm": one ring per
+/// layer, cell (l, j) stacked on (l − 1, j) or (l − 1, j + 1 mod N).
+fn layered(p0: f64, p1: f64, layers: u32, seed: u64) -> Automaton {
+    Automaton {
+        layout: Layout::Layers,
+        ..basic_model(p0, p1, layers, seed)
+    }
+}
+
+#[test]
+fn layered_circles_close_each_ring_on_itself_fig_11a() {
+    for seed in SEEDS {
+        let p = layered(0.99, 1.0, 150, seed).run();
+        let at = |l: usize, j: usize| p.filled(l * N + j % N);
+        // every chunk stands on one in the ring below, across the seam too
+        for l in 1..150 {
+            for j in 0..N {
+                assert!(
+                    !at(l, j) || at(l - 1, j) || at(l - 1, j + 1),
+                    "seed {seed}: ({l}, {j})"
+                );
+            }
+        }
+        // p1 = 1 on the helix: crisp stripes, every turn the one below
+        // shifted one cell, from turn 5 on (Fig. 6b). On layered circles the
+        // same rule leaves most layers the one below turned one cell in its
+        // ring, but a layer's seam, where the store runs on from the end of
+        // one ring to the start of the next, keeps launching waves: a
+        // disturbance from column 0 along the layer (Fig. 11a, "waves by
+        // simulation using the original algorithm")
+        let helix = basic(0.99, 1.0, 150, seed);
+        assert!(
+            steady_from(&helix, 1).is_some_and(|f| f <= 5),
+            "seed {seed}"
+        );
+        let mut waves = 0;
+        for l in 5..150 {
+            let moved: Vec<usize> = (0..N).filter(|&j| at(l, j) != at(l - 1, j + 1)).collect();
+            if !moved.is_empty() {
+                waves += 1;
+                // it starts at the seam: within one chunk spacing (1/e1
+                // cells) of column 0, or the ring's last cell alone
+                assert!(
+                    moved[0] < 4 || moved == [N - 1],
+                    "seed {seed}, layer {l}: {moved:?}"
+                );
+            }
+        }
+        assert!(waves >= 145 / 10, "seed {seed}: {waves} layers with a wave");
+        assert_eq!(helix.events().extinctions, 0, "seed {seed}");
+    }
+}
+
+#[test]
+fn layered_circles_print_flat_rings_joined_by_a_layer_change() {
+    let (radius, h, layers) = (20.0, 0.2, 12u32);
+    let ca = CaHelix {
+        radius,
+        layer_height: h,
+        center: glam::DVec3::new(0.0, 0.0, h),
+        model: layered(1.0, 0.5, layers, 3),
+    };
+    let pattern = ca.model.run();
+    let t = ca.toolpath(&pattern, 0.15, 30.0);
+    let l = layers as usize;
+    assert_eq!(t.strings.len() as u64, ca.string_count());
+    assert_eq!(t.strings.len(), N * l + l - 1);
+    let mut k = 0;
+    for layer in 0..l {
+        if layer > 0 {
+            // straight up by one layer height, not extruding
+            let (a, b) = (t.points[k], t.points[k + 1]);
+            assert!(t.strings[k].travel, "layer {layer}");
+            assert!(
+                (b.z - a.z - h).abs() < 1e-12
+                    && (b.x - a.x).abs() < 1e-12
+                    && (b.y - a.y).abs() < 1e-12
+            );
+            k += 1;
+        }
+        let z = h + h * layer as f64;
+        for j in 0..N {
+            let (a, b) = (t.points[k], t.points[k + 1]);
+            assert!(
+                (a.z - z).abs() < 1e-12 && (b.z - z).abs() < 1e-12,
+                "layer {layer} cell {j}: {a} {b}"
+            );
+            assert!((a.truncate().length() - radius).abs() < 1e-9);
+            assert_eq!(
+                !t.strings[k].travel,
+                pattern.filled(layer * N + j),
+                "layer {layer} cell {j}"
+            );
+            k += 1;
+        }
+    }
+    // the layer ends where it began: a closed ring
+    assert!((t.points[N].truncate() - t.points[0].truncate()).length() < 1e-9);
 }
 
 fn load(name: &str, sets: &[(&str, &str)]) -> Recipe {

@@ -42,6 +42,13 @@
 //! stripe; split_merge, by stacking on i − 1 too and keeping 1 − C of the
 //! store after a straight stack, does both (Fig. 9b).
 //!
+//! **Layered circles** (`layout: layers`, Fig. 11a, "the layered-circle-based
+//! (non-helical) algorithm in the previous study"): each turn is a flat ring
+//! and a layer change (a travel straight up) joins them; cell (l, j) stands on
+//! (l − 1, j ± 1 mod N) of the ring below, while the store runs on from one
+//! ring into the next. The seam then keeps launching waves along the layer,
+//! the edges that made the paper print a helix (section 2).
+//!
 //! **Randomness** comes from SplitMix64 (Steele, Lea and Flood 2014): integer
 //! arithmetic only, uniforms made from the top 53 bits, so a seed gives the
 //! same pattern, and the same G-code, on every machine.
@@ -66,6 +73,21 @@ pub enum Rule {
     Basic,
     /// Section 4.2: on i − 1, else on i + 1 at p1, else straight up at p0 using C.
     SplitMerge,
+}
+
+/// How the cells' turns are laid out: one helix, or one circle per layer.
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum Layout {
+    /// One helix, the paper's method (section 2): a cell's neighbours below
+    /// run on across the seam into the turn being printed.
+    #[default]
+    Helix,
+    /// Layered circles with a layer change, the "layered-circle-based
+    /// (non-helical) algorithm in the previous study" of Fig. 11a: each
+    /// layer is a ring of its own, so its neighbours below wrap round in the
+    /// layer below.
+    Layers,
 }
 
 /// `initial:` as written.
@@ -122,6 +144,8 @@ pub struct Automaton {
     pub layers: u32,
     /// Basic or split-and-merge.
     pub rule: Rule,
+    /// A helix or layered circles.
+    pub layout: Layout,
     /// Probability of stacking straight up.
     pub p0: f64,
     /// Probability of stacking on a neighbour below.
@@ -187,9 +211,21 @@ impl Automaton {
         for i in n..total {
             if store >= 1.0 {
                 let below = cell[i - n].filled();
-                let next = cell[i - n + 1].filled();
-                // the helix has no cell before its first one
-                let prev = i > n && cell[i - n - 1].filled();
+                let (next, prev) = match self.layout {
+                    // one array, as Fig. 5 keeps it: the cell ahead of the
+                    // last one of a turn is the first of this turn, and the
+                    // helix has no cell before its first one
+                    Layout::Helix => (cell[i - n + 1].filled(), i > n && cell[i - n - 1].filled()),
+                    // cell (l, j) stands on (l − 1, j ± 1 mod N): the ring of
+                    // the layer below closes on itself
+                    Layout::Layers => {
+                        let (row, j) = (i - n - i % n, i % n);
+                        (
+                            cell[row + (j + 1) % n].filled(),
+                            cell[row + (j + n - 1) % n].filled(),
+                        )
+                    }
+                };
                 match self.rule {
                     Rule::Basic => {
                         if below && rng.chance(self.p0) {
@@ -339,9 +375,13 @@ pub struct CaHelix {
 }
 
 impl CaHelix {
-    /// One string per cell: turns × cells per turn.
+    /// One string per cell (turns × cells per turn), and for layered
+    /// circles one layer change between layers.
     pub fn string_count(&self) -> u64 {
-        self.model.len()
+        match self.model.layout {
+            Layout::Helix => self.model.len(),
+            Layout::Layers => self.model.len() + self.model.layers as u64 - 1,
+        }
     }
 
     /// Runs the automaton; filled cells become arcs extruded at `c` and `v`,
@@ -353,13 +393,26 @@ impl CaHelix {
     /// The toolpath of an already computed pattern.
     pub fn toolpath(&self, pattern: &Pattern, c: f64, v: f64) -> Toolpath {
         let n = self.model.cells;
+        let layered = self.model.layout == Layout::Layers;
+        // the end of cell k − 1: on a helix it rises with every cell; on
+        // layered circles it stays at its layer's height, cell (l, N − 1)
+        // ending back at angle 0 of layer l
         let at = |k: u64| {
             let (x, y) = on_circle(self.radius, k, n);
-            let z = self.layer_height * k as f64 / n as f64;
+            let z = if layered {
+                self.layer_height * ((k.max(1) - 1) / n as u64) as f64
+            } else {
+                self.layer_height * k as f64 / n as f64
+            };
             self.center + DVec3::new(x, y, z)
         };
-        let mut t = Toolpath::with_capacity(at(0), pattern.cell.len());
+        let mut t = Toolpath::with_capacity(at(0), self.string_count() as usize);
         for (i, cell) in pattern.cell.iter().enumerate() {
+            if layered && i > 0 && i % n as usize == 0 {
+                // the layer change: straight up, not extruding
+                let (here, layer) = (at(i as u64), at(i as u64 + 1).z);
+                t.travel(here.with_z(layer), v);
+            }
             let p = at(i as u64 + 1);
             if cell.filled() {
                 t.draw(p, c, v);
@@ -373,7 +426,7 @@ impl CaHelix {
 
 /// `ca_helix:` as written in a recipe. Required: `radius`, `layers` (turns,
 /// the first included), `layer_height`; optional (default): `cells` (288),
-/// `rule` (`basic`), `p0` (0.99), `p1` (1), `consume` (0.5, split_merge only),
+/// `rule` (`basic`), `layout` (`helix`), `p0` (0.99), `p1` (1), `consume` (0.5, split_merge only),
 /// `e1` (0.3), `initial` (`ones`), `noise` (0.5, `initial: random` only),
 /// `seed` (0), `center` ([0, 0, layer_height]). Filled cells are extruded at
 /// the part's cross-section and speed.
@@ -388,6 +441,8 @@ pub struct RawCaHelix {
     pub cells: Option<Num>,
     #[serde(default)]
     pub rule: Option<Rule>,
+    #[serde(default)]
+    pub layout: Option<Layout>,
     #[serde(default)]
     pub p0: Option<Num>,
     #[serde(default)]
@@ -549,6 +604,7 @@ impl RawCaHelix {
                 cells,
                 layers,
                 rule,
+                layout: self.layout.unwrap_or_default(),
                 p0,
                 p1,
                 consume,
@@ -569,6 +625,7 @@ mod tests {
             cells: 288,
             layers: 150,
             rule,
+            layout: Layout::Helix,
             p0,
             p1,
             consume: 0.7,
