@@ -180,8 +180,8 @@ impl Stand {
     pub fn layers(&self, tp: &Toolpath, tip_radius: f64) -> Result<(glam::DVec2, u32)> {
         let (centre, _) = first_contact(tp, self.layer_height);
         let (w, h) = (self.line_width, self.layer_height);
-        let inner = self.radius - (self.walls - 1) as f64 * w;
-        if inner - 0.5 * w <= 0.0 {
+        let inner = self.radius - self.walls.saturating_sub(1) as f64 * w;
+        if self.walls == 0 || inner - 0.5 * w <= 0.0 {
             return Err(Error::input(
                 "stand.walls",
                 format!(

@@ -30,9 +30,13 @@
 //!   cruises at `v_nom` when it gets there, and decelerates to its exit speed
 //!   (a triangle when the block is too short to reach `v_nom`).
 //!
+//! Under Klipper the forward limit is applied as the blocks come and the
+//! passes are Klipper's own, with its `minimum_cruise_ratio` (see
+//! `klipper_passes`).
+//!
 //! This is the firmware's look-ahead with an unbounded buffer: the passes run
 //! over the whole print at [`Planner::finish`]. A firmware's buffer (16 moves
-//! for Marlin, about 2 s of moves for Klipper) is long enough for the short
+//! for Marlin, about 1 s of moves for Klipper) is long enough for the short
 //! strings of p3dp's recipes that this differs little; with long moves at high
 //! speed a short buffer would plan slower than this.
 //!
