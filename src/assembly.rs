@@ -44,19 +44,37 @@ pub fn make_parts(recipe: &Recipe, threads: Threads) -> Result<Vec<Toolpath>> {
     for g in &recipe.groups {
         apply(g, &mut parts[g.first..g.end], recipe.max_strings, threads)?;
     }
-    // brims last: round each part's first contact as printed, undeformed
+    // stands, then brims, last: under and round each part's first contact
+    // as printed, undeformed (a brim goes round its part's stand); their
+    // strings count against the limit like the part's own
+    let tip_radius = 0.5 * recipe.printer.head.tip_diameter;
+    let mut extra = false;
+    let mut all: u64 = parts.iter().map(total_of).sum();
     for (tp, part) in parts.iter_mut().zip(&recipe.parts) {
+        if let Some(s) = &part.stand {
+            let before = total_of(tp);
+            *tp = s
+                .under(tp, tip_radius, limit.saturating_sub(all))
+                .map_err(|e| e.under(&part.place))?;
+            all = all.saturating_add(total_of(tp) - before);
+            extra = true;
+        }
         if let Some(b) = &part.brim {
             *tp = b.around(tp);
+            extra = true;
         }
     }
-    if recipe.groups.iter().any(|g| has_subdivide(&g.steps)) {
-        let total: u64 = parts.iter().map(|t| t.len() as u64).sum();
+    if extra || recipe.groups.iter().any(|g| has_subdivide(&g.steps)) {
+        let total: u64 = parts.iter().map(total_of).sum();
         if total > limit {
             return Err(over_total("parts", total, limit));
         }
     }
     Ok(parts)
+}
+
+fn total_of(tp: &Toolpath) -> u64 {
+    tp.len() as u64
 }
 
 fn has_subdivide(steps: &[Step]) -> bool {

@@ -43,7 +43,7 @@ pub const CODES: &[(&str, &str)] = &[
     ("starvation", "runs of moves shorter in time than the planner's minimum segment time (warning)"),
     ("unsupported", "filament with neither the bed nor earlier filament under it (error)"),
     ("first-layer", "the nozzle closer to the bed than checks.first_layer_min × its diameter (warning); each part's bed contact is in the report and the stats' first_layer"),
-    ("small-contact", "a part stands on less bed than its height and mass need (checks.min_contact_per_height, min_contact_per_gram): add a brim (warning)"),
+    ("small-contact", "a part stands on less bed than its height and mass need (checks.min_contact_per_height, min_contact_per_gram): add a brim or a stand (warning)"),
     ("bridge", "a string spanning a gap between supported ends (info; warning when longer than checks.max_bridge)"),
     ("nozzle-collision", "the nozzle's cone passes through filament printed earlier (error)"),
     ("head-collision", "the head's box passes through filament printed earlier (warning: the box is an estimate)"),

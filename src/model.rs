@@ -42,6 +42,9 @@ pub struct Part {
     pub place: String,
     /// Loops on the bed round its first contact, printed first.
     pub brim: Option<Brim>,
+    /// A short printed tube round its first contact, printed first (before
+    /// the brim, which then goes round the stand).
+    pub stand: Option<Stand>,
 }
 
 /// A part's brim: `loops` closed circles on the bed round the part's first
@@ -73,32 +76,7 @@ impl Brim {
         if tp.is_empty() || self.loops == 0 {
             return tp.clone();
         }
-        let drawn = || {
-            (0..tp.len())
-                .filter(|&k| !tp.strings[k].travel)
-                .flat_map(|k| {
-                    let (a, b) = tp.ends(k);
-                    [a, b]
-                })
-        };
-        let z0 = drawn().map(|p| p.z).fold(f64::INFINITY, f64::min);
-        let (mut lo, mut hi) = (
-            glam::DVec2::splat(f64::INFINITY),
-            glam::DVec2::splat(f64::NEG_INFINITY),
-        );
-        for p in drawn().filter(|p| p.z <= z0 + self.layer_height) {
-            lo = lo.min(p.truncate());
-            hi = hi.max(p.truncate());
-        }
-        if !lo.is_finite() {
-            let p = tp.points[0].truncate();
-            (lo, hi) = (p, p);
-        }
-        let centre = (lo + hi) * 0.5;
-        let reach = drawn()
-            .filter(|p| p.z <= z0 + self.layer_height)
-            .map(|p| p.truncate().distance(centre))
-            .fold(0.0, f64::max);
+        let (centre, reach) = first_contact(tp, self.layer_height);
         let (w, h) = (self.line_width, self.layer_height);
         let c = w * h;
         let r_in = reach + 0.9 * w;
@@ -121,6 +99,228 @@ impl Brim {
         }
         out.append(tp, self.speed);
         out
+    }
+}
+
+/// The middle of the bounding rectangle of `tp`'s first contact (its
+/// extruding strings within `layer` mm of its lowest), seen from above, and
+/// the farthest contact point's distance from it.
+fn first_contact(tp: &Toolpath, layer: f64) -> (glam::DVec2, f64) {
+    let drawn = || {
+        (0..tp.len())
+            .filter(|&k| !tp.strings[k].travel)
+            .flat_map(|k| {
+                let (a, b) = tp.ends(k);
+                [a, b]
+            })
+    };
+    let z0 = drawn().map(|p| p.z).fold(f64::INFINITY, f64::min);
+    let (mut lo, mut hi) = (
+        glam::DVec2::splat(f64::INFINITY),
+        glam::DVec2::splat(f64::NEG_INFINITY),
+    );
+    for p in drawn().filter(|p| p.z <= z0 + layer) {
+        lo = lo.min(p.truncate());
+        hi = hi.max(p.truncate());
+    }
+    if !lo.is_finite() {
+        let p = tp
+            .points
+            .first()
+            .map_or(glam::DVec2::ZERO, |p| p.truncate());
+        (lo, hi) = (p, p);
+    }
+    let centre = (lo + hi) * 0.5;
+    let reach = drawn()
+        .filter(|p| p.z <= z0 + layer)
+        .map(|p| p.truncate().distance(centre))
+        .fold(0.0, f64::max);
+    (centre, reach)
+}
+
+/// A part's stand: a short tube of `walls` concentric walls printed on the
+/// bed before the part, centred under its first contact, its top just under
+/// where the part passes over it: the foot of Kanada's bowl ("a half sphere
+/// and a stand", paper 000 Fig. 12), for a part that stands on a pole. It
+/// widens the part's hold on the bed, and a part that flares out over it
+/// (a sphere from its pole) lays its strings on the tube's top.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Stand {
+    /// Radius of the outermost wall's centre line, mm.
+    pub radius: f64,
+    /// Number of walls, `line_width` apart, from `radius` inwards.
+    pub walls: u32,
+    /// Height, mm (whole layers); `None`: as tall as the part leaves room for.
+    pub height: Option<f64>,
+    /// Width of a wall, mm.
+    pub line_width: f64,
+    /// Height of a layer (the first layer's nozzle height), mm.
+    pub layer_height: f64,
+    /// Speed, mm/s.
+    pub speed: f64,
+}
+
+impl Stand {
+    /// Longest chord of a wall's circle, mm.
+    const CHORD: f64 = 0.5;
+
+    /// How many layers the stand has under `tp` (see [`Stand::under`]), and
+    /// its centre; errors name the key under `stand.`.
+    ///
+    /// The room: the nozzle's flat tip reaches `tip_radius` round the
+    /// nozzle, so where the nozzle, running along a string of the part
+    /// (travel too), comes within `tip_radius` of the tube's band (from the
+    /// inner wall's inner edge to the outer wall's outer edge, seen from
+    /// above), the tube's top (its last layer's nozzle height) may be no
+    /// higher than the nozzle: the lower end of every such string bounds it.
+    /// A part that flares out over the stand (a sphere from its pole) then
+    /// lays its strings just over the tube's top, a little higher the
+    /// steeper it rises. The layers are whole: n = ⌊top / layer_height⌋ (with
+    /// a micron's tolerance for the rounding of the division).
+    pub fn layers(&self, tp: &Toolpath, tip_radius: f64) -> Result<(glam::DVec2, u32)> {
+        let (centre, _) = first_contact(tp, self.layer_height);
+        let (w, h) = (self.line_width, self.layer_height);
+        let inner = self.radius - self.walls.saturating_sub(1) as f64 * w;
+        if self.walls == 0 || inner - 0.5 * w <= 0.0 {
+            return Err(Error::input(
+                "stand.walls",
+                format!(
+                    "{} walls {w} mm apart do not fit in a radius of {} mm; expected fewer walls or a larger radius",
+                    self.walls, self.radius
+                ),
+            ));
+        }
+        let (lo, hi) = (
+            inner - 0.5 * w - tip_radius,
+            self.radius + 0.5 * w + tip_radius,
+        );
+        // the lowest end of a string that comes over the widened band:
+        // nearest point of the segment to the centre within `hi`, farthest
+        // end beyond `lo`
+        let mut over = f64::INFINITY;
+        for k in 0..tp.len() {
+            let (a, b) = tp.ends(k);
+            let (a2, b2) = (a.truncate() - centre, b.truncate() - centre);
+            let d = b2 - a2;
+            let t = if d.length_squared() > 0.0 {
+                (-a2.dot(d) / d.length_squared()).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let near = (a2 + t * d).length();
+            let far = a2.length().max(b2.length());
+            if near <= hi && far >= lo {
+                over = over.min(a.z.min(b.z));
+            }
+        }
+        let room = over;
+        let fit = |top: f64| libm::floor(top / h + 1e-6);
+        let n = match self.height {
+            Some(want) => {
+                let n = fit(want);
+                if n < 1.0 {
+                    return Err(Error::input(
+                        "stand.height",
+                        format!(
+                            "{want} mm is less than one layer of {h} mm; expected at least {h}"
+                        ),
+                    ));
+                }
+                if n * h > room + 1e-6 {
+                    return Err(Error::input(
+                        "stand.height",
+                        format!(
+                            "the part passes over the stand's walls (radius {} mm, with the nozzle's room) at z = {over:.3} mm, so a stand of {:.3} mm would be hit; expected at most {:.3} mm (whole layers of {h} mm no higher than the nozzle there), or leave `height` out to fit it",
+                            self.radius,
+                            n * h,
+                            (fit(room) * h).max(0.0)
+                        ),
+                    ));
+                }
+                n
+            }
+            None => {
+                if !over.is_finite() {
+                    return Err(Error::input(
+                        "stand",
+                        format!(
+                            "nothing of the part passes over a stand of radius {} mm, so its height cannot be fitted under the part; expected `height`",
+                            self.radius
+                        ),
+                    ));
+                }
+                let n = fit(room);
+                if n < 1.0 {
+                    return Err(Error::input(
+                        "stand.radius",
+                        format!(
+                            "the part passes over the stand's walls at z = {over:.3} mm: no room for one layer of {h} mm under it; expected a larger radius (where the part is higher)"
+                        ),
+                    ));
+                }
+                n
+            }
+        };
+        if n > 10_000.0 {
+            return Err(Error::input(
+                "stand.height",
+                format!("{} layers is too many; expected at most 10000", n),
+            ));
+        }
+        Ok((centre, n as u32))
+    }
+
+    /// How many strings a stand of `layers` layers has.
+    fn strings(&self, layers: u32) -> u64 {
+        let per_layer: u64 = (0..self.walls)
+            .map(|j| self.segments(self.radius - j as f64 * self.line_width) as u64 + 1)
+            .sum();
+        per_layer.saturating_mul(layers as u64)
+    }
+
+    fn segments(&self, r: f64) -> usize {
+        (libm::ceil(std::f64::consts::TAU * r / Self::CHORD) as usize).max(24)
+    }
+
+    /// The stand under `tp`, then `tp`, refused past `budget` strings for
+    /// the stand: layer k (1..=n) at nozzle height k·layer_height, each its
+    /// walls as closed circles from the outermost in, a travel up to the next
+    /// layer's outer wall, then the part from the stand's last point.
+    pub fn under(&self, tp: &Toolpath, tip_radius: f64, budget: u64) -> Result<Toolpath> {
+        if tp.is_empty() {
+            return Ok(tp.clone());
+        }
+        let (centre, n) = self.layers(tp, tip_radius)?;
+        let count = self.strings(n);
+        if count > budget {
+            return Err(Error::input(
+                "stand",
+                format!("the stand has {count} strings, more than the {budget} the recipe's max_strings leaves; expected a smaller stand"),
+            ));
+        }
+        let (w, h) = (self.line_width, self.layer_height);
+        let c = w * h;
+        let at = |r: f64, t: f64, z: f64| {
+            glam::DVec3::new(centre.x + r * libm::cos(t), centre.y + r * libm::sin(t), z)
+        };
+        let mut out = Toolpath::new(at(self.radius, 0.0, h));
+        out.name = tp.name.clone();
+        for layer in 1..=n {
+            let z = layer as f64 * h;
+            for j in 0..self.walls {
+                let r = self.radius - j as f64 * w;
+                if layer > 1 || j > 0 {
+                    out.travel(at(r, 0.0, z), self.speed);
+                }
+                let m = self.segments(r);
+                for i in 1..=m {
+                    let t = std::f64::consts::TAU * i as f64 / m as f64;
+                    out.draw(at(r, if i == m { 0.0 } else { t }, z), c, self.speed);
+                }
+            }
+        }
+        out.append(tp, self.speed);
+        Ok(out)
     }
 }
 
@@ -259,6 +459,86 @@ pub fn pattern_png(recipe: &Recipe) -> Result<Vec<u8>> {
 mod brim_tests {
     use super::*;
     use glam::DVec3;
+
+    /// A cone of strings from a point at (0, 0, 0.4) out to radius 10,
+    /// rising 0.1 mm per mm outwards: a pole flaring out.
+    fn flare() -> Toolpath {
+        let mut tp = Toolpath::new(DVec3::new(0.0, 0.0, 0.4));
+        tp.name = "pole".into();
+        for k in 1..=100 {
+            let r = 0.1 * k as f64;
+            let t = 0.7 * k as f64;
+            tp.draw(
+                DVec3::new(r * t.cos(), r * t.sin(), 0.4 + 0.1 * r),
+                0.1,
+                30.0,
+            );
+        }
+        tp
+    }
+
+    fn stand(radius: f64, height: Option<f64>) -> Stand {
+        Stand {
+            radius,
+            walls: 2,
+            height,
+            line_width: 0.5,
+            layer_height: 0.2,
+            speed: 20.0,
+        }
+    }
+
+    #[test]
+    fn a_stand_fits_under_the_part_and_prints_first() {
+        // walls at 6 and 5.5 (inner edge 5.25), tip radius 0.5: the part
+        // comes within reach at r = 4.75, z = 0.875 there; the contact's
+        // centre is the middle of the points within 0.2 of the lowest
+        let tp = flare();
+        let s = stand(6.0, None);
+        let (centre, n) = s.layers(&tp, 0.5).unwrap();
+        let over = (0..tp.len())
+            .flat_map(|k| {
+                let (a, b) = tp.ends(k);
+                [a, b]
+            })
+            .filter(|p| p.truncate().distance(centre) >= 4.75 - 0.1)
+            .map(|p| p.z)
+            .fold(f64::INFINITY, f64::min);
+        assert!(over < 0.4 + 0.1 * 4.9, "{over}");
+        assert_eq!(n, (over / 0.2).floor() as u32);
+        let out = s.under(&tp, 0.5, 1_000_000).unwrap();
+        // layers at 0.2, 0.4, …; every drawn stand string at a wall's radius
+        let k_part = out.len() - tp.len();
+        for k in 0..k_part {
+            if out.strings[k].travel {
+                continue;
+            }
+            let (a, b) = out.ends(k);
+            let r = b.truncate().distance(centre);
+            assert!((r - 6.0).abs() < 1e-9 || (r - 5.5).abs() < 1e-9, "{r}");
+            assert!((a.z / 0.2 - (a.z / 0.2).round()).abs() < 1e-9 && a.z <= over + 1e-9);
+            assert!((out.strings[k].c - 0.1).abs() < 1e-12);
+        }
+        // the part follows whole
+        assert_eq!(
+            out.points[out.points.len() - 1],
+            tp.points[tp.points.len() - 1]
+        );
+        // a stand taller than the room is refused, naming `stand.height`
+        let e = stand(6.0, Some(2.0))
+            .under(&tp, 0.5, 1_000_000)
+            .unwrap_err();
+        assert_eq!(e.place.as_deref(), Some("stand.height"), "{e}");
+        // one the part leaves room for is built as asked
+        let (_, n) = stand(6.0, Some(0.4)).layers(&tp, 0.5).unwrap();
+        assert_eq!(n, 2);
+        // walls that do not fit in the radius
+        let e = stand(0.6, None).layers(&tp, 0.5).unwrap_err();
+        assert_eq!(e.place.as_deref(), Some("stand.walls"), "{e}");
+        // more strings than the budget
+        let e = s.under(&tp, 0.5, 10).unwrap_err();
+        assert_eq!(e.place.as_deref(), Some("stand"), "{e}");
+    }
 
     #[test]
     fn a_brim_circles_the_first_contact_outside_in_then_prints_the_part() {

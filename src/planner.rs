@@ -30,9 +30,13 @@
 //!   cruises at `v_nom` when it gets there, and decelerates to its exit speed
 //!   (a triangle when the block is too short to reach `v_nom`).
 //!
+//! Under Klipper the forward limit is applied as the blocks come and the
+//! passes are Klipper's own, with its `minimum_cruise_ratio` (see
+//! `klipper_passes`).
+//!
 //! This is the firmware's look-ahead with an unbounded buffer: the passes run
 //! over the whole print at [`Planner::finish`]. A firmware's buffer (16 moves
-//! for Marlin, about 2 s of moves for Klipper) is long enough for the short
+//! for Marlin, about 1 s of moves for Klipper) is long enough for the short
 //! strings of p3dp's recipes that this differs little; with long moves at high
 //! speed a short buffer would plan slower than this.
 //!
@@ -103,15 +107,20 @@ pub struct Estimate {
     pub parts: Vec<PartTimes>,
 }
 
-/// One move, as the passes need it (32 bytes: 2M moves take 64 MB).
+/// One move, as the passes need it (48 bytes: 2M moves take 96 MB).
 #[derive(Clone, Copy, Debug)]
 struct Block {
     len: f64,
     accel: f64,
-    /// Cruise v²: v_nom², then capped by the minimum cruise ratio.
+    /// Cruise v²: v_nom².
     cruise_v2: f64,
-    /// Highest entry v² (junction limit), then the planned entry v².
+    /// Highest entry v² (junction limit; under Klipper also what the blocks
+    /// before can reach), then the planned entry v².
     entry_v2: f64,
+    /// Klipper: the highest entry v² in the minimum-cruise-ratio profile.
+    mcr_entry_v2: f64,
+    /// Klipper: the v² this block can gain in that profile, 2·L·a_mcr.
+    mcr_delta_v2: f64,
 }
 
 /// The last XYZ block, for the next junction.
@@ -123,6 +132,9 @@ struct Last {
     cruise_v2: f64,
     /// Filament per mm of path (0 for travel), for Klipper's extruder corner.
     e_per_mm: f64,
+    /// Its acceleration over its kind's nominal one (below 1 when the Z axis
+    /// limits it): Klipper's junction deviation scales with it.
+    accel_share: f64,
 }
 
 /// Marlin's block buffer as the SD reader fills it and the steppers empty it
@@ -303,10 +315,11 @@ impl Planner {
         let d = to - from;
         let len = d.length();
         if len > 0.0 {
-            let mut accel = match kind {
+            let base = match kind {
                 MoveKind::Extrude => self.limits.max_acceleration,
                 MoveKind::Travel => self.limits.travel_acceleration,
             };
+            let mut accel = base;
             // the Z axis's own limits, scaled to the move as both firmwares
             // do (Klipper's cartesian check_move: z_ratio = L / |dz|)
             let mut cap = f64::INFINITY;
@@ -327,9 +340,10 @@ impl Planner {
             } else {
                 0.0
             };
-            let entry_v2 = match self.last {
+            let accel_share = accel / base;
+            let mut entry_v2 = match self.last {
                 Some(prev) => {
-                    let mut j = self.junction_v2(&prev, dir, len, accel, cruise_v2);
+                    let mut j = self.junction_v2(&prev, dir, len, accel, accel_share, cruise_v2);
                     // Klipper's extruder.py calc_junction: the E speed may
                     // change at once by at most instantaneous_corner_velocity
                     if let Some(icv) = self.limits.instantaneous_corner_velocity {
@@ -342,11 +356,14 @@ impl Planner {
                 }
                 None => 0.0,
             };
+            let (mcr_entry_v2, mcr_delta_v2) = self.klipper_entry(&mut entry_v2, base, accel, len);
             self.blocks.push(Block {
                 len,
                 accel,
                 cruise_v2,
                 entry_v2,
+                mcr_entry_v2,
+                mcr_delta_v2,
             });
             self.last = Some(Last {
                 dir,
@@ -354,6 +371,7 @@ impl Planner {
                 accel,
                 cruise_v2,
                 e_per_mm,
+                accel_share,
             });
             self.pos = Some(to);
             let ideal = if feed.is_finite() && feed > 0.0 {
@@ -385,13 +403,18 @@ impl Planner {
             None => self.limits.retract_acceleration,
         };
         let v = self.nominal(length, feed, false, cap);
+        self.last = None;
+        let mut entry_v2 = 0.0;
+        let base = self.limits.max_acceleration;
+        let (mcr_entry_v2, mcr_delta_v2) = self.klipper_entry(&mut entry_v2, base, accel, length);
         self.blocks.push(Block {
             len: length,
             accel,
             cruise_v2: v * v,
-            entry_v2: 0.0,
+            entry_v2,
+            mcr_entry_v2,
+            mcr_delta_v2,
         });
-        self.last = None;
         let ideal = if feed.is_finite() && feed > 0.0 {
             length / feed
         } else {
@@ -400,9 +423,36 @@ impl Planner {
         self.add(ideal, length / v, 0.0);
     }
 
+    /// Klipper's look-ahead at the time a block is queued (its
+    /// `Move.calc_junction`): the block's highest entry v² `entry_v2` is also
+    /// held to what the block before can reach, e_prev + 2·a_prev·L_prev (a
+    /// forward pass as the moves come), and the same is done in the
+    /// minimum-cruise-ratio profile, where every block gains at most
+    /// 2·L·min(a_nom·(1 − ratio), a) of v² (`a_nom` the kind's acceleration,
+    /// Klipper's `max_accel`; `a` the block's own, lower where the Z axis or
+    /// the extruder limits it). Returns that profile's (entry v², gain); with
+    /// no previous XYZ block the head is at rest. Marlin's model keeps the
+    /// junction limit alone: (0, 0).
+    fn klipper_entry(&self, entry_v2: &mut f64, base: f64, accel: f64, len: f64) -> (f64, f64) {
+        if self.limits.square_corner_velocity.is_none() {
+            return (0.0, 0.0);
+        }
+        let mcr_delta_v2 = 2.0 * len * (base * (1.0 - self.limits.minimum_cruise_ratio)).min(accel);
+        let prev = match (self.last, self.blocks.last()) {
+            (Some(_), Some(b)) => b,
+            _ => {
+                *entry_v2 = 0.0;
+                return (0.0, mcr_delta_v2);
+            }
+        };
+        *entry_v2 = entry_v2.min(prev.entry_v2 + 2.0 * prev.accel * prev.len);
+        let mcr_entry_v2 = entry_v2.min(prev.mcr_entry_v2 + prev.mcr_delta_v2);
+        (mcr_entry_v2, mcr_delta_v2)
+    }
+
     /// Highest v² at the corner from `prev` into a block along `dir` of length
-    /// `len`, acceleration `accel` and cruise v² `cruise_v2` (never above
-    /// either block's cruise v²).
+    /// `len`, acceleration `accel` (`accel_share` of its kind's) and cruise
+    /// v² `cruise_v2` (never above either block's cruise v²).
     ///
     /// With θ the angle between the reversed incoming direction and the
     /// outgoing one (θ = 180° straight on, 90° a square corner, 0 a reversal),
@@ -418,10 +468,20 @@ impl Planner {
     ///   taken as a chord of an arc of radius L / φ (φ = π − θ the turn), so
     ///   also v² ≤ a·L / φ. (Marlin approximates φ by a polynomial that never
     ///   goes below 0.033 rad; here φ is exact.)
-    /// - Klipper: δ = scv²·(√2 − 1) / a, so v² = R/δ·scv²·(√2 − 1), and a 90°
-    ///   corner gets exactly scv; and the circle must touch each move no
-    ///   further than its middle: v² ≤ ½·L·a·tan(θ/2) for both moves.
-    fn junction_v2(&self, prev: &Last, dir: DVec3, len: f64, accel: f64, cruise_v2: f64) -> f64 {
+    /// - Klipper: δ = scv²·(√2 − 1) / a_nom with a_nom its `max_accel`, and
+    ///   v² = R·δ·a for each of the two moves' own a, so a 90° corner gets
+    ///   exactly scv (less where the Z axis lowers a move's a); and the
+    ///   circle must touch each move no further than its middle:
+    ///   v² ≤ ½·L·a·tan(θ/2) for both moves.
+    fn junction_v2(
+        &self,
+        prev: &Last,
+        dir: DVec3,
+        len: f64,
+        accel: f64,
+        accel_share: f64,
+        cruise_v2: f64,
+    ) -> f64 {
         let both = cruise_v2.min(prev.cruise_v2);
         // w = |u1 − u2|² = 2·(1 − cos φ) = 4·cos²(θ/2): stable for small turns
         let w = (prev.dir - dir).length_squared().min(4.0);
@@ -440,7 +500,8 @@ impl Planner {
             self.limits.junction_deviation,
         ) {
             (Some(scv), _) => {
-                let jd_v2 = r * scv * scv * (std::f64::consts::SQRT_2 - 1.0);
+                let share = accel_share.min(prev.accel_share);
+                let jd_v2 = r * scv * scv * (std::f64::consts::SQRT_2 - 1.0) * share;
                 let tan_half = sin_half / cos_half2.sqrt();
                 let c_this = 0.5 * len * accel * tan_half;
                 let c_prev = 0.5 * prev.len * prev.accel * tan_half;
@@ -470,14 +531,14 @@ impl Planner {
 
     /// Plans every move (the passes of the module comment) and sums the times.
     pub fn finish(mut self) -> Estimate {
-        let ratio = self.limits.minimum_cruise_ratio;
-        if ratio > 0.0 {
-            smooth_cruise(&mut self.blocks, ratio);
-        }
-        backward_pass(&mut self.blocks);
         let mut ends: Vec<usize> = self.parts.iter().map(|p| p.first).collect();
         ends.push(self.blocks.len());
-        let planned = forward_pass(&mut self.blocks, &ends);
+        let planned = if self.limits.square_corner_velocity.is_some() {
+            klipper_passes(&self.blocks, &ends)
+        } else {
+            backward_pass(&mut self.blocks);
+            forward_pass(&mut self.blocks, &ends)
+        };
         self.estimate(&planned)
     }
 
@@ -509,36 +570,63 @@ impl Planner {
     }
 }
 
-/// Caps cruise speeds by Klipper's minimum cruise ratio (`ratio` > 0).
-fn smooth_cruise(b: &mut [Block], ratio: f64) {
+/// Klipper's look-ahead flush (`LookAheadQueue.flush`) over the whole print
+/// and the blocks' times, summed per range as [`forward_pass`] does.
+///
+/// Backward from rest at the end, each block gets its entry v²
+/// s_i = min(e_i, s_{i+1} + 2·a_i·L_i) as in Marlin's model, and the same in
+/// the minimum-cruise-ratio profile (entry limits `mcr_entry_v2` and gains
+/// `mcr_delta_v2` of [`Planner::klipper_entry`], whose acceleration is
+/// a·(1 − ratio)): m_i = min(me_i, m_{i+1} + d_i). A block with
+/// m_i < m_{i+1} + d_i can speed up in that profile; the peak v² of the run of
+/// such blocks is where the profile's triangle tops out, (m_i + m_{i+1} + d_i)/2,
+/// taken at the block that can both speed up and slow down (or that
+/// accelerates all along just before blocks that only slow down), and shared
+/// by the blocks before it that accelerate all along. Such a block cruises at
+/// most at that peak and at its own triangle's top (s_i + s_{i+1} + 2·a_i·L_i)/2.
+/// Reaching the peak at a instead of a·(1 − ratio) takes (1 − ratio) of the
+/// distance the profile's ramps take, which leaves at least `ratio` of a run
+/// from rest to rest cruising. A block that can only slow down cruises at
+/// the cruise of the block before it, or its own entry if lower. Then each
+/// block is a trapezoid from min(s_i, c_i) to min(s_{i+1}, c_i) cruising at c_i.
+fn klipper_passes(b: &[Block], ends: &[usize]) -> Vec<f64> {
     let n = b.len();
-    // Klipper's smoothed look-ahead: the same passes at the virtual
-    // acceleration a_d = a·(1 − minimum_cruise_ratio) ("accel_to_decel")
-    // give smoothed corner speeds s_i; a move that can speed up in that
-    // profile (s_i < s_{i+1} + 2·a_d·L) cruises no faster than its peak,
-    // (s_i + s_{i+1} + 2·a_d·L)/2, which leaves at least the ratio of it
-    // at cruising speed; a move that only slows down keeps its speed.
-    if n == 0 {
-        return;
-    }
-    let k = 1.0 - ratio;
-    let mut sm = vec![0.0f64; n + 1];
+    // (entry v², cruise v² if known, exit v²), filled backward
+    let mut plan: Vec<(f64, Option<f64>, f64)> = vec![(0.0, None, 0.0); n];
+    let (mut next, mut next_mcr, mut peak) = (0.0f64, 0.0f64, 0.0f64);
+    let mut pending = 0usize;
     for i in (0..n).rev() {
-        sm[i] = b[i]
-            .entry_v2
-            .min(sm[i + 1] + 2.0 * k * b[i].accel * b[i].len);
-    }
-    for i in 1..n {
-        let reach = sm[i - 1] + 2.0 * k * b[i - 1].accel * b[i - 1].len;
-        sm[i] = sm[i].min(reach);
-    }
-    for i in 0..n {
-        let reach = sm[i + 1] + 2.0 * k * b[i].accel * b[i].len;
-        if sm[i] < reach {
-            let peak = 0.5 * (sm[i] + reach);
-            b[i].cruise_v2 = b[i].cruise_v2.min(peak);
+        let reach = next + 2.0 * b[i].accel * b[i].len;
+        let start = b[i].entry_v2.min(reach);
+        pending += 1;
+        let reach_mcr = next_mcr + b[i].mcr_delta_v2;
+        let start_mcr = b[i].mcr_entry_v2.min(reach_mcr);
+        let mut cruise = None;
+        if start_mcr < reach_mcr {
+            if start_mcr + b[i].mcr_delta_v2 > next_mcr || pending > 1 {
+                peak = 0.5 * (start_mcr + reach_mcr);
+            }
+            cruise = Some(b[i].cruise_v2.min(0.5 * (start + reach)).min(peak));
+            pending = 0;
         }
+        plan[i] = (start, cruise, next);
+        next = start;
+        next_mcr = start_mcr;
     }
+    let mut planned = vec![0.0f64; ends.len()];
+    let mut slot = 0;
+    let mut prev_cruise = 0.0f64;
+    for (i, &(start, cruise, exit)) in plan.iter().enumerate() {
+        while i >= ends[slot] {
+            slot += 1;
+        }
+        let c = cruise.unwrap_or(prev_cruise.min(start));
+        if c > 0.0 {
+            planned[slot] += trapezoid_time(b[i].len, b[i].accel, start.min(c), exit.min(c), c);
+        }
+        prev_cruise = c;
+    }
+    planned
 }
 
 /// The backward pass: entry speeds the blocks after can brake from.
@@ -1146,6 +1234,29 @@ mod tests {
         let accel_dist = 750.0 / 2000.0;
         close(1.5 - 2.0 * accel_dist, 0.75, 1e-12);
         close(e.total.planned, 2.0 * v / 1000.0 + 0.75 / v, 1e-12);
+    }
+
+    #[test]
+    fn minimum_cruise_ratio_holds_for_a_run_of_moves() {
+        // Klipper plans a run of moves as if it accelerated at a·(1 − ratio)
+        // (the "pseudo" acceleration of its minimum-cruise-ratio check):
+        // from rest to rest along D mm that profile peaks at v_p² = a·(1 − ratio)·D;
+        // the head reaches v_p at a in (1 − ratio)·D/2, brakes in as much and
+        // cruises ratio·D: t = 2·v_p/a + ratio·D/v_p, however D is cut into moves
+        for (k, ratio) in [(1usize, 0.5), (5, 0.5), (5, 0.2), (40, 0.5), (7, 0.8)] {
+            let (a, d): (f64, f64) = (1000.0, 5.0);
+            let vp = (a * (1.0 - ratio) * d).sqrt();
+            let want = 2.0 * vp / a + ratio * d / vp;
+            let e = plan(
+                klipper(a, 5.0, 1000.0, ratio),
+                &line(k, d / k as f64),
+                1000.0,
+            );
+            close(e.total.planned, want, 1e-12);
+        }
+        // where the feed caps the peak the ratio does not matter
+        let e = plan(klipper(1000.0, 5.0, 1000.0, 0.5), &line(5, 1.0), 20.0);
+        close(e.total.planned, 5.0 / 20.0 + 20.0 / 1000.0, 1e-12);
     }
 
     #[test]

@@ -393,7 +393,7 @@ fn check_codes(tag: &str, text: &str) -> String {
 }
 
 #[test]
-fn the_sphere_and_the_globe_need_their_brims() {
+fn the_sphere_and_the_globe_need_a_brim_or_a_stand() {
     for name in ["sphere", "globe"] {
         let text = std::fs::read_to_string(root().join(format!("recipes/{name}.yaml")))
             .unwrap()
@@ -401,11 +401,104 @@ fn the_sphere_and_the_globe_need_their_brims() {
         assert!(text.contains("brim: {loops: 8}"), "{name}");
         let with = check_codes(&format!("{name}-brim"), &text);
         assert!(!with.contains("small-contact"), "{with}");
-        let without = check_codes(
-            &format!("{name}-no-brim"),
-            &text.replace("brim: {loops: 8}", ""),
-        );
+        // the globe also has a stand (its foot)
+        let text = text.replace("stand: {radius: 8}", "");
+        let bare = text.replace("brim: {loops: 8}", "");
+        let without = check_codes(&format!("{name}-no-brim"), &bare);
         assert!(without.contains("warning [small-contact]"), "{without}");
-        assert!(without.contains("add a `brim:`"), "{without}");
+        assert!(without.contains("add a `brim:` or a `stand:`"), "{without}");
+        // a stand alone widens the contact enough (the check measures the
+        // union of the first layer's bands: nothing special-cased)
+        let stand = text.replace("brim: {loops: 8}", "stand: {radius: 7}");
+        let with = check_codes(&format!("{name}-stand"), &stand);
+        assert!(!with.contains("small-contact"), "{with}");
+        assert!(with.contains("0 warnings, 0 errors"), "{with}");
     }
+}
+
+/// The stats JSON of building `text` (written as a recipe file).
+fn stats_of(tag: &str, text: &str) -> serde_json::Value {
+    let dir = tmp(&format!("checks-{tag}"));
+    std::fs::write(dir.join("r.yaml"), text).unwrap();
+    let out = p3dp(
+        &dir,
+        &["build", "r.yaml", "-o", "r.gcode", "--stats-json", "s.json"],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v = serde_json::from_str(&std::fs::read_to_string(dir.join("s.json")).unwrap()).unwrap();
+    let _ = std::fs::remove_dir_all(&dir);
+    v
+}
+
+#[test]
+fn a_stand_is_printed_first_and_counted() {
+    // Kanada's sphere (radius 25, lifted 0.4 mm: z = 0.4 + 25 − √(625 − r²)
+    // from its pole) without its brim, bare and on a stand of radius 7
+    let text = std::fs::read_to_string(root().join("recipes/sphere.yaml")).unwrap();
+    let sphere = |stand: &str| text.replace("brim: {loops: 8}", stand);
+    let bare = stats_of("stand-bare", &sphere(""));
+    let with = stats_of("stand-with", &sphere("stand: {radius: 7}"));
+    // the stand's walls at 7 and 6.55 mm (0.45 apart), 88 and 83 chords of at
+    // most 0.5 mm; the nozzle's tip (1 mm) comes within 0.5 mm of the inner
+    // wall's inner edge (6.325 mm) over the sphere at r = 5.825 mm, where
+    // z = 0.4 + 25 − √(625 − 5.825²) ≈ 1.088: five layers of 0.2 mm fit
+    let z = 0.4 + 25.0 - (625.0f64 - 5.825 * 5.825).sqrt();
+    let layers = (z / 0.2).floor() as u64;
+    assert_eq!(layers, 5);
+    // each layer: two closed circles and a travel to each (but the very
+    // first), then one travel from the stand to the part
+    let per_layer = 88 + 83 + 2;
+    let count = |v: &serde_json::Value| {
+        v["parts"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|p| p["name"] == "sphere")
+            .unwrap()["strings"]
+            .as_u64()
+            .unwrap()
+    };
+    assert_eq!(count(&with) - count(&bare), layers * per_layer);
+    let num = |v: &serde_json::Value, k: &str| v[k].as_f64().unwrap();
+    // its filament: 5 layers of two circles of 0.45 × 0.2 mm² beads, over
+    // the filament's area (1.75 mm), less a little for the chords
+    let stand_mm =
+        5.0 * std::f64::consts::TAU * (7.0 + 6.55) * 0.09 / (std::f64::consts::PI * 0.875 * 0.875);
+    let added_mm = num(&with, "filament_length_mm") - num(&bare, "filament_length_mm");
+    assert!(
+        (added_mm / stand_mm - 1.0).abs() < 0.01,
+        "{added_mm} vs {stand_mm}"
+    );
+    assert!(num(&with, "print_time_s") > num(&bare, "print_time_s"));
+    let contact = |v: &serde_json::Value| {
+        v["first_layer"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|f| f["part"] == "sphere")
+            .unwrap()["contact_area_mm2"]
+            .as_f64()
+            .unwrap()
+    };
+    assert!(
+        contact(&with) > contact(&bare) + 30.0,
+        "{} {}",
+        contact(&with),
+        contact(&bare)
+    );
+    // a stand past max_strings is refused, naming it
+    let limit = count(&with) - 100;
+    let over =
+        sphere("stand: {radius: 7}").replace("parts:", &format!("max_strings: {limit}\nparts:"));
+    let dir = tmp("checks-stand-limit");
+    std::fs::write(dir.join("r.yaml"), over).unwrap();
+    let out = p3dp(&dir, &["check", "r.yaml"]);
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("parts[0].stand"), "{err}");
 }

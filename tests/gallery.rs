@@ -65,12 +65,14 @@ fn index(recipe: &Recipe, name: &str) -> usize {
 }
 
 /// Part `name` with all its steps (and those of the groups around it).
-/// Part `name`'s own strings (without a brim: the surfaces are the part's).
+/// Part `name`'s own strings (without a brim or a stand: the surfaces are
+/// the part's).
 fn part(recipe: &Recipe, name: &str) -> Toolpath {
     let k = index(recipe, name);
     let mut r = recipe.clone();
     for p in &mut r.parts {
         p.brim = None;
+        p.stand = None;
     }
     make_parts(&r, Threads::available()).unwrap().swap_remove(k)
 }

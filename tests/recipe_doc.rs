@@ -78,6 +78,8 @@ fn loader_names() -> Vec<(String, String)> {
             "{for: {k: {__probe__: 1}}, primitive: {circle: {radius: 1}}}",
         )),
     );
+    add("brim", listed(&part("{brim: {__probe__: 1}}")));
+    add("stand", listed(&part("{stand: {__probe__: 1}}")));
     let prim = |p: &str, inner: &str| part(&format!("{{primitive: {{{p}: {inner}}}}}"));
     add(
         "path commands",

@@ -374,7 +374,7 @@ fn small_contact(recipe: &Recipe, tp: &Toolpath, f: &Footprint, out: &mut Vec<Fi
         code: "small-contact",
         severity: Severity::Warning,
         message: format!(
-            "part `{}` stands on {:.1} mm² of bed for {height:.1} mm of height and {grams:.1} g: less than the {need:.1} mm² it needs ({} mm²/mm of height + {} mm²/g, checks.min_contact_per_height, min_contact_per_gram); it may tip or come off the bed: add a `brim:` to the part",
+            "part `{}` stands on {:.1} mm² of bed for {height:.1} mm of height and {grams:.1} g: less than the {need:.1} mm² it needs ({} mm²/mm of height + {} mm²/g, checks.min_contact_per_height, min_contact_per_gram); it may tip or come off the bed: add a `brim:` or a `stand:` to the part",
             tp.name,
             f.contact_area_mm2,
             lim.min_contact_per_height,

@@ -469,6 +469,54 @@ fn resolve_part(ctx: &Ctx, p: &RawPart, c0: f64, v0: f64, k: usize) -> Result<Pa
             }
             None => None,
         },
+        stand: match &p.stand {
+            Some(st) => Some(resolve_stand(ctx, st, speed)?),
+            None => None,
+        },
+    })
+}
+
+/// `stand:` resolved; errors name the key under `stand.`.
+fn resolve_stand(ctx: &Ctx, st: &RawStand, speed: f64) -> Result<crate::model::Stand> {
+    let radius = ctx.positive(&st.radius, "stand.radius")?;
+    if radius > 1000.0 {
+        return Err(Error::input(
+            "stand.radius",
+            format!("{radius} mm is not allowed; expected at most 1000 mm"),
+        ));
+    }
+    let walls = match &st.walls {
+        Some(n) => {
+            let n = ctx.positive(n, "stand.walls")?;
+            if n.fract() != 0.0 || n > 100.0 {
+                return Err(Error::input(
+                    "stand.walls",
+                    format!("{n} is not allowed; expected a whole number of walls, 1 to 100"),
+                ));
+            }
+            n as u32
+        }
+        None => 2,
+    };
+    Ok(crate::model::Stand {
+        radius,
+        walls,
+        height: match &st.height {
+            Some(n) => Some(ctx.positive(n, "stand.height")?),
+            None => None,
+        },
+        line_width: match &st.line_width {
+            Some(n) => ctx.positive(n, "stand.line_width")?,
+            None => 0.45,
+        },
+        layer_height: match &st.layer_height {
+            Some(n) => ctx.positive(n, "stand.layer_height")?,
+            None => 0.2,
+        },
+        speed: match &st.speed {
+            Some(n) => ctx.positive(n, "stand.speed")?,
+            None => speed,
+        },
     })
 }
 

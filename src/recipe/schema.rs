@@ -254,6 +254,9 @@ pub struct RawPart {
     /// Loops on the bed round the part's first contact, printed first.
     #[serde(default)]
     pub brim: Option<RawBrim>,
+    /// A short printed tube under the part's first contact, printed first.
+    #[serde(default)]
+    pub stand: Option<RawStand>,
     /// Child parts, making this part a group (see [`super::expand`]).
     #[serde(default)]
     pub parts: Option<Vec<RawPart>>,
@@ -278,6 +281,32 @@ pub struct RawBrim {
     #[serde(default)]
     pub line_width: Option<Num>,
     /// Height of the loops' bead, mm (0.2).
+    #[serde(default)]
+    pub layer_height: Option<Num>,
+    /// mm/s (the part's speed).
+    #[serde(default)]
+    pub speed: Option<Num>,
+}
+
+/// `stand:` of a part: a short printed tube round its first contact, its top
+/// just under where the part passes over it.
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RawStand {
+    /// Radius of the outer wall's centre line, mm, about the middle of the
+    /// part's first contact.
+    pub radius: Num,
+    /// Number of walls, `line_width` apart, from `radius` inwards (2).
+    #[serde(default)]
+    pub walls: Option<Num>,
+    /// Height, mm, in whole layers (as tall as the part leaves room for: no
+    /// higher than the nozzle where the part passes over the walls).
+    #[serde(default)]
+    pub height: Option<Num>,
+    /// Width of a wall, mm (0.45).
+    #[serde(default)]
+    pub line_width: Option<Num>,
+    /// Height of a layer, mm (0.2).
     #[serde(default)]
     pub layer_height: Option<Num>,
     /// mm/s (the part's speed).
