@@ -11,7 +11,7 @@
 //! 4. analysis and output: [`planner`], [`gcode`], [`check`], [`stats`];
 //! 5. the YAML edge: [`recipe`];
 //! 6. orchestration: [`output`], [`plan`], [`preview`], [`build`],
-//!    [`batch`], [`lock`], [`cli`].
+//!    [`batch`], [`lock`], [`diagnostic`], [`watch`], [`cli`].
 
 #![warn(missing_docs)]
 
@@ -51,5 +51,6 @@ pub mod lock;
 pub mod output;
 pub mod plan;
 pub mod preview;
+pub mod watch;
 
 pub use error::{Error, Result};
