@@ -126,10 +126,22 @@ struct Built {
 /// first, then a line for each build (errors on standard error).
 pub fn run(opts: &Options) -> Result<()> {
     let shown = opts.recipe.display().to_string();
-    if !opts.recipe.is_file() {
-        // the first build names what is wrong (missing, a folder, unreadable)
-        crate::input::read_text(&opts.recipe, "recipe")?;
-        return Err(Error::input("", "expected a recipe file").in_file(&shown));
+    // a recipe that is not there now is a mistake of the command line; one
+    // that goes later is shown in the page until it comes back
+    match std::fs::metadata(&opts.recipe) {
+        Err(e) => {
+            return Err(Error::io_from(
+                &shown,
+                format!("cannot read the recipe: {e}"),
+                &e,
+            ))
+        }
+        Ok(m) if !m.is_file() => {
+            return Err(
+                Error::input("", "is not a file; expected a recipe file (YAML)").in_file(&shown),
+            )
+        }
+        Ok(_) => {}
     }
     crate::check::validate_allow(&opts.build.allow, |i| {
         format!("--allow {}", opts.build.allow[i])
@@ -177,7 +189,14 @@ pub fn run(opts: &Options) -> Result<()> {
     shared.lock().stop = true;
     shared.changed.notify_all();
     server.unblock();
-    let _ = http.join();
+    // a page still being sent to a stalled client is not waited for long
+    let until = Instant::now() + Duration::from_millis(500);
+    while !http.is_finished() && Instant::now() < until {
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    if http.is_finished() {
+        let _ = http.join();
+    }
     drop(server);
     result
 }
@@ -223,6 +242,8 @@ fn follow(
     })
     .map_err(|e| Error::io("p3dp watch", format!("cannot watch files: {e}")))?;
     let mut files = Files::default();
+    // the recipe's folder from the start: a save during the first build counts
+    files.update(&mut watcher, &opts.recipe, &[]);
     let mut number = 1;
     start_build(opts, number, tx);
     let mut building = true;
@@ -404,10 +425,12 @@ impl Files {
     }
 
     /// Whether a file event concerns a file followed (or a missing folder on
-    /// the way to one). Reading a file is no change.
+    /// the way to one). Reading a file is no change; closing one written is
+    /// (the last event of a slow write).
     fn touches(&self, ev: &notify::Event) -> bool {
+        use notify::event::{AccessKind, AccessMode};
         use notify::EventKind;
-        if matches!(ev.kind, EventKind::Access(_)) {
+        if matches!(ev.kind, EventKind::Access(a) if a != AccessKind::Close(AccessMode::Write)) {
             return false;
         }
         ev.paths.iter().any(|p| {
@@ -629,6 +652,10 @@ mod tests {
         )));
         assert!(!files.touches(&ev(
             notify::EventKind::Access(AccessKind::Any),
+            recipe.clone()
+        )));
+        assert!(files.touches(&ev(
+            notify::EventKind::Access(AccessKind::Close(notify::event::AccessMode::Write)),
             recipe.clone()
         )));
         assert!(!files.touches(&ev(

@@ -288,3 +288,61 @@ fn a_busy_port_or_a_missing_recipe_is_refused_at_once() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("missing.yaml"));
 }
+
+/// The files `p3dp watch` follows are those the build read or tried:
+/// recipe, includes, images, a printer profile and what it inherits.
+#[test]
+fn a_build_records_every_file_it_reads_missing_ones_too() {
+    let dir = tmp("watch-inputs");
+    std::fs::create_dir_all(dir.join("printers")).unwrap();
+    for f in ["child-user.yaml", "base-user.yaml"] {
+        std::fs::copy(
+            root().join("tests/fixtures/printers").join(f),
+            dir.join("printers").join(f),
+        )
+        .unwrap();
+    }
+    std::fs::copy(root().join("maps/world-300x150.png"), dir.join("map.png")).unwrap();
+    std::fs::write(dir.join("lib.yaml"), LIB).unwrap();
+    let text = |image: &str| {
+        format!(
+            "p3dp: 1
+name: inputs
+printer: printers/child-user.yaml
+material: pla
+include: [lib.yaml]
+parts:
+  - primitive:
+      helix: {{ radius: 10, height: h, pitch: 0.5 }}
+    steps:
+      - modulate_map: {{ image: {image}, u: \"theta/(2*pi)\", v: \"z/h\", dark: 1, light: 0.8 }}
+"
+        )
+    };
+    let recipe = dir.join("recipe.yaml");
+    std::fs::write(&recipe, text("map.png")).unwrap();
+    let opts = p3dp::plan::Options {
+        threads: p3dp::threads::Threads::ONE,
+        ..Default::default()
+    };
+    let (built, files) = p3dp::input::recording(|| p3dp::plan::plan(&recipe, &opts));
+    if let Err(e) = built {
+        panic!("{}", p3dp::cli::render_error(&e));
+    }
+    let ids: Vec<_> = files.iter().map(|f| f.canonicalize().unwrap()).collect();
+    for f in [
+        "recipe.yaml",
+        "lib.yaml",
+        "map.png",
+        "printers/child-user.yaml",
+        "printers/base-user.yaml",
+    ] {
+        let want = dir.join(f).canonicalize().unwrap();
+        assert!(ids.contains(&want), "{f} not among {files:?}");
+    }
+    // a missing image fails the build, and is followed: making it is a change
+    std::fs::write(&recipe, text("later.png")).unwrap();
+    let (built, files) = p3dp::input::recording(|| p3dp::plan::plan(&recipe, &opts));
+    assert!(built.is_err());
+    assert!(files.iter().any(|f| f.ends_with("later.png")), "{files:?}");
+}
