@@ -308,7 +308,16 @@ fn start_build(opts: &Options, number: u64, tx: &Sender<Wake>) {
         .name(format!("p3dp-build-{number}"))
         .spawn(move || {
             let t0 = Instant::now();
-            let (result, inputs) = crate::input::recording(|| build(&opts));
+            // a bug in a stage must not leave the loop waiting for this build
+            let (result, inputs) = crate::input::recording(|| {
+                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| build(&opts)))
+                    .unwrap_or_else(|_| {
+                        Err(Error::io(
+                            "p3dp watch",
+                            "the build stopped on an internal error (a bug of p3dp; please report it with the recipe)",
+                        ))
+                    })
+            });
             let _ = to_main.send(Wake::Built(Box::new(Outcome {
                 number,
                 result,
