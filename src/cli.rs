@@ -1,5 +1,6 @@
 //! The command line: its clap definition ([`Cli`]) and the commands `build`,
-//! `preview`, `check`, `printers` and `hash`, as the spec's contract says.
+//! `preview`, `check`, `printers` and `hash`, as the spec's contract says;
+//! `watch` runs in [`crate::watch`].
 //!
 //! A command expands its recipes and `--sweep`s into jobs (see [`crate::batch`])
 //! and runs them in parallel. Each returns the errors it met (one per failed
@@ -38,6 +39,8 @@ pub enum Command {
     Build(BuildArgs),
     /// Draw the toolpath: a PNG image, or a self-contained HTML file with a 3D viewer.
     Preview(PreviewArgs),
+    /// Serve the 3D viewer on http://127.0.0.1:PORT/ and update it on every save of the recipe or a file it reads.
+    Watch(WatchArgs),
     /// Run every printability check without writing G-code.
     Check {
         /// Shared flags.
@@ -76,6 +79,10 @@ pub fn run(cli: Cli) -> Vec<Error> {
     match cli.command {
         Command::Build(a) => build(&a),
         Command::Preview(a) => preview(&a),
+        Command::Watch(a) => match watch(&a) {
+            Ok(()) => Vec::new(),
+            Err(e) => vec![e],
+        },
         Command::Check { common } => check(&common),
         Command::Printers => {
             crate::say!("{}", printers());
@@ -1165,6 +1172,51 @@ pub fn preview(a: &PreviewArgs) -> Vec<Error> {
         Ok(()) => Vec::new(),
         Err(e) => vec![e],
     }
+}
+
+/// Flags of `watch`.
+#[derive(Args, Clone, Debug, Default)]
+pub struct WatchArgs {
+    /// Recipe file (YAML).
+    #[arg(value_name = "RECIPE")]
+    pub recipe: PathBuf,
+    /// Override a param: NAME=VALUE (VALUE may be an expression); repeatable.
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    pub sets: Vec<String>,
+    /// Use this printer (built-in name or YAML file) instead of the recipe's.
+    #[arg(long, value_name = "NAME|FILE")]
+    pub printer: Option<String>,
+    /// Silence a check for this build: its code, e.g. `bridge`; repeatable.
+    #[arg(long = "allow", value_name = "CODE")]
+    pub allow: Vec<String>,
+    /// At most N threads for each build (default: one per core).
+    #[arg(short = 'j', long = "jobs", value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
+    pub jobs: Option<u16>,
+    /// The port on 127.0.0.1 (loopback only) to serve on; 0 takes any free one.
+    #[arg(long, value_name = "N", default_value_t = crate::watch::DEFAULT_PORT)]
+    pub port: u16,
+    /// Open the page in the system's web browser.
+    #[arg(long)]
+    pub open: bool,
+}
+
+/// `p3dp watch`: serves the HTML viewer of a recipe on loopback and rebuilds
+/// it on every change of the recipe or a file it reads, until Ctrl-C.
+pub fn watch(a: &WatchArgs) -> Result<()> {
+    let sets: Vec<(String, String)> = a.sets.iter().map(|s| parse_set(s)).collect::<Result<_>>()?;
+    crate::watch::run(&crate::watch::Options {
+        recipe: a.recipe.clone(),
+        build: Options {
+            sets,
+            printer: a.printer.clone(),
+            allow: a.allow.clone(),
+            threads: a
+                .jobs
+                .map_or_else(Threads::available, |n| Threads::new(usize::from(n))),
+        },
+        port: a.port,
+        open: a.open,
+    })
 }
 
 /// `p3dp printers`: one line per built-in profile (name, flavour, bed,

@@ -6,9 +6,15 @@
 //! bytes that are not UTF-8 reported with their line and column. Before YAML
 //! parses the text, [`check_nesting`] refuses brackets nested deeper than
 //! [`MAX_NESTING`] (200,000 nested `[` took the parser 73 s).
+//!
+//! Every file a build reads or tries to read (recipe, included files,
+//! images, printer profiles and those they inherit from) is noted through
+//! [`note_read`], so that [`recording`] can tell `p3dp watch` which files to
+//! follow, the missing ones included (creating one is a change too).
 
+use std::cell::RefCell;
 use std::io::Read;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
 
@@ -42,8 +48,37 @@ pub fn check_image_size(width: u32, height: u32) -> std::result::Result<(), Stri
     Ok(())
 }
 
+thread_local! {
+    /// The files noted on this thread while [`recording`] runs (`None`: not recording).
+    static READS: RefCell<Option<Vec<PathBuf>>> = const { RefCell::new(None) };
+}
+
+/// Notes that `path` is read, or tried (a missing file too), for
+/// [`recording`]; does nothing when no recording runs on this thread.
+pub fn note_read(path: &Path) {
+    READS.with(|r| {
+        if let Some(list) = r.borrow_mut().as_mut() {
+            if !list.iter().any(|p| p == path) {
+                list.push(path.to_path_buf());
+            }
+        }
+    });
+}
+
+/// Runs `f` and returns, with what it gives, every file noted by
+/// [`note_read`] on this thread meanwhile (in order, each once), whether `f`
+/// succeeded or not. The loading stages (recipe, includes, images, profiles)
+/// run on the calling thread.
+pub fn recording<T>(f: impl FnOnce() -> T) -> (T, Vec<PathBuf>) {
+    let outer = READS.with(|r| r.borrow_mut().replace(Vec::new()));
+    let value = f();
+    let list = READS.with(|r| std::mem::replace(&mut *r.borrow_mut(), outer));
+    (value, list.unwrap_or_default())
+}
+
 /// Reads `path` (a `what`, e.g. "recipe", for messages) as text, bounded.
 pub fn read_text(path: &Path, what: &str) -> Result<String> {
+    note_read(path);
     let shown = path.display().to_string();
     let file = std::fs::File::open(path)
         .map_err(|e| Error::io_from(&shown, format!("cannot read the {what}: {e}"), &e))?;
@@ -162,6 +197,22 @@ pub fn check_nesting(text: &str) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn recording_notes_each_file_once_missing_ones_too() {
+        let missing = Path::new("no-such-p3dp-recipe.yaml");
+        let (r, files) = recording(|| {
+            note_read(Path::new("a.png"));
+            let r = read_text(missing, "recipe");
+            note_read(Path::new("a.png"));
+            r
+        });
+        assert!(r.is_err());
+        assert_eq!(files, [PathBuf::from("a.png"), missing.to_path_buf()]);
+        // nothing is kept outside a recording
+        note_read(Path::new("b.png"));
+        assert!(recording(|| ()).1.is_empty());
+    }
 
     #[test]
     fn nesting_counts_brackets_outside_strings_and_comments() {

@@ -11,7 +11,7 @@
 //! 4. analysis and output: [`planner`], [`gcode`], [`check`], [`stats`];
 //! 5. the YAML edge: [`recipe`];
 //! 6. orchestration: [`output`], [`plan`], [`preview`], [`build`],
-//!    [`batch`], [`lock`], [`cli`].
+//!    [`batch`], [`lock`], [`diagnostic`], [`watch`], [`cli`].
 
 #![warn(missing_docs)]
 // print!/println! panic on a closed pipe (`p3dp check r.yaml | head -1`):
@@ -54,5 +54,6 @@ pub mod lock;
 pub mod output;
 pub mod plan;
 pub mod preview;
+pub mod watch;
 
 pub use error::{Error, Result};

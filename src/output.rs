@@ -34,8 +34,17 @@ fn live() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
     LIVE.lock().unwrap_or_else(|e| e.into_inner())
 }
 
+/// What a command that stops cleanly by itself does with a signal, instead
+/// of the exit of [`remove_temp_files_on_signals`]: given the signal, it
+/// returns whether it took it.
+pub type StopHook = Box<dyn FnOnce(i32) -> bool + Send>;
+
+/// The hook of [`stop_on_signals`], taken by the first signal.
+static ON_SIGNAL: Mutex<Option<StopHook>> = Mutex::new(None);
+
 /// Removes every temp file being written and exits (128 + the signal) on
-/// SIGINT, SIGTERM or SIGHUP. Called once by the binary.
+/// SIGINT, SIGTERM or SIGHUP; the first signal after [`stop_on_signals`]
+/// goes to its hook instead. Called once by the binary.
 pub fn remove_temp_files_on_signals() {
     #[cfg(unix)]
     {
@@ -46,7 +55,11 @@ pub fn remove_temp_files_on_signals() {
         let _ = std::thread::Builder::new()
             .name("p3dp-signals".into())
             .spawn(move || {
-                if let Some(sig) = signals.forever().next() {
+                for sig in signals.forever() {
+                    let hook = ON_SIGNAL.lock().unwrap_or_else(|e| e.into_inner()).take();
+                    if hook.is_some_and(|stop| stop(sig)) {
+                        continue; // the command stops by itself; a second signal exits
+                    }
                     // held until exit: no temp file is made or renamed after this
                     let files = live();
                     for f in files.iter() {
@@ -56,6 +69,13 @@ pub fn remove_temp_files_on_signals() {
                 }
             });
     }
+}
+
+/// Lets a command that writes no files and stops cleanly by itself (`p3dp
+/// watch`) take the next SIGINT, SIGTERM or SIGHUP: `stop` is called with it
+/// instead of the exit (once: a second signal exits as usual).
+pub fn stop_on_signals(stop: StopHook) {
+    *ON_SIGNAL.lock().unwrap_or_else(|e| e.into_inner()) = Some(stop);
 }
 
 /// Whether `name` is one of our temp files: `.p3dp-` + 6 letters or digits + `.tmp`.

@@ -146,7 +146,15 @@ fn completions_and_the_manual_name_the_subcommands() {
         let o = p3dp(&dir, &["completions", shell]);
         assert!(o.status.success(), "{shell}: {}", stderr(&o));
         let text = stdout(&o);
-        for sub in ["build", "check", "hash", "preview", "new", "completions"] {
+        for sub in [
+            "build",
+            "check",
+            "hash",
+            "preview",
+            "watch",
+            "new",
+            "completions",
+        ] {
             assert!(text.contains(sub), "{shell} completions lack {sub}");
         }
     }
@@ -154,7 +162,7 @@ fn completions_and_the_manual_name_the_subcommands() {
     assert!(o.status.success(), "{}", stderr(&o));
     let man = stdout(&o);
     assert!(man.starts_with(".ie") || man.contains(".TH"), "{man}");
-    for sub in ["build", "check", "hash", "preview", "new", "man"] {
+    for sub in ["build", "check", "hash", "preview", "watch", "new", "man"] {
         assert!(man.contains(sub), "the manual lacks {sub}");
     }
 }

@@ -45,6 +45,7 @@ const LAYERS: &[(&str, &[&str])] = &[
             "batch",
             "lock",
             "diagnostic",
+            "watch",
             "cli",
         ],
     ),

@@ -25,7 +25,7 @@ use crate::format::hms;
 use crate::plan::Plan;
 use crate::stats::Stats;
 
-/// The viewer page; `__P3DP_TITLE__` and `__P3DP_DATA__` are filled in.
+/// The viewer page; `__P3DP_TITLE__`, `__P3DP_LIVE__` and `__P3DP_DATA__` are filled in.
 const TEMPLATE: &str = include_str!("viewer.html");
 
 /// One G0/G1 move read back from G-code, in recipe coordinates.
@@ -161,6 +161,59 @@ fn surfaces(mv: &[Move], kind: &[u8], scene: &Scene, h: &mut [f64], normal: &mut
 
 /// The viewer page for `plan`, whose G-code is `gcode` and stats `stats`.
 pub fn page(plan: &Plan, gcode: &str, stats: &Stats, opts: &Options) -> Page {
+    let (data, points) = data(plan, gcode, stats, opts);
+    Page {
+        html: page_with(&stats.name, &data, &serde_json::Value::Null),
+        points,
+    }
+}
+
+/// A viewer page showing `data` (as [`data`] makes it; `null`: no model
+/// yet) under `title`. `live` is `null` for a file; `p3dp watch` gives the
+/// state the page starts from and follows its server-sent events.
+pub fn page_with(title: &str, data: &serde_json::Value, live: &serde_json::Value) -> String {
+    fill(
+        TEMPLATE,
+        &[
+            ("__P3DP_TITLE__", escape_html(title)),
+            ("__P3DP_LIVE__", script_json(live)),
+            ("__P3DP_DATA__", script_json(data)),
+        ],
+    )
+}
+
+/// JSON to put inside a `<script>` element: every `<` written `\u003c` (the
+/// same string to a JSON reader), so no `</script>` or `<!--` in a name or
+/// a message can end or change the element.
+fn script_json(v: &serde_json::Value) -> String {
+    v.to_string().replace('<', "\\u003c")
+}
+
+/// `template` with each placeholder replaced by its value, in one pass (a
+/// value that contains a placeholder's name is left as it is).
+fn fill(template: &str, values: &[(&str, String)]) -> String {
+    let mut out =
+        String::with_capacity(template.len() + values.iter().map(|v| v.1.len()).sum::<usize>());
+    let mut rest = template;
+    loop {
+        let next = values
+            .iter()
+            .filter_map(|(k, v)| rest.find(k).map(|at| (at, *k, v)))
+            .min_by_key(|(at, _, _)| *at);
+        let Some((at, k, v)) = next else {
+            out.push_str(rest);
+            return out;
+        };
+        out.push_str(&rest[..at]);
+        out.push_str(v);
+        rest = &rest[at + k.len()..];
+    }
+}
+
+/// What the viewer shows of `plan` (whose G-code is `gcode` and stats
+/// `stats`): its moves, stats and findings, as the JSON the page reads; and
+/// how many points it carries.
+pub fn data(plan: &Plan, gcode: &str, stats: &Stats, opts: &Options) -> (serde_json::Value, usize) {
     let printer = &plan.recipe.printer;
     let scene = Scene::new(plan);
     let mv = moves(gcode, DVec3::from_array(printer.origin));
@@ -184,7 +237,16 @@ pub fn page(plan: &Plan, gcode: &str, stats: &Stats, opts: &Options) -> Page {
     let findings: Vec<_> = plan
         .findings
         .iter()
-        .map(|f| json!({"code": f.code, "severity": f.severity.word(), "message": f.message}))
+        .map(|f| {
+            json!({
+                "code": f.code,
+                "severity": f.severity.word(),
+                "message": f.message,
+                "part": f.part,
+                "string": f.string,
+                "at": f.at,
+            })
+        })
         .collect();
     let data = json!({
         "format": "p3dp-preview 1",
@@ -218,12 +280,7 @@ pub fn page(plan: &Plan, gcode: &str, stats: &Stats, opts: &Options) -> Page {
         },
         "findings": findings,
     });
-    // JSON inside <script>: no `</` may close the element early
-    let data = data.to_string().replace("</", "<\\/");
-    let html = TEMPLATE
-        .replace("__P3DP_TITLE__", &escape_html(&stats.name))
-        .replacen("__P3DP_DATA__", &data, 1);
-    Page { html, points: n }
+    (data, n)
 }
 
 /// The machine end points (µm) of the strings the checks flagged.
@@ -372,8 +429,27 @@ mod tests {
 
     #[test]
     fn template_has_its_placeholders_and_no_network() {
-        assert!(TEMPLATE.contains("__P3DP_DATA__") && TEMPLATE.contains("__P3DP_TITLE__"));
+        for p in ["__P3DP_DATA__", "__P3DP_TITLE__", "__P3DP_LIVE__"] {
+            assert!(TEMPLATE.contains(p), "{p}");
+        }
         assert!(!TEMPLATE.contains("http://") && !TEMPLATE.contains("https://"));
         assert_eq!(escape_html("a<b>&\""), "a&lt;b&gt;&amp;&quot;");
+    }
+
+    #[test]
+    fn placeholders_are_filled_once_and_script_json_cannot_close_its_element() {
+        let v = serde_json::json!({"name": "</script><!-- __P3DP_DATA__"});
+        let page = page_with("__P3DP_DATA__ <b>", &v, &serde_json::Value::Null);
+        assert_eq!(
+            page.matches("</script>").count(),
+            TEMPLATE.matches("</script>").count()
+        );
+        assert!(
+            page.contains("<title>__P3DP_DATA__ &lt;b&gt;"),
+            "the title is filled as text"
+        );
+        assert!(!page.contains("__P3DP_LIVE__"));
+        let json = script_json(&v);
+        assert_eq!(serde_json::from_str::<serde_json::Value>(&json).unwrap(), v);
     }
 }

@@ -92,6 +92,7 @@ impl Printer {
         } else {
             base.join(spec)
         };
+        crate::input::note_read(&path);
         if !path.is_file() {
             let at = if path == Path::new(spec) {
                 String::new()
@@ -162,6 +163,7 @@ fn inherit(
             Some(dir) if !dir.as_os_str().is_empty() && dir != Path::new(".") => dir.join(rel),
             _ => Path::new(rel).to_path_buf(),
         };
+        crate::input::note_read(&file);
         let canon = file.canonicalize().map_err(|e| {
             Error::input(
                 "inherits",

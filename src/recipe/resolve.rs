@@ -623,6 +623,7 @@ pub fn load_bitmap(path: &PathBuf, shown: &str) -> Result<Bitmap> {
         io_kind: Some(e.kind()),
         ..Error::input("", message)
     };
+    crate::input::note_read(path);
     let open = || {
         image::ImageReader::open(path)
             .map_err(|e| {

@@ -150,6 +150,7 @@ impl Loader {
             let place = format!("include[{k}]");
             let path = dir.join(inc);
             let shown = path.display().to_string();
+            crate::input::note_read(&path);
             let canon = std::fs::canonicalize(&path).map_err(|e| {
                 here(Error::input(
                     &place,
