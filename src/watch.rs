@@ -177,11 +177,11 @@ pub fn run(opts: &Options) -> Result<()> {
             .map_err(|e| Error::io("p3dp watch", format!("cannot start the server: {e}")))?
     };
     let url = format!("http://127.0.0.1:{port}/");
-    println!("p3dp watch: {shown} on {url} (loopback only; Ctrl-C stops)");
+    crate::sayln!("p3dp watch: {shown} on {url} (loopback only; Ctrl-C stops)");
     let _ = std::io::stdout().flush();
     if opts.open {
         if let Err(e) = opener::open(&url) {
-            eprintln!("note: cannot open a browser ({e}); open {url} yourself");
+            crate::tellln!("note: cannot open a browser ({e}); open {url} yourself");
         }
     }
     let result = follow(opts, &shared, &tx, &rx);
@@ -273,7 +273,7 @@ fn follow(
                     pending = Some(pending.map_or((now, now), |(first, _)| (first, now)));
                 }
             }
-            Some(Wake::Files(Err(e))) => eprintln!("note: watching files: {e}"),
+            Some(Wake::Files(Err(e))) => crate::tellln!("note: watching files: {e}"),
             Some(Wake::Built(out)) => {
                 building = false;
                 files.update(&mut watcher, &opts.recipe, &out.inputs);
@@ -364,7 +364,7 @@ fn publish(shared: &Shared, out: Outcome) {
     st.build = st.build.max(out.number);
     match out.result {
         Ok(b) => {
-            println!(
+            crate::sayln!(
                 "build {}: ok in {secs:.2} s · {} · watching {} file{}",
                 out.number,
                 b.summary,
@@ -380,8 +380,8 @@ fn publish(shared: &Shared, out: Outcome) {
                 Some((n, _, _)) => format!("the page keeps build {n}'s model"),
                 None => "no model to show yet".to_string(),
             };
-            eprintln!("build {} failed in {secs:.2} s ({kept}):", out.number);
-            eprint!(
+            crate::tellln!("build {} failed in {secs:.2} s ({kept}):", out.number);
+            crate::tell!(
                 "{}",
                 crate::diagnostic::render(&e, crate::diagnostic::stderr_color())
             );
@@ -426,7 +426,7 @@ impl Files {
         }
         for new in dirs.difference(&self.dirs) {
             if let Err(e) = watcher.watch(new, notify::RecursiveMode::NonRecursive) {
-                eprintln!("note: cannot watch {}: {e}", new.display());
+                crate::tellln!("note: cannot watch {}: {e}", new.display());
             }
         }
         self.files = files;
