@@ -30,7 +30,7 @@ use serde::Serialize;
 
 use super::support::width;
 use super::{fmt_p, Finding, Severity};
-use crate::geom::grid::SegGrid;
+use crate::geom::grid::GrowGrid;
 use crate::model::Recipe;
 use crate::toolpath::Toolpath;
 
@@ -264,14 +264,14 @@ fn footprint_all(
         }
     }
     starts.push(cands.len());
-    // seen from above: one grid of the candidates (z = 0), ids in print order,
-    // so "laid before g" is the front of each bucket; only the strings kept
-    // (not covered themselves) cover later ones
+    // seen from above (z = 0): only the strings kept (not covered
+    // themselves) cover later ones, so only they are listed, as they are
+    // kept; a grid of every candidate made a path retracing one line a
+    // million times scan all the covered copies before the kept one
+    // (quadratic: minutes for 2M strings)
     let flat = |p: DVec2| DVec3::new(p.x, p.y, 0.0);
-    let grid = SegGrid::build(cands.len(), 1.0, |i| {
-        (flat(cands[i].laid.a), flat(cands[i].laid.b))
-    });
-    let mut kept = vec![false; cands.len()];
+    let mut grid = GrowGrid::new(1.0);
+    let mut painted = std::collections::HashSet::new();
     let mut out = Vec::with_capacity(paths.len());
     let mut cover = Cover::default();
     for (j, tp) in paths.iter().enumerate() {
@@ -283,14 +283,21 @@ fn footprint_all(
             let c = &cands[g];
             let mid = flat(c.here.a.lerp(c.here.b, 0.5));
             let band = band(tp.strings[c.k].c, c.here.h, nozzle);
-            cells += cover.capsule(c.here.a, c.here.b, band / 2.0);
-            let covered = grid.search(mid, c.w / 2.0, g as u32, |e| {
-                kept[e as usize] && covers(&cands[e as usize].laid, &c.here, c.w)
+            // the same capsule again (a line retraced, either way) adds
+            // nothing to the union: painting it 2M times took 15 s
+            let (a, b) = (c.here.a.to_array(), c.here.b.to_array());
+            let (a, b) = if a <= b { (a, b) } else { (b, a) };
+            let key = [a[0], a[1], b[0], b[1], band].map(f64::to_bits);
+            if painted.insert(key) {
+                cells += cover.capsule(c.here.a, c.here.b, band / 2.0);
+            }
+            let covered = grid.search(mid, c.w / 2.0, |e| {
+                covers(&cands[e as usize].laid, &c.here, c.w)
             });
             if covered {
                 continue;
             }
-            kept[g] = true;
+            grid.insert(g as u32, flat(c.laid.a), flat(c.laid.b));
             let (a2, b2) = (c.here.a, c.here.b);
             let (a, b) = tp.ends(c.k);
             let l = a.distance(b);

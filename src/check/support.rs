@@ -44,6 +44,13 @@ pub fn width(c: f64, nozzle: f64) -> f64 {
 /// How far beyond the search radius an unsupported sample looks for the
 /// nearest filament, to say how far it hangs, mm.
 const GAP_SEARCH: f64 = 5.0;
+/// Strings listed near one sample (the grid's cubes round it) looked at for
+/// one that holds it up; past this many it is held (see `rests`). The
+/// gallery and tests/checks/ list at most 543 (the bowl).
+const MAX_HOLDERS: usize = 4096;
+/// Strings listed within [`GAP_SEARCH`] of one unsupported sample looked at
+/// for its overhang; the gallery lists at most 8,261 (the brush).
+const MAX_NEAR: usize = 32768;
 /// Unsupported samples whose overhang is measured (the rest use the bed).
 const GAP_BUDGET: usize = 20_000;
 
@@ -480,7 +487,17 @@ fn rests(
     }
     let reach = tol * (w + dep.w_max) / 2.0;
     let mut found = None;
+    let mut visits = 0;
     dep.search(q, reach, g, |j| {
+        // a pile of strings over one place (a path retracing a line a
+        // million times) lists them all near every sample above it; a
+        // sample with more than MAX_HOLDERS strings round it stands on a
+        // pile, and counts as held (2M strings under 200 ran for minutes)
+        visits += 1;
+        if visits > MAX_HOLDERS {
+            found = Some(j);
+            return true;
+        }
         let ok = holds(dep, j, pi, sq, q, w, tol);
         if ok {
             found = Some(j);
@@ -498,7 +515,14 @@ fn rests(
 fn overhang(dep: &Deposits, g: u32, pi: u32, sq: f64, q: DVec3, w: f64) -> Option<(f64, f64)> {
     // (3D distance, reach, drop) of the one reached past least
     let mut best: Option<(f64, f64, f64)> = None;
+    let mut visits = 0;
     dep.search(q, GAP_SEARCH, g, |j| {
+        // a figure for the message: the nearest of the first MAX_NEAR
+        // strings listed near the sample (newest first) is near enough
+        visits += 1;
+        if visits > MAX_NEAR {
+            return true;
+        }
         let (pj, kj) = dep.ids[j as usize];
         let k = kj as usize;
         let tp = dep.paths[pj as usize];

@@ -168,6 +168,65 @@ impl SegGrid {
     }
 }
 
+/// Segments added one at a time, listed as [`SegGrid`] lists them (pieces
+/// at most `cell / 2` long, in the cube of each piece's middle), for a scan
+/// that only ever searches what it has kept so far.
+#[derive(Clone, Debug)]
+pub struct GrowGrid {
+    inv: f64,
+    cell: f64,
+    cubes: std::collections::HashMap<[i64; 3], Vec<u32>>,
+}
+
+impl GrowGrid {
+    /// An empty grid of cubes of side `cell` (> 0).
+    pub fn new(cell: f64) -> GrowGrid {
+        GrowGrid {
+            inv: 1.0 / cell,
+            cell,
+            cubes: std::collections::HashMap::new(),
+        }
+    }
+
+    /// Lists segment `id` from `a` to `b`.
+    pub fn insert(&mut self, id: u32, a: DVec3, b: DVec3) {
+        let pieces = (a.distance(b) * 2.0 * self.inv).clamp(0.0, 1e6) as usize + 1;
+        let mut last = None;
+        for j in 0..pieces {
+            let c = cube(a.lerp(b, (j as f64 + 0.5) / pieces as f64), self.inv);
+            if last != Some(c) {
+                let ids = self.cubes.entry(c).or_default();
+                if ids.last() != Some(&id) {
+                    ids.push(id);
+                }
+                last = Some(c);
+            }
+        }
+    }
+
+    /// Calls `f` on the ids listed within `r` of `p`, oldest first cube by
+    /// cube, until it says stop; whether it did.
+    pub fn search(&self, p: DVec3, r: f64, mut f: impl FnMut(u32) -> bool) -> bool {
+        let r = r + self.cell / 4.0;
+        let (lo, hi) = (
+            cube(p - DVec3::splat(r), self.inv),
+            cube(p + DVec3::splat(r), self.inv),
+        );
+        for x in lo[0]..=hi[0] {
+            for y in lo[1]..=hi[1] {
+                for z in lo[2]..=hi[2] {
+                    if let Some(ids) = self.cubes.get(&[x, y, z]) {
+                        if ids.iter().any(|&j| f(j)) {
+                            return true;
+                        }
+                    }
+                }
+            }
+        }
+        false
+    }
+}
+
 /// Closest point of segment a–b to `p`: the parameter u in [0, 1].
 #[inline]
 pub fn closest(p: DVec3, a: DVec3, b: DVec3) -> f64 {
@@ -239,5 +298,38 @@ mod tests {
     fn far_points_do_not_overflow() {
         let c = cube(DVec3::new(1e300, -1e300, 0.0), 2.0);
         assert_eq!(c, [1_000_000_000_000_000, -1_000_000_000_000_000, 0]);
+    }
+
+    #[test]
+    fn a_growing_grid_finds_what_a_built_one_finds() {
+        // random segments added one by one: the ids found near a point
+        // within r (by distance to the segment) are those a full scan finds
+        let mut rng = crate::rng::SplitMix64::new(5);
+        let mut r = |lo: f64, hi: f64| lo + (hi - lo) * rng.uniform();
+        let segs: Vec<(DVec3, DVec3)> = (0..300)
+            .map(|_| {
+                let a = DVec3::new(r(-10.0, 10.0), r(-10.0, 10.0), r(0.0, 3.0));
+                let b = a + DVec3::new(r(-4.0, 4.0), r(-4.0, 4.0), r(-0.5, 0.5));
+                (a, b)
+            })
+            .collect();
+        let mut g = GrowGrid::new(1.0);
+        for (i, &(a, b)) in segs.iter().enumerate() {
+            g.insert(i as u32, a, b);
+            let p = DVec3::new(r(-10.0, 10.0), r(-10.0, 10.0), r(0.0, 3.0));
+            let near = |&(a, b): &(DVec3, DVec3)| p.distance(a.lerp(b, closest(p, a, b))) <= 0.7;
+            let want: Vec<u32> = (0..=i as u32)
+                .filter(|&j| near(&segs[j as usize]))
+                .collect();
+            let mut got = Vec::new();
+            g.search(p, 0.7, |j| {
+                if near(&segs[j as usize]) && !got.contains(&j) {
+                    got.push(j);
+                }
+                false
+            });
+            got.sort();
+            assert_eq!(got, want, "after {i}");
+        }
     }
 }
