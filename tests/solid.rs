@@ -649,3 +649,136 @@ fn a_solid_refuses_a_cross_section_it_would_ignore() {
     std::fs::write(&path, text.replace("0.15", "0.09")).unwrap();
     Recipe::load(&path, &[], None).unwrap();
 }
+
+/// Layer settings of the z-buffer tests.
+fn zb_settings() -> p3dp::primitive::solid::Settings {
+    use p3dp::primitive::solid::{Infill, Pattern, Settings};
+    Settings {
+        layer_height: 0.5,
+        perimeters: 1,
+        line_width: 0.45,
+        chord_tolerance: 0.05,
+        infill: Infill {
+            angle: 45.0,
+            spacing: 1.5,
+            alternate: true,
+            pattern: Pattern::Lines,
+            connect: false,
+        },
+    }
+}
+
+#[test]
+fn the_incremental_z_buffer_equals_a_full_rebuild_and_touches_only_its_range() {
+    use p3dp::primitive::solid::region::Op;
+    use p3dp::primitive::solid::{Body, Feature, ZBuffer};
+    let st = zb_settings();
+    let h = st.layer_height;
+    for seed in 1..=6u64 {
+        let mut g = Lcg(seed);
+        // a pool of features on a coarse grid (shared edges, equal z ends)
+        let pool: Vec<Feature> = (0..9)
+            .map(|k| {
+                let z0 = g.grid(-1.0, 6.0, 0.5);
+                let dz = g.grid(0.5, 5.0, 0.5);
+                let op = match (k, g.unit()) {
+                    (0, _) => Op::Union,
+                    (_, u) if u < 0.55 => Op::Union,
+                    (_, u) if u < 0.85 => Op::Subtract,
+                    _ => Op::Intersect,
+                };
+                let body = if g.unit() < 0.5 {
+                    Body::Box {
+                        center: DVec3::new(
+                            g.grid(-6.0, 6.0, 1.0),
+                            g.grid(-6.0, 6.0, 1.0),
+                            z0 + dz / 2.0,
+                        ),
+                        size: DVec3::new(g.grid(2.0, 12.0, 1.0), g.grid(2.0, 12.0, 1.0), dz),
+                    }
+                } else {
+                    Body::Cylinder {
+                        center: DVec3::new(g.grid(-6.0, 6.0, 1.0), g.grid(-6.0, 6.0, 1.0), z0),
+                        radius: g.grid(1.0, 6.0, 1.0),
+                        height: dz,
+                    }
+                };
+                Feature { body, op }
+            })
+            .collect();
+        // in a random order, some removed between the additions
+        let mut order: Vec<usize> = (0..pool.len()).collect();
+        for i in (1..order.len()).rev() {
+            let j = (g.unit() * (i + 1) as f64) as usize;
+            order.swap(i, j.min(i));
+        }
+        let mut zb = ZBuffer::new(st);
+        let mut held: Vec<(u64, Feature)> = Vec::new();
+        let (mut touched, mut rebuilt) = (0u64, 0u64);
+        let in_range = |f: &Feature, j: u64| {
+            let (z0, z1) = f.z_range();
+            let z = (j as f64 - 0.5) * h;
+            z0 <= z && z < z1
+        };
+        let compare = |zb: &ZBuffer, held: &[(u64, Feature)], what: &str| -> u64 {
+            let feats: Vec<Feature> = held.iter().map(|(_, f)| *f).collect();
+            assert_eq!(zb.features(), &feats[..], "seed {seed}, {what}");
+            let fresh = ZBuffer::build(st, feats).unwrap();
+            assert_eq!(zb.layer_count(), fresh.layer_count(), "seed {seed}, {what}");
+            for (j, (a, b)) in zb.layer_slabs().zip(fresh.layer_slabs()).enumerate() {
+                assert_eq!(
+                    a.map(|s| &**s),
+                    b.map(|s| &**s),
+                    "seed {seed}, {what}: layer {}",
+                    j + 1
+                );
+            }
+            fresh.layer_count()
+        };
+        for &k in &order {
+            let f = pool[k];
+            let up = zb.add_feature(f).unwrap();
+            held.push((up.added[0], f));
+            let n = compare(&zb, &held, &format!("add {k}"));
+            touched += up.recomputed();
+            rebuilt += n;
+            if f.op != Op::Intersect {
+                for &j in &up.layers {
+                    assert!(in_range(&f, j), "seed {seed}: add {k} recomputed layer {j}");
+                }
+            }
+            // every layer the feature reaches and the buffer has is recomputed
+            for j in 1..=zb.layer_count() {
+                if in_range(&f, j) {
+                    assert!(up.layers.contains(&j), "seed {seed}: add {k} skipped {j}");
+                }
+            }
+            assert!(up.sections <= up.recomputed());
+            if g.unit() < 0.3 && held.len() > 1 {
+                let i = (g.unit() * held.len() as f64) as usize % held.len();
+                let (id, gone) = held.remove(i);
+                match zb.remove_feature(id) {
+                    Ok(up) => {
+                        compare(&zb, &held, &format!("remove {id}"));
+                        if gone.op != Op::Intersect {
+                            for &j in &up.layers {
+                                assert!(
+                                    in_range(&gone, j),
+                                    "seed {seed}: remove {id} recomputed layer {j}"
+                                );
+                            }
+                        }
+                        touched += up.recomputed();
+                    }
+                    Err(e) => panic!("seed {seed}: {e}"),
+                }
+            }
+        }
+        // fewer layers computed than by rebuilding after every addition
+        assert!(touched < rebuilt, "seed {seed}: {touched} vs {rebuilt}");
+    }
+    // an unknown id is an input error naming the features
+    let mut zb = ZBuffer::new(st);
+    let e = zb.remove_feature(7).unwrap_err();
+    assert_eq!(e.place.as_deref(), Some("solid.features"));
+}

@@ -40,6 +40,8 @@
 pub mod infill;
 pub use crate::geom::{offset, piece, region};
 
+use std::sync::Arc;
+
 use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
@@ -59,11 +61,13 @@ mod plan;
 mod resolve;
 mod schema;
 mod stats;
+mod zbuffer;
 
 pub use model::*;
 pub use resolve::resolve;
 pub use schema::*;
 pub use stats::*;
+pub use zbuffer::{Update, ZBuffer};
 
 #[cfg(test)]
 mod tests {
@@ -81,6 +85,8 @@ mod tests {
                 angle: 45.0,
                 spacing,
                 alternate: true,
+                pattern: Pattern::Lines,
+                connect: false,
             },
             vec![
                 Feature {
@@ -175,6 +181,8 @@ mod tests {
                 angle: 45.0,
                 spacing: 0.45,
                 alternate: true,
+                pattern: Pattern::Lines,
+                connect: false,
             },
             vec![Feature {
                 body: Body::Box {

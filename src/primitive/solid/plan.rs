@@ -13,81 +13,40 @@ impl Solid {
         infill: Infill,
         features: Vec<Feature>,
     ) -> Result<Solid> {
-        // nothing but a union adds material: the top is the highest union's
-        let top = features
-            .iter()
-            .filter(|f| f.op == Op::Union)
-            .map(|f| f.z_range().1)
-            .fold(f64::NEG_INFINITY, f64::max);
-        // layers whose middle (j − ½)·h lies below the top
-        let layers = (libm::ceil(top / layer_height + 0.5) - 1.0).max(0.0);
-        if layers > MAX_LAYERS as f64 {
-            return Err(Error::input(
-                "solid.layer_height",
-                format!(
-                    "{layer_height} would make {layers} layers up to z = {top}; expected at most {MAX_LAYERS}"
-                ),
-            ));
-        }
-        let layers = layers as u64;
-        let mut lo = DVec2::splat(f64::INFINITY);
-        let mut hi = DVec2::splat(f64::NEG_INFINITY);
-        for f in &features {
-            let [a, b] = f.footprint();
-            lo = lo.min(a);
-            hi = hi.max(b);
-        }
-        let diag = (hi - lo).length();
-        if diag / infill.spacing > MAX_LINES {
-            return Err(Error::input(
-                "solid.infill.spacing",
-                format!(
-                    "{} would need more than {MAX_LINES} infill lines across the part ({diag:.1} mm); expected a larger spacing",
-                    infill.spacing
-                ),
-            ));
-        }
-        if piece::chords(diag, std::f64::consts::TAU, chord_tolerance) as f64 > MAX_LINES {
-            return Err(Error::input(
-                "solid.chord_tolerance",
-                format!("{chord_tolerance} would cut a circle into more than {MAX_LINES} strings; expected a larger tolerance"),
-            ));
-        }
-        let mut s = Solid {
+        let settings = Settings {
             layer_height,
             perimeters,
             line_width,
             chord_tolerance,
             infill,
-            features,
+        };
+        Solid::from_zbuffer(&ZBuffer::build(settings, features)?)
+    }
+
+    /// The solid printed from a z-buffer (its slabs shared, not recomputed);
+    /// refused when it leaves nothing to print.
+    pub fn from_zbuffer(zb: &ZBuffer) -> Result<Solid> {
+        let st = zb.settings();
+        let mut s = Solid {
+            layer_height: st.layer_height,
+            perimeters: st.perimeters,
+            line_width: st.line_width,
+            chord_tolerance: st.chord_tolerance,
+            infill: st.infill,
+            features: zb.features().to_vec(),
             slabs: Vec::new(),
-            layer_slab: Vec::with_capacity(layers as usize),
+            layer_slab: Vec::with_capacity(zb.layer_count() as usize),
             count: 0,
         };
-        // slab boundaries: every feature's ends
-        let mut events: Vec<f64> = s
-            .features
-            .iter()
-            .flat_map(|f| {
-                let (a, b) = f.z_range();
-                [a, b]
-            })
-            .collect();
-        events.sort_by(f64::total_cmp);
-        events.dedup();
-        let mut current: Option<(usize, Option<usize>)> = None; // (event interval, slab)
-        for j in 1..=layers {
-            let zm = (j as f64 - 0.5) * layer_height;
-            let interval = events.partition_point(|&e| e <= zm);
-            let slab = match current {
-                Some((iv, slab)) if iv == interval => slab,
+        for slab in zb.layer_slabs() {
+            let k = slab.map(|slab| match s.slabs.last() {
+                Some(last) if Arc::ptr_eq(last, slab) => s.slabs.len() - 1,
                 _ => {
-                    let slab = s.make_slab(zm);
-                    current = Some((interval, slab));
-                    slab
+                    s.slabs.push(Arc::clone(slab));
+                    s.slabs.len() - 1
                 }
-            };
-            s.layer_slab.push(slab);
+            });
+            s.layer_slab.push(k);
         }
         s.count = s.count();
         if s.count == 0 {
@@ -98,14 +57,13 @@ impl Solid {
         }
         Ok(s)
     }
+}
 
+impl Settings {
     /// Computes the slab whose middle plane is `zm`; `None` when empty.
-    fn make_slab(&mut self, zm: f64) -> Option<usize> {
-        let shapes: Vec<(Option<Shape>, Op)> = self
-            .features
-            .iter()
-            .map(|f| (f.section(zm), f.op))
-            .collect();
+    pub(super) fn make_slab(&self, features: &[Feature], zm: f64) -> Option<Slab> {
+        let shapes: Vec<(Option<Shape>, Op)> =
+            features.iter().map(|f| (f.section(zm), f.op)).collect();
         let region = region::boolean(&shapes);
         if region.is_empty() {
             return None;
@@ -156,12 +114,11 @@ impl Solid {
         } else {
             p0.clone()
         };
-        self.slabs.push(Slab {
+        Some(Slab {
             region,
             islands,
             programs: [p0, p1],
-        });
-        Some(self.slabs.len() - 1)
+        })
     }
 
     /// Orders a layer's strings from `head`: island by island (nearest
@@ -253,7 +210,9 @@ impl Solid {
             strings,
         }
     }
+}
 
+impl Solid {
     /// The number of strings [`Solid::walk`] makes, from each layer's
     /// program without making them: its strings, and between layers one
     /// travel up plus one across when the next layer starts elsewhere.
@@ -317,7 +276,7 @@ impl Solid {
             Layer {
                 index,
                 z: index as f64 * self.layer_height,
-                slab: s.map(|s| &self.slabs[s]),
+                slab: s.map(|s| &*self.slabs[s]),
                 parity: if self.infill.alternate && index.is_multiple_of(2) {
                     1
                 } else {
@@ -328,7 +287,7 @@ impl Solid {
     }
 
     /// The z-buffer: the distinct cross-sections.
-    pub fn slabs(&self) -> &[Slab] {
+    pub fn slabs(&self) -> &[Arc<Slab>] {
         &self.slabs
     }
 
