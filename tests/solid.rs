@@ -782,3 +782,158 @@ fn the_incremental_z_buffer_equals_a_full_rebuild_and_touches_only_its_range() {
     let e = zb.remove_feature(7).unwrap_err();
     assert_eq!(e.place.as_deref(), Some("solid.features"));
 }
+
+#[test]
+fn grid_infill_lays_both_directions_in_every_layer_inside_the_perimeters() {
+    // the paper's ±45° grid: per layer, each direction alone has length ×
+    // spacing ≈ the infill area (within 3 %), both together twice that; the
+    // filament of a layer is still its area × height at the solid spacing
+    // (2 × line width), as each line stands for half a spacing
+    let grid = BOX_WITH_HOLE.replace(
+        "infill: {angle: 45, spacing: 0.8, alternate: true}",
+        "infill: {pattern: grid}",
+    );
+    let r = load(&recipe_file("grid", &grid));
+    let s = solid_of(&r, 0);
+    assert!(
+        (s.infill.spacing - 0.9).abs() < 1e-12,
+        "default: 2 × line_width"
+    );
+    let t = make_part(&r, 0, Threads::available()).unwrap();
+    let w = s.line_width;
+    for layer in s.layers() {
+        let g = geometry(s, layer.index);
+        let (_, inf) = classify(&g, &strings_at(&t, layer.z));
+        let mut length = [0.0; 2];
+        for &(a, b) in &inf {
+            for p in [a, b, a.lerp(b, 0.5)] {
+                assert!(
+                    g.innermost.iter().any(|r| r.contains(p)),
+                    "z {}: {p}",
+                    layer.z
+                );
+                let d = g
+                    .innermost
+                    .iter()
+                    .flat_map(|r| r.loops.iter())
+                    .map(|l| dist_loop(l, p))
+                    .fold(f64::INFINITY, f64::min);
+                assert!(d >= 0.5 * w - 1e-9, "z {}: {p} only {d} inside", layer.z);
+            }
+            let d = b - a;
+            let angle = libm::atan2(d.y, d.x).rem_euclid(PI);
+            let fam = if (angle - FRAC_PI_4).abs() < 1e-9 {
+                0
+            } else {
+                assert!((angle - 3.0 * FRAC_PI_4).abs() < 1e-9, "line at {angle}");
+                1
+            };
+            length[fam] += a.distance(b);
+        }
+        for (fam, l) in length.iter().enumerate() {
+            let filled = l * s.infill.spacing;
+            assert!(
+                rel(filled, g.infill_area) < 0.03,
+                "z {}, direction {fam}: {filled} vs {}",
+                layer.z,
+                g.infill_area
+            );
+        }
+        // area × height of filament in the layer
+        let volume: f64 = (0..t.len())
+            .filter(|&k| !t.strings[k].travel)
+            .filter(|&k| {
+                let (a, b) = t.ends(k);
+                (a.z - layer.z).abs() < 1e-9 && (b.z - layer.z).abs() < 1e-9
+            })
+            .map(|k| t.strings[k].c * t.length(k))
+            .sum();
+        let want = layer.slab.unwrap().region.area() * s.layer_height;
+        assert!(
+            rel(volume, want) < 0.03,
+            "z {}: {volume} vs {want}",
+            layer.z
+        );
+    }
+}
+
+#[test]
+fn connected_infill_travels_less_and_its_joins_stay_inside() {
+    use p3dp::primitive::solid::plan_join_inside as join_inside;
+    for pattern in ["lines", "grid"] {
+        let base = BOX_WITH_HOLE.replace(
+            "infill: {angle: 45, spacing: 0.8, alternate: true}",
+            &format!("infill: {{pattern: {pattern}, spacing: 0.9}}"),
+        );
+        let joined = base.replace("spacing: 0.9}", "spacing: 0.9, connect: true}");
+        let (r0, r1) = (
+            load(&recipe_file(&format!("apart-{pattern}"), &base)),
+            load(&recipe_file(&format!("joined-{pattern}"), &joined)),
+        );
+        let (t0, t1) = (
+            make_part(&r0, 0, Threads::available()).unwrap(),
+            make_part(&r1, 0, Threads::available()).unwrap(),
+        );
+        let s = solid_of(&r1, 0);
+        assert_eq!(t1.len() as u64, s.string_count());
+        let travels = |t: &Toolpath| (0..t.len()).filter(|&k| t.strings[k].travel).count();
+        let (n0, n1) = (travels(&t0), travels(&t1));
+        assert!(n1 * 2 < n0, "{pattern}: {n1} travels joined vs {n0} apart");
+        // the same lines are drawn; the joins are the other drawn strings
+        let mut joins = 0;
+        for layer in s.layers() {
+            let g = geometry(s, layer.index);
+            let slab = layer.slab.unwrap();
+            let (_, inf) = classify(&g, &strings_at(&t1, layer.z));
+            for &(a, b) in &inf {
+                let d = b - a;
+                let angle = libm::atan2(d.y, d.x).rem_euclid(PI);
+                if (angle - FRAC_PI_4).abs() < 1e-9 || (angle - 3.0 * FRAC_PI_4).abs() < 1e-9 {
+                    continue;
+                }
+                joins += 1;
+                assert!(
+                    a.distance(b) <= 3.0 * 0.9 + 1e-9,
+                    "a join of {} from {a} to {b} at z {}",
+                    a.distance(b),
+                    layer.z
+                );
+                assert!(
+                    slab.islands
+                        .iter()
+                        .any(|isl| join_inside(&isl.infill_region, a, b)),
+                    "z {}: join {a} – {b} leaves the infill region",
+                    layer.z
+                );
+                // and sampled: every point inside or on the region
+                for i in 1..16 {
+                    let p = a.lerp(b, i as f64 / 16.0);
+                    assert!(
+                        slab.islands.iter().any(|isl| isl.infill_region.contains(p)
+                            || isl
+                                .infill_region
+                                .loops
+                                .iter()
+                                .any(|l| dist_loop(l, p) < 1e-6)),
+                        "z {}: {p} of a join outside",
+                        layer.z
+                    );
+                }
+            }
+            // the lines themselves: as long as without joining
+            let (_, apart) = classify(&g, &strings_at(&t0, layer.z));
+            let lines = |v: &[(DVec2, DVec2)]| -> f64 {
+                v.iter()
+                    .filter(|(a, b)| {
+                        let d = *b - *a;
+                        let angle = libm::atan2(d.y, d.x).rem_euclid(PI);
+                        (angle - FRAC_PI_4).abs() < 1e-9 || (angle - 3.0 * FRAC_PI_4).abs() < 1e-9
+                    })
+                    .map(|(a, b)| a.distance(*b))
+                    .sum()
+            };
+            assert!(rel(lines(&inf), lines(&apart)) < 1e-9, "z {}", layer.z);
+        }
+        assert!(joins > 100, "{pattern}: {joins} joins");
+    }
+}

@@ -64,6 +64,8 @@ mod stats;
 mod zbuffer;
 
 pub use model::*;
+pub use plan::join_inside as plan_join_inside;
+pub use plan::JOIN_SPACINGS;
 pub use resolve::resolve;
 pub use schema::*;
 pub use stats::*;

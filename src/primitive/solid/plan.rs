@@ -88,7 +88,7 @@ impl Settings {
                 let infill_region = offset::offset(&isl, inset);
                 let min_span = 0.5 * w;
                 let plus = infill::spans(&infill_region, dirs[0], self.infill.spacing, min_span);
-                let minus = if self.infill.alternate {
+                let minus = if self.infill.alternate || self.infill.pattern == Pattern::Grid {
                     infill::spans(&infill_region, dirs[1], self.infill.spacing, min_span)
                 } else {
                     plus.clone()
@@ -109,7 +109,7 @@ impl Settings {
             .and_then(|p| p.last())
             .copied()
             .unwrap_or(lo);
-        let p1 = if self.infill.alternate {
+        let p1 = if self.infill.alternate && self.infill.pattern == Pattern::Lines {
             self.program(&islands, 1, start1)
         } else {
             p0.clone()
@@ -128,10 +128,27 @@ impl Settings {
     fn program(&self, islands: &[IslandPlan], parity: usize, mut head: DVec2) -> Program {
         let w = self.line_width;
         let tol = self.chord_tolerance;
+        // the infill directions of this layer: one (lines) or both (grid)
+        let fams: Vec<(usize, DVec2)> = match self.infill.pattern {
+            Pattern::Lines => vec![(
+                parity,
+                infill::direction(if parity == 0 {
+                    self.infill.angle
+                } else {
+                    -self.infill.angle
+                }),
+            )],
+            Pattern::Grid => vec![
+                (0, infill::direction(self.infill.angle)),
+                (1, infill::direction(-self.infill.angle)),
+            ],
+        };
         // per island: the polylines of each perimeter level, and the spans
+        // of each direction
         let mut todo: Vec<Todo> = islands
             .iter()
-            .map(|isl| {
+            .enumerate()
+            .map(|(k, isl)| {
                 let levels = isl
                     .perimeters
                     .iter()
@@ -143,7 +160,8 @@ impl Settings {
                             .collect()
                     })
                     .collect();
-                (levels, isl.infill[parity].clone())
+                let spans = fams.iter().map(|&(f, _)| isl.infill[f].clone()).collect();
+                (levels, spans, k)
             })
             .collect();
         let mut paths: Vec<Vec<DVec2>> = Vec::new();
@@ -160,15 +178,15 @@ impl Settings {
                     return best;
                 }
             }
-            for (a, b) in &t.1 {
+            for (a, b) in t.1.iter().flatten() {
                 best = best.min(a.distance(h)).min(b.distance(h));
             }
             best
         };
         while !todo.is_empty() {
             let k = nearest(todo.iter().map(|t| entry(t, head)));
-            let (levels, spans) = todo.remove(k);
-            if levels.iter().all(Vec::is_empty) && spans.is_empty() {
+            let (levels, families, island) = todo.remove(k);
+            if levels.iter().all(Vec::is_empty) && families.iter().all(Vec::is_empty) {
                 continue;
             }
             for mut level in levels {
@@ -188,14 +206,17 @@ impl Settings {
                     paths.push(path);
                 }
             }
-            let u = infill::direction(if parity == 0 {
-                self.infill.angle
-            } else {
-                -self.infill.angle
-            });
-            is_infill.resize(paths.len(), false);
-            head = order_spans(spans, u, self.infill.spacing, head, &mut paths);
-            is_infill.resize(paths.len(), true);
+            for (spans, &(_, u)) in families.into_iter().zip(&fams) {
+                is_infill.resize(paths.len(), false);
+                let from = paths.len();
+                head = order_spans(spans, u, self.infill.spacing, head, &mut paths);
+                if self.infill.connect {
+                    let region = &islands[island].infill_region;
+                    let longest = JOIN_SPACINGS * self.infill.spacing;
+                    connect(&mut paths, from, region, longest);
+                }
+                is_infill.resize(paths.len(), true);
+            }
         }
         let mut strings = 0;
         for (i, p) in paths.iter().enumerate() {
@@ -277,7 +298,10 @@ impl Solid {
                 index,
                 z: index as f64 * self.layer_height,
                 slab: s.map(|s| &*self.slabs[s]),
-                parity: if self.infill.alternate && index.is_multiple_of(2) {
+                parity: if self.infill.alternate
+                    && self.infill.pattern == Pattern::Lines
+                    && index.is_multiple_of(2)
+                {
                     1
                 } else {
                     0
@@ -296,15 +320,25 @@ impl Solid {
         self.count
     }
 
+    /// The width of layer each infill line stands for: its spacing with
+    /// lines (a region of area A gets A / spacing of line); half of it with
+    /// the grid (A / spacing per direction, 2·A / spacing in all).
+    pub fn infill_share(&self) -> f64 {
+        match self.infill.pattern {
+            Pattern::Lines => self.infill.spacing,
+            Pattern::Grid => 0.5 * self.infill.spacing,
+        }
+    }
+
     /// Makes the strings at speed `v`: perimeters of cross-section
-    /// layer_height × line_width, infill of layer_height × min(spacing,
-    /// line_width), so a solid layer's filament fills its area × height (lines
-    /// closer than their width are squeezed to their spacing, not piled on
-    /// each other). The part's cross-section `_c` is not used: the recipe's
+    /// layer_height × line_width, infill of layer_height × min(share,
+    /// line_width) ([`Solid::infill_share`]), so a solid layer's filament
+    /// fills its area × height (lines closer than their width are squeezed
+    /// to their share, not piled on each other). The part's cross-section `_c` is not used: the recipe's
     /// resolution refuses one that differs from layer_height × line_width.
     pub fn build(&self, _c: f64, v: f64) -> Toolpath {
         let c = self.layer_height * self.line_width;
-        let c_infill = self.layer_height * self.line_width.min(self.infill.spacing);
+        let c_infill = self.layer_height * self.line_width.min(self.infill_share());
         let mut t: Option<Toolpath> = None;
         self.walk(|p, travel, infill| match &mut t {
             None => t = Some(Toolpath::with_capacity(p, self.count as usize)),
@@ -315,8 +349,64 @@ impl Solid {
     }
 }
 
-/// An island still to print: its perimeter levels' closed polylines, its infill spans.
-type Todo = (Vec<Vec<Vec<DVec2>>>, Vec<(DVec2, DVec2)>);
+/// An island still to print: its perimeter levels' closed polylines, its
+/// infill spans of each direction, its index.
+type Todo = (Vec<Vec<Vec<DVec2>>>, Vec<Vec<(DVec2, DVec2)>>, usize);
+
+/// The longest join of connected infill, in spacings: lines at 45° to an
+/// edge end √2 spacings apart along it; at 3 spacings, edges down to 19.5°
+/// (1/sin θ ≤ 3) are joined, longer joins would lay thick seams.
+pub const JOIN_SPACINGS: f64 = 3.0;
+
+/// Connected infill: each infill path from `from` on is appended to the one
+/// before it when the straight join from the one's end to the other's start
+/// is at most `longest` and lies in `region` (see [`join_inside`]), so the
+/// nozzle draws along the boundary instead of travelling (a zig-zag).
+fn connect(paths: &mut Vec<Vec<DVec2>>, from: usize, region: &Region, longest: f64) {
+    let mut out: Vec<Vec<DVec2>> = Vec::with_capacity(paths.len() - from);
+    for path in paths.drain(from..) {
+        match out.last_mut() {
+            Some(prev)
+                if prev[prev.len() - 1].distance(path[0]) <= longest
+                    && join_inside(region, prev[prev.len() - 1], path[0]) =>
+            {
+                // the join is the string from prev's end to path[0]
+                let skip = usize::from(prev[prev.len() - 1] == path[0]);
+                prev.extend_from_slice(&path[skip..]);
+            }
+            _ => out.push(path),
+        }
+    }
+    paths.extend(out);
+}
+
+/// Whether the segment a–b (ends on the boundary of `region` or inside it)
+/// lies in the closed region: it meets no boundary piece but at its ends,
+/// and its midpoint is inside or on the boundary. A segment touching the
+/// boundary between its ends counts as leaving (a join is only skipped).
+pub fn join_inside(region: &Region, a: DVec2, b: DVec2) -> bool {
+    let eps = region.eps();
+    if a.distance(b) <= eps {
+        return true;
+    }
+    let seg = piece::Piece::Line(a, b);
+    for l in &region.loops {
+        for p in &l.pieces {
+            for (x, _, _) in piece::intersect(&seg, p, eps) {
+                if x.distance(a) > eps && x.distance(b) > eps {
+                    return false;
+                }
+            }
+        }
+    }
+    let m = a.lerp(b, 0.5);
+    region.contains(m)
+        || region
+            .loops
+            .iter()
+            .flat_map(|l| l.pieces.iter())
+            .any(|p| p.distance(m) <= eps)
+}
 
 /// Appends the infill `spans` (lines along `u`, `spacing` apart) to `paths`
 /// nearest first from `head`, each from its nearer end; returns the new head.
