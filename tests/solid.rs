@@ -937,3 +937,150 @@ fn connected_infill_travels_less_and_its_joins_stay_inside() {
         assert!(joins > 100, "{pattern}: {joins} joins");
     }
 }
+
+#[test]
+fn the_zbuffer_json_is_the_exact_loops_and_the_svg_draws_a_layer() {
+    use p3dp::primitive::solid::piece::Arc;
+    let path = recipe_file("zbuf", BOX_WITH_HOLE);
+    let dir = path.parent().unwrap();
+    let out = common::p3dp(
+        dir,
+        &[
+            "build",
+            "zbuf.yaml",
+            "-o",
+            "z.gcode",
+            "--stats-json",
+            "s.json",
+            "--zbuffer",
+            "z.json",
+            "--zbuffer-svg",
+            "l.svg",
+            "--zbuffer-layer",
+            "60",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let read = |f: &str| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(dir.join(f)).unwrap()).unwrap()
+    };
+    let (z, stats) = (read("z.json"), read("s.json"));
+    let solid = &z["solids"][0];
+    assert_eq!(solid["part"], "solid");
+    let sections = solid["sections"].as_array().unwrap();
+    let layers = solid["layers"].as_array().unwrap();
+    let stat_layers = stats["solids"][0]["layers"].as_array().unwrap();
+    assert_eq!(layers.len(), stat_layers.len());
+    let r = load(&path);
+    let s = solid_of(&r, 0);
+    let pt = |v: &serde_json::Value| DVec2::new(v[0].as_f64().unwrap(), v[1].as_f64().unwrap());
+    let (mut arcs, mut lines) = (0, 0);
+    for ((layer, stat), mine) in layers.iter().zip(stat_layers).zip(s.layers()) {
+        let k = layer["section"].as_u64().unwrap() as usize;
+        let loops = sections[k]["loops"].as_array().unwrap();
+        assert_eq!(loops.len() as u64, stat["loops"].as_u64().unwrap());
+        assert_eq!(layer["z"].as_f64(), stat["z"].as_f64());
+        let region = &mine.slab.unwrap().region;
+        // the area from the curves alone: ½ Σ a × b for a line, ½ (c × (p1 −
+        // p0) + r²·sweep) for an arc
+        let mut area = 0.0;
+        for (l, exact) in loops.iter().zip(&region.loops) {
+            let mut loop_area = 0.0;
+            let pieces = l["pieces"].as_array().unwrap();
+            for (i, p) in pieces.iter().enumerate() {
+                let (a, b) = (pt(&p["from"]), pt(&p["to"]));
+                // each piece starts where the one before ends
+                let prev = &pieces[(i + pieces.len() - 1) % pieces.len()];
+                assert_eq!(pt(&prev["to"]), a);
+                match p["kind"].as_str().unwrap() {
+                    "line" => {
+                        lines += 1;
+                        assert_eq!(exact.pieces[i], Piece::Line(a, b));
+                        loop_area += 0.5 * (a.x * b.y - a.y * b.x);
+                    }
+                    "arc" => {
+                        arcs += 1;
+                        let c = pt(&p["center"]);
+                        let rad = p["radius"].as_f64().unwrap();
+                        let sweep = p["sweep_rad"].as_f64().unwrap();
+                        let arc = Arc {
+                            c,
+                            r: rad,
+                            a0: p["start_rad"].as_f64().unwrap(),
+                            sweep,
+                            p0: a,
+                            p1: b,
+                        };
+                        // read back bit for bit, and consistent with its ends
+                        assert_eq!(exact.pieces[i], Piece::Arc(arc));
+                        assert!(arc.at(0.0).distance(a) < 1e-9);
+                        assert!(arc.at(sweep.abs()).distance(b) < 1e-9);
+                        let d = b - a;
+                        loop_area += 0.5 * (c.x * d.y - c.y * d.x + rad * rad * sweep);
+                    }
+                    other => panic!("a piece of kind {other}"),
+                }
+            }
+            let want = if loop_area > 0.0 { "ccw" } else { "cw" };
+            assert_eq!(l["orientation"], want);
+            assert!((l["area_mm2"].as_f64().unwrap() - loop_area).abs() < 1e-9);
+            area += loop_area;
+        }
+        let stat_area = stat["area_mm2"].as_f64().unwrap();
+        assert!(
+            rel(area, stat_area) < 1e-12,
+            "z {}: {area} vs {stat_area}",
+            stat["z"]
+        );
+    }
+    assert!(arcs > 0 && lines > 0);
+    // layer 60 (z 12): the boss alone, a circle of radius 5 drawn as two arcs
+    let svg = std::fs::read_to_string(dir.join("l.svg")).unwrap();
+    assert!(
+        svg.starts_with("<svg") && svg.contains("layer 60 at z 12"),
+        "{svg}"
+    );
+    assert!(svg.contains("A5 5 0 0 1"), "{svg}");
+    // a layer above the part: exit 2 naming the option, and nothing written
+    for f in ["z.gcode", "z.json", "l.svg"] {
+        std::fs::remove_file(dir.join(f)).unwrap();
+    }
+    let out = common::p3dp(
+        dir,
+        &[
+            "build",
+            "zbuf.yaml",
+            "-o",
+            "z.gcode",
+            "--zbuffer",
+            "z.json",
+            "--zbuffer-svg",
+            "l.svg",
+            "--zbuffer-layer",
+            "81",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--zbuffer-layer"));
+    for f in ["z.gcode", "z.json", "l.svg"] {
+        assert!(!dir.join(f).exists(), "{f} written by a failed build");
+    }
+    // never over an input
+    let out = common::p3dp(
+        dir,
+        &[
+            "build",
+            "zbuf.yaml",
+            "-o",
+            "z.gcode",
+            "--zbuffer",
+            "zbuf.yaml",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(2));
+    assert!(std::fs::read_to_string(&path).unwrap().contains("solid:"));
+}

@@ -56,6 +56,7 @@ pub const MAX_LAYERS: u64 = 1_000_000;
 /// Most scanlines (or chords of one circle) a layer may need.
 pub const MAX_LINES: f64 = 1e5;
 
+mod export;
 mod model;
 mod plan;
 mod resolve;
@@ -63,6 +64,7 @@ mod schema;
 mod stats;
 mod zbuffer;
 
+pub use export::*;
 pub use model::*;
 pub use plan::join_inside as plan_join_inside;
 pub use plan::JOIN_SPACINGS;
