@@ -13,7 +13,8 @@
 //!    paper's "z-buffer is modified each time a feature is added"). Each
 //!    section is the exact boolean of rectangles and discs
 //!    ([`region::boolean`]), kept as loops of segments and circular arcs.
-//!    Material below the bed (z < 0) is not printed.
+//!    Material below the bed (z < 0) is not printed. The buffer is a
+//!    [`ZBuffer`], updated feature by feature (see its module).
 //! 2. **Boundary first** (the paper's criterion). Each island of a section
 //!    is printed on its own: its perimeters from the outside in, centre lines
 //!    at (k + ½)·w inside the boundary for k = 0 … perimeters − 1 (w the line
@@ -22,7 +23,10 @@
 //!    size; each inner one is pressed against the wall before it.
 //! 3. **Infill** fills what the perimeters leave, the section offset by
 //!    perimeters·w (w/2 with no perimeters), with scanlines at +angle on odd
-//!    layers and −angle on even ones ([`infill::spans`]), `spacing` apart.
+//!    layers and −angle on even ones ([`infill::spans`]), `spacing` apart;
+//!    with `pattern: grid`, both directions in every layer (+angle first);
+//!    with `connect`, each line joined to the next along the boundary where
+//!    the join stays inside (`plan::connect`).
 //! 4. Only then do arcs become strings, chords within `chord_tolerance` of
 //!    the true curve ([`piece::chords`]).
 //!
