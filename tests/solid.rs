@@ -1084,3 +1084,43 @@ fn the_zbuffer_json_is_the_exact_loops_and_the_svg_draws_a_layer() {
     assert_eq!(out.status.code(), Some(2));
     assert!(std::fs::read_to_string(&path).unwrap().contains("solid:"));
 }
+
+#[test]
+fn a_kept_z_buffer_re_slices_only_the_edited_feature() {
+    use p3dp::primitive::solid::{reusing, Cache};
+    // as `p3dp watch` builds: the z-buffers of one build kept for the next
+    let path = recipe_file("kept", BOX_WITH_HOLE);
+    let (r, cache) = reusing(Cache::default(), || load(&path));
+    assert_eq!(cache.last.len(), 1);
+    assert_eq!((cache.last[0].layers, cache.last[0].recomputed), (80, 80));
+    drop(r);
+    // the boss (z 10 … 16) made 4 mm tall: layers 51 … 70 recomputed, 71 … 80 gone
+    let text = std::fs::read_to_string(&path).unwrap();
+    std::fs::write(
+        &path,
+        text.replace("radius: 5, height: 6", "radius: 5, height: 4"),
+    )
+    .unwrap();
+    let (r, cache) = reusing(cache, || load(&path));
+    assert_eq!((cache.last[0].layers, cache.last[0].recomputed), (70, 20));
+    let fresh = load(&path);
+    assert_eq!(
+        solid_of(&r, 0),
+        solid_of(&fresh, 0),
+        "equal to a build from scratch"
+    );
+    // the hole widened (z 0 … 10): the layers below the boss only
+    let text = std::fs::read_to_string(&path).unwrap();
+    std::fs::write(&path, text.replace("radius: 8", "radius: 9")).unwrap();
+    let (r, cache) = reusing(cache, || load(&path));
+    assert_eq!((cache.last[0].layers, cache.last[0].recomputed), (70, 50));
+    assert_eq!(solid_of(&r, 0), solid_of(&load(&path), 0));
+    // a setting changed: everything again
+    let text = std::fs::read_to_string(&path).unwrap();
+    std::fs::write(&path, text.replace("perimeters: 2", "perimeters: 3")).unwrap();
+    let (_, cache) = reusing(cache, || load(&path));
+    assert_eq!((cache.last[0].layers, cache.last[0].recomputed), (70, 70));
+    // nothing changed: nothing recomputed
+    let (_, cache) = reusing(cache, || load(&path));
+    assert_eq!((cache.last[0].layers, cache.last[0].recomputed), (70, 0));
+}

@@ -75,7 +75,7 @@ pub use plan::JOIN_SPACINGS;
 pub use resolve::resolve;
 pub use schema::*;
 pub use stats::*;
-pub use zbuffer::{Update, ZBuffer};
+pub use zbuffer::{reusing, Cache, Reuse, Update, ZBuffer};
 
 #[cfg(test)]
 mod tests {

@@ -20,7 +20,7 @@ impl Solid {
             chord_tolerance,
             infill,
         };
-        Solid::from_zbuffer(&ZBuffer::build(settings, features)?)
+        Solid::from_zbuffer(&zbuffer::cached(settings, features)?)
     }
 
     /// The solid printed from a z-buffer (its slabs shared, not recomputed);

@@ -265,3 +265,97 @@ fn check(st: &Settings, features: &[Feature]) -> Result<u64> {
     }
     Ok(layers as u64)
 }
+
+/// What a build did with one solid's z-buffer under [`reusing`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Reuse {
+    /// Layers of the solid.
+    pub layers: u64,
+    /// Layers whose slab was recomputed (all of them when nothing was kept).
+    pub recomputed: u64,
+}
+
+/// The z-buffers a long-running command keeps between builds (`p3dp
+/// watch`), in the order a build resolves its solids.
+#[derive(Clone, Debug, Default)]
+pub struct Cache {
+    buffers: Vec<ZBuffer>,
+    /// What the last build under [`reusing`] did with each solid, in order.
+    pub last: Vec<Reuse>,
+}
+
+/// The cache installed on this thread by [`reusing`], and the buffers of the build so far.
+type Installed = (Vec<ZBuffer>, Vec<ZBuffer>, Vec<Reuse>);
+
+thread_local! {
+    static CACHE: std::cell::RefCell<Option<Installed>> = const { std::cell::RefCell::new(None) };
+}
+
+/// Runs `f` (a build) with `cache` installed on this thread: the k-th solid
+/// it resolves starts from the cache's k-th z-buffer when the settings are
+/// the same, and only the features that differ (those between the longest
+/// common head and tail of the two feature lists) are removed and added
+/// (see [`ZBuffer::splice`]). Returns `f`'s value and the cache to keep.
+pub fn reusing<T>(cache: Cache, f: impl FnOnce() -> T) -> (T, Cache) {
+    let outer = CACHE.with(|c| {
+        c.borrow_mut()
+            .replace((cache.buffers, Vec::new(), Vec::new()))
+    });
+    let value = f();
+    let (mut old, mut new, last) = CACHE
+        .with(|c| std::mem::replace(&mut *c.borrow_mut(), outer))
+        .unwrap_or_default();
+    // a build that stopped early keeps the rest for the next one
+    if old.len() > new.len() {
+        new.extend(old.drain(new.len()..));
+    }
+    (value, Cache { buffers: new, last })
+}
+
+/// The z-buffer of `features`: from the installed cache when there is one
+/// (noting what was recomputed), else built whole.
+pub(super) fn cached(settings: Settings, features: Vec<Feature>) -> Result<ZBuffer> {
+    let taken = CACHE.with(|c| {
+        c.borrow_mut().as_mut().map(|(old, new, _)| {
+            let k = new.len();
+            old.get_mut(k)
+                .filter(|zb| zb.settings == settings)
+                .map(|zb| zb.clone())
+        })
+    });
+    let Some(old) = taken else {
+        return ZBuffer::build(settings, features);
+    };
+    let (zb, recomputed) = match old {
+        Some(mut zb) => {
+            let (a, b) = (zb.features(), &features[..]);
+            let head = a.iter().zip(b).take_while(|(x, y)| x == y).count();
+            let rest = a.len().min(b.len()) - head;
+            let tail = a
+                .iter()
+                .rev()
+                .zip(b.iter().rev())
+                .take(rest)
+                .take_while(|(x, y)| x == y)
+                .count();
+            let (remove, insert) = (a.len() - head - tail, b[head..b.len() - tail].to_vec());
+            let up = zb.splice(head, remove, insert)?;
+            (zb, up.recomputed())
+        }
+        None => {
+            let zb = ZBuffer::build(settings, features)?;
+            let n = zb.layer_count();
+            (zb, n)
+        }
+    };
+    CACHE.with(|c| {
+        if let Some((_, new, last)) = c.borrow_mut().as_mut() {
+            new.push(zb.clone());
+            last.push(Reuse {
+                layers: zb.layer_count(),
+                recomputed,
+            });
+        }
+    });
+    Ok(zb)
+}
