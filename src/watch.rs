@@ -10,6 +10,9 @@
 //! new build. The page follows `/events` (server-sent events): `model` swaps
 //! the geometry in place (the camera stays), `build-error` shows the error,
 //! rendered as in the terminal, beside the last good model.
+//! The `solid` parts' z-buffers are kept from one build to the next
+//! ([`crate::primitive::solid::reusing`]): an edited feature re-slices only
+//! the layers it reaches, and the build line says how many.
 //!
 //! The server binds 127.0.0.1 only and answers only requests addressed to
 //! it by that name or `localhost`. Nothing is written to disk. The first
