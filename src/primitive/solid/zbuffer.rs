@@ -144,7 +144,7 @@ impl ZBuffer {
             // sections' after a guess widened by one on each side
             let lo = (libm::floor(z0 / h + 0.5) - 1.0).max(1.0);
             let hi = (libm::ceil(z1 / h + 0.5) + 1.0).min(layers as f64);
-            if !(lo <= hi) {
+            if lo.is_nan() || hi.is_nan() || lo > hi {
                 continue;
             }
             for j in lo as u64..=hi as u64 {
