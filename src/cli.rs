@@ -171,6 +171,15 @@ pub struct BuildArgs {
     /// Also write a preview of the build: FILE.png (an image) or FILE.html (a 3D viewer).
     #[arg(long, value_name = "FILE")]
     pub preview: Option<PathBuf>,
+    /// Also write the z-buffer of the recipe's solid parts as JSON: each section's loops of lines and arcs, each layer's section.
+    #[arg(long, value_name = "FILE")]
+    pub zbuffer: Option<PathBuf>,
+    /// Also draw one layer of the solid parts' z-buffer (--zbuffer-layer, default 1) as SVG: exact loops, perimeters, infill boundary.
+    #[arg(long, value_name = "FILE")]
+    pub zbuffer_svg: Option<PathBuf>,
+    /// The layer --zbuffer-svg draws: 1 for the first on the bed.
+    #[arg(long, value_name = "N")]
+    pub zbuffer_layer: Option<u64>,
 }
 
 /// Flags of `hash`.
@@ -434,8 +443,35 @@ fn prepare(a: &BuildArgs) -> Result<Prepared> {
         ("--stats-json", a.stats_json.as_deref()),
         ("--preview", a.preview.as_deref()),
         ("--pattern", a.pattern.as_deref()),
+        ("--zbuffer", a.zbuffer.as_deref()),
+        ("--zbuffer-svg", a.zbuffer_svg.as_deref()),
     ] {
         non_empty(option, value)?;
+    }
+    for (option, given) in [
+        ("--zbuffer", a.zbuffer.is_some()),
+        ("--zbuffer-svg", a.zbuffer_svg.is_some()),
+    ] {
+        if given && jobs.len() > 1 {
+            return Err(Error::input(
+                option,
+                "writes the z-buffer of one build; expected one recipe and no --sweep",
+            ));
+        }
+    }
+    if let Some(n) = a.zbuffer_layer {
+        if a.zbuffer_svg.is_none() {
+            return Err(Error::input(
+                "--zbuffer-layer",
+                "chooses the layer --zbuffer-svg draws; expected --zbuffer-svg FILE too",
+            ));
+        }
+        if n == 0 {
+            return Err(Error::input(
+                "--zbuffer-layer",
+                "0 is not a layer; expected 1 for the first layer on the bed, or higher",
+            ));
+        }
     }
     if a.pattern.is_some() && jobs.len() > 1 {
         return Err(Error::input(
@@ -465,6 +501,8 @@ fn prepare(a: &BuildArgs) -> Result<Prepared> {
         ("--stats-json", &a.stats_json),
         ("--preview", &a.preview),
         ("--pattern", &a.pattern),
+        ("--zbuffer", &a.zbuffer),
+        ("--zbuffer-svg", &a.zbuffer_svg),
     ] {
         if let Some(v) = value {
             outs.push((option.to_string(), v.clone()));
@@ -512,6 +550,7 @@ fn build_job(
         Some(f) => Some((f, pattern_png(&p.recipe).map_err(|e| e.in_file(&p.path))?)),
         None => None,
     };
+    let zbuffer = zbuffer_files(a, &p)?;
     let mut files = Vec::new();
     let mut lines = Vec::new();
     let built = match &target {
@@ -537,6 +576,9 @@ fn build_job(
     if let Some((f, png)) = &pattern {
         files.push(stage(f, png)?);
     }
+    for (f, bytes) in &zbuffer {
+        files.push(stage(f, bytes)?);
+    }
     // a batch keeps each variant that built; one build commits all its
     // outputs together, after the stats file is written too
     if !single {
@@ -549,6 +591,50 @@ fn build_job(
         files,
         lines,
     })
+}
+
+/// The bytes of `--zbuffer` and `--zbuffer-svg`, made before any file is
+/// written; refused when the recipe has no solid part or none has the layer.
+fn zbuffer_files(a: &BuildArgs, p: &Plan) -> Result<Vec<(PathBuf, Vec<u8>)>> {
+    let mut out = Vec::new();
+    if a.zbuffer.is_none() && a.zbuffer_svg.is_none() {
+        return Ok(out);
+    }
+    let curves = crate::stats::zbuffer_curves(&p.recipe);
+    let option = if a.zbuffer.is_some() {
+        "--zbuffer"
+    } else {
+        "--zbuffer-svg"
+    };
+    if curves.is_empty() {
+        return Err(Error::input(
+            option,
+            "the recipe has no `solid` part; expected one whose z-buffer to write",
+        ));
+    }
+    if let Some(f) = &a.zbuffer {
+        let json = serde_json::json!({
+            "p3dp_zbuffer": 1,
+            "recipe": p.path,
+            "solids": curves,
+        });
+        let mut text = serde_json::to_string_pretty(&json)
+            .map_err(|e| Error::io("--zbuffer", e.to_string()))?;
+        text.push('\n');
+        out.push((f.clone(), text.into_bytes()));
+    }
+    if let Some(f) = &a.zbuffer_svg {
+        let n = a.zbuffer_layer.unwrap_or(1);
+        let most = curves.iter().map(|c| c.layers.len()).max().unwrap_or(0);
+        let Some(svg) = crate::stats::zbuffer_svg(&p.recipe, n) else {
+            return Err(Error::input(
+                "--zbuffer-layer",
+                format!("{n} is above the solid parts' layers; expected a layer from 1 to {most}"),
+            ));
+        };
+        out.push((f.clone(), svg.into_bytes()));
+    }
+    Ok(out)
 }
 
 /// Writes `--stats-json`, then commits every pending output of a single

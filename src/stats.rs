@@ -250,3 +250,30 @@ pub fn solid_stats(recipe: &Recipe) -> Vec<SolidStats> {
         })
         .collect()
 }
+
+/// Each solid part of a recipe with its name (before any steps).
+fn solids(recipe: &Recipe) -> Vec<(&str, &crate::primitive::solid::Solid)> {
+    recipe
+        .parts
+        .iter()
+        .flat_map(|p| p.primitives().map(move |q| (p, q)))
+        .filter_map(|(p, q)| match q {
+            Primitive::Solid(s) => Some((p.name.as_str(), s)),
+            _ => None,
+        })
+        .collect()
+}
+
+/// The z-buffers of a recipe's solid parts as curves (`--zbuffer`).
+pub fn zbuffer_curves(recipe: &Recipe) -> Vec<crate::primitive::solid::SolidCurves> {
+    solids(recipe)
+        .into_iter()
+        .map(|(name, s)| s.curves(name))
+        .collect()
+}
+
+/// An SVG of layer `index` of a recipe's solid parts (`--zbuffer-svg`);
+/// `None` when none has that layer.
+pub fn zbuffer_svg(recipe: &Recipe, index: u64) -> Option<String> {
+    crate::primitive::solid::layer_svg(&solids(recipe), index)
+}

@@ -10,6 +10,9 @@
 //! new build. The page follows `/events` (server-sent events): `model` swaps
 //! the geometry in place (the camera stays), `build-error` shows the error,
 //! rendered as in the terminal, beside the last good model.
+//! The `solid` parts' z-buffers are kept from one build to the next
+//! ([`crate::primitive::solid::reusing`]): an edited feature re-slices only
+//! the layers it reaches, and the build line says how many.
 //!
 //! The server binds 127.0.0.1 only and answers only requests addressed to
 //! it by that name or `localhost`. Nothing is written to disk. The first
@@ -106,10 +109,15 @@ enum Wake {
     Stop,
 }
 
+/// The solids' z-buffers kept between builds (see [`crate::primitive::solid::reusing`]).
+type Buffers = Arc<Mutex<crate::primitive::solid::Cache>>;
+
 /// One build's result.
 struct Outcome {
     number: u64,
     result: Result<Built>,
+    /// Per solid: its layers and how many were recomputed.
+    solids: Vec<crate::primitive::solid::Reuse>,
     /// The files the build read or tried to read.
     inputs: Vec<PathBuf>,
     took: Duration,
@@ -244,8 +252,9 @@ fn follow(
     let mut files = Files::default();
     // the recipe's folder from the start: a save during the first build counts
     files.update(&mut watcher, &opts.recipe, &[]);
+    let buffers = Buffers::default();
     let mut number = 1;
-    start_build(opts, number, tx);
+    start_build(opts, number, tx, &buffers);
     let mut building = true;
     let mut again = false;
     // the first change not yet built, and the newest
@@ -281,7 +290,7 @@ fn follow(
                 if again {
                     again = false;
                     number += 1;
-                    start_build(opts, number, tx);
+                    start_build(opts, number, tx, &buffers);
                     building = true;
                 }
             }
@@ -292,7 +301,7 @@ fn follow(
                     again = true;
                 } else {
                     number += 1;
-                    start_build(opts, number, tx);
+                    start_build(opts, number, tx, &buffers);
                     building = true;
                 }
             }
@@ -301,26 +310,35 @@ fn follow(
 }
 
 /// Builds on a thread of its own (a signal is answered mid-build), telling
-/// the main loop the outcome.
-fn start_build(opts: &Options, number: u64, tx: &Sender<Wake>) {
-    let (opts, to_main) = (opts.clone(), tx.clone());
+/// the main loop the outcome; the solids start from the z-buffers of the
+/// build before, so an edited feature re-slices only the layers it reaches.
+fn start_build(opts: &Options, number: u64, tx: &Sender<Wake>, buffers: &Buffers) {
+    let (opts, to_main, buffers) = (opts.clone(), tx.clone(), Arc::clone(buffers));
     let spawned = std::thread::Builder::new()
         .name(format!("p3dp-build-{number}"))
         .spawn(move || {
             let t0 = Instant::now();
             // a bug in a stage must not leave the loop waiting for this build
-            let (result, inputs) = crate::input::recording(|| {
-                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| build(&opts)))
-                    .unwrap_or_else(|_| {
-                        Err(Error::io(
-                            "p3dp watch",
-                            "the build stopped on an internal error (a bug of p3dp; please report it with the recipe)",
-                        ))
-                    })
+            let mut kept = buffers.lock().unwrap_or_else(|e| e.into_inner());
+            let cache = std::mem::take(&mut *kept);
+            let ((result, inputs), cache) = crate::primitive::solid::reusing(cache, || {
+                crate::input::recording(|| {
+                    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| build(&opts)))
+                        .unwrap_or_else(|_| {
+                            Err(Error::io(
+                                "p3dp watch",
+                                "the build stopped on an internal error (a bug of p3dp; please report it with the recipe)",
+                            ))
+                        })
+                })
             });
+            let solids = cache.last.clone();
+            *kept = cache;
+            drop(kept);
             let _ = to_main.send(Wake::Built(Box::new(Outcome {
                 number,
                 result,
+                solids,
                 inputs,
                 took: t0.elapsed(),
             })));
@@ -332,6 +350,7 @@ fn start_build(opts: &Options, number: u64, tx: &Sender<Wake>) {
                 "p3dp watch",
                 format!("cannot start a build: {e}"),
             )),
+            solids: Vec::new(),
             inputs: Vec::new(),
             took: Duration::ZERO,
         })));
@@ -365,9 +384,10 @@ fn publish(shared: &Shared, out: Outcome) {
     match out.result {
         Ok(b) => {
             crate::sayln!(
-                "build {}: ok in {secs:.2} s · {} · watching {} file{}",
+                "build {}: ok in {secs:.2} s · {}{} · watching {} file{}",
                 out.number,
                 b.summary,
+                resliced(&out.solids),
                 out.inputs.len(),
                 if out.inputs.len() == 1 { "" } else { "s" }
             );
@@ -394,6 +414,19 @@ fn publish(shared: &Shared, out: Outcome) {
     st.seq += 1;
     drop(st);
     shared.changed.notify_all();
+}
+
+/// ` · solid layers re-sliced: 20 of 70` (each solid's count, `+`-joined),
+/// or nothing without solids.
+fn resliced(solids: &[crate::primitive::solid::Reuse]) -> String {
+    if solids.is_empty() {
+        return String::new();
+    }
+    let each: Vec<String> = solids
+        .iter()
+        .map(|r| format!("{} of {}", r.recomputed, r.layers))
+        .collect();
+    format!(" · solid layers re-sliced: {}", each.join(", "))
 }
 
 /// The files followed, by identity, and the folders watched for them.

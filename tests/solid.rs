@@ -649,3 +649,478 @@ fn a_solid_refuses_a_cross_section_it_would_ignore() {
     std::fs::write(&path, text.replace("0.15", "0.09")).unwrap();
     Recipe::load(&path, &[], None).unwrap();
 }
+
+/// Layer settings of the z-buffer tests.
+fn zb_settings() -> p3dp::primitive::solid::Settings {
+    use p3dp::primitive::solid::{Infill, Pattern, Settings};
+    Settings {
+        layer_height: 0.5,
+        perimeters: 1,
+        line_width: 0.45,
+        chord_tolerance: 0.05,
+        infill: Infill {
+            angle: 45.0,
+            spacing: 1.5,
+            alternate: true,
+            pattern: Pattern::Lines,
+            connect: false,
+        },
+    }
+}
+
+#[test]
+fn the_incremental_z_buffer_equals_a_full_rebuild_and_touches_only_its_range() {
+    use p3dp::primitive::solid::region::Op;
+    use p3dp::primitive::solid::{Body, Feature, ZBuffer};
+    let st = zb_settings();
+    let h = st.layer_height;
+    for seed in 1..=6u64 {
+        let mut g = Lcg(seed);
+        // a pool of features on a coarse grid (shared edges, equal z ends)
+        let pool: Vec<Feature> = (0..9)
+            .map(|k| {
+                let z0 = g.grid(-1.0, 6.0, 0.5);
+                let dz = g.grid(0.5, 5.0, 0.5);
+                let op = match (k, g.unit()) {
+                    (0, _) => Op::Union,
+                    (_, u) if u < 0.55 => Op::Union,
+                    (_, u) if u < 0.85 => Op::Subtract,
+                    _ => Op::Intersect,
+                };
+                let body = if g.unit() < 0.5 {
+                    Body::Box {
+                        center: DVec3::new(
+                            g.grid(-6.0, 6.0, 1.0),
+                            g.grid(-6.0, 6.0, 1.0),
+                            z0 + dz / 2.0,
+                        ),
+                        size: DVec3::new(g.grid(2.0, 12.0, 1.0), g.grid(2.0, 12.0, 1.0), dz),
+                    }
+                } else {
+                    Body::Cylinder {
+                        center: DVec3::new(g.grid(-6.0, 6.0, 1.0), g.grid(-6.0, 6.0, 1.0), z0),
+                        radius: g.grid(1.0, 6.0, 1.0),
+                        height: dz,
+                    }
+                };
+                Feature { body, op }
+            })
+            .collect();
+        // in a random order, some removed between the additions
+        let mut order: Vec<usize> = (0..pool.len()).collect();
+        for i in (1..order.len()).rev() {
+            let j = (g.unit() * (i + 1) as f64) as usize;
+            order.swap(i, j.min(i));
+        }
+        let mut zb = ZBuffer::new(st);
+        let mut held: Vec<(u64, Feature)> = Vec::new();
+        let (mut touched, mut rebuilt) = (0u64, 0u64);
+        let in_range = |f: &Feature, j: u64| {
+            let (z0, z1) = f.z_range();
+            let z = (j as f64 - 0.5) * h;
+            z0 <= z && z < z1
+        };
+        let compare = |zb: &ZBuffer, held: &[(u64, Feature)], what: &str| -> u64 {
+            let feats: Vec<Feature> = held.iter().map(|(_, f)| *f).collect();
+            assert_eq!(zb.features(), &feats[..], "seed {seed}, {what}");
+            let fresh = ZBuffer::build(st, feats).unwrap();
+            assert_eq!(zb.layer_count(), fresh.layer_count(), "seed {seed}, {what}");
+            for (j, (a, b)) in zb.layer_slabs().zip(fresh.layer_slabs()).enumerate() {
+                assert_eq!(
+                    a.map(|s| &**s),
+                    b.map(|s| &**s),
+                    "seed {seed}, {what}: layer {}",
+                    j + 1
+                );
+            }
+            fresh.layer_count()
+        };
+        for &k in &order {
+            let f = pool[k];
+            let up = zb.add_feature(f).unwrap();
+            held.push((up.added[0], f));
+            let n = compare(&zb, &held, &format!("add {k}"));
+            touched += up.recomputed();
+            rebuilt += n;
+            if f.op != Op::Intersect {
+                for &j in &up.layers {
+                    assert!(in_range(&f, j), "seed {seed}: add {k} recomputed layer {j}");
+                }
+            }
+            // every layer the feature reaches and the buffer has is recomputed
+            for j in 1..=zb.layer_count() {
+                if in_range(&f, j) {
+                    assert!(up.layers.contains(&j), "seed {seed}: add {k} skipped {j}");
+                }
+            }
+            assert!(up.sections <= up.recomputed());
+            if g.unit() < 0.3 && held.len() > 1 {
+                let i = (g.unit() * held.len() as f64) as usize % held.len();
+                let (id, gone) = held.remove(i);
+                match zb.remove_feature(id) {
+                    Ok(up) => {
+                        compare(&zb, &held, &format!("remove {id}"));
+                        if gone.op != Op::Intersect {
+                            for &j in &up.layers {
+                                assert!(
+                                    in_range(&gone, j),
+                                    "seed {seed}: remove {id} recomputed layer {j}"
+                                );
+                            }
+                        }
+                        touched += up.recomputed();
+                    }
+                    Err(e) => panic!("seed {seed}: {e}"),
+                }
+            }
+        }
+        // fewer layers computed than by rebuilding after every addition
+        assert!(touched < rebuilt, "seed {seed}: {touched} vs {rebuilt}");
+    }
+    // an unknown id is an input error naming the features
+    let mut zb = ZBuffer::new(st);
+    let e = zb.remove_feature(7).unwrap_err();
+    assert_eq!(e.place.as_deref(), Some("solid.features"));
+}
+
+#[test]
+fn grid_infill_lays_both_directions_in_every_layer_inside_the_perimeters() {
+    // the paper's ±45° grid: per layer, each direction alone has length ×
+    // spacing ≈ the infill area (within 3 %), both together twice that; the
+    // filament of a layer is still its area × height at the solid spacing
+    // (2 × line width), as each line stands for half a spacing
+    let grid = BOX_WITH_HOLE.replace(
+        "infill: {angle: 45, spacing: 0.8, alternate: true}",
+        "infill: {pattern: grid}",
+    );
+    let r = load(&recipe_file("grid", &grid));
+    let s = solid_of(&r, 0);
+    assert!(
+        (s.infill.spacing - 0.9).abs() < 1e-12,
+        "default: 2 × line_width"
+    );
+    let t = make_part(&r, 0, Threads::available()).unwrap();
+    let w = s.line_width;
+    for layer in s.layers() {
+        let g = geometry(s, layer.index);
+        let (_, inf) = classify(&g, &strings_at(&t, layer.z));
+        let mut length = [0.0; 2];
+        for &(a, b) in &inf {
+            for p in [a, b, a.lerp(b, 0.5)] {
+                assert!(
+                    g.innermost.iter().any(|r| r.contains(p)),
+                    "z {}: {p}",
+                    layer.z
+                );
+                let d = g
+                    .innermost
+                    .iter()
+                    .flat_map(|r| r.loops.iter())
+                    .map(|l| dist_loop(l, p))
+                    .fold(f64::INFINITY, f64::min);
+                assert!(d >= 0.5 * w - 1e-9, "z {}: {p} only {d} inside", layer.z);
+            }
+            let d = b - a;
+            let angle = libm::atan2(d.y, d.x).rem_euclid(PI);
+            let fam = if (angle - FRAC_PI_4).abs() < 1e-9 {
+                0
+            } else {
+                assert!((angle - 3.0 * FRAC_PI_4).abs() < 1e-9, "line at {angle}");
+                1
+            };
+            length[fam] += a.distance(b);
+        }
+        for (fam, l) in length.iter().enumerate() {
+            let filled = l * s.infill.spacing;
+            assert!(
+                rel(filled, g.infill_area) < 0.03,
+                "z {}, direction {fam}: {filled} vs {}",
+                layer.z,
+                g.infill_area
+            );
+        }
+        // area × height of filament in the layer
+        let volume: f64 = (0..t.len())
+            .filter(|&k| !t.strings[k].travel)
+            .filter(|&k| {
+                let (a, b) = t.ends(k);
+                (a.z - layer.z).abs() < 1e-9 && (b.z - layer.z).abs() < 1e-9
+            })
+            .map(|k| t.strings[k].c * t.length(k))
+            .sum();
+        let want = layer.slab.unwrap().region.area() * s.layer_height;
+        assert!(
+            rel(volume, want) < 0.03,
+            "z {}: {volume} vs {want}",
+            layer.z
+        );
+    }
+}
+
+#[test]
+fn connected_infill_travels_less_and_its_joins_stay_inside() {
+    use p3dp::primitive::solid::plan_join_inside as join_inside;
+    for pattern in ["lines", "grid"] {
+        let base = BOX_WITH_HOLE.replace(
+            "infill: {angle: 45, spacing: 0.8, alternate: true}",
+            &format!("infill: {{pattern: {pattern}, spacing: 0.9}}"),
+        );
+        let joined = base.replace("spacing: 0.9}", "spacing: 0.9, connect: true}");
+        let (r0, r1) = (
+            load(&recipe_file(&format!("apart-{pattern}"), &base)),
+            load(&recipe_file(&format!("joined-{pattern}"), &joined)),
+        );
+        let (t0, t1) = (
+            make_part(&r0, 0, Threads::available()).unwrap(),
+            make_part(&r1, 0, Threads::available()).unwrap(),
+        );
+        let s = solid_of(&r1, 0);
+        assert_eq!(t1.len() as u64, s.string_count());
+        let travels = |t: &Toolpath| (0..t.len()).filter(|&k| t.strings[k].travel).count();
+        let (n0, n1) = (travels(&t0), travels(&t1));
+        assert!(n1 * 2 < n0, "{pattern}: {n1} travels joined vs {n0} apart");
+        // the same lines are drawn; the joins are the other drawn strings
+        let mut joins = 0;
+        for layer in s.layers() {
+            let g = geometry(s, layer.index);
+            let slab = layer.slab.unwrap();
+            let (_, inf) = classify(&g, &strings_at(&t1, layer.z));
+            for &(a, b) in &inf {
+                let d = b - a;
+                let angle = libm::atan2(d.y, d.x).rem_euclid(PI);
+                if (angle - FRAC_PI_4).abs() < 1e-9 || (angle - 3.0 * FRAC_PI_4).abs() < 1e-9 {
+                    continue;
+                }
+                joins += 1;
+                assert!(
+                    a.distance(b) <= 3.0 * 0.9 + 1e-9,
+                    "a join of {} from {a} to {b} at z {}",
+                    a.distance(b),
+                    layer.z
+                );
+                assert!(
+                    slab.islands
+                        .iter()
+                        .any(|isl| join_inside(&isl.infill_region, a, b)),
+                    "z {}: join {a} – {b} leaves the infill region",
+                    layer.z
+                );
+                // and sampled: every point inside or on the region
+                for i in 1..16 {
+                    let p = a.lerp(b, i as f64 / 16.0);
+                    assert!(
+                        slab.islands.iter().any(|isl| isl.infill_region.contains(p)
+                            || isl
+                                .infill_region
+                                .loops
+                                .iter()
+                                .any(|l| dist_loop(l, p) < 1e-6)),
+                        "z {}: {p} of a join outside",
+                        layer.z
+                    );
+                }
+            }
+            // the lines themselves: as long as without joining
+            let (_, apart) = classify(&g, &strings_at(&t0, layer.z));
+            let lines = |v: &[(DVec2, DVec2)]| -> f64 {
+                v.iter()
+                    .filter(|(a, b)| {
+                        let d = *b - *a;
+                        let angle = libm::atan2(d.y, d.x).rem_euclid(PI);
+                        (angle - FRAC_PI_4).abs() < 1e-9 || (angle - 3.0 * FRAC_PI_4).abs() < 1e-9
+                    })
+                    .map(|(a, b)| a.distance(*b))
+                    .sum()
+            };
+            assert!(rel(lines(&inf), lines(&apart)) < 1e-9, "z {}", layer.z);
+        }
+        assert!(joins > 100, "{pattern}: {joins} joins");
+    }
+}
+
+#[test]
+fn the_zbuffer_json_is_the_exact_loops_and_the_svg_draws_a_layer() {
+    use p3dp::primitive::solid::piece::Arc;
+    let path = recipe_file("zbuf", BOX_WITH_HOLE);
+    let dir = path.parent().unwrap();
+    let out = common::p3dp(
+        dir,
+        &[
+            "build",
+            "zbuf.yaml",
+            "-o",
+            "z.gcode",
+            "--stats-json",
+            "s.json",
+            "--zbuffer",
+            "z.json",
+            "--zbuffer-svg",
+            "l.svg",
+            "--zbuffer-layer",
+            "60",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let read = |f: &str| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(dir.join(f)).unwrap()).unwrap()
+    };
+    let (z, stats) = (read("z.json"), read("s.json"));
+    let solid = &z["solids"][0];
+    assert_eq!(solid["part"], "solid");
+    let sections = solid["sections"].as_array().unwrap();
+    let layers = solid["layers"].as_array().unwrap();
+    let stat_layers = stats["solids"][0]["layers"].as_array().unwrap();
+    assert_eq!(layers.len(), stat_layers.len());
+    let r = load(&path);
+    let s = solid_of(&r, 0);
+    let pt = |v: &serde_json::Value| DVec2::new(v[0].as_f64().unwrap(), v[1].as_f64().unwrap());
+    let (mut arcs, mut lines) = (0, 0);
+    for ((layer, stat), mine) in layers.iter().zip(stat_layers).zip(s.layers()) {
+        let k = layer["section"].as_u64().unwrap() as usize;
+        let loops = sections[k]["loops"].as_array().unwrap();
+        assert_eq!(loops.len() as u64, stat["loops"].as_u64().unwrap());
+        assert_eq!(layer["z"].as_f64(), stat["z"].as_f64());
+        let region = &mine.slab.unwrap().region;
+        // the area from the curves alone: ½ Σ a × b for a line, ½ (c × (p1 −
+        // p0) + r²·sweep) for an arc
+        let mut area = 0.0;
+        for (l, exact) in loops.iter().zip(&region.loops) {
+            let mut loop_area = 0.0;
+            let pieces = l["pieces"].as_array().unwrap();
+            for (i, p) in pieces.iter().enumerate() {
+                let (a, b) = (pt(&p["from"]), pt(&p["to"]));
+                // each piece starts where the one before ends
+                let prev = &pieces[(i + pieces.len() - 1) % pieces.len()];
+                assert_eq!(pt(&prev["to"]), a);
+                match p["kind"].as_str().unwrap() {
+                    "line" => {
+                        lines += 1;
+                        assert_eq!(exact.pieces[i], Piece::Line(a, b));
+                        loop_area += 0.5 * (a.x * b.y - a.y * b.x);
+                    }
+                    "arc" => {
+                        arcs += 1;
+                        let c = pt(&p["center"]);
+                        let rad = p["radius"].as_f64().unwrap();
+                        let sweep = p["sweep_rad"].as_f64().unwrap();
+                        let arc = Arc {
+                            c,
+                            r: rad,
+                            a0: p["start_rad"].as_f64().unwrap(),
+                            sweep,
+                            p0: a,
+                            p1: b,
+                        };
+                        // read back bit for bit, and consistent with its ends
+                        assert_eq!(exact.pieces[i], Piece::Arc(arc));
+                        assert!(arc.at(0.0).distance(a) < 1e-9);
+                        assert!(arc.at(sweep.abs()).distance(b) < 1e-9);
+                        let d = b - a;
+                        loop_area += 0.5 * (c.x * d.y - c.y * d.x + rad * rad * sweep);
+                    }
+                    other => panic!("a piece of kind {other}"),
+                }
+            }
+            let want = if loop_area > 0.0 { "ccw" } else { "cw" };
+            assert_eq!(l["orientation"], want);
+            assert!((l["area_mm2"].as_f64().unwrap() - loop_area).abs() < 1e-9);
+            area += loop_area;
+        }
+        let stat_area = stat["area_mm2"].as_f64().unwrap();
+        assert!(
+            rel(area, stat_area) < 1e-12,
+            "z {}: {area} vs {stat_area}",
+            stat["z"]
+        );
+    }
+    assert!(arcs > 0 && lines > 0);
+    // layer 60 (z 12): the boss alone, a circle of radius 5 drawn as two arcs
+    let svg = std::fs::read_to_string(dir.join("l.svg")).unwrap();
+    assert!(
+        svg.starts_with("<svg") && svg.contains("layer 60 at z 12"),
+        "{svg}"
+    );
+    assert!(svg.contains("A5 5 0 0 1"), "{svg}");
+    // a layer above the part: exit 2 naming the option, and nothing written
+    for f in ["z.gcode", "z.json", "l.svg"] {
+        std::fs::remove_file(dir.join(f)).unwrap();
+    }
+    let out = common::p3dp(
+        dir,
+        &[
+            "build",
+            "zbuf.yaml",
+            "-o",
+            "z.gcode",
+            "--zbuffer",
+            "z.json",
+            "--zbuffer-svg",
+            "l.svg",
+            "--zbuffer-layer",
+            "81",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--zbuffer-layer"));
+    for f in ["z.gcode", "z.json", "l.svg"] {
+        assert!(!dir.join(f).exists(), "{f} written by a failed build");
+    }
+    // never over an input
+    let out = common::p3dp(
+        dir,
+        &[
+            "build",
+            "zbuf.yaml",
+            "-o",
+            "z.gcode",
+            "--zbuffer",
+            "zbuf.yaml",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(2));
+    assert!(std::fs::read_to_string(&path).unwrap().contains("solid:"));
+}
+
+#[test]
+fn a_kept_z_buffer_re_slices_only_the_edited_feature() {
+    use p3dp::primitive::solid::{reusing, Cache};
+    // as `p3dp watch` builds: the z-buffers of one build kept for the next
+    let path = recipe_file("kept", BOX_WITH_HOLE);
+    let (r, cache) = reusing(Cache::default(), || load(&path));
+    assert_eq!(cache.last.len(), 1);
+    assert_eq!((cache.last[0].layers, cache.last[0].recomputed), (80, 80));
+    drop(r);
+    // the boss (z 10 … 16) made 4 mm tall: layers 51 … 70 recomputed, 71 … 80 gone
+    let text = std::fs::read_to_string(&path).unwrap();
+    std::fs::write(
+        &path,
+        text.replace("radius: 5, height: 6", "radius: 5, height: 4"),
+    )
+    .unwrap();
+    let (r, cache) = reusing(cache, || load(&path));
+    assert_eq!((cache.last[0].layers, cache.last[0].recomputed), (70, 20));
+    let fresh = load(&path);
+    assert_eq!(
+        solid_of(&r, 0),
+        solid_of(&fresh, 0),
+        "equal to a build from scratch"
+    );
+    // the hole widened (z 0 … 10): the layers below the boss only
+    let text = std::fs::read_to_string(&path).unwrap();
+    std::fs::write(&path, text.replace("radius: 8", "radius: 9")).unwrap();
+    let (r, cache) = reusing(cache, || load(&path));
+    assert_eq!((cache.last[0].layers, cache.last[0].recomputed), (70, 50));
+    assert_eq!(solid_of(&r, 0), solid_of(&load(&path), 0));
+    // a setting changed: everything again
+    let text = std::fs::read_to_string(&path).unwrap();
+    std::fs::write(&path, text.replace("perimeters: 2", "perimeters: 3")).unwrap();
+    let (_, cache) = reusing(cache, || load(&path));
+    assert_eq!((cache.last[0].layers, cache.last[0].recomputed), (70, 70));
+    // nothing changed: nothing recomputed
+    let (_, cache) = reusing(cache, || load(&path));
+    assert_eq!((cache.last[0].layers, cache.last[0].recomputed), (70, 0));
+}

@@ -346,3 +346,35 @@ parts:
     assert!(built.is_err());
     assert!(files.iter().any(|f| f.ends_with("later.png")), "{files:?}");
 }
+
+/// The next line of `p3dp watch` containing `what`, within `wait`.
+fn line_with(server: &Server, what: &str, wait: Duration) -> String {
+    let t0 = Instant::now();
+    loop {
+        let left = wait.saturating_sub(t0.elapsed());
+        match server.stdout.recv_timeout(left) {
+            Ok(l) if l.contains(what) => return l,
+            Ok(_) => {}
+            Err(_) => panic!("no line with {what:?} within {wait:?}"),
+        }
+    }
+}
+
+#[test]
+fn an_edited_feature_re_slices_only_its_layers() {
+    let dir = tmp("watch-solid");
+    let recipe = dir.join("solid.yaml");
+    let text = "p3dp: 1\nname: solid\nprinter: generic-220\nmaterial: pla\nparts:\n  - name: solid\n    speed: 40\n    primitive:\n      solid: {layer_height: 0.2, perimeters: 2, infill: {spacing: 0.8}, features: [{box: {center: [0, 0, 5], size: [40, 30, 10]}}, {cylinder: {center: [0, 0, 0], radius: 8, height: 10, op: subtract}}, {cylinder: {center: [15, 0, 10], radius: 5, height: 6}}]}\n";
+    std::fs::write(&recipe, text).unwrap();
+    let server = start(&dir, &["solid.yaml"]);
+    // the first build slices every layer
+    let l = line_with(&server, ": ok in ", Duration::from_secs(20));
+    assert!(l.contains("solid layers re-sliced: 80 of 80"), "{l}");
+    // the boss (z 10 … 16) made 4 mm tall: its 20 remaining layers only
+    save(
+        &recipe,
+        &text.replace("radius: 5, height: 6", "radius: 5, height: 4"),
+    );
+    let l = line_with(&server, ": ok in ", Duration::from_secs(20));
+    assert!(l.contains("solid layers re-sliced: 20 of 70"), "{l}");
+}

@@ -13,7 +13,8 @@
 //!    paper's "z-buffer is modified each time a feature is added"). Each
 //!    section is the exact boolean of rectangles and discs
 //!    ([`region::boolean`]), kept as loops of segments and circular arcs.
-//!    Material below the bed (z < 0) is not printed.
+//!    Material below the bed (z < 0) is not printed. The buffer is a
+//!    [`ZBuffer`], updated feature by feature (see its module).
 //! 2. **Boundary first** (the paper's criterion). Each island of a section
 //!    is printed on its own: its perimeters from the outside in, centre lines
 //!    at (k + ½)·w inside the boundary for k = 0 … perimeters − 1 (w the line
@@ -22,7 +23,10 @@
 //!    size; each inner one is pressed against the wall before it.
 //! 3. **Infill** fills what the perimeters leave, the section offset by
 //!    perimeters·w (w/2 with no perimeters), with scanlines at +angle on odd
-//!    layers and −angle on even ones ([`infill::spans`]), `spacing` apart.
+//!    layers and −angle on even ones ([`infill::spans`]), `spacing` apart;
+//!    with `pattern: grid`, both directions in every layer (+angle first);
+//!    with `connect`, each line joined to the next along the boundary where
+//!    the join stays inside (`plan::connect`).
 //! 4. Only then do arcs become strings, chords within `chord_tolerance` of
 //!    the true curve ([`piece::chords`]).
 //!
@@ -40,6 +44,8 @@
 pub mod infill;
 pub use crate::geom::{offset, piece, region};
 
+use std::sync::Arc;
+
 use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
@@ -54,16 +60,22 @@ pub const MAX_LAYERS: u64 = 1_000_000;
 /// Most scanlines (or chords of one circle) a layer may need.
 pub const MAX_LINES: f64 = 1e5;
 
+mod export;
 mod model;
 mod plan;
 mod resolve;
 mod schema;
 mod stats;
+mod zbuffer;
 
+pub use export::*;
 pub use model::*;
+pub use plan::join_inside as plan_join_inside;
+pub use plan::JOIN_SPACINGS;
 pub use resolve::resolve;
 pub use schema::*;
 pub use stats::*;
+pub use zbuffer::{reusing, Cache, Reuse, Update, ZBuffer};
 
 #[cfg(test)]
 mod tests {
@@ -81,6 +93,8 @@ mod tests {
                 angle: 45.0,
                 spacing,
                 alternate: true,
+                pattern: Pattern::Lines,
+                connect: false,
             },
             vec![
                 Feature {
@@ -175,6 +189,8 @@ mod tests {
                 angle: 45.0,
                 spacing: 0.45,
                 alternate: true,
+                pattern: Pattern::Lines,
+                connect: false,
             },
             vec![Feature {
                 body: Body::Box {

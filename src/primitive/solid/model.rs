@@ -84,8 +84,22 @@ pub struct Infill {
     pub angle: f64,
     /// mm between lines.
     pub spacing: f64,
-    /// +angle on odd layers, −angle on even ones.
+    /// +angle on odd layers, −angle on even ones (lines only).
     pub alternate: bool,
+    /// Lines of one direction per layer, or the grid of both.
+    pub pattern: Pattern,
+    /// Lines joined end to end along the boundary (zig-zag) where the join
+    /// stays inside, instead of a travel per line.
+    pub connect: bool,
+}
+
+/// An infill pattern.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Pattern {
+    /// One direction per layer (alternating with `alternate`).
+    Lines,
+    /// Both directions, +angle then −angle, in every layer (the paper's ±45° grid).
+    Grid,
 }
 
 /// What one island of a section becomes.
@@ -134,6 +148,22 @@ pub struct Layer<'a> {
     pub parity: usize,
 }
 
+/// What a solid's slabs are made with, beside its features: a slab is a
+/// function of these and of the features holding its plane.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Settings {
+    /// mm.
+    pub layer_height: f64,
+    /// Perimeter loops per layer.
+    pub perimeters: u32,
+    /// Extrusion width, mm.
+    pub line_width: f64,
+    /// Most a chord may stray from an arc, mm.
+    pub chord_tolerance: f64,
+    /// Infill settings.
+    pub infill: Infill,
+}
+
 /// A `solid` primitive resolved, with its z-buffer computed.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Solid {
@@ -149,7 +179,7 @@ pub struct Solid {
     pub infill: Infill,
     /// Features in order.
     pub features: Vec<Feature>,
-    pub(super) slabs: Vec<Slab>,
+    pub(super) slabs: Vec<Arc<Slab>>,
     /// Slab of layer j + 1.
     pub(super) layer_slab: Vec<Option<usize>>,
     pub(super) count: u64,

@@ -13,81 +13,40 @@ impl Solid {
         infill: Infill,
         features: Vec<Feature>,
     ) -> Result<Solid> {
-        // nothing but a union adds material: the top is the highest union's
-        let top = features
-            .iter()
-            .filter(|f| f.op == Op::Union)
-            .map(|f| f.z_range().1)
-            .fold(f64::NEG_INFINITY, f64::max);
-        // layers whose middle (j − ½)·h lies below the top
-        let layers = (libm::ceil(top / layer_height + 0.5) - 1.0).max(0.0);
-        if layers > MAX_LAYERS as f64 {
-            return Err(Error::input(
-                "solid.layer_height",
-                format!(
-                    "{layer_height} would make {layers} layers up to z = {top}; expected at most {MAX_LAYERS}"
-                ),
-            ));
-        }
-        let layers = layers as u64;
-        let mut lo = DVec2::splat(f64::INFINITY);
-        let mut hi = DVec2::splat(f64::NEG_INFINITY);
-        for f in &features {
-            let [a, b] = f.footprint();
-            lo = lo.min(a);
-            hi = hi.max(b);
-        }
-        let diag = (hi - lo).length();
-        if diag / infill.spacing > MAX_LINES {
-            return Err(Error::input(
-                "solid.infill.spacing",
-                format!(
-                    "{} would need more than {MAX_LINES} infill lines across the part ({diag:.1} mm); expected a larger spacing",
-                    infill.spacing
-                ),
-            ));
-        }
-        if piece::chords(diag, std::f64::consts::TAU, chord_tolerance) as f64 > MAX_LINES {
-            return Err(Error::input(
-                "solid.chord_tolerance",
-                format!("{chord_tolerance} would cut a circle into more than {MAX_LINES} strings; expected a larger tolerance"),
-            ));
-        }
-        let mut s = Solid {
+        let settings = Settings {
             layer_height,
             perimeters,
             line_width,
             chord_tolerance,
             infill,
-            features,
+        };
+        Solid::from_zbuffer(&zbuffer::cached(settings, features)?)
+    }
+
+    /// The solid printed from a z-buffer (its slabs shared, not recomputed);
+    /// refused when it leaves nothing to print.
+    pub fn from_zbuffer(zb: &ZBuffer) -> Result<Solid> {
+        let st = zb.settings();
+        let mut s = Solid {
+            layer_height: st.layer_height,
+            perimeters: st.perimeters,
+            line_width: st.line_width,
+            chord_tolerance: st.chord_tolerance,
+            infill: st.infill,
+            features: zb.features().to_vec(),
             slabs: Vec::new(),
-            layer_slab: Vec::with_capacity(layers as usize),
+            layer_slab: Vec::with_capacity(zb.layer_count() as usize),
             count: 0,
         };
-        // slab boundaries: every feature's ends
-        let mut events: Vec<f64> = s
-            .features
-            .iter()
-            .flat_map(|f| {
-                let (a, b) = f.z_range();
-                [a, b]
-            })
-            .collect();
-        events.sort_by(f64::total_cmp);
-        events.dedup();
-        let mut current: Option<(usize, Option<usize>)> = None; // (event interval, slab)
-        for j in 1..=layers {
-            let zm = (j as f64 - 0.5) * layer_height;
-            let interval = events.partition_point(|&e| e <= zm);
-            let slab = match current {
-                Some((iv, slab)) if iv == interval => slab,
+        for slab in zb.layer_slabs() {
+            let k = slab.map(|slab| match s.slabs.last() {
+                Some(last) if Arc::ptr_eq(last, slab) => s.slabs.len() - 1,
                 _ => {
-                    let slab = s.make_slab(zm);
-                    current = Some((interval, slab));
-                    slab
+                    s.slabs.push(Arc::clone(slab));
+                    s.slabs.len() - 1
                 }
-            };
-            s.layer_slab.push(slab);
+            });
+            s.layer_slab.push(k);
         }
         s.count = s.count();
         if s.count == 0 {
@@ -98,14 +57,13 @@ impl Solid {
         }
         Ok(s)
     }
+}
 
+impl Settings {
     /// Computes the slab whose middle plane is `zm`; `None` when empty.
-    fn make_slab(&mut self, zm: f64) -> Option<usize> {
-        let shapes: Vec<(Option<Shape>, Op)> = self
-            .features
-            .iter()
-            .map(|f| (f.section(zm), f.op))
-            .collect();
+    pub(super) fn make_slab(&self, features: &[Feature], zm: f64) -> Option<Slab> {
+        let shapes: Vec<(Option<Shape>, Op)> =
+            features.iter().map(|f| (f.section(zm), f.op)).collect();
         let region = region::boolean(&shapes);
         if region.is_empty() {
             return None;
@@ -130,7 +88,7 @@ impl Solid {
                 let infill_region = offset::offset(&isl, inset);
                 let min_span = 0.5 * w;
                 let plus = infill::spans(&infill_region, dirs[0], self.infill.spacing, min_span);
-                let minus = if self.infill.alternate {
+                let minus = if self.infill.alternate || self.infill.pattern == Pattern::Grid {
                     infill::spans(&infill_region, dirs[1], self.infill.spacing, min_span)
                 } else {
                     plus.clone()
@@ -151,17 +109,16 @@ impl Solid {
             .and_then(|p| p.last())
             .copied()
             .unwrap_or(lo);
-        let p1 = if self.infill.alternate {
+        let p1 = if self.infill.alternate && self.infill.pattern == Pattern::Lines {
             self.program(&islands, 1, start1)
         } else {
             p0.clone()
         };
-        self.slabs.push(Slab {
+        Some(Slab {
             region,
             islands,
             programs: [p0, p1],
-        });
-        Some(self.slabs.len() - 1)
+        })
     }
 
     /// Orders a layer's strings from `head`: island by island (nearest
@@ -171,10 +128,27 @@ impl Solid {
     fn program(&self, islands: &[IslandPlan], parity: usize, mut head: DVec2) -> Program {
         let w = self.line_width;
         let tol = self.chord_tolerance;
+        // the infill directions of this layer: one (lines) or both (grid)
+        let fams: Vec<(usize, DVec2)> = match self.infill.pattern {
+            Pattern::Lines => vec![(
+                parity,
+                infill::direction(if parity == 0 {
+                    self.infill.angle
+                } else {
+                    -self.infill.angle
+                }),
+            )],
+            Pattern::Grid => vec![
+                (0, infill::direction(self.infill.angle)),
+                (1, infill::direction(-self.infill.angle)),
+            ],
+        };
         // per island: the polylines of each perimeter level, and the spans
+        // of each direction
         let mut todo: Vec<Todo> = islands
             .iter()
-            .map(|isl| {
+            .enumerate()
+            .map(|(k, isl)| {
                 let levels = isl
                     .perimeters
                     .iter()
@@ -186,7 +160,8 @@ impl Solid {
                             .collect()
                     })
                     .collect();
-                (levels, isl.infill[parity].clone())
+                let spans = fams.iter().map(|&(f, _)| isl.infill[f].clone()).collect();
+                (levels, spans, k)
             })
             .collect();
         let mut paths: Vec<Vec<DVec2>> = Vec::new();
@@ -203,15 +178,15 @@ impl Solid {
                     return best;
                 }
             }
-            for (a, b) in &t.1 {
+            for (a, b) in t.1.iter().flatten() {
                 best = best.min(a.distance(h)).min(b.distance(h));
             }
             best
         };
         while !todo.is_empty() {
             let k = nearest(todo.iter().map(|t| entry(t, head)));
-            let (levels, spans) = todo.remove(k);
-            if levels.iter().all(Vec::is_empty) && spans.is_empty() {
+            let (levels, families, island) = todo.remove(k);
+            if levels.iter().all(Vec::is_empty) && families.iter().all(Vec::is_empty) {
                 continue;
             }
             for mut level in levels {
@@ -231,14 +206,17 @@ impl Solid {
                     paths.push(path);
                 }
             }
-            let u = infill::direction(if parity == 0 {
-                self.infill.angle
-            } else {
-                -self.infill.angle
-            });
-            is_infill.resize(paths.len(), false);
-            head = order_spans(spans, u, self.infill.spacing, head, &mut paths);
-            is_infill.resize(paths.len(), true);
+            for (spans, &(_, u)) in families.into_iter().zip(&fams) {
+                is_infill.resize(paths.len(), false);
+                let from = paths.len();
+                head = order_spans(spans, u, self.infill.spacing, head, &mut paths);
+                if self.infill.connect {
+                    let region = &islands[island].infill_region;
+                    let longest = JOIN_SPACINGS * self.infill.spacing;
+                    connect(&mut paths, from, region, longest);
+                }
+                is_infill.resize(paths.len(), true);
+            }
         }
         let mut strings = 0;
         for (i, p) in paths.iter().enumerate() {
@@ -253,7 +231,9 @@ impl Solid {
             strings,
         }
     }
+}
 
+impl Solid {
     /// The number of strings [`Solid::walk`] makes, from each layer's
     /// program without making them: its strings, and between layers one
     /// travel up plus one across when the next layer starts elsewhere.
@@ -317,8 +297,11 @@ impl Solid {
             Layer {
                 index,
                 z: index as f64 * self.layer_height,
-                slab: s.map(|s| &self.slabs[s]),
-                parity: if self.infill.alternate && index.is_multiple_of(2) {
+                slab: s.map(|s| &*self.slabs[s]),
+                parity: if self.infill.alternate
+                    && self.infill.pattern == Pattern::Lines
+                    && index.is_multiple_of(2)
+                {
                     1
                 } else {
                     0
@@ -328,7 +311,7 @@ impl Solid {
     }
 
     /// The z-buffer: the distinct cross-sections.
-    pub fn slabs(&self) -> &[Slab] {
+    pub fn slabs(&self) -> &[Arc<Slab>] {
         &self.slabs
     }
 
@@ -337,15 +320,25 @@ impl Solid {
         self.count
     }
 
+    /// The width of layer each infill line stands for: its spacing with
+    /// lines (a region of area A gets A / spacing of line); half of it with
+    /// the grid (A / spacing per direction, 2·A / spacing in all).
+    pub fn infill_share(&self) -> f64 {
+        match self.infill.pattern {
+            Pattern::Lines => self.infill.spacing,
+            Pattern::Grid => 0.5 * self.infill.spacing,
+        }
+    }
+
     /// Makes the strings at speed `v`: perimeters of cross-section
-    /// layer_height × line_width, infill of layer_height × min(spacing,
-    /// line_width), so a solid layer's filament fills its area × height (lines
-    /// closer than their width are squeezed to their spacing, not piled on
-    /// each other). The part's cross-section `_c` is not used: the recipe's
+    /// layer_height × line_width, infill of layer_height × min(share,
+    /// line_width) ([`Solid::infill_share`]), so a solid layer's filament
+    /// fills its area × height (lines closer than their width are squeezed
+    /// to their share, not piled on each other). The part's cross-section `_c` is not used: the recipe's
     /// resolution refuses one that differs from layer_height × line_width.
     pub fn build(&self, _c: f64, v: f64) -> Toolpath {
         let c = self.layer_height * self.line_width;
-        let c_infill = self.layer_height * self.line_width.min(self.infill.spacing);
+        let c_infill = self.layer_height * self.line_width.min(self.infill_share());
         let mut t: Option<Toolpath> = None;
         self.walk(|p, travel, infill| match &mut t {
             None => t = Some(Toolpath::with_capacity(p, self.count as usize)),
@@ -356,8 +349,64 @@ impl Solid {
     }
 }
 
-/// An island still to print: its perimeter levels' closed polylines, its infill spans.
-type Todo = (Vec<Vec<Vec<DVec2>>>, Vec<(DVec2, DVec2)>);
+/// An island still to print: its perimeter levels' closed polylines, its
+/// infill spans of each direction, its index.
+type Todo = (Vec<Vec<Vec<DVec2>>>, Vec<Vec<(DVec2, DVec2)>>, usize);
+
+/// The longest join of connected infill, in spacings: lines at 45° to an
+/// edge end √2 spacings apart along it; at 3 spacings, edges down to 19.5°
+/// (1/sin θ ≤ 3) are joined, longer joins would lay thick seams.
+pub const JOIN_SPACINGS: f64 = 3.0;
+
+/// Connected infill: each infill path from `from` on is appended to the one
+/// before it when the straight join from the one's end to the other's start
+/// is at most `longest` and lies in `region` (see [`join_inside`]), so the
+/// nozzle draws along the boundary instead of travelling (a zig-zag).
+fn connect(paths: &mut Vec<Vec<DVec2>>, from: usize, region: &Region, longest: f64) {
+    let mut out: Vec<Vec<DVec2>> = Vec::with_capacity(paths.len() - from);
+    for path in paths.drain(from..) {
+        match out.last_mut() {
+            Some(prev)
+                if prev[prev.len() - 1].distance(path[0]) <= longest
+                    && join_inside(region, prev[prev.len() - 1], path[0]) =>
+            {
+                // the join is the string from prev's end to path[0]
+                let skip = usize::from(prev[prev.len() - 1] == path[0]);
+                prev.extend_from_slice(&path[skip..]);
+            }
+            _ => out.push(path),
+        }
+    }
+    paths.extend(out);
+}
+
+/// Whether the segment a–b (ends on the boundary of `region` or inside it)
+/// lies in the closed region: it meets no boundary piece but at its ends,
+/// and its midpoint is inside or on the boundary. A segment touching the
+/// boundary between its ends counts as leaving (a join is only skipped).
+pub fn join_inside(region: &Region, a: DVec2, b: DVec2) -> bool {
+    let eps = region.eps();
+    if a.distance(b) <= eps {
+        return true;
+    }
+    let seg = piece::Piece::Line(a, b);
+    for l in &region.loops {
+        for p in &l.pieces {
+            for (x, _, _) in piece::intersect(&seg, p, eps) {
+                if x.distance(a) > eps && x.distance(b) > eps {
+                    return false;
+                }
+            }
+        }
+    }
+    let m = a.lerp(b, 0.5);
+    region.contains(m)
+        || region
+            .loops
+            .iter()
+            .flat_map(|l| l.pieces.iter())
+            .any(|p| p.distance(m) <= eps)
+}
 
 /// Appends the infill `spans` (lines along `u`, `spacing` apart) to `paths`
 /// nearest first from `head`, each from its nearer end; returns the new head.

@@ -44,18 +44,33 @@ pub fn resolve(raw: &RawSolid, num: &dyn Fn(&Num, &str) -> Result<f64>) -> Resul
         None => 2,
     };
     let infill = match &raw.infill {
-        Some(i) => Infill {
-            angle: match &i.angle {
-                Some(n) => num(n, "solid.infill.angle")?,
-                None => 45.0,
-            },
-            spacing: opt(&i.spacing, "solid.infill.spacing", line_width)?,
-            alternate: i.alternate.unwrap_or(true),
-        },
+        Some(i) => {
+            let pattern = match i.pattern {
+                None | Some(RawPattern::Lines) => Pattern::Lines,
+                Some(RawPattern::Grid) => Pattern::Grid,
+            };
+            // a grid lays two directions: each at twice the width is solid
+            let solid_spacing = match pattern {
+                Pattern::Lines => line_width,
+                Pattern::Grid => 2.0 * line_width,
+            };
+            Infill {
+                angle: match &i.angle {
+                    Some(n) => num(n, "solid.infill.angle")?,
+                    None => 45.0,
+                },
+                spacing: opt(&i.spacing, "solid.infill.spacing", solid_spacing)?,
+                alternate: i.alternate.unwrap_or(true),
+                pattern,
+                connect: i.connect.unwrap_or(false),
+            }
+        }
         None => Infill {
             angle: 45.0,
             spacing: line_width,
             alternate: true,
+            pattern: Pattern::Lines,
+            connect: false,
         },
     };
     if raw.features.is_empty() {

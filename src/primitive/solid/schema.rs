@@ -32,12 +32,28 @@ pub struct RawInfill {
     /// Degrees from +x (45).
     #[serde(default)]
     pub angle: Option<Num>,
-    /// mm between lines (line_width: solid).
+    /// mm between lines of one direction (lines: line_width; grid: 2 × line_width; both solid).
     #[serde(default)]
     pub spacing: Option<Num>,
-    /// +angle and −angle on alternate layers (true).
+    /// +angle and −angle on alternate layers (true; lines only).
     #[serde(default)]
     pub alternate: Option<bool>,
+    /// lines (default): one direction per layer; grid: both in every layer.
+    #[serde(default)]
+    pub pattern: Option<RawPattern>,
+    /// Join the lines end to end along the boundary where the join stays inside (false).
+    #[serde(default)]
+    pub connect: Option<bool>,
+}
+
+/// `pattern:` of the infill.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum RawPattern {
+    /// One direction per layer.
+    Lines,
+    /// Both directions (+angle, then −angle) in every layer.
+    Grid,
 }
 
 /// A feature as written: `{box: {…}}` or `{cylinder: {…}}`.
