@@ -129,6 +129,7 @@ fn join(parts: &[Toolpath]) -> Toolpath {
                 c: 0.0,
                 v: JOIN,
                 travel: true,
+                hair: false,
             });
         }
         let base = all.strings.len();

@@ -18,6 +18,10 @@ pub struct Strand {
     pub v: f64,
     /// A travel move: the head moves without extruding.
     pub travel: bool,
+    /// A declared hair (a turtle's `hair:`): a thin string pulled from a blob
+    /// into the air on purpose, which the `unsupported`, `thin-string` and
+    /// `nozzle-collision` checks pass over (and nothing else does).
+    pub hair: bool,
 }
 
 /// Something the printer does between two strings that is not a move
@@ -111,7 +115,25 @@ impl Toolpath {
             c,
             v,
             travel: false,
+            hair: false,
         });
+    }
+
+    /// Adds a declared hair to `p`: an extruding string of cross-section `c`
+    /// that is meant to hang in the air (see [`Strand::hair`]).
+    pub fn hair(&mut self, p: DVec3, c: f64, v: f64) {
+        self.points.push(p);
+        self.strings.push(Strand {
+            c,
+            v,
+            travel: false,
+            hair: true,
+        });
+    }
+
+    /// How many strings are declared hairs.
+    pub fn hair_count(&self) -> usize {
+        self.strings.iter().filter(|s| s.hair).count()
     }
 
     /// Adds a travel string to `p` (the papers' `move`).
@@ -121,6 +143,7 @@ impl Toolpath {
             c: 0.0,
             v,
             travel: true,
+            hair: false,
         });
     }
 

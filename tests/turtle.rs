@@ -274,6 +274,7 @@ fn every_turtle_recipe_passes_check() {
         "nonplanar-vase",
         "brush",
         "pine-tree",
+        "hairs",
     ] {
         let o = p3dp(&root(), &["check", &format!("recipes/{name}.yaml")]);
         assert!(

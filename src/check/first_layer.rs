@@ -406,7 +406,8 @@ mod tests {
             Strand {
                 c,
                 v: 30.0,
-                travel: false
+                travel: false,
+                hair: false,
             };
             n
         ];

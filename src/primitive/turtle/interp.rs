@@ -20,6 +20,12 @@ use crate::toolpath::{Event, Toolpath};
 pub const MAX_CALL_DEPTH: usize = 200;
 /// Filament speed of `extrude` in place without `feed:`, mm/s.
 pub const DEFAULT_FEED: f64 = 1.0;
+/// Filament of a hair's blob without `blob:`, mm (about 0.1 mm³ of 1.75 mm
+/// filament: a bead a nozzle wide and high).
+pub const DEFAULT_HAIR_BLOB: f64 = 0.05;
+/// Extrude rate of a hair's pull without `rate:`, mm of filament per mm: a
+/// third of ExtruderTurtle's 0.03 for a 0.2 mm layer, "extruding little".
+pub const DEFAULT_HAIR_RATE: f64 = 0.01;
 
 /// What a run may produce and how it starts.
 #[derive(Clone, Copy, Debug)]
@@ -558,6 +564,45 @@ impl Run<'_> {
                 let r = self.block(&p.body, &mut inner);
                 self.depth -= 1;
                 r?;
+            }
+            Op::Hair { length, blob, rate } => {
+                // Laput et al.'s blob-and-pull (ExtruderTurtle §4.3): a blob
+                // in place, a thin pull along the heading, a retraction that
+                // snaps it; the pen is up afterwards
+                let len = self.positive(length, vals, place)?;
+                let blob = match blob {
+                    Some(b) => {
+                        let p = place.replace(".hair", ".blob");
+                        self.within(b, vals, &p, 0.0, 1000.0)?
+                    }
+                    None => DEFAULT_HAIR_BLOB,
+                };
+                let rate = match rate {
+                    Some(r) => {
+                        let p = place.replace(".hair", ".rate");
+                        self.positive(r, vals, &p)?
+                    }
+                    None => DEFAULT_HAIR_RATE,
+                };
+                if blob > 0.0 {
+                    let e = Event::Extrude {
+                        filament: blob,
+                        speed: DEFAULT_FEED,
+                    };
+                    self.event(e, place)?;
+                }
+                let to = self.frame.pos + self.frame.heading * len;
+                if !to.is_finite() {
+                    return Err(Error::input(place, "the hair's tip is not finite"));
+                }
+                self.strings += 1;
+                self.made(place)?;
+                if let Some(tp) = &mut self.out {
+                    tp.hair(to, rate * self.area, self.v);
+                }
+                self.frame.pos = to;
+                self.event(Event::Retract, place)?;
+                self.pen_down = false;
             }
             Op::Lsystem(ls) => {
                 let p = format!("{place}.iterations");
