@@ -112,3 +112,161 @@ fn hairs_are_rows_of_declared_hairs_of_the_recipes_length_that_pass_check() {
     }
     assert!(codes(&r, &bare).contains(&"thin-string"));
 }
+
+/// Extruding strings of `tp` at height `z` (within 1 µm), as segments.
+fn at_height(tp: &Toolpath, z: f64) -> Vec<(DVec3, DVec3)> {
+    (0..tp.len())
+        .filter(|&k| !tp.strings[k].travel)
+        .map(|k| tp.ends(k))
+        .filter(|(a, b)| (a.z - z).abs() < 1e-6 && (b.z - z).abs() < 1e-6)
+        .collect()
+}
+
+#[test]
+fn the_parabolas_chords_are_tangent_to_it_and_their_crossings_lie_on_it() {
+    let r = load("string-art-parabola.yaml");
+    let tp = only_part(&r);
+    let (n, arm, h) = (
+        param(&r, "divisions") as usize,
+        param(&r, "arm"),
+        param(&r, "layer_height"),
+    );
+    let (p0, o, p2) = (
+        DVec3::new(-arm / 2.0, arm / 2.0, 0.0),
+        DVec3::new(-arm / 2.0, -arm / 2.0, 0.0),
+        DVec3::new(arm / 2.0, -arm / 2.0, 0.0),
+    );
+    // the quadratic Bezier P0, O, P2: the parabola the chords should envelop
+    let curve = |t: f64| p0 * (1.0 - t) * (1.0 - t) + o * 2.0 * t * (1.0 - t) + p2 * t * t;
+    let samples: Vec<DVec3> = (0..=20_000).map(|i| curve(i as f64 / 20_000.0)).collect();
+    let flat = |v: DVec3| DVec3::new(v.x, v.y, 0.0);
+    for layer in 0..param(&r, "layers") as usize {
+        let z = h * (layer + 1) as f64;
+        // the chords: strings off both arms (not along x = -arm/2 or y = -arm/2)
+        let on_arm = |a: DVec3, b: DVec3| {
+            ((a.x + arm / 2.0).abs() < 1e-9 && (b.x + arm / 2.0).abs() < 1e-9)
+                || ((a.y + arm / 2.0).abs() < 1e-9 && (b.y + arm / 2.0).abs() < 1e-9)
+        };
+        let mut chords: Vec<(DVec3, DVec3)> = at_height(&tp, z)
+            .into_iter()
+            .filter(|&(a, b)| !on_arm(a, b))
+            .map(|(a, b)| {
+                // from the first arm (x = -arm/2) to the second
+                let (a, b) = if (a.x + arm / 2.0).abs() < 1e-9 {
+                    (a, b)
+                } else {
+                    (b, a)
+                };
+                (flat(a), flat(b))
+            })
+            .collect();
+        assert_eq!(chords.len(), n - 1, "layer {layer}");
+        chords.sort_by(|x, y| y.0.y.total_cmp(&x.0.y));
+        for (i, &(a, b)) in chords.iter().enumerate() {
+            // each chord touches the curve and has all of it on one side
+            let u = (b - a).normalize();
+            let d: Vec<f64> = samples
+                .iter()
+                .map(|&q| u.x * (q.y - a.y) - u.y * (q.x - a.x))
+                .collect();
+            let least = d.iter().fold(f64::INFINITY, |m, &v| m.min(v.abs()));
+            assert!(least < 1e-3, "chord {i} misses the curve by {least} mm");
+            let (lo, hi) = d
+                .iter()
+                .fold((0f64, 0f64), |(l, h), &v| (l.min(v), h.max(v)));
+            assert!(
+                lo > -1e-6 || hi < 1e-6,
+                "chord {i} crosses the curve ({lo}, {hi})"
+            );
+        }
+        // consecutive chords cross within h²/4 |P0 - 2 O + P2| of the curve
+        // (their crossing is the blossom of t and t + 1/N: that far from the
+        // point at t + 1/(2N), along P0 - 2 O + P2)
+        let step = 1.0 / n as f64;
+        let tol = step * step / 4.0 * (p0 - 2.0 * o + p2).length() + 1e-6;
+        for w in chords.windows(2) {
+            let ((a1, b1), (a2, b2)) = (w[0], w[1]);
+            let (d1, d2) = (b1 - a1, b2 - a2);
+            let den = d1.x * d2.y - d1.y * d2.x;
+            let s = ((a2.x - a1.x) * d2.y - (a2.y - a1.y) * d2.x) / den;
+            let x = a1 + d1 * s;
+            let off = samples
+                .iter()
+                .fold(f64::INFINITY, |m, q| m.min(q.distance(x)));
+            assert!(
+                off <= tol,
+                "crossing {x} is {off} mm off the parabola (tolerance {tol})"
+            );
+        }
+    }
+    assert!(codes(&r, &tp).is_empty(), "{:?}", codes(&r, &tp));
+}
+
+/// Total length of the extruding strings of `tp` at height `z`, mm.
+fn length_at(tp: &Toolpath, z: f64) -> f64 {
+    at_height(tp, z).iter().map(|(a, b)| a.distance(*b)).sum()
+}
+
+#[test]
+fn filled_shapes_fill_their_area_and_stay_inside_it() {
+    let r = load("filled-shapes.yaml");
+    let parts = make_parts(&r, Threads::available()).unwrap();
+    let (h, fill, sparse, cube, apothem) = (
+        param(&r, "layer_height"),
+        param(&r, "fill"),
+        param(&r, "sparse"),
+        param(&r, "cube"),
+        param(&r, "apothem"),
+    );
+    let t36 = 36f64.to_radians().tan();
+    // the pentagon's bottom layers: length × spacing ≈ its area, 5 a² tan 36°
+    let pent = &parts[0];
+    let area = 5.0 * apothem * apothem * t36;
+    for layer in 0..param(&r, "bottom") as usize {
+        let z = h * (layer + 1) as f64;
+        let covered = length_at(pent, z) * fill;
+        assert!(
+            (covered / area - 1.0).abs() < 0.03,
+            "layer {layer}: {covered} of {area} mm²"
+        );
+        // every string inside the pentagon, at least fill/2 from its sides
+        for (a, b) in at_height(pent, z) {
+            for p in [a, b] {
+                for k in 0..5 {
+                    let th = (-90.0 + 72.0 * k as f64).to_radians();
+                    let reach = p.x * th.cos() + p.y * th.sin();
+                    assert!(reach <= apothem - fill / 2.0 + 1e-9, "{p} outside");
+                }
+            }
+        }
+    }
+    // above the bottom: one ring a layer, the outermost (a hollow prism)
+    let z = h * (param(&r, "bottom") + 1.0);
+    let ring = 10.0 * (apothem - fill / 2.0) * t36;
+    assert!((length_at(pent, z) - ring).abs() < 1e-6);
+    // the cubes: every layer's fill lines (along x; the zig-zag's short
+    // joins aside) times their spacing cover the square within 3 %, the
+    // sparse one with lines `sparse` apart (a lower fill density)
+    for (tp, s) in [(&parts[1], fill), (&parts[2], sparse)] {
+        let layers = (cube / h).round() as usize;
+        for layer in 0..layers {
+            let lines: f64 = at_height(tp, h * (layer + 1) as f64)
+                .iter()
+                .filter(|(a, b)| (a.y - b.y).abs() < 1e-9)
+                .map(|(a, b)| a.distance(*b))
+                .sum();
+            let (covered, area) = (lines * s, cube * cube);
+            assert!(
+                (covered / area - 1.0).abs() < 0.03,
+                "{} layer {layer}: {covered} of {area}",
+                tp.name
+            );
+        }
+    }
+    let dense: f64 = parts[1].volume();
+    let thin: f64 = parts[2].volume();
+    assert!(
+        (dense / thin - sparse / fill).abs() / (sparse / fill) < 0.1,
+        "{dense} {thin}"
+    );
+}

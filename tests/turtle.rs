@@ -275,6 +275,8 @@ fn every_turtle_recipe_passes_check() {
         "brush",
         "pine-tree",
         "hairs",
+        "string-art-parabola",
+        "filled-shapes",
     ] {
         let o = p3dp(&root(), &["check", &format!("recipes/{name}.yaml")]);
         assert!(
