@@ -270,3 +270,237 @@ fn filled_shapes_fill_their_area_and_stay_inside_it() {
         "{dense} {thin}"
     );
 }
+
+/// Linking number of two closed polygons by the Gauss double integral, summed
+/// exactly segment pair by segment pair as the solid angle each pair spans
+/// (Klenin & Langowski 2000), as tests/olympic.rs computes it.
+fn linking_by_gauss(a: &[DVec3], b: &[DVec3]) -> f64 {
+    let mut omega = 0.0;
+    for i in 0..a.len() {
+        let (p1, p2) = (a[i], a[(i + 1) % a.len()]);
+        for j in 0..b.len() {
+            let (p3, p4) = (b[j], b[(j + 1) % b.len()]);
+            let (r13, r14, r23, r24) = (p3 - p1, p4 - p1, p3 - p2, p4 - p2);
+            let orient = (p4 - p3).cross(p2 - p1).dot(r13);
+            let scale = (p4 - p3).length() * (p2 - p1).length() * r13.length();
+            let faces = [
+                r13.cross(r14),
+                r14.cross(r24),
+                r24.cross(r23),
+                r23.cross(r13),
+            ];
+            if orient.abs() <= 1e-12 * scale || faces.iter().any(|n| n.length() < 1e-15) {
+                continue;
+            }
+            let n = faces.map(|f| f.normalize());
+            let mut w = 0.0;
+            for k in 0..4 {
+                w += n[k].dot(n[(k + 1) % 4]).clamp(-1.0, 1.0).asin();
+            }
+            omega += w * orient.signum();
+        }
+    }
+    omega / (4.0 * std::f64::consts::PI)
+}
+
+/// Distance from `p` to segment `a`–`b`.
+fn to_segment(p: DVec3, a: DVec3, b: DVec3) -> f64 {
+    let d = b - a;
+    let t = if d.length_squared() > 0.0 {
+        ((p - a).dot(d) / d.length_squared()).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    p.distance(a + d * t)
+}
+
+/// Least distance between two sets of strings, sampling the first every 0.1 mm.
+fn apart(a: &[(DVec3, DVec3)], b: &[(DVec3, DVec3)]) -> f64 {
+    let mut m = f64::INFINITY;
+    for &(p, q) in a {
+        let n = (p.distance(q) / 0.1).ceil().max(1.0) as usize;
+        for i in 0..=n {
+            let s = p.lerp(q, i as f64 / n as f64);
+            for &(c, d) in b {
+                m = m.min(to_segment(s, c, d));
+            }
+        }
+    }
+    m
+}
+
+#[test]
+fn chain_mail_links_interlock_with_their_neighbours_only_and_never_touch() {
+    let r = load("chain-mail.yaml");
+    let tp = only_part(&r);
+    let (links, pitch, a_len, reach, w, ox) = (
+        param(&r, "links") as usize,
+        param(&r, "pitch"),
+        param(&r, "a_len"),
+        param(&r, "reach"),
+        param(&r, "b_half"),
+        param(&r, "ox"),
+    );
+    // every extruding string belongs to one link: an A link's strings lie
+    // in y = 0 within its x range, a B link's off it within its own
+    let mut a_links: Vec<Vec<(DVec3, DVec3)>> = vec![Vec::new(); links];
+    let mut b_links: Vec<Vec<(DVec3, DVec3)>> = vec![Vec::new(); links - 1];
+    for k in (0..tp.len()).filter(|&k| !tp.strings[k].travel) {
+        let (a, b) = tp.ends(k);
+        let mx = (a.x + b.x) / 2.0;
+        if a.y == 0.0 && b.y == 0.0 {
+            let i = (0..links)
+                .find(|&i| {
+                    let x0 = ox + i as f64 * pitch;
+                    (x0 - 1e-9..=x0 + a_len + 1e-9).contains(&mx)
+                })
+                .unwrap_or_else(|| panic!("string {k} {a}–{b} is in no A link"));
+            a_links[i].push((a, b));
+        } else {
+            let i = (0..links - 1)
+                .find(|&i| {
+                    let x0 = ox + i as f64 * pitch + a_len - reach;
+                    let x1 = ox + (i + 1) as f64 * pitch + reach;
+                    (x0 - 1e-9..=x1 + 1e-9).contains(&mx)
+                })
+                .unwrap_or_else(|| panic!("string {k} {a}–{b} is in no B link"));
+            b_links[i].push((a, b));
+        }
+    }
+    // each link's centre curve, read from its strings: an A link is the
+    // rectangle through its lowest and highest strings, closed by pillars
+    // present in every layer between; a B link is its top layer, a closed
+    // rectangle of perimeter 2 (x1 - x0) + 4 b_half
+    let span = |s: &[(DVec3, DVec3)], f: fn(DVec3) -> f64| {
+        s.iter()
+            .flat_map(|&(a, b)| [f(a), f(b)])
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+                (l.min(v), h.max(v))
+            })
+    };
+    let h = param(&r, "layer_height");
+    let mut curves: Vec<Vec<DVec3>> = Vec::new();
+    for (i, s) in a_links.iter().enumerate() {
+        let (x0, x1) = span(s, |p| p.x);
+        let (z0, z1) = span(s, |p| p.z);
+        assert!((x1 - x0 - a_len).abs() < 1e-9 && (z1 - z0) > 5.0, "A {i}");
+        let layers = ((z1 - z0) / h).round() as usize + 1;
+        for l in 0..layers {
+            let z = z0 + l as f64 * h;
+            let here: Vec<_> = s.iter().filter(|(a, _)| (a.z - z).abs() < 1e-6).collect();
+            for end in [x0, x1] {
+                assert!(
+                    here.iter().any(|(a, b)| a.x == end || b.x == end),
+                    "A {i}: no pillar at x = {end}, z = {z}"
+                );
+            }
+        }
+        curves.push(vec![
+            DVec3::new(x0, 0.0, z0),
+            DVec3::new(x1, 0.0, z0),
+            DVec3::new(x1, 0.0, z1),
+            DVec3::new(x0, 0.0, z1),
+        ]);
+    }
+    for (i, s) in b_links.iter().enumerate() {
+        let (x0, x1) = span(s, |p| p.x);
+        let (_, top) = span(s, |p| p.z);
+        let lid: f64 = s
+            .iter()
+            .filter(|(a, b)| a.z == top && b.z == top)
+            .map(|(a, b)| a.distance(*b))
+            .sum();
+        assert!(
+            (lid - 2.0 * (x1 - x0) - 4.0 * w).abs() < 1e-9,
+            "B {i}: {lid}"
+        );
+        curves.push(vec![
+            DVec3::new(x0, -w, top),
+            DVec3::new(x1, -w, top),
+            DVec3::new(x1, w, top),
+            DVec3::new(x0, w, top),
+        ]);
+    }
+    assert_eq!(curves.len(), 2 * links - 1);
+    // in chain order A0 B0 A1 B1 …: neighbours link once, others not at all
+    let order: Vec<usize> = (0..2 * links - 1)
+        .map(|j| if j % 2 == 0 { j / 2 } else { links + j / 2 })
+        .collect();
+    let strings = |j: usize| {
+        if j < links {
+            &a_links[j]
+        } else {
+            &b_links[j - links]
+        }
+    };
+    for p in 0..order.len() {
+        for q in p + 1..order.len() {
+            let lk = linking_by_gauss(&curves[order[p]], &curves[order[q]]);
+            let want = if q == p + 1 { 1.0 } else { 0.0 };
+            assert!(
+                (lk.abs() - want).abs() < 1e-6,
+                "links {p} and {q} in the chain: linking number {lk}"
+            );
+            // no two links touch: more than a bead (generic-220's 0.4 mm
+            // nozzle) apart, centre line to centre line, with room to spare
+            let d = apart(strings(order[p]), strings(order[q]));
+            assert!(d > 1.0, "links {p} and {q} come {d} mm close");
+        }
+    }
+    assert!(codes(&r, &tp).is_empty(), "{:?}", codes(&r, &tp));
+}
+
+#[test]
+fn flexible_circles_have_a_pillar_per_side_in_every_layer_and_differ_by_rate() {
+    let r = load("flexible-circles.yaml");
+    let parts = make_parts(&r, Threads::available()).unwrap();
+    let (segments, poke, radius, h) = (
+        param(&r, "segments") as usize,
+        param(&r, "poke"),
+        param(&r, "radius"),
+        param(&r, "layer_height"),
+    );
+    let layers = (param(&r, "height") / h).round() as usize;
+    assert_eq!(parts.len(), 3);
+    for tp in &parts {
+        let centre = {
+            let (lo, hi) = tp.points.iter().fold(
+                (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+                |(l, h), p| (l.min(*p), h.max(*p)),
+            );
+            DVec3::new((lo.x + hi.x) / 2.0, (lo.y + hi.y) / 2.0, 0.0)
+        };
+        let mut first: Vec<(i64, i64)> = Vec::new();
+        for l in 0..layers {
+            // the pokes: outward strings `poke` long from a vertex of the ring
+            let mut tips: Vec<(i64, i64)> = at_height(tp, h * (l + 1) as f64)
+                .into_iter()
+                .filter(|(a, b)| (a.distance(*b) - poke).abs() < 1e-9)
+                .filter_map(|(a, b)| {
+                    let (ra, rb) = (
+                        (a - centre).truncate().length(),
+                        (b - centre).truncate().length(),
+                    );
+                    ((ra - radius).abs() < 1e-6 && (rb - radius - poke).abs() < 1e-6)
+                        .then(|| ((b.x * 1e4).round() as i64, (b.y * 1e4).round() as i64))
+                })
+                .collect();
+            tips.sort();
+            assert_eq!(tips.len(), segments, "{} layer {l}", tp.name);
+            // the same places in every layer: the pokes stack into pillars
+            if l == 0 {
+                first = tips;
+            } else {
+                assert_eq!(tips, first, "{} layer {l}", tp.name);
+            }
+        }
+    }
+    // the same path, filament in the ratio of the extrude rates
+    let v: Vec<f64> = parts.iter().map(|t| t.volume()).collect();
+    let (lo, mid, hi) = (
+        param(&r, "rate_lo"),
+        param(&r, "rate_mid"),
+        param(&r, "rate_hi"),
+    );
+    assert!((v[1] / v[0] - mid / lo).abs() < 1e-9 && (v[2] / v[0] - hi / lo).abs() < 1e-9);
+}

@@ -277,6 +277,8 @@ fn every_turtle_recipe_passes_check() {
         "hairs",
         "string-art-parabola",
         "filled-shapes",
+        "flexible-circles",
+        "chain-mail",
     ] {
         let o = p3dp(&root(), &["check", &format!("recipes/{name}.yaml")]);
         assert!(
