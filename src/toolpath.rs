@@ -66,6 +66,19 @@ pub enum Event {
     },
 }
 
+/// Where a turtle stood when its program said `draw_turtle`
+/// (ExtruderTurtle's `draw_Turtle()`): drawn in the previews as a small
+/// triangle pointing along the heading, never written to the G-code.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Marker {
+    /// The turtle's position, recipe coordinates, mm.
+    pub pos: DVec3,
+    /// Its heading (unit).
+    pub heading: DVec3,
+    /// Its up axis (unit), the triangle's normal.
+    pub up: DVec3,
+}
+
 /// A part: a polyline of points and the strings between them.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Toolpath {
@@ -78,6 +91,8 @@ pub struct Toolpath {
     /// Events in order of their string index: `(k, e)` happens before
     /// string k (k = n: after the last string).
     pub events: Vec<(usize, Event)>,
+    /// Turtle markers for the previews (`draw_turtle`), in program order.
+    pub markers: Vec<Marker>,
 }
 
 impl Toolpath {
@@ -88,6 +103,7 @@ impl Toolpath {
             points: vec![start],
             strings: Vec::new(),
             events: Vec::new(),
+            markers: Vec::new(),
         }
     }
 
@@ -100,6 +116,7 @@ impl Toolpath {
             points,
             strings: Vec::with_capacity(n),
             events: Vec::new(),
+            markers: Vec::new(),
         }
     }
 
@@ -198,6 +215,7 @@ impl Toolpath {
             .extend(other.events.iter().map(|&(k, e)| (k + base, e)));
         self.points.extend_from_slice(&other.points[1..]);
         self.strings.extend_from_slice(&other.strings);
+        self.markers.extend_from_slice(&other.markers);
     }
 }
 

@@ -394,6 +394,7 @@ mod tests {
 
     fn ring(r: f64, z: f64, n: usize, c: f64) -> Toolpath {
         let mut tp = Toolpath {
+            markers: Vec::new(),
             name: "ring".into(),
             ..Toolpath::default()
         };

@@ -133,6 +133,9 @@ pub const IDLE_STEPS: u64 = 4_000_000;
 /// the gallery's L-systems and recursive procedures need fewer than 8.
 pub const STEPS_PER_STRING: u64 = 16;
 
+/// Most `draw_turtle` markers a part keeps (the rest are not drawn).
+pub const MAX_MARKERS: usize = 10_000;
+
 /// Most frames `push` may save before a `pop`.
 pub const MAX_SAVED: usize = 100_000;
 
@@ -441,6 +444,18 @@ impl Run<'_> {
             }
             Op::PenDown => self.pen_down = true,
             Op::Pause => self.event(Event::Pause, place)?,
+            Op::DrawTurtle => {
+                // ExtruderTurtle's draw_Turtle(): seen in the previews only
+                if let Some(tp) = &mut self.out {
+                    if tp.markers.len() < MAX_MARKERS {
+                        tp.markers.push(crate::toolpath::Marker {
+                            pos: self.frame.pos,
+                            heading: self.frame.heading,
+                            up: self.frame.up,
+                        });
+                    }
+                }
+            }
             Op::Push => {
                 // each saved frame is memory: a push without a pop is bounded
                 if self.saved.len() >= MAX_SAVED {

@@ -78,7 +78,7 @@ pub struct RawLsystem {
 #[derive(Clone, Debug, PartialEq)]
 #[allow(missing_docs)]
 pub enum RawCommand {
-    /// A command without a value: `pen_up`, `pen_down`, `pause`, `push`, `pop`.
+    /// A command without a value: `pen_up`, `pen_down`, `pause`, `push`, `pop`, `draw_turtle`.
     Bare(&'static str),
     /// A command with one number: movement, turns, settings, events.
     Scalar(&'static str, Num),
@@ -120,7 +120,7 @@ pub enum RawCommand {
 }
 
 /// Commands written as bare words.
-pub const BARE: &[&str] = &["pen_up", "pen_down", "pause", "push", "pop"];
+pub const BARE: &[&str] = &["pen_up", "pen_down", "pause", "push", "pop", "draw_turtle"];
 /// Commands taking one number.
 pub const SCALAR: &[&str] = &[
     "forward",
@@ -140,7 +140,7 @@ pub const SCALAR: &[&str] = &[
 /// Every command, for error messages.
 pub const COMMANDS: &str = "forward, backward, lift, goto, yaw, pitch, roll, left, right, \
 set_heading, pen_up, pen_down, extrude_rate, cross_section, speed, extrude, dwell, pause, \
-nozzle_temp, bed_temp, fan, push, pop, repeat, if, call, lsystem, hair";
+nozzle_temp, bed_temp, fan, push, pop, draw_turtle, repeat, if, call, lsystem, hair";
 
 impl schemars::JsonSchema for RawCommand {
     fn schema_name() -> std::borrow::Cow<'static, str> {
@@ -426,6 +426,8 @@ pub enum Op {
     Pause,
     Push,
     Pop,
+    /// `draw_turtle`: a marker in the previews, nothing in the G-code.
+    DrawTurtle,
     Set(Setting, Val),
     Extrude(Val, Option<Val>),
     Dwell(Val),
@@ -595,6 +597,7 @@ impl<'a> Compiler<'a> {
                     "pen_down" => Op::PenDown,
                     "pause" => Op::Pause,
                     "push" => Op::Push,
+                    "draw_turtle" => Op::DrawTurtle,
                     _ => Op::Pop,
                 },
             ),
