@@ -102,6 +102,8 @@ fn is_join(s: &Strand) -> bool {
 /// Runs a group's steps on `parts` as one string set.
 fn apply(g: &Group, parts: &mut [Toolpath], max_strings: u64, threads: Threads) -> Result<()> {
     let names: Vec<String> = parts.iter().map(|t| t.name.clone()).collect();
+    // the previews' turtle markers stay with their parts (not moved by steps)
+    let markers: Vec<_> = parts.iter().map(|t| t.markers.clone()).collect();
     let mut all = join(parts);
     for (j, step) in g.steps.iter().enumerate() {
         step.apply(&mut all, max_strings, threads)
@@ -111,8 +113,16 @@ fn apply(g: &Group, parts: &mut [Toolpath], max_strings: u64, threads: Threads) 
             all = join(&split(all));
         }
     }
-    for (tp, (part, name)) in parts.iter_mut().zip(split(all).into_iter().zip(names)) {
-        *tp = Toolpath { name, ..part };
+    for ((tp, (part, name)), markers) in parts
+        .iter_mut()
+        .zip(split(all).into_iter().zip(names))
+        .zip(markers)
+    {
+        *tp = Toolpath {
+            name,
+            markers,
+            ..part
+        };
     }
     Ok(())
 }
@@ -129,6 +139,7 @@ fn join(parts: &[Toolpath]) -> Toolpath {
                 c: 0.0,
                 v: JOIN,
                 travel: true,
+                hair: false,
             });
         }
         let base = all.strings.len();
@@ -157,6 +168,7 @@ fn split(all: Toolpath) -> Vec<Toolpath> {
             points: all.points[first..=k].to_vec(),
             strings: all.strings[first..k].to_vec(),
             events: Vec::new(),
+            markers: Vec::new(),
         };
         while let Some(&&(i, e)) = events.peek() {
             if i > k {

@@ -18,6 +18,10 @@ pub struct Strand {
     pub v: f64,
     /// A travel move: the head moves without extruding.
     pub travel: bool,
+    /// A declared hair (a turtle's `hair:`): a thin string pulled from a blob
+    /// into the air on purpose, which the `unsupported`, `thin-string` and
+    /// `nozzle-collision` checks pass over (and nothing else does).
+    pub hair: bool,
 }
 
 /// Something the printer does between two strings that is not a move
@@ -62,6 +66,19 @@ pub enum Event {
     },
 }
 
+/// Where a turtle stood when its program said `draw_turtle`
+/// (ExtruderTurtle's `draw_Turtle()`): drawn in the previews as a small
+/// triangle pointing along the heading, never written to the G-code.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Marker {
+    /// The turtle's position, recipe coordinates, mm.
+    pub pos: DVec3,
+    /// Its heading (unit).
+    pub heading: DVec3,
+    /// Its up axis (unit), the triangle's normal.
+    pub up: DVec3,
+}
+
 /// A part: a polyline of points and the strings between them.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Toolpath {
@@ -74,6 +91,8 @@ pub struct Toolpath {
     /// Events in order of their string index: `(k, e)` happens before
     /// string k (k = n: after the last string).
     pub events: Vec<(usize, Event)>,
+    /// Turtle markers for the previews (`draw_turtle`), in program order.
+    pub markers: Vec<Marker>,
 }
 
 impl Toolpath {
@@ -84,6 +103,7 @@ impl Toolpath {
             points: vec![start],
             strings: Vec::new(),
             events: Vec::new(),
+            markers: Vec::new(),
         }
     }
 
@@ -96,6 +116,7 @@ impl Toolpath {
             points,
             strings: Vec::with_capacity(n),
             events: Vec::new(),
+            markers: Vec::new(),
         }
     }
 
@@ -111,7 +132,25 @@ impl Toolpath {
             c,
             v,
             travel: false,
+            hair: false,
         });
+    }
+
+    /// Adds a declared hair to `p`: an extruding string of cross-section `c`
+    /// that is meant to hang in the air (see [`Strand::hair`]).
+    pub fn hair(&mut self, p: DVec3, c: f64, v: f64) {
+        self.points.push(p);
+        self.strings.push(Strand {
+            c,
+            v,
+            travel: false,
+            hair: true,
+        });
+    }
+
+    /// How many strings are declared hairs.
+    pub fn hair_count(&self) -> usize {
+        self.strings.iter().filter(|s| s.hair).count()
     }
 
     /// Adds a travel string to `p` (the papers' `move`).
@@ -121,6 +160,7 @@ impl Toolpath {
             c: 0.0,
             v,
             travel: true,
+            hair: false,
         });
     }
 
@@ -175,6 +215,7 @@ impl Toolpath {
             .extend(other.events.iter().map(|&(k, e)| (k + base, e)));
         self.points.extend_from_slice(&other.points[1..]);
         self.strings.extend_from_slice(&other.strings);
+        self.markers.extend_from_slice(&other.markers);
     }
 }
 

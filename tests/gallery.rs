@@ -105,12 +105,14 @@ fn split_first(recipe: &Recipe, k: usize, tp: &Toolpath) -> (Toolpath, Toolpath)
         points: tp.points[..=n].to_vec(),
         strings: tp.strings[..n].to_vec(),
         events: Vec::new(),
+        markers: Vec::new(),
     };
     let rest = Toolpath {
         name: tp.name.clone(),
         points: tp.points[n..].to_vec(),
         strings: tp.strings[n..].to_vec(),
         events: Vec::new(),
+        markers: Vec::new(),
     };
     (first, rest)
 }

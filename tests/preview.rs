@@ -562,3 +562,56 @@ fn a_bad_thumbnail_size_names_its_place() {
         "{err}"
     );
 }
+
+#[test]
+fn draw_turtle_is_a_triangle_in_the_previews_and_nothing_in_the_g_code() {
+    let dir = tmp("preview-turtle");
+    let square = |mark: &str| {
+        format!(
+            "p3dp: 1\nname: sq\nparts:\n  - name: sq\n    primitive:\n      turtle:\n        start: {{position: [0, 0, 0.2]}}\n        program:\n          - repeat: 4\n            do: [{{forward: 20}}, {{left: 90}}]\n          - {{forward: 5}}\n          - {{left: 30}}\n{mark}"
+        )
+    };
+    std::fs::write(dir.join("plain.yaml"), square("")).unwrap();
+    std::fs::write(dir.join("marked.yaml"), square("          - draw_turtle\n")).unwrap();
+    for f in ["plain", "marked"] {
+        ok(&p3dp(
+            &dir,
+            &["build", &format!("{f}.yaml"), "-o", &format!("{f}.gcode")],
+        ));
+        ok(&p3dp(
+            &dir,
+            &[
+                "preview",
+                &format!("{f}.yaml"),
+                "-o",
+                &format!("{f}.png"),
+                "--view",
+                "top",
+            ],
+        ));
+        ok(&p3dp(
+            &dir,
+            &["preview", &format!("{f}.yaml"), "-o", &format!("{f}.html")],
+        ));
+    }
+    // the same G-code, byte for byte
+    let g = |f: &str| std::fs::read(dir.join(f)).unwrap();
+    assert_eq!(g("plain.gcode"), g("marked.gcode"));
+    // the PNG: the marker's colour only where the turtle is drawn
+    let yellow = |f: &str| {
+        rgb(&dir.join(f))
+            .pixels()
+            .filter(|p| p.0 == [255, 200, 40])
+            .count()
+    };
+    assert_eq!(yellow("plain.png"), 0);
+    assert!(yellow("marked.png") > 20, "{}", yellow("marked.png"));
+    // the viewer's data: the turtle where the program left it, heading 30°
+    let data = |f: &str| viewer_data(&std::fs::read_to_string(dir.join(f)).unwrap());
+    assert_eq!(data("plain.html")["turtles"], serde_json::json!([]));
+    let t = &data("marked.html")["turtles"][0];
+    let v = |i: usize, k: usize| t[i][k].as_f64().unwrap();
+    assert!((v(0, 0) - 5.0).abs() < 1e-9 && v(0, 1).abs() < 1e-9 && (v(0, 2) - 0.2).abs() < 1e-9);
+    assert!((v(1, 0) - 0.75f64.sqrt()).abs() < 1e-9 && (v(1, 1) - 0.5).abs() < 1e-9);
+    assert!((v(2, 2) - 1.0).abs() < 1e-9);
+}

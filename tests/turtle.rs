@@ -274,6 +274,11 @@ fn every_turtle_recipe_passes_check() {
         "nonplanar-vase",
         "brush",
         "pine-tree",
+        "hairs",
+        "string-art-parabola",
+        "filled-shapes",
+        "flexible-circles",
+        "chain-mail",
     ] {
         let o = p3dp(&root(), &["check", &format!("recipes/{name}.yaml")]);
         assert!(

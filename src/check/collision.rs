@@ -30,7 +30,10 @@
 //! sits in the string it lays). When the nozzle's lowest point on a move is
 //! above all filament that counts, the move cannot collide and costs nothing
 //! more; filament is mapped only when a move needs the map, so a helix
-//! printed bottom to top is checked in passing.
+//! printed bottom to top is checked in passing. A declared hair (a turtle's
+//! `hair:`, [`crate::toolpath::Strand::hair`]) is never mapped (a hair bends
+//! out of the head's way), and the move that pulls it is not checked against
+//! the cone (the nozzle rises out of its own blob), only against the box.
 
 use glam::{DVec2, DVec3};
 
@@ -243,7 +246,8 @@ impl Walk<'_> {
                 self.mapped = (p + 1, 0);
                 continue;
             }
-            if !tp.strings[k].travel {
+            // a hair bends out of the head's way: it is not mapped
+            if !tp.strings[k].travel && !tp.strings[k].hair {
                 let (a, b) = tp.ends(k);
                 self.map.deposit(a, b, (p as u32, k as u32));
             }
@@ -251,8 +255,9 @@ impl Walk<'_> {
         }
     }
 
-    /// Checks the head along a–b (`string` None for the travel between parts).
-    fn segment(&mut self, a: DVec3, b: DVec3, string: Option<usize>, travel: bool) {
+    /// Checks the head along a–b (`string` None for the travel between
+    /// parts); pulling a hair (`hair`) is checked for the box only.
+    fn segment(&mut self, a: DVec3, b: DVec3, string: Option<usize>, travel: bool, hair: bool) {
         // no filament old enough above the move's lowest point: no collision
         if a.z.min(b.z) + self.delta >= self.elig_top {
             return;
@@ -263,31 +268,36 @@ impl Walk<'_> {
         let step = len / n as f64;
         for i in 0..=n {
             let p = a.lerp(b, i as f64 / n as f64);
-            self.at(p, string, travel, if i == 0 { 0.0 } else { step });
+            self.at(p, string, travel, hair, if i == 0 { 0.0 } else { step });
         }
     }
 
     /// Checks the head with its nozzle tip at `p`.
-    fn at(&mut self, p: DVec3, string: Option<usize>, travel: bool, step: f64) {
+    fn at(&mut self, p: DVec3, string: Option<usize>, travel: bool, hair: bool, step: f64) {
         let xy = p.truncate();
         let (tan, r_tip, h) = (self.tan, self.r_tip, self.h_cone);
         // the deepest filament inside the cone: how far inside its surface
+        // (none while pulling a hair: the nozzle rises out of its own blob)
         let mut deepest: Option<(f64, f64, f64)> = None;
-        let src = self.map.find(
-            xy - DVec2::splat(self.r_top),
-            xy + DVec2::splat(self.r_top),
-            p.z + self.delta,
-            xy,
-            |side, z| {
-                let depth = r_tip + (z - p.z).min(h) * tan - side;
-                if depth > 0.0 && deepest.is_none_or(|d| depth > d.0) {
-                    deepest = Some((depth, side, z));
-                }
-                false
-            },
-        );
+        let src = if hair {
+            None
+        } else {
+            self.map.find(
+                xy - DVec2::splat(self.r_top),
+                xy + DVec2::splat(self.r_top),
+                p.z + self.delta,
+                xy,
+                |side, z| {
+                    let depth = r_tip + (z - p.z).min(h) * tan - side;
+                    if depth > 0.0 && deepest.is_none_or(|d| depth > d.0) {
+                        deepest = Some((depth, side, z));
+                    }
+                    false
+                },
+            )
+        };
         debug_assert!(src.is_none());
-        if let Some((depth, side, z)) = deepest {
+        if let (false, Some((depth, side, z))) = (hair, deepest) {
             // find it again for its place and source
             let hit = self.map.find(
                 xy - DVec2::splat(self.r_top),
@@ -362,11 +372,11 @@ pub fn check(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) {
                 Some(z) => {
                     let up = DVec3::new(h.x, h.y, z);
                     let over = DVec3::new(start.x, start.y, z);
-                    w.segment(h, up, None, true);
-                    w.segment(up, over, None, true);
-                    w.segment(over, start, None, true);
+                    w.segment(h, up, None, true, false);
+                    w.segment(up, over, None, true, false);
+                    w.segment(over, start, None, true, false);
                 }
-                None => w.segment(h, start, None, true),
+                None => w.segment(h, start, None, true, false),
             }
         }
         // string j becomes old enough once the path is LAG past its end
@@ -378,7 +388,7 @@ pub fn check(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) {
                     break;
                 }
                 earc += l;
-                if !tp.strings[ek].travel {
+                if !tp.strings[ek].travel && !tp.strings[ek].hair {
                     let (a, b) = tp.ends(ek);
                     w.elig_top = w.elig_top.max(a.z).max(b.z);
                 }
@@ -389,7 +399,7 @@ pub fn check(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) {
         for k in 0..tp.len() {
             let s = tp.strings[k];
             let (a, b) = tp.ends(k);
-            w.segment(a, b, Some(k), s.travel);
+            w.segment(a, b, Some(k), s.travel, s.hair);
             arc += a.distance(b);
             if !s.travel {
                 printed_top = printed_top.max(a.z).max(b.z);

@@ -401,6 +401,7 @@ mod tests {
 
     fn ring(r: f64, z: f64, n: usize, c: f64) -> Toolpath {
         let mut tp = Toolpath {
+            markers: Vec::new(),
             name: "ring".into(),
             ..Toolpath::default()
         };
@@ -413,7 +414,8 @@ mod tests {
             Strand {
                 c,
                 v: 30.0,
-                travel: false
+                travel: false,
+                hair: false,
             };
             n
         ];

@@ -1,7 +1,8 @@
 //! Cross-sections a nozzle can lay: far above nozzle² the nozzle cannot
 //! shape the bead (it floods and clogs), far below it the string breaks.
 //! Warnings past `checks.cross_section_max` / `_min` (× nozzle²), errors past
-//! the hard limits. The volumetric flow c·v is checked in [`super::run`]'s
+//! the hard limits; a declared hair (`hair:`) is thin on purpose and never
+//! `thin-string` (it may still be `over-extrusion`). The volumetric flow c·v is checked in [`super::run`]'s
 //! `flow` (the hot end's `max_flow`).
 
 use super::{fmt_p, Finding, Severity};
@@ -76,7 +77,8 @@ pub fn cross_sections(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) {
         }
         if s.c > hi {
             Tally::count(&mut over, k, s.c, s.c > hard_hi, f64::max);
-        } else if s.c < lo {
+        } else if s.c < lo && !s.hair {
+            // a declared hair is thin on purpose (toolpath::Strand::hair)
             Tally::count(&mut thin, k, s.c, s.c < hard_lo, f64::min);
         }
     }

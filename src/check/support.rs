@@ -21,7 +21,9 @@
 //! the one before). Consecutive unsupported samples make a run: a run with
 //! supported ends is a `bridge` (a note up to `checks.max_bridge`, a warning
 //! beyond), any other run longer than the string's width is `unsupported`
-//! (an error: the string hangs from one end or floats). Findings are one per
+//! (an error: the string hangs from one end or floats). A declared hair (a
+//! turtle's `hair:`, [`crate::toolpath::Strand::hair`]) hangs on purpose: it
+//! is neither sampled nor support for later strings. Findings are one per
 //! part and kind, with the run count, the total length of path (and the
 //! filament it carries), the longest run, the place of the first run and the
 //! worst overhang: how far sideways a sample reaches past the edge of the
@@ -88,7 +90,8 @@ impl<'a> Deposits<'a> {
                 acc += l;
                 s.push(acc);
                 let st = tp.strings[k];
-                if !st.travel && l > 0.0 {
+                // a hair holds nothing up: it is no deposit
+                if !st.travel && !st.hair && l > 0.0 {
                     ids.push((p as u32, k as u32));
                     w_max = w_max.max(width(st.c, nozzle));
                 }
@@ -291,6 +294,15 @@ fn scan_part(
             continue;
         }
         if l <= 0.0 {
+            continue;
+        }
+        if s.hair {
+            // a declared hair hangs in the air on purpose: not sampled, and
+            // not a deposit (so `g` does not count it); the run before it
+            // ends unsupported, as before a travel
+            close(&mut run, &mut run_pts, None);
+            last_ok = None;
+            hint = None;
             continue;
         }
         let w = width(s.c, nozzle);

@@ -279,6 +279,12 @@ pub fn data(plan: &Plan, gcode: &str, stats: &Stats, opts: &Options) -> (serde_j
             "spacing_mm": scene.typical_spacing(),
         },
         "findings": findings,
+        // draw_turtle markers: position, heading, up (recipe coordinates)
+        "turtles": scene
+            .turtles
+            .iter()
+            .map(|m| [m.pos.to_array(), m.heading.to_array(), m.up.to_array()])
+            .collect::<Vec<_>>(),
     });
     (data, n)
 }

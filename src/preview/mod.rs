@@ -234,6 +234,8 @@ pub struct Scene<'a> {
     pub spacing: Vec<f64>,
     /// Where the findings are, recipe coordinates.
     pub marks: Vec<DVec3>,
+    /// The turtles' `draw_turtle` markers of every part.
+    pub turtles: Vec<crate::toolpath::Marker>,
 }
 
 impl<'a> Scene<'a> {
@@ -272,7 +274,25 @@ impl<'a> Scene<'a> {
                 .filter_map(|f| f.at.map(DVec3::from_array))
                 .filter(|p| p.is_finite())
                 .collect(),
+            turtles: plan
+                .paths
+                .iter()
+                .flat_map(|tp| tp.markers.iter().copied())
+                .filter(|m| m.pos.is_finite())
+                .collect(),
         }
+    }
+
+    /// The triangle of a turtle marker (ExtruderTurtle's draw_Turtle(), Fig.
+    /// 2c): its sharpest corner `size` mm ahead along the heading, the other
+    /// two behind it on either side, in the turtle's plane (normal `up`).
+    pub fn turtle_triangle(m: &crate::toolpath::Marker, size: f64) -> [DVec3; 3] {
+        let left = m.up.cross(m.heading);
+        [
+            m.pos + m.heading * size,
+            m.pos - m.heading * (0.5 * size) + left * (0.5 * size),
+            m.pos - m.heading * (0.5 * size) - left * (0.5 * size),
+        ]
     }
 
     /// The number string k of path `pi` shows in colour mode `mode`.

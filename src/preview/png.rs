@@ -223,6 +223,33 @@ fn draw_model(
         pm.stroke_path(&path, &paint, &stroke, Transform::identity(), None);
         pb = path.clear();
     }
+    // the turtles' markers (draw_turtle): a filled triangle each, pointing
+    // along the heading, about 1/30 of the print's size
+    if !scene.turtles.is_empty() {
+        let (lo, hi) = pts.iter().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(l, h), p| (l.min(*p), h.max(*p)),
+        );
+        let size = ((hi - lo).max_element() / 30.0).clamp(1.0, 20.0);
+        paint.set_color_rgba8(255, 200, 40, 255);
+        for m in &scene.turtles {
+            let tri = super::Scene::turtle_triangle(m, size).map(|p| frame.pixel(p));
+            let mut tb = PathBuilder::new();
+            tb.move_to(tri[0].0 as f32, tri[0].1 as f32);
+            tb.line_to(tri[1].0 as f32, tri[1].1 as f32);
+            tb.line_to(tri[2].0 as f32, tri[2].1 as f32);
+            tb.close();
+            if let Some(path) = tb.finish() {
+                pm.fill_path(
+                    &path,
+                    &paint,
+                    tiny_skia::FillRule::Winding,
+                    Transform::identity(),
+                    None,
+                );
+            }
+        }
+    }
     if mode == ColorMode::Findings {
         paint.set_color_rgba8(255, 60, 50, 255);
         let r = (6.0 * (rect[3] - rect[1]) / 400.0).clamp(4.0, 24.0) as f32;

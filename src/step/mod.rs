@@ -71,6 +71,9 @@ impl Step {
                 for p in &mut tp.points {
                     *p += *d;
                 }
+                for m in &mut tp.markers {
+                    m.pos += *d;
+                }
                 Ok(())
             }
         }

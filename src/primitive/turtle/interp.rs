@@ -20,6 +20,12 @@ use crate::toolpath::{Event, Toolpath};
 pub const MAX_CALL_DEPTH: usize = 200;
 /// Filament speed of `extrude` in place without `feed:`, mm/s.
 pub const DEFAULT_FEED: f64 = 1.0;
+/// Filament of a hair's blob without `blob:`, mm (about 0.1 mm³ of 1.75 mm
+/// filament: a bead a nozzle wide and high).
+pub const DEFAULT_HAIR_BLOB: f64 = 0.05;
+/// Extrude rate of a hair's pull without `rate:`, mm of filament per mm: a
+/// third of ExtruderTurtle's 0.03 for a 0.2 mm layer, "extruding little".
+pub const DEFAULT_HAIR_RATE: f64 = 0.01;
 
 /// What a run may produce and how it starts.
 #[derive(Clone, Copy, Debug)]
@@ -126,6 +132,9 @@ pub const IDLE_STEPS: u64 = 4_000_000;
 /// Steps allowed for each string or event made, on top of [`IDLE_STEPS`]:
 /// the gallery's L-systems and recursive procedures need fewer than 8.
 pub const STEPS_PER_STRING: u64 = 16;
+
+/// Most `draw_turtle` markers a part keeps (the rest are not drawn).
+pub const MAX_MARKERS: usize = 10_000;
 
 /// Most frames `push` may save before a `pop`.
 pub const MAX_SAVED: usize = 100_000;
@@ -435,6 +444,18 @@ impl Run<'_> {
             }
             Op::PenDown => self.pen_down = true,
             Op::Pause => self.event(Event::Pause, place)?,
+            Op::DrawTurtle => {
+                // ExtruderTurtle's draw_Turtle(): seen in the previews only
+                if let Some(tp) = &mut self.out {
+                    if tp.markers.len() < MAX_MARKERS {
+                        tp.markers.push(crate::toolpath::Marker {
+                            pos: self.frame.pos,
+                            heading: self.frame.heading,
+                            up: self.frame.up,
+                        });
+                    }
+                }
+            }
             Op::Push => {
                 // each saved frame is memory: a push without a pop is bounded
                 if self.saved.len() >= MAX_SAVED {
@@ -558,6 +579,45 @@ impl Run<'_> {
                 let r = self.block(&p.body, &mut inner);
                 self.depth -= 1;
                 r?;
+            }
+            Op::Hair { length, blob, rate } => {
+                // Laput et al.'s blob-and-pull (ExtruderTurtle §4.3): a blob
+                // in place, a thin pull along the heading, a retraction that
+                // snaps it; the pen is up afterwards
+                let len = self.positive(length, vals, place)?;
+                let blob = match blob {
+                    Some(b) => {
+                        let p = place.replace(".hair", ".blob");
+                        self.within(b, vals, &p, 0.0, 1000.0)?
+                    }
+                    None => DEFAULT_HAIR_BLOB,
+                };
+                let rate = match rate {
+                    Some(r) => {
+                        let p = place.replace(".hair", ".rate");
+                        self.positive(r, vals, &p)?
+                    }
+                    None => DEFAULT_HAIR_RATE,
+                };
+                if blob > 0.0 {
+                    let e = Event::Extrude {
+                        filament: blob,
+                        speed: DEFAULT_FEED,
+                    };
+                    self.event(e, place)?;
+                }
+                let to = self.frame.pos + self.frame.heading * len;
+                if !to.is_finite() {
+                    return Err(Error::input(place, "the hair's tip is not finite"));
+                }
+                self.strings += 1;
+                self.made(place)?;
+                if let Some(tp) = &mut self.out {
+                    tp.hair(to, rate * self.area, self.v);
+                }
+                self.frame.pos = to;
+                self.event(Event::Retract, place)?;
+                self.pen_down = false;
             }
             Op::Lsystem(ls) => {
                 let p = format!("{place}.iterations");

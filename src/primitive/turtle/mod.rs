@@ -202,6 +202,37 @@ mod tests {
     }
 
     #[test]
+    fn a_hair_is_a_blob_a_declared_pull_and_a_retraction() {
+        let t = run("program:\n  - {pitch: 90}\n  - {hair: 6, blob: 0.2, rate: 0.5}\n  - {forward: 2}\n  - pen_down\n  - {forward: 1}\n");
+        // the pull, then (pen up) a travel, then a drawn string
+        assert_eq!(t.len(), 3);
+        assert!(t.strings[0].hair && !t.strings[0].travel);
+        assert_eq!(t.points[1], DVec3::new(0.0, 0.0, 6.0));
+        assert_eq!(t.strings[0].c, 0.5 * 2.0);
+        assert!(t.strings[1].travel && !t.strings[1].hair);
+        assert!(!t.strings[2].hair && !t.strings[2].travel);
+        assert_eq!(
+            t.events,
+            vec![
+                (
+                    0,
+                    Event::Extrude {
+                        filament: 0.2,
+                        speed: 1.0
+                    }
+                ),
+                (1, Event::Retract)
+            ]
+        );
+        let e = err("program:\n  - {hair: -1}\n");
+        assert_eq!(e.place.as_deref(), Some("turtle.program[0].hair"));
+        let e = err("program:\n  - {hair: 1, rate: 0}\n");
+        assert_eq!(e.place.as_deref(), Some("turtle.program[0].rate"));
+        let e = err("program:\n  - {hair: 1, feed: 2}\n");
+        assert!(e.message.contains("its other keys are blob, rate"), "{e}");
+    }
+
+    #[test]
     fn closed_polygons_return_to_their_start() {
         for (sides, turn) in [(3, "right"), (6, "left"), (7, "left"), (17, "right")] {
             let t = run(&format!(

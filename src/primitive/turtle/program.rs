@@ -78,7 +78,7 @@ pub struct RawLsystem {
 #[derive(Clone, Debug, PartialEq)]
 #[allow(missing_docs)]
 pub enum RawCommand {
-    /// A command without a value: `pen_up`, `pen_down`, `pause`, `push`, `pop`.
+    /// A command without a value: `pen_up`, `pen_down`, `pause`, `push`, `pop`, `draw_turtle`.
     Bare(&'static str),
     /// A command with one number: movement, turns, settings, events.
     Scalar(&'static str, Num),
@@ -111,10 +111,16 @@ pub enum RawCommand {
         args: Vec<Num>,
     },
     Lsystem(Box<RawLsystem>),
+    /// `hair: L` with `blob:` and `rate:`: a declared hair (see [`Op::Hair`]).
+    Hair {
+        length: Num,
+        blob: Option<Num>,
+        rate: Option<Num>,
+    },
 }
 
 /// Commands written as bare words.
-pub const BARE: &[&str] = &["pen_up", "pen_down", "pause", "push", "pop"];
+pub const BARE: &[&str] = &["pen_up", "pen_down", "pause", "push", "pop", "draw_turtle"];
 /// Commands taking one number.
 pub const SCALAR: &[&str] = &[
     "forward",
@@ -134,7 +140,7 @@ pub const SCALAR: &[&str] = &[
 /// Every command, for error messages.
 pub const COMMANDS: &str = "forward, backward, lift, goto, yaw, pitch, roll, left, right, \
 set_heading, pen_up, pen_down, extrude_rate, cross_section, speed, extrude, dwell, pause, \
-nozzle_temp, bed_temp, fan, push, pop, repeat, if, call, lsystem";
+nozzle_temp, bed_temp, fan, push, pop, draw_turtle, repeat, if, call, lsystem, hair";
 
 impl schemars::JsonSchema for RawCommand {
     fn schema_name() -> std::borrow::Cow<'static, str> {
@@ -142,7 +148,9 @@ impl schemars::JsonSchema for RawCommand {
     }
     fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
         let mut keys: Vec<&str> = COMMANDS.split(", ").collect();
-        keys.extend(["as", "do", "else", "args", "up", "feed", "wait"]);
+        keys.extend([
+            "as", "do", "else", "args", "up", "feed", "wait", "blob", "rate",
+        ]);
         schemars::json_schema!({
             "description": "A turtle command: a one-key map such as {forward: 10} (with companion keys for a few), or a bare word such as pen_up.",
             "anyOf": [
@@ -179,6 +187,8 @@ struct Keys {
     up: Option<Num3>,
     feed: Option<Num>,
     wait: Option<bool>,
+    blob: Option<Num>,
+    rate: Option<Num>,
 }
 
 impl<'de> Visitor<'de> for CommandVisitor {
@@ -210,11 +220,12 @@ impl<'de> Visitor<'de> for CommandVisitor {
                     set(&mut k.cmd, find(SCALAR, w).unwrap())?;
                     k.num = Some(m.next_value()?);
                 }
-                "repeat" | "if" | "extrude" | "nozzle_temp" | "bed_temp" => {
+                "repeat" | "if" | "extrude" | "nozzle_temp" | "bed_temp" | "hair" => {
                     let name = match key.as_str() {
                         "repeat" => "repeat",
                         "if" => "if",
                         "extrude" => "extrude",
+                        "hair" => "hair",
                         "nozzle_temp" => "nozzle_temp",
                         _ => "bed_temp",
                     };
@@ -241,6 +252,8 @@ impl<'de> Visitor<'de> for CommandVisitor {
                 "up" => k.up = Some(m.next_value()?),
                 "feed" => k.feed = Some(m.next_value()?),
                 "wait" => k.wait = Some(m.next_value()?),
+                "blob" => k.blob = Some(m.next_value()?),
+                "rate" => k.rate = Some(m.next_value()?),
                 w if find(BARE, w).is_some() => {
                     return Err(de::Error::custom(format!(
                         "`{w}` takes no value; write it as a bare word: `- {w}`"
@@ -275,7 +288,7 @@ impl Keys {
     fn build<E: de::Error>(self) -> std::result::Result<RawCommand, E> {
         let Some(cmd) = self.cmd else {
             return Err(E::custom(format!(
-                "expected a command key (one of {COMMANDS}) beside `as`, `do`, `else`, `args`, `up`, `feed` or `wait`"
+                "expected a command key (one of {COMMANDS}) beside `as`, `do`, `else`, `args`, `up`, `feed`, `wait`, `blob` or `rate`"
             )));
         };
         let allowed: &[&str] = match cmd {
@@ -285,6 +298,7 @@ impl Keys {
             "set_heading" => &["up"],
             "extrude" => &["feed"],
             "nozzle_temp" | "bed_temp" => &["wait"],
+            "hair" => &["blob", "rate"],
             _ => &[],
         };
         let present = [
@@ -295,6 +309,8 @@ impl Keys {
             ("up", self.up.is_some()),
             ("feed", self.feed.is_some()),
             ("wait", self.wait.is_some()),
+            ("blob", self.blob.is_some()),
+            ("rate", self.rate.is_some()),
         ];
         for (key, here) in present {
             if here && !allowed.contains(&key) {
@@ -343,6 +359,11 @@ impl Keys {
                 args: self.args.unwrap_or_default(),
             },
             "lsystem" => RawCommand::Lsystem(Box::new(self.lsystem.unwrap())),
+            "hair" => RawCommand::Hair {
+                length: self.num.unwrap(),
+                blob: self.blob,
+                rate: self.rate,
+            },
             _ => RawCommand::Scalar(cmd, self.num.unwrap()),
         })
     }
@@ -405,6 +426,8 @@ pub enum Op {
     Pause,
     Push,
     Pop,
+    /// `draw_turtle`: a marker in the previews, nothing in the G-code.
+    DrawTurtle,
     Set(Setting, Val),
     Extrude(Val, Option<Val>),
     Dwell(Val),
@@ -429,6 +452,15 @@ pub enum Op {
         args: Vec<Val>,
     },
     Lsystem(Box<super::lsystem::Lsystem>),
+    /// `hair`: a blob of `blob` mm of filament in place, a pull of `length`
+    /// mm along the heading at `rate` mm of filament per mm (a declared hair,
+    /// [`crate::toolpath::Strand::hair`]), then a retraction with the pen up
+    /// (Laput et al.'s blob-and-pull, ExtruderTurtle §4.3).
+    Hair {
+        length: Val,
+        blob: Option<Val>,
+        rate: Option<Val>,
+    },
 }
 
 /// A compiled command and its key path (relative to `turtle`).
@@ -565,6 +597,7 @@ impl<'a> Compiler<'a> {
                     "pen_down" => Op::PenDown,
                     "pause" => Op::Pause,
                     "push" => Op::Push,
+                    "draw_turtle" => Op::DrawTurtle,
                     _ => Op::Pop,
                 },
             ),
@@ -684,6 +717,20 @@ impl<'a> Compiler<'a> {
                 }
                 (at("call"), Op::Call { proc, args: vals })
             }
+            RawCommand::Hair { length, blob, rate } => (
+                at("hair"),
+                Op::Hair {
+                    length: self.val(length, scope, &at("hair"))?,
+                    blob: match blob {
+                        Some(b) => Some(self.val(b, scope, &at("blob"))?),
+                        None => None,
+                    },
+                    rate: match rate {
+                        Some(r) => Some(self.val(r, scope, &at("rate"))?),
+                        None => None,
+                    },
+                },
+            ),
             RawCommand::Lsystem(l) => {
                 let place = at("lsystem");
                 (
