@@ -3,8 +3,11 @@
 //! parabola (Fig. 9 left) and filled shapes (Fig. 4), each read back from
 //! its strings and checked for the property its recipe promises.
 
+mod common;
+
 use std::path::PathBuf;
 
+use common::linking_by_gauss;
 use glam::DVec3;
 use p3dp::assembly::make_parts;
 use p3dp::check::{self, Severity};
@@ -269,38 +272,6 @@ fn filled_shapes_fill_their_area_and_stay_inside_it() {
         (dense / thin - sparse / fill).abs() / (sparse / fill) < 0.1,
         "{dense} {thin}"
     );
-}
-
-/// Linking number of two closed polygons by the Gauss double integral, summed
-/// exactly segment pair by segment pair as the solid angle each pair spans
-/// (Klenin & Langowski 2000), as tests/olympic.rs computes it.
-fn linking_by_gauss(a: &[DVec3], b: &[DVec3]) -> f64 {
-    let mut omega = 0.0;
-    for i in 0..a.len() {
-        let (p1, p2) = (a[i], a[(i + 1) % a.len()]);
-        for j in 0..b.len() {
-            let (p3, p4) = (b[j], b[(j + 1) % b.len()]);
-            let (r13, r14, r23, r24) = (p3 - p1, p4 - p1, p3 - p2, p4 - p2);
-            let orient = (p4 - p3).cross(p2 - p1).dot(r13);
-            let scale = (p4 - p3).length() * (p2 - p1).length() * r13.length();
-            let faces = [
-                r13.cross(r14),
-                r14.cross(r24),
-                r24.cross(r23),
-                r23.cross(r13),
-            ];
-            if orient.abs() <= 1e-12 * scale || faces.iter().any(|n| n.length() < 1e-15) {
-                continue;
-            }
-            let n = faces.map(|f| f.normalize());
-            let mut w = 0.0;
-            for k in 0..4 {
-                w += n[k].dot(n[(k + 1) % 4]).clamp(-1.0, 1.0).asin();
-            }
-            omega += w * orient.signum();
-        }
-    }
-    omega / (4.0 * std::f64::consts::PI)
 }
 
 /// Distance from `p` to segment `a`–`b`.

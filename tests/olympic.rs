@@ -159,38 +159,6 @@ fn linking_by_crossings(a: &[DVec3], b: &[DVec3]) -> (f64, f64) {
     (sum / 2.0, gap)
 }
 
-/// Linking number of two closed polygons by the Gauss double integral, summed
-/// exactly segment pair by segment pair as the solid angle each pair spans
-/// (Klenin & Langowski 2000). An integer up to rounding for closed curves.
-fn linking_by_gauss(a: &[DVec3], b: &[DVec3]) -> f64 {
-    let mut omega = 0.0;
-    for i in 0..a.len() {
-        let (p1, p2) = (a[i], a[(i + 1) % a.len()]);
-        for j in 0..b.len() {
-            let (p3, p4) = (b[j], b[(j + 1) % b.len()]);
-            let (r13, r14, r23, r24) = (p3 - p1, p4 - p1, p3 - p2, p4 - p2);
-            let orient = (p4 - p3).cross(p2 - p1).dot(r13);
-            let scale = (p4 - p3).length() * (p2 - p1).length() * r13.length();
-            let faces = [
-                r13.cross(r14),
-                r14.cross(r24),
-                r24.cross(r23),
-                r23.cross(r13),
-            ];
-            if orient.abs() <= 1e-12 * scale || faces.iter().any(|n| n.length() < 1e-15) {
-                continue; // the four points in a plane: no solid angle
-            }
-            let n = faces.map(|f| f.normalize());
-            let mut w = 0.0;
-            for k in 0..4 {
-                w += n[k].dot(n[(k + 1) % 4]).clamp(-1.0, 1.0).asin();
-            }
-            omega += w * orient.signum();
-        }
-    }
-    omega / (4.0 * PI)
-}
-
 // ---------------------------------------------------------------------------
 // the recipe's pieces
 
