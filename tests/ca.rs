@@ -103,6 +103,11 @@ fn p0_one_gives_vertical_stripes_fig_6c() {
 #[test]
 fn p1_one_gives_crisp_leaning_stripes_fig_6b() {
     for seed in SEEDS {
+        // p0 = 1 does not make them vertical while p1 = 1: p0 is never
+        // consulted once the stripes lean
+        let p = basic(1.0, 1.0, 150, seed);
+        assert!(steady_from(&p, 1).is_some_and(|f| f <= 5), "seed {seed}");
+        assert_eq!(straight_and_leaning(&p, 5), (0.0, 1.0), "seed {seed}");
         let p = basic(0.99, 1.0, 150, seed);
         // from an early turn on, every turn is the one below moved one cell
         let from = steady_from(&p, 1).unwrap_or(usize::MAX);
