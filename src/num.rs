@@ -107,6 +107,14 @@ impl<'a> Scope<'a> {
         }
     }
 
+    /// `n` as [`Scope::positive`] reads it, or `default` when absent.
+    pub fn positive_or(&self, n: &Option<Num>, place: &str, default: f64) -> Result<f64> {
+        match n {
+            Some(n) => self.positive(n, place),
+            None => Ok(default),
+        }
+    }
+
     /// A number ≥ 0.
     pub fn non_negative(&self, n: &Num, place: &str) -> Result<f64> {
         let v = self.num(n, place)?;

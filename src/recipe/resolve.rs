@@ -187,14 +187,12 @@ impl Recipe {
             None => Printer::resolve(raw.printer.as_deref().unwrap_or("generic-220"), dir)?,
         };
         let material = resolve_material(&ctx, raw.material.as_ref())?;
-        let c0 = match &raw.defaults.cross_section {
-            Some(n) => ctx.positive(n, "defaults.cross_section")?,
-            None => DEFAULT_CROSS_SECTION,
-        };
-        let v0 = match &raw.defaults.speed {
-            Some(n) => ctx.positive(n, "defaults.speed")?,
-            None => DEFAULT_SPEED,
-        };
+        let c0 = ctx.positive_or(
+            &raw.defaults.cross_section,
+            "defaults.cross_section",
+            DEFAULT_CROSS_SECTION,
+        )?;
+        let v0 = ctx.positive_or(&raw.defaults.speed, "defaults.speed", DEFAULT_SPEED)?;
         let skirt = match &raw.skirt {
             Some(s) => Some(Skirt {
                 distance: ctx.non_negative(&s.distance, "skirt.distance")?,
@@ -312,10 +310,7 @@ fn resolve_material(ctx: &Ctx, m: Option<&RawMaterial>) -> Result<Material> {
                 density: ctx.positive(&m.density, "material.density")?,
                 nozzle_temp,
                 bed_temp: ctx.non_negative(&m.bed_temp, "material.bed_temp")?,
-                max_nozzle_temp: match &m.max_nozzle_temp {
-                    Some(n) => ctx.positive(n, "material.max_nozzle_temp")?,
-                    None => nozzle_temp + 25.0,
-                },
+                max_nozzle_temp: ctx.positive_or(&m.max_nozzle_temp, "material.max_nozzle_temp", nozzle_temp + 25.0)?,
                 fan_speed: match &m.fan_speed {
                     Some(n) => {
                         let f = ctx.non_negative(n, "material.fan_speed")?;
@@ -366,14 +361,8 @@ fn material_ranges(m: &Material) -> Result<()> {
 }
 
 fn resolve_part(ctx: &Ctx, p: &RawPart, c0: f64, v0: f64, k: usize) -> Result<Part> {
-    let cross_section = match &p.cross_section {
-        Some(n) => ctx.positive(n, "cross_section")?,
-        None => c0,
-    };
-    let speed = match &p.speed {
-        Some(n) => ctx.positive(n, "speed")?,
-        None => v0,
-    };
+    let cross_section = ctx.positive_or(&p.cross_section, "cross_section", c0)?;
+    let speed = ctx.positive_or(&p.speed, "speed", v0)?;
     // one primitive or a list, each maybe with its own c and v
     let items = p.primitive.as_ref().map(|p| p.items()).unwrap_or_default();
     if items.is_empty() {
@@ -453,18 +442,9 @@ fn resolve_part(ctx: &Ctx, p: &RawPart, c0: f64, v0: f64, k: usize) -> Result<Pa
                         }
                         n as u32
                     },
-                    line_width: match &b.line_width {
-                        Some(n) => ctx.positive(n, "brim.line_width")?,
-                        None => 0.45,
-                    },
-                    layer_height: match &b.layer_height {
-                        Some(n) => ctx.positive(n, "brim.layer_height")?,
-                        None => 0.2,
-                    },
-                    speed: match &b.speed {
-                        Some(n) => ctx.positive(n, "brim.speed")?,
-                        None => speed,
-                    },
+                    line_width: ctx.positive_or(&b.line_width, "brim.line_width", 0.45)?,
+                    layer_height: ctx.positive_or(&b.layer_height, "brim.layer_height", 0.2)?,
+                    speed: ctx.positive_or(&b.speed, "brim.speed", speed)?,
                 })
             }
             None => None,
@@ -505,18 +485,9 @@ fn resolve_stand(ctx: &Ctx, st: &RawStand, speed: f64) -> Result<crate::model::S
             Some(n) => Some(ctx.positive(n, "stand.height")?),
             None => None,
         },
-        line_width: match &st.line_width {
-            Some(n) => ctx.positive(n, "stand.line_width")?,
-            None => 0.45,
-        },
-        layer_height: match &st.layer_height {
-            Some(n) => ctx.positive(n, "stand.layer_height")?,
-            None => 0.2,
-        },
-        speed: match &st.speed {
-            Some(n) => ctx.positive(n, "stand.speed")?,
-            None => speed,
-        },
+        line_width: ctx.positive_or(&st.line_width, "stand.line_width", 0.45)?,
+        layer_height: ctx.positive_or(&st.layer_height, "stand.layer_height", 0.2)?,
+        speed: ctx.positive_or(&st.speed, "stand.speed", speed)?,
     })
 }
 
