@@ -29,6 +29,7 @@ pub mod rng;
 pub mod safe_text;
 pub mod threads;
 pub mod toolpath;
+pub mod svg;
 
 pub mod limits;
 pub mod machine;
