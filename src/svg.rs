@@ -449,9 +449,20 @@ impl Outline {
             .collect();
         let s = match closed.as_slice() {
             [] => {
-                return Err(
-                    "has no closed path (one ending with `Z`, or a closed shape); expected one for an outline".into(),
-                )
+                let open: Vec<String> = subpaths
+                    .iter()
+                    .filter(|s| !s.element.is_empty())
+                    .take(5)
+                    .map(|s| format!("id=\"{}\"", s.element))
+                    .collect();
+                let which = if open.is_empty() {
+                    String::new()
+                } else {
+                    format!(" (open: {})", open.join(", "))
+                };
+                return Err(format!(
+                    "has no closed path{which}; expected one ending with `Z`, or a closed shape, for an outline"
+                ));
             }
             [s] => s,
             more => {
