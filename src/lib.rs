@@ -27,9 +27,9 @@ pub mod input;
 pub mod num;
 pub mod rng;
 pub mod safe_text;
+pub mod svg;
 pub mod threads;
 pub mod toolpath;
-pub mod svg;
 
 pub mod limits;
 pub mod machine;

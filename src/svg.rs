@@ -116,7 +116,11 @@ pub fn parse(text: &str, opt: &Options) -> std::result::Result<Vec<Subpath>, Str
             ..Default::default()
         },
     )
-    .map_err(|e| format!("cannot read it as XML: {e}; expected an SVG file (no DTD, at most {MAX_NODES} nodes)"))?;
+    .map_err(|e| {
+        format!(
+            "cannot read it as XML: {e}; expected an SVG file (no DTD, at most {MAX_NODES} nodes)"
+        )
+    })?;
     check_expansion(&doc)?;
     if let Some(id) = opt.id {
         if !doc.descendants().any(|n| n.attribute("id") == Some(id)) {
@@ -687,7 +691,8 @@ mod tests {
 
     #[test]
     fn a_self_reference_is_refused() {
-        let svg = r##"<svg xmlns="http://www.w3.org/2000/svg"><g id="g"><use href="#g"/></g></svg>"##;
+        let svg =
+            r##"<svg xmlns="http://www.w3.org/2000/svg"><g id="g"><use href="#g"/></g></svg>"##;
         let e = parse(svg, &opt()).unwrap_err();
         assert!(e.contains("itself"), "{e}");
     }

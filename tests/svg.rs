@@ -209,7 +209,11 @@ fn a_circle_of_bezier_curves_is_flattened_within_the_tolerance() {
         let mut w: f64 = 0.0;
         for k in 0..tp.len() {
             let (a, b) = tp.ends(k);
-            assert!(off(a.truncate()) < 1e-4, "vertex {k} {a} {}", off(a.truncate()));
+            assert!(
+                off(a.truncate()) < 1e-4,
+                "vertex {k} {a} {}",
+                off(a.truncate())
+            );
             w = w.max(off(((a + b) * 0.5).truncate()));
         }
         assert!(w <= tol, "chord sag {w} over tolerance {tol}");
@@ -259,7 +263,8 @@ fn the_star_vase_follows_its_outline_in_every_turn() {
     for (j, ((a, b), s)) in fin.points.iter().zip(&tp.points).zip(u).enumerate() {
         let s = *s - s.floor();
         let z = b.z;
-        let want = b.truncate().length() * (1.0 + p("belly") * (std::f64::consts::PI * z / p("height")).sin())
+        let want = b.truncate().length()
+            * (1.0 + p("belly") * (std::f64::consts::PI * z / p("height")).sin())
             + p("ripple") * (z / p("height")) * (std::f64::consts::TAU * p("ripples") * s).sin();
         assert!((a.truncate().length() - want).abs() < 1e-9, "point {j}");
         assert!((a.z - z - p("bottom_top")).abs() < 1e-9);
@@ -340,7 +345,10 @@ fn refuse(dir: &Path, svg: &str, file: &str, what: &[&str]) {
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(!err.contains("panicked"), "{err}");
-    assert!(err.contains("parts[0].primitive.helix.outline.svg"), "{err}");
+    assert!(
+        err.contains("parts[0].primitive.helix.outline.svg"),
+        "{err}"
+    );
     assert!(err.contains(file), "{err}");
     for w in what {
         assert!(err.contains(w), "`{w}` not in {err}");
@@ -381,7 +389,12 @@ fn bad_svgs_are_refused_naming_the_file_and_the_element() {
     }
     body.push_str(r##"</defs><use xlink:href="#l8"/>"##);
     let t = std::time::Instant::now();
-    refuse(&dir, &svg(&body), "bomb.svg", &["<g id=\"l5\">", "line 1", "SVG bomb"]);
+    refuse(
+        &dir,
+        &svg(&body),
+        "bomb.svg",
+        &["<g id=\"l5\">", "line 1", "SVG bomb"],
+    );
     assert!(t.elapsed().as_secs() < 20);
     // a huge file: refused by size before it is parsed
     let mut big = svg("");
@@ -401,7 +414,12 @@ fn bad_svgs_are_refused_naming_the_file_and_the_element() {
     let out = p3dp(&dir, &["build", "r2.yaml", "-o", "o.gcode"]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
-    assert!(err.contains("parts[0].primitive.path.svg") && err.contains("id=\"round\"") && err.contains("max_strings"), "{err}");
+    assert!(
+        err.contains("parts[0].primitive.path.svg")
+            && err.contains("id=\"round\"")
+            && err.contains("max_strings"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -415,7 +433,12 @@ fn the_drawing_recipe_plots_every_shape() {
     // all at the pen's height, centred on the origin, 1.5 times 80 × 60 mm
     // less the strokes (the bounding box of the geometry: 76 × 56 mm)
     assert!(tp.points.iter().all(|p| p.z == r.params["pen_z"]));
-    let (lo, hi) = tp.points.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, h), p| (l.min(*p), h.max(*p)));
+    let (lo, hi) = tp
+        .points
+        .iter()
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, h), p| {
+            (l.min(*p), h.max(*p))
+        });
     assert!(((hi.x - lo.x) - 1.5 * 76.0).abs() < 1e-3, "{lo} {hi}");
     assert!((hi.x + lo.x).abs() < 1e-9 && (hi.y + lo.y).abs() < 1e-9);
 }

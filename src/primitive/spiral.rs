@@ -141,8 +141,7 @@ pub struct RawSpiral {
 impl RawSpiral {
     /// Evaluates every number; errors name `spiral.KEY`.
     pub fn resolve(&self, s: &Scope, files: Files) -> Result<Spiral> {
-        let (radius, outline) =
-            radius_or_outline(s, files, "spiral", &self.radius, &self.outline)?;
+        let (radius, outline) = radius_or_outline(s, files, "spiral", &self.radius, &self.outline)?;
         let inner = match &self.inner_radius {
             Some(n) => s.non_negative(n, "spiral.inner_radius")?,
             None => 0.0,
