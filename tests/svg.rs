@@ -130,8 +130,8 @@ fn every_turn_of_a_star_helix_follows_the_star_one_pitch_up() {
     // s is the arc fraction: at point k of the first turn, the distance
     // walked along the star from the start
     let mut walked = 0.0;
-    for k in 0..m {
-        assert!((u[k] * perimeter - walked).abs() < 1e-4, "s at point {k}");
+    for (k, uk) in u.iter().enumerate().take(m) {
+        assert!((uk * perimeter - walked).abs() < 1e-4, "s at point {k}");
         walked += flat(k);
     }
 }
