@@ -37,6 +37,9 @@ pub const MAX_DEPTH: usize = 256;
 /// Millimetres per CSS px (user unit of the root viewport).
 pub const MM_PER_PX: f64 = 25.4 / 96.0;
 
+/// Farthest a drawing's point may lie from its origin, mm.
+pub const MAX_MM: f64 = 1e6;
+
 /// The default chord tolerance of flattened curves, mm.
 pub const DEFAULT_TOLERANCE: f64 = 0.01;
 
@@ -167,6 +170,22 @@ pub fn parse(text: &str, opt: &Options) -> std::result::Result<Vec<Subpath>, Str
         ));
     }
     out.retain(|s| s.points.len() >= 2);
+    // a huge `scale` (or viewBox ratio) must not reach the geometry as
+    // infinities: a drawing lies within a kilometre of its origin
+    if let Some(s) = out
+        .iter()
+        .find(|s| s.points.iter().any(|p| !(p.abs().max_element() <= MAX_MM)))
+    {
+        let what = if s.element.is_empty() {
+            "a path".to_string()
+        } else {
+            format!("the element with id=\"{}\"", s.element)
+        };
+        return Err(format!(
+            "{what} reaches beyond {MAX_MM} mm at scale {}; expected a smaller scale",
+            opt.scale
+        ));
+    }
     Ok(out)
 }
 
@@ -687,6 +706,20 @@ mod tests {
         let e = parse(&svg, &opt()).unwrap_err();
         assert!(e.contains("<g id=\"a"), "{e}");
         assert!(e.contains("SVG bomb"), "{e}");
+    }
+
+    #[test]
+    fn a_huge_scale_is_refused() {
+        let svg = format!(r#"{MM}<path id="p" d="M 0 0 L 10 0 L 10 10 Z"/></svg>"#);
+        let e = parse(
+            &svg,
+            &Options {
+                scale: 1e300,
+                ..opt()
+            },
+        )
+        .unwrap_err();
+        assert!(e.contains("id=\"p\"") && e.contains("scale"), "{e}");
     }
 
     #[test]
