@@ -184,3 +184,34 @@ pub fn drawing_commands(
     }
     Ok(cmds)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn along_counts_turns_from_the_first_step_euclidean() {
+        // a unit square's fractions with 4 steps a turn: 0, 1/4, 1/2, 3/4
+        let sq = [
+            DVec2::new(1.0, -1.0),
+            DVec2::new(1.0, 1.0),
+            DVec2::new(-1.0, 1.0),
+            DVec2::new(-1.0, -1.0),
+        ];
+        let o = Outline::new(&sq).unwrap();
+        let f = o.fractions(4);
+        assert_eq!(f.len(), 8, "4 steps and 4 corners: {f:?}");
+        let pts = turn_points(&o, &f);
+        // starting 3 steps before turn 0: u = -1 + f[5], -1 + f[6], -1 + f[7], 0, …
+        let t = along(&f, &pts, -3, 4, 0.1, 10.0, |u, p| p.extend(u));
+        let u = t.turns.as_ref().unwrap();
+        assert_eq!(u.len(), 5);
+        assert_eq!(u[3], 0.0);
+        assert_eq!(u[0], -1.0 + f[5]);
+        assert_eq!(u[4], f[1]);
+        for (p, uj) in t.points.iter().zip(u) {
+            assert_eq!(p.z, *uj);
+            assert_eq!(p.truncate(), o.point_at(*uj));
+        }
+    }
+}
