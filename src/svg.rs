@@ -172,10 +172,11 @@ pub fn parse(text: &str, opt: &Options) -> std::result::Result<Vec<Subpath>, Str
     out.retain(|s| s.points.len() >= 2);
     // a huge `scale` (or viewBox ratio) must not reach the geometry as
     // infinities: a drawing lies within a kilometre of its origin
-    if let Some(s) = out
-        .iter()
-        .find(|s| s.points.iter().any(|p| !(p.abs().max_element() <= MAX_MM)))
-    {
+    if let Some(s) = out.iter().find(|s| {
+        s.points
+            .iter()
+            .any(|p| !p.is_finite() || p.abs().max_element() > MAX_MM)
+    }) {
         let what = if s.element.is_empty() {
             "a path".to_string()
         } else {
