@@ -148,6 +148,17 @@ fn join(parts: &[Toolpath]) -> Toolpath {
         all.points.extend_from_slice(&t.points);
         all.strings.extend_from_slice(&t.strings);
     }
+    // an outline's `s` travels with its points (0 on parts without one)
+    if parts.iter().any(|t| t.turns.is_some()) {
+        let mut u = Vec::with_capacity(all.points.len());
+        for t in parts {
+            match &t.turns {
+                Some(v) => u.extend_from_slice(v),
+                None => u.resize(u.len() + t.points.len(), 0.0),
+            }
+        }
+        all.turns = Some(u);
+    }
     all
 }
 
@@ -169,6 +180,7 @@ fn split(all: Toolpath) -> Vec<Toolpath> {
             strings: all.strings[first..k].to_vec(),
             events: Vec::new(),
             markers: Vec::new(),
+            turns: all.turns.as_ref().map(|u| u[first..=k].to_vec()),
         };
         while let Some(&&(i, e)) = events.peek() {
             if i > k {

@@ -85,19 +85,27 @@ pub mod var {
     pub const N: usize = 8;
     /// i / (n - 1), 0 to 1 along the part.
     pub const T: usize = 9;
+    /// arc-length fraction 0..1 along an `outline:` (the `s` of issue 20).
+    pub const S: usize = 10;
     /// how many slots there are.
-    pub const COUNT: usize = 10;
+    pub const COUNT: usize = 11;
 }
 
 /// Names of the variable slots, indexed by [`var`].
-pub const VAR_NAMES: [&str; var::COUNT] = ["x", "y", "z", "r", "theta", "c", "v", "i", "n", "t"];
+pub const VAR_NAMES: [&str; var::COUNT] =
+    ["x", "y", "z", "r", "theta", "c", "v", "i", "n", "t", "s"];
+
+/// Variables added after recipe v1, whose names a param, template param or
+/// loop variable may still take: such a param shadows the variable.
+pub const SHADOWABLE: [&str; 1] = ["s"];
 
 /// The values an expression sees for one point or string.
 pub type Vars = [f64; var::COUNT];
 
-/// Names that params may not take: the variables and the constants.
+/// Names that params may not take: the variables (less [`SHADOWABLE`]) and
+/// the constants.
 pub fn is_reserved(name: &str) -> bool {
-    VAR_NAMES.contains(&name) || name == "pi" || name == "e"
+    (VAR_NAMES.contains(&name) && !SHADOWABLE.contains(&name)) || name == "pi" || name == "e"
 }
 
 const STACK: usize = 32;
@@ -605,6 +613,12 @@ impl Expr {
                     } else if names.is_some() && is_rand_mark(&name) {
                         rands += 1;
                         Node::Ext((names.unwrap_or(&[]).len() + rands as usize - 1) as u16)
+                    } else if let Some(v) = params
+                        .get(&name)
+                        .filter(|_| SHADOWABLE.contains(&name.as_str()))
+                    {
+                        // a param named like a later variable shadows it
+                        Node::Num(*v)
                     } else if let Some(k) = VAR_NAMES.iter().position(|n| *n == name) {
                         if !allowed.contains(&k) {
                             return Err(ExprError::new(

@@ -27,6 +27,7 @@ pub mod input;
 pub mod num;
 pub mod rng;
 pub mod safe_text;
+pub mod svg;
 pub mod threads;
 pub mod toolpath;
 

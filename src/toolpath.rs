@@ -93,6 +93,12 @@ pub struct Toolpath {
     pub events: Vec<(usize, Event)>,
     /// Turtle markers for the previews (`draw_turtle`), in program order.
     pub markers: Vec<Marker>,
+    /// Per point, when a primitive of the part follows an `outline:`: turns
+    /// along the outline, u = k + s on turn k at arc fraction s (so it grows
+    /// along the part and interpolates linearly); expressions see
+    /// s = u − floor(u) ([`Toolpath::s_at_point`]). Points of the part's
+    /// other primitives have u = 0. `None`: no outline, and no `s`.
+    pub turns: Option<Vec<f64>>,
 }
 
 impl Toolpath {
@@ -104,6 +110,7 @@ impl Toolpath {
             strings: Vec::new(),
             events: Vec::new(),
             markers: Vec::new(),
+            turns: None,
         }
     }
 
@@ -117,6 +124,7 @@ impl Toolpath {
             strings: Vec::with_capacity(n),
             events: Vec::new(),
             markers: Vec::new(),
+            turns: None,
         }
     }
 
@@ -125,8 +133,35 @@ impl Toolpath {
         *self.points.last().expect("a toolpath has a start point")
     }
 
+    /// Keeps `turns` one per point: a new point repeats the last value.
+    #[inline]
+    fn push_turns(&mut self) {
+        if let Some(u) = &mut self.turns {
+            u.push(u.last().copied().unwrap_or(0.0));
+        }
+    }
+
+    /// The `s` of point k: the arc fraction along the outline (0 with no outline).
+    #[inline]
+    pub fn s_at_point(&self, k: usize) -> f64 {
+        match &self.turns {
+            Some(u) => frac(u[k]),
+            None => 0.0,
+        }
+    }
+
+    /// The `s` of string k's midpoint (0 with no outline).
+    #[inline]
+    pub fn s_at_string(&self, k: usize) -> f64 {
+        match &self.turns {
+            Some(u) => frac(0.5 * (u[k] + u[k + 1])),
+            None => 0.0,
+        }
+    }
+
     /// Adds an extruding string to `p` (the papers' `draw`).
     pub fn draw(&mut self, p: DVec3, c: f64, v: f64) {
+        self.push_turns();
         self.points.push(p);
         self.strings.push(Strand {
             c,
@@ -139,6 +174,7 @@ impl Toolpath {
     /// Adds a declared hair to `p`: an extruding string of cross-section `c`
     /// that is meant to hang in the air (see [`Strand::hair`]).
     pub fn hair(&mut self, p: DVec3, c: f64, v: f64) {
+        self.push_turns();
         self.points.push(p);
         self.strings.push(Strand {
             c,
@@ -155,6 +191,7 @@ impl Toolpath {
 
     /// Adds a travel string to `p` (the papers' `move`).
     pub fn travel(&mut self, p: DVec3, v: f64) {
+        self.push_turns();
         self.points.push(p);
         self.strings.push(Strand {
             c: 0.0,
@@ -213,10 +250,24 @@ impl Toolpath {
         let base = self.len();
         self.events
             .extend(other.events.iter().map(|&(k, e)| (k + base, e)));
+        if self.turns.is_some() || other.turns.is_some() {
+            let mine = self.points.len();
+            let u = self.turns.get_or_insert_with(|| vec![0.0; mine]);
+            match &other.turns {
+                Some(o) => u.extend_from_slice(&o[1..]),
+                None => u.resize(mine + other.points.len() - 1, 0.0),
+            }
+        }
         self.points.extend_from_slice(&other.points[1..]);
         self.strings.extend_from_slice(&other.strings);
         self.markers.extend_from_slice(&other.markers);
     }
+}
+
+/// x − floor(x): the fractional part, in [0, 1).
+#[inline]
+pub fn frac(x: f64) -> f64 {
+    x - libm::floor(x)
 }
 
 /// Cylinder coordinates (r, theta) of a point, theta in [0, 2·pi).

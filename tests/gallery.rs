@@ -106,6 +106,7 @@ fn split_first(recipe: &Recipe, k: usize, tp: &Toolpath) -> (Toolpath, Toolpath)
         strings: tp.strings[..n].to_vec(),
         events: Vec::new(),
         markers: Vec::new(),
+        turns: None,
     };
     let rest = Toolpath {
         name: tp.name.clone(),
@@ -113,6 +114,7 @@ fn split_first(recipe: &Recipe, k: usize, tp: &Toolpath) -> (Toolpath, Toolpath)
         strings: tp.strings[n..].to_vec(),
         events: Vec::new(),
         markers: Vec::new(),
+        turns: None,
     };
     (first, rest)
 }

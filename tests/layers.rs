@@ -23,6 +23,7 @@ const LAYERS: &[(&str, &[&str])] = &[
             "format",
             "rng",
             "geom",
+            "svg",
         ],
     ),
     ("machine model", &["machine"]),

@@ -1,8 +1,12 @@
 //! `cylinder`: a filled cylinder of flat spirals (Kanada's `cylinder`).
 
+use std::sync::Arc;
+
 use glam::DVec3;
 
+use super::outline::{radius_or_outline, Files, RawOutline};
 use super::spiral::{Direction, Spiral};
+use crate::svg::Outline;
 use crate::toolpath::Toolpath;
 use serde::Deserialize;
 
@@ -11,9 +15,9 @@ use crate::num::{Num, Num3, Scope};
 
 /// Flat spirals every `vpitch`, `hpitch` apart, alternately outward and
 /// inward, so each layer starts where the last one ended, one `vpitch` up.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Cylinder {
-    /// Radius, mm.
+    /// Radius, mm (with an outline: its farthest distance from its centroid).
     pub radius: f64,
     /// Height, mm.
     pub height: f64,
@@ -25,6 +29,8 @@ pub struct Cylinder {
     pub center: DVec3,
     /// Strings per turn.
     pub segments: u32,
+    /// A closed outline in place of the circle (each layer a spiral of it).
+    pub outline: Option<Arc<Outline>>,
 }
 
 impl Cylinder {
@@ -45,6 +51,7 @@ impl Cylinder {
             } else {
                 Direction::Inward
             },
+            outline: self.outline.clone(),
         }
     }
 
@@ -74,7 +81,8 @@ impl Cylinder {
 #[serde(deny_unknown_fields)]
 #[allow(missing_docs)]
 pub struct RawCylinder {
-    pub radius: Num,
+    #[serde(default)]
+    pub radius: Option<Num>,
     pub height: Num,
     pub vpitch: Num,
     pub hpitch: Num,
@@ -82,13 +90,18 @@ pub struct RawCylinder {
     pub center: Option<Num3>,
     #[serde(default)]
     pub segments: Option<Num>,
+    #[serde(default)]
+    pub outline: Option<RawOutline>,
 }
 
 impl RawCylinder {
     /// Evaluates every number; errors name `cylinder.KEY`.
-    pub fn resolve(&self, s: &Scope) -> Result<Cylinder> {
+    pub fn resolve(&self, s: &Scope, files: Files) -> Result<Cylinder> {
+        let (radius, outline) =
+            radius_or_outline(s, files, "cylinder", &self.radius, &self.outline)?;
         Ok(Cylinder {
-            radius: s.positive(&self.radius, "cylinder.radius")?,
+            radius,
+            outline,
             height: s.positive(&self.height, "cylinder.height")?,
             vpitch: s.positive(&self.vpitch, "cylinder.vpitch")?,
             hpitch: s.positive(&self.hpitch, "cylinder.hpitch")?,
@@ -111,6 +124,7 @@ mod tests {
             hpitch: 0.5,
             center: DVec3::new(0.0, 0.0, 0.2),
             segments: 36,
+            outline: None,
         };
         let t = cyl.build(0.1, 20.0);
         assert_eq!(t.len() as u64, cyl.string_count());

@@ -1,8 +1,12 @@
 //! `helix`: the single wall with no layers and no seam (Kanada, Fig. 4b).
 
+use std::sync::Arc;
+
 use glam::DVec3;
 
 use super::on_circle;
+use super::outline::{along, radius_or_outline, turn_points, Files, RawOutline};
+use crate::svg::Outline;
 use crate::toolpath::Toolpath;
 use serde::Deserialize;
 
@@ -10,9 +14,9 @@ use crate::error::Result;
 use crate::num::{Num, Num3, Scope};
 
 /// A helix rising continuously from `center.z` to `center.z + height`.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Helix {
-    /// Radius, mm.
+    /// Radius, mm (with an outline: its farthest distance from its centroid).
     pub radius: f64,
     /// Total rise, mm.
     pub height: f64,
@@ -22,17 +26,40 @@ pub struct Helix {
     pub center: DVec3,
     /// Strings per turn.
     pub segments: u32,
+    /// A closed outline in place of the circle, centroid at the origin.
+    pub outline: Option<Arc<Outline>>,
 }
 
 impl Helix {
-    /// `round(height / pitch * segments)`, as the spec says.
+    /// `round(height / pitch * segments)`, as the spec says (with an
+    /// outline, segments plus the outline's corners per turn).
     pub fn string_count(&self) -> u64 {
-        libm::round(self.height / self.pitch * self.segments as f64).max(1.0) as u64
+        let m = match &self.outline {
+            Some(o) => o.fractions(self.segments).len(),
+            None => self.segments as usize,
+        };
+        libm::round(self.height / self.pitch * m as f64).max(1.0) as u64
+    }
+
+    /// Over an outline: point j is on turn k = j div m at arc fraction
+    /// s = f[j mod m] (the `segments` even steps and the corners, the same
+    /// every turn), at height (k + s)·pitch: every turn is the outline,
+    /// rising one pitch over it. The top is within one string's rise of
+    /// `height`.
+    fn build_outline(&self, o: &Outline, c: f64, v: f64) -> Toolpath {
+        let f = o.fractions(self.segments);
+        let pts = turn_points(o, &f);
+        along(&f, &pts, 0, self.string_count(), c, v, |u, p| {
+            self.center + DVec3::new(p.x, p.y, u * self.pitch)
+        })
     }
 
     /// Point k is at angle 2·pi·k/segments and height `height·k/n`, so the
     /// angle steps are uniform and the last point sits exactly at `height`.
     pub fn build(&self, c: f64, v: f64) -> Toolpath {
+        if let Some(o) = &self.outline {
+            return self.build_outline(o, c, v);
+        }
         let n = self.string_count();
         let at = |k: u64| {
             let (x, y) = on_circle(self.radius, k, self.segments);
@@ -56,20 +83,25 @@ impl Helix {
 #[serde(deny_unknown_fields)]
 #[allow(missing_docs)]
 pub struct RawHelix {
-    pub radius: Num,
+    #[serde(default)]
+    pub radius: Option<Num>,
     pub height: Num,
     pub pitch: Num,
     #[serde(default)]
     pub center: Option<Num3>,
     #[serde(default)]
     pub segments: Option<Num>,
+    #[serde(default)]
+    pub outline: Option<RawOutline>,
 }
 
 impl RawHelix {
     /// Evaluates every number; errors name `helix.KEY`.
-    pub fn resolve(&self, s: &Scope) -> Result<Helix> {
+    pub fn resolve(&self, s: &Scope, files: Files) -> Result<Helix> {
+        let (radius, outline) = radius_or_outline(s, files, "helix", &self.radius, &self.outline)?;
         Ok(Helix {
-            radius: s.positive(&self.radius, "helix.radius")?,
+            radius,
+            outline,
             height: s.positive(&self.height, "helix.height")?,
             pitch: s.positive(&self.pitch, "helix.pitch")?,
             center: s.center(&self.center, "helix")?,
@@ -90,6 +122,7 @@ mod tests {
             pitch: 0.3,
             center: DVec3::new(0.0, 0.0, 0.2),
             segments: 72,
+            outline: None,
         };
         let t = h.build(0.1, 20.0);
         assert_eq!(t.len() as u64, (10.0f64 / 0.3 * 72.0).round() as u64);

@@ -9,6 +9,8 @@ pub mod ca;
 mod circle;
 mod cylinder;
 mod helix;
+/// SVG sources: `path: {svg: …}` and the `outline:` of helix, spiral, cylinder.
+pub mod outline;
 mod path;
 /// The constant-flow helix of self-organised patterns: `pattern_helix`.
 pub mod pattern;
@@ -55,15 +57,25 @@ pub enum RawPrimitive {
 impl RawPrimitive {
     /// Resolves the primitive in `scope`; a turtle runs now, starting from
     /// `env` (the part's cross-section and speed). Errors name `KIND.KEY`.
-    pub fn resolve(&self, scope: &Scope, env: &turtle::Env) -> Result<Primitive> {
+    /// SVG files are read relative to `dir`.
+    pub fn resolve(
+        &self,
+        scope: &Scope,
+        env: &turtle::Env,
+        dir: &std::path::Path,
+    ) -> Result<Primitive> {
         let num = |n: &Num, place: &str| scope.num(n, place);
+        let files = outline::Files {
+            dir,
+            max_strings: env.max_strings,
+        };
         Ok(match self {
-            RawPrimitive::Path(p) => Primitive::Path(p.resolve(scope)?),
+            RawPrimitive::Path(p) => Primitive::Path(p.resolve(scope, files)?),
             RawPrimitive::Circle(p) => Primitive::Circle(p.resolve(scope)?),
             RawPrimitive::Arc(p) => Primitive::Arc(p.resolve(scope)?),
-            RawPrimitive::Spiral(p) => Primitive::Spiral(p.resolve(scope)?),
-            RawPrimitive::Helix(p) => Primitive::Helix(p.resolve(scope)?),
-            RawPrimitive::Cylinder(p) => Primitive::Cylinder(p.resolve(scope)?),
+            RawPrimitive::Spiral(p) => Primitive::Spiral(p.resolve(scope, files)?),
+            RawPrimitive::Helix(p) => Primitive::Helix(p.resolve(scope, files)?),
+            RawPrimitive::Cylinder(p) => Primitive::Cylinder(p.resolve(scope, files)?),
             RawPrimitive::PatternHelix(p) => Primitive::PatternHelix(p.resolve(&num)?),
             RawPrimitive::CaHelix(p) => Primitive::CaHelix(p.resolve(&num)?),
             RawPrimitive::Solid(s) => Primitive::Solid(solid::resolve(s, &num)?),

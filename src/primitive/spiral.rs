@@ -1,7 +1,11 @@
 //! `spiral`: a flat Archimedean spiral (Kanada, Fig. 4a).
 
+use std::sync::Arc;
+
 use glam::DVec3;
 
+use super::outline::{along, radius_or_outline, turn_points, Files, RawOutline};
+use crate::svg::Outline;
 use crate::toolpath::Toolpath;
 use serde::Deserialize;
 
@@ -19,9 +23,9 @@ pub enum Direction {
 
 /// A flat spiral whose outer end sits at angle 0, where a helix of the same
 /// radius starts, so that the helix continues it without a seam.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Spiral {
-    /// Outer radius, mm.
+    /// Outer radius, mm (with an outline: its farthest distance from its centroid).
     pub radius: f64,
     /// Horizontal distance between turns, mm.
     pub pitch: f64,
@@ -33,6 +37,8 @@ pub struct Spiral {
     pub inner_radius: f64,
     /// Outward or inward.
     pub direction: Direction,
+    /// A closed outline in place of the circle, centroid at the origin.
+    pub outline: Option<Arc<Outline>>,
 }
 
 impl Spiral {
@@ -41,14 +47,45 @@ impl Spiral {
         (self.radius - self.inner_radius) / self.pitch
     }
 
-    /// `round(turns · segments)`, at least 1.
+    /// `round(turns · segments)`, at least 1 (with an outline, segments
+    /// plus the outline's corners per turn).
     pub fn string_count(&self) -> u64 {
-        libm::round(self.turns() * self.segments as f64).max(1.0) as u64
+        let m = match &self.outline {
+            Some(o) => o.fractions(self.segments).len(),
+            None => self.segments as usize,
+        };
+        libm::round(self.turns() * m as f64).max(1.0) as u64
+    }
+
+    /// Over an outline: the outward spiral's last point is the outline's
+    /// start (u = 0); point j sits n − j steps before it, at turns u ≤ 0 and
+    /// arc fraction s = u − floor(u), on the outline scaled about its
+    /// centroid by (radius + u·pitch) / radius, so the turns are `pitch`
+    /// apart where the outline is farthest from its centroid (`radius`)
+    /// and the first is `inner_radius` / `radius` of the outline's size.
+    fn build_outline(&self, o: &Outline, c: f64, v: f64) -> Toolpath {
+        let f = o.fractions(self.segments);
+        let pts = turn_points(o, &f);
+        let n = self.string_count();
+        let mut t = along(&f, &pts, -(n as i64), n, c, v, |u, p| {
+            let k = ((self.radius + u * self.pitch) / self.radius).max(0.0);
+            self.center + DVec3::new(p.x * k, p.y * k, 0.0)
+        });
+        if self.direction == Direction::Inward {
+            t.points.reverse();
+            if let Some(u) = &mut t.turns {
+                u.reverse();
+            }
+        }
+        t
     }
 
     /// r(s) = inner + (radius − inner)·s and angle 2·pi·turns·(s − 1) for
     /// s = k/n: r grows by `pitch` a turn and the outer end is at angle 0.
     pub fn build(&self, c: f64, v: f64) -> Toolpath {
+        if let Some(o) = &self.outline {
+            return self.build_outline(o, c, v);
+        }
         let n = self.string_count();
         let turns = self.turns();
         let at = |k: u64| {
@@ -86,7 +123,8 @@ pub enum RawDirection {
 #[serde(deny_unknown_fields)]
 #[allow(missing_docs)]
 pub struct RawSpiral {
-    pub radius: Num,
+    #[serde(default)]
+    pub radius: Option<Num>,
     pub pitch: Num,
     #[serde(default)]
     pub center: Option<Num3>,
@@ -96,12 +134,14 @@ pub struct RawSpiral {
     pub inner_radius: Option<Num>,
     #[serde(default)]
     pub direction: Option<RawDirection>,
+    #[serde(default)]
+    pub outline: Option<RawOutline>,
 }
 
 impl RawSpiral {
     /// Evaluates every number; errors name `spiral.KEY`.
-    pub fn resolve(&self, s: &Scope) -> Result<Spiral> {
-        let radius = s.positive(&self.radius, "spiral.radius")?;
+    pub fn resolve(&self, s: &Scope, files: Files) -> Result<Spiral> {
+        let (radius, outline) = radius_or_outline(s, files, "spiral", &self.radius, &self.outline)?;
         let inner = match &self.inner_radius {
             Some(n) => s.non_negative(n, "spiral.inner_radius")?,
             None => 0.0,
@@ -122,6 +162,7 @@ impl RawSpiral {
                 Some(RawDirection::Inward) => Direction::Inward,
                 _ => Direction::Outward,
             },
+            outline,
         })
     }
 }
@@ -138,6 +179,7 @@ mod tests {
             segments: 72,
             inner_radius: 2.0,
             direction,
+            outline: None,
         }
     }
 

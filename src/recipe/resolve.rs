@@ -43,6 +43,7 @@ const POINT_VARS: &[usize] = &[
     var::I,
     var::N,
     var::T,
+    var::S,
 ];
 const STRING_VARS: &[usize] = &[
     var::X,
@@ -55,6 +56,7 @@ const STRING_VARS: &[usize] = &[
     var::I,
     var::N,
     var::T,
+    var::S,
 ];
 
 fn is_identifier(s: &str) -> bool {
@@ -387,7 +389,7 @@ fn resolve_part(ctx: &Ctx, p: &RawPart, c0: f64, v0: f64, k: usize) -> Result<Pa
         };
         let primitive = item
             .primitive
-            .resolve(&ctx.scope, &env)
+            .resolve(&ctx.scope, &env, ctx.dir)
             .map_err(|e| e.under(&key))?;
         // a solid's beads are layer_height × line_width: a cross_section the
         // recipe gives for it would be silently ignored, so refuse it

@@ -6,7 +6,7 @@ use super::{not_finite, par_chunks, vars_at};
 use crate::error::{Error, Result};
 use crate::expr::{var, Expr};
 use crate::threads::Threads;
-use crate::toolpath::Toolpath;
+use crate::toolpath::{frac, Toolpath};
 
 /// A deformation: new positions and/or new cross-sections and speeds.
 #[derive(Clone, Debug)]
@@ -43,6 +43,7 @@ impl Deform {
         let polar_too = self.needs_polar(&exprs);
         let n = tp.len();
         let points = &tp.points;
+        let turns = &tp.turns;
         par_chunks(&mut tp.strings, threads, |start, chunk| {
             for (j, s) in chunk.iter_mut().enumerate() {
                 if s.travel {
@@ -53,6 +54,9 @@ impl Deform {
                 let mut vars = vars_at(m, k, n, polar_too);
                 vars[var::C] = s.c;
                 vars[var::V] = s.v;
+                if let Some(u) = turns {
+                    vars[var::S] = frac(0.5 * (u[k] + u[k + 1]));
+                }
                 if let Some(e) = &self.cross_section {
                     let c = e.eval(&vars);
                     if !c.is_finite() || c < 0.0 {
@@ -79,11 +83,15 @@ impl Deform {
         // theta' = theta needs no trigonometry: (x, y) scales by r'/r.
         let keep_theta = f1.is_var(var::THETA);
         let polar_too = cylinder || self.needs_polar(&[f0, f1, f2]);
+        let turns = &tp.turns;
         par_chunks(&mut tp.points, threads, |start, chunk| {
             for (j, point) in chunk.iter_mut().enumerate() {
                 let i = start + j;
                 let p = *point;
-                let vars = vars_at(p, i, n, polar_too);
+                let mut vars = vars_at(p, i, n, polar_too);
+                if let Some(u) = turns {
+                    vars[var::S] = frac(u[i]);
+                }
                 let q = if !cylinder {
                     DVec3::new(f0.eval(&vars), f1.eval(&vars), f2.eval(&vars))
                 } else {

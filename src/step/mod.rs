@@ -59,9 +59,31 @@ impl Step {
         }
     }
 
+    /// Whether one of the step's expressions reads variable slot `k`.
+    pub fn uses(&self, k: usize) -> bool {
+        match self {
+            Step::DeformXyz(d) | Step::DeformCylinder(d) => d
+                .position
+                .iter()
+                .flatten()
+                .chain(&d.cross_section)
+                .chain(&d.speed)
+                .any(|e| e.uses(k)),
+            Step::ModulateCylinder(m) => m.factor.uses(k),
+            Step::ModulateMap(m) => m.u.uses(k) || m.v.uses(k),
+            Step::Subdivide(_) | Step::Translate(_) => false,
+        }
+    }
+
     /// Applies the step in place, on up to `threads` threads. `max_strings`
     /// bounds what `subdivide` may make.
     pub fn apply(&self, tp: &mut Toolpath, max_strings: u64, threads: Threads) -> Result<()> {
+        if tp.turns.is_none() && self.uses(var::S) {
+            return Err(Error::input(
+                "",
+                "`s` (the arc fraction along an `outline:`) has no meaning here: no primitive of this part follows an outline; expected `t` or an outline",
+            ));
+        }
         match self {
             Step::DeformXyz(d) | Step::DeformCylinder(d) => d.apply(tp, threads),
             Step::ModulateCylinder(m) => m.apply(tp),

@@ -133,6 +133,7 @@ impl Modulate {
             let mut vars = vars_at(m, k, n, true);
             vars[var::C] = s.c;
             vars[var::V] = s.v;
+            vars[var::S] = tp.s_at_string(k);
             let f = self.factor.eval(&vars);
             check_factor(&self.factor, f, k, m)?;
             scale(tp, k, f, self.keep);
@@ -169,7 +170,8 @@ impl ModulateMap {
                 continue;
             }
             let m = tp.midpoint(k);
-            let vars = vars_at(m, k, n, true);
+            let mut vars = vars_at(m, k, n, true);
+            vars[var::S] = tp.s_at_string(k);
             let u = self.u.eval(&vars);
             let v = self.v.eval(&vars);
             if !u.is_finite() {

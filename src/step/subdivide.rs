@@ -35,6 +35,12 @@ pub fn apply(tp: &mut Toolpath, max: f64, max_strings: u64) -> Result<()> {
     // new index of the first piece of each old string (and of the end), so
     // events stay before the same string
     let mut first = Vec::with_capacity(tp.len() + 1);
+    // an outline's turns u = k + s grow along the part: linear between ends
+    let mut turns = tp.turns.as_ref().map(|u| {
+        let mut t = Vec::with_capacity(total as usize + 1);
+        t.push(u[0]);
+        t
+    });
     for k in 0..tp.len() {
         first.push(strings.len());
         let (a, b) = tp.ends(k);
@@ -42,10 +48,17 @@ pub fn apply(tp: &mut Toolpath, max: f64, max_strings: u64) -> Result<()> {
         for j in 1..m {
             points.push(a.lerp(b, j as f64 / m as f64));
             strings.push(tp.strings[k]);
+            if let (Some(t), Some(u)) = (&mut turns, &tp.turns) {
+                t.push(u[k] + (u[k + 1] - u[k]) * (j as f64 / m as f64));
+            }
         }
         points.push(b);
         strings.push(tp.strings[k]);
+        if let (Some(t), Some(u)) = (&mut turns, &tp.turns) {
+            t.push(u[k + 1]);
+        }
     }
+    tp.turns = turns;
     first.push(strings.len());
     tp.points = points;
     tp.strings = strings;

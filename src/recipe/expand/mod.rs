@@ -578,7 +578,10 @@ fn is_identifier(s: &str) -> bool {
 }
 
 fn reserved_names() -> String {
-    let mut v: Vec<&str> = expr::VAR_NAMES.to_vec();
+    let mut v: Vec<&str> = expr::VAR_NAMES
+        .into_iter()
+        .filter(|n| expr::is_reserved(n))
+        .collect();
     v.extend(["pi", "e"]);
     v.join(", ")
 }
