@@ -41,6 +41,7 @@ const LAYERS: &[(&str, &[&str])] = &[
             "output",
             "plan",
             "preview",
+            "mesh",
             "build",
             "batch",
             "lock",

@@ -153,6 +153,8 @@ struct Seg {
     n: DVec3,
     len: f64,
     sec: Section,
+    /// How far the strings taken into this one (a chord) lie from it, mm.
+    dev: f64,
 }
 
 /// The mesh of every extruding string of a plan (skirt and parts).
@@ -219,15 +221,74 @@ pub fn add_path(mesh: &mut Mesh, tp: &Toolpath, h_typ: f64) {
             n: perpendicular(n, t),
             len,
             sec,
+            dev: 0.0,
         };
-        if let Some(p) = bead.last() {
-            if !joins(p, &seg) {
-                flush(mesh, &mut bead);
-            }
-        }
-        bead.push(seg);
+        push(mesh, &mut bead, seg);
     }
     flush(mesh, &mut bead);
+}
+
+/// Adds `q` to the bead: through a mitre when it can; else, when the turn
+/// is gentle but the strings too short for the bead's thickness (a curve
+/// tighter than the bead, near a pole), the last string and `q` become one
+/// chord of the same volume (and again with the one before, while needed);
+/// else the bead ends and `q` starts the next.
+fn push(mesh: &mut Mesh, bead: &mut Vec<Seg>, mut q: Seg) {
+    while let Some(p) = bead.last().copied() {
+        if joins(&p, &q) {
+            break;
+        }
+        match chord(&p, &q) {
+            Some(m) if p.t.dot(q.t) >= max_turn_cos() => {
+                bead.pop();
+                q = m;
+            }
+            _ => {
+                flush(mesh, bead);
+                break;
+            }
+        }
+    }
+    bead.push(q);
+}
+
+/// The cosine of [`MAX_TURN_DEG`].
+fn max_turn_cos() -> f64 {
+    libm::cos(MAX_TURN_DEG.to_radians())
+}
+
+/// Strings `p` and `q` as one chord from p's start to q's end, its section
+/// q's shape scaled to keep their volume, or `None` when the chord is too
+/// short, would have to be more than twice as thick (in area) or would
+/// leave the strings' path by more than a quarter of the bead.
+fn chord(p: &Seg, q: &Seg) -> Option<Seg> {
+    let len = p.a.distance(q.b);
+    if len < MIN_LEN {
+        return None;
+    }
+    let volume = p.sec.area() * p.len + q.sec.area() * q.len;
+    let f = (volume / len / q.sec.area()).sqrt();
+    if !(f <= std::f64::consts::SQRT_2) {
+        return None;
+    }
+    let t = (q.b - p.a) / len;
+    // the path may leave the chord by a quarter of the bead at most
+    let dev = (p.b - p.a).cross(t).length() + p.dev.max(q.dev);
+    if dev > 0.25 * q.sec.w.max(q.sec.h) {
+        return None;
+    }
+    Some(Seg {
+        a: p.a,
+        b: q.b,
+        t,
+        n: perpendicular(q.n, t),
+        len,
+        sec: Section {
+            w: q.sec.w * f,
+            h: q.sec.h * f,
+        },
+        dev,
+    })
 }
 
 /// `n` made unit and perpendicular to `t` (any perpendicular when it is
@@ -261,7 +322,7 @@ fn carried(prev: Option<&Seg>, t: DVec3) -> DVec3 {
 /// Whether string `q` continues the bead of `p` through a mitre.
 fn joins(p: &Seg, q: &Seg) -> bool {
     let cos_turn = p.t.dot(q.t);
-    if cos_turn < libm::cos(MAX_TURN_DEG.to_radians()) {
+    if cos_turn < max_turn_cos() {
         return false;
     }
     // the mitre reaches r·tan(θ/2) along each string, r the section's
