@@ -66,7 +66,10 @@ fn obj_edges(text: &str) -> (usize, usize, usize) {
             nf += 1;
             let i: Vec<u32> = f.split(' ').map(|x| x.parse().unwrap()).collect();
             assert_eq!(i.len(), 3, "{l}");
-            assert!(i[0] != i[1] && i[1] != i[2] && i[0] != i[2], "degenerate {l}");
+            assert!(
+                i[0] != i[1] && i[1] != i[2] && i[0] != i[2],
+                "degenerate {l}"
+            );
             for e in 0..3 {
                 *edges.entry((i[e], i[(e + 1) % 3])).or_default() += 1;
             }
@@ -82,7 +85,11 @@ fn obj_edges(text: &str) -> (usize, usize, usize) {
 /// `prusa-slicer --info FILE`'s `key = value` lines, or `None` when it is not
 /// installed (a failure under CI, which installs it).
 fn prusa_info(file: &Path) -> Option<HashMap<String, String>> {
-    let out = match Command::new("prusa-slicer").arg("--info").arg(file).output() {
+    let out = match Command::new("prusa-slicer")
+        .arg("--info")
+        .arg(file)
+        .output()
+    {
         Ok(o) => o,
         Err(_) => {
             assert!(
@@ -117,7 +124,11 @@ fn stats(dir: &Path, name: &str) -> (f64, [f64; 3], [f64; 3]) {
             "x.json",
         ],
     );
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let j: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.join("x.json")).unwrap()).unwrap();
     let v3 = |k: &str| {
@@ -139,7 +150,11 @@ fn check_recipe(name: &str, max_half_bead: f64) -> usize {
     let r = r.to_str().unwrap();
     for f in ["m.stl", "m.3mf", "m.obj"] {
         let out = p3dp(&dir, &["mesh", r, "-o", f]);
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
         let line = String::from_utf8_lossy(&out.stdout);
         assert!(line.starts_with(&format!("mesh → {f}: ")), "{line}");
         // deterministic: the same bytes again
@@ -157,10 +172,16 @@ fn check_recipe(name: &str, max_half_bead: f64) -> usize {
     // shared by index within a bead, every edge is used once each way
     let obj = std::fs::read_to_string(dir.join("m.obj")).unwrap();
     let (bad_edges, nf, nv) = obj_edges(&obj);
-    assert_eq!(bad_edges, 0, "{name}: edges not shared by two facing triangles");
+    assert_eq!(
+        bad_edges, 0,
+        "{name}: edges not shared by two facing triangles"
+    );
     assert_eq!(nf, tris.len());
     // 8 vertices a ring, 16 triangles between rings: about 2 triangles a vertex
-    assert!(nv * 2 <= nf + nf / 10, "{name}: {nv} vertices for {nf} faces");
+    assert!(
+        nv * 2 <= nf + nf / 10,
+        "{name}: {nv} vertices for {nf} faces"
+    );
     // volume: the filament's, up to joints and the 1 µm grid
     assert!(
         (vol - filament).abs() < 0.01 * filament,
@@ -182,7 +203,11 @@ fn check_recipe(name: &str, max_half_bead: f64) -> usize {
     // PrusaSlicer's own check, on the STL and the 3MF
     for f in ["m.stl", "m.3mf"] {
         if let Some(info) = prusa_info(&dir.join(f)) {
-            assert_eq!(info.get("manifold").map(String::as_str), Some("yes"), "{name} {f}: {info:?}");
+            assert_eq!(
+                info.get("manifold").map(String::as_str),
+                Some("yes"),
+                "{name} {f}: {info:?}"
+            );
             assert_eq!(
                 info.get("number_of_facets").map(String::as_str),
                 Some(tris.len().to_string().as_str()),
@@ -225,12 +250,15 @@ fn the_3mf_carries_the_material_colour() {
     let yaml = "p3dp: 1\nname: ring\nmaterial: {name: green-petg, density: 1.27, nozzle_temp: 235, bed_temp: 80, color: \"#2e7d32\"}\nparts:\n  - name: ring\n    primitive:\n      helix: {radius: 10, height: 3, pitch: 0.3}\n";
     std::fs::write(dir.join("ring.yaml"), yaml).unwrap();
     let out = p3dp(&dir, &["mesh", "ring.yaml", "-o", "ring.3mf"]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let bytes = std::fs::read(dir.join("ring.3mf")).unwrap();
     let mut z = zip::ZipArchive::new(std::io::Cursor::new(bytes)).unwrap();
     let mut model = String::new();
-    std::io::Read::read_to_string(&mut z.by_name("3D/3dmodel.model").unwrap(), &mut model)
-        .unwrap();
+    std::io::Read::read_to_string(&mut z.by_name("3D/3dmodel.model").unwrap(), &mut model).unwrap();
     assert!(
         model.contains(r##"<base name="green-petg" displaycolor="#2E7D32FF"/>"##),
         "{}",
@@ -241,7 +269,10 @@ fn the_3mf_carries_the_material_colour() {
     let out = p3dp(&dir, &["mesh", "bad.yaml", "-o", "bad.3mf"]);
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("material.color") && err.contains("#rrggbb"), "{err}");
+    assert!(
+        err.contains("material.color") && err.contains("#rrggbb"),
+        "{err}"
+    );
     assert!(!dir.join("bad.3mf").exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -266,11 +297,20 @@ fn bad_invocations_exit_2_and_write_nothing() {
     assert_eq!(std::fs::read(&copy).unwrap(), before);
     // a bad --set names the param
     let out = p3dp(&dir, &["mesh", r, "--set", "radius=-3", "-o", "n.stl"]);
-    assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     assert!(!dir.join("n.stl").exists());
     // the default name: ./NAME.stl
     let out = p3dp(&dir, &["mesh", "s.yaml"]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     assert!(dir.join("sphere.stl").exists());
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -75,7 +75,15 @@ mod tests {
     fn colors_parse() {
         assert_eq!(parse_color("#FA8f29"), Some(DEFAULT_COLOR));
         assert_eq!(parse_color("#000000"), Some([0, 0, 0]));
-        for bad in ["FA8F29", "#FA8F2", "#FA8F299", "#GG0000", "", "#", "#ＦＡ8F29"] {
+        for bad in [
+            "FA8F29",
+            "#FA8F2",
+            "#FA8F299",
+            "#GG0000",
+            "",
+            "#",
+            "#ＦＡ8F29",
+        ] {
             assert_eq!(parse_color(bad), None, "{bad}");
         }
     }

@@ -268,7 +268,7 @@ fn chord(p: &Seg, q: &Seg) -> Option<Seg> {
     }
     let volume = p.sec.area() * p.len + q.sec.area() * q.len;
     let f = (volume / len / q.sec.area()).sqrt();
-    if !(f <= std::f64::consts::SQRT_2) {
+    if f.is_nan() || f > std::f64::consts::SQRT_2 {
         return None;
     }
     let t = (q.b - p.a) / len;
@@ -383,14 +383,7 @@ fn flush(mesh: &mut Mesh, segs: &mut Vec<Seg>) {
     if closed {
         rings.push(joint(&last, &first));
     } else {
-        rings.push(ring(
-            first.a,
-            first.t,
-            first.n,
-            first.sec,
-            DVec3::ZERO,
-            0.0,
-        ));
+        rings.push(ring(first.a, first.t, first.n, first.sec, DVec3::ZERO, 0.0));
     }
     for i in 1..n {
         rings.push(joint(&segs[i - 1], &segs[i]));
@@ -503,7 +496,10 @@ mod tests {
         }
         for (&(a, b), &n) in &edges {
             if n != 1 || edges.get(&(b, a)) != Some(&1) {
-                return Err(format!("edge {a}–{b} used {n} times, back {:?}", edges.get(&(b, a))));
+                return Err(format!(
+                    "edge {a}–{b} used {n} times, back {:?}",
+                    edges.get(&(b, a))
+                ));
             }
         }
         Ok(())
@@ -519,7 +515,13 @@ mod tests {
 
     #[test]
     fn sections_have_area_c() {
-        for (c, h) in [(0.196, 0.2), (0.12, 0.3), (0.05, 0.4), (0.3, 0.1), (0.0785, 0.316)] {
+        for (c, h) in [
+            (0.196, 0.2),
+            (0.12, 0.3),
+            (0.05, 0.4),
+            (0.3, 0.1),
+            (0.0785, 0.316),
+        ] {
             let s = Section::flat(c, h);
             assert!((s.area() - c).abs() < 1e-12, "{c} {h} {s:?}");
             assert_eq!(s.h, h);
@@ -614,7 +616,11 @@ mod tests {
         assert_eq!(m.beads, 1);
         closed_and_oriented(&m).unwrap();
         let want = tp.volume();
-        assert!((m.volume() - want).abs() < 0.01 * want, "{} vs {want}", m.volume());
+        assert!(
+            (m.volume() - want).abs() < 0.01 * want,
+            "{} vs {want}",
+            m.volume()
+        );
         // the wall is the flat bead of height `pitch`, w wide
         let flat = Section::flat(c, pitch);
         let (lo, hi) = m.bbox().unwrap();
@@ -623,7 +629,10 @@ mod tests {
         }
         // the first and last turns have a pass on one side: flat too
         assert!((lo.z + pitch / 2.0).abs() < 0.01, "{lo}");
-        assert!((hi.z - (pitch * turns as f64 + pitch / 2.0)).abs() < 0.01, "{hi}");
+        assert!(
+            (hi.z - (pitch * turns as f64 + pitch / 2.0)).abs() < 0.01,
+            "{hi}"
+        );
     }
 
     #[test]
@@ -645,7 +654,11 @@ mod tests {
         let half = Section::round(0.1).w / 2.0;
         assert!(lo.y >= -half - 0.3 && hi.y <= 4.0 + half + 0.3, "{lo} {hi}");
         let want = tp.volume();
-        assert!((m.volume() - want).abs() < 1e-3 * want, "{} vs {want}", m.volume());
+        assert!(
+            (m.volume() - want).abs() < 1e-3 * want,
+            "{} vs {want}",
+            m.volume()
+        );
         // a 90° corner is mitred: one bead
         let mut l = Toolpath::new(DVec3::ZERO);
         l.draw(DVec3::new(5.0, 0.0, 0.0), 0.1, 30.0);

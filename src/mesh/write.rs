@@ -283,7 +283,10 @@ mod tests {
             mm(&mut s, v);
             s.push(b' ');
         }
-        assert_eq!(String::from_utf8(s).unwrap(), "0 0.001 -0.001 1.5 -20 123.456 ");
+        assert_eq!(
+            String::from_utf8(s).unwrap(),
+            "0 0.001 -0.001 1.5 -20 123.456 "
+        );
     }
 
     #[test]
@@ -351,9 +354,9 @@ mod tests {
             assert!(names.iter().any(|n| n == want), "{names:?}");
         }
         let mut model = String::new();
-        io::Read::read_to_string(&mut z.by_name("3D/3dmodel.model").unwrap(), &mut model)
-            .unwrap();
-        assert!(model.contains(r##"<base name="a&lt;b &amp; &quot;c&quot;" displaycolor="#12ABEFFF"/>"##));
+        io::Read::read_to_string(&mut z.by_name("3D/3dmodel.model").unwrap(), &mut model).unwrap();
+        assert!(model
+            .contains(r##"<base name="a&lt;b &amp; &quot;c&quot;" displaycolor="#12ABEFFF"/>"##));
         assert_eq!(model.matches("<vertex ").count(), m.vertices.len());
         assert_eq!(model.matches("<triangle ").count(), m.triangles.len());
     }
