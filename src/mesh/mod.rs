@@ -203,16 +203,21 @@ pub fn add_path(mesh: &mut Mesh, tp: &Toolpath, h_typ: f64) {
                     .nearest_other((a + b) * 0.5, sm)
                     .is_some_and(|q| l.spacing >= 0.5 * q.distance((a + b) * 0.5))
         });
+        // the previous string's normal turned with the tangent: a flat
+        // section keeps its side (its normal's sign) by it, a round one
+        // takes it
+        let along = carried(bead.last(), t);
         let (sec, n) = match local {
             Some(l) => {
                 let h = l.spacing.clamp(0.5 * h_typ, 2.0 * h_typ);
-                let mut n = l.normal;
-                if bead.last().is_some_and(|g| g.n.dot(n) < 0.0) {
-                    n = -n;
-                }
+                let n = if along.dot(l.normal) < 0.0 {
+                    -l.normal
+                } else {
+                    l.normal
+                };
                 (Section::flat(s.c, h), n)
             }
-            None => (Section::round(s.c), carried(bead.last(), t)),
+            None => (Section::round(s.c), along),
         };
         let seg = Seg {
             a,
@@ -343,12 +348,16 @@ fn ring(c: DVec3, t: DVec3, n: DVec3, sec: Section, d: DVec3, stretch: f64) -> [
 }
 
 /// The mitred ring where `p` turns into `q`: in the plane bisecting the turn,
-/// the mean of their sections and normals, stretched by 1/cos(θ/2) − 1
+/// the mean of their sections and of their normals (each turned into that
+/// plane with its tangent), stretched by 1/cos(θ/2) − 1
 /// along the bend.
 fn joint(p: &Seg, q: &Seg) -> [DVec3; RING] {
     let t = (p.t + q.t).normalize();
-    let pn = if p.n.dot(q.n) < 0.0 { -p.n } else { p.n };
-    let n = perpendicular(pn + q.n, t);
+    // both normals turned (half the turn each) into the mitre's plane
+    let pn = glam::DQuat::from_rotation_arc(p.t, t) * p.n;
+    let qn = glam::DQuat::from_rotation_arc(q.t, t) * q.n;
+    let pn = if pn.dot(qn) < 0.0 { -pn } else { pn };
+    let n = perpendicular(pn + qn, t);
     // the mean shape, scaled to the mean area (so that sections of one
     // area turned across each other do not swell at the joint)
     let mean = Section {
@@ -676,6 +685,36 @@ mod tests {
         );
         let (lo, hi) = m.bbox().unwrap();
         assert!((lo.y + half).abs() < 2e-3 && (hi.x - 5.0 - half).abs() < 2e-3);
+    }
+
+    /// A wall round a rhombus (turns of 70° and 110°), rising 0.2 a turn:
+    /// past 90° the flat bead must keep its side of the wall by its normal
+    /// turned with the tangent (the side nearest the last normal is the
+    /// wrong one, and the mitre's frame collapses).
+    #[test]
+    fn a_wall_keeps_its_side_round_sharp_corners() {
+        let (c70, s70) = (libm::cos(70f64.to_radians()), libm::sin(70f64.to_radians()));
+        let corners = [
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(20.0, 0.0, 0.0),
+            DVec3::new(20.0 + 20.0 * c70, 20.0 * s70, 0.0),
+            DVec3::new(20.0 * c70, 20.0 * s70, 0.0),
+        ];
+        let mut tp = Toolpath::new(corners[0] + DVec3::Z * 0.2);
+        for i in 1..=40 {
+            let z = 0.2 + 0.2 * i as f64 / 4.0;
+            tp.draw(corners[i % 4] + DVec3::Z * z, 0.15, 30.0);
+        }
+        let mut m = Mesh::default();
+        add_path(&mut m, &tp, 0.2);
+        assert_eq!(m.beads, 1, "mitred at every corner");
+        closed_and_oriented(&m).unwrap();
+        let want = tp.volume();
+        assert!(
+            (m.volume() - want).abs() < 0.01 * want,
+            "{} vs {want}",
+            m.volume()
+        );
     }
 
     #[test]
