@@ -1,5 +1,5 @@
 //! The command line: its clap definition ([`Cli`]) and the commands `build`,
-//! `preview`, `check`, `printers` and `hash`, as the spec's contract says;
+//! `preview`, `mesh`, `check`, `printers` and `hash`, as the spec's contract says;
 //! `watch` runs in [`crate::watch`].
 //!
 //! A command expands its recipes and `--sweep`s into jobs (see [`crate::batch`])
@@ -39,6 +39,8 @@ pub enum Command {
     Build(BuildArgs),
     /// Draw the toolpath: a PNG image, or a self-contained HTML file with a 3D viewer.
     Preview(PreviewArgs),
+    /// Write the toolpath as solid beads for a slicer or CAD: FILE.stl, FILE.3mf or FILE.obj.
+    Mesh(MeshArgs),
     /// Serve the 3D viewer on http://127.0.0.1:PORT/ and update it on every save of the recipe or a file it reads.
     Watch(WatchArgs),
     /// Run every printability check without writing G-code.
@@ -79,6 +81,7 @@ pub fn run(cli: Cli) -> Vec<Error> {
     match cli.command {
         Command::Build(a) => build(&a),
         Command::Preview(a) => preview(&a),
+        Command::Mesh(a) => mesh(&a),
         Command::Watch(a) => match watch(&a) {
             Ok(()) => Vec::new(),
             Err(e) => vec![e],
@@ -1252,6 +1255,66 @@ pub fn preview(a: &PreviewArgs) -> Vec<Error> {
             "{}",
             crate::preview::write(&p, &out, &opts, &|w| p.render(w))?
         );
+        Ok(())
+    };
+    match run() {
+        Ok(()) => Vec::new(),
+        Err(e) => vec![e],
+    }
+}
+
+/// Flags of `mesh`.
+#[derive(Args, Clone, Debug, Default)]
+pub struct MeshArgs {
+    /// Recipe file (YAML).
+    #[arg(value_name = "RECIPE")]
+    pub recipe: PathBuf,
+    /// Override a param: NAME=VALUE (VALUE may be an expression); repeatable.
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    pub sets: Vec<String>,
+    /// Use this printer (built-in name or YAML file) instead of the recipe's.
+    #[arg(long, value_name = "NAME|FILE")]
+    pub printer: Option<String>,
+    /// Output: FILE.stl (binary), FILE.3mf (with the filament colour) or FILE.obj (default ./NAME.stl).
+    #[arg(short, long, value_name = "FILE")]
+    pub output: Option<PathBuf>,
+    /// Silence a check for this build: its code, e.g. `bridge`; repeatable.
+    #[arg(long = "allow", value_name = "CODE")]
+    pub allow: Vec<String>,
+}
+
+/// `p3dp mesh`: writes the toolpath as solid beads (see [`crate::mesh`]); as
+/// with `preview`, a recipe that fails its checks is meshed too.
+pub fn mesh(a: &MeshArgs) -> Vec<Error> {
+    let run = || -> Result<()> {
+        let sets: Vec<(String, String)> =
+            a.sets.iter().map(|s| parse_set(s)).collect::<Result<_>>()?;
+        let out = match &a.output {
+            Some(o) => o.clone(),
+            None => PathBuf::from(format!("{}.stl", file_stem(&recipe_name(&a.recipe)?))),
+        };
+        non_empty("-o", Some(&out))?;
+        crate::mesh::write::Format::of(&out)?;
+        let mut ins = vec![("the recipe".to_string(), a.recipe.clone())];
+        if let Some(p) = a
+            .printer
+            .as_ref()
+            .filter(|p| crate::machine::Printer::built_in(p).is_none())
+        {
+            ins.push(("the --printer profile".to_string(), PathBuf::from(p)));
+        }
+        crate::output::check_distinct(&[("-o".to_string(), out.clone())], &ins)?;
+        let p = plan(
+            &a.recipe,
+            &Options {
+                sets,
+                printer: a.printer.clone(),
+                allow: a.allow.clone(),
+                threads: Threads::available(),
+            },
+        )?;
+        make_parent(&out)?;
+        crate::sayln!("{}", crate::mesh::write::write(&p, &out)?);
         Ok(())
     };
     match run() {

@@ -52,6 +52,7 @@ pub mod build;
 pub mod cli;
 pub mod diagnostic;
 pub mod lock;
+pub mod mesh;
 pub mod output;
 pub mod plan;
 pub mod preview;

@@ -151,6 +151,7 @@ fn completions_and_the_manual_name_the_subcommands() {
             "check",
             "hash",
             "preview",
+            "mesh",
             "watch",
             "new",
             "completions",
@@ -162,7 +163,9 @@ fn completions_and_the_manual_name_the_subcommands() {
     assert!(o.status.success(), "{}", stderr(&o));
     let man = stdout(&o);
     assert!(man.starts_with(".ie") || man.contains(".TH"), "{man}");
-    for sub in ["build", "check", "hash", "preview", "watch", "new", "man"] {
+    for sub in [
+        "build", "check", "hash", "preview", "mesh", "watch", "new", "man",
+    ] {
         assert!(man.contains(sub), "the manual lacks {sub}");
     }
 }

@@ -42,6 +42,7 @@ const LAYERS: &[(&str, &[&str])] = &[
             "output",
             "plan",
             "preview",
+            "mesh",
             "build",
             "batch",
             "lock",

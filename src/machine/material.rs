@@ -20,7 +20,13 @@ pub struct Material {
     /// Height (recipe z, mm) above which the fan turns on: the first layers
     /// stick better warm.
     pub fan_start_z: f64,
+    /// Filament colour, sRGB (the 3MF mesh's material colour).
+    pub color: [u8; 3],
 }
+
+/// The colour of a material that names none: the orange the previews draw
+/// filament in (`#FA8F29`).
+pub const DEFAULT_COLOR: [u8; 3] = [0xFA, 0x8F, 0x29];
 
 /// Height above which the fan of a built-in material turns on, mm: past the
 /// first layer or two.
@@ -46,6 +52,39 @@ impl Material {
             max_nozzle_temp: max,
             fan_speed: fan,
             fan_start_z: FAN_START_Z,
+            color: DEFAULT_COLOR,
         })
+    }
+}
+
+/// Parses a colour written `#rrggbb` (hex digits, either case).
+pub fn parse_color(s: &str) -> Option<[u8; 3]> {
+    let hex = s.strip_prefix('#')?;
+    if hex.len() != 6 || !hex.bytes().all(|b| b.is_ascii_hexdigit()) {
+        return None;
+    }
+    let byte = |i: usize| u8::from_str_radix(&hex[i..i + 2], 16).ok();
+    Some([byte(0)?, byte(2)?, byte(4)?])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn colors_parse() {
+        assert_eq!(parse_color("#FA8f29"), Some(DEFAULT_COLOR));
+        assert_eq!(parse_color("#000000"), Some([0, 0, 0]));
+        for bad in [
+            "FA8F29",
+            "#FA8F2",
+            "#FA8F299",
+            "#GG0000",
+            "",
+            "#",
+            "#ＦＡ8F29",
+        ] {
+            assert_eq!(parse_color(bad), None, "{bad}");
+        }
     }
 }

@@ -330,6 +330,15 @@ fn resolve_material(ctx: &Ctx, m: Option<&RawMaterial>) -> Result<Material> {
                     Some(n) => ctx.non_negative(n, "material.fan_start_z")?,
                     None => FAN_START_Z,
                 },
+                color: match &m.color {
+                    Some(c) => crate::machine::material::parse_color(c).ok_or_else(|| {
+                        Error::input(
+                            "material.color",
+                            format!("`{c}` is not a colour; expected `#rrggbb` in hex, e.g. `#FA8F29`"),
+                        )
+                    })?,
+                    None => crate::machine::material::DEFAULT_COLOR,
+                },
             };
             material_ranges(&material)?;
             Ok(material)

@@ -44,6 +44,9 @@ pub struct InlineMaterial {
     /// Height above which the fan turns on, mm; 0.5 when absent.
     #[serde(default)]
     pub fan_start_z: Option<Num>,
+    /// Filament colour `#rrggbb` (the 3MF of `p3dp mesh`); `#FA8F29` when absent.
+    #[serde(default)]
+    pub color: Option<String>,
 }
 
 impl<'de> Deserialize<'de> for RawMaterial {
