@@ -730,10 +730,43 @@ fn replay(planner: &mut Planner, call: Call) {
 pub struct Background {
     limits: Limits,
     batch: Vec<Call>,
-    tx: Option<std::sync::mpsc::SyncSender<Vec<Call>>>,
+    tx: Option<Tx>,
     worker: Option<std::thread::JoinHandle<Estimate>>,
     /// The planner itself when it runs inline (a budget of one thread).
     inline: Option<Planner>,
+    /// The estimate of a [`Feed`] run by another thread.
+    fed: Option<std::sync::mpsc::Receiver<Estimate>>,
+}
+
+/// Where recorded calls go: the planner's own thread (bounded: the writer
+/// waits when it is too far ahead) or a [`Feed`] (unbounded: its thread may
+/// have other work first).
+enum Tx {
+    Bounded(std::sync::mpsc::SyncSender<Vec<Call>>),
+    Unbounded(std::sync::mpsc::Sender<Vec<Call>>),
+}
+
+/// The receiving end of [`Background::fed`]: a planner that a thread the
+/// caller already has runs (after its other work), replaying every recorded
+/// call in order.
+pub struct Feed {
+    planner: Planner,
+    rx: std::sync::mpsc::Receiver<Vec<Call>>,
+    done: std::sync::mpsc::SyncSender<Estimate>,
+}
+
+impl Feed {
+    /// Replays the calls until the writer finishes or is dropped, and hands
+    /// the estimate back to [`Background::finish`].
+    pub fn run(mut self) {
+        for batch in self.rx {
+            for call in batch {
+                replay(&mut self.planner, call);
+            }
+        }
+        // the writer may be gone (an error): then nobody wants the estimate
+        let _ = self.done.send(self.planner.finish());
+    }
 }
 
 impl Background {
@@ -748,6 +781,7 @@ impl Background {
                 tx: None,
                 worker: None,
                 inline: Some(planner),
+                fed: None,
             };
         }
         let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<Call>>(64);
@@ -762,10 +796,33 @@ impl Background {
         Background {
             limits,
             batch: Vec::with_capacity(BATCH),
-            tx: Some(tx),
+            tx: Some(Tx::Bounded(tx)),
             worker: Some(worker),
             inline: None,
+            fed: None,
         }
+    }
+
+    /// A planner with these limits whose calls are recorded for the returned
+    /// [`Feed`], which another thread runs when it is free: the same calls in
+    /// the same order, so the same estimate. Calls wait in memory until then.
+    pub fn fed(limits: Limits) -> (Background, Feed) {
+        let (tx, rx) = std::sync::mpsc::channel::<Vec<Call>>();
+        let (done, fed) = std::sync::mpsc::sync_channel(1);
+        let feed = Feed {
+            planner: Planner::new(limits.clone()),
+            rx,
+            done,
+        };
+        let bg = Background {
+            limits,
+            batch: Vec::with_capacity(BATCH),
+            tx: Some(Tx::Unbounded(tx)),
+            worker: None,
+            inline: None,
+            fed: Some(fed),
+        };
+        (bg, feed)
     }
 
     fn call(&mut self, c: Call) {
@@ -781,9 +838,15 @@ impl Background {
 
     fn send(&mut self) {
         let batch = std::mem::replace(&mut self.batch, Vec::with_capacity(BATCH));
-        if let Some(tx) = &self.tx {
-            // a send fails only if the worker died: its panic is raised at finish
-            let _ = tx.send(batch);
+        // a send fails only if the worker died: its panic is raised at finish
+        match &self.tx {
+            Some(Tx::Bounded(tx)) => {
+                let _ = tx.send(batch);
+            }
+            Some(Tx::Unbounded(tx)) => {
+                let _ = tx.send(batch);
+            }
+            None => {}
         }
     }
 
@@ -825,6 +888,12 @@ impl Background {
         }
         self.send();
         self.tx = None;
+        if let Some(fed) = self.fed.take() {
+            // the feed's thread panicked if it hung up: the scope re-raises that
+            return fed
+                .recv()
+                .unwrap_or_else(|_| panic!("the planner's feed ended without an estimate"));
+        }
         let worker = self.worker.take().expect("finish is called once");
         worker
             .join()

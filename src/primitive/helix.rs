@@ -2,7 +2,7 @@
 
 use glam::DVec3;
 
-use super::on_circle;
+use super::TurnTable;
 use crate::toolpath::Toolpath;
 use serde::Deserialize;
 
@@ -34,8 +34,9 @@ impl Helix {
     /// angle steps are uniform and the last point sits exactly at `height`.
     pub fn build(&self, c: f64, v: f64) -> Toolpath {
         let n = self.string_count();
+        let circle = TurnTable::new(self.radius, self.segments, n);
         let at = |k: u64| {
-            let (x, y) = on_circle(self.radius, k, self.segments);
+            let (x, y) = circle.at(k);
             let z = if k == n {
                 self.height
             } else {
