@@ -81,12 +81,15 @@ impl Plan {
         };
         let this = &*self;
         let (checked, written) = std::thread::scope(|s| {
-            let checks = s.spawn(move || {
-                let c = this.checks(allow, check_threads);
-                if let Some(f) = feed {
+            let checks = s.spawn(move || match feed {
+                // the planner's moves wait while a check runs, and are
+                // planned between checks and after the last
+                Some(mut f) => {
+                    let c = this.checks_between(allow, check_threads, &mut || f.catch_up());
                     f.run();
+                    c
                 }
-                c
+                None => this.checks(allow, check_threads),
             });
             let written = this.write_gcode_with(out, planner);
             let checked = checks

@@ -49,6 +49,19 @@ pub fn run(
     allowed: &[String],
     threads: Threads,
 ) -> (Vec<Finding>, Vec<first_layer::Footprint>) {
+    run_between(recipe, paths, allowed, threads, &mut || {})
+}
+
+/// [`run`], calling `between` after each check (a thread that has other
+/// work queued, such as the print-time planner's moves, does some of it
+/// there, so less of it waits in memory); the findings are the same.
+pub fn run_between(
+    recipe: &Recipe,
+    paths: &[&Toolpath],
+    allowed: &[String],
+    threads: Threads,
+    between: &mut dyn FnMut(),
+) -> (Vec<Finding>, Vec<first_layer::Footprint>) {
     let mut out = Vec::new();
     temperatures(recipe, &mut out);
     for tp in paths {
@@ -56,6 +69,7 @@ pub fn run(
         strings(recipe, tp, &mut out);
         flow::cross_sections(recipe, tp, &mut out);
         out.extend(events(recipe, tp));
+        between();
     }
     let cheap_error = out
         .iter()
@@ -71,11 +85,14 @@ pub fn run(
         };
         let support = (geometric && threads.parallel()).then(|| s.spawn(support_check));
         starvation::check(recipe, paths, &mut out);
+        between();
         let mut collisions = Vec::new();
         let mut footprints = Vec::new();
         if geometric {
             footprints = first_layer::check(recipe, paths, &mut out);
+            between();
             collision::check(recipe, paths, &mut collisions);
+            between();
         }
         if let Some(h) = support {
             out.extend(h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)));
