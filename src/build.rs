@@ -84,7 +84,7 @@ impl Plan {
             let checks = s.spawn(move || match feed {
                 // the planner's moves wait while a check runs, and are
                 // planned between checks and after the last
-                Some(mut f) => {
+                Some(f) => {
                     let c = this.checks_between(allow, check_threads, &mut || f.catch_up());
                     f.run();
                     c

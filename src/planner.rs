@@ -758,8 +758,8 @@ pub struct Background {
     worker: Option<std::thread::JoinHandle<Estimate>>,
     /// The planner itself when it runs inline (a budget of one thread).
     inline: Option<Planner>,
-    /// The estimate of a [`Feed`] run by another thread.
-    fed: Option<std::sync::mpsc::Receiver<Estimate>>,
+    /// The planner of a [`Feed`], shared with another thread.
+    fed: Option<std::sync::Arc<std::sync::Mutex<Fed>>>,
 }
 
 /// Where recorded calls go: the planner's own thread (bounded: the writer
@@ -771,34 +771,65 @@ enum Tx {
 }
 
 /// The receiving end of [`Background::fed`]: a planner that a thread the
-/// caller already has runs (after its other work), replaying every recorded
-/// call in order.
+/// caller already has runs between and after its other work, replaying every
+/// recorded call in order. The writer's thread takes over what is left once
+/// it has written everything (see [`Background::finish`]), so whichever
+/// thread is free plans; one lock keeps the calls in order, so the estimate
+/// is the one planner's.
 pub struct Feed {
-    planner: Planner,
-    rx: std::sync::mpsc::Receiver<Vec<Call>>,
-    done: std::sync::mpsc::SyncSender<Estimate>,
+    shared: std::sync::Arc<std::sync::Mutex<Fed>>,
 }
 
-impl Feed {
-    /// Replays the calls recorded so far, without waiting for more.
-    pub fn catch_up(&mut self) {
+/// A planner fed by a channel, and its estimate once the calls have ended.
+struct Fed {
+    planner: Option<Planner>,
+    rx: std::sync::mpsc::Receiver<Vec<Call>>,
+    estimate: Option<Estimate>,
+}
+
+impl Fed {
+    /// Replays the calls recorded so far.
+    fn catch_up(&mut self) {
+        let Some(p) = &mut self.planner else { return };
         while let Ok(batch) = self.rx.try_recv() {
             for call in batch {
-                replay(&mut self.planner, call);
+                replay(p, call);
             }
         }
     }
 
-    /// Replays the calls until the writer finishes or is dropped, and hands
-    /// the estimate back to [`Background::finish`].
-    pub fn run(mut self) {
-        for batch in self.rx {
+    /// Replays the calls until the writer has sent the last and dropped its
+    /// end (or is gone), then plans them.
+    fn run(&mut self) {
+        let Some(mut p) = self.planner.take() else { return };
+        while let Ok(batch) = self.rx.recv() {
             for call in batch {
-                replay(&mut self.planner, call);
+                replay(&mut p, call);
             }
         }
-        // the writer may be gone (an error): then nobody wants the estimate
-        let _ = self.done.send(self.planner.finish());
+        self.estimate = Some(p.finish());
+    }
+}
+
+/// The shared planner, even if a thread panicked while it held it (that
+/// panic is raised where the scope joins it).
+fn lock(m: &std::sync::Mutex<Fed>) -> std::sync::MutexGuard<'_, Fed> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+impl Feed {
+    /// Replays the calls recorded so far, without waiting for more; does
+    /// nothing if the writer's thread is planning now.
+    pub fn catch_up(&self) {
+        if let Ok(mut fed) = self.shared.try_lock() {
+            fed.catch_up();
+        }
+    }
+
+    /// Replays the calls until the writer finishes (unless its thread has
+    /// done so already), and plans them.
+    pub fn run(self) {
+        lock(&self.shared).run();
     }
 }
 
@@ -841,21 +872,20 @@ impl Background {
     /// the same order, so the same estimate. Calls wait in memory until then.
     pub fn fed(limits: Limits) -> (Background, Feed) {
         let (tx, rx) = std::sync::mpsc::channel::<Vec<Call>>();
-        let (done, fed) = std::sync::mpsc::sync_channel(1);
-        let feed = Feed {
-            planner: Planner::new(limits.clone()),
+        let shared = std::sync::Arc::new(std::sync::Mutex::new(Fed {
+            planner: Some(Planner::new(limits.clone())),
             rx,
-            done,
-        };
+            estimate: None,
+        }));
         let bg = Background {
             limits,
             batch: Vec::with_capacity(BATCH),
             tx: Some(Tx::Unbounded(tx)),
             worker: None,
             inline: None,
-            fed: Some(fed),
+            fed: Some(shared.clone()),
         };
-        (bg, feed)
+        (bg, Feed { shared })
     }
 
     fn call(&mut self, c: Call) {
@@ -921,11 +951,14 @@ impl Background {
         }
         self.send();
         self.tx = None;
-        if let Some(fed) = self.fed.take() {
-            // the feed's thread panicked if it hung up: the scope re-raises that
+        if let Some(shared) = self.fed.take() {
+            // every call is sent: plan what the feed's thread has not yet
+            let mut fed = lock(&shared);
+            fed.run();
             return fed
-                .recv()
-                .unwrap_or_else(|_| panic!("the planner's feed ended without an estimate"));
+                .estimate
+                .take()
+                .unwrap_or_else(|| panic!("the planner's estimate was taken twice"));
         }
         let worker = self.worker.take().expect("finish is called once");
         worker
