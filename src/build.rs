@@ -77,7 +77,11 @@ impl Plan {
             let (bg, feed) = Background::fed(limits);
             (bg, Some(feed), Threads::ONE)
         } else {
-            (Background::new(limits, Threads::new(2)), None, Threads::new(n - 2))
+            (
+                Background::new(limits, Threads::new(2)),
+                None,
+                Threads::new(n - 2),
+            )
         };
         let this = &*self;
         let (checked, written) = std::thread::scope(|s| {

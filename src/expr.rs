@@ -463,6 +463,24 @@ fn run(ops: &[Op], vars: &Vars, ext: &[f64]) -> f64 {
 /// Points one pass of [`Expr::eval_many`] evaluates together.
 pub const LANES: usize = 64;
 
+/// The evaluation stack of [`Expr::eval_many_in`]: one value per point in
+/// each slot.
+pub struct Lanes(Box<[[f64; LANES]; STACK]>);
+
+impl Lanes {
+    /// A stack for [`Expr::eval_many_in`].
+    pub fn new() -> Lanes {
+        Lanes(Box::new([[0.0; LANES]; STACK]))
+    }
+}
+
+impl Default for Lanes {
+    /// [`Lanes::new`].
+    fn default() -> Lanes {
+        Lanes::new()
+    }
+}
+
 /// [`run`] on up to [`LANES`] points: each stack slot holds one value per
 /// point, and every instruction is applied to all of them before the next.
 fn run_lanes(ops: &[Op], vars: &[Vars], out: &mut [f64], st: &mut [[f64; LANES]; STACK]) {
@@ -830,10 +848,17 @@ impl Expr {
     /// instruction and point); each point sees exactly the operations of
     /// [`Expr::eval`], in the same order.
     pub fn eval_many(&self, vars: &[Vars], out: &mut [f64]) {
+        let mut lanes = Lanes::new();
+        self.eval_many_in(vars, out, &mut lanes);
+    }
+
+    /// [`Expr::eval_many`] on the stack `lanes` (made once for many calls:
+    /// it is 16 KiB, and clearing it on every call of a few points cost more
+    /// than the evaluation).
+    pub fn eval_many_in(&self, vars: &[Vars], out: &mut [f64], lanes: &mut Lanes) {
         assert_eq!(vars.len(), out.len(), "one result per point");
-        let mut st = [[0.0f64; LANES]; STACK];
         for (v, o) in vars.chunks(LANES).zip(out.chunks_mut(LANES)) {
-            run_lanes(&self.ops, v, o, &mut st);
+            run_lanes(&self.ops, v, o, &mut lanes.0);
         }
     }
 

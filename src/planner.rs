@@ -801,7 +801,9 @@ impl Fed {
     /// Replays the calls until the writer has sent the last and dropped its
     /// end (or is gone), then plans them.
     fn run(&mut self) {
-        let Some(mut p) = self.planner.take() else { return };
+        let Some(mut p) = self.planner.take() else {
+            return;
+        };
         while let Ok(batch) = self.rx.recv() {
             for call in batch {
                 replay(&mut p, call);

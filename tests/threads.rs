@@ -60,7 +60,11 @@ fn the_vase_is_the_same_bytes_on_1_2_and_4_threads() {
         (out, stats)
     };
     let one = build(1);
-    assert!(one.0.len() > 1_000_000, "a real build: {} bytes", one.0.len());
+    assert!(
+        one.0.len() > 1_000_000,
+        "a real build: {} bytes",
+        one.0.len()
+    );
     for n in [1, 2, 4] {
         for (how, other) in [("plan + render", build(n)), ("check_and_render", piped(n))] {
             assert!(one.0 == other.0, "{how} on {n} threads changed the G-code");

@@ -204,8 +204,7 @@ impl std::hash::Hasher for CellHasher {
 }
 
 /// A `HashMap` keyed by grid cells, hashed by [`CellHasher`].
-pub type CellMap<K, V> =
-    std::collections::HashMap<K, V, std::hash::BuildHasherDefault<CellHasher>>;
+pub type CellMap<K, V> = std::collections::HashMap<K, V, std::hash::BuildHasherDefault<CellHasher>>;
 
 /// A `HashSet` of grid cells, hashed by [`CellHasher`].
 pub type CellSet<K> = std::collections::HashSet<K, std::hash::BuildHasherDefault<CellHasher>>;

@@ -4,7 +4,7 @@ use glam::DVec3;
 
 use super::{not_finite, par_chunks, vars_at};
 use crate::error::{Error, Result};
-use crate::expr::{var, Expr, LANES};
+use crate::expr::{var, Expr, Lanes, LANES};
 use crate::threads::Threads;
 use crate::toolpath::Toolpath;
 
@@ -47,6 +47,7 @@ impl Deform {
             // LANES strings at a time (Expr::eval_many: the same values as
             // eval); travel strings are evaluated too but keep their c and v
             let mut vars = [[0.0; var::COUNT]; LANES];
+            let mut lanes = Lanes::new();
             let mut mids = [DVec3::ZERO; LANES];
             let (mut cs, mut vs) = ([0.0; LANES], [0.0; LANES]);
             for (b, block) in chunk.chunks_mut(LANES).enumerate() {
@@ -62,10 +63,10 @@ impl Deform {
                     mids[j] = mid;
                 }
                 if let Some(e) = &self.cross_section {
-                    e.eval_many(&vars[..m], &mut cs[..m]);
+                    e.eval_many_in(&vars[..m], &mut cs[..m], &mut lanes);
                 }
                 if let Some(e) = &self.speed {
-                    e.eval_many(&vars[..m], &mut vs[..m]);
+                    e.eval_many_in(&vars[..m], &mut vs[..m], &mut lanes);
                 }
                 for (j, s) in block.iter_mut().enumerate() {
                     if s.travel {
@@ -104,6 +105,7 @@ impl Deform {
             // over all of them (Expr::eval_many: the same values as eval)
             let mut vars = [[0.0; var::COUNT]; LANES];
             let mut out = [[0.0; LANES]; 3];
+            let mut lanes = Lanes::new();
             for (b, block) in chunk.chunks_mut(LANES).enumerate() {
                 let first = start + b * LANES;
                 let m = block.len();
@@ -112,10 +114,10 @@ impl Deform {
                 }
                 let vars = &vars[..m];
                 let [o0, o1, o2] = &mut out;
-                f0.eval_many(vars, &mut o0[..m]);
-                f2.eval_many(vars, &mut o2[..m]);
+                f0.eval_many_in(vars, &mut o0[..m], &mut lanes);
+                f2.eval_many_in(vars, &mut o2[..m], &mut lanes);
                 if !cylinder || !keep_theta {
-                    f1.eval_many(vars, &mut o1[..m]);
+                    f1.eval_many_in(vars, &mut o1[..m], &mut lanes);
                 }
                 for (j, point) in block.iter_mut().enumerate() {
                     let p = *point;
