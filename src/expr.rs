@@ -483,6 +483,8 @@ impl Default for Lanes {
 
 /// [`run`] on up to [`LANES`] points: each stack slot holds one value per
 /// point, and every instruction is applied to all of them before the next.
+// the calls of 3, 4 and k arguments read several slots of one lane at once
+#[allow(clippy::needless_range_loop)]
 fn run_lanes(ops: &[Op], vars: &[Vars], out: &mut [f64], st: &mut [[f64; LANES]; STACK]) {
     let n = vars.len();
     let mut sp = 0usize;
