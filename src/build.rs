@@ -7,17 +7,25 @@ use crate::error::{Error, Result};
 use crate::gcode::{Emitter, MoveStats};
 pub use crate::model::make_part;
 use crate::output::HashWriter;
-pub use crate::plan::{plan, Options, Plan};
+pub use crate::plan::{plan, prepare, Options, Plan};
+use crate::planner::Background;
 use crate::stats::{PartStats, Stats};
+use crate::threads::Threads;
 use crate::toolpath::Toolpath;
 
 impl Plan {
     /// Writes the G-code to `out`.
     pub fn write_gcode<W: Write>(&self, out: W) -> Result<(W, MoveStats)> {
+        let planner = Background::new(self.recipe.printer.limits(), self.threads);
+        self.write_gcode_with(out, planner)
+    }
+
+    /// Writes the G-code to `out`, its moves planned by `planner`.
+    fn write_gcode_with<W: Write>(&self, out: W, planner: Background) -> Result<(W, MoveStats)> {
         let io =
             |e: io::Error| Error::io_from(&self.path, format!("cannot write the G-code: {e}"), &e);
         let top = self.top_z();
-        let mut em = Emitter::new(out, &self.recipe, self.threads);
+        let mut em = Emitter::with_planner(out, &self.recipe, planner);
         em.thumbnails = crate::preview::thumbnail::blocks(self)?;
         let fan_events = |t: &Toolpath| {
             t.events
@@ -38,6 +46,74 @@ impl Plan {
     pub fn render<W: Write>(&self, out: W) -> Result<Stats> {
         let (hw, moves) = self.write_gcode(HashWriter::new(out))?;
         let (digest, bytes) = hw.finish();
+        Ok(self.stats(&moves, digest, bytes))
+    }
+
+    /// Checks the plan (as [`Plan::check`]) and writes its G-code to `out`
+    /// (as [`Plan::write_gcode`]) at the same time, within the plan's thread
+    /// budget; with one thread, or when the G-code depends on the findings
+    /// (thumbnails mark them), one after the other. The findings are in the
+    /// plan whatever the G-code's result, and the caller must look at them
+    /// first: with checks that fail, `out` holds G-code that must not be
+    /// committed (so `out` should be a temp file, never standard output).
+    /// The bytes are those of `check` then `write_gcode`.
+    ///
+    /// With two threads the G-code is written (and hashed, by `out`) on the
+    /// caller's thread while the other runs the checks, then the print-time
+    /// planner on the moves recorded meanwhile; with three or more the
+    /// planner has a thread of its own and the checks the rest.
+    pub fn check_and_write<W: Write>(
+        &mut self,
+        allow: &[String],
+        out: W,
+    ) -> Result<(W, MoveStats)> {
+        let n = self.threads.get();
+        if n == 1 || !self.recipe.printer.thumbnails.is_empty() {
+            self.check(allow);
+            return self.write_gcode(out);
+        }
+        let limits = self.recipe.printer.limits();
+        let (planner, feed, check_threads) = if n == 2 {
+            let (bg, feed) = Background::fed(limits);
+            (bg, Some(feed), Threads::ONE)
+        } else {
+            (
+                Background::new(limits, Threads::new(2)),
+                None,
+                Threads::new(n - 2),
+            )
+        };
+        let this = &*self;
+        let (checked, written) = std::thread::scope(|s| {
+            let checks = s.spawn(move || match feed {
+                // the planner's moves wait while a check runs, and are
+                // planned between checks and after the last
+                Some(f) => {
+                    let c = this.checks_between(allow, check_threads, &mut || f.catch_up());
+                    f.run();
+                    c
+                }
+                None => this.checks(allow, check_threads),
+            });
+            let written = this.write_gcode_with(out, planner);
+            let checked = checks
+                .join()
+                .unwrap_or_else(|e| std::panic::resume_unwind(e));
+            (checked, written)
+        });
+        (self.findings, self.footprints) = checked;
+        written
+    }
+
+    /// [`Plan::check_and_write`] through a hashing writer: the stats.
+    pub fn check_and_render<W: Write>(&mut self, allow: &[String], out: W) -> Result<Stats> {
+        let (hw, moves) = self.check_and_write(allow, HashWriter::new(out))?;
+        let (digest, bytes) = hw.finish();
+        Ok(self.stats(&moves, digest, bytes))
+    }
+
+    /// The stats of the G-code written with `moves`, its hash and size.
+    fn stats(&self, moves: &MoveStats, digest: String, bytes: u64) -> Stats {
         let parts = self
             .paths
             .iter()
@@ -52,13 +128,13 @@ impl Plan {
         let mut stats = Stats::new(
             &self.path,
             &self.recipe,
-            &moves,
+            moves,
             parts,
             digest,
             bytes,
             self.findings.clone(),
         );
         stats.first_layer = self.footprints.clone();
-        Ok(stats)
+        stats
     }
 }

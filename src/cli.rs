@@ -233,13 +233,25 @@ impl Common {
 
     /// Plans a job on `threads` and refuses it when its checks fail (unless forced).
     fn checked_plan(&self, job: &Job, threads: Threads) -> Result<Plan> {
+        let mut p = self.prepared(job, threads)?;
+        p.check(&self.allow);
+        self.refuse_failing(&p)?;
+        Ok(p)
+    }
+
+    /// Plans a job on `threads` without checking it yet.
+    fn prepared(&self, job: &Job, threads: Threads) -> Result<Plan> {
         let opts = Options {
             sets: job.sets.clone(),
             printer: self.printer.clone().or_else(|| job.printer.clone()),
             allow: self.allow.clone(),
             threads,
         };
-        let p = plan(&job.recipe, &opts)?;
+        crate::build::prepare(&job.recipe, &opts)
+    }
+
+    /// The error of a checked plan whose checks fail (unless forced).
+    fn refuse_failing(&self, p: &Plan) -> Result<()> {
         let failing = p.failing(self.strict);
         if !failing.is_empty() && !self.force {
             let mut msg = format!(
@@ -252,7 +264,7 @@ impl Common {
             }
             return Err(Error::check(&p.path, msg));
         }
-        Ok(p)
+        Ok(())
     }
 }
 
@@ -547,7 +559,24 @@ fn build_job(
     single: bool,
 ) -> Result<Done> {
     let target = target?;
-    let p = a.common.checked_plan(job, threads)?;
+    let mut p = a.common.prepared(job, threads)?;
+    // a file in a folder that exists is written (to its temp file) while the
+    // checks run, and committed below only if they pass; anything else waits
+    // for the checks, so a failed check still writes nothing
+    let mut early = None;
+    if let Target::File(f) = &target {
+        let folder = f.parent().filter(|d| !d.as_os_str().is_empty());
+        if folder.is_none_or(|d| d.is_dir()) {
+            if let Ok(mut file) = AtomicFile::create(f) {
+                let stats = p.check_and_render(&a.common.allow, file.file());
+                early = Some((file, stats));
+            }
+        }
+    }
+    if early.is_none() {
+        p.check(&a.common.allow);
+    }
+    a.common.refuse_failing(&p)?;
     // the cell array of --pattern, made before any file is written
     let pattern = match &a.pattern {
         Some(f) => Some((f, pattern_png(&p.recipe).map_err(|e| e.in_file(&p.path))?)),
@@ -561,9 +590,15 @@ fn build_job(
             .render(crate::output::Stdout)
             .map(|s| (s, "standard output".to_string(), true)),
         Target::File(f) => {
-            make_parent(f)?;
-            let mut file = AtomicFile::create(f)?;
-            let stats = p.render(file.file())?;
+            let (file, stats) = match early {
+                Some((file, stats)) => (file, stats?),
+                None => {
+                    make_parent(f)?;
+                    let mut file = AtomicFile::create(f)?;
+                    let stats = p.render(file.file())?;
+                    (file, stats)
+                }
+            };
             files.push(file);
             Ok((stats, f.display().to_string(), false))
         }
@@ -898,8 +933,11 @@ fn fingerprints(c: &Common, jobs: &[Job]) -> Vec<Result<(String, LineHashes)>> {
 }
 
 fn fingerprint(c: &Common, job: &Job, threads: Threads) -> Result<(String, LineHashes)> {
-    let p = c.checked_plan(job, threads)?;
-    let (hw, _) = p.write_gcode(HashWriter::new(LineHashes::default()))?;
+    // nothing is written: the G-code is hashed while the checks run
+    let mut p = c.prepared(job, threads)?;
+    let written = p.check_and_write(&c.allow, HashWriter::new(LineHashes::default()));
+    c.refuse_failing(&p)?;
+    let (hw, _) = written?;
     let (digest, _, lines) = hw.finish_into();
     Ok((digest, lines))
 }

@@ -42,6 +42,14 @@ pub struct Plan {
 
 /// Loads, builds and checks a recipe.
 pub fn plan(path: &Path, opts: &Options) -> Result<Plan> {
+    let mut p = prepare(path, opts)?;
+    p.check(&opts.allow);
+    Ok(p)
+}
+
+/// Loads and builds a recipe without checking it: no findings until
+/// [`Plan::check`] (or [`Plan::checks`]) has run.
+pub fn prepare(path: &Path, opts: &Options) -> Result<Plan> {
     let shown = path.display().to_string();
     // the command line's own mistakes name the option, not the recipe
     check::validate_allow(&opts.allow, |i| format!("--allow {}", opts.allow[i]))?;
@@ -73,22 +81,50 @@ pub fn plan(path: &Path, opts: &Options) -> Result<Plan> {
         }
     }
     paths.extend(parts);
-    let refs: Vec<&Toolpath> = paths.iter().collect();
-    let allowed: Vec<String> = recipe.allow.iter().chain(&opts.allow).cloned().collect();
-    let (mut findings, footprints) = check::run(&recipe, &refs, &allowed, opts.threads);
-    check::apply_allow(&mut findings, &recipe.allow);
-    check::apply_allow(&mut findings, &opts.allow);
     Ok(Plan {
         path: shown,
         recipe,
         paths,
-        findings,
-        footprints,
+        findings: Vec::new(),
+        footprints: Vec::new(),
         threads: opts.threads,
     })
 }
 
+/// What the checks of a plan found: its findings (those `allow`ed already
+/// marked) and the parts' footprints.
+pub type Checked = (Vec<Finding>, Vec<check::first_layer::Footprint>);
+
 impl Plan {
+    /// Runs the checks on `threads` (any budget gives the same answer),
+    /// `allow` (the command line's `--allow`) silencing codes beside the
+    /// recipe's own; the plan is not changed: see [`Plan::check`].
+    pub fn checks(&self, allow: &[String], threads: crate::threads::Threads) -> Checked {
+        self.checks_between(allow, threads, &mut || {})
+    }
+
+    /// [`Plan::checks`], calling `between` after each check (see
+    /// [`check::run_between`]).
+    pub fn checks_between(
+        &self,
+        allow: &[String],
+        threads: crate::threads::Threads,
+        between: &mut dyn FnMut(),
+    ) -> Checked {
+        let refs: Vec<&Toolpath> = self.paths.iter().collect();
+        let allowed: Vec<String> = self.recipe.allow.iter().chain(allow).cloned().collect();
+        let (mut findings, footprints) =
+            check::run_between(&self.recipe, &refs, &allowed, threads, between);
+        check::apply_allow(&mut findings, &self.recipe.allow);
+        check::apply_allow(&mut findings, allow);
+        (findings, footprints)
+    }
+
+    /// Runs the checks on the plan's own budget and keeps what they found.
+    pub fn check(&mut self, allow: &[String]) {
+        (self.findings, self.footprints) = self.checks(allow, self.threads);
+    }
+
     /// Highest point of any part, recipe coordinates.
     pub fn top_z(&self) -> f64 {
         self.paths

@@ -107,7 +107,7 @@ pub struct Estimate {
     pub parts: Vec<PartTimes>,
 }
 
-/// One move, as the passes need it (48 bytes: 2M moves take 96 MB).
+/// One move, as the passes need it (32 bytes: 2M moves take 64 MB).
 #[derive(Clone, Copy, Debug)]
 struct Block {
     len: f64,
@@ -117,10 +117,16 @@ struct Block {
     /// Highest entry v² (junction limit; under Klipper also what the blocks
     /// before can reach), then the planned entry v².
     entry_v2: f64,
-    /// Klipper: the highest entry v² in the minimum-cruise-ratio profile.
-    mcr_entry_v2: f64,
-    /// Klipper: the v² this block can gain in that profile, 2·L·a_mcr.
-    mcr_delta_v2: f64,
+}
+
+/// A block's minimum-cruise-ratio profile, kept beside it under Klipper's
+/// model only (Marlin's has none: 16 bytes a move saved).
+#[derive(Clone, Copy, Debug)]
+struct Mcr {
+    /// The highest entry v² in the minimum-cruise-ratio profile.
+    entry_v2: f64,
+    /// The v² this block can gain in that profile, 2·L·a_mcr.
+    delta_v2: f64,
 }
 
 /// The last XYZ block, for the next junction.
@@ -161,6 +167,8 @@ struct Part {
 pub struct Planner {
     limits: Limits,
     blocks: Vec<Block>,
+    /// Under Klipper's model, each block's [`Mcr`]; empty under Marlin's.
+    mcr: Vec<Mcr>,
     pos: Option<DVec3>,
     last: Option<Last>,
     parts: Vec<Part>,
@@ -175,6 +183,7 @@ impl Planner {
         Planner {
             limits,
             blocks: Vec::new(),
+            mcr: Vec::new(),
             pos: None,
             last: None,
             parts: Vec::new(),
@@ -357,14 +366,16 @@ impl Planner {
                 None => 0.0,
             };
             let (mcr_entry_v2, mcr_delta_v2) = self.klipper_entry(&mut entry_v2, base, accel, len);
-            self.blocks.push(Block {
-                len,
-                accel,
-                cruise_v2,
-                entry_v2,
+            self.push(
+                Block {
+                    len,
+                    accel,
+                    cruise_v2,
+                    entry_v2,
+                },
                 mcr_entry_v2,
                 mcr_delta_v2,
-            });
+            );
             self.last = Some(Last {
                 dir,
                 len,
@@ -407,14 +418,16 @@ impl Planner {
         let mut entry_v2 = 0.0;
         let base = self.limits.max_acceleration;
         let (mcr_entry_v2, mcr_delta_v2) = self.klipper_entry(&mut entry_v2, base, accel, length);
-        self.blocks.push(Block {
-            len: length,
-            accel,
-            cruise_v2: v * v,
-            entry_v2,
+        self.push(
+            Block {
+                len: length,
+                accel,
+                cruise_v2: v * v,
+                entry_v2,
+            },
             mcr_entry_v2,
             mcr_delta_v2,
-        });
+        );
         let ideal = if feed.is_finite() && feed > 0.0 {
             length / feed
         } else {
@@ -433,20 +446,31 @@ impl Planner {
     /// the extruder limits it). Returns that profile's (entry v², gain); with
     /// no previous XYZ block the head is at rest. Marlin's model keeps the
     /// junction limit alone: (0, 0).
+    /// Queues a block, with its minimum-cruise-ratio profile under Klipper's model.
+    fn push(&mut self, b: Block, mcr_entry_v2: f64, mcr_delta_v2: f64) {
+        self.blocks.push(b);
+        if self.limits.square_corner_velocity.is_some() {
+            self.mcr.push(Mcr {
+                entry_v2: mcr_entry_v2,
+                delta_v2: mcr_delta_v2,
+            });
+        }
+    }
+
     fn klipper_entry(&self, entry_v2: &mut f64, base: f64, accel: f64, len: f64) -> (f64, f64) {
         if self.limits.square_corner_velocity.is_none() {
             return (0.0, 0.0);
         }
         let mcr_delta_v2 = 2.0 * len * (base * (1.0 - self.limits.minimum_cruise_ratio)).min(accel);
-        let prev = match (self.last, self.blocks.last()) {
-            (Some(_), Some(b)) => b,
+        let (prev, prev_mcr) = match (self.last, self.blocks.last(), self.mcr.last()) {
+            (Some(_), Some(b), Some(m)) => (b, m),
             _ => {
                 *entry_v2 = 0.0;
                 return (0.0, mcr_delta_v2);
             }
         };
         *entry_v2 = entry_v2.min(prev.entry_v2 + 2.0 * prev.accel * prev.len);
-        let mcr_entry_v2 = entry_v2.min(prev.mcr_entry_v2 + prev.mcr_delta_v2);
+        let mcr_entry_v2 = entry_v2.min(prev_mcr.entry_v2 + prev_mcr.delta_v2);
         (mcr_entry_v2, mcr_delta_v2)
     }
 
@@ -534,7 +558,7 @@ impl Planner {
         let mut ends: Vec<usize> = self.parts.iter().map(|p| p.first).collect();
         ends.push(self.blocks.len());
         let planned = if self.limits.square_corner_velocity.is_some() {
-            klipper_passes(&self.blocks, &ends)
+            klipper_passes(&self.blocks, &self.mcr, &ends)
         } else {
             backward_pass(&mut self.blocks);
             forward_pass(&mut self.blocks, &ends)
@@ -589,7 +613,7 @@ impl Planner {
 /// from rest to rest cruising. A block that can only slow down cruises at
 /// the cruise of the block before it, or its own entry if lower. Then each
 /// block is a trapezoid from min(s_i, c_i) to min(s_{i+1}, c_i) cruising at c_i.
-fn klipper_passes(b: &[Block], ends: &[usize]) -> Vec<f64> {
+fn klipper_passes(b: &[Block], mcr: &[Mcr], ends: &[usize]) -> Vec<f64> {
     let n = b.len();
     // (entry v², cruise v² if known, exit v²), filled backward
     let mut plan: Vec<(f64, Option<f64>, f64)> = vec![(0.0, None, 0.0); n];
@@ -599,11 +623,11 @@ fn klipper_passes(b: &[Block], ends: &[usize]) -> Vec<f64> {
         let reach = next + 2.0 * b[i].accel * b[i].len;
         let start = b[i].entry_v2.min(reach);
         pending += 1;
-        let reach_mcr = next_mcr + b[i].mcr_delta_v2;
-        let start_mcr = b[i].mcr_entry_v2.min(reach_mcr);
+        let reach_mcr = next_mcr + mcr[i].delta_v2;
+        let start_mcr = mcr[i].entry_v2.min(reach_mcr);
         let mut cruise = None;
         if start_mcr < reach_mcr {
-            if start_mcr + b[i].mcr_delta_v2 > next_mcr || pending > 1 {
+            if start_mcr + mcr[i].delta_v2 > next_mcr || pending > 1 {
                 peak = 0.5 * (start_mcr + reach_mcr);
             }
             cruise = Some(b[i].cruise_v2.min(0.5 * (start + reach)).min(peak));
@@ -730,10 +754,85 @@ fn replay(planner: &mut Planner, call: Call) {
 pub struct Background {
     limits: Limits,
     batch: Vec<Call>,
-    tx: Option<std::sync::mpsc::SyncSender<Vec<Call>>>,
+    tx: Option<Tx>,
     worker: Option<std::thread::JoinHandle<Estimate>>,
     /// The planner itself when it runs inline (a budget of one thread).
     inline: Option<Planner>,
+    /// The planner of a [`Feed`], shared with another thread.
+    fed: Option<std::sync::Arc<std::sync::Mutex<Fed>>>,
+}
+
+/// Where recorded calls go: the planner's own thread (bounded: the writer
+/// waits when it is too far ahead) or a [`Feed`] (unbounded: its thread may
+/// have other work first).
+enum Tx {
+    Bounded(std::sync::mpsc::SyncSender<Vec<Call>>),
+    Unbounded(std::sync::mpsc::Sender<Vec<Call>>),
+}
+
+/// The receiving end of [`Background::fed`]: a planner that a thread the
+/// caller already has runs between and after its other work, replaying every
+/// recorded call in order. The writer's thread takes over what is left once
+/// it has written everything (see [`Background::finish`]), so whichever
+/// thread is free plans; one lock keeps the calls in order, so the estimate
+/// is the one planner's.
+pub struct Feed {
+    shared: std::sync::Arc<std::sync::Mutex<Fed>>,
+}
+
+/// A planner fed by a channel, and its estimate once the calls have ended.
+struct Fed {
+    planner: Option<Planner>,
+    rx: std::sync::mpsc::Receiver<Vec<Call>>,
+    estimate: Option<Estimate>,
+}
+
+impl Fed {
+    /// Replays the calls recorded so far.
+    fn catch_up(&mut self) {
+        let Some(p) = &mut self.planner else { return };
+        while let Ok(batch) = self.rx.try_recv() {
+            for call in batch {
+                replay(p, call);
+            }
+        }
+    }
+
+    /// Replays the calls until the writer has sent the last and dropped its
+    /// end (or is gone), then plans them.
+    fn run(&mut self) {
+        let Some(mut p) = self.planner.take() else {
+            return;
+        };
+        while let Ok(batch) = self.rx.recv() {
+            for call in batch {
+                replay(&mut p, call);
+            }
+        }
+        self.estimate = Some(p.finish());
+    }
+}
+
+/// The shared planner, even if a thread panicked while it held it (that
+/// panic is raised where the scope joins it).
+fn lock(m: &std::sync::Mutex<Fed>) -> std::sync::MutexGuard<'_, Fed> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+impl Feed {
+    /// Replays the calls recorded so far, without waiting for more; does
+    /// nothing if the writer's thread is planning now.
+    pub fn catch_up(&self) {
+        if let Ok(mut fed) = self.shared.try_lock() {
+            fed.catch_up();
+        }
+    }
+
+    /// Replays the calls until the writer finishes (unless its thread has
+    /// done so already), and plans them.
+    pub fn run(self) {
+        lock(&self.shared).run();
+    }
 }
 
 impl Background {
@@ -748,6 +847,7 @@ impl Background {
                 tx: None,
                 worker: None,
                 inline: Some(planner),
+                fed: None,
             };
         }
         let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<Call>>(64);
@@ -762,10 +862,32 @@ impl Background {
         Background {
             limits,
             batch: Vec::with_capacity(BATCH),
-            tx: Some(tx),
+            tx: Some(Tx::Bounded(tx)),
             worker: Some(worker),
             inline: None,
+            fed: None,
         }
+    }
+
+    /// A planner with these limits whose calls are recorded for the returned
+    /// [`Feed`], which another thread runs when it is free: the same calls in
+    /// the same order, so the same estimate. Calls wait in memory until then.
+    pub fn fed(limits: Limits) -> (Background, Feed) {
+        let (tx, rx) = std::sync::mpsc::channel::<Vec<Call>>();
+        let shared = std::sync::Arc::new(std::sync::Mutex::new(Fed {
+            planner: Some(Planner::new(limits.clone())),
+            rx,
+            estimate: None,
+        }));
+        let bg = Background {
+            limits,
+            batch: Vec::with_capacity(BATCH),
+            tx: Some(Tx::Unbounded(tx)),
+            worker: None,
+            inline: None,
+            fed: Some(shared.clone()),
+        };
+        (bg, Feed { shared })
     }
 
     fn call(&mut self, c: Call) {
@@ -781,9 +903,15 @@ impl Background {
 
     fn send(&mut self) {
         let batch = std::mem::replace(&mut self.batch, Vec::with_capacity(BATCH));
-        if let Some(tx) = &self.tx {
-            // a send fails only if the worker died: its panic is raised at finish
-            let _ = tx.send(batch);
+        // a send fails only if the worker died: its panic is raised at finish
+        match &self.tx {
+            Some(Tx::Bounded(tx)) => {
+                let _ = tx.send(batch);
+            }
+            Some(Tx::Unbounded(tx)) => {
+                let _ = tx.send(batch);
+            }
+            None => {}
         }
     }
 
@@ -825,6 +953,15 @@ impl Background {
         }
         self.send();
         self.tx = None;
+        if let Some(shared) = self.fed.take() {
+            // every call is sent: plan what the feed's thread has not yet
+            let mut fed = lock(&shared);
+            fed.run();
+            return fed
+                .estimate
+                .take()
+                .unwrap_or_else(|| panic!("the planner's estimate was taken twice"));
+        }
         let worker = self.worker.take().expect("finish is called once");
         worker
             .join()

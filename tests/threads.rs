@@ -5,7 +5,7 @@
 mod common;
 
 use common::*;
-use p3dp::build::{plan, Options};
+use p3dp::build::{plan, prepare, Options};
 use p3dp::threads::Threads;
 
 /// A scaled-down `benches/vase-2m.yaml`: 60 turns of 1000 strings, so the
@@ -45,21 +45,81 @@ fn the_vase_is_the_same_bytes_on_1_2_and_4_threads() {
         assert!(p.paths.iter().map(|t| t.len()).sum::<usize>() > 50_000);
         let mut out = Vec::new();
         let stats = p.render(&mut out).unwrap();
-        (out, stats.gcode_sha256, p.findings.len())
+        (out, stats)
+    };
+    // the pipelined build: checks beside the writer (two threads: the
+    // planner between checks; four: a thread of its own)
+    let piped = |n: usize| {
+        let opts = Options {
+            threads: Threads::new(n),
+            ..Default::default()
+        };
+        let mut p = prepare(&path, &opts).unwrap();
+        let mut out = Vec::new();
+        let stats = p.check_and_render(&[], &mut out).unwrap();
+        (out, stats)
     };
     let one = build(1);
-    for n in [2, 4] {
-        let other = build(n);
-        assert!(one.0 == other.0, "{n} threads changed the G-code");
-        assert_eq!(one.1, other.1);
-        assert_eq!(one.2, other.2);
+    assert!(
+        one.0.len() > 1_000_000,
+        "a real build: {} bytes",
+        one.0.len()
+    );
+    for n in [1, 2, 4] {
+        for (how, other) in [("plan + render", build(n)), ("check_and_render", piped(n))] {
+            assert!(one.0 == other.0, "{how} on {n} threads changed the G-code");
+            // the whole stats: hash, moves, times, findings, footprints
+            assert_eq!(one.1, other.1, "{how} on {n} threads changed the stats");
+        }
     }
-    // and through the binary: -j 1 and -j 4 write the same hash
+    // and through the binary: -j 1, 2 and 4 write the same G-code and stats
+    let built = |j: &str| {
+        let (g, s) = (format!("vase-{j}.gcode"), format!("vase-{j}.json"));
+        let o = p3dp(
+            &dir,
+            &["build", "-j", j, "vase.yaml", "-o", &g, "--stats-json", &s],
+        );
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let g = std::fs::read(dir.join(g)).unwrap();
+        let s = std::fs::read_to_string(dir.join(s)).unwrap();
+        (g, s)
+    };
+    let j1 = built("1");
+    assert!(j1.0 == one.0, "the binary writes what the library renders");
+    for j in ["2", "4"] {
+        let other = built(j);
+        assert!(j1.0 == other.0, "-j {j} changed the G-code");
+        assert_eq!(j1.1, other.1, "-j {j} changed the stats");
+    }
     let hash = |j: &str| {
         let o = p3dp(&dir, &["hash", "-j", j, "vase.yaml"]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         String::from_utf8(o.stdout).unwrap()
     };
     assert_eq!(hash("1"), hash("4"));
-    assert!(hash("1").starts_with(&one.1));
+    assert!(hash("2").starts_with(&one.1.gcode_sha256));
+}
+
+/// The G-code is written while the checks run, to a temp file: a check that
+/// fails must still leave nothing behind, on any thread count, and the error
+/// is the check's.
+#[test]
+fn a_failed_check_writes_nothing_whatever_the_threads() {
+    let dir = tmp("threads-vase-fails");
+    // 60 turns up to z = 300: above the printer's 250 mm
+    let tall = VASE
+        .replace("height: 6", "height: 300")
+        .replace("pitch: 0.1", "pitch: 5");
+    std::fs::write(dir.join("tall.yaml"), tall).unwrap();
+    for j in ["1", "2", "4"] {
+        let o = p3dp(&dir, &["build", "-j", j, "tall.yaml", "-o", "tall.gcode"]);
+        assert_eq!(o.status.code(), Some(1), "-j {j}: a failed check");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains("above-max-z"), "-j {j}: {err}");
+        let left: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(left, ["tall.yaml"], "-j {j} left files behind");
+    }
 }

@@ -74,7 +74,7 @@ const TILE: i64 = 64;
 /// one bit each, made as they are first touched.
 #[derive(Default)]
 struct Cover {
-    tiles: std::collections::HashMap<(i64, i64), Box<[u64; (TILE * TILE / 64) as usize]>>,
+    tiles: crate::geom::grid::CellMap<(i64, i64), Box<[u64; (TILE * TILE / 64) as usize]>>,
 }
 
 impl Cover {
@@ -271,7 +271,7 @@ fn footprint_all(
     // (quadratic: minutes for 2M strings)
     let flat = |p: DVec2| DVec3::new(p.x, p.y, 0.0);
     let mut grid = GrowGrid::new(1.0);
-    let mut painted = std::collections::HashSet::new();
+    let mut painted = crate::geom::grid::CellSet::default();
     let mut out = Vec::with_capacity(paths.len());
     let mut cover = Cover::default();
     for (j, tp) in paths.iter().enumerate() {

@@ -49,6 +49,19 @@ pub fn run(
     allowed: &[String],
     threads: Threads,
 ) -> (Vec<Finding>, Vec<first_layer::Footprint>) {
+    run_between(recipe, paths, allowed, threads, &mut || {})
+}
+
+/// [`run`], calling `between` after each check (a thread that has other
+/// work queued, such as the print-time planner's moves, does some of it
+/// there, so less of it waits in memory); the findings are the same.
+pub fn run_between(
+    recipe: &Recipe,
+    paths: &[&Toolpath],
+    allowed: &[String],
+    threads: Threads,
+    between: &mut dyn FnMut(),
+) -> (Vec<Finding>, Vec<first_layer::Footprint>) {
     let mut out = Vec::new();
     temperatures(recipe, &mut out);
     for tp in paths {
@@ -56,6 +69,7 @@ pub fn run(
         strings(recipe, tp, &mut out);
         flow::cross_sections(recipe, tp, &mut out);
         out.extend(events(recipe, tp));
+        between();
     }
     let cheap_error = out
         .iter()
@@ -71,11 +85,14 @@ pub fn run(
         };
         let support = (geometric && threads.parallel()).then(|| s.spawn(support_check));
         starvation::check(recipe, paths, &mut out);
+        between();
         let mut collisions = Vec::new();
         let mut footprints = Vec::new();
         if geometric {
             footprints = first_layer::check(recipe, paths, &mut out);
+            between();
             collision::check(recipe, paths, &mut collisions);
+            between();
         }
         if let Some(h) = support {
             out.extend(h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)));
@@ -177,24 +194,30 @@ fn temperatures(recipe: &Recipe, out: &mut Vec<Finding>) {
     }
 }
 
-/// Counts points failing `bad` and reports the first.
-fn points_where(
+/// Counts the points failing each of the `N` tests of `bad` (one pass over
+/// the points, which is what costs on millions of them) and reports the
+/// first of each, in the order of `what`: (code, what the points are).
+fn points_where<const N: usize>(
     tp: &Toolpath,
-    code: &'static str,
-    what: &str,
-    bad: impl Fn(DVec3) -> bool,
+    what: [(&'static str, &str); N],
+    bad: impl Fn(DVec3) -> [bool; N],
     recipe: &Recipe,
     out: &mut Vec<Finding>,
 ) {
-    let mut first = None;
-    let mut count = 0usize;
+    let mut first = [None; N];
+    let mut count = [0usize; N];
     for (i, p) in tp.points.iter().enumerate() {
-        if bad(*p) {
-            count += 1;
-            first.get_or_insert(i);
+        let b = bad(*p);
+        for t in 0..N {
+            if b[t] {
+                count[t] += 1;
+                first[t].get_or_insert(i);
+            }
         }
     }
-    if let Some(i) = first {
+    for (t, (code, what)) in what.into_iter().enumerate() {
+        let Some(i) = first[t] else { continue };
+        let count = count[t];
         let p = tp.points[i];
         out.push(Finding {
             code,
@@ -216,37 +239,31 @@ fn points_where(
 
 fn machine_limits(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) {
     let printer = &recipe.printer;
-    points_where(
-        tp,
-        "non-finite",
-        "that are not finite numbers (NaN or infinite)",
-        |p| !p.is_finite(),
-        recipe,
-        out,
-    );
     let bed = printer.bed;
-    points_where(
-        tp,
-        "out-of-bed",
-        &format!("outside the {} bed", bed.describe()),
-        |p| p.is_finite() && !bed.contains_xy(printer.to_machine(p)),
-        recipe,
-        out,
-    );
-    points_where(
-        tp,
-        "below-bed",
-        "below the bed (z < 0)",
-        |p| printer.to_machine(p).z < 0.0,
-        recipe,
-        out,
-    );
     let max_z = bed.max_z();
+    let outside = format!("outside the {} bed", bed.describe());
+    let above = format!("above the highest reachable z of {max_z} mm");
     points_where(
         tp,
-        "above-max-z",
-        &format!("above the highest reachable z of {max_z} mm"),
-        |p| printer.to_machine(p).z > max_z,
+        [
+            (
+                "non-finite",
+                "that are not finite numbers (NaN or infinite)",
+            ),
+            ("out-of-bed", &outside),
+            ("below-bed", "below the bed (z < 0)"),
+            ("above-max-z", &above),
+        ],
+        |p| {
+            let m = printer.to_machine(p);
+            let finite = p.is_finite();
+            [
+                !finite,
+                finite && !bed.contains_xy(m),
+                m.z < 0.0,
+                m.z > max_z,
+            ]
+        },
         recipe,
         out,
     );

@@ -108,6 +108,17 @@ impl<'a, W: Write> Emitter<'a, W> {
     /// An emitter writing to `out` for `recipe`'s printer and material; its
     /// print-time planner runs on a thread of its own if `threads` allows.
     pub fn new(out: W, recipe: &'a Recipe, threads: Threads) -> Emitter<'a, W> {
+        let planner = crate::planner::Background::new(recipe.printer.limits(), threads);
+        Emitter::with_planner(out, recipe, planner)
+    }
+
+    /// An emitter writing to `out` whose moves go to `planner` (see
+    /// [`crate::planner::Background::fed`]).
+    pub fn with_planner(
+        out: W,
+        recipe: &'a Recipe,
+        planner: crate::planner::Background,
+    ) -> Emitter<'a, W> {
         let d = recipe
             .material
             .filament_diameter
@@ -130,7 +141,7 @@ impl<'a, W: Write> Emitter<'a, W> {
             },
             pending: Pending::default(),
             thumbnails: String::new(),
-            planner: crate::planner::Background::new(recipe.printer.limits(), threads),
+            planner,
             fan: (recipe.material.fan_speed > 0.0)
                 .then_some((recipe.material.fan_speed, recipe.material.fan_start_z)),
         }

@@ -4,9 +4,9 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
-use super::on_circle;
 use super::outline::{along, radius_or_outline, turn_points, Files, RawOutline};
 use crate::svg::Outline;
+use super::TurnTable;
 use crate::toolpath::Toolpath;
 use serde::Deserialize;
 
@@ -61,8 +61,9 @@ impl Helix {
             return self.build_outline(o, c, v);
         }
         let n = self.string_count();
+        let circle = TurnTable::new(self.radius, self.segments, n);
         let at = |k: u64| {
-            let (x, y) = on_circle(self.radius, k, self.segments);
+            let (x, y) = circle.at(k);
             let z = if k == n {
                 self.height
             } else {

@@ -156,3 +156,26 @@ pub(crate) fn on_circle(r: f64, k: u64, segments: u32) -> (f64, f64) {
     let a = std::f64::consts::TAU * (k % segments as u64) as f64 / segments as f64;
     (r * libm::cos(a), r * libm::sin(a))
 }
+
+/// [`on_circle`] for points 0..=`last`, its sines and cosines computed once
+/// per angle of a turn (a 2M-string helix of 1000 segments needs 1000, not
+/// 2M): point k is entry `k mod segments`, the very values `on_circle` gives.
+pub(crate) struct TurnTable {
+    points: Vec<(f64, f64)>,
+}
+
+impl TurnTable {
+    /// The table for radius `r` and `segments` a turn, up to point `last`.
+    pub(crate) fn new(r: f64, segments: u32, last: u64) -> TurnTable {
+        let len = (segments as u64).min(last.saturating_add(1));
+        TurnTable {
+            points: (0..len).map(|k| on_circle(r, k, segments)).collect(),
+        }
+    }
+
+    /// `on_circle(r, k, segments)`.
+    #[inline]
+    pub(crate) fn at(&self, k: u64) -> (f64, f64) {
+        self.points[(k % self.points.len() as u64) as usize]
+    }
+}

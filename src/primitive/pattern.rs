@@ -21,7 +21,7 @@ use glam::DVec3;
 use serde::Deserialize;
 
 use super::ca::Values;
-use super::on_circle;
+use super::TurnTable;
 use crate::error::Result;
 use crate::num::{Num, Num3, NumFn};
 use crate::toolpath::Toolpath;
@@ -75,8 +75,9 @@ impl PatternHelix {
         let (c, v) = (self.cross_section.unwrap_or(c), self.speed.unwrap_or(v));
         let n = self.string_count();
         let seg = self.segments as u64;
+        let circle = TurnTable::new(self.radius, self.segments, n);
         let at = |k: u64| {
-            let (x, y) = on_circle(self.radius, k, self.segments);
+            let (x, y) = circle.at(k);
             let z = self.layer_height * k as f64 / seg as f64;
             self.center + DVec3::new(x, y, z)
         };

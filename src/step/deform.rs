@@ -4,7 +4,7 @@ use glam::DVec3;
 
 use super::{not_finite, par_chunks, vars_at};
 use crate::error::{Error, Result};
-use crate::expr::{var, Expr};
+use crate::expr::{var, Expr, Lanes, LANES};
 use crate::threads::Threads;
 use crate::toolpath::{frac, Toolpath};
 
@@ -45,31 +45,52 @@ impl Deform {
         let points = &tp.points;
         let turns = &tp.turns;
         par_chunks(&mut tp.strings, threads, |start, chunk| {
-            for (j, s) in chunk.iter_mut().enumerate() {
-                if s.travel {
-                    continue;
-                }
-                let k = start + j;
-                let m = (points[k] + points[k + 1]) * 0.5;
-                let mut vars = vars_at(m, k, n, polar_too);
-                vars[var::C] = s.c;
-                vars[var::V] = s.v;
-                if let Some(u) = turns {
-                    vars[var::S] = frac(0.5 * (u[k] + u[k + 1]));
+            // LANES strings at a time (Expr::eval_many: the same values as
+            // eval); travel strings are evaluated too but keep their c and v
+            let mut vars = [[0.0; var::COUNT]; LANES];
+            let mut lanes = Lanes::new();
+            let mut mids = [DVec3::ZERO; LANES];
+            let (mut cs, mut vs) = ([0.0; LANES], [0.0; LANES]);
+            for (b, block) in chunk.chunks_mut(LANES).enumerate() {
+                let first = start + b * LANES;
+                let m = block.len();
+                for (j, s) in block.iter().enumerate() {
+                    let k = first + j;
+                    let mid = (points[k] + points[k + 1]) * 0.5;
+                    let mut v = vars_at(mid, k, n, polar_too);
+                    v[var::C] = s.c;
+                    v[var::V] = s.v;
+                    if let Some(u) = turns {
+                        v[var::S] = frac(0.5 * (u[k] + u[k + 1]));
+                    }
+                    vars[j] = v;
+                    mids[j] = mid;
                 }
                 if let Some(e) = &self.cross_section {
-                    let c = e.eval(&vars);
-                    if !c.is_finite() || c < 0.0 {
-                        return Err(bad_value("cross_section", e, c, k, m, "≥ 0 mm²"));
-                    }
-                    s.c = c;
+                    e.eval_many_in(&vars[..m], &mut cs[..m], &mut lanes);
                 }
                 if let Some(e) = &self.speed {
-                    let v = e.eval(&vars);
-                    if !v.is_finite() || v <= 0.0 {
-                        return Err(bad_value("speed", e, v, k, m, "> 0 mm/s"));
+                    e.eval_many_in(&vars[..m], &mut vs[..m], &mut lanes);
+                }
+                for (j, s) in block.iter_mut().enumerate() {
+                    if s.travel {
+                        continue;
                     }
-                    s.v = v;
+                    let (k, mid) = (first + j, mids[j]);
+                    if let Some(e) = &self.cross_section {
+                        let c = cs[j];
+                        if !c.is_finite() || c < 0.0 {
+                            return Err(bad_value("cross_section", e, c, k, mid, "≥ 0 mm²"));
+                        }
+                        s.c = c;
+                    }
+                    if let Some(e) = &self.speed {
+                        let v = vs[j];
+                        if !v.is_finite() || v <= 0.0 {
+                            return Err(bad_value("speed", e, v, k, mid, "> 0 mm/s"));
+                        }
+                        s.v = v;
+                    }
                 }
             }
             Ok(())
@@ -85,36 +106,54 @@ impl Deform {
         let polar_too = cylinder || self.needs_polar(&[f0, f1, f2]);
         let turns = &tp.turns;
         par_chunks(&mut tp.points, threads, |start, chunk| {
-            for (j, point) in chunk.iter_mut().enumerate() {
-                let i = start + j;
-                let p = *point;
-                let mut vars = vars_at(p, i, n, polar_too);
-                if let Some(u) = turns {
-                    vars[var::S] = frac(u[i]);
-                }
-                let q = if !cylinder {
-                    DVec3::new(f0.eval(&vars), f1.eval(&vars), f2.eval(&vars))
-                } else {
-                    let r = f0.eval(&vars);
-                    let z = f2.eval(&vars);
-                    if keep_theta {
-                        let r0 = vars[var::R];
-                        if r0 > 0.0 {
-                            let s = r / r0;
-                            DVec3::new(p.x * s, p.y * s, z)
-                        } else {
-                            DVec3::new(r, 0.0, z)
-                        }
-                    } else {
-                        let th = f1.eval(&vars);
-                        DVec3::new(r * libm::cos(th), r * libm::sin(th), z)
+            // LANES points at a time: their variables, then each expression
+            // over all of them (Expr::eval_many: the same values as eval)
+            let mut vars = [[0.0; var::COUNT]; LANES];
+            let mut out = [[0.0; LANES]; 3];
+            let mut lanes = Lanes::new();
+            for (b, block) in chunk.chunks_mut(LANES).enumerate() {
+                let first = start + b * LANES;
+                let m = block.len();
+                for (j, p) in block.iter().enumerate() {
+                    let i = first + j;
+                    vars[j] = vars_at(*p, i, n, polar_too);
+                    if let Some(u) = turns {
+                        vars[j][var::S] = frac(u[i]);
                     }
-                };
-                if !q.is_finite() {
-                    let (key, src, value) = worst(pos, &vars);
-                    return Err(not_finite(&key, src, value, "point", i, p));
                 }
-                *point = q;
+                let vars = &vars[..m];
+                let [o0, o1, o2] = &mut out;
+                f0.eval_many_in(vars, &mut o0[..m], &mut lanes);
+                f2.eval_many_in(vars, &mut o2[..m], &mut lanes);
+                if !cylinder || !keep_theta {
+                    f1.eval_many_in(vars, &mut o1[..m], &mut lanes);
+                }
+                for (j, point) in block.iter_mut().enumerate() {
+                    let p = *point;
+                    let q = if !cylinder {
+                        DVec3::new(o0[j], o1[j], o2[j])
+                    } else {
+                        let r = o0[j];
+                        let z = o2[j];
+                        if keep_theta {
+                            let r0 = vars[j][var::R];
+                            if r0 > 0.0 {
+                                let s = r / r0;
+                                DVec3::new(p.x * s, p.y * s, z)
+                            } else {
+                                DVec3::new(r, 0.0, z)
+                            }
+                        } else {
+                            let th = o1[j];
+                            DVec3::new(r * libm::cos(th), r * libm::sin(th), z)
+                        }
+                    };
+                    if !q.is_finite() {
+                        let (key, src, value) = worst(pos, &vars[j]);
+                        return Err(not_finite(&key, src, value, "point", first + j, p));
+                    }
+                    *point = q;
+                }
             }
             Ok(())
         })
