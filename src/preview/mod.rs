@@ -219,6 +219,8 @@ pub struct Options {
     pub size: Size,
     /// Only the model: no title, stats or legend (PNG only).
     pub bare: bool,
+    /// How many threads drawing it may use (`-j`); the output is the same on any number.
+    pub threads: crate::threads::Threads,
 }
 
 /// The plan read for drawing: per path the spacing of its passes, per string
@@ -336,27 +338,41 @@ impl<'a> Scene<'a> {
     /// The extruding points (all points when nothing extrudes).
     pub fn extruding_points(&self) -> Vec<DVec3> {
         let mut out = Vec::new();
+        self.each_extruding_point(|p| {
+            if out.last() != Some(&p) {
+                out.push(p)
+            }
+        });
+        out
+    }
+
+    /// Calls `f` on the finite ends of every extruding string, in print order
+    /// (on every finite point when nothing extrudes): [`Scene::extruding_points`]
+    /// without holding them.
+    pub fn each_extruding_point(&self, mut f: impl FnMut(DVec3)) {
+        let mut any = false;
         for tp in &self.plan.paths {
             for (k, s) in tp.strings.iter().enumerate() {
                 if !s.travel {
+                    any = true;
                     let (a, b) = tp.ends(k);
-                    if out.last() != Some(&a) {
-                        out.push(a);
+                    for p in [a, b] {
+                        if p.is_finite() {
+                            f(p);
+                        }
                     }
-                    out.push(b);
                 }
             }
         }
-        if out.is_empty() {
-            out = self
-                .plan
-                .paths
-                .iter()
-                .flat_map(|t| t.points.clone())
-                .collect();
+        if !any {
+            for tp in &self.plan.paths {
+                for p in &tp.points {
+                    if p.is_finite() {
+                        f(*p);
+                    }
+                }
+            }
         }
-        out.retain(|p| p.is_finite());
-        out
     }
 
     /// Half the widest a string is drawn, mm: room to leave round the model.
@@ -509,12 +525,28 @@ impl<'t> Grid<'t> {
     /// closest point of the strings within one cell of `p`, or `None` when
     /// none lies that near.
     pub fn nearest_other(&self, p: DVec3, sp: f64) -> Option<DVec3> {
+        self.nearest_other_near(p, sp, None).map(|(q, _)| q)
+    }
+
+    /// [`Grid::nearest_other`], and the string the point lies on, looking
+    /// first at the strings around `hint` (the answer for a point nearby).
+    ///
+    /// The answer is the same with or without the hint: the nearest
+    /// qualifying point, ties going to the lower string. The hint only
+    /// narrows the search: a qualifying point d away from `p` bounds the
+    /// answer's distance by d, so only the cubes within d of `p` (not within
+    /// a whole cell) can hold it.
+    pub fn nearest_other_near(
+        &self,
+        p: DVec3,
+        sp: f64,
+        hint: Option<usize>,
+    ) -> Option<(DVec3, usize)> {
         if !p.is_finite() {
             return None;
         }
-        let mut best: Option<(f64, DVec3)> = None;
-        self.strings.search(p, self.cell, u32::MAX, |k| {
-            let k = k as usize;
+        let mut best: Option<(f64, usize, DVec3)> = None;
+        let consider = |k: usize, best: &mut Option<(f64, usize, DVec3)>| {
             let (a, b) = (self.points[k], self.points[k + 1]);
             // the closest point of the string: a + f·(b − a)
             let f = closest(p, a, b);
@@ -524,34 +556,62 @@ impl<'t> Grid<'t> {
             // 1 µm: a point revisited (a closed loop) is no neighbour
             if d > 1e-3
                 && d < self.cell
-                && best.is_none_or(|b| d < b.0)
+                && best.is_none_or(|b| (d, k) < (b.0, b.1))
                 && (sq - sp).abs() > 3.0 * d
             {
-                best = Some((d, q));
+                *best = Some((d, k, q));
             }
+        };
+        let n = self.points.len().saturating_sub(1);
+        if let Some(h) = hint {
+            for k in h.saturating_sub(HINT_REACH)..(h + HINT_REACH + 1).min(n) {
+                consider(k, &mut best);
+            }
+        }
+        let r = best.map_or(self.cell, |b| b.0);
+        self.strings.search(p, r, u32::MAX, |k| {
+            consider(k as usize, &mut best);
             false
         });
-        best.map(|(_, q)| q)
+        best.map(|(_, k, q)| (q, k))
     }
 
     /// The surface a string from `a` to `b` lies in, told by the nearest
     /// other pass to its middle (arc length `sm`): see [`Local`].
     pub fn local(&self, a: DVec3, b: DVec3, sm: f64) -> Option<Local> {
+        self.local_near(a, b, sm, None).map(|(l, _)| l)
+    }
+
+    /// [`Grid::local`] with a hint (see [`Grid::nearest_other_near`]), and
+    /// the neighbouring string it found.
+    pub fn local_near(
+        &self,
+        a: DVec3,
+        b: DVec3,
+        sm: f64,
+        hint: Option<usize>,
+    ) -> Option<(Local, usize)> {
         let t = (b - a).normalize_or_zero();
         let m = (a + b) * 0.5;
-        let q = self.nearest_other(m, sm)?;
+        let (q, k) = self.nearest_other_near(m, sm, hint)?;
         // the way across to the neighbour, less any part along the string
         let across = (q - m) - t * (q - m).dot(t);
         let normal = t.cross(across).normalize_or_zero();
         if t == DVec3::ZERO || normal == DVec3::ZERO {
             return None;
         }
-        Some(Local {
-            normal,
-            spacing: across.length(),
-        })
+        Some((
+            Local {
+                normal,
+                spacing: across.length(),
+            },
+            k,
+        ))
     }
 }
+
+/// How many strings either side of a hint [`Grid::nearest_other_near`] tries.
+const HINT_REACH: usize = 4;
 
 /// The wall around one string: it fills the `spacing` across to the next
 /// pass along the surface, and is c / spacing thick along `normal`.
@@ -669,7 +729,8 @@ impl Format {
 
 /// Writes a plan's G-code to a writer and returns its stats (the build's
 /// renderer, passed down so that previews need not know how G-code is made).
-pub type Render<'a> = &'a dyn Fn(&mut dyn std::io::Write) -> Result<Stats>;
+/// `Sync`, so that it may run on a thread of its own beside the drawing.
+pub type Render<'a> = &'a (dyn Fn(&mut dyn std::io::Write) -> Result<Stats> + Sync);
 
 /// Writes a preview of `plan` to `out` (PNG or HTML by extension, atomically);
 /// returns a line for the report. `render` writes the plan's G-code.
@@ -692,9 +753,7 @@ pub fn bytes(plan: &Plan, out: &Path, opts: &Options, render: Render) -> Result<
     let shown = out.display().to_string();
     match format {
         Format::Png => {
-            let stats = render(&mut std::io::sink())?;
-            let scene = Scene::new(plan);
-            let r = png::render(&scene, Some(&stats), opts);
+            let (r, _) = png::preview(plan, opts, render)?;
             let bytes = png::encode(&r.pixmap, false);
             let (x, y) = r.frame.pixel(DVec3::ZERO);
             Ok((bytes, format!(
