@@ -228,8 +228,11 @@ pub struct Options {
 pub struct Scene<'a> {
     /// The plan drawn.
     pub plan: &'a Plan,
-    /// Per path: print time at the end of each string, s (Σ length / speed).
-    pub time: Vec<Vec<f64>>,
+    /// Per path: print time at the end of each string, s (Σ length / speed);
+    /// made when first asked for ([`Scene::time`]).
+    time: std::sync::OnceLock<Vec<Vec<f64>>>,
+    /// [`Scene::range`] of each colour mode, once asked for.
+    ranges: [std::sync::OnceLock<(f64, f64)>; 6],
     /// Per path: whether a finding concerns each string.
     pub flagged: Vec<Vec<bool>>,
     /// Per path: the typical spacing between its passes, mm.
@@ -249,25 +252,10 @@ impl<'a> Scene<'a> {
             .iter()
             .map(|tp| pass_spacing(&tp.points).unwrap_or(fallback))
             .collect();
-        let mut t = 0.0;
-        let time = plan
-            .paths
-            .iter()
-            .map(|tp| {
-                (0..tp.len())
-                    .map(|k| {
-                        let v = tp.strings[k].v;
-                        if v > 0.0 {
-                            t += tp.length(k) / v;
-                        }
-                        t
-                    })
-                    .collect()
-            })
-            .collect();
         Scene {
             plan,
-            time,
+            time: Default::default(),
+            ranges: Default::default(),
             flagged: flags(plan),
             spacing,
             marks: plan
@@ -297,6 +285,28 @@ impl<'a> Scene<'a> {
         ]
     }
 
+    /// Per path: print time at the end of each string, s (Σ length / speed).
+    pub fn time(&self) -> &Vec<Vec<f64>> {
+        self.time.get_or_init(|| {
+            let mut t = 0.0;
+            self.plan
+                .paths
+                .iter()
+                .map(|tp| {
+                    (0..tp.len())
+                        .map(|k| {
+                            let v = tp.strings[k].v;
+                            if v > 0.0 {
+                                t += tp.length(k) / v;
+                            }
+                            t
+                        })
+                        .collect()
+                })
+                .collect()
+        })
+    }
+
     /// The number string k of path `pi` shows in colour mode `mode`.
     pub fn value(&self, mode: ColorMode, pi: usize, k: usize) -> f64 {
         let s = self.plan.paths[pi].strings[k];
@@ -304,15 +314,23 @@ impl<'a> Scene<'a> {
             ColorMode::Speed => s.v,
             ColorMode::CrossSection => s.c,
             ColorMode::Flow => s.c * s.v,
-            ColorMode::Order => self.time[pi][k] / 60.0,
+            ColorMode::Order => self.time()[pi][k] / 60.0,
             ColorMode::Findings | ColorMode::Plain => 0.0,
         }
     }
 
     /// Lowest and highest value over the extruding strings (0, 0 when none).
     pub fn range(&self, mode: ColorMode) -> (f64, f64) {
+        let slot = ColorMode::NAMES
+            .iter()
+            .position(|n| *n == mode.name())
+            .expect("every mode is named");
+        *self.ranges[slot].get_or_init(|| self.find_range(mode))
+    }
+
+    fn find_range(&self, mode: ColorMode) -> (f64, f64) {
         if mode == ColorMode::Order {
-            let end = self.time.iter().flatten().last().copied().unwrap_or(0.0);
+            let end = self.time().iter().flatten().last().copied().unwrap_or(0.0);
             return (0.0, end / 60.0);
         }
         let mut lo = f64::INFINITY;
@@ -542,6 +560,24 @@ impl<'t> Grid<'t> {
         sp: f64,
         hint: Option<usize>,
     ) -> Option<(DVec3, usize)> {
+        self.nearest(p, sp, hint, false)
+    }
+
+    /// The point [`Grid::nearest_other_near`] finds, or, when a string
+    /// within [`HINT_REACH`] of `hint` qualifies, the nearest point of those
+    /// alone: a pass followed along (the next pass of a helix stays the next
+    /// pass), the whole grid searched only when it is lost.
+    pub fn follow_other(&self, p: DVec3, sp: f64, hint: usize) -> Option<(DVec3, usize)> {
+        self.nearest(p, sp, Some(hint), true)
+    }
+
+    fn nearest(
+        &self,
+        p: DVec3,
+        sp: f64,
+        hint: Option<usize>,
+        follow: bool,
+    ) -> Option<(DVec3, usize)> {
         if !p.is_finite() {
             return None;
         }
@@ -564,36 +600,40 @@ impl<'t> Grid<'t> {
         };
         let n = self.points.len().saturating_sub(1);
         if let Some(h) = hint {
-            for k in h.saturating_sub(HINT_REACH)..(h + HINT_REACH + 1).min(n) {
+            for k in h.saturating_sub(HINT_REACH)..h.saturating_add(HINT_REACH + 1).min(n) {
                 consider(k, &mut best);
             }
         }
-        let r = best.map_or(self.cell, |b| b.0);
-        self.strings.search(p, r, u32::MAX, |k| {
-            consider(k as usize, &mut best);
-            false
-        });
+        if !(follow && best.is_some()) {
+            let r = best.map_or(self.cell, |b| b.0);
+            self.strings.search(p, r, u32::MAX, |k| {
+                consider(k as usize, &mut best);
+                false
+            });
+        }
         best.map(|(_, k, q)| (q, k))
     }
 
     /// The surface a string from `a` to `b` lies in, told by the nearest
     /// other pass to its middle (arc length `sm`): see [`Local`].
     pub fn local(&self, a: DVec3, b: DVec3, sm: f64) -> Option<Local> {
-        self.local_near(a, b, sm, None).map(|(l, _)| l)
+        self.local_near(a, b, sm, None, false).map(|(l, _)| l)
     }
 
     /// [`Grid::local`] with a hint (see [`Grid::nearest_other_near`]), and
-    /// the neighbouring string it found.
+    /// the neighbouring string it found; with `follow`, the neighbour
+    /// [`Grid::follow_other`] finds.
     pub fn local_near(
         &self,
         a: DVec3,
         b: DVec3,
         sm: f64,
         hint: Option<usize>,
+        follow: bool,
     ) -> Option<(Local, usize)> {
         let t = (b - a).normalize_or_zero();
         let m = (a + b) * 0.5;
-        let (q, k) = self.nearest_other_near(m, sm, hint)?;
+        let (q, k) = self.nearest(m, sm, hint, follow)?;
         // the way across to the neighbour, less any part along the string
         let across = (q - m) - t * (q - m).dot(t);
         let normal = t.cross(across).normalize_or_zero();
@@ -611,7 +651,7 @@ impl<'t> Grid<'t> {
 }
 
 /// How many strings either side of a hint [`Grid::nearest_other_near`] tries.
-const HINT_REACH: usize = 4;
+pub const HINT_REACH: usize = 4;
 
 /// The wall around one string: it fills the `spacing` across to the next
 /// pass along the surface, and is c / spacing thick along `normal`.

@@ -10,7 +10,7 @@
 //! surfaces and the near side of a helix stands out from the far side.
 
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::{Mutex, OnceLock};
+use std::sync::Mutex;
 
 use glam::DVec3;
 use tiny_skia::{LineCap, Paint, PathBuilder, Pixmap, Rect, Stroke, Transform};
@@ -110,6 +110,9 @@ const MERGE_PX: f64 = 2.0;
 const PIECE: usize = 1 << 14;
 /// Rows of pixels per band when the strokes are painted on several threads.
 const BAND: usize = 32;
+/// When following the neighbouring pass from stroke to stroke
+/// ([`Grid::follow_other`]), every this many strokes search it in full.
+const REFRESH: usize = 32;
 
 /// One stroke to paint.
 struct Item {
@@ -126,43 +129,80 @@ struct Item {
     kind: u8,
 }
 
+/// One stroke of the PNG preview, coloured, as the bands paint it.
+struct Px {
+    a: (f32, f32),
+    b: (f32, f32),
+    depth: f32,
+    /// Half its width, px.
+    r: f32,
+    rgb: [u8; 3],
+    /// Opacity, 0..=255.
+    alpha: u8,
+}
+
 /// The full preview of `plan`: background, model, and unless `opts.bare`
 /// (or the image is too small for text) the name, stats and legend; with the
 /// stats `render` returned.
 ///
-/// A pipeline over `opts.threads`: while one thread writes the G-code (into
-/// nothing, for its stats), the others read the scene and collect the
-/// strokes, and it joins them when done; the strokes are then painted in
-/// bands of rows, each band by one thread. Every pixel sees the same strokes
-/// in the same order on any number of threads, so the image is the same.
+/// In phases, each over `opts.threads`, each one's memory let go before the
+/// next: the strokes are collected in pieces of [`PIECE`] strings (each
+/// piece by whichever thread is free, coloured as it is collected, kept in
+/// its own slot so that their order is the print order); then painted in
+/// bands of [`BAND`] rows, each band by one thread; then the G-code is
+/// written into nothing for the stats of the header (its planner on a
+/// thread of its own). Every pixel sees the same strokes in the same order on
+/// any number of threads, so the image is the same.
 pub fn preview(plan: &Plan, opts: &Options, render: Render) -> Result<(Rendered, Stats)> {
     let threads = opts.threads;
-    let scene_cell = OnceLock::new();
-    let model_cell = OnceLock::new();
-    let stats = std::thread::scope(|s| {
-        let helper = threads.parallel().then(|| {
-            s.spawn(|| {
-                let stats = render(&mut std::io::sink());
-                if let Some(m) = model_cell.get() {
-                    Model::work(m);
-                }
-                stats
+    let scene = Scene::new(plan);
+    let (rect, decorate, ts) = layout(&scene, opts);
+    let model = Model::new(&scene, opts.view, opts.color, rect, PIECE, true);
+    let (frame, bbox) = (model.frame, model.bbox);
+    let pal = Palette {
+        mode: opts.color,
+        lo: scene.range(opts.color).0,
+        hi: scene.range(opts.color).1,
+        dmin: model.depths.0,
+        dspan: if model.depths.1 > model.depths.0 {
+            model.depths.1 - model.depths.0
+        } else {
+            1.0
+        },
+    };
+    let min_px = 0.75f32;
+    let slots = Mutex::new(Vec::new());
+    std::thread::scope(|s| {
+        let work = || {
+            model.work(&slots, |items| {
+                items
+                    .iter()
+                    .map(|it| {
+                        let (r, rgb, alpha) = if it.kind == 1 {
+                            (min_px.max(1.0) * 0.5, [150, 155, 165], 90)
+                        } else {
+                            (it.width.max(min_px) * 0.5, pal.rgb(it), 255)
+                        };
+                        Px {
+                            a: it.a,
+                            b: it.b,
+                            depth: it.depth as f32,
+                            r,
+                            rgb,
+                            alpha,
+                        }
+                    })
+                    .collect()
             })
-        });
-        let scene = scene_cell.get_or_init(|| Scene::new(plan));
-        let rect = layout(scene, opts).0;
-        let model = model_cell.get_or_init(|| Model::new(scene, opts.view, opts.color, rect, PIECE));
-        for _ in 2..threads.get() {
-            s.spawn(|| model.work());
+        };
+        for _ in 1..threads.get() {
+            s.spawn(work);
         }
-        model.work();
-        match helper {
-            Some(h) => h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)),
-            None => render(&mut std::io::sink()),
-        }
-    })?;
-    let scene = scene_cell.get().expect("made in the scope");
-    let model = model_cell.into_inner().expect("made in the scope");
+        work();
+    });
+    drop(model);
+    let mut strokes = gather(slots);
+    strokes.sort_by(|a, b| a.depth.total_cmp(&b.depth));
     let mut pm = Pixmap::new(opts.size.width, opts.size.height).expect("sizes are 1..=8192");
     pm.fill(tiny_skia::Color::from_rgba8(
         BACKGROUND[0],
@@ -170,18 +210,26 @@ pub fn preview(plan: &Plan, opts: &Options, render: Render) -> Result<(Rendered,
         BACKGROUND[2],
         255,
     ));
-    let (rect, decorate, ts) = layout(scene, opts);
-    let (frame, bbox) = (model.frame, model.bbox);
-    let mut items = model.items();
-    sort(&mut items);
-    paint_bands(&mut pm, &items, scene, opts.color, 0.75, threads);
-    drop(items);
-    marks(&mut pm, scene, &frame, bbox, opts.color, rect);
+    paint_bands(&mut pm, &strokes, threads);
+    drop(strokes);
+    marks(&mut pm, &scene, &frame, bbox, opts.color, rect);
+    let stats = render(&mut std::io::sink())?;
     if decorate {
-        header(&mut pm, &stats, scene, ts);
-        legend(&mut pm, scene, opts.color, ts);
+        header(&mut pm, &stats, &scene, ts);
+        legend(&mut pm, &scene, opts.color, ts);
     }
     Ok((Rendered { pixmap: pm, frame }, stats))
+}
+
+/// The pieces' results in order, as one list.
+fn gather<T>(slots: Mutex<Vec<Option<Vec<T>>>>) -> Vec<T> {
+    let done = slots.into_inner().unwrap_or_else(|e| e.into_inner());
+    let n = done.iter().map(|d| d.as_ref().map_or(0, Vec::len)).sum();
+    let mut out = Vec::with_capacity(n);
+    for d in done {
+        out.extend(d.expect("every piece is collected"));
+    }
+    out
 }
 
 /// Where the model goes in the image, whether the text goes round it, and
@@ -212,10 +260,18 @@ pub fn thumbnail(scene: &Scene, size: Size) -> Pixmap {
     let rect = [pad, pad, w - pad, h - pad];
     // one piece per path, on the caller's thread: the bytes are part of the
     // G-code and its hash
-    let model = Model::new(scene, super::View::Iso, ColorMode::Plain, rect, usize::MAX);
-    model.work();
+    let model = Model::new(
+        scene,
+        super::View::Iso,
+        ColorMode::Plain,
+        rect,
+        usize::MAX,
+        false,
+    );
+    let slots = Mutex::new(Vec::new());
+    model.work(&slots, |items| items);
     let (frame, bbox) = (model.frame, model.bbox);
-    let mut items = model.items();
+    let mut items = gather(slots);
     sort(&mut items);
     paint_strokes(&mut pm, &items, scene, ColorMode::Plain, 1.0);
     marks(&mut pm, scene, &frame, bbox, ColorMode::Plain, rect);
@@ -223,7 +279,8 @@ pub fn thumbnail(scene: &Scene, size: Size) -> Pixmap {
 }
 
 /// Painter's algorithm: far (small depth) first; the sort is stable, so
-/// strings at equal depth keep print order and the result is deterministic.
+/// strings at equal depth keep print order and the result is deterministic
+/// (the PNG preview's strokes are sorted the same way).
 fn sort(items: &mut [Item]) {
     items.sort_by(|a, b| a.depth.total_cmp(&b.depth));
 }
@@ -239,32 +296,40 @@ struct Model<'s, 'p> {
     light: DVec3,
     /// The box of the extruding points, recipe coordinates.
     bbox: (DVec3, DVec3),
+    /// Their lowest and highest depth.
+    depths: (f64, f64),
     /// Per path, its strings in a grid (to find the neighbouring pass).
     grids: Vec<Grid<'p>>,
     /// (path, first string, end) of each piece.
     pieces: Vec<(usize, usize, usize)>,
+    /// Whether a stroke's neighbouring pass is followed from the last
+    /// stroke's ([`Grid::follow_other`]) rather than searched in full.
+    follow: bool,
     next: AtomicUsize,
-    done: Mutex<Vec<Option<Vec<Item>>>>,
 }
 
 impl<'s, 'p> Model<'s, 'p> {
-    /// Fits `scene` into `rect` seen from `view`; pieces of `piece` strings.
+    /// Fits `scene` into `rect` seen from `view`; pieces of `piece` strings;
+    /// neighbouring passes followed or not (`follow`).
     fn new(
         scene: &'s Scene<'p>,
         view: super::View,
         mode: ColorMode,
         rect: [f64; 4],
         piece: usize,
+        follow: bool,
     ) -> Model<'s, 'p> {
         let basis = view.basis();
         let mut lo2 = (f64::INFINITY, f64::INFINITY);
         let mut hi2 = (f64::NEG_INFINITY, f64::NEG_INFINITY);
         let mut lo = DVec3::splat(f64::INFINITY);
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
+        let mut depths = (f64::INFINITY, f64::NEG_INFINITY);
         scene.each_extruding_point(|p| {
-            let (u, w, _) = basis.project(p);
+            let (u, w, d) = basis.project(p);
             lo2 = (lo2.0.min(u), lo2.1.min(w));
             hi2 = (hi2.0.max(u), hi2.1.max(w));
+            depths = (depths.0.min(d), depths.1.max(d));
             lo = lo.min(p);
             hi = hi.max(p);
         });
@@ -285,7 +350,6 @@ impl<'s, 'p> Model<'s, 'p> {
                 k = end;
             }
         }
-        let n = pieces.len();
         Model {
             scene,
             frame,
@@ -293,34 +357,29 @@ impl<'s, 'p> Model<'s, 'p> {
             // the light comes from the upper left, in front: fixed to the view
             light: (-0.6 * basis.right + 0.5 * basis.up + 0.6 * basis.toward).normalize(),
             bbox: (lo, hi),
+            depths,
             grids,
             pieces,
+            follow,
             next: AtomicUsize::new(0),
-            done: Mutex::new((0..n).map(|_| None).collect()),
         }
     }
 
-    /// Collects pieces until none is left.
-    fn work(&self) {
+    /// Collects pieces until none is left, each made into `f` of its strokes
+    /// and kept in its slot (the piece's number) of `slots`.
+    fn work<T>(&self, slots: &Mutex<Vec<Option<Vec<T>>>>, f: impl Fn(Vec<Item>) -> Vec<T>) {
         loop {
             let i = self.next.fetch_add(1, Ordering::Relaxed);
             let Some(&(pi, k0, k1)) = self.pieces.get(i) else {
                 return;
             };
-            let items = self.collect(pi, k0, k1);
-            self.done.lock().unwrap_or_else(|e| e.into_inner())[i] = Some(items);
+            let out = f(self.collect(pi, k0, k1));
+            let mut slots = slots.lock().unwrap_or_else(|e| e.into_inner());
+            if slots.len() <= i {
+                slots.resize_with(i + 1, || None);
+            }
+            slots[i] = Some(out);
         }
-    }
-
-    /// Every stroke, in print order (all pieces collected).
-    fn items(self) -> Vec<Item> {
-        let done = self.done.into_inner().unwrap_or_else(|e| e.into_inner());
-        let n = done.iter().map(|d| d.as_ref().map_or(0, Vec::len)).sum();
-        let mut out = Vec::with_capacity(n);
-        for d in done {
-            out.extend(d.expect("every piece is collected"));
-        }
-        out
     }
 
     /// The strokes of strings `k0..k1` of path `pi`: runs shorter than
@@ -336,6 +395,7 @@ impl<'s, 'p> Model<'s, 'p> {
         let mut items = Vec::new();
         // the neighbour found for the last stroke: the next one's is near it
         let mut hint: Option<(usize, usize)> = None;
+        let mut lit = 0usize;
         let mut k = k0;
         while k < k1 {
             let first = k;
@@ -374,7 +434,9 @@ impl<'s, 'p> Model<'s, 'p> {
             } else {
                 let guess = hint.map(|(at, j)| j + (first - at));
                 let sm = (grid.arc(first) + grid.arc(end)) / 2.0;
-                let found = grid.local_near(start, b, sm, guess);
+                let follow = self.follow && lit % REFRESH != 0;
+                lit += 1;
+                let found = grid.local_near(start, b, sm, guess, follow);
                 hint = found.map(|(_, j)| (first, j));
                 found.map(|(l, _)| l)
             };
@@ -506,45 +568,50 @@ fn paint_strokes(pm: &mut Pixmap, items: &[Item], scene: &Scene, mode: ColorMode
     }
 }
 
-/// Paints the (sorted) strokes into an opaque image, at least `min_px` wide,
-/// in bands of [`BAND`] rows on up to `threads` threads.
+/// Paints the (sorted) strokes into an opaque image in bands of [`BAND`]
+/// rows on up to `threads` threads.
 ///
-/// A stroke is a capsule: the points within r = width / 2 of segment a–b. A
-/// pixel is covered by the overlap of its width with the capsule across the
-/// line through its centre at distance d: min(d + ½, r) − max(d − ½, −r),
-/// clamped to [0, 1] (a box filter; 1 inside, 0 beyond r + ½), and takes
-/// the stroke's colour in that share (over: dst + (src − dst)·α, in integers
-/// rounded the same way everywhere). Each band paints every stroke that
-/// reaches it, in order, so a pixel's result does not depend on the bands.
-fn paint_bands(
-    pm: &mut Pixmap,
-    items: &[Item],
-    scene: &Scene,
-    mode: ColorMode,
-    min_px: f32,
-    threads: Threads,
-) {
-    let pal = Palette::new(items, scene, mode);
-    let width = pm.width() as usize;
-    let bands: Vec<(usize, &mut [u8])> = pm
+/// A stroke is a capsule: the points within r (half its width) of segment
+/// a–b. A pixel is covered by the overlap of its width with the capsule
+/// across the line through its centre at distance d: min(d + ½, r) −
+/// max(d − ½, −r), clamped to [0, 1] (a box filter; 1 inside, 0 beyond
+/// r + ½), and takes the stroke's colour in that share times its opacity
+/// (over: dst + (src − dst)·α, in integers rounded the same way everywhere).
+/// Each band paints every stroke that reaches it, in order, so a pixel's
+/// result does not depend on how the image is cut into bands.
+fn paint_bands(pm: &mut Pixmap, strokes: &[Px], threads: Threads) {
+    let (width, height) = (pm.width() as usize, pm.height() as usize);
+    // each band's strokes, in painting order
+    let mut bins: Vec<Vec<u32>> = vec![Vec::new(); height.div_ceil(BAND)];
+    for (i, px) in strokes.iter().enumerate() {
+        let ext = px.r + 0.5;
+        let top = (px.a.1.min(px.b.1) - ext).floor();
+        let bottom = (px.a.1.max(px.b.1) + ext).ceil().min(height as f32);
+        if !(top < bottom && bottom > 0.0) {
+            continue; // off the image, or not a number
+        }
+        let first = top.max(0.0) as usize / BAND;
+        let last = (bottom as usize - 1) / BAND;
+        for bin in &mut bins[first..=last] {
+            bin.push(i as u32);
+        }
+    }
+    let bands: Vec<(&[u32], usize, &mut [u8])> = pm
         .data_mut()
         .chunks_mut(width * 4 * BAND)
+        .zip(&bins)
         .enumerate()
+        .map(|(i, (band, bin))| (bin.as_slice(), i * BAND, band))
         .collect();
     let queue = Mutex::new(bands);
     let work = || loop {
-        let Some((i, band)) = queue.lock().unwrap_or_else(|e| e.into_inner()).pop() else {
+        let Some((bin, y0, band)) = queue.lock().unwrap_or_else(|e| e.into_inner()).pop() else {
             return;
         };
-        let y0 = i * BAND;
         let y1 = y0 + band.len() / (4 * width);
-        for it in items {
-            let (rgb, alpha, w) = if it.kind == 1 {
-                ([150, 155, 165], 90.0, min_px.max(1.0))
-            } else {
-                (pal.rgb(it), 255.0, it.width.max(min_px))
-            };
-            capsule(band, width, y0, y1, it.a, it.b, w * 0.5, rgb, alpha);
+        for &i in bin {
+            let px = &strokes[i as usize];
+            capsule(band, width, y0, y1, px);
         }
     };
     std::thread::scope(|s| {
@@ -555,25 +622,15 @@ fn paint_bands(
     });
 }
 
-/// Blends a capsule of radius `r` round segment `a`–`b` (pixel coordinates)
-/// in colour `rgb` at opacity `alpha` (0..=255) into rows `y0..y1` of an
-/// opaque premultiplied RGBA image `width` pixels wide, held in `band`.
-#[allow(clippy::too_many_arguments)]
-fn capsule(
-    band: &mut [u8],
-    width: usize,
-    y0: usize,
-    y1: usize,
-    a: (f32, f32),
-    b: (f32, f32),
-    r: f32,
-    rgb: [u8; 3],
-    alpha: f32,
-) {
+/// Blends stroke `px` into rows `y0..y1` of an opaque premultiplied RGBA
+/// image `width` pixels wide, held in `band` (see [`paint_bands`]).
+fn capsule(band: &mut [u8], width: usize, y0: usize, y1: usize, px: &Px) {
+    let (a, b, r) = (px.a, px.b, px.r);
     if !(r.is_finite() && a.0.is_finite() && a.1.is_finite() && b.0.is_finite() && b.1.is_finite())
     {
         return;
     }
+    let alpha = f32::from(px.alpha);
     let ext = r + 0.5;
     let top = (a.1.min(b.1) - ext).floor().max(y0 as f32);
     let bottom = (a.1.max(b.1) + ext).ceil().min(y1 as f32);
@@ -585,7 +642,7 @@ fn capsule(
     let (dx, dy) = (b.0 - a.0, b.1 - a.1);
     let l2 = dx * dx + dy * dy;
     let inv = if l2 > 0.0 { 1.0 / l2 } else { 0.0 };
-    let src = rgb.map(u32::from);
+    let src = px.rgb.map(u32::from);
     for y in top as usize..bottom as usize {
         let py = y as f32 + 0.5 - a.1;
         let row = &mut band[(y - y0) * width * 4..(y - y0 + 1) * width * 4];
