@@ -775,14 +775,57 @@ pub type Render<'a> = &'a (dyn Fn(&mut dyn std::io::Write) -> Result<Stats> + Sy
 /// Writes a preview of `plan` to `out` (PNG or HTML by extension, atomically);
 /// returns a line for the report. `render` writes the plan's G-code.
 pub fn write(plan: &Plan, out: &Path, opts: &Options, render: Render) -> Result<String> {
-    let (bytes, line) = bytes(plan, out, opts, render)?;
     let shown = out.display().to_string();
+    let io = |e: std::io::Error| Error::io_from(&shown, format!("cannot write the preview: {e}"), &e);
+    if Format::of(out)? == Format::Html {
+        // streamed into the file as it is encoded
+        let (data, stats) = html::read(plan, opts, render)?;
+        let mut len = 0;
+        write_atomic(out, |f| {
+            use std::io::Write;
+            let mut w = Counted {
+                inner: std::io::BufWriter::with_capacity(1 << 16, f),
+                n: 0,
+            };
+            html::write_page(&stats.name, &data, &mut w).map_err(io)?;
+            w.inner.flush().map_err(io)?;
+            len = w.n;
+            Ok(())
+        })?;
+        return Ok(html_line(&shown, data.points(), len));
+    }
+    let (bytes, line) = bytes(plan, out, opts, render)?;
     write_atomic(out, |f| {
         use std::io::Write;
-        f.write_all(&bytes)
-            .map_err(|e| Error::io_from(&shown, format!("cannot write the preview: {e}"), &e))
+        f.write_all(&bytes).map_err(io)
     })?;
     Ok(line)
+}
+
+/// A writer that counts the bytes through it.
+struct Counted<W> {
+    inner: W,
+    n: usize,
+}
+
+impl<W: std::io::Write> std::io::Write for Counted<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let k = self.inner.write(buf)?;
+        self.n += k;
+        Ok(k)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.inner.flush()
+    }
+}
+
+/// The report line of an HTML preview of `points` points and `len` bytes.
+fn html_line(shown: &str, points: usize, len: usize) -> String {
+    format!(
+        "preview → {shown}: HTML viewer, {points} points, {} kB",
+        (len + 512) / 1024
+    )
 }
 
 /// The bytes of the preview [`write`] writes to `out` (its format by the
@@ -806,16 +849,11 @@ pub fn bytes(plan: &Plan, out: &Path, opts: &Options, render: Render) -> Result<
             )))
         }
         Format::Html => {
-            let mut code = Vec::new();
-            let stats = render(&mut code)?;
-            let text = String::from_utf8_lossy(&code);
-            let page = html::page(plan, &text, &stats, opts);
-            let line = format!(
-                "preview → {shown}: HTML viewer, {} points, {} kB",
-                page.points,
-                (page.html.len() + 512) / 1024
-            );
-            Ok((page.html.into_bytes(), line))
+            let (data, stats) = html::read(plan, opts, render)?;
+            let mut page = Vec::new();
+            html::write_page(&stats.name, &data, &mut page).expect("writing to memory");
+            let line = html_line(&shown, data.points(), page.len());
+            Ok((page, line))
         }
     }
 }
