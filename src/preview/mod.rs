@@ -29,7 +29,7 @@ mod text;
 
 use std::collections::HashSet;
 
-use crate::geom::grid::{closest, SegGrid};
+use crate::geom::grid::{closest, cube, SegGrid};
 use std::path::Path;
 
 use glam::DVec3;
@@ -651,7 +651,7 @@ impl<'t> Grid<'t> {
 }
 
 /// How many strings either side of a hint [`Grid::nearest_other_near`] tries.
-pub const HINT_REACH: usize = 4;
+pub const HINT_REACH: usize = 2;
 
 /// The wall around one string: it fills the `spacing` across to the next
 /// pass along the surface, and is c / spacing thick along `normal`.
@@ -666,27 +666,125 @@ pub struct Local {
 /// The distance between neighbouring passes of a polyline (a helix's layer
 /// height, a spiral's pitch), mm, or `None` when it has no such neighbours:
 /// the median, over up to 1024 sampled points, of the distance to the nearest
-/// point of another pass within 2 mm (see [`Grid`]).
+/// point of another pass within 2 mm (as [`Grid::nearest_other`] finds it).
+///
+/// With so few points asked about, no grid of all the strings is built: the
+/// cubes of 2 mm within 2.5 mm of a sampled point list it, and each string
+/// is measured once against the points listed in the cubes of its pieces (at
+/// most 1 mm long, so a string within 2 mm of a point has a piece whose
+/// middle lies within 2.5 mm of it).
 pub fn pass_spacing(points: &[DVec3]) -> Option<f64> {
+    const REACH: f64 = 2.0;
     let n = points.len();
     if n < 3 {
         return None;
     }
-    let grid = Grid::new(points, 2.0);
     let step = (n / 1024).max(1);
-    let mut found: Vec<f64> = (0..n)
-        .step_by(step)
-        .filter(|&i| points[i].is_finite())
-        .filter_map(|i| {
-            let p = points[i];
-            grid.nearest_other(p, grid.arc(i)).map(|q| p.distance(q))
-        })
-        .collect();
+    let inv = 1.0 / REACH;
+    // the sampled points with their arc lengths
+    let mut samples: Vec<(DVec3, f64)> = Vec::new();
+    let mut acc = 0.0;
+    for (k, p) in points.iter().enumerate() {
+        if k > 0 {
+            let d = p.distance(points[k - 1]);
+            if d.is_finite() {
+                acc += d;
+            }
+        }
+        if k % step == 0 && p.is_finite() {
+            samples.push((*p, acc));
+        }
+    }
+    let mut near: std::collections::HashMap<[i64; 3], Vec<u32>, CubeHash> = Default::default();
+    let r = DVec3::splat(1.25 * REACH);
+    for (i, (p, _)) in samples.iter().enumerate() {
+        let (lo, hi) = (cube(*p - r, inv), cube(*p + r, inv));
+        for x in lo[0]..=hi[0] {
+            for y in lo[1]..=hi[1] {
+                for z in lo[2]..=hi[2] {
+                    near.entry([x, y, z]).or_default().push(i as u32);
+                }
+            }
+        }
+    }
+    let mut best: Vec<Option<(f64, usize)>> = vec![None; samples.len()];
+    let mut sa = 0.0;
+    for k in 0..n - 1 {
+        let (a, b) = (points[k], points[k + 1]);
+        let l = a.distance(b);
+        let sb = if l.is_finite() { sa + l } else { sa };
+        let pieces = (l * 2.0 * inv).clamp(0.0, 1e6) as usize + 1;
+        let mut last = None;
+        for j in 0..pieces {
+            let c = cube(a.lerp(b, (j as f64 + 0.5) / pieces as f64), inv);
+            if last == Some(c) {
+                continue;
+            }
+            last = Some(c);
+            for &i in near.get(&c).map_or(&[][..], |v| v) {
+                let (p, sp) = samples[i as usize];
+                // as Grid::nearest_other: the closest point a + f·(b − a)
+                let f = closest(p, a, b);
+                let d = p.distance(a + (b - a) * f);
+                let sq = sa + f * (sb - sa);
+                let slot = &mut best[i as usize];
+                if d > 1e-3
+                    && d < REACH
+                    && slot.is_none_or(|o| (d, k) < o)
+                    && (sq - sp).abs() > 3.0 * d
+                {
+                    *slot = Some((d, k));
+                }
+            }
+        }
+        sa = sb;
+    }
+    let mut found: Vec<f64> = best.iter().flatten().map(|b| b.0).collect();
     if found.len() < 8 {
         return None;
     }
     found.sort_by(f64::total_cmp);
     Some(found[found.len() / 2])
+}
+
+/// A quick hash of integer cube coordinates (a multiply and a rotation a
+/// word): the cubes are keys of a map looked up once per string.
+#[derive(Clone, Copy, Default)]
+struct CubeHash;
+
+/// [`CubeHash`]'s state.
+#[derive(Default)]
+struct CubeHasher(u64);
+
+impl std::hash::BuildHasher for CubeHash {
+    type Hasher = CubeHasher;
+    fn build_hasher(&self) -> CubeHasher {
+        CubeHasher(0)
+    }
+}
+
+impl std::hash::Hasher for CubeHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(u64::from(b));
+        }
+    }
+
+    fn write_u64(&mut self, v: u64) {
+        self.0 = (self.0.rotate_left(23) ^ v).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    }
+
+    fn write_i64(&mut self, v: i64) {
+        self.write_u64(v as u64);
+    }
+
+    fn write_usize(&mut self, v: usize) {
+        self.write_u64(v as u64);
+    }
+
+    fn finish(&self) -> u64 {
+        self.0 ^ (self.0 >> 29)
+    }
 }
 
 /// The diameter of a round string of cross-section `c`, mm: how a string with
@@ -837,7 +935,7 @@ pub fn bytes(plan: &Plan, out: &Path, opts: &Options, render: Render) -> Result<
     match format {
         Format::Png => {
             let (r, _) = png::preview(plan, opts, render)?;
-            let bytes = png::encode(&r.pixmap, false);
+            let bytes = png::encode_fast(&r.pixmap, false);
             let (x, y) = r.frame.pixel(DVec3::ZERO);
             Ok((bytes, format!(
                 "preview → {shown}: {} × {} px, {} view, colour {}, scale {:.4} px/mm, recipe (0, 0, 0) at pixel ({x:.2}, {y:.2})",

@@ -925,8 +925,19 @@ fn header(pm: &mut Pixmap, st: &Stats, scene: &Scene, ts: u32) {
     }
 }
 
-/// PNG bytes of `pm`: RGB, or RGBA with `alpha` (colours un-premultiplied).
+/// PNG bytes of `pm`: RGB, or RGBA with `alpha` (colours un-premultiplied),
+/// compressed as hard as the encoder can (the G-code thumbnails).
 pub fn encode(pm: &Pixmap, alpha: bool) -> Vec<u8> {
+    encode_with(pm, alpha, image::codecs::png::CompressionType::Best)
+}
+
+/// [`encode`] with a quicker compression: the PNG previews (a flat
+/// background and smooth shading compress well even so).
+pub fn encode_fast(pm: &Pixmap, alpha: bool) -> Vec<u8> {
+    encode_with(pm, alpha, image::codecs::png::CompressionType::Fast)
+}
+
+fn encode_with(pm: &Pixmap, alpha: bool, level: image::codecs::png::CompressionType) -> Vec<u8> {
     use image::ImageEncoder;
     let n = if alpha { 4 } else { 3 };
     let mut data = Vec::with_capacity(pm.pixels().len() * n);
@@ -943,8 +954,8 @@ pub fn encode(pm: &Pixmap, alpha: bool) -> Vec<u8> {
     } else {
         image::ExtendedColorType::Rgb8
     };
-    use image::codecs::png::{CompressionType, FilterType, PngEncoder};
-    PngEncoder::new_with_quality(&mut out, CompressionType::Best, FilterType::Adaptive)
+    use image::codecs::png::{FilterType, PngEncoder};
+    PngEncoder::new_with_quality(&mut out, level, FilterType::Adaptive)
         .write_image(&data, pm.width(), pm.height(), kind)
         .expect("PNG encoding into memory does not fail");
     out
