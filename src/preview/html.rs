@@ -672,6 +672,33 @@ mod tests {
     }
 
     #[test]
+    fn the_reader_reads_what_moves_reads_however_the_text_is_cut() {
+        let g = "G28\nG0 X110.000 Y110.000 Z0.200 F7200\n; part: a (2 strings)\nG1 X111.000 E0.05000 F1800\nG1 E-0.8 ; retract\nG1 E0.05 ; unretract\nG1 Y111.000 E0.10000\nM83\nG1 X110.000 E0.02\nG0 Z5";
+        let origin = DVec3::new(110.0, 110.0, 0.0);
+        let m = moves(g, origin);
+        let none = HashSet::new();
+        for cut in [1, 2, 7, 1000] {
+            let mut r = Reader::new(origin, &none, 2.0);
+            for chunk in g.as_bytes().chunks(cut) {
+                r.write_all(chunk).unwrap();
+            }
+            r.finish();
+            assert_eq!(r.to, m.iter().map(|x| x.to).collect::<Vec<_>>(), "{cut}");
+            assert_eq!(r.kind, [0, 1, 1, 1, 0], "{cut}");
+            assert_eq!(r.parts, [(0, 0), (1, 1)], "{cut}");
+            // 0.05 mm of filament of 2 mm² over 1 mm
+            assert!((r.c[1] - 0.1).abs() < 1e-12, "{cut}: {:?}", r.c);
+        }
+    }
+
+    #[test]
+    fn quantiles_by_selection_are_the_sorted_ranks() {
+        let v: Vec<f64> = (0..1001).map(|i| ((i * 7919) % 1001) as f64).collect();
+        assert_eq!(spread(v), [2.0, 998.0]);
+        assert_eq!(spread(vec![f64::NAN]), [0.0, 0.0]);
+    }
+
+    #[test]
     fn template_has_its_placeholders_and_no_network() {
         for p in ["__P3DP_DATA__", "__P3DP_TITLE__", "__P3DP_LIVE__"] {
             assert!(TEMPLATE.contains(p), "{p}");

@@ -1024,6 +1024,23 @@ mod tests {
         }
         let h = pass_spacing(&tp.points).unwrap();
         assert!((h - 0.3).abs() < 0.01, "{h}");
+        // the same median as asking a grid of all the strings
+        let g = Grid::new(&tp.points, 2.0);
+        let mut d: Vec<f64> = (0..tp.points.len())
+            .step_by((tp.points.len() / 1024).max(1))
+            .filter_map(|i| {
+                let p = tp.points[i];
+                g.nearest_other(p, g.arc(i)).map(|q| p.distance(q))
+            })
+            .collect();
+        d.sort_by(f64::total_cmp);
+        assert_eq!(h, d[d.len() / 2]);
+        // following a pass from a hint finds the nearest point too, here
+        let (p, k) = (tp.points[2500], 2500);
+        let exact = g.nearest_other_near(p, g.arc(k), None);
+        assert_eq!(g.nearest_other_near(p, g.arc(k), Some(2300)), exact);
+        let q = exact.unwrap();
+        assert_eq!(g.follow_other(p, g.arc(k), q.1 + 1), exact);
         // a single straight line has no other pass
         let mut line = Toolpath::new(DVec3::ZERO);
         for i in 1..100 {
