@@ -139,6 +139,8 @@ struct Px {
     rgb: [u8; 3],
     /// Opacity, 0..=255.
     alpha: u8,
+    /// Its place in print order (ties of depth keep it).
+    seq: u32,
 }
 
 /// The full preview of `plan`: background, model, and unless `opts.bare`
@@ -146,15 +148,16 @@ struct Px {
 /// stats `render` returned.
 ///
 /// In phases, each over `opts.threads`, each one's memory let go before the
-/// next: the strokes are collected in pieces of [`PIECE`] strings (each
-/// piece by whichever thread is free, coloured as it is collected, kept in
-/// its own slot so that their order is the print order); then painted in
-/// bands of [`BAND`] rows, each band by one thread; then the G-code is
-/// written into nothing for the stats of the header (its planner on a
-/// thread of its own). Every pixel sees the same strokes in the same order on
+/// next: the G-code is written into nothing for the stats of the header (its
+/// planner on a thread of its own); the strokes are collected in pieces of
+/// [`PIECE`] strings (each piece by whichever thread is free, coloured as it
+/// is collected, kept in its own slot so that their order is the print
+/// order); then painted in bands of [`BAND`] rows, each band by one thread. Every pixel sees the same strokes in the same order on
 /// any number of threads, so the image is the same.
 pub fn preview(plan: &Plan, opts: &Options, render: Render) -> Result<(Rendered, Stats)> {
     let threads = opts.threads;
+    // first: the planner's memory is let go before the strokes take theirs
+    let stats = render(&mut std::io::sink())?;
     let scene = Scene::new(plan);
     let (rect, decorate, ts) = layout(&scene, opts);
     let model = Model::new(&scene, opts.view, opts.color, rect, PIECE, true);
@@ -190,6 +193,7 @@ pub fn preview(plan: &Plan, opts: &Options, render: Render) -> Result<(Rendered,
                             r,
                             rgb,
                             alpha,
+                            seq: 0,
                         }
                     })
                     .collect()
@@ -202,7 +206,12 @@ pub fn preview(plan: &Plan, opts: &Options, render: Render) -> Result<(Rendered,
     });
     drop(model);
     let mut strokes = gather(slots);
-    strokes.sort_by(|a, b| a.depth.total_cmp(&b.depth));
+    // far first, print order among equals: the order of a stable sort, by an
+    // unstable one that needs no room beside the strokes
+    for (i, px) in strokes.iter_mut().enumerate() {
+        px.seq = i as u32;
+    }
+    strokes.sort_unstable_by(|a, b| a.depth.total_cmp(&b.depth).then(a.seq.cmp(&b.seq)));
     let mut pm = Pixmap::new(opts.size.width, opts.size.height).expect("sizes are 1..=8192");
     pm.fill(tiny_skia::Color::from_rgba8(
         BACKGROUND[0],
@@ -213,7 +222,6 @@ pub fn preview(plan: &Plan, opts: &Options, render: Render) -> Result<(Rendered,
     paint_bands(&mut pm, &strokes, threads);
     drop(strokes);
     marks(&mut pm, &scene, &frame, bbox, opts.color, rect);
-    let stats = render(&mut std::io::sink())?;
     if decorate {
         header(&mut pm, &stats, &scene, ts);
         legend(&mut pm, &scene, opts.color, ts);
