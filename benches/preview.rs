@@ -61,10 +61,8 @@ fn main() {
     let bin = PathBuf::from(env!("CARGO_BIN_EXE_p3dp"));
     let runs = 5;
     for (ext, wall_target, mem_target) in [("png", 1.0, Some(250.0)), ("html", 1.5, None)] {
-        let out = std::env::temp_dir().join(format!(
-            "p3dp-bench-preview-{}.{ext}",
-            std::process::id()
-        ));
+        let out =
+            std::env::temp_dir().join(format!("p3dp-bench-preview-{}.{ext}", std::process::id()));
         let mut walls = Vec::new();
         let mut peak: Option<f64> = None;
         let mut first: Option<Vec<u8>> = None;
@@ -84,7 +82,10 @@ fn main() {
         walls.sort_by(f64::total_cmp);
         let median = walls[runs / 2];
         let size = first.map_or(0, |b| b.len());
-        println!("vase-2m preview → {ext}: {runs} runs, {} kB", (size + 512) / 1024);
+        println!(
+            "vase-2m preview → {ext}: {runs} runs, {} kB",
+            (size + 512) / 1024
+        );
         println!(
             "  wall: min {:.3} s, median {median:.3} s (target ≤ {wall_target} s)",
             walls[0]

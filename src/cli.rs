@@ -566,16 +566,15 @@ fn build_job(
         }
     }?;
     if let Some(pv) = &a.preview {
-        let (bytes, line) =
-            crate::preview::bytes(
-                &p,
-                pv,
-                &crate::preview::Options {
-                    threads,
-                    ..Default::default()
-                },
-                &|w| p.render(w),
-            )?;
+        let (bytes, line) = crate::preview::bytes(
+            &p,
+            pv,
+            &crate::preview::Options {
+                threads,
+                ..Default::default()
+            },
+            &|w| p.render(w),
+        )?;
         files.push(stage(pv, &bytes)?);
         lines.push(line);
     }

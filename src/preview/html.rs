@@ -290,7 +290,12 @@ fn surfaces(r: &Reader, scene: &Scene, threads: Threads) -> (Vec<f64>, Vec<i8>) 
         let grid = Grid::for_surface(pts, typ);
         let next = AtomicUsize::new(0);
         let pieces = pts.len().div_ceil(PIECE);
-        let hs = Mutex::new(h[start..end].chunks_mut(PIECE).zip(normal[3 * start..3 * end].chunks_mut(3 * PIECE)).collect::<Vec<_>>());
+        let hs = Mutex::new(
+            h[start..end]
+                .chunks_mut(PIECE)
+                .zip(normal[3 * start..3 * end].chunks_mut(3 * PIECE))
+                .collect::<Vec<_>>(),
+        );
         let work = || loop {
             let p = next.fetch_add(1, Ordering::Relaxed);
             if p >= pieces {
@@ -309,7 +314,7 @@ fn surfaces(r: &Reader, scene: &Scene, threads: Threads) -> (Vec<f64>, Vec<i8>) 
                     continue;
                 }
                 let sm = (grid.arc(j - 1) + grid.arc(j)) / 2.0;
-                let follow = j % REFRESH != 0;
+                let follow = !j.is_multiple_of(REFRESH);
                 let found = grid.local_near(pts[j - 1], pts[j], sm, hint.map(|x| x + 1), follow);
                 hint = found.map(|(_, x)| x);
                 if let Some((l, _)) = found {
@@ -363,7 +368,7 @@ pub fn write_page(title: &str, data: &Data, w: &mut dyn Write) -> std::io::Resul
         let Some((at, k)) = next else {
             return w.write_all(rest.as_bytes());
         };
-        w.write_all(rest[..at].as_bytes())?;
+        w.write_all(&rest.as_bytes()[..at])?;
         match k {
             "__P3DP_TITLE__" => w.write_all(escape_html(title).as_bytes())?,
             "__P3DP_LIVE__" => w.write_all(script_json(&serde_json::Value::Null).as_bytes())?,

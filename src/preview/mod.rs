@@ -691,7 +691,7 @@ pub fn pass_spacing(points: &[DVec3]) -> Option<f64> {
                 acc += d;
             }
         }
-        if k % step == 0 && p.is_finite() {
+        if k.is_multiple_of(step) && p.is_finite() {
             samples.push((*p, acc));
         }
     }
@@ -874,7 +874,8 @@ pub type Render<'a> = &'a (dyn Fn(&mut dyn std::io::Write) -> Result<Stats> + Sy
 /// returns a line for the report. `render` writes the plan's G-code.
 pub fn write(plan: &Plan, out: &Path, opts: &Options, render: Render) -> Result<String> {
     let shown = out.display().to_string();
-    let io = |e: std::io::Error| Error::io_from(&shown, format!("cannot write the preview: {e}"), &e);
+    let io =
+        |e: std::io::Error| Error::io_from(&shown, format!("cannot write the preview: {e}"), &e);
     if Format::of(out)? == Format::Html {
         // streamed into the file as it is encoded
         let (data, stats) = html::read(plan, opts, render)?;

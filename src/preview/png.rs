@@ -16,8 +16,7 @@ use glam::DVec3;
 use tiny_skia::{LineCap, Paint, PathBuilder, Pixmap, Rect, Stroke, Transform};
 
 use super::{
-    colormap, fmt_value, round_diameter, text, Basis, ColorMode, Grid, Options, Render, Scene,
-    Size,
+    colormap, fmt_value, round_diameter, text, Basis, ColorMode, Grid, Options, Render, Scene, Size,
 };
 use crate::check::Severity;
 use crate::error::Result;
@@ -413,9 +412,7 @@ impl<'s, 'p> Model<'s, 'p> {
             let (mut len, mut csum, mut vsum) = (0.0, 0.0, 0.0);
             let mut end = k;
             // take strings while the run is shorter than MERGE_PX and alike
-            while end < k1
-                && tp.strings[end].travel == s0.travel
-                && scene.flagged[pi][end] == flag0
+            while end < k1 && tp.strings[end].travel == s0.travel && scene.flagged[pi][end] == flag0
             {
                 let l = tp.length(end);
                 len += l;
@@ -442,7 +439,7 @@ impl<'s, 'p> Model<'s, 'p> {
             } else {
                 let guess = hint.map(|(at, j)| j + (first - at));
                 let sm = (grid.arc(first) + grid.arc(end)) / 2.0;
-                let follow = self.follow && lit % REFRESH != 0;
+                let follow = self.follow && !lit.is_multiple_of(REFRESH);
                 lit += 1;
                 let found = grid.local_near(start, b, sm, guess, follow);
                 hint = found.map(|(_, j)| (first, j));
@@ -760,12 +757,7 @@ pub fn flat_tube(basis: &Basis, t: DVec3, n: DVec3, thick: f64, along: f64) -> (
 /// is the share of the string's width that is face. Without one the string is a thin tube of
 /// tangent T (illuminated lines): sqrt(1 − (L·T)²), and the highlight
 /// (sqrt(1 − (L·T)²)·sqrt(1 − (V·T)²) − (L·T)(V·T))^24.
-fn shade(
-    t: DVec3,
-    normal: Option<(DVec3, DVec3, f64)>,
-    light: DVec3,
-    basis: Basis,
-) -> (f64, f64) {
+fn shade(t: DVec3, normal: Option<(DVec3, DVec3, f64)>, light: DVec3, basis: Basis) -> (f64, f64) {
     let v = basis.toward;
     let lt = light.dot(t);
     let tube = (1.0 - lt * lt).max(0.0).sqrt();
