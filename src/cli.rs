@@ -604,10 +604,15 @@ fn build_job(
         }
     }?;
     if let Some(pv) = &a.preview {
-        let (bytes, line) =
-            crate::preview::bytes(&p, pv, &crate::preview::Options::default(), &|w| {
-                p.render(w)
-            })?;
+        let (bytes, line) = crate::preview::bytes(
+            &p,
+            pv,
+            &crate::preview::Options {
+                threads,
+                ..Default::default()
+            },
+            &|w| p.render(w),
+        )?;
         files.push(stage(pv, &bytes)?);
         lines.push(line);
     }
@@ -1234,6 +1239,9 @@ pub struct PreviewArgs {
     /// Silence a check for this build: its code, e.g. `bridge`; repeatable.
     #[arg(long = "allow", value_name = "CODE")]
     pub allow: Vec<String>,
+    /// At most N threads for the build and the drawing (default: one per core); the file is the same on any number.
+    #[arg(short = 'j', long = "jobs", value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
+    pub jobs: Option<u16>,
 }
 
 /// `p3dp preview`: draws the toolpath to a PNG image or an HTML viewer; a
@@ -1241,7 +1249,11 @@ pub struct PreviewArgs {
 pub fn preview(a: &PreviewArgs) -> Vec<Error> {
     let run = || -> Result<()> {
         use crate::preview::{ColorMode, Options as PreviewOptions, Size, View};
+        let threads = a
+            .jobs
+            .map_or_else(Threads::available, |n| Threads::new(usize::from(n)));
         let opts = PreviewOptions {
+            threads,
             view: a
                 .view
                 .as_deref()
@@ -1285,7 +1297,7 @@ pub fn preview(a: &PreviewArgs) -> Vec<Error> {
                 sets,
                 printer: a.printer.clone(),
                 allow: a.allow.clone(),
-                threads: Threads::available(),
+                threads,
             },
         )?;
         make_parent(&out)?;

@@ -213,6 +213,43 @@ fn the_same_recipe_gives_the_same_bytes() {
 }
 
 #[test]
+fn the_thread_count_does_not_change_a_byte() {
+    // the benchmark vase cut to 60,000 strings: several pieces of work, so
+    // 2 and 4 threads share them out differently from 1
+    let dir = tmp("preview-threads");
+    let vase = Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/vase-2m.yaml");
+    for ext in ["png", "html"] {
+        let out: Vec<Vec<u8>> = ["1", "2", "4"]
+            .iter()
+            .map(|j| {
+                let name = format!("j{j}.{ext}");
+                let args = [
+                    "preview",
+                    s(&vase),
+                    "--set",
+                    "height=6",
+                    "-o",
+                    &name,
+                    "--size",
+                    "500x400",
+                    "-j",
+                    j,
+                ];
+                ok(&p3dp(&dir, &args));
+                std::fs::read(dir.join(&name)).unwrap()
+            })
+            .collect();
+        assert!(out[0].len() > 1000, "{ext}: {} bytes", out[0].len());
+        assert!(out[0] == out[1], "{ext}: 1 and 2 threads differ");
+        assert!(out[0] == out[2], "{ext}: 1 and 4 threads differ");
+    }
+    // and the image shows the vase: a shaded model, not the background alone
+    let img = rgb(&dir.join("j2.png"));
+    let model = img.pixels().filter(|p| is_model(p.0)).count();
+    assert!(model > 10_000, "{model} model pixels");
+}
+
+#[test]
 fn findings_are_red_over_a_grey_model() {
     let dir = tmp("preview-findings");
     // the upper half of this wall needs too much flow (a warning)

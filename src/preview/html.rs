@@ -15,15 +15,20 @@
 //! c / h thick, lit by its normal.
 
 use std::collections::HashSet;
+use std::io::Write;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
 
 use base64::Engine;
 use glam::DVec3;
 use serde_json::json;
 
-use super::{Grid, Options, Scene};
+use super::{Grid, Options, Render, Scene};
+use crate::error::Result;
 use crate::format::hms;
 use crate::plan::Plan;
 use crate::stats::Stats;
+use crate::threads::Threads;
 
 /// The viewer page; `__P3DP_TITLE__`, `__P3DP_LIVE__` and `__P3DP_DATA__` are filled in.
 const TEMPLATE: &str = include_str!("viewer.html");
@@ -50,24 +55,48 @@ pub struct Move {
 /// Reads the moves of p3dp's G-code (G90; M82 or M83; G92 E), machine
 /// coordinates turned back into recipe coordinates by subtracting `origin`.
 pub fn moves(gcode: &str, origin: DVec3) -> Vec<Move> {
-    let mut pos = [0.0f64; 3];
-    let (mut e, mut feed, mut relative, mut part) = (0.0, 0.0, false, 0);
-    let mut out = Vec::new();
-    for line in gcode.lines() {
+    let mut parser = Parser::new(origin);
+    gcode.lines().filter_map(|l| parser.line(l)).collect()
+}
+
+/// The state of reading G-code line by line (see [`moves`]).
+struct Parser {
+    origin: DVec3,
+    pos: [f64; 3],
+    e: f64,
+    feed: f64,
+    relative: bool,
+    part: usize,
+}
+
+impl Parser {
+    fn new(origin: DVec3) -> Parser {
+        Parser {
+            origin,
+            pos: [0.0; 3],
+            e: 0.0,
+            feed: 0.0,
+            relative: false,
+            part: 0,
+        }
+    }
+
+    /// The move `line` makes, if it moves the head.
+    fn line(&mut self, line: &str) -> Option<Move> {
         if line.starts_with("; part: ") {
-            part += 1;
+            self.part += 1;
         }
         let code = line.split(';').next().unwrap_or("").trim();
         let mut words = code.split_whitespace();
-        let Some(cmd) = words.next() else { continue };
+        let cmd = words.next()?;
         let value = |w: &str| w[1..].parse::<f64>().ok();
         match cmd {
-            "M82" => relative = false,
-            "M83" => relative = true,
+            "M82" => self.relative = false,
+            "M83" => self.relative = true,
             "G92" => {
                 for w in words {
                     if w.starts_with('E') {
-                        e = value(w).unwrap_or(e);
+                        self.e = value(w).unwrap_or(self.e);
                     }
                 }
             }
@@ -78,34 +107,145 @@ pub fn moves(gcode: &str, origin: DVec3) -> Vec<Move> {
                 for w in words {
                     let Some(v) = value(w) else { continue };
                     match w.as_bytes()[0] {
-                        b'X' => (pos[0], moved) = (v, true),
-                        b'Y' => (pos[1], moved) = (v, true),
-                        b'Z' => (pos[2], moved) = (v, true),
+                        b'X' => (self.pos[0], moved) = (v, true),
+                        b'Y' => (self.pos[1], moved) = (v, true),
+                        b'Z' => (self.pos[2], moved) = (v, true),
                         b'E' => {
                             has_e = true;
-                            de = if relative { v } else { v - e };
-                            e = if relative { e + v } else { v };
+                            de = if self.relative { v } else { v - self.e };
+                            self.e = if self.relative { self.e + v } else { v };
                         }
-                        b'F' => feed = v,
+                        b'F' => self.feed = v,
                         _ => {}
                     }
                 }
                 if moved {
-                    out.push(Move {
-                        to: DVec3::from_array(pos) - origin,
-                        feed,
+                    return Some(Move {
+                        to: DVec3::from_array(self.pos) - self.origin,
+                        feed: self.feed,
                         de,
                         g0: cmd == "G0",
                         extrudes: cmd == "G1" && has_e,
-                        part,
-                        machine_um: pos.map(|x| libm::round(x * 1e3) as i64),
+                        part: self.part,
+                        machine_um: self.pos.map(|x| libm::round(x * 1e3) as i64),
                     });
                 }
             }
             _ => {}
         }
+        None
     }
-    out
+}
+
+/// G-code read as it is written (a writer): per move only what the viewer
+/// draws, neither the text nor the [`Move`]s kept.
+struct Reader<'f> {
+    parser: Parser,
+    /// The end of the last line, not yet read.
+    partial: Vec<u8>,
+    flagged_ends: &'f HashSet<[i64; 3]>,
+    /// Filament cross-section, mm².
+    area: f64,
+    to: Vec<DVec3>,
+    feed: Vec<f64>,
+    /// Kinds (0 travel, 1 extrude, 2 flagged, 3 dry).
+    kind: Vec<u8>,
+    /// The cross-section each move lays, mm².
+    c: Vec<f64>,
+    /// (part number, first move) of each run of moves of one part.
+    parts: Vec<(usize, usize)>,
+    bmin: DVec3,
+    bmax: DVec3,
+}
+
+impl<'f> Reader<'f> {
+    fn new(origin: DVec3, flagged_ends: &'f HashSet<[i64; 3]>, area: f64) -> Reader<'f> {
+        Reader {
+            parser: Parser::new(origin),
+            partial: Vec::new(),
+            flagged_ends,
+            area,
+            to: Vec::new(),
+            feed: Vec::new(),
+            kind: Vec::new(),
+            c: Vec::new(),
+            parts: Vec::new(),
+            bmin: DVec3::splat(f64::INFINITY),
+            bmax: DVec3::splat(f64::NEG_INFINITY),
+        }
+    }
+
+    fn read_line(&mut self, line: &[u8]) {
+        let Some(m) = self.parser.line(&String::from_utf8_lossy(line)) else {
+            return;
+        };
+        let k = self.to.len();
+        if self.parts.last().is_none_or(|p| p.0 != m.part) {
+            self.parts.push((m.part, k));
+        }
+        let prev = self.to.last().copied();
+        let kind = if m.g0 {
+            0u8
+        } else if !m.extrudes {
+            3
+        } else if self.flagged_ends.contains(&m.machine_um) {
+            2
+        } else {
+            1
+        };
+        let mut c = 0.0;
+        if m.extrudes {
+            // the cross-section the move lays: filament volume over length
+            let len = prev.map_or(0.0, |p| p.distance(m.to));
+            if len > 0.0 {
+                c = m.de.max(0.0) * self.area / len;
+            }
+            let prev = prev.unwrap_or(m.to);
+            self.bmin = self.bmin.min(prev).min(m.to);
+            self.bmax = self.bmax.max(prev).max(m.to);
+        }
+        self.to.push(m.to);
+        self.feed.push(m.feed);
+        self.kind.push(kind);
+        self.c.push(c);
+    }
+
+    /// Reads all of `bytes` and what is left of the last line.
+    fn read_all(&mut self, bytes: &[u8]) {
+        // a reader takes every byte it is given
+        let _ = self.write(bytes);
+        self.finish();
+    }
+
+    /// Reads what is left of the last line (G-code ending without a newline).
+    fn finish(&mut self) {
+        let rest = std::mem::take(&mut self.partial);
+        if !rest.is_empty() {
+            self.read_line(&rest);
+        }
+    }
+}
+
+impl std::io::Write for Reader<'_> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let mut rest = buf;
+        while let Some(at) = rest.iter().position(|&b| b == b'\n') {
+            if self.partial.is_empty() {
+                self.read_line(&rest[..at]);
+            } else {
+                let mut line = std::mem::take(&mut self.partial);
+                line.extend_from_slice(&rest[..at]);
+                self.read_line(&line);
+            }
+            rest = &rest[at + 1..];
+        }
+        self.partial.extend_from_slice(rest);
+        Ok(buf.len())
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
 }
 
 /// A viewer page and how many points it carries.
@@ -127,36 +267,72 @@ fn escape_html(s: &str) -> String {
         .replace('"', "&quot;")
 }
 
+/// Moves per piece of work when the surfaces are found on several threads;
+/// a multiple of [`REFRESH`], and fixed, so that the answer does not depend
+/// on the thread count.
+const PIECE: usize = 1 << 14;
+/// Every this many moves, the neighbouring pass is searched in full rather
+/// than followed from the last move's ([`Grid::follow_other`]).
+const REFRESH: usize = 32;
+
 /// Per extruding move, the spacing to the neighbouring pass (`h`, mm) and the
-/// surface normal (`normal`, i8 × 127), from the moves of the same part.
-fn surfaces(mv: &[Move], kind: &[u8], scene: &Scene, h: &mut [f64], normal: &mut [i8]) {
-    let mut start = 0;
-    while start < mv.len() {
-        let part = mv[start].part;
-        let mut end = start;
-        while end < mv.len() && mv[end].part == part {
-            end += 1;
-        }
-        let typical = part.checked_sub(1).and_then(|i| scene.spacing.get(i));
-        if let Some(&typ) = typical {
-            let pts: Vec<DVec3> = mv[start..end].iter().map(|m| m.to).collect();
-            let grid = Grid::for_surface(&pts, typ);
-            for j in 1..pts.len() {
+/// surface normal (i8 × 127), from the moves of the same part; in pieces of
+/// [`PIECE`] moves on up to `threads` threads.
+fn surfaces(r: &Reader, scene: &Scene, threads: Threads) -> (Vec<f64>, Vec<i8>) {
+    let n = r.to.len();
+    let (mut h, mut normal) = (vec![0.0; n], vec![0i8; 3 * n]);
+    for (i, &(part, start)) in r.parts.iter().enumerate() {
+        let end = r.parts.get(i + 1).map_or(n, |p| p.1);
+        let Some(&typ) = part.checked_sub(1).and_then(|i| scene.spacing.get(i)) else {
+            continue;
+        };
+        let pts = &r.to[start..end];
+        let grid = Grid::for_surface(pts, typ);
+        let next = AtomicUsize::new(0);
+        let pieces = pts.len().div_ceil(PIECE);
+        let hs = Mutex::new(
+            h[start..end]
+                .chunks_mut(PIECE)
+                .zip(normal[3 * start..3 * end].chunks_mut(3 * PIECE))
+                .collect::<Vec<_>>(),
+        );
+        let work = || loop {
+            let p = next.fetch_add(1, Ordering::Relaxed);
+            if p >= pieces {
+                return;
+            }
+            let (hp, np) = {
+                let mut all = hs.lock().unwrap_or_else(|e| e.into_inner());
+                std::mem::take(&mut all[p])
+            };
+            let mut hint: Option<usize> = None;
+            for (o, hk) in hp.iter_mut().enumerate() {
+                let j = p * PIECE + o;
                 let k = start + j;
-                if kind[k] != 1 && kind[k] != 2 {
+                if j == 0 || (r.kind[k] != 1 && r.kind[k] != 2) {
+                    hint = None;
                     continue;
                 }
                 let sm = (grid.arc(j - 1) + grid.arc(j)) / 2.0;
-                if let Some(l) = grid.local(pts[j - 1], pts[j], sm) {
-                    h[k] = l.spacing.clamp(0.5 * typ, 2.0 * typ);
-                    for (i, x) in l.normal.to_array().iter().enumerate() {
-                        normal[3 * k + i] = libm::round(x * 127.0) as i8;
+                let follow = !j.is_multiple_of(REFRESH);
+                let found = grid.local_near(pts[j - 1], pts[j], sm, hint.map(|x| x + 1), follow);
+                hint = found.map(|(_, x)| x);
+                if let Some((l, _)) = found {
+                    *hk = l.spacing.clamp(0.5 * typ, 2.0 * typ);
+                    for (x, q) in l.normal.to_array().iter().zip(&mut np[3 * o..3 * o + 3]) {
+                        *q = libm::round(x * 127.0) as i8;
                     }
                 }
             }
-        }
-        start = end;
+        };
+        std::thread::scope(|s| {
+            for _ in 1..threads.get() {
+                s.spawn(work);
+            }
+            work();
+        });
     }
+    (h, normal)
 }
 
 /// The viewer page for `plan`, whose G-code is `gcode` and stats `stats`.
@@ -166,6 +342,54 @@ pub fn page(plan: &Plan, gcode: &str, stats: &Stats, opts: &Options) -> Page {
         html: page_with(&stats.name, &data, &serde_json::Value::Null),
         points,
     }
+}
+
+/// Reads `plan`'s G-code as `render` writes it (neither its text nor its
+/// moves kept) into what the viewer shows; with the stats `render` returned.
+pub fn read(plan: &Plan, opts: &Options, render: Render) -> Result<(Data, Stats)> {
+    let scene = Scene::new(plan);
+    let flagged = flagged_ends(plan, &scene);
+    let mut reader = Reader::new(origin(plan), &flagged, filament_area(plan));
+    let stats = render(&mut reader)?;
+    reader.finish();
+    Ok((Data::new(plan, &scene, reader, &stats, opts), stats))
+}
+
+/// Writes the viewer page of `data` under `title` to `w`, the path data
+/// streamed as it is encoded (the same bytes as [`page`]).
+pub fn write_page(title: &str, data: &Data, w: &mut dyn Write) -> std::io::Result<()> {
+    let mut rest = TEMPLATE;
+    let keys = ["__P3DP_TITLE__", "__P3DP_LIVE__", "__P3DP_DATA__"];
+    loop {
+        let next = keys
+            .iter()
+            .filter_map(|k| rest.find(k).map(|at| (at, *k)))
+            .min_by_key(|(at, _)| *at);
+        let Some((at, k)) = next else {
+            return w.write_all(rest.as_bytes());
+        };
+        w.write_all(&rest.as_bytes()[..at])?;
+        match k {
+            "__P3DP_TITLE__" => w.write_all(escape_html(title).as_bytes())?,
+            "__P3DP_LIVE__" => w.write_all(script_json(&serde_json::Value::Null).as_bytes())?,
+            _ => data.write_json(w)?,
+        }
+        rest = &rest[at + k.len()..];
+    }
+}
+
+fn origin(plan: &Plan) -> DVec3 {
+    DVec3::from_array(plan.recipe.printer.origin)
+}
+
+/// The filament's cross-section, mm².
+fn filament_area(plan: &Plan) -> f64 {
+    let d = plan
+        .recipe
+        .material
+        .filament_diameter
+        .unwrap_or(plan.recipe.printer.filament_diameter);
+    std::f64::consts::PI * d * d / 4.0
 }
 
 /// A viewer page showing `data` (as [`data`] makes it; `null`: no model
@@ -214,79 +438,168 @@ fn fill(template: &str, values: &[(&str, String)]) -> String {
 /// `stats`): its moves, stats and findings, as the JSON the page reads; and
 /// how many points it carries.
 pub fn data(plan: &Plan, gcode: &str, stats: &Stats, opts: &Options) -> (serde_json::Value, usize) {
-    let printer = &plan.recipe.printer;
     let scene = Scene::new(plan);
-    let mv = moves(gcode, DVec3::from_array(printer.origin));
-    let d = plan
-        .recipe
-        .material
-        .filament_diameter
-        .unwrap_or(printer.filament_diameter);
-    let area = std::f64::consts::PI * d * d / 4.0;
     let flagged = flagged_ends(plan, &scene);
-    let n = mv.len();
-    let a = per_move(&mv, &flagged, area);
-    let mut h = vec![0.0; n];
-    let mut normal = vec![0i8; 3 * n];
-    surfaces(&mv, &a.kind, &scene, &mut h, &mut normal);
-    let (cmax, cq) = quantize(&a.c);
-    let (hmax, hq) = quantize(&h);
-    let nq: Vec<u8> = normal.iter().map(|&x| x as u8).collect();
-    let ranges = color_ranges(&mv, &a.kind, &a.c);
-    let size = [0, 1, 2].map(|k| stats.bbox.max[k] - stats.bbox.min[k]);
-    let findings: Vec<_> = plan
-        .findings
-        .iter()
-        .map(|f| {
-            json!({
-                "code": f.code,
-                "severity": f.severity.word(),
-                "message": f.message,
-                "part": f.part,
-                "string": f.string,
-                "at": f.at,
-            })
-        })
-        .collect();
-    let data = json!({
-        "format": "p3dp-preview 1",
-        "name": stats.name,
-        "view": opts.view.name(),
-        "color": opts.color.name(),
-        "points": n,
-        "pos": b64(&a.pos),
-        "feed": b64(&a.feed),
-        "cq": b64(&cq),
-        "cmax": cmax,
-        "hq": b64(&hq),
-        "hmax": hmax,
-        "nq": b64(&nq),
-        "kind": b64(&a.kind),
-        "bbox": {"min": a.bmin.to_array(), "max": a.bmax.to_array()},
-        "ranges": {"speed": ranges[0], "cross-section": ranges[1], "flow": ranges[2]},
-        "stats": {
-            "size_mm": size,
-            "filament_m": stats.filament_length_mm / 1000.0,
-            "filament_g": stats.filament_mass_g,
-            "material": stats.material,
-            "printer": stats.printer,
-            "time": hms(stats.print_time_s),
-            "time_s": stats.print_time_s,
-            "strings": stats.strings,
-            "extrude_moves": stats.extrude_moves,
-            "travel_moves": stats.travel_moves,
-            "max_flow": stats.max_flow_mm3_s,
-            "spacing_mm": scene.typical_spacing(),
-        },
-        "findings": findings,
-        // draw_turtle markers: position, heading, up (recipe coordinates)
-        "turtles": scene
-            .turtles
+    let mut reader = Reader::new(origin(plan), &flagged, filament_area(plan));
+    reader.read_all(gcode.as_bytes());
+    let data = Data::new(plan, &scene, reader, stats, opts);
+    (data.to_value(), data.points())
+}
+
+/// What the viewer shows of a plan: per move its point, feed rate, kind,
+/// cross-section, spacing and normal (written as base64 of little-endian
+/// binary), and the small fields (stats, findings, colour ranges…).
+pub struct Data {
+    small: serde_json::Value,
+    to: Vec<DVec3>,
+    feed: Vec<f64>,
+    kind: Vec<u8>,
+    c: Vec<f64>,
+    h: Vec<f64>,
+    normal: Vec<i8>,
+    cmax: f64,
+    hmax: f64,
+}
+
+/// The per-move fields of the page, each written as base64 of binary.
+const BLOBS: [&str; 6] = ["pos", "feed", "cq", "hq", "nq", "kind"];
+
+impl Data {
+    fn new(plan: &Plan, scene: &Scene, r: Reader, stats: &Stats, opts: &Options) -> Data {
+        let n = r.to.len();
+        let (h, normal) = surfaces(&r, scene, opts.threads);
+        let (bmin, bmax) = if r.bmin.x > r.bmax.x {
+            (DVec3::ZERO, DVec3::ZERO)
+        } else {
+            (r.bmin, r.bmax)
+        };
+        let cmax = r.c.iter().fold(0.0f64, |a, &b| a.max(b));
+        let hmax = h.iter().fold(0.0f64, |a, &b| a.max(b));
+        let ranges = color_ranges(&r.feed, &r.kind, &r.c);
+        let size = [0, 1, 2].map(|k| stats.bbox.max[k] - stats.bbox.min[k]);
+        let findings: Vec<_> = plan
+            .findings
             .iter()
-            .map(|m| [m.pos.to_array(), m.heading.to_array(), m.up.to_array()])
-            .collect::<Vec<_>>(),
-    });
-    (data, n)
+            .map(|f| {
+                json!({
+                    "code": f.code,
+                    "severity": f.severity.word(),
+                    "message": f.message,
+                    "part": f.part,
+                    "string": f.string,
+                    "at": f.at,
+                })
+            })
+            .collect();
+        let small = json!({
+            "format": "p3dp-preview 1",
+            "name": stats.name,
+            "view": opts.view.name(),
+            "color": opts.color.name(),
+            "points": n,
+            "cmax": cmax,
+            "hmax": hmax,
+            "bbox": {"min": bmin.to_array(), "max": bmax.to_array()},
+            "ranges": {"speed": ranges[0], "cross-section": ranges[1], "flow": ranges[2]},
+            "stats": {
+                "size_mm": size,
+                "filament_m": stats.filament_length_mm / 1000.0,
+                "filament_g": stats.filament_mass_g,
+                "material": stats.material,
+                "printer": stats.printer,
+                "time": hms(stats.print_time_s),
+                "time_s": stats.print_time_s,
+                "strings": stats.strings,
+                "extrude_moves": stats.extrude_moves,
+                "travel_moves": stats.travel_moves,
+                "max_flow": stats.max_flow_mm3_s,
+                "spacing_mm": scene.typical_spacing(),
+            },
+            "findings": findings,
+            // draw_turtle markers: position, heading, up (recipe coordinates)
+            "turtles": scene
+                .turtles
+                .iter()
+                .map(|m| [m.pos.to_array(), m.heading.to_array(), m.up.to_array()])
+                .collect::<Vec<_>>(),
+        });
+        Data {
+            small,
+            to: r.to,
+            feed: r.feed,
+            kind: r.kind,
+            c: r.c,
+            h,
+            normal,
+            cmax,
+            hmax,
+        }
+    }
+
+    /// Points of the path (= the G-code's moves that change X, Y or Z).
+    pub fn points(&self) -> usize {
+        self.to.len()
+    }
+
+    /// Writes the binary of field `key` (one of [`BLOBS`]) to `w`, a
+    /// block of moves at a time.
+    fn blob(&self, key: &str, w: &mut dyn Write) -> std::io::Result<()> {
+        let mut buf = Vec::with_capacity(12 * 4096);
+        for start in (0..self.to.len()).step_by(4096) {
+            let end = (start + 4096).min(self.to.len());
+            buf.clear();
+            for k in start..end {
+                match key {
+                    "pos" => {
+                        let p = self.to[k];
+                        let p = if p.is_finite() { p } else { DVec3::ZERO };
+                        for x in [p.x, p.y, p.z] {
+                            buf.extend_from_slice(&(x as f32).to_le_bytes());
+                        }
+                    }
+                    "feed" => buf.extend_from_slice(
+                        &(self.feed[k].clamp(0.0, 65535.0) as u16).to_le_bytes(),
+                    ),
+                    "cq" => buf.extend_from_slice(&quantize(self.c[k], self.cmax).to_le_bytes()),
+                    "hq" => buf.extend_from_slice(&quantize(self.h[k], self.hmax).to_le_bytes()),
+                    "nq" => buf.extend(self.normal[3 * k..3 * k + 3].iter().map(|&x| x as u8)),
+                    _ => buf.push(self.kind[k]),
+                }
+            }
+            w.write_all(&buf)?;
+        }
+        Ok(())
+    }
+
+    /// The JSON the page reads, written to `w` (base64 streamed).
+    pub fn write_json(&self, w: &mut dyn Write) -> std::io::Result<()> {
+        // the small fields' object with the blobs put in front of its fields
+        let small = script_json(&self.small);
+        w.write_all(b"{")?;
+        for key in BLOBS {
+            write!(w, "\"{key}\":\"")?;
+            let mut enc = base64::write::EncoderWriter::new(
+                &mut *w,
+                &base64::engine::general_purpose::STANDARD,
+            );
+            self.blob(key, &mut enc)?;
+            enc.finish()?;
+            drop(enc);
+            w.write_all(b"\",")?;
+        }
+        w.write_all(&small.as_bytes()[1..])
+    }
+
+    /// The JSON the page reads, as a value.
+    pub fn to_value(&self) -> serde_json::Value {
+        let mut v = self.small.clone();
+        for key in BLOBS {
+            let mut bytes = Vec::new();
+            self.blob(key, &mut bytes).expect("writing to memory");
+            v[key] = serde_json::Value::String(b64(&bytes));
+        }
+        v
+    }
 }
 
 /// The machine end points (µm) of the strings the checks flagged.
@@ -306,111 +619,41 @@ fn flagged_ends(plan: &Plan, scene: &Scene) -> HashSet<[i64; 3]> {
     flagged_ends
 }
 
-/// The per-move arrays of the page, and the box of what is extruded.
-struct MoveArrays {
-    pos: Vec<u8>,
-    feed: Vec<u8>,
-    kind: Vec<u8>,
-    c: Vec<f64>,
-    bmin: DVec3,
-    bmax: DVec3,
-}
-
-/// Positions, feeds, kinds (0 travel, 1 extrude, 2 flagged, 3 dry) and laid
-/// cross-sections of the moves, with a filament of `area` mm².
-fn per_move(mv: &[Move], flagged_ends: &HashSet<[i64; 3]>, area: f64) -> MoveArrays {
-    let n = mv.len();
-    let mut pos = Vec::with_capacity(12 * n);
-    let mut feed = Vec::with_capacity(2 * n);
-    let mut kind = Vec::with_capacity(n);
-    let mut c = vec![0.0; n];
-    let mut bmin = DVec3::splat(f64::INFINITY);
-    let mut bmax = DVec3::splat(f64::NEG_INFINITY);
-    for (k, m) in mv.iter().enumerate() {
-        let p = if m.to.is_finite() { m.to } else { DVec3::ZERO };
-        for x in [p.x, p.y, p.z] {
-            pos.extend_from_slice(&(x as f32).to_le_bytes());
-        }
-        feed.extend_from_slice(&(m.feed.clamp(0.0, 65535.0) as u16).to_le_bytes());
-        let len = if k > 0 {
-            mv[k - 1].to.distance(m.to)
-        } else {
-            0.0
-        };
-        let extruding = m.extrudes;
-        let kd = if m.g0 {
-            0u8
-        } else if !extruding {
-            3
-        } else if flagged_ends.contains(&m.machine_um) {
-            2
-        } else {
-            1
-        };
-        kind.push(kd);
-        if extruding {
-            // the cross-section the move lays: filament volume over length
-            c[k] = if len > 0.0 {
-                m.de.max(0.0) * area / len
-            } else {
-                0.0
-            };
-            let prev = if k > 0 { mv[k - 1].to } else { m.to };
-            bmin = bmin.min(prev).min(m.to);
-            bmax = bmax.max(prev).max(m.to);
-        }
-    }
-    if bmin.x > bmax.x {
-        (bmin, bmax) = (DVec3::ZERO, DVec3::ZERO);
-    }
-    MoveArrays {
-        pos,
-        feed,
-        kind,
-        c,
-        bmin,
-        bmax,
+/// `x` as a u16 fraction of `max` (0 when `max` is not positive).
+fn quantize(x: f64, max: f64) -> u16 {
+    if max > 0.0 {
+        libm::round(x / max * 65535.0) as u16
+    } else {
+        0
     }
 }
 
-/// The largest value and every value as a little-endian u16 fraction of it.
-fn quantize(v: &[f64]) -> (f64, Vec<u8>) {
-    let max = v.iter().fold(0.0f64, |a, &b| a.max(b));
-    let mut out = Vec::with_capacity(2 * v.len());
-    for x in v {
-        let q = if max > 0.0 {
-            libm::round(x / max * 65535.0) as u16
-        } else {
-            0
-        };
-        out.extend_from_slice(&q.to_le_bytes());
-    }
-    (max, out)
-}
-
-/// The 0.2 % and 99.8 % quantiles of the finite values ([0, 0] for none).
+/// The 0.2 % and 99.8 % quantiles of the finite values ([0, 0] for none):
+/// the values of those ranks, found by selection rather than a full sort.
 fn spread(vals: Vec<f64>) -> [f64; 2] {
     let mut v: Vec<f64> = vals.into_iter().filter(|x| x.is_finite()).collect();
     if v.is_empty() {
         return [0.0, 0.0];
     }
-    v.sort_by(f64::total_cmp);
-    let at = |q: f64| v[((v.len() - 1) as f64 * q).round() as usize];
-    [at(0.002), at(0.998)]
+    let rank = |q: f64| ((v.len() - 1) as f64 * q).round() as usize;
+    let (lo, hi) = (rank(0.002), rank(0.998));
+    let a = *v.select_nth_unstable_by(lo, f64::total_cmp).1;
+    let b = *v.select_nth_unstable_by(hi, f64::total_cmp).1;
+    [a, b]
 }
 
 /// The colour scales of speed, cross-section and flow over the extruding moves.
-fn color_ranges(mv: &[Move], kind: &[u8], c: &[f64]) -> [[f64; 2]; 3] {
+fn color_ranges(feed: &[f64], kind: &[u8], c: &[f64]) -> [[f64; 2]; 3] {
     // the scales span the middle 99.6 % of the extruding moves, so that a few
     // merged moves near a pole (their chord shorter than their path) do not
     // squeeze the colours of all the others
-    let ext: Vec<usize> = (0..mv.len())
+    let ext: Vec<usize> = (0..kind.len())
         .filter(|&k| kind[k] == 1 || kind[k] == 2)
         .collect();
     [
-        spread(ext.iter().map(|&k| mv[k].feed / 60.0).collect()),
+        spread(ext.iter().map(|&k| feed[k] / 60.0).collect()),
         spread(ext.iter().map(|&k| c[k]).collect()),
-        spread(ext.iter().map(|&k| c[k] * mv[k].feed / 60.0).collect()),
+        spread(ext.iter().map(|&k| c[k] * feed[k] / 60.0).collect()),
     ]
 }
 
@@ -431,6 +674,33 @@ mod tests {
         assert!((m[3].de - 0.02).abs() < 1e-12);
         assert!(m[3].extrudes && !m[4].extrudes && !m[0].extrudes);
         assert_eq!(m[4].machine_um, [110_000, 111_000, 5_000]);
+    }
+
+    #[test]
+    fn the_reader_reads_what_moves_reads_however_the_text_is_cut() {
+        let g = "G28\nG0 X110.000 Y110.000 Z0.200 F7200\n; part: a (2 strings)\nG1 X111.000 E0.05000 F1800\nG1 E-0.8 ; retract\nG1 E0.05 ; unretract\nG1 Y111.000 E0.10000\nM83\nG1 X110.000 E0.02\nG0 Z5";
+        let origin = DVec3::new(110.0, 110.0, 0.0);
+        let m = moves(g, origin);
+        let none = HashSet::new();
+        for cut in [1, 2, 7, 1000] {
+            let mut r = Reader::new(origin, &none, 2.0);
+            for chunk in g.as_bytes().chunks(cut) {
+                r.write_all(chunk).unwrap();
+            }
+            r.finish();
+            assert_eq!(r.to, m.iter().map(|x| x.to).collect::<Vec<_>>(), "{cut}");
+            assert_eq!(r.kind, [0, 1, 1, 1, 0], "{cut}");
+            assert_eq!(r.parts, [(0, 0), (1, 1)], "{cut}");
+            // 0.05 mm of filament of 2 mm² over 1 mm
+            assert!((r.c[1] - 0.1).abs() < 1e-12, "{cut}: {:?}", r.c);
+        }
+    }
+
+    #[test]
+    fn quantiles_by_selection_are_the_sorted_ranks() {
+        let v: Vec<f64> = (0..1001).map(|i| ((i * 7919) % 1001) as f64).collect();
+        assert_eq!(spread(v), [2.0, 998.0]);
+        assert_eq!(spread(vec![f64::NAN]), [0.0, 0.0]);
     }
 
     #[test]

@@ -29,7 +29,7 @@ mod text;
 
 use std::collections::HashSet;
 
-use crate::geom::grid::{closest, SegGrid};
+use crate::geom::grid::{closest, cube, SegGrid};
 use std::path::Path;
 
 use glam::DVec3;
@@ -219,6 +219,8 @@ pub struct Options {
     pub size: Size,
     /// Only the model: no title, stats or legend (PNG only).
     pub bare: bool,
+    /// How many threads drawing it may use (`-j`); the output is the same on any number.
+    pub threads: crate::threads::Threads,
 }
 
 /// The plan read for drawing: per path the spacing of its passes, per string
@@ -226,8 +228,11 @@ pub struct Options {
 pub struct Scene<'a> {
     /// The plan drawn.
     pub plan: &'a Plan,
-    /// Per path: print time at the end of each string, s (Σ length / speed).
-    pub time: Vec<Vec<f64>>,
+    /// Per path: print time at the end of each string, s (Σ length / speed);
+    /// made when first asked for ([`Scene::time`]).
+    time: std::sync::OnceLock<Vec<Vec<f64>>>,
+    /// [`Scene::range`] of each colour mode, once asked for.
+    ranges: [std::sync::OnceLock<(f64, f64)>; 6],
     /// Per path: whether a finding concerns each string.
     pub flagged: Vec<Vec<bool>>,
     /// Per path: the typical spacing between its passes, mm.
@@ -247,25 +252,10 @@ impl<'a> Scene<'a> {
             .iter()
             .map(|tp| pass_spacing(&tp.points).unwrap_or(fallback))
             .collect();
-        let mut t = 0.0;
-        let time = plan
-            .paths
-            .iter()
-            .map(|tp| {
-                (0..tp.len())
-                    .map(|k| {
-                        let v = tp.strings[k].v;
-                        if v > 0.0 {
-                            t += tp.length(k) / v;
-                        }
-                        t
-                    })
-                    .collect()
-            })
-            .collect();
         Scene {
             plan,
-            time,
+            time: Default::default(),
+            ranges: Default::default(),
             flagged: flags(plan),
             spacing,
             marks: plan
@@ -295,6 +285,28 @@ impl<'a> Scene<'a> {
         ]
     }
 
+    /// Per path: print time at the end of each string, s (Σ length / speed).
+    pub fn time(&self) -> &Vec<Vec<f64>> {
+        self.time.get_or_init(|| {
+            let mut t = 0.0;
+            self.plan
+                .paths
+                .iter()
+                .map(|tp| {
+                    (0..tp.len())
+                        .map(|k| {
+                            let v = tp.strings[k].v;
+                            if v > 0.0 {
+                                t += tp.length(k) / v;
+                            }
+                            t
+                        })
+                        .collect()
+                })
+                .collect()
+        })
+    }
+
     /// The number string k of path `pi` shows in colour mode `mode`.
     pub fn value(&self, mode: ColorMode, pi: usize, k: usize) -> f64 {
         let s = self.plan.paths[pi].strings[k];
@@ -302,15 +314,23 @@ impl<'a> Scene<'a> {
             ColorMode::Speed => s.v,
             ColorMode::CrossSection => s.c,
             ColorMode::Flow => s.c * s.v,
-            ColorMode::Order => self.time[pi][k] / 60.0,
+            ColorMode::Order => self.time()[pi][k] / 60.0,
             ColorMode::Findings | ColorMode::Plain => 0.0,
         }
     }
 
     /// Lowest and highest value over the extruding strings (0, 0 when none).
     pub fn range(&self, mode: ColorMode) -> (f64, f64) {
+        let slot = ColorMode::NAMES
+            .iter()
+            .position(|n| *n == mode.name())
+            .expect("every mode is named");
+        *self.ranges[slot].get_or_init(|| self.find_range(mode))
+    }
+
+    fn find_range(&self, mode: ColorMode) -> (f64, f64) {
         if mode == ColorMode::Order {
-            let end = self.time.iter().flatten().last().copied().unwrap_or(0.0);
+            let end = self.time().iter().flatten().last().copied().unwrap_or(0.0);
             return (0.0, end / 60.0);
         }
         let mut lo = f64::INFINITY;
@@ -336,27 +356,41 @@ impl<'a> Scene<'a> {
     /// The extruding points (all points when nothing extrudes).
     pub fn extruding_points(&self) -> Vec<DVec3> {
         let mut out = Vec::new();
+        self.each_extruding_point(|p| {
+            if out.last() != Some(&p) {
+                out.push(p)
+            }
+        });
+        out
+    }
+
+    /// Calls `f` on the finite ends of every extruding string, in print order
+    /// (on every finite point when nothing extrudes): [`Scene::extruding_points`]
+    /// without holding them.
+    pub fn each_extruding_point(&self, mut f: impl FnMut(DVec3)) {
+        let mut any = false;
         for tp in &self.plan.paths {
             for (k, s) in tp.strings.iter().enumerate() {
                 if !s.travel {
+                    any = true;
                     let (a, b) = tp.ends(k);
-                    if out.last() != Some(&a) {
-                        out.push(a);
+                    for p in [a, b] {
+                        if p.is_finite() {
+                            f(p);
+                        }
                     }
-                    out.push(b);
                 }
             }
         }
-        if out.is_empty() {
-            out = self
-                .plan
-                .paths
-                .iter()
-                .flat_map(|t| t.points.clone())
-                .collect();
+        if !any {
+            for tp in &self.plan.paths {
+                for p in &tp.points {
+                    if p.is_finite() {
+                        f(*p);
+                    }
+                }
+            }
         }
-        out.retain(|p| p.is_finite());
-        out
     }
 
     /// Half the widest a string is drawn, mm: room to leave round the model.
@@ -509,12 +543,46 @@ impl<'t> Grid<'t> {
     /// closest point of the strings within one cell of `p`, or `None` when
     /// none lies that near.
     pub fn nearest_other(&self, p: DVec3, sp: f64) -> Option<DVec3> {
+        self.nearest_other_near(p, sp, None).map(|(q, _)| q)
+    }
+
+    /// [`Grid::nearest_other`], and the string the point lies on, looking
+    /// first at the strings around `hint` (the answer for a point nearby).
+    ///
+    /// The answer is the same with or without the hint: the nearest
+    /// qualifying point, ties going to the lower string. The hint only
+    /// narrows the search: a qualifying point d away from `p` bounds the
+    /// answer's distance by d, so only the cubes within d of `p` (not within
+    /// a whole cell) can hold it.
+    pub fn nearest_other_near(
+        &self,
+        p: DVec3,
+        sp: f64,
+        hint: Option<usize>,
+    ) -> Option<(DVec3, usize)> {
+        self.nearest(p, sp, hint, false)
+    }
+
+    /// The point [`Grid::nearest_other_near`] finds, or, when a string
+    /// within [`HINT_REACH`] of `hint` qualifies, the nearest point of those
+    /// alone: a pass followed along (the next pass of a helix stays the next
+    /// pass), the whole grid searched only when it is lost.
+    pub fn follow_other(&self, p: DVec3, sp: f64, hint: usize) -> Option<(DVec3, usize)> {
+        self.nearest(p, sp, Some(hint), true)
+    }
+
+    fn nearest(
+        &self,
+        p: DVec3,
+        sp: f64,
+        hint: Option<usize>,
+        follow: bool,
+    ) -> Option<(DVec3, usize)> {
         if !p.is_finite() {
             return None;
         }
-        let mut best: Option<(f64, DVec3)> = None;
-        self.strings.search(p, self.cell, u32::MAX, |k| {
-            let k = k as usize;
+        let mut best: Option<(f64, usize, DVec3)> = None;
+        let consider = |k: usize, best: &mut Option<(f64, usize, DVec3)>| {
             let (a, b) = (self.points[k], self.points[k + 1]);
             // the closest point of the string: a + f·(b − a)
             let f = closest(p, a, b);
@@ -524,34 +592,66 @@ impl<'t> Grid<'t> {
             // 1 µm: a point revisited (a closed loop) is no neighbour
             if d > 1e-3
                 && d < self.cell
-                && best.is_none_or(|b| d < b.0)
+                && best.is_none_or(|b| (d, k) < (b.0, b.1))
                 && (sq - sp).abs() > 3.0 * d
             {
-                best = Some((d, q));
+                *best = Some((d, k, q));
             }
-            false
-        });
-        best.map(|(_, q)| q)
+        };
+        let n = self.points.len().saturating_sub(1);
+        if let Some(h) = hint {
+            for k in h.saturating_sub(HINT_REACH)..h.saturating_add(HINT_REACH + 1).min(n) {
+                consider(k, &mut best);
+            }
+        }
+        if !(follow && best.is_some()) {
+            let r = best.map_or(self.cell, |b| b.0);
+            self.strings.search(p, r, u32::MAX, |k| {
+                consider(k as usize, &mut best);
+                false
+            });
+        }
+        best.map(|(_, k, q)| (q, k))
     }
 
     /// The surface a string from `a` to `b` lies in, told by the nearest
     /// other pass to its middle (arc length `sm`): see [`Local`].
     pub fn local(&self, a: DVec3, b: DVec3, sm: f64) -> Option<Local> {
+        self.local_near(a, b, sm, None, false).map(|(l, _)| l)
+    }
+
+    /// [`Grid::local`] with a hint (see [`Grid::nearest_other_near`]), and
+    /// the neighbouring string it found; with `follow`, the neighbour
+    /// [`Grid::follow_other`] finds.
+    pub fn local_near(
+        &self,
+        a: DVec3,
+        b: DVec3,
+        sm: f64,
+        hint: Option<usize>,
+        follow: bool,
+    ) -> Option<(Local, usize)> {
         let t = (b - a).normalize_or_zero();
         let m = (a + b) * 0.5;
-        let q = self.nearest_other(m, sm)?;
+        let (q, k) = self.nearest(m, sm, hint, follow)?;
         // the way across to the neighbour, less any part along the string
         let across = (q - m) - t * (q - m).dot(t);
         let normal = t.cross(across).normalize_or_zero();
         if t == DVec3::ZERO || normal == DVec3::ZERO {
             return None;
         }
-        Some(Local {
-            normal,
-            spacing: across.length(),
-        })
+        Some((
+            Local {
+                normal,
+                spacing: across.length(),
+            },
+            k,
+        ))
     }
 }
+
+/// How many strings either side of a hint [`Grid::nearest_other_near`] tries.
+pub const HINT_REACH: usize = 2;
 
 /// The wall around one string: it fills the `spacing` across to the next
 /// pass along the surface, and is c / spacing thick along `normal`.
@@ -566,27 +666,125 @@ pub struct Local {
 /// The distance between neighbouring passes of a polyline (a helix's layer
 /// height, a spiral's pitch), mm, or `None` when it has no such neighbours:
 /// the median, over up to 1024 sampled points, of the distance to the nearest
-/// point of another pass within 2 mm (see [`Grid`]).
+/// point of another pass within 2 mm (as [`Grid::nearest_other`] finds it).
+///
+/// With so few points asked about, no grid of all the strings is built: the
+/// cubes of 2 mm within 2.5 mm of a sampled point list it, and each string
+/// is measured once against the points listed in the cubes of its pieces (at
+/// most 1 mm long, so a string within 2 mm of a point has a piece whose
+/// middle lies within 2.5 mm of it).
 pub fn pass_spacing(points: &[DVec3]) -> Option<f64> {
+    const REACH: f64 = 2.0;
     let n = points.len();
     if n < 3 {
         return None;
     }
-    let grid = Grid::new(points, 2.0);
     let step = (n / 1024).max(1);
-    let mut found: Vec<f64> = (0..n)
-        .step_by(step)
-        .filter(|&i| points[i].is_finite())
-        .filter_map(|i| {
-            let p = points[i];
-            grid.nearest_other(p, grid.arc(i)).map(|q| p.distance(q))
-        })
-        .collect();
+    let inv = 1.0 / REACH;
+    // the sampled points with their arc lengths
+    let mut samples: Vec<(DVec3, f64)> = Vec::new();
+    let mut acc = 0.0;
+    for (k, p) in points.iter().enumerate() {
+        if k > 0 {
+            let d = p.distance(points[k - 1]);
+            if d.is_finite() {
+                acc += d;
+            }
+        }
+        if k.is_multiple_of(step) && p.is_finite() {
+            samples.push((*p, acc));
+        }
+    }
+    let mut near: std::collections::HashMap<[i64; 3], Vec<u32>, CubeHash> = Default::default();
+    let r = DVec3::splat(1.25 * REACH);
+    for (i, (p, _)) in samples.iter().enumerate() {
+        let (lo, hi) = (cube(*p - r, inv), cube(*p + r, inv));
+        for x in lo[0]..=hi[0] {
+            for y in lo[1]..=hi[1] {
+                for z in lo[2]..=hi[2] {
+                    near.entry([x, y, z]).or_default().push(i as u32);
+                }
+            }
+        }
+    }
+    let mut best: Vec<Option<(f64, usize)>> = vec![None; samples.len()];
+    let mut sa = 0.0;
+    for k in 0..n - 1 {
+        let (a, b) = (points[k], points[k + 1]);
+        let l = a.distance(b);
+        let sb = if l.is_finite() { sa + l } else { sa };
+        let pieces = (l * 2.0 * inv).clamp(0.0, 1e6) as usize + 1;
+        let mut last = None;
+        for j in 0..pieces {
+            let c = cube(a.lerp(b, (j as f64 + 0.5) / pieces as f64), inv);
+            if last == Some(c) {
+                continue;
+            }
+            last = Some(c);
+            for &i in near.get(&c).map_or(&[][..], |v| v) {
+                let (p, sp) = samples[i as usize];
+                // as Grid::nearest_other: the closest point a + f·(b − a)
+                let f = closest(p, a, b);
+                let d = p.distance(a + (b - a) * f);
+                let sq = sa + f * (sb - sa);
+                let slot = &mut best[i as usize];
+                if d > 1e-3
+                    && d < REACH
+                    && slot.is_none_or(|o| (d, k) < o)
+                    && (sq - sp).abs() > 3.0 * d
+                {
+                    *slot = Some((d, k));
+                }
+            }
+        }
+        sa = sb;
+    }
+    let mut found: Vec<f64> = best.iter().flatten().map(|b| b.0).collect();
     if found.len() < 8 {
         return None;
     }
     found.sort_by(f64::total_cmp);
     Some(found[found.len() / 2])
+}
+
+/// A quick hash of integer cube coordinates (a multiply and a rotation a
+/// word): the cubes are keys of a map looked up once per string.
+#[derive(Clone, Copy, Default)]
+struct CubeHash;
+
+/// [`CubeHash`]'s state.
+#[derive(Default)]
+struct CubeHasher(u64);
+
+impl std::hash::BuildHasher for CubeHash {
+    type Hasher = CubeHasher;
+    fn build_hasher(&self) -> CubeHasher {
+        CubeHasher(0)
+    }
+}
+
+impl std::hash::Hasher for CubeHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(u64::from(b));
+        }
+    }
+
+    fn write_u64(&mut self, v: u64) {
+        self.0 = (self.0.rotate_left(23) ^ v).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    }
+
+    fn write_i64(&mut self, v: i64) {
+        self.write_u64(v as u64);
+    }
+
+    fn write_usize(&mut self, v: usize) {
+        self.write_u64(v as u64);
+    }
+
+    fn finish(&self) -> u64 {
+        self.0 ^ (self.0 >> 29)
+    }
 }
 
 /// The diameter of a round string of cross-section `c`, mm: how a string with
@@ -669,19 +867,64 @@ impl Format {
 
 /// Writes a plan's G-code to a writer and returns its stats (the build's
 /// renderer, passed down so that previews need not know how G-code is made).
-pub type Render<'a> = &'a dyn Fn(&mut dyn std::io::Write) -> Result<Stats>;
+/// `Sync`, so that it may run on a thread of its own beside the drawing.
+pub type Render<'a> = &'a (dyn Fn(&mut dyn std::io::Write) -> Result<Stats> + Sync);
 
 /// Writes a preview of `plan` to `out` (PNG or HTML by extension, atomically);
 /// returns a line for the report. `render` writes the plan's G-code.
 pub fn write(plan: &Plan, out: &Path, opts: &Options, render: Render) -> Result<String> {
-    let (bytes, line) = bytes(plan, out, opts, render)?;
     let shown = out.display().to_string();
+    let io =
+        |e: std::io::Error| Error::io_from(&shown, format!("cannot write the preview: {e}"), &e);
+    if Format::of(out)? == Format::Html {
+        // streamed into the file as it is encoded
+        let (data, stats) = html::read(plan, opts, render)?;
+        let mut len = 0;
+        write_atomic(out, |f| {
+            use std::io::Write;
+            let mut w = Counted {
+                inner: std::io::BufWriter::with_capacity(1 << 16, f),
+                n: 0,
+            };
+            html::write_page(&stats.name, &data, &mut w).map_err(io)?;
+            w.inner.flush().map_err(io)?;
+            len = w.n;
+            Ok(())
+        })?;
+        return Ok(html_line(&shown, data.points(), len));
+    }
+    let (bytes, line) = bytes(plan, out, opts, render)?;
     write_atomic(out, |f| {
         use std::io::Write;
-        f.write_all(&bytes)
-            .map_err(|e| Error::io_from(&shown, format!("cannot write the preview: {e}"), &e))
+        f.write_all(&bytes).map_err(io)
     })?;
     Ok(line)
+}
+
+/// A writer that counts the bytes through it.
+struct Counted<W> {
+    inner: W,
+    n: usize,
+}
+
+impl<W: std::io::Write> std::io::Write for Counted<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let k = self.inner.write(buf)?;
+        self.n += k;
+        Ok(k)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.inner.flush()
+    }
+}
+
+/// The report line of an HTML preview of `points` points and `len` bytes.
+fn html_line(shown: &str, points: usize, len: usize) -> String {
+    format!(
+        "preview → {shown}: HTML viewer, {points} points, {} kB",
+        (len + 512) / 1024
+    )
 }
 
 /// The bytes of the preview [`write`] writes to `out` (its format by the
@@ -692,10 +935,8 @@ pub fn bytes(plan: &Plan, out: &Path, opts: &Options, render: Render) -> Result<
     let shown = out.display().to_string();
     match format {
         Format::Png => {
-            let stats = render(&mut std::io::sink())?;
-            let scene = Scene::new(plan);
-            let r = png::render(&scene, Some(&stats), opts);
-            let bytes = png::encode(&r.pixmap, false);
+            let (r, _) = png::preview(plan, opts, render)?;
+            let bytes = png::encode_fast(&r.pixmap, false);
             let (x, y) = r.frame.pixel(DVec3::ZERO);
             Ok((bytes, format!(
                 "preview → {shown}: {} × {} px, {} view, colour {}, scale {:.4} px/mm, recipe (0, 0, 0) at pixel ({x:.2}, {y:.2})",
@@ -707,16 +948,11 @@ pub fn bytes(plan: &Plan, out: &Path, opts: &Options, render: Render) -> Result<
             )))
         }
         Format::Html => {
-            let mut code = Vec::new();
-            let stats = render(&mut code)?;
-            let text = String::from_utf8_lossy(&code);
-            let page = html::page(plan, &text, &stats, opts);
-            let line = format!(
-                "preview → {shown}: HTML viewer, {} points, {} kB",
-                page.points,
-                (page.html.len() + 512) / 1024
-            );
-            Ok((page.html.into_bytes(), line))
+            let (data, stats) = html::read(plan, opts, render)?;
+            let mut page = Vec::new();
+            html::write_page(&stats.name, &data, &mut page).expect("writing to memory");
+            let line = html_line(&shown, data.points(), page.len());
+            Ok((page, line))
         }
     }
 }
@@ -789,6 +1025,23 @@ mod tests {
         }
         let h = pass_spacing(&tp.points).unwrap();
         assert!((h - 0.3).abs() < 0.01, "{h}");
+        // the same median as asking a grid of all the strings
+        let g = Grid::new(&tp.points, 2.0);
+        let mut d: Vec<f64> = (0..tp.points.len())
+            .step_by((tp.points.len() / 1024).max(1))
+            .filter_map(|i| {
+                let p = tp.points[i];
+                g.nearest_other(p, g.arc(i)).map(|q| p.distance(q))
+            })
+            .collect();
+        d.sort_by(f64::total_cmp);
+        assert_eq!(h, d[d.len() / 2]);
+        // following a pass from a hint finds the nearest point too, here
+        let (p, k) = (tp.points[2500], 2500);
+        let exact = g.nearest_other_near(p, g.arc(k), None);
+        assert_eq!(g.nearest_other_near(p, g.arc(k), Some(2300)), exact);
+        let q = exact.unwrap();
+        assert_eq!(g.follow_other(p, g.arc(k), q.1 + 1), exact);
         // a single straight line has no other pass
         let mut line = Toolpath::new(DVec3::ZERO);
         for i in 1..100 {

@@ -9,15 +9,21 @@
 //! illuminated lines). A depth cue darkens far strings, so walls read as
 //! surfaces and the near side of a helix stands out from the far side.
 
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+
 use glam::DVec3;
 use tiny_skia::{LineCap, Paint, PathBuilder, Pixmap, Rect, Stroke, Transform};
 
 use super::{
-    colormap, fmt_value, round_diameter, text, Basis, ColorMode, Grid, Options, Scene, Size,
+    colormap, fmt_value, round_diameter, text, Basis, ColorMode, Grid, Options, Render, Scene, Size,
 };
 use crate::check::Severity;
+use crate::error::Result;
 use crate::format::hms;
+use crate::plan::Plan;
 use crate::stats::Stats;
+use crate::threads::Threads;
 
 /// Where recipe space lands in the image.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -43,6 +49,18 @@ impl Frame {
             lo = (lo.0.min(u), lo.1.min(w));
             hi = (hi.0.max(u), hi.1.max(w));
         }
+        Frame::fit_box(basis, lo, hi, rect, pad)
+    }
+
+    /// [`Frame::fit`] given the lowest and highest screen-plane coordinates
+    /// (u, w) of the points (lo > hi: none).
+    pub fn fit_box(
+        basis: Basis,
+        mut lo: (f64, f64),
+        mut hi: (f64, f64),
+        rect: [f64; 4],
+        pad: f64,
+    ) -> Frame {
         if lo.0 > hi.0 {
             (lo, hi) = ((0.0, 0.0), (0.0, 0.0));
         }
@@ -85,35 +103,146 @@ const GREY: [f32; 3] = [0.66, 0.68, 0.71];
 const FILAMENT: [f32; 3] = [0.98, 0.56, 0.16];
 /// Strings shorter than this on screen are merged with their neighbours, px.
 const MERGE_PX: f64 = 2.0;
+/// Strings per piece of work when the strokes are collected on several
+/// threads. Merged runs end at a piece's end, so the pieces are a fixed size
+/// (not a share of the threads): the strokes are the same on any number.
+const PIECE: usize = 1 << 14;
+/// Rows of pixels per band when the strokes are painted on several threads.
+const BAND: usize = 32;
+/// When following the neighbouring pass from stroke to stroke
+/// ([`Grid::follow_other`]), every this many strokes search it in full.
+const REFRESH: usize = 32;
 
 /// One stroke to paint.
 struct Item {
     a: (f32, f32),
     b: (f32, f32),
     depth: f64,
-    width: f32,
     /// The number the colour shows (scalar modes).
     value: f64,
+    /// Diffuse and highlight terms of its shading ([`shade`]).
+    diffuse: f64,
+    spec: f64,
+    width: f32,
     /// 0: lit string; 1: travel (faint, unlit); 2: flagged (lit, brighter).
     kind: u8,
-    tangent: DVec3,
-    /// When the string has a neighbouring pass to tell the surface by: the
-    /// normals of its face and of its edge turned towards the viewer, and the
-    /// share of its width that is face.
-    normal: Option<(DVec3, DVec3, f64)>,
 }
 
-/// The full preview: background, model, and unless `opts.bare` (or the image
-/// is too small for text) the name, stats and legend.
-pub fn render(scene: &Scene, stats: Option<&Stats>, opts: &Options) -> Rendered {
-    let Size { width, height } = opts.size;
-    let mut pm = Pixmap::new(width, height).expect("sizes are 1..=8192");
+/// One stroke of the PNG preview, coloured, as the bands paint it.
+struct Px {
+    a: (f32, f32),
+    b: (f32, f32),
+    depth: f32,
+    /// Half its width, px.
+    r: f32,
+    rgb: [u8; 3],
+    /// Opacity, 0..=255.
+    alpha: u8,
+    /// Its place in print order (ties of depth keep it).
+    seq: u32,
+}
+
+/// The full preview of `plan`: background, model, and unless `opts.bare`
+/// (or the image is too small for text) the name, stats and legend; with the
+/// stats `render` returned.
+///
+/// In phases, each over `opts.threads`, each one's memory let go before the
+/// next: the G-code is written into nothing for the stats of the header (its
+/// planner on a thread of its own); the strokes are collected in pieces of
+/// [`PIECE`] strings (each piece by whichever thread is free, coloured as it
+/// is collected, kept in its own slot so that their order is the print
+/// order); then painted in bands of [`BAND`] rows, each band by one thread. Every pixel sees the same strokes in the same order on
+/// any number of threads, so the image is the same.
+pub fn preview(plan: &Plan, opts: &Options, render: Render) -> Result<(Rendered, Stats)> {
+    let threads = opts.threads;
+    // first: the planner's memory is let go before the strokes take theirs
+    let stats = render(&mut std::io::sink())?;
+    let scene = Scene::new(plan);
+    let (rect, decorate, ts) = layout(&scene, opts);
+    let model = Model::new(&scene, opts.view, opts.color, rect, PIECE, true);
+    let (frame, bbox) = (model.frame, model.bbox);
+    let pal = Palette {
+        mode: opts.color,
+        lo: scene.range(opts.color).0,
+        hi: scene.range(opts.color).1,
+        dmin: model.depths.0,
+        dspan: if model.depths.1 > model.depths.0 {
+            model.depths.1 - model.depths.0
+        } else {
+            1.0
+        },
+    };
+    let min_px = 0.75f32;
+    let slots = Mutex::new(Vec::new());
+    std::thread::scope(|s| {
+        let work = || {
+            model.work(&slots, |items| {
+                items
+                    .iter()
+                    .map(|it| {
+                        let (r, rgb, alpha) = if it.kind == 1 {
+                            (min_px.max(1.0) * 0.5, [150, 155, 165], 90)
+                        } else {
+                            (it.width.max(min_px) * 0.5, pal.rgb(it), 255)
+                        };
+                        Px {
+                            a: it.a,
+                            b: it.b,
+                            depth: it.depth as f32,
+                            r,
+                            rgb,
+                            alpha,
+                            seq: 0,
+                        }
+                    })
+                    .collect()
+            })
+        };
+        for _ in 1..threads.get() {
+            s.spawn(work);
+        }
+        work();
+    });
+    drop(model);
+    let mut strokes = gather(slots);
+    // far first, print order among equals: the order of a stable sort, by an
+    // unstable one that needs no room beside the strokes
+    for (i, px) in strokes.iter_mut().enumerate() {
+        px.seq = i as u32;
+    }
+    strokes.sort_unstable_by(|a, b| a.depth.total_cmp(&b.depth).then(a.seq.cmp(&b.seq)));
+    let mut pm = Pixmap::new(opts.size.width, opts.size.height).expect("sizes are 1..=8192");
     pm.fill(tiny_skia::Color::from_rgba8(
         BACKGROUND[0],
         BACKGROUND[1],
         BACKGROUND[2],
         255,
     ));
+    paint_bands(&mut pm, &strokes, threads);
+    drop(strokes);
+    marks(&mut pm, &scene, &frame, bbox, opts.color, rect);
+    if decorate {
+        header(&mut pm, &stats, &scene, ts);
+        legend(&mut pm, &scene, opts.color, ts);
+    }
+    Ok((Rendered { pixmap: pm, frame }, stats))
+}
+
+/// The pieces' results in order, as one list.
+fn gather<T>(slots: Mutex<Vec<Option<Vec<T>>>>) -> Vec<T> {
+    let done = slots.into_inner().unwrap_or_else(|e| e.into_inner());
+    let n = done.iter().map(|d| d.as_ref().map_or(0, Vec::len)).sum();
+    let mut out = Vec::with_capacity(n);
+    for d in done {
+        out.extend(d.expect("every piece is collected"));
+    }
+    out
+}
+
+/// Where the model goes in the image, whether the text goes round it, and
+/// the text's scale.
+fn layout(scene: &Scene, opts: &Options) -> ([f64; 4], bool, u32) {
+    let Size { width, height } = opts.size;
     let (w, h) = (width as f64, height as f64);
     let decorate = !opts.bare && width >= 320 && height >= 240;
     let ts = (height / 450).clamp(1, 4);
@@ -126,14 +255,7 @@ pub fn render(scene: &Scene, stats: Option<&Stats>, opts: &Options) -> Rendered 
         let pad = (w.min(h) * 0.03).max(1.0);
         [pad, pad, w - pad, h - pad]
     };
-    let frame = draw_model(&mut pm, scene, opts, rect, 0.75);
-    if decorate {
-        if let Some(st) = stats {
-            header(&mut pm, st, scene, ts);
-        }
-        legend(&mut pm, scene, opts.color, ts);
-    }
-    Rendered { pixmap: pm, frame }
+    (rect, decorate, ts)
 }
 
 /// A G-code thumbnail: the model alone in filament colour, iso view, on a
@@ -142,149 +264,155 @@ pub fn thumbnail(scene: &Scene, size: Size) -> Pixmap {
     let mut pm = Pixmap::new(size.width, size.height).expect("sizes are 1..=8192");
     let (w, h) = (size.width as f64, size.height as f64);
     let pad = (w.min(h) * 0.04).max(0.5);
-    let opts = Options {
-        view: super::View::Iso,
-        color: ColorMode::Plain,
-        size,
-        bare: true,
-    };
-    draw_model(&mut pm, scene, &opts, [pad, pad, w - pad, h - pad], 1.0);
+    let rect = [pad, pad, w - pad, h - pad];
+    // one piece per path, on the caller's thread: the bytes are part of the
+    // G-code and its hash
+    let model = Model::new(
+        scene,
+        super::View::Iso,
+        ColorMode::Plain,
+        rect,
+        usize::MAX,
+        false,
+    );
+    let slots = Mutex::new(Vec::new());
+    model.work(&slots, |items| items);
+    let (frame, bbox) = (model.frame, model.bbox);
+    let mut items = gather(slots);
+    sort(&mut items);
+    paint_strokes(&mut pm, &items, scene, ColorMode::Plain, 1.0);
+    marks(&mut pm, scene, &frame, bbox, ColorMode::Plain, rect);
     pm
 }
 
-/// Paints the strings into `rect`; returns the projection.
-fn draw_model(
-    pm: &mut Pixmap,
-    scene: &Scene,
-    opts: &Options,
-    rect: [f64; 4],
-    min_px: f32,
-) -> Frame {
-    let basis = opts.view.basis();
-    let pts = scene.extruding_points();
-    let frame = Frame::fit(basis, &pts, rect, scene.pad());
-    let mode = opts.color;
-    let (lo, hi) = scene.range(mode);
-    let mut items = collect(scene, &frame, mode);
-    // painter's algorithm: far (small depth) first; the sort is stable, so
-    // strings at equal depth keep print order and the result is deterministic
+/// Painter's algorithm: far (small depth) first; the sort is stable, so
+/// strings at equal depth keep print order and the result is deterministic
+/// (the PNG preview's strokes are sorted the same way).
+fn sort(items: &mut [Item]) {
     items.sort_by(|a, b| a.depth.total_cmp(&b.depth));
-    let (dmin, dmax) = items
-        .iter()
-        .filter(|i| i.kind != 1)
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), i| {
-            (a.min(i.depth), b.max(i.depth))
-        });
-    let dspan = if dmax > dmin { dmax - dmin } else { 1.0 };
-    // the light comes from the upper left, in front: fixed to the view
-    let light = (-0.6 * basis.right + 0.5 * basis.up + 0.6 * basis.toward).normalize();
-    let mut paint = Paint {
-        anti_alias: true,
-        ..Paint::default()
-    };
-    let mut stroke = Stroke {
-        line_cap: LineCap::Round,
-        ..Stroke::default()
-    };
-    let mut pb = PathBuilder::new();
-    for it in &items {
-        let rgb = if it.kind == 1 {
-            paint.set_color_rgba8(150, 155, 165, 90);
-            stroke.width = min_px.max(1.0);
-            None
-        } else {
-            let base = match mode {
-                ColorMode::Findings if it.kind == 2 => RED,
-                ColorMode::Findings => GREY,
-                ColorMode::Plain => FILAMENT,
-                _ if hi > lo => colormap((it.value - lo) / (hi - lo)),
-                _ => colormap(0.5),
-            };
-            let depth = (it.depth - dmin) / dspan;
-            let (diffuse, spec) = shade(it, light, basis);
-            let mut k = 0.16 + 0.14 * depth + 0.85 * diffuse;
-            if it.kind == 2 {
-                k = 0.55 + 0.45 * k;
-            }
-            let c = base.map(|x| (x as f64 * k + 0.30 * spec).clamp(0.0, 1.0));
-            stroke.width = it.width.max(min_px);
-            Some(c)
-        };
-        if let Some(c) = rgb {
-            let [r, g, b] = c.map(|x| libm::round(x * 255.0) as u8);
-            paint.set_color_rgba8(r, g, b, 255);
-        }
-        pb.move_to(it.a.0, it.a.1);
-        pb.line_to(it.b.0, it.b.1);
-        let Some(path) = pb.finish() else {
-            pb = PathBuilder::new();
-            continue;
-        };
-        pm.stroke_path(&path, &paint, &stroke, Transform::identity(), None);
-        pb = path.clear();
-    }
-    // the turtles' markers (draw_turtle): a filled triangle each, pointing
-    // along the heading, about 1/30 of the print's size
-    if !scene.turtles.is_empty() {
-        let (lo, hi) = pts.iter().fold(
-            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-            |(l, h), p| (l.min(*p), h.max(*p)),
-        );
-        let size = ((hi - lo).max_element() / 30.0).clamp(1.0, 20.0);
-        paint.set_color_rgba8(255, 200, 40, 255);
-        for m in &scene.turtles {
-            let tri = super::Scene::turtle_triangle(m, size).map(|p| frame.pixel(p));
-            let mut tb = PathBuilder::new();
-            tb.move_to(tri[0].0 as f32, tri[0].1 as f32);
-            tb.line_to(tri[1].0 as f32, tri[1].1 as f32);
-            tb.line_to(tri[2].0 as f32, tri[2].1 as f32);
-            tb.close();
-            if let Some(path) = tb.finish() {
-                pm.fill_path(
-                    &path,
-                    &paint,
-                    tiny_skia::FillRule::Winding,
-                    Transform::identity(),
-                    None,
-                );
-            }
-        }
-    }
-    if mode == ColorMode::Findings {
-        paint.set_color_rgba8(255, 60, 50, 255);
-        let r = (6.0 * (rect[3] - rect[1]) / 400.0).clamp(4.0, 24.0) as f32;
-        stroke.width = (r / 5.0).max(1.0);
-        for p in &scene.marks {
-            let (x, y) = frame.pixel(*p);
-            if let Some(path) = PathBuilder::from_circle(x as f32, y as f32, r) {
-                pm.stroke_path(&path, &paint, &stroke, Transform::identity(), None);
-            }
-        }
-    }
-    frame
 }
 
-/// The strings as strokes: runs shorter than [`MERGE_PX`] on screen become
-/// one stroke (length-weighted cross-section and value), so a
-/// 2-million-string vase paints as fast as its pixels allow.
-fn collect(scene: &Scene, frame: &Frame, mode: ColorMode) -> Vec<Item> {
-    let mut items = Vec::new();
-    for (pi, tp) in scene.plan.paths.iter().enumerate() {
+/// The strings of a scene made ready to paint into a rectangle of an image:
+/// the projection, each path's grid of strings, and the pieces of work that
+/// collect the strokes (taken by whichever thread is free; each piece's
+/// strokes are kept in its own slot, so their order is the print order).
+struct Model<'s, 'p> {
+    scene: &'s Scene<'p>,
+    frame: Frame,
+    mode: ColorMode,
+    light: DVec3,
+    /// The box of the extruding points, recipe coordinates.
+    bbox: (DVec3, DVec3),
+    /// Their lowest and highest depth.
+    depths: (f64, f64),
+    /// Per path, its strings in a grid (to find the neighbouring pass).
+    grids: Vec<Grid<'p>>,
+    /// (path, first string, end) of each piece.
+    pieces: Vec<(usize, usize, usize)>,
+    /// Whether a stroke's neighbouring pass is followed from the last
+    /// stroke's ([`Grid::follow_other`]) rather than searched in full.
+    follow: bool,
+    next: AtomicUsize,
+}
+
+impl<'s, 'p> Model<'s, 'p> {
+    /// Fits `scene` into `rect` seen from `view`; pieces of `piece` strings;
+    /// neighbouring passes followed or not (`follow`).
+    fn new(
+        scene: &'s Scene<'p>,
+        view: super::View,
+        mode: ColorMode,
+        rect: [f64; 4],
+        piece: usize,
+        follow: bool,
+    ) -> Model<'s, 'p> {
+        let basis = view.basis();
+        let mut lo2 = (f64::INFINITY, f64::INFINITY);
+        let mut hi2 = (f64::NEG_INFINITY, f64::NEG_INFINITY);
+        let mut lo = DVec3::splat(f64::INFINITY);
+        let mut hi = DVec3::splat(f64::NEG_INFINITY);
+        let mut depths = (f64::INFINITY, f64::NEG_INFINITY);
+        scene.each_extruding_point(|p| {
+            let (u, w, d) = basis.project(p);
+            lo2 = (lo2.0.min(u), lo2.1.min(w));
+            hi2 = (hi2.0.max(u), hi2.1.max(w));
+            depths = (depths.0.min(d), depths.1.max(d));
+            lo = lo.min(p);
+            hi = hi.max(p);
+        });
+        let frame = Frame::fit_box(basis, lo2, hi2, rect, scene.pad());
+        let grids: Vec<Grid> = scene
+            .plan
+            .paths
+            .iter()
+            .zip(&scene.spacing)
+            .map(|(tp, &h)| Grid::for_surface(&tp.points, h))
+            .collect();
+        let mut pieces = Vec::new();
+        for (pi, tp) in scene.plan.paths.iter().enumerate() {
+            let mut k = 0;
+            while k < tp.len() {
+                let end = k.saturating_add(piece).min(tp.len());
+                pieces.push((pi, k, end));
+                k = end;
+            }
+        }
+        Model {
+            scene,
+            frame,
+            mode,
+            // the light comes from the upper left, in front: fixed to the view
+            light: (-0.6 * basis.right + 0.5 * basis.up + 0.6 * basis.toward).normalize(),
+            bbox: (lo, hi),
+            depths,
+            grids,
+            pieces,
+            follow,
+            next: AtomicUsize::new(0),
+        }
+    }
+
+    /// Collects pieces until none is left, each made into `f` of its strokes
+    /// and kept in its slot (the piece's number) of `slots`.
+    fn work<T>(&self, slots: &Mutex<Vec<Option<Vec<T>>>>, f: impl Fn(Vec<Item>) -> Vec<T>) {
+        loop {
+            let i = self.next.fetch_add(1, Ordering::Relaxed);
+            let Some(&(pi, k0, k1)) = self.pieces.get(i) else {
+                return;
+            };
+            let out = f(self.collect(pi, k0, k1));
+            let mut slots = slots.lock().unwrap_or_else(|e| e.into_inner());
+            if slots.len() <= i {
+                slots.resize_with(i + 1, || None);
+            }
+            slots[i] = Some(out);
+        }
+    }
+
+    /// The strokes of strings `k0..k1` of path `pi`: runs shorter than
+    /// [`MERGE_PX`] on screen become one stroke (length-weighted
+    /// cross-section and value), so a 2-million-string vase paints as fast as
+    /// its pixels allow.
+    fn collect(&self, pi: usize, k0: usize, k1: usize) -> Vec<Item> {
+        let (scene, frame, mode) = (self.scene, &self.frame, self.mode);
+        let tp = &scene.plan.paths[pi];
+        let grid = &self.grids[pi];
         // neighbouring passes lie about `spacing` apart: look a little further
         let h_typ = scene.spacing[pi];
-        let grid = Grid::for_surface(&tp.points, h_typ);
-        let mut k = 0;
-        while k < tp.len() {
-            let k0 = k;
+        let mut items = Vec::new();
+        // the neighbour found for the last stroke: the next one's is near it
+        let mut hint: Option<(usize, usize)> = None;
+        let mut lit = 0usize;
+        let mut k = k0;
+        while k < k1 {
+            let first = k;
             let start = tp.points[k];
             let s0 = tp.strings[k];
             let flag0 = scene.flagged[pi][k];
             let (mut len, mut csum, mut vsum) = (0.0, 0.0, 0.0);
             let mut end = k;
             // take strings while the run is shorter than MERGE_PX and alike
-            while end < tp.len()
-                && tp.strings[end].travel == s0.travel
-                && scene.flagged[pi][end] == flag0
+            while end < k1 && tp.strings[end].travel == s0.travel && scene.flagged[pi][end] == flag0
             {
                 let l = tp.length(end);
                 len += l;
@@ -309,7 +437,13 @@ fn collect(scene: &Scene, frame: &Frame, mode: ColorMode) -> Vec<Item> {
             let local = if s0.travel {
                 None
             } else {
-                grid.local(start, b, (grid.arc(k0) + grid.arc(end)) / 2.0)
+                let guess = hint.map(|(at, j)| j + (first - at));
+                let sm = (grid.arc(first) + grid.arc(end)) / 2.0;
+                let follow = self.follow && !lit.is_multiple_of(REFRESH);
+                lit += 1;
+                let found = grid.local_near(start, b, sm, guess, follow);
+                hint = found.map(|(_, j)| (first, j));
+                found.map(|(l, _)| l)
             };
             let (width, normal) = match local {
                 _ if s0.travel => (0.0, None),
@@ -329,6 +463,11 @@ fn collect(scene: &Scene, frame: &Frame, mode: ColorMode) -> Vec<Item> {
                 }
                 None => (round_diameter(c), None),
             };
+            let (diffuse, spec) = if s0.travel {
+                (0.0, 0.0)
+            } else {
+                shade(tangent, normal, self.light, frame.basis)
+            };
             let pa = frame.pixel(start);
             let pb = frame.pixel(b);
             items.push(Item {
@@ -337,6 +476,8 @@ fn collect(scene: &Scene, frame: &Frame, mode: ColorMode) -> Vec<Item> {
                 depth: frame.basis.project((start + b) * 0.5).2,
                 width: (width * frame.scale) as f32,
                 value: v,
+                diffuse,
+                spec,
                 kind: if s0.travel {
                     1
                 } else if flag0 {
@@ -344,12 +485,242 @@ fn collect(scene: &Scene, frame: &Frame, mode: ColorMode) -> Vec<Item> {
                 } else {
                     0
                 },
-                tangent,
-                normal,
             });
         }
+        items
     }
-    items
+}
+
+/// How the lit strokes are coloured: the value range of the colour mode and
+/// the depth range of the strokes (far ones are darker).
+struct Palette {
+    mode: ColorMode,
+    lo: f64,
+    hi: f64,
+    dmin: f64,
+    dspan: f64,
+}
+
+impl Palette {
+    fn new(items: &[Item], scene: &Scene, mode: ColorMode) -> Palette {
+        let (lo, hi) = scene.range(mode);
+        let (dmin, dmax) = items
+            .iter()
+            .filter(|i| i.kind != 1)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), i| {
+                (a.min(i.depth), b.max(i.depth))
+            });
+        let dspan = if dmax > dmin { dmax - dmin } else { 1.0 };
+        Palette {
+            mode,
+            lo,
+            hi,
+            dmin,
+            dspan,
+        }
+    }
+
+    /// The colour of a lit (not travel) stroke.
+    fn rgb(&self, it: &Item) -> [u8; 3] {
+        let (lo, hi) = (self.lo, self.hi);
+        let base = match self.mode {
+            ColorMode::Findings if it.kind == 2 => RED,
+            ColorMode::Findings => GREY,
+            ColorMode::Plain => FILAMENT,
+            _ if hi > lo => colormap((it.value - lo) / (hi - lo)),
+            _ => colormap(0.5),
+        };
+        let depth = (it.depth - self.dmin) / self.dspan;
+        let mut k = 0.16 + 0.14 * depth + 0.85 * it.diffuse;
+        if it.kind == 2 {
+            k = 0.55 + 0.45 * k;
+        }
+        let c = base.map(|x| (x as f64 * k + 0.30 * it.spec).clamp(0.0, 1.0));
+        c.map(|x| libm::round(x * 255.0) as u8)
+    }
+}
+
+/// Paints the (sorted) strokes as tiny-skia's anti-aliased round-capped
+/// strokes, at least `min_px` wide: the G-code thumbnails.
+fn paint_strokes(pm: &mut Pixmap, items: &[Item], scene: &Scene, mode: ColorMode, min_px: f32) {
+    let pal = Palette::new(items, scene, mode);
+    let mut paint = Paint {
+        anti_alias: true,
+        ..Paint::default()
+    };
+    let mut stroke = Stroke {
+        line_cap: LineCap::Round,
+        ..Stroke::default()
+    };
+    let mut pb = PathBuilder::new();
+    for it in items {
+        if it.kind == 1 {
+            paint.set_color_rgba8(150, 155, 165, 90);
+            stroke.width = min_px.max(1.0);
+        } else {
+            let [r, g, b] = pal.rgb(it);
+            paint.set_color_rgba8(r, g, b, 255);
+            stroke.width = it.width.max(min_px);
+        }
+        pb.move_to(it.a.0, it.a.1);
+        pb.line_to(it.b.0, it.b.1);
+        let Some(path) = pb.finish() else {
+            pb = PathBuilder::new();
+            continue;
+        };
+        pm.stroke_path(&path, &paint, &stroke, Transform::identity(), None);
+        pb = path.clear();
+    }
+}
+
+/// Paints the (sorted) strokes into an opaque image in bands of [`BAND`]
+/// rows on up to `threads` threads.
+///
+/// A stroke is a capsule: the points within r (half its width) of segment
+/// a–b. A pixel is covered by the overlap of its width with the capsule
+/// across the line through its centre at distance d: min(d + ½, r) −
+/// max(d − ½, −r), clamped to [0, 1] (a box filter; 1 inside, 0 beyond
+/// r + ½), and takes the stroke's colour in that share times its opacity
+/// (over: dst + (src − dst)·α, in integers rounded the same way everywhere).
+/// Each band paints every stroke that reaches it, in order, so a pixel's
+/// result does not depend on how the image is cut into bands.
+fn paint_bands(pm: &mut Pixmap, strokes: &[Px], threads: Threads) {
+    let (width, height) = (pm.width() as usize, pm.height() as usize);
+    // each band's strokes, in painting order
+    let mut bins: Vec<Vec<u32>> = vec![Vec::new(); height.div_ceil(BAND)];
+    for (i, px) in strokes.iter().enumerate() {
+        let ext = px.r + 0.5;
+        let top = (px.a.1.min(px.b.1) - ext).floor();
+        let bottom = (px.a.1.max(px.b.1) + ext).ceil().min(height as f32);
+        if !(top < bottom && bottom > 0.0) {
+            continue; // off the image, or not a number
+        }
+        let first = top.max(0.0) as usize / BAND;
+        let last = (bottom as usize - 1) / BAND;
+        for bin in &mut bins[first..=last] {
+            bin.push(i as u32);
+        }
+    }
+    let bands: Vec<(&[u32], usize, &mut [u8])> = pm
+        .data_mut()
+        .chunks_mut(width * 4 * BAND)
+        .zip(&bins)
+        .enumerate()
+        .map(|(i, (band, bin))| (bin.as_slice(), i * BAND, band))
+        .collect();
+    let queue = Mutex::new(bands);
+    let work = || loop {
+        let Some((bin, y0, band)) = queue.lock().unwrap_or_else(|e| e.into_inner()).pop() else {
+            return;
+        };
+        let y1 = y0 + band.len() / (4 * width);
+        for &i in bin {
+            let px = &strokes[i as usize];
+            capsule(band, width, y0, y1, px);
+        }
+    };
+    std::thread::scope(|s| {
+        for _ in 1..threads.get() {
+            s.spawn(work);
+        }
+        work();
+    });
+}
+
+/// Blends stroke `px` into rows `y0..y1` of an opaque premultiplied RGBA
+/// image `width` pixels wide, held in `band` (see [`paint_bands`]).
+fn capsule(band: &mut [u8], width: usize, y0: usize, y1: usize, px: &Px) {
+    let (a, b, r) = (px.a, px.b, px.r);
+    if !(r.is_finite() && a.0.is_finite() && a.1.is_finite() && b.0.is_finite() && b.1.is_finite())
+    {
+        return;
+    }
+    let alpha = f32::from(px.alpha);
+    let ext = r + 0.5;
+    let top = (a.1.min(b.1) - ext).floor().max(y0 as f32);
+    let bottom = (a.1.max(b.1) + ext).ceil().min(y1 as f32);
+    let left = (a.0.min(b.0) - ext).floor().max(0.0);
+    let right = (a.0.max(b.0) + ext).ceil().min(width as f32);
+    if top >= bottom || left >= right {
+        return;
+    }
+    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+    let l2 = dx * dx + dy * dy;
+    let inv = if l2 > 0.0 { 1.0 / l2 } else { 0.0 };
+    let src = px.rgb.map(u32::from);
+    for y in top as usize..bottom as usize {
+        let py = y as f32 + 0.5 - a.1;
+        let row = &mut band[(y - y0) * width * 4..(y - y0 + 1) * width * 4];
+        for x in left as usize..right as usize {
+            let px = x as f32 + 0.5 - a.0;
+            let t = ((px * dx + py * dy) * inv).clamp(0.0, 1.0);
+            let (ex, ey) = (px - t * dx, py - t * dy);
+            let d = (ex * ex + ey * ey).sqrt();
+            let cov = ((d + 0.5).min(r) - (d - 0.5).max(-r)).clamp(0.0, 1.0);
+            let k = (cov * alpha + 0.5) as u32;
+            if k == 0 {
+                continue;
+            }
+            let p = &mut row[4 * x..4 * x + 3];
+            for (c, s) in p.iter_mut().zip(src) {
+                *c = ((s * k + u32::from(*c) * (255 - k) + 127) / 255) as u8;
+            }
+        }
+    }
+}
+
+/// The turtles' markers and, in the findings mode, a ring round each finding.
+fn marks(
+    pm: &mut Pixmap,
+    scene: &Scene,
+    frame: &Frame,
+    bbox: (DVec3, DVec3),
+    mode: ColorMode,
+    rect: [f64; 4],
+) {
+    let mut paint = Paint {
+        anti_alias: true,
+        ..Paint::default()
+    };
+    // the turtles' markers (draw_turtle): a filled triangle each, pointing
+    // along the heading, about 1/30 of the print's size
+    if !scene.turtles.is_empty() {
+        let (lo, hi) = bbox;
+        let size = ((hi - lo).max_element() / 30.0).clamp(1.0, 20.0);
+        paint.set_color_rgba8(255, 200, 40, 255);
+        for m in &scene.turtles {
+            let tri = super::Scene::turtle_triangle(m, size).map(|p| frame.pixel(p));
+            let mut tb = PathBuilder::new();
+            tb.move_to(tri[0].0 as f32, tri[0].1 as f32);
+            tb.line_to(tri[1].0 as f32, tri[1].1 as f32);
+            tb.line_to(tri[2].0 as f32, tri[2].1 as f32);
+            tb.close();
+            if let Some(path) = tb.finish() {
+                pm.fill_path(
+                    &path,
+                    &paint,
+                    tiny_skia::FillRule::Winding,
+                    Transform::identity(),
+                    None,
+                );
+            }
+        }
+    }
+    if mode == ColorMode::Findings {
+        paint.set_color_rgba8(255, 60, 50, 255);
+        let r = (6.0 * (rect[3] - rect[1]) / 400.0).clamp(4.0, 24.0) as f32;
+        let stroke = Stroke {
+            line_cap: LineCap::Round,
+            width: (r / 5.0).max(1.0),
+            ..Stroke::default()
+        };
+        for p in &scene.marks {
+            let (x, y) = frame.pixel(*p);
+            if let Some(path) = PathBuilder::from_circle(x as f32, y as f32, r) {
+                pm.stroke_path(&path, &paint, &stroke, Transform::identity(), None);
+            }
+        }
+    }
 }
 
 /// How a string of tangent `t` looks, as a flat tube: its width in mm and
@@ -386,12 +757,11 @@ pub fn flat_tube(basis: &Basis, t: DVec3, n: DVec3, thick: f64, along: f64) -> (
 /// is the share of the string's width that is face. Without one the string is a thin tube of
 /// tangent T (illuminated lines): sqrt(1 − (L·T)²), and the highlight
 /// (sqrt(1 − (L·T)²)·sqrt(1 − (V·T)²) − (L·T)(V·T))^24.
-fn shade(it: &Item, light: DVec3, basis: Basis) -> (f64, f64) {
+fn shade(t: DVec3, normal: Option<(DVec3, DVec3, f64)>, light: DVec3, basis: Basis) -> (f64, f64) {
     let v = basis.toward;
-    let t = it.tangent;
     let lt = light.dot(t);
     let tube = (1.0 - lt * lt).max(0.0).sqrt();
-    match it.normal {
+    match normal {
         Some((face, edge, share)) => {
             let h = (light + v).normalize();
             let lambert = |n: DVec3| {
@@ -555,8 +925,19 @@ fn header(pm: &mut Pixmap, st: &Stats, scene: &Scene, ts: u32) {
     }
 }
 
-/// PNG bytes of `pm`: RGB, or RGBA with `alpha` (colours un-premultiplied).
+/// PNG bytes of `pm`: RGB, or RGBA with `alpha` (colours un-premultiplied),
+/// compressed as hard as the encoder can (the G-code thumbnails).
 pub fn encode(pm: &Pixmap, alpha: bool) -> Vec<u8> {
+    encode_with(pm, alpha, image::codecs::png::CompressionType::Best)
+}
+
+/// [`encode`] with a quicker compression: the PNG previews (a flat
+/// background and smooth shading compress well even so).
+pub fn encode_fast(pm: &Pixmap, alpha: bool) -> Vec<u8> {
+    encode_with(pm, alpha, image::codecs::png::CompressionType::Fast)
+}
+
+fn encode_with(pm: &Pixmap, alpha: bool, level: image::codecs::png::CompressionType) -> Vec<u8> {
     use image::ImageEncoder;
     let n = if alpha { 4 } else { 3 };
     let mut data = Vec::with_capacity(pm.pixels().len() * n);
@@ -573,8 +954,8 @@ pub fn encode(pm: &Pixmap, alpha: bool) -> Vec<u8> {
     } else {
         image::ExtendedColorType::Rgb8
     };
-    use image::codecs::png::{CompressionType, FilterType, PngEncoder};
-    PngEncoder::new_with_quality(&mut out, CompressionType::Best, FilterType::Adaptive)
+    use image::codecs::png::{FilterType, PngEncoder};
+    PngEncoder::new_with_quality(&mut out, level, FilterType::Adaptive)
         .write_image(&data, pm.width(), pm.height(), kind)
         .expect("PNG encoding into memory does not fail");
     out
