@@ -125,6 +125,20 @@ pub fn parse(text: &str, opt: &Options) -> std::result::Result<Vec<Subpath>, Str
         )
     })?;
     check_expansion(&doc)?;
+    check_style_work(&doc)?;
+    // usvg copies a marker's content to every vertex of every path that
+    // names it (in an attribute or a style sheet): a small marker on a long
+    // path is a bomb the `<use>` count does not see, and markers are
+    // decoration (arrowheads), not outlines. Refused, naming the first.
+    if let Some(m) = doc
+        .descendants()
+        .find(|n| n.is_element() && n.tag_name().name() == "marker")
+    {
+        return Err(format!(
+            "{} is a marker, which p3dp does not draw (usvg would copy it to every vertex of the paths that use it); expected a drawing without `<marker>` elements",
+            describe(&doc, m)
+        ));
+    }
     if let Some(id) = opt.id {
         if !doc.descendants().any(|n| n.attribute("id") == Some(id)) {
             return Err(format!(
@@ -188,6 +202,39 @@ pub fn parse(text: &str, opt: &Options) -> std::result::Result<Vec<Subpath>, Str
         ));
     }
     Ok(out)
+}
+
+/// Most style-sheet rules × elements that usvg's CSS matching may try (each
+/// element is matched against every rule: 10⁷ pairs take about 0.2 s).
+pub const MAX_STYLE_WORK: u64 = 10_000_000;
+
+/// Refuses a style sheet whose rules, matched against every element, would
+/// cost more than [`MAX_STYLE_WORK`]: 60,000 rules over 60,000 elements fit
+/// in 3 MB and took 83 s in usvg. Rules are counted by their `{`.
+fn check_style_work(doc: &roxmltree::Document) -> std::result::Result<(), String> {
+    let elements = doc.descendants().filter(|n| n.is_element()).count() as u64;
+    let mut rules = 0u64;
+    let mut first = None;
+    for n in doc
+        .descendants()
+        .filter(|n| n.is_element() && n.tag_name().name() == "style")
+    {
+        let text: u64 = n
+            .descendants()
+            .filter(|t| t.is_text())
+            .filter_map(|t| t.text())
+            .map(|t| t.matches('{').count() as u64)
+            .sum();
+        rules += text;
+        first.get_or_insert(n);
+    }
+    match first {
+        Some(n) if rules.saturating_mul(elements) > MAX_STYLE_WORK => Err(format!(
+            "its style sheets (the first: {}) hold {rules} rules for {elements} elements, more than {MAX_STYLE_WORK} rule × element matches; expected a shorter style sheet (or styles written on the elements)",
+            describe(doc, n)
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// Names an element for errors: its tag, id and line.
@@ -707,6 +754,43 @@ mod tests {
         let e = parse(&svg, &opt()).unwrap_err();
         assert!(e.contains("<g id=\"a"), "{e}");
         assert!(e.contains("SVG bomb"), "{e}");
+    }
+
+    #[test]
+    fn a_marker_is_refused_before_usvg_copies_it() {
+        // 20,000 vertices each given a marker of 1,000 copies would be 2e7
+        // elements once usvg expands them
+        let mut d = String::from("M 0 0");
+        for i in 1..20_000 {
+            d.push_str(&format!(" L {} {}", i % 40, (i * 7) % 40));
+        }
+        let svg = format!(
+            r##"{MM}<defs><path id="l0" d="M 0 0 L 1 0 L 1 1 Z"/><marker id="m"><use href="#l0"/></marker></defs><path id="p" d="{d}" style="marker-mid: url(#m)"/></svg>"##
+        );
+        let e = parse(&svg, &opt()).unwrap_err();
+        assert!(e.contains("<marker id=\"m\"> at line 1"), "{e}");
+    }
+
+    #[test]
+    fn a_style_sheet_matched_against_every_element_is_bounded() {
+        // 4,000 rules × 4,000 elements = 1.6e7 matches: refused before usvg
+        let mut svg = String::from(MM);
+        svg.push_str("<style>");
+        for i in 0..4000 {
+            svg.push_str(&format!(".c{i}{{fill:red}}"));
+        }
+        svg.push_str("</style>");
+        for i in 0..4000 {
+            svg.push_str(&format!(r#"<path class="c{i}" d="M0 0L1 1"/>"#));
+        }
+        svg.push_str("</svg>");
+        let e = parse(&svg, &opt()).unwrap_err();
+        assert!(e.contains("<style> at line 1") && e.contains("4000 rules"), "{e}");
+        // a usual sheet passes
+        let ok = format!(
+            r#"{MM}<style>.a{{fill:red}} path{{stroke:black}}</style><path class="a" d="M0 0L1 1"/></svg>"#
+        );
+        assert!(parse(&ok, &opt()).is_ok());
     }
 
     #[test]
