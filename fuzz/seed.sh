@@ -18,6 +18,7 @@ seed recipe "$root"/recipes/*.yaml "$root"/tests/bad/*.yaml "$root"/tests/fixtur
 seed printer "$root"/src/machine/printers/*.yaml "$root"/tests/fixtures/printers/*.yaml
 seed lock "$root"/p3dp.lock
 seed image "$root"/maps/* "$root"/tests/bad/*.png
+seed svg "$root"/recipes/*.svg "$root"/tests/bad/svg/*.svg
 # expressions: every quoted string of the recipes, one a file
 mkdir -p "$here/corpus/expr"
 grep -ho '"[^"]*"' "$root"/recipes/*.yaml | sed 's/^"//; s/"$//' | sort -u | while IFS= read -r e; do

@@ -16,8 +16,8 @@ fuzz_target!(|data: &[u8]| {
     if let Ok(e) = Expr::compile(src, &params, &all) {
         for vars in [
             [0.0; var::COUNT],
-            [1.0, -2.0, 3.5, 4.0, 0.5, 0.2, 40.0, 7.0, 100.0, 0.07],
-            [1e300, -1e300, f64::MIN_POSITIVE, 1e-300, 6.28, 1e9, 1e-9, 1e6, 1e6, 1.0],
+            [1.0, -2.0, 3.5, 4.0, 0.5, 0.2, 40.0, 7.0, 100.0, 0.07, 0.25],
+            [1e300, -1e300, f64::MIN_POSITIVE, 1e-300, 6.28, 1e9, 1e-9, 1e6, 1e6, 1.0, 0.999],
         ] {
             let _ = e.eval(&vars);
         }
