@@ -785,7 +785,10 @@ mod tests {
         }
         svg.push_str("</svg>");
         let e = parse(&svg, &opt()).unwrap_err();
-        assert!(e.contains("<style> at line 1") && e.contains("4000 rules"), "{e}");
+        assert!(
+            e.contains("<style> at line 1") && e.contains("4000 rules"),
+            "{e}"
+        );
         // a usual sheet passes
         let ok = format!(
             r#"{MM}<style>.a{{fill:red}} path{{stroke:black}}</style><path class="a" d="M0 0L1 1"/></svg>"#

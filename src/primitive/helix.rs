@@ -5,8 +5,8 @@ use std::sync::Arc;
 use glam::DVec3;
 
 use super::outline::{along, radius_or_outline, turn_points, Files, RawOutline};
-use crate::svg::Outline;
 use super::TurnTable;
+use crate::svg::Outline;
 use crate::toolpath::Toolpath;
 use serde::Deserialize;
 
