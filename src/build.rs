@@ -2,12 +2,14 @@
 //! goes, and the stats of what was written.
 
 use std::io::{self, Write};
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::error::{Error, Result};
+use crate::finding;
 use crate::gcode::{Emitter, MoveStats};
 pub use crate::model::make_part;
 use crate::output::HashWriter;
-pub use crate::plan::{plan, prepare, Options, Plan};
+pub use crate::plan::{plan, prepare, Checked, Options, Plan};
 use crate::planner::Background;
 use crate::stats::{PartStats, Stats};
 use crate::threads::Threads;
@@ -67,9 +69,27 @@ impl Plan {
         allow: &[String],
         out: W,
     ) -> Result<(W, MoveStats)> {
+        self.check_and_write_until(allow, None, out)
+    }
+
+    /// [`Plan::check_and_write`], and with `stop = Some(strict)` the writing
+    /// given up as soon as the checks fail at that strictness (the caller
+    /// refuses the build, so the rest of the G-code would be wasted work; a
+    /// 8M-string vase over the printer's height wrote all 270 MB of it
+    /// first). The writer's error is then "stopped": the caller reports the
+    /// findings instead. `None` (a `--force` build) always writes everything.
+    pub fn check_and_write_until<W: Write>(
+        &mut self,
+        allow: &[String],
+        stop: Option<bool>,
+        out: W,
+    ) -> Result<(W, MoveStats)> {
         let n = self.threads.get();
         if n == 1 || !self.recipe.printer.thumbnails.is_empty() {
             self.check(allow);
+            if stop.is_some_and(|strict| !self.failing(strict).is_empty()) {
+                return Err(Error::check(&self.path, "stopped: the checks failed"));
+            }
             return self.write_gcode(out);
         }
         let limits = self.recipe.printer.limits();
@@ -84,18 +104,33 @@ impl Plan {
             )
         };
         let this = &*self;
+        let failed = AtomicBool::new(false);
+        let failed = &failed;
+        let gives_up = move |c: &Checked| {
+            let yes = stop.is_some_and(|strict| !finding::failing(&c.0, strict).is_empty());
+            failed.store(yes, Ordering::Relaxed);
+            yes
+        };
         let (checked, written) = std::thread::scope(|s| {
             let checks = s.spawn(move || match feed {
                 // the planner's moves wait while a check runs, and are
-                // planned between checks and after the last
+                // planned between checks and after the last (not at all when
+                // the build is refused: the writer's end then plans nothing)
                 Some(f) => {
                     let c = this.checks_between(allow, check_threads, &mut || f.catch_up());
-                    f.run();
+                    if !gives_up(&c) {
+                        f.run();
+                    }
                     c
                 }
-                None => this.checks(allow, check_threads),
+                None => {
+                    let c = this.checks(allow, check_threads);
+                    gives_up(&c);
+                    c
+                }
             });
-            let written = this.write_gcode_with(out, planner);
+            let out = Until { out, failed };
+            let written = this.write_gcode_with(out, planner).map(|(w, m)| (w.out, m));
             let checked = checks
                 .join()
                 .unwrap_or_else(|e| std::panic::resume_unwind(e));
@@ -107,7 +142,17 @@ impl Plan {
 
     /// [`Plan::check_and_write`] through a hashing writer: the stats.
     pub fn check_and_render<W: Write>(&mut self, allow: &[String], out: W) -> Result<Stats> {
-        let (hw, moves) = self.check_and_write(allow, HashWriter::new(out))?;
+        self.check_and_render_until(allow, None, out)
+    }
+
+    /// [`Plan::check_and_write_until`] through a hashing writer: the stats.
+    pub fn check_and_render_until<W: Write>(
+        &mut self,
+        allow: &[String],
+        stop: Option<bool>,
+        out: W,
+    ) -> Result<Stats> {
+        let (hw, moves) = self.check_and_write_until(allow, stop, HashWriter::new(out))?;
         let (digest, bytes) = hw.finish();
         Ok(self.stats(&moves, digest, bytes))
     }
@@ -136,5 +181,25 @@ impl Plan {
         );
         stats.first_layer = self.footprints.clone();
         stats
+    }
+}
+
+/// A writer that fails once `failed` is set: the G-code of a build the
+/// checks refuse is not written on (see [`Plan::check_and_write_until`]).
+struct Until<'a, W> {
+    out: W,
+    failed: &'a AtomicBool,
+}
+
+impl<W: Write> Write for Until<'_, W> {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        if self.failed.load(Ordering::Relaxed) {
+            return Err(io::Error::other("stopped: the checks failed"));
+        }
+        self.out.write(buf)
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        self.out.flush()
     }
 }

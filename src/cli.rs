@@ -568,7 +568,8 @@ fn build_job(
         let folder = f.parent().filter(|d| !d.as_os_str().is_empty());
         if folder.is_none_or(|d| d.is_dir()) {
             if let Ok(mut file) = AtomicFile::create(f) {
-                let stats = p.check_and_render(&a.common.allow, file.file());
+                let stop = (!a.common.force).then_some(a.common.strict);
+                let stats = p.check_and_render_until(&a.common.allow, stop, file.file());
                 early = Some((file, stats));
             }
         }
@@ -940,7 +941,8 @@ fn fingerprints(c: &Common, jobs: &[Job]) -> Vec<Result<(String, LineHashes)>> {
 fn fingerprint(c: &Common, job: &Job, threads: Threads) -> Result<(String, LineHashes)> {
     // nothing is written: the G-code is hashed while the checks run
     let mut p = c.prepared(job, threads)?;
-    let written = p.check_and_write(&c.allow, HashWriter::new(LineHashes::default()));
+    let stop = (!c.force).then_some(c.strict);
+    let written = p.check_and_write_until(&c.allow, stop, HashWriter::new(LineHashes::default()));
     c.refuse_failing(&p)?;
     let (hw, _) = written?;
     let (digest, _, lines) = hw.finish_into();

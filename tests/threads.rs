@@ -123,3 +123,44 @@ fn a_failed_check_writes_nothing_whatever_the_threads() {
         assert_eq!(left, ["tall.yaml"], "-j {j} left files behind");
     }
 }
+
+/// A build the checks refuse gives up writing (`check_and_write_until`):
+/// on one thread nothing is written at all; on more, the writer stops once
+/// the checks have failed, or (when it was quicker) has written the whole
+/// G-code, never a prefix passed off as done; the findings are the same.
+#[test]
+fn a_refused_build_stops_writing_and_keeps_its_findings() {
+    let dir = tmp("threads-vase-stops");
+    let tall = VASE
+        .replace("height: 6", "height: 300")
+        .replace("pitch: 0.1", "pitch: 5");
+    let path = dir.join("tall.yaml");
+    std::fs::write(&path, tall).unwrap();
+    let prepared = |n: usize| {
+        let opts = Options {
+            threads: Threads::new(n),
+            ..Default::default()
+        };
+        prepare(&path, &opts).unwrap()
+    };
+    // the whole G-code, as `--force` writes it
+    let mut forced = prepared(2);
+    let mut full = Vec::new();
+    forced.check_and_render_until(&[], None, &mut full).unwrap();
+    assert!(!forced.failing(false).is_empty(), "the tall vase fails");
+    assert!(full.len() > 100_000);
+    for n in [1, 2, 4] {
+        let mut p = prepared(n);
+        let mut out = Vec::new();
+        let r = p.check_and_render_until(&[], Some(false), &mut out);
+        assert_eq!(p.findings, forced.findings, "{n} threads: other findings");
+        match r {
+            Err(e) => assert!(e.to_string().contains("stopped"), "{n} threads: {e}"),
+            Ok(_) => assert!(out == full, "{n} threads: a prefix passed off as done"),
+        }
+        if n == 1 {
+            assert!(out.is_empty(), "one thread: checks first, nothing written");
+        }
+        assert!(out.len() <= full.len() && full.starts_with(&out));
+    }
+}
