@@ -13,21 +13,21 @@ use crate::toolpath::Toolpath;
 
 /// Convex hull of `pts`, counter-clockwise, by Andrew's monotone chain.
 pub fn convex_hull(mut pts: Vec<DVec2>) -> Vec<DVec2> {
-    pts.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
+    // unstable is the same order: two points equal under `total_cmp` on
+    // both axes have the same bits
+    pts.sort_unstable_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
     pts.dedup();
     if pts.len() < 3 {
         return pts;
     }
     let cross = |o: DVec2, a: DVec2, b: DVec2| (a - o).perp_dot(b - o);
     let mut hull: Vec<DVec2> = Vec::with_capacity(pts.len() + 1);
+    let n = pts.len();
     for pass in 0..2 {
         let start = hull.len();
-        let iter: Box<dyn Iterator<Item = &DVec2>> = if pass == 0 {
-            Box::new(pts.iter())
-        } else {
-            Box::new(pts.iter().rev())
-        };
-        for &p in iter {
+        for i in 0..n {
+            // the lower chain left to right, then the upper right to left
+            let p = pts[if pass == 0 { i } else { n - 1 - i }];
             while hull.len() >= start + 2
                 && cross(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0.0
             {
@@ -88,13 +88,21 @@ pub fn make(
     let mut pts = Vec::new();
     let mut z = f64::INFINITY;
     for tp in parts {
+        // a string's start is the string before's end: pushed once (the
+        // hull's sort and dedup would drop the copy anyway)
+        let mut pushed_end = false;
         for k in 0..tp.len() {
-            if !tp.strings[k].travel {
-                let (a, b) = tp.ends(k);
-                pts.push(a.truncate());
-                pts.push(b.truncate());
-                z = z.min(a.z).min(b.z);
+            if tp.strings[k].travel {
+                pushed_end = false;
+                continue;
             }
+            let (a, b) = tp.ends(k);
+            if !pushed_end {
+                pts.push(a.truncate());
+            }
+            pts.push(b.truncate());
+            pushed_end = true;
+            z = z.min(a.z).min(b.z);
         }
     }
     if pts.is_empty() {

@@ -114,6 +114,28 @@ impl Toolpath {
         }
     }
 
+    /// A part through `points` (at least one) whose strings all extrude with
+    /// cross-section `c` at speed `v`: the same as `new(first)` then `draw`
+    /// to each of the rest, without a push per string.
+    pub fn uniform(points: impl Iterator<Item = DVec3>, c: f64, v: f64) -> Toolpath {
+        let points: Vec<DVec3> = points.collect();
+        assert!(!points.is_empty(), "a part starts somewhere");
+        let strand = Strand {
+            c,
+            v,
+            travel: false,
+            hair: false,
+        };
+        Toolpath {
+            name: String::new(),
+            strings: vec![strand; points.len() - 1],
+            points,
+            events: Vec::new(),
+            markers: Vec::new(),
+            turns: None,
+        }
+    }
+
     /// An empty part with room for `n` strings.
     pub fn with_capacity(start: DVec3, n: usize) -> Toolpath {
         let mut points = Vec::with_capacity(n + 1);
@@ -273,7 +295,18 @@ pub fn frac(x: f64) -> f64 {
 /// Cylinder coordinates (r, theta) of a point, theta in [0, 2·pi).
 #[inline]
 pub fn polar(p: DVec3) -> (f64, f64) {
-    let r = (p.x * p.x + p.y * p.y).sqrt();
+    (radius(p), angle(p))
+}
+
+/// Distance of a point from the z axis (the r of [`polar`]).
+#[inline]
+pub fn radius(p: DVec3) -> f64 {
+    (p.x * p.x + p.y * p.y).sqrt()
+}
+
+/// Angle of a point about the z axis in [0, 2·pi) (the theta of [`polar`]).
+#[inline]
+pub fn angle(p: DVec3) -> f64 {
     let mut theta = libm::atan2(p.y, p.x);
     if theta < 0.0 {
         theta += std::f64::consts::TAU;
@@ -281,7 +314,7 @@ pub fn polar(p: DVec3) -> (f64, f64) {
             theta = 0.0; // -0 and tiny negatives round up to exactly 2·pi
         }
     }
-    (r, theta)
+    theta
 }
 
 #[cfg(test)]

@@ -62,20 +62,19 @@ impl Helix {
         }
         let n = self.string_count();
         let circle = TurnTable::new(self.radius, self.segments, n);
-        let at = |k: u64| {
-            let (x, y) = circle.at(k);
+        // the turn's table walked in step (k mod segments without a division
+        // per point), the points and strings written in one go
+        let mut turn = circle.walk();
+        let points = (0..=n).map(|k| {
+            let (x, y) = turn.next_point();
             let z = if k == n {
                 self.height
             } else {
                 self.height * k as f64 / n as f64
             };
             self.center + DVec3::new(x, y, z)
-        };
-        let mut t = Toolpath::with_capacity(at(0), n as usize);
-        for k in 1..=n {
-            t.draw(at(k), c, v);
-        }
-        t
+        });
+        Toolpath::uniform(points, c, v)
     }
 }
 
@@ -135,5 +134,35 @@ mod tests {
         assert!((p.z - 0.2 - 0.3).abs() < 1e-3);
         // z never decreases
         assert!(t.points.windows(2).all(|w| w[1].z > w[0].z));
+    }
+
+    #[test]
+    fn built_in_one_go_as_point_by_point() {
+        // the walked table and `Toolpath::uniform` give the bits of
+        // `on_circle` per point and `draw` per string
+        let h = Helix {
+            radius: 7.5,
+            height: 3.0,
+            pitch: 0.2,
+            center: DVec3::new(1.0, -2.0, 0.3),
+            segments: 37,
+            outline: None,
+        };
+        let t = h.build(0.2, 30.0);
+        let n = h.string_count();
+        let at = |k: u64| {
+            let (x, y) = super::super::on_circle(h.radius, k, h.segments);
+            let z = if k == n {
+                h.height
+            } else {
+                h.height * k as f64 / n as f64
+            };
+            h.center + DVec3::new(x, y, z)
+        };
+        let mut want = Toolpath::new(at(0));
+        for k in 1..=n {
+            want.draw(at(k), 0.2, 30.0);
+        }
+        assert_eq!(t, want);
     }
 }

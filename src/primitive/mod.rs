@@ -178,4 +178,31 @@ impl TurnTable {
     pub(crate) fn at(&self, k: u64) -> (f64, f64) {
         self.points[(k % self.points.len() as u64) as usize]
     }
+
+    /// The points `at(0)`, `at(1)`, … in turn, without a division each.
+    pub(crate) fn walk(&self) -> TurnWalk<'_> {
+        TurnWalk {
+            points: &self.points,
+            j: 0,
+        }
+    }
+}
+
+/// [`TurnTable::walk`]: the table's entries in order, round and round.
+pub(crate) struct TurnWalk<'a> {
+    points: &'a [(f64, f64)],
+    j: usize,
+}
+
+impl TurnWalk<'_> {
+    /// The next point: `at(k)` for the k-th call (from 0).
+    #[inline]
+    pub(crate) fn next_point(&mut self) -> (f64, f64) {
+        let p = self.points[self.j];
+        self.j += 1;
+        if self.j == self.points.len() {
+            self.j = 0;
+        }
+        p
+    }
 }

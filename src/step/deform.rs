@@ -2,7 +2,7 @@
 
 use glam::DVec3;
 
-use super::{not_finite, par_chunks, vars_at};
+use super::{not_finite, par_chunks, vars_with};
 use crate::error::{Error, Result};
 use crate::expr::{var, Expr, Lanes, LANES};
 use crate::threads::Threads;
@@ -22,8 +22,13 @@ pub struct Deform {
 }
 
 impl Deform {
-    fn needs_polar(&self, exprs: &[&Expr]) -> bool {
-        exprs.iter().any(|e| e.uses(var::R) || e.uses(var::THETA))
+    /// Whether any of `exprs` reads r, and whether any reads theta (atan2,
+    /// the costly one, is computed only for expressions that read it).
+    fn needs_polar(exprs: &[&Expr]) -> (bool, bool) {
+        (
+            exprs.iter().any(|e| e.uses(var::R)),
+            exprs.iter().any(|e| e.uses(var::THETA)),
+        )
     }
 
     /// Applies the deformation: c and v first, at the old midpoints, then the
@@ -40,7 +45,7 @@ impl Deform {
 
     fn apply_strings(&self, tp: &mut Toolpath, threads: Threads) -> Result<()> {
         let exprs: Vec<&Expr> = self.cross_section.iter().chain(&self.speed).collect();
-        let polar_too = self.needs_polar(&exprs);
+        let (r_too, theta_too) = Self::needs_polar(&exprs);
         let n = tp.len();
         let points = &tp.points;
         let turns = &tp.turns;
@@ -57,7 +62,7 @@ impl Deform {
                 for (j, s) in block.iter().enumerate() {
                     let k = first + j;
                     let mid = (points[k] + points[k + 1]) * 0.5;
-                    let mut v = vars_at(mid, k, n, polar_too);
+                    let mut v = vars_with(mid, k, n, r_too, theta_too);
                     v[var::C] = s.c;
                     v[var::V] = s.v;
                     if let Some(u) = turns {
@@ -103,7 +108,15 @@ impl Deform {
         let cylinder = self.cylinder;
         // theta' = theta needs no trigonometry: (x, y) scales by r'/r.
         let keep_theta = f1.is_var(var::THETA);
-        let polar_too = cylinder || self.needs_polar(&[f0, f1, f2]);
+        // a cylinder deform needs r (the old radius) but theta only for the
+        // expressions it evaluates (f1 is not evaluated when it is theta)
+        let evaluated: Vec<&Expr> = if cylinder && keep_theta {
+            vec![f0, f2]
+        } else {
+            vec![f0, f1, f2]
+        };
+        let (r_used, theta_too) = Self::needs_polar(&evaluated);
+        let r_too = cylinder || r_used;
         let turns = &tp.turns;
         par_chunks(&mut tp.points, threads, |start, chunk| {
             // LANES points at a time: their variables, then each expression
@@ -116,7 +129,7 @@ impl Deform {
                 let m = block.len();
                 for (j, p) in block.iter().enumerate() {
                     let i = first + j;
-                    vars[j] = vars_at(*p, i, n, polar_too);
+                    vars[j] = vars_with(*p, i, n, r_too, theta_too);
                     if let Some(u) = turns {
                         vars[j][var::S] = frac(u[i]);
                     }
@@ -189,6 +202,7 @@ fn bad_value(key: &str, e: &Expr, value: f64, k: usize, m: DVec3, expected: &str
 mod tests {
     use super::*;
     use crate::expr::Params;
+    use crate::step::vars_at;
 
     fn ex(src: &str) -> Expr {
         let all: Vec<usize> = (0..var::COUNT).collect();

@@ -18,7 +18,7 @@ use glam::DVec3;
 use crate::error::{Error, Result};
 use crate::expr::{var, Vars};
 use crate::threads::Threads;
-use crate::toolpath::{polar, Toolpath};
+use crate::toolpath::{angle, radius, Toolpath};
 
 /// What `modulate_*` keeps when it scales the cross-section.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -102,8 +102,9 @@ impl Step {
     }
 }
 
-/// Below this many items a step runs on one thread (a thread costs ~50 µs).
-const PAR_MIN: usize = 50_000;
+/// Below this many items a step runs on one thread (a thread costs ~50 µs;
+/// 8k points of a deform take ~0.5 ms).
+const PAR_MIN: usize = 8_192;
 
 /// Calls `f(start, chunk)` on consecutive chunks of `items` (chunk j starts at
 /// item `start`), on up to `threads` scoped threads (the caller's budget;
@@ -141,14 +142,22 @@ pub(crate) fn par_chunks<T: Send>(
 /// when `polar_too` (atan2 is the costly part).
 #[inline]
 pub(crate) fn vars_at(p: DVec3, i: usize, n: usize, polar_too: bool) -> Vars {
+    vars_with(p, i, n, polar_too, polar_too)
+}
+
+/// [`vars_at`] with r only when `r_too` and theta only when `theta_too`
+/// (left 0 otherwise: for expressions that do not read them).
+#[inline]
+pub(crate) fn vars_with(p: DVec3, i: usize, n: usize, r_too: bool, theta_too: bool) -> Vars {
     let mut v = [0.0; var::COUNT];
     v[var::X] = p.x;
     v[var::Y] = p.y;
     v[var::Z] = p.z;
-    if polar_too {
-        let (r, theta) = polar(p);
-        v[var::R] = r;
-        v[var::THETA] = theta;
+    if r_too {
+        v[var::R] = radius(p);
+    }
+    if theta_too {
+        v[var::THETA] = angle(p);
     }
     v[var::I] = i as f64;
     v[var::N] = n as f64;
