@@ -569,7 +569,7 @@ fn build_job(
         if folder.is_none_or(|d| d.is_dir()) {
             if let Ok(mut file) = AtomicFile::create(f) {
                 let stop = (!a.common.force).then_some(a.common.strict);
-                let stats = p.check_and_render_until(&a.common.allow, stop, file.file());
+                let stats = p.check_and_render_until(&a.common.allow, stop, file.streaming());
                 early = Some((file, stats));
             }
         }
@@ -596,7 +596,7 @@ fn build_job(
                 None => {
                     make_parent(f)?;
                     let mut file = AtomicFile::create(f)?;
-                    let stats = p.render(file.file())?;
+                    let stats = p.render(file.streaming())?;
                     (file, stats)
                 }
             };
