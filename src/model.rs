@@ -391,11 +391,13 @@ impl Part {
     }
 
     /// Builds the primitives in order, joined by travel strings where one
-    /// ends away from the next one's start.
-    pub fn build_primitives(&self) -> Toolpath {
-        let mut tp = self.primitive.build(self.cross_section, self.speed);
+    /// ends away from the next one's start; on up to `threads` threads.
+    pub fn build_primitives(&self, threads: Threads) -> Toolpath {
+        let mut tp = self
+            .primitive
+            .build_on(self.cross_section, self.speed, threads);
         for p in &self.more {
-            let next = p.primitive.build(p.cross_section, p.speed);
+            let next = p.primitive.build_on(p.cross_section, p.speed, threads);
             tp.append(&next, p.speed);
         }
         tp
@@ -419,7 +421,7 @@ pub fn make_part_within(
     threads: Threads,
 ) -> Result<Toolpath> {
     let part = &recipe.parts[k];
-    let mut tp = part.build_primitives();
+    let mut tp = part.build_primitives(threads);
     tp.name = part.name.clone();
     for (j, step) in part.steps.iter().enumerate() {
         step.apply(&mut tp, budget, threads)

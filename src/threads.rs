@@ -31,6 +31,33 @@ impl Threads {
     }
 }
 
+impl Threads {
+    /// Calls `f(start, chunk)` on consecutive chunks of `items` (chunk j
+    /// starts at item `start`) on up to this many scoped threads, or on the
+    /// caller's alone below `min` items. For work whose every item is
+    /// computed the same way wherever the split falls.
+    pub fn chunks<T: Send>(self, items: &mut [T], min: usize, f: impl Fn(usize, &mut [T]) + Sync) {
+        let n = items.len();
+        let threads = if n < min { 1 } else { self.get() };
+        if threads <= 1 {
+            return f(0, items);
+        }
+        let size = n.div_ceil(threads);
+        std::thread::scope(|s| {
+            let f = &f;
+            let mut rest = items;
+            let mut start = 0;
+            while rest.len() > size {
+                let (chunk, tail) = rest.split_at_mut(size);
+                s.spawn(move || f(start, chunk));
+                start += size;
+                rest = tail;
+            }
+            f(start, rest); // the last chunk on the caller's thread
+        });
+    }
+}
+
 impl Default for Threads {
     /// [`Threads::available`].
     fn default() -> Threads {

@@ -117,8 +117,7 @@ impl Toolpath {
     /// A part through `points` (at least one) whose strings all extrude with
     /// cross-section `c` at speed `v`: the same as `new(first)` then `draw`
     /// to each of the rest, without a push per string.
-    pub fn uniform(points: impl Iterator<Item = DVec3>, c: f64, v: f64) -> Toolpath {
-        let points: Vec<DVec3> = points.collect();
+    pub fn uniform(points: Vec<DVec3>, c: f64, v: f64) -> Toolpath {
         assert!(!points.is_empty(), "a part starts somewhere");
         let strand = Strand {
             c,

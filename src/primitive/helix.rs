@@ -5,8 +5,9 @@ use std::sync::Arc;
 use glam::DVec3;
 
 use super::outline::{along, radius_or_outline, turn_points, Files, RawOutline};
-use super::TurnTable;
+use super::{TurnTable, PAR_MIN};
 use crate::svg::Outline;
+use crate::threads::Threads;
 use crate::toolpath::Toolpath;
 use serde::Deserialize;
 
@@ -57,22 +58,32 @@ impl Helix {
     /// Point k is at angle 2·pi·k/segments and height `height·k/n`, so the
     /// angle steps are uniform and the last point sits exactly at `height`.
     pub fn build(&self, c: f64, v: f64) -> Toolpath {
+        self.build_on(c, v, Threads::ONE)
+    }
+
+    /// [`Helix::build`], the points computed on up to `threads` threads
+    /// (each point the same whatever the split).
+    pub fn build_on(&self, c: f64, v: f64, threads: Threads) -> Toolpath {
         if let Some(o) = &self.outline {
             return self.build_outline(o, c, v);
         }
         let n = self.string_count();
         let circle = TurnTable::new(self.radius, self.segments, n);
+        let mut points = vec![DVec3::ZERO; n as usize + 1];
         // the turn's table walked in step (k mod segments without a division
         // per point), the points and strings written in one go
-        let mut turn = circle.walk();
-        let points = (0..=n).map(|k| {
-            let (x, y) = turn.next_point();
-            let z = if k == n {
-                self.height
-            } else {
-                self.height * k as f64 / n as f64
-            };
-            self.center + DVec3::new(x, y, z)
+        threads.chunks(&mut points, PAR_MIN, |start, chunk| {
+            let mut turn = circle.walk_from(start as u64);
+            for (j, p) in chunk.iter_mut().enumerate() {
+                let k = (start + j) as u64;
+                let (x, y) = turn.next_point();
+                let z = if k == n {
+                    self.height
+                } else {
+                    self.height * k as f64 / n as f64
+                };
+                *p = self.center + DVec3::new(x, y, z);
+            }
         });
         Toolpath::uniform(points, c, v)
     }
@@ -164,5 +175,15 @@ mod tests {
             want.draw(at(k), 0.2, 30.0);
         }
         assert_eq!(t, want);
+        // split over threads (above PAR_MIN points): the same again
+        let big = Helix {
+            height: 60.0,
+            ..h.clone()
+        };
+        assert!(big.string_count() as usize > PAR_MIN);
+        let one = big.build(0.2, 30.0);
+        for threads in [2, 3, 4] {
+            assert_eq!(big.build_on(0.2, 30.0, Threads::new(threads)), one);
+        }
     }
 }

@@ -35,6 +35,7 @@ use serde::Deserialize;
 
 use crate::error::Result;
 use crate::num::{Num, Scope};
+use crate::threads::Threads;
 use crate::toolpath::Toolpath;
 
 /// A primitive as written: each kind owns its raw form and its resolution.
@@ -131,6 +132,15 @@ impl Primitive {
     /// Makes the strings, with cross-section `c` and speed `v` where the
     /// primitive sets none of its own.
     pub fn build(&self, c: f64, v: f64) -> Toolpath {
+        self.build_on(c, v, Threads::ONE)
+    }
+
+    /// [`Primitive::build`] on up to `threads` threads where a primitive
+    /// splits its points (a helix); the same strings whatever the budget.
+    pub fn build_on(&self, c: f64, v: f64, threads: Threads) -> Toolpath {
+        if let Primitive::Helix(p) = self {
+            return p.build_on(c, v, threads);
+        }
         match self {
             Primitive::Path(cmds) => path::build(cmds, c, v),
             Primitive::Circle(p) => p.build(c, v),
@@ -146,6 +156,10 @@ impl Primitive {
         }
     }
 }
+
+/// Below this many points a primitive is made on one thread (as steps:
+/// a thread costs ~50 µs).
+pub(crate) const PAR_MIN: usize = 8_192;
 
 /// The point at angle `k / segments` of a turn on a circle of radius `r`.
 ///
@@ -179,11 +193,11 @@ impl TurnTable {
         self.points[(k % self.points.len() as u64) as usize]
     }
 
-    /// The points `at(0)`, `at(1)`, … in turn, without a division each.
-    pub(crate) fn walk(&self) -> TurnWalk<'_> {
+    /// The points `at(k)`, `at(k + 1)`, … in turn, without a division each.
+    pub(crate) fn walk_from(&self, k: u64) -> TurnWalk<'_> {
         TurnWalk {
             points: &self.points,
-            j: 0,
+            j: (k % self.points.len() as u64) as usize,
         }
     }
 }
