@@ -64,6 +64,13 @@ pub struct MoveStats {
 const XYZ: f64 = 1e3;
 const E: f64 = 1e5;
 
+/// A feed of `mm_s` mm/s in whole mm/min as written after `F`, at least 1:
+/// `libm::round(mm_s * 60).max(1) as i64` (`as` is monotone and 1 exact).
+#[inline]
+fn feed_units(mm_s: f64) -> i64 {
+    crate::format::round_i64(mm_s * 60.0).max(1)
+}
+
 /// Writes one print: header, start G-code, parts, end G-code, summary.
 pub struct Emitter<'a, W: Write> {
     out: W,
@@ -72,6 +79,9 @@ pub struct Emitter<'a, W: Write> {
     area: f64,
     /// Last written machine position in µm, once known.
     written: Option<[i64; 3]>,
+    /// `written` in mm (zero before it is known), divided once per move
+    /// where it is set, so the divisions overlap the formatting.
+    written_mm: DVec3,
     /// Exact head position, recipe coordinates.
     head: Option<DVec3>,
     /// Exact filament total, mm.
@@ -135,6 +145,7 @@ impl<'a, W: Write> Emitter<'a, W> {
             printer: &recipe.printer,
             area: std::f64::consts::PI * (d / 2.0) * (d / 2.0),
             written: None,
+            written_mm: DVec3::ZERO,
             head: None,
             e_exact: 0.0,
             e_units: 0,
@@ -259,8 +270,12 @@ impl<'a, W: Write> Emitter<'a, W> {
 
     #[inline]
     fn set_feed(&mut self, mm_s: f64) {
-        // libm::round(mm_s * 60).max(1) as i64: `as` is monotone and 1 exact
-        let f = crate::format::round_i64(mm_s * 60.0).max(1);
+        self.set_feed_units(feed_units(mm_s));
+    }
+
+    /// Writes ` F<f>` (mm/min) if the feed changes.
+    #[inline]
+    fn set_feed_units(&mut self, f: i64) {
         if f != self.feed {
             self.buf.put(b" F");
             self.buf.put_int(f);
@@ -275,8 +290,7 @@ impl<'a, W: Write> Emitter<'a, W> {
 
     /// The last written machine position, mm (what the firmware plans with).
     fn written_mm(&self) -> DVec3 {
-        let w = self.written.unwrap_or([0; 3]);
-        DVec3::new(w[0] as f64, w[1] as f64, w[2] as f64) / XYZ
+        self.written_mm
     }
 
     /// Starts a move line; returns whether any axis changed.
@@ -302,6 +316,7 @@ impl<'a, W: Write> Emitter<'a, W> {
             }
         }
         self.written = Some(w);
+        self.written_mm = DVec3::new(w[0] as f64, w[1] as f64, w[2] as f64) / XYZ;
         changed
     }
 
@@ -483,16 +498,21 @@ impl<'a, W: Write> Emitter<'a, W> {
         self.fan_on_above(to)?;
         self.unretract()?;
         let from = self.head.expect("extrusion starts after a travel");
+        // the move's length, feed and time first: their square root and
+        // divisions then run while the line is formatted (the feed is the
+        // one `set_feed_units` leaves, `feed_mm_s` the same division)
+        let feed = feed_units(v);
+        let f = feed as f64 / 60.0;
+        let len = from.distance(to);
+        let t = if len > 0.0 { len / f } else { filament / f };
         self.axes(b"G1", to, [true; 3]);
         self.buf.put(b" E");
         self.put_e(filament);
-        self.set_feed(v);
+        self.set_feed_units(feed);
         self.end_line()?;
-        let len = from.distance(to);
-        let (to_m, f) = (self.written_mm(), self.feed_mm_s());
+        let to_m = self.written_mm();
         self.planner
             .move_to(to_m, filament, f, crate::planner::MoveKind::Extrude);
-        let t = if len > 0.0 { len / f } else { filament / f };
         self.count_extrusion(len, filament, t, &[from, to]);
         self.head = Some(to);
         Ok(())
