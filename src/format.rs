@@ -182,9 +182,17 @@ impl Chunk {
             self.buf[at..at + 8].copy_from_slice(&word);
             at += t - d;
         } else {
-            let n = digits(high);
-            digits_before(&mut self.buf, at + n, high);
-            at += n;
+            if high < 100_000_000 {
+                // a word of high's digits, its leading zeros shifted out
+                let h = eight_digits(high as u32);
+                let zeros = (h & 0x0f0f_0f0f_0f0f_0f0f).trailing_zeros() as usize / 8;
+                self.buf[at..at + 8].copy_from_slice(&(h >> (8 * zeros)).to_le_bytes());
+                at += 8 - zeros;
+            } else {
+                let n = digits(high);
+                digits_before(&mut self.buf, at + n, high);
+                at += n;
+            }
             self.buf[at..at + 8].copy_from_slice(&w.to_le_bytes());
             at += 8 - d;
         }
@@ -312,8 +320,10 @@ mod tests {
             f64::EPSILON,
             5e-324,
             0.49999999999999994,
-            9.223372036854775807e18,
-            -9.223372036854775808e18,
+            i64::MAX as f64,
+            (i64::MAX as f64).next_down(),
+            i64::MIN as f64,
+            (i64::MIN as f64).next_up(),
         ];
         let mut x = 0.5f64;
         while x < 1e20 {
@@ -375,7 +385,7 @@ mod tests {
     #[test]
     fn chunk_numbers_are_the_old_formatter_s() {
         let mut st = 7;
-        let mut check = |v: f64| {
+        let check = |v: f64| {
             assert_eq!(fixed(v, 3), reference(v, 3), "{v:e} with 3 decimals");
             assert_eq!(fixed(v, 5), reference(v, 5), "{v:e} with 5 decimals");
         };
