@@ -22,7 +22,7 @@ use std::io::{self, Write};
 use glam::DVec3;
 
 use crate::error::Result;
-use crate::format::{fmt_num, hms, put_fixed, units};
+use crate::format::{fmt_num, hms, units, Chunk};
 use crate::machine::{Extrusion, Printer};
 use crate::model::Recipe;
 use crate::safe_text::one_line;
@@ -64,6 +64,13 @@ pub struct MoveStats {
 const XYZ: f64 = 1e3;
 const E: f64 = 1e5;
 
+/// A feed of `mm_s` mm/s in whole mm/min as written after `F`, at least 1:
+/// `libm::round(mm_s * 60).max(1) as i64` (`as` is monotone and 1 exact).
+#[inline]
+fn feed_units(mm_s: f64) -> i64 {
+    crate::format::round_i64(mm_s * 60.0).max(1)
+}
+
 /// Writes one print: header, start G-code, parts, end G-code, summary.
 pub struct Emitter<'a, W: Write> {
     out: W,
@@ -72,6 +79,9 @@ pub struct Emitter<'a, W: Write> {
     area: f64,
     /// Last written machine position in µm, once known.
     written: Option<[i64; 3]>,
+    /// `written` in mm (zero before it is known), divided once per move
+    /// where it is set, so the divisions overlap the formatting.
+    written_mm: DVec3,
     /// Exact head position, recipe coordinates.
     head: Option<DVec3>,
     /// Exact filament total, mm.
@@ -80,7 +90,14 @@ pub struct Emitter<'a, W: Write> {
     e_units: i64,
     retracted: bool,
     feed: i64,
-    line: Vec<u8>,
+    /// `feed` in mm/s: `feed as f64 / 60.0`, kept rather than divided again
+    /// for each move.
+    feed_mm_s: f64,
+    /// The text not yet handed to `out`: lines are formatted straight into
+    /// it, and it goes out whole once full (see [`Chunk`]).
+    buf: Chunk,
+    /// Where the line being formatted starts in `buf`.
+    line_start: usize,
     /// The moves so far.
     pub stats: MoveStats,
     pending: Pending,
@@ -128,12 +145,15 @@ impl<'a, W: Write> Emitter<'a, W> {
             printer: &recipe.printer,
             area: std::f64::consts::PI * (d / 2.0) * (d / 2.0),
             written: None,
+            written_mm: DVec3::ZERO,
             head: None,
             e_exact: 0.0,
             e_units: 0,
             retracted: false,
             feed: -1,
-            line: Vec::with_capacity(96),
+            feed_mm_s: -1.0 / 60.0,
+            buf: Chunk::new(),
+            line_start: 0,
             stats: MoveStats {
                 bbox_min: DVec3::splat(f64::INFINITY),
                 bbox_max: DVec3::splat(f64::NEG_INFINITY),
@@ -178,11 +198,28 @@ impl<'a, W: Write> Emitter<'a, W> {
     }
 
     fn text(&mut self, s: &str) -> io::Result<()> {
-        self.out.write_all(s.as_bytes())?;
+        self.buf.put(s.as_bytes());
         if !s.ends_with('\n') && !s.is_empty() {
-            self.out.write_all(b"\n")?;
+            self.buf.push(b'\n');
+        }
+        self.hand_on()
+    }
+
+    /// Writes the buffered text to `out` once there is a chunk of it.
+    #[inline]
+    fn hand_on(&mut self) -> io::Result<()> {
+        if self.buf.full() {
+            self.out.write_all(self.buf.bytes())?;
+            self.buf.clear();
         }
         Ok(())
+    }
+
+    /// Starts a line with `head`.
+    #[inline]
+    fn begin(&mut self, head: &[u8]) {
+        self.line_start = self.buf.len();
+        self.buf.put(head);
     }
 
     /// Header comments, start G-code and the extrusion mode.
@@ -231,40 +268,44 @@ impl<'a, W: Write> Emitter<'a, W> {
         Ok(())
     }
 
+    #[inline]
     fn set_feed(&mut self, mm_s: f64) {
-        let f = libm::round(mm_s * 60.0).max(1.0) as i64;
+        self.set_feed_units(feed_units(mm_s));
+    }
+
+    /// Writes ` F<f>` (mm/min) if the feed changes.
+    #[inline]
+    fn set_feed_units(&mut self, f: i64) {
         if f != self.feed {
-            self.line.extend_from_slice(b" F");
-            let mut ib = itoa::Buffer::new();
-            self.line.extend_from_slice(ib.format(f).as_bytes());
+            self.buf.put(b" F");
+            self.buf.put_int(f);
             self.feed = f;
+            self.feed_mm_s = f as f64 / 60.0;
         }
     }
 
     fn feed_mm_s(&self) -> f64 {
-        self.feed as f64 / 60.0
+        self.feed_mm_s
     }
 
     /// The last written machine position, mm (what the firmware plans with).
     fn written_mm(&self) -> DVec3 {
-        let w = self.written.unwrap_or([0; 3]);
-        DVec3::new(w[0] as f64, w[1] as f64, w[2] as f64) / XYZ
+        self.written_mm
     }
 
     /// Starts a move line; returns whether any axis changed.
     fn axes(&mut self, g: &[u8], to: DVec3, only: [bool; 3]) -> bool {
         let m = self.printer.to_machine(to);
         let u = [units(m.x, XYZ), units(m.y, XYZ), units(m.z, XYZ)];
-        self.line.clear();
-        self.line.extend_from_slice(g);
+        self.begin(g);
         let mut changed = false;
         for (k, name) in [b" X", b" Y", b" Z"].iter().enumerate() {
             if !only[k] {
                 continue;
             }
             if self.written.is_none_or(|w| w[k] != u[k]) {
-                self.line.extend_from_slice(*name);
-                put_fixed(&mut self.line, u[k], 3);
+                self.buf.put(*name);
+                self.buf.put_fixed::<3>(u[k]);
                 changed = true;
             }
         }
@@ -275,12 +316,13 @@ impl<'a, W: Write> Emitter<'a, W> {
             }
         }
         self.written = Some(w);
+        self.written_mm = DVec3::new(w[0] as f64, w[1] as f64, w[2] as f64) / XYZ;
         changed
     }
 
     fn end_line(&mut self) -> io::Result<()> {
-        self.line.push(b'\n');
-        self.out.write_all(&self.line)
+        self.buf.push(b'\n');
+        self.hand_on()
     }
 
     fn retract(&mut self) -> io::Result<()> {
@@ -297,14 +339,13 @@ impl<'a, W: Write> Emitter<'a, W> {
             self.planner.extrude_only(len as f64 / E, r.speed);
             return Ok(());
         }
-        self.line.clear();
-        self.line.extend_from_slice(b"G1 E");
+        self.begin(b"G1 E");
         match self.printer.extrusion {
-            Extrusion::Absolute => put_fixed(&mut self.line, self.e_units - len, 5),
-            Extrusion::Relative => put_fixed(&mut self.line, -len, 5),
+            Extrusion::Absolute => self.buf.put_fixed::<5>(self.e_units - len),
+            Extrusion::Relative => self.buf.put_fixed::<5>(-len),
         }
         self.set_feed(r.speed);
-        self.line.extend_from_slice(b" ; retract");
+        self.buf.put(b" ; retract");
         self.end_line()?;
         self.retracted = true;
         self.stats.retractions += 1;
@@ -312,10 +353,16 @@ impl<'a, W: Write> Emitter<'a, W> {
         Ok(())
     }
 
+    #[inline]
     fn unretract(&mut self) -> io::Result<()> {
         if !self.retracted {
             return Ok(());
         }
+        self.unretract_now()
+    }
+
+    /// Writes the unretraction (see [`Emitter::unretract`]).
+    fn unretract_now(&mut self) -> io::Result<()> {
         let r = &self.printer.retraction;
         let len = units(r.length, E);
         if self.printer.firmware_retraction {
@@ -324,14 +371,13 @@ impl<'a, W: Write> Emitter<'a, W> {
             self.planner.extrude_only(len as f64 / E, r.speed);
             return Ok(());
         }
-        self.line.clear();
-        self.line.extend_from_slice(b"G1 E");
+        self.begin(b"G1 E");
         match self.printer.extrusion {
-            Extrusion::Absolute => put_fixed(&mut self.line, self.e_units, 5),
-            Extrusion::Relative => put_fixed(&mut self.line, len, 5),
+            Extrusion::Absolute => self.buf.put_fixed::<5>(self.e_units),
+            Extrusion::Relative => self.buf.put_fixed::<5>(len),
         }
         self.set_feed(r.speed);
-        self.line.extend_from_slice(b" ; unretract");
+        self.buf.put(b" ; unretract");
         self.end_line()?;
         self.retracted = false;
         self.planner.extrude_only(len as f64 / E, self.feed_mm_s());
@@ -353,6 +399,7 @@ impl<'a, W: Write> Emitter<'a, W> {
         }
         let changed = self.axes(b"G0", target, only);
         if !changed {
+            self.buf.truncate(self.line_start);
             self.head = Some(target);
             return Ok(());
         }
@@ -421,6 +468,7 @@ impl<'a, W: Write> Emitter<'a, W> {
 
     /// Switches the material's fan on before the first extruding move that
     /// ends above its start height (slicers keep the first layers warm).
+    #[inline]
     fn fan_on_above(&mut self, to: DVec3) -> io::Result<()> {
         match self.fan {
             Some((speed, z)) if to.z > z => {
@@ -439,8 +487,8 @@ impl<'a, W: Write> Emitter<'a, W> {
         self.e_exact += filament;
         let e_new = units(self.e_exact, E);
         match self.printer.extrusion {
-            Extrusion::Absolute => put_fixed(&mut self.line, e_new, 5),
-            Extrusion::Relative => put_fixed(&mut self.line, e_new - self.e_units, 5),
+            Extrusion::Absolute => self.buf.put_fixed::<5>(e_new),
+            Extrusion::Relative => self.buf.put_fixed::<5>(e_new - self.e_units),
         }
         self.e_units = e_new;
     }
@@ -450,16 +498,21 @@ impl<'a, W: Write> Emitter<'a, W> {
         self.fan_on_above(to)?;
         self.unretract()?;
         let from = self.head.expect("extrusion starts after a travel");
-        self.axes(b"G1", to, [true; 3]);
-        self.line.extend_from_slice(b" E");
-        self.put_e(filament);
-        self.set_feed(v);
-        self.end_line()?;
+        // the move's length, feed and time first: their square root and
+        // divisions then run while the line is formatted (the feed is the
+        // one `set_feed_units` leaves, `feed_mm_s` the same division)
+        let feed = feed_units(v);
+        let f = feed as f64 / 60.0;
         let len = from.distance(to);
-        let (to_m, f) = (self.written_mm(), self.feed_mm_s());
+        let t = if len > 0.0 { len / f } else { filament / f };
+        self.axes(b"G1", to, [true; 3]);
+        self.buf.put(b" E");
+        self.put_e(filament);
+        self.set_feed_units(feed);
+        self.end_line()?;
+        let to_m = self.written_mm();
         self.planner
             .move_to(to_m, filament, f, crate::planner::MoveKind::Extrude);
-        let t = if len > 0.0 { len / f } else { filament / f };
         self.count_extrusion(len, filament, t, &[from, to]);
         self.head = Some(to);
         Ok(())
@@ -506,11 +559,11 @@ impl<'a, W: Write> Emitter<'a, W> {
         let to = tp.points[arc.end];
         self.axes(if arc.ccw { b"G3" } else { b"G2" }, to, [true; 3]);
         let c = self.printer.to_machine(arc.center.extend(0.0));
-        self.line.extend_from_slice(b" I");
-        put_fixed(&mut self.line, units(c.x - start.x, XYZ), 3);
-        self.line.extend_from_slice(b" J");
-        put_fixed(&mut self.line, units(c.y - start.y, XYZ), 3);
-        self.line.extend_from_slice(b" E");
+        self.buf.put(b" I");
+        self.buf.put_fixed::<3>(units(c.x - start.x, XYZ));
+        self.buf.put(b" J");
+        self.buf.put_fixed::<3>(units(c.y - start.y, XYZ));
+        self.buf.put(b" E");
         self.put_e(filament);
         self.set_feed(v);
         self.end_line()?;
@@ -584,11 +637,10 @@ impl<'a, W: Write> Emitter<'a, W> {
             return Ok(());
         }
         self.unretract()?;
-        self.line.clear();
-        self.line.extend_from_slice(b"G1 E");
+        self.begin(b"G1 E");
         self.put_e(filament);
         self.set_feed(speed);
-        self.line.extend_from_slice(b" ; extrude in place");
+        self.buf.put(b" ; extrude in place");
         self.end_line()?;
         let st = &mut self.stats;
         st.filament += filament;
@@ -702,6 +754,8 @@ impl<'a, W: Write> Emitter<'a, W> {
         ));
         self.stats.estimate = est;
         self.text(&summary).map_err(io)?;
+        self.out.write_all(self.buf.bytes()).map_err(io)?;
+        self.buf.clear();
         self.out.flush().map_err(io)?;
         Ok((self.out, self.stats))
     }
