@@ -246,6 +246,12 @@ pub struct Scene<'a> {
 impl<'a> Scene<'a> {
     /// Reads `plan` for drawing.
     pub fn new(plan: &'a Plan) -> Scene<'a> {
+        Scene::with_flags(plan, flags(plan))
+    }
+
+    /// [`Scene::new`] given which strings the findings concern (as [`flags`]
+    /// finds them), so that they may be known before the rest.
+    fn with_flags(plan: &'a Plan, flagged: Vec<Vec<bool>>) -> Scene<'a> {
         let fallback = plan.recipe.printer.nozzle_diameter / 2.0;
         let spacing: Vec<f64> = plan
             .paths
@@ -256,7 +262,7 @@ impl<'a> Scene<'a> {
             plan,
             time: Default::default(),
             ranges: Default::default(),
-            flagged: flags(plan),
+            flagged,
             spacing,
             marks: plan
                 .findings

@@ -146,19 +146,51 @@ struct Px {
 /// (or the image is too small for text) the name, stats and legend; with the
 /// stats `render` returned.
 ///
-/// In phases, each over `opts.threads`, each one's memory let go before the
-/// next: the G-code is written into nothing for the stats of the header (its
-/// planner on a thread of its own); the strokes are collected in pieces of
-/// [`PIECE`] strings (each piece by whichever thread is free, coloured as it
-/// is collected, kept in its own slot so that their order is the print
-/// order); then painted in bands of [`BAND`] rows, each band by one thread. Every pixel sees the same strokes in the same order on
-/// any number of threads, so the image is the same.
+/// The G-code is written into nothing for the stats of the header (its
+/// planner on a thread of its own), beside the drawing when `opts.threads`
+/// allows more than one, before it otherwise. The drawing goes in phases,
+/// each over `opts.threads`, each one's memory let go before the next: the
+/// strokes are collected in pieces of [`PIECE`] strings (each piece by
+/// whichever thread is free, coloured as it is collected, kept in its own
+/// slot so that their order is the print order); then painted in bands of
+/// [`BAND`] rows, each band by one thread. Every pixel sees the same strokes
+/// in the same order on any number of threads, so the image is the same.
 pub fn preview(plan: &Plan, opts: &Options, render: Render) -> Result<(Rendered, Stats)> {
+    if opts.threads.get() == 1 {
+        // one thread: the planner's memory is let go before the strokes take theirs
+        let stats = render(&mut std::io::sink())?;
+        let (pm, frame, scene) = draw(plan, opts);
+        return Ok(finish(pm, frame, &scene, stats, opts));
+    }
+    // more: the G-code is written into nothing (for the header's stats) on
+    // a thread of its own while the model is drawn, filling the cores where
+    // the drawing runs on one thread (the pass spacing, the grids, the sort)
+    let (stats, (pm, frame, scene)) = std::thread::scope(|s| {
+        let stats = s.spawn(|| render(&mut std::io::sink()));
+        let drawn = draw(plan, opts);
+        let stats = stats
+            .join()
+            .unwrap_or_else(|e| std::panic::resume_unwind(e));
+        (stats, drawn)
+    });
+    Ok(finish(pm, frame, &scene, stats?, opts))
+}
+
+/// The header and legend drawn over the model (unless bare or too small).
+fn finish(mut pm: Pixmap, frame: Frame, scene: &Scene, stats: Stats, opts: &Options) -> (Rendered, Stats) {
+    let (_, decorate, ts) = layout(scene, opts);
+    if decorate {
+        header(&mut pm, &stats, scene, ts);
+        legend(&mut pm, scene, opts.color, ts);
+    }
+    (Rendered { pixmap: pm, frame }, stats)
+}
+
+/// The background and the model (with its marks), as [`preview`] paints them.
+fn draw<'p>(plan: &'p Plan, opts: &Options) -> (Pixmap, Frame, Scene<'p>) {
     let threads = opts.threads;
-    // first: the planner's memory is let go before the strokes take theirs
-    let stats = render(&mut std::io::sink())?;
     let scene = Scene::new(plan);
-    let (rect, decorate, ts) = layout(&scene, opts);
+    let (rect, _, _) = layout(&scene, opts);
     let model = Model::new(&scene, opts.view, opts.color, rect, PIECE, true);
     let (frame, bbox) = (model.frame, model.bbox);
     let pal = Palette {
@@ -221,11 +253,7 @@ pub fn preview(plan: &Plan, opts: &Options, render: Render) -> Result<(Rendered,
     paint_bands(&mut pm, &strokes, threads);
     drop(strokes);
     marks(&mut pm, &scene, &frame, bbox, opts.color, rect);
-    if decorate {
-        header(&mut pm, &stats, &scene, ts);
-        legend(&mut pm, &scene, opts.color, ts);
-    }
-    Ok((Rendered { pixmap: pm, frame }, stats))
+    (pm, frame, scene)
 }
 
 /// The pieces' results in order, as one list.
