@@ -30,6 +30,43 @@ use crate::plan::Plan;
 use crate::stats::Stats;
 use crate::threads::Threads;
 
+/// Bytes of G-code per chunk passed from the thread writing it to the one
+/// reading it back, and how many chunks may wait between them.
+const PIPE_CHUNK: usize = 1 << 18;
+const PIPE_DEPTH: usize = 4;
+
+/// The writing end of the G-code's way to its reader on another thread
+/// ([`read`]): chunks of [`PIPE_CHUNK`] bytes, in order.
+struct Pipe {
+    tx: std::sync::mpsc::SyncSender<Vec<u8>>,
+    buf: Vec<u8>,
+}
+
+impl Pipe {
+    /// Passes on what is gathered.
+    fn send(&mut self) {
+        if !self.buf.is_empty() {
+            let chunk = std::mem::replace(&mut self.buf, Vec::with_capacity(PIPE_CHUNK));
+            // the reader only stops when the pipe is dropped
+            let _ = self.tx.send(chunk);
+        }
+    }
+}
+
+impl Write for Pipe {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.buf.extend_from_slice(buf);
+        if self.buf.len() >= PIPE_CHUNK {
+            self.send();
+        }
+        Ok(buf.len())
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
 /// The viewer page; `__P3DP_TITLE__`, `__P3DP_LIVE__` and `__P3DP_DATA__` are filled in.
 const TEMPLATE: &str = include_str!("viewer.html");
 
@@ -111,6 +148,8 @@ struct Parser {
     feed: f64,
     relative: bool,
     part: usize,
+    /// Whether [`Move::machine_um`] is wanted (else left at zero).
+    um: bool,
 }
 
 impl Parser {
@@ -122,6 +161,7 @@ impl Parser {
             feed: 0.0,
             relative: false,
             part: 0,
+            um: true,
         }
     }
 
@@ -144,7 +184,10 @@ impl Parser {
         for w in code.split(|&b| space(b)).filter(|w| !w.is_empty()) {
             if n == words.len() {
                 // a long line: as many words as it has
-                let all: Vec<&[u8]> = code.split(|&b| space(b)).filter(|w| !w.is_empty()).collect();
+                let all: Vec<&[u8]> = code
+                    .split(|&b| space(b))
+                    .filter(|w| !w.is_empty())
+                    .collect();
                 return self.words(&all);
             }
             words[n] = w;
@@ -201,7 +244,11 @@ impl Parser {
                         g0: cmd == b"G0",
                         extrudes: cmd == b"G1" && has_e,
                         part: self.part,
-                        machine_um: self.pos.map(|x| libm::round(x * 1e3) as i64),
+                        machine_um: if self.um {
+                            self.pos.map(|x| libm::round(x * 1e3) as i64)
+                        } else {
+                            [0; 3]
+                        },
                     });
                 }
             }
@@ -235,7 +282,11 @@ struct Reader<'f> {
 impl<'f> Reader<'f> {
     fn new(origin: DVec3, flagged_ends: &'f HashSet<[i64; 3]>, area: f64) -> Reader<'f> {
         Reader {
-            parser: Parser::new(origin),
+            parser: Parser {
+                // the machine position is only looked up among the flagged ends
+                um: !flagged_ends.is_empty(),
+                ..Parser::new(origin)
+            },
             partial: Vec::new(),
             flagged_ends,
             area,
@@ -361,7 +412,7 @@ fn surfaces(r: &Reader, scene: &Scene, threads: Threads) -> (Vec<f64>, Vec<i8>) 
             continue;
         };
         let pts = &r.to[start..end];
-        let grid = Grid::for_surface(pts, typ);
+        let grid = Grid::for_surface_on(pts, typ, threads.get());
         let next = AtomicUsize::new(0);
         let pieces = pts.len().div_ceil(PIECE);
         let hs = Mutex::new(
@@ -421,8 +472,9 @@ pub fn page(plan: &Plan, gcode: &str, stats: &Stats, opts: &Options) -> Page {
 /// Reads `plan`'s G-code as `render` writes it (neither its text nor its
 /// moves kept) into what the viewer shows; with the stats `render` returned.
 ///
-/// With more than one thread the G-code is written and read on a thread of
-/// its own while the scene is read (the pass spacing of each path).
+/// With more than one thread the G-code is written on one thread and read
+/// back on another (passed in chunks, in order) while the scene is read
+/// (the pass spacing of each path) on the caller's.
 pub fn read(plan: &Plan, opts: &Options, render: Render) -> Result<(Data, Stats)> {
     let flags = super::flags(plan);
     let ends = flagged_ends(plan, &flags);
@@ -432,11 +484,28 @@ pub fn read(plan: &Plan, opts: &Options, render: Render) -> Result<(Data, Stats)
         (Scene::with_flags(plan, flags), stats)
     } else {
         std::thread::scope(|s| {
-            let stats = s.spawn(|| render(&mut reader));
+            let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<u8>>(PIPE_DEPTH);
+            let reading = &mut reader;
+            let read = s.spawn(move || {
+                for chunk in rx {
+                    // a reader takes every byte it is given
+                    let _ = reading.write(&chunk);
+                }
+            });
+            let stats = s.spawn(move || {
+                let mut pipe = Pipe {
+                    tx,
+                    buf: Vec::with_capacity(PIPE_CHUNK),
+                };
+                let stats = render(&mut pipe);
+                pipe.send();
+                stats
+            });
             let scene = Scene::with_flags(plan, flags);
             let stats = stats
                 .join()
                 .unwrap_or_else(|e| std::panic::resume_unwind(e));
+            read.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
             (scene, stats)
         })
     };
@@ -790,10 +859,37 @@ mod tests {
     #[test]
     fn numbers_read_as_parse_reads_them_bit_for_bit() {
         let mut words: Vec<String> = [
-            "", "-", "+", ".", "-.", "0", "-0", "-0.000", "+1.5", ".5", "5.", "-.5", "+.5",
-            "1.2.3", "--1", "1e3", "1E-2", "inf", "-inf", "NaN", "0x10", "12a", "1 2",
-            "123456789012345", "1234567890123456", "0.000000000000001",
-            "0.0000000000000001", "9007199254740993", "110.000", "0.05000", "1e400",
+            "",
+            "-",
+            "+",
+            ".",
+            "-.",
+            "0",
+            "-0",
+            "-0.000",
+            "+1.5",
+            ".5",
+            "5.",
+            "-.5",
+            "+.5",
+            "1.2.3",
+            "--1",
+            "1e3",
+            "1E-2",
+            "inf",
+            "-inf",
+            "NaN",
+            "0x10",
+            "12a",
+            "1 2",
+            "123456789012345",
+            "1234567890123456",
+            "0.000000000000001",
+            "0.0000000000000001",
+            "9007199254740993",
+            "110.000",
+            "0.05000",
+            "1e400",
         ]
         .iter()
         .map(|w| w.to_string())
