@@ -634,7 +634,15 @@ impl<'t> Grid<'t> {
             // the closest point of the string: a + f·(b − a)
             let f = closest(p, a, b);
             let q = a + (b - a) * f;
-            let d = p.distance(q);
+            // no root where the square shows it too far: d² beyond
+            // bound²·(1 + 10⁻¹²) makes the rounded root d above the bound
+            // (as far as the cell, or the best so far), which is refused below
+            let bound = best.map_or(self.cell, |b| b.0.min(self.cell));
+            let d2 = (p - q).length_squared();
+            if d2 > bound * bound * (1.0 + 1e-12) {
+                return;
+            }
+            let d = d2.sqrt(); // p.distance(q), bit for bit
             let sq = self.s[k] + f * (self.s[k + 1] - self.s[k]);
             // 1 µm: a point revisited (a closed loop) is no neighbour
             if d > 1e-3
