@@ -30,6 +30,43 @@ use crate::plan::Plan;
 use crate::stats::Stats;
 use crate::threads::Threads;
 
+/// Bytes of G-code per chunk passed from the thread writing it to the one
+/// reading it back, and how many chunks may wait between them.
+const PIPE_CHUNK: usize = 1 << 18;
+const PIPE_DEPTH: usize = 4;
+
+/// The writing end of the G-code's way to its reader on another thread
+/// ([`read`]): chunks of [`PIPE_CHUNK`] bytes, in order.
+struct Pipe {
+    tx: std::sync::mpsc::SyncSender<Vec<u8>>,
+    buf: Vec<u8>,
+}
+
+impl Pipe {
+    /// Passes on what is gathered.
+    fn send(&mut self) {
+        if !self.buf.is_empty() {
+            let chunk = std::mem::replace(&mut self.buf, Vec::with_capacity(PIPE_CHUNK));
+            // the reader only stops when the pipe is dropped
+            let _ = self.tx.send(chunk);
+        }
+    }
+}
+
+impl Write for Pipe {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.buf.extend_from_slice(buf);
+        if self.buf.len() >= PIPE_CHUNK {
+            self.send();
+        }
+        Ok(buf.len())
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
 /// The viewer page; `__P3DP_TITLE__`, `__P3DP_LIVE__` and `__P3DP_DATA__` are filled in.
 const TEMPLATE: &str = include_str!("viewer.html");
 
@@ -56,7 +93,51 @@ pub struct Move {
 /// coordinates turned back into recipe coordinates by subtracting `origin`.
 pub fn moves(gcode: &str, origin: DVec3) -> Vec<Move> {
     let mut parser = Parser::new(origin);
-    gcode.lines().filter_map(|l| parser.line(l)).collect()
+    gcode
+        .lines()
+        .filter_map(|l| parser.line(l.as_bytes()))
+        .collect()
+}
+
+/// Whether `b` is whitespace to [`str::split_whitespace`] (of the ASCII).
+fn space(b: u8) -> bool {
+    matches!(b, b' ' | b'\t' | b'\n' | b'\x0b' | b'\x0c' | b'\r')
+}
+
+/// The number `s` spells, exactly as `str::parse::<f64>` reads it.
+///
+/// Plain decimals (an optional sign, up to 15 digits, a point), which is all
+/// p3dp writes, are read directly: their digits m < 10^15 < 2^53 and 10^f
+/// (f ≤ 15 decimals) are exact doubles, so the one correctly rounded
+/// division m / 10^f is the correctly rounded value of the decimal, as
+/// `parse` gives (the "fast path" of Clinger's algorithm). Anything else
+/// goes to `parse`.
+fn number(s: &[u8]) -> Option<f64> {
+    const POW10: [f64; 16] = [
+        1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
+    ];
+    let (neg, digits) = match s.first() {
+        Some(b'-') => (true, &s[1..]),
+        Some(b'+') => (false, &s[1..]),
+        _ => (false, s),
+    };
+    let (mut m, mut n, mut frac, mut point) = (0u64, 0usize, 0usize, false);
+    for &b in digits {
+        match b {
+            b'0'..=b'9' if n < 15 => {
+                m = m * 10 + u64::from(b - b'0');
+                n += 1;
+                frac += usize::from(point);
+            }
+            b'.' if !point => point = true,
+            _ => return std::str::from_utf8(s).ok()?.parse().ok(),
+        }
+    }
+    if n == 0 {
+        return std::str::from_utf8(s).ok()?.parse().ok();
+    }
+    let v = m as f64 / POW10[frac];
+    Some(if neg { -v } else { v })
 }
 
 /// The state of reading G-code line by line (see [`moves`]).
@@ -67,6 +148,8 @@ struct Parser {
     feed: f64,
     relative: bool,
     part: usize,
+    /// Whether [`Move::machine_um`] is wanted (else left at zero).
+    um: bool,
 }
 
 impl Parser {
@@ -78,35 +161,69 @@ impl Parser {
             feed: 0.0,
             relative: false,
             part: 0,
+            um: true,
         }
     }
 
     /// The move `line` makes, if it moves the head.
-    fn line(&mut self, line: &str) -> Option<Move> {
-        if line.starts_with("; part: ") {
+    ///
+    /// Read as bytes; a line whose code (before any `;`) is not all ASCII is
+    /// read as text, as `str::split_whitespace` and `str::parse` read it.
+    fn line(&mut self, line: &[u8]) -> Option<Move> {
+        if line.starts_with(b"; part: ") {
             self.part += 1;
         }
-        let code = line.split(';').next().unwrap_or("").trim();
-        let mut words = code.split_whitespace();
-        let cmd = words.next()?;
-        let value = |w: &str| w[1..].parse::<f64>().ok();
+        let code = line.split(|&b| b == b';').next().unwrap_or(&[]);
+        if !code.is_ascii() {
+            let text = String::from_utf8_lossy(code);
+            let words: Vec<&[u8]> = text.split_whitespace().map(str::as_bytes).collect();
+            return self.words(&words);
+        }
+        let mut words: [&[u8]; 8] = [&[]; 8];
+        let mut n = 0;
+        for w in code.split(|&b| space(b)).filter(|w| !w.is_empty()) {
+            if n == words.len() {
+                // a long line: as many words as it has
+                let all: Vec<&[u8]> = code
+                    .split(|&b| space(b))
+                    .filter(|w| !w.is_empty())
+                    .collect();
+                return self.words(&all);
+            }
+            words[n] = w;
+            n += 1;
+        }
+        self.words(&words[..n])
+    }
+
+    /// The move a line of these words makes, if it moves the head.
+    fn words(&mut self, words: &[&[u8]]) -> Option<Move> {
+        let (&cmd, words) = words.split_first()?;
+        // a word's letter, and the number after it (a word is not empty)
+        let value = |w: &[u8]| {
+            if w[0].is_ascii() {
+                return number(&w[1..]);
+            }
+            let first = std::str::from_utf8(w).ok()?.chars().next()?;
+            number(&w[first.len_utf8()..])
+        };
         match cmd {
-            "M82" => self.relative = false,
-            "M83" => self.relative = true,
-            "G92" => {
-                for w in words {
-                    if w.starts_with('E') {
+            b"M82" => self.relative = false,
+            b"M83" => self.relative = true,
+            b"G92" => {
+                for &w in words {
+                    if w.starts_with(b"E") {
                         self.e = value(w).unwrap_or(self.e);
                     }
                 }
             }
-            "G0" | "G1" => {
+            b"G0" | b"G1" => {
                 let mut moved = false;
                 let mut has_e = false;
                 let mut de = 0.0;
-                for w in words {
+                for &w in words {
                     let Some(v) = value(w) else { continue };
-                    match w.as_bytes()[0] {
+                    match w[0] {
                         b'X' => (self.pos[0], moved) = (v, true),
                         b'Y' => (self.pos[1], moved) = (v, true),
                         b'Z' => (self.pos[2], moved) = (v, true),
@@ -124,10 +241,14 @@ impl Parser {
                         to: DVec3::from_array(self.pos) - self.origin,
                         feed: self.feed,
                         de,
-                        g0: cmd == "G0",
-                        extrudes: cmd == "G1" && has_e,
+                        g0: cmd == b"G0",
+                        extrudes: cmd == b"G1" && has_e,
                         part: self.part,
-                        machine_um: self.pos.map(|x| libm::round(x * 1e3) as i64),
+                        machine_um: if self.um {
+                            self.pos.map(|x| libm::round(x * 1e3) as i64)
+                        } else {
+                            [0; 3]
+                        },
                     });
                 }
             }
@@ -161,7 +282,11 @@ struct Reader<'f> {
 impl<'f> Reader<'f> {
     fn new(origin: DVec3, flagged_ends: &'f HashSet<[i64; 3]>, area: f64) -> Reader<'f> {
         Reader {
-            parser: Parser::new(origin),
+            parser: Parser {
+                // the machine position is only looked up among the flagged ends
+                um: !flagged_ends.is_empty(),
+                ..Parser::new(origin)
+            },
             partial: Vec::new(),
             flagged_ends,
             area,
@@ -176,7 +301,7 @@ impl<'f> Reader<'f> {
     }
 
     fn read_line(&mut self, line: &[u8]) {
-        let Some(m) = self.parser.line(&String::from_utf8_lossy(line)) else {
+        let Some(m) = self.parser.line(line) else {
             return;
         };
         let k = self.to.len();
@@ -287,7 +412,7 @@ fn surfaces(r: &Reader, scene: &Scene, threads: Threads) -> (Vec<f64>, Vec<i8>) 
             continue;
         };
         let pts = &r.to[start..end];
-        let grid = Grid::for_surface(pts, typ);
+        let grid = Grid::for_surface_on(pts, typ, threads.get());
         let next = AtomicUsize::new(0);
         let pieces = pts.len().div_ceil(PIECE);
         let hs = Mutex::new(
@@ -346,11 +471,45 @@ pub fn page(plan: &Plan, gcode: &str, stats: &Stats, opts: &Options) -> Page {
 
 /// Reads `plan`'s G-code as `render` writes it (neither its text nor its
 /// moves kept) into what the viewer shows; with the stats `render` returned.
+///
+/// With more than one thread the G-code is written on one thread and read
+/// back on another (passed in chunks, in order) while the scene is read
+/// (the pass spacing of each path) on the caller's.
 pub fn read(plan: &Plan, opts: &Options, render: Render) -> Result<(Data, Stats)> {
-    let scene = Scene::new(plan);
-    let flagged = flagged_ends(plan, &scene);
-    let mut reader = Reader::new(origin(plan), &flagged, filament_area(plan));
-    let stats = render(&mut reader)?;
+    let flags = super::flags(plan);
+    let ends = flagged_ends(plan, &flags);
+    let mut reader = Reader::new(origin(plan), &ends, filament_area(plan));
+    let (scene, stats) = if opts.threads.get() == 1 {
+        let stats = render(&mut reader);
+        (Scene::with_flags(plan, flags), stats)
+    } else {
+        std::thread::scope(|s| {
+            let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<u8>>(PIPE_DEPTH);
+            let reading = &mut reader;
+            let read = s.spawn(move || {
+                for chunk in rx {
+                    // a reader takes every byte it is given
+                    let _ = reading.write(&chunk);
+                }
+            });
+            let stats = s.spawn(move || {
+                let mut pipe = Pipe {
+                    tx,
+                    buf: Vec::with_capacity(PIPE_CHUNK),
+                };
+                let stats = render(&mut pipe);
+                pipe.send();
+                stats
+            });
+            let scene = Scene::with_flags(plan, flags);
+            let stats = stats
+                .join()
+                .unwrap_or_else(|e| std::panic::resume_unwind(e));
+            read.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
+            (scene, stats)
+        })
+    };
+    let stats = stats?;
     reader.finish();
     Ok((Data::new(plan, &scene, reader, &stats, opts), stats))
 }
@@ -439,7 +598,7 @@ fn fill(template: &str, values: &[(&str, String)]) -> String {
 /// how many points it carries.
 pub fn data(plan: &Plan, gcode: &str, stats: &Stats, opts: &Options) -> (serde_json::Value, usize) {
     let scene = Scene::new(plan);
-    let flagged = flagged_ends(plan, &scene);
+    let flagged = flagged_ends(plan, &scene.flagged);
     let mut reader = Reader::new(origin(plan), &flagged, filament_area(plan));
     reader.read_all(gcode.as_bytes());
     let data = Data::new(plan, &scene, reader, stats, opts);
@@ -602,14 +761,15 @@ impl Data {
     }
 }
 
-/// The machine end points (µm) of the strings the checks flagged.
-fn flagged_ends(plan: &Plan, scene: &Scene) -> HashSet<[i64; 3]> {
+/// The machine end points (µm) of the strings the checks flagged (`flags`,
+/// per path, as [`Scene::flagged`]).
+fn flagged_ends(plan: &Plan, flags: &[Vec<bool>]) -> HashSet<[i64; 3]> {
     let printer = &plan.recipe.printer;
     // a move is flagged when it ends where a flagged string ends (the writer
     // ends every move, merged or not, at the end point of a string)
     let mut flagged_ends = HashSet::new();
     for (pi, tp) in plan.paths.iter().enumerate() {
-        for (k, f) in scene.flagged[pi].iter().enumerate() {
+        for (k, f) in flags[pi].iter().enumerate() {
             if *f {
                 let m = printer.to_machine(tp.points[k + 1]);
                 flagged_ends.insert([m.x, m.y, m.z].map(|x| libm::round(x * 1e3) as i64));
@@ -694,6 +854,82 @@ mod tests {
             // 0.05 mm of filament of 2 mm² over 1 mm
             assert!((r.c[1] - 0.1).abs() < 1e-12, "{cut}: {:?}", r.c);
         }
+    }
+
+    #[test]
+    fn numbers_read_as_parse_reads_them_bit_for_bit() {
+        let mut words: Vec<String> = [
+            "",
+            "-",
+            "+",
+            ".",
+            "-.",
+            "0",
+            "-0",
+            "-0.000",
+            "+1.5",
+            ".5",
+            "5.",
+            "-.5",
+            "+.5",
+            "1.2.3",
+            "--1",
+            "1e3",
+            "1E-2",
+            "inf",
+            "-inf",
+            "NaN",
+            "0x10",
+            "12a",
+            "1 2",
+            "123456789012345",
+            "1234567890123456",
+            "0.000000000000001",
+            "0.0000000000000001",
+            "9007199254740993",
+            "110.000",
+            "0.05000",
+            "1e400",
+        ]
+        .iter()
+        .map(|w| w.to_string())
+        .collect();
+        // numbers as p3dp writes them, and some wider and longer
+        let mut x: u64 = 0x2545_F491_4F6C_DD1D;
+        for _ in 0..20_000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let v = (x % 2_000_000_000) as f64 / 1000.0 - 1e6;
+            let places = (x >> 40) as usize % 16;
+            words.push(format!("{v:.places$}"));
+            words.push(format!("{}", f64::from_bits(x >> 2)));
+        }
+        for w in &words {
+            let want = w.parse::<f64>().ok();
+            let got = number(w.as_bytes());
+            assert_eq!(got.map(f64::to_bits), want.map(f64::to_bits), "{w:?}");
+        }
+    }
+
+    #[test]
+    fn lines_with_other_text_read_as_before() {
+        let origin = DVec3::ZERO;
+        let mut p = Parser::new(origin);
+        // whitespace of every kind between the words, a comment with anything in it
+        let m = p
+            .line("G1\tX1.5\x0bY2 \x0cZ3\r ; é ; part: x".as_bytes())
+            .unwrap();
+        assert_eq!(m.to, DVec3::new(1.5, 2.0, 3.0));
+        // a word that is not ASCII, and bytes that are not UTF-8, are skipped
+        let m = p.line("G1 X4 ÉY7 Y5".as_bytes()).unwrap();
+        assert_eq!(m.to, DVec3::new(4.0, 5.0, 3.0));
+        let m = p.line(b"G1 X6 \xff Y8\xfe Z9").unwrap();
+        assert_eq!(m.to, DVec3::new(6.0, 5.0, 9.0));
+        // more words than usual
+        let m = p.line(b"G1 A1 B2 C3 D4 I5 J6 K7 L8 X10").unwrap();
+        assert_eq!(m.to.x, 10.0);
+        assert!(p.line(b"; G1 X1").is_none() && p.line(b"").is_none());
     }
 
     #[test]

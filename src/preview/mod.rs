@@ -246,6 +246,12 @@ pub struct Scene<'a> {
 impl<'a> Scene<'a> {
     /// Reads `plan` for drawing.
     pub fn new(plan: &'a Plan) -> Scene<'a> {
+        Scene::with_flags(plan, flags(plan))
+    }
+
+    /// [`Scene::new`] given which strings the findings concern (as [`flags`]
+    /// finds them), so that they may be known before the rest.
+    fn with_flags(plan: &'a Plan, flagged: Vec<Vec<bool>>) -> Scene<'a> {
         let fallback = plan.recipe.printer.nozzle_diameter / 2.0;
         let spacing: Vec<f64> = plan
             .paths
@@ -256,7 +262,7 @@ impl<'a> Scene<'a> {
             plan,
             time: Default::default(),
             ranges: Default::default(),
-            flagged: flags(plan),
+            flagged,
             spacing,
             marks: plan
                 .findings
@@ -491,13 +497,21 @@ pub struct Grid<'t> {
     /// Arc length along the path at each point, mm.
     s: Vec<f64>,
     cell: f64,
-    /// String k runs from point k to point k + 1.
-    strings: SegGrid,
+    /// String k runs from point k to point k + 1; the strings in runs (the
+    /// id of each run's first, and the run's grid, which numbers them from 0).
+    strings: Vec<(usize, SegGrid)>,
 }
 
 impl<'t> Grid<'t> {
     /// Files the strings of the polyline `points` in cubes of `cell` mm.
     pub fn new(points: &'t [DVec3], cell: f64) -> Grid<'t> {
+        Grid::new_on(points, cell, 1)
+    }
+
+    /// [`Grid::new`] in `parts` grids of a run of strings each, built at
+    /// once on as many threads. A search looks in each; the nearest point
+    /// (ties going to the lower string) is the same however they are cut.
+    pub fn new_on(points: &'t [DVec3], cell: f64, parts: usize) -> Grid<'t> {
         let mut s = Vec::with_capacity(points.len());
         let mut acc = 0.0;
         for (k, p) in points.iter().enumerate() {
@@ -510,7 +524,31 @@ impl<'t> Grid<'t> {
             s.push(acc);
         }
         let n = points.len().saturating_sub(1);
-        let strings = SegGrid::build(n, cell, |k| (points[k], points[k + 1]));
+        let run = n.div_ceil(parts.max(1)).max(1);
+        let build = |from: usize| {
+            let to = (from + run).min(n);
+            let g = SegGrid::build(to - from, cell, |k| {
+                (points[from + k], points[from + k + 1])
+            });
+            (from, g)
+        };
+        let strings = if n <= run {
+            vec![build(0)]
+        } else {
+            std::thread::scope(|sc| {
+                let built: Vec<_> = (run..n)
+                    .step_by(run)
+                    .map(|from| sc.spawn(move || build(from)))
+                    .collect();
+                let mut all = vec![build(0)];
+                all.extend(
+                    built
+                        .into_iter()
+                        .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e))),
+                );
+                all
+            })
+        };
         Grid {
             points,
             s,
@@ -523,6 +561,11 @@ impl<'t> Grid<'t> {
     /// `h` apart: cells big enough to reach the ends of the strings nearby
     /// (longer than `h` on a coarse helix).
     pub fn for_surface(points: &'t [DVec3], h: f64) -> Grid<'t> {
+        Grid::for_surface_on(points, h, 1)
+    }
+
+    /// [`Grid::for_surface`] in `parts` grids built at once ([`Grid::new_on`]).
+    pub fn for_surface_on(points: &'t [DVec3], h: f64, parts: usize) -> Grid<'t> {
         let step = (points.len() / 4096).max(1);
         let mut lens: Vec<f64> = (step..points.len())
             .step_by(step)
@@ -531,7 +574,11 @@ impl<'t> Grid<'t> {
             .collect();
         lens.sort_by(f64::total_cmp);
         let l90 = lens.get(lens.len() * 9 / 10).copied().unwrap_or(0.0);
-        Grid::new(points, (3.0 * h).max(0.6 * l90 + 1.5 * h).clamp(0.3, 4.0))
+        Grid::new_on(
+            points,
+            (3.0 * h).max(0.6 * l90 + 1.5 * h).clamp(0.3, 4.0),
+            parts,
+        )
     }
 
     /// Arc length at point k, mm.
@@ -587,7 +634,15 @@ impl<'t> Grid<'t> {
             // the closest point of the string: a + f·(b − a)
             let f = closest(p, a, b);
             let q = a + (b - a) * f;
-            let d = p.distance(q);
+            // no root where the square shows it too far: d² beyond
+            // bound²·(1 + 10⁻¹²) makes the rounded root d above the bound
+            // (as far as the cell, or the best so far), which is refused below
+            let bound = best.map_or(self.cell, |b| b.0.min(self.cell));
+            let d2 = (p - q).length_squared();
+            if d2 > bound * bound * (1.0 + 1e-12) {
+                return;
+            }
+            let d = d2.sqrt(); // p.distance(q), bit for bit
             let sq = self.s[k] + f * (self.s[k + 1] - self.s[k]);
             // 1 µm: a point revisited (a closed loop) is no neighbour
             if d > 1e-3
@@ -605,11 +660,13 @@ impl<'t> Grid<'t> {
             }
         }
         if !(follow && best.is_some()) {
-            let r = best.map_or(self.cell, |b| b.0);
-            self.strings.search(p, r, u32::MAX, |k| {
-                consider(k as usize, &mut best);
-                false
-            });
+            for (from, g) in &self.strings {
+                let r = best.map_or(self.cell, |b| b.0);
+                g.search(p, r, u32::MAX, |k| {
+                    consider(from + k as usize, &mut best);
+                    false
+                });
+            }
         }
         best.map(|(_, k, q)| (q, k))
     }
@@ -695,18 +752,7 @@ pub fn pass_spacing(points: &[DVec3]) -> Option<f64> {
             samples.push((*p, acc));
         }
     }
-    let mut near: std::collections::HashMap<[i64; 3], Vec<u32>, CubeHash> = Default::default();
-    let r = DVec3::splat(1.25 * REACH);
-    for (i, (p, _)) in samples.iter().enumerate() {
-        let (lo, hi) = (cube(*p - r, inv), cube(*p + r, inv));
-        for x in lo[0]..=hi[0] {
-            for y in lo[1]..=hi[1] {
-                for z in lo[2]..=hi[2] {
-                    near.entry([x, y, z]).or_default().push(i as u32);
-                }
-            }
-        }
-    }
+    let near = Near::new(&samples, DVec3::splat(1.25 * REACH), inv);
     let mut best: Vec<Option<(f64, usize)>> = vec![None; samples.len()];
     let mut sa = 0.0;
     for k in 0..n - 1 {
@@ -721,7 +767,7 @@ pub fn pass_spacing(points: &[DVec3]) -> Option<f64> {
                 continue;
             }
             last = Some(c);
-            for &i in near.get(&c).map_or(&[][..], |v| v) {
+            for &i in near.get(c) {
                 let (p, sp) = samples[i as usize];
                 // as Grid::nearest_other: the closest point a + f·(b − a)
                 let f = closest(p, a, b);
@@ -745,6 +791,115 @@ pub fn pass_spacing(points: &[DVec3]) -> Option<f64> {
     }
     found.sort_by(f64::total_cmp);
     Some(found[found.len() / 2])
+}
+
+/// The sampled points of [`pass_spacing`] listed (ascending) under every cube
+/// within `r` of them: in an array over the cubes of their box when it has
+/// at most [`Near::DENSE`] cubes (a look-up is then an index), else in a map.
+enum Near {
+    /// Cube (x, y, z) of the box from `lo` of `dims` cubes lists
+    /// `items[starts[c]..starts[c + 1]]`, c = (x·dims[1] + y)·dims[2] + z
+    /// relative to `lo`.
+    Dense {
+        lo: [i64; 3],
+        dims: [i64; 3],
+        starts: Vec<u32>,
+        items: Vec<u32>,
+    },
+    Map(std::collections::HashMap<[i64; 3], Vec<u32>, CubeHash>),
+}
+
+impl Near {
+    /// The most cubes the array spans (16 MB of starts).
+    const DENSE: i64 = 1 << 22;
+
+    fn new(samples: &[(DVec3, f64)], r: DVec3, inv: f64) -> Near {
+        let range = |p: DVec3| (cube(p - r, inv), cube(p + r, inv));
+        let mut lo = [i64::MAX; 3];
+        let mut hi = [i64::MIN; 3];
+        for (p, _) in samples {
+            let (a, b) = range(*p);
+            for j in 0..3 {
+                lo[j] = lo[j].min(a[j]);
+                hi[j] = hi[j].max(b[j]);
+            }
+        }
+        // cube coordinates are clamped to ±1e15, so these do not overflow
+        let dims = [0, 1, 2].map(|j| (hi[j] - lo[j] + 1).max(0));
+        let cubes = dims
+            .iter()
+            .try_fold(1i64, |acc, &d| acc.checked_mul(d))
+            .filter(|&c| c <= Near::DENSE);
+        let Some(cubes) = cubes.filter(|_| !samples.is_empty()) else {
+            let mut map: std::collections::HashMap<[i64; 3], Vec<u32>, CubeHash> =
+                Default::default();
+            for (i, (p, _)) in samples.iter().enumerate() {
+                let (a, b) = range(*p);
+                for x in a[0]..=b[0] {
+                    for y in a[1]..=b[1] {
+                        for z in a[2]..=b[2] {
+                            map.entry([x, y, z]).or_default().push(i as u32);
+                        }
+                    }
+                }
+            }
+            return Near::Map(map);
+        };
+        // counted, then filled in the order of the samples (as the map's lists)
+        let mut starts = vec![0u32; cubes as usize + 1];
+        let index = |x: i64, y: i64, z: i64| {
+            (((x - lo[0]) * dims[1] + (y - lo[1])) * dims[2] + (z - lo[2])) as usize
+        };
+        let each = |f: &mut dyn FnMut(usize, usize)| {
+            for (i, (p, _)) in samples.iter().enumerate() {
+                let (a, b) = range(*p);
+                for x in a[0]..=b[0] {
+                    for y in a[1]..=b[1] {
+                        for z in a[2]..=b[2] {
+                            f(index(x, y, z), i);
+                        }
+                    }
+                }
+            }
+        };
+        each(&mut |c, _| starts[c + 1] += 1);
+        for c in 1..starts.len() {
+            starts[c] += starts[c - 1];
+        }
+        let mut items = vec![0u32; starts[cubes as usize] as usize];
+        let mut next = starts.clone();
+        each(&mut |c, i| {
+            items[next[c] as usize] = i as u32;
+            next[c] += 1;
+        });
+        Near::Dense {
+            lo,
+            dims,
+            starts,
+            items,
+        }
+    }
+
+    /// The samples listed under cube `c`.
+    #[inline]
+    fn get(&self, c: [i64; 3]) -> &[u32] {
+        match self {
+            Near::Dense {
+                lo,
+                dims,
+                starts,
+                items,
+            } => {
+                let d = [0, 1, 2].map(|j| c[j] - lo[j]);
+                if (0..3).any(|j| d[j] < 0 || d[j] >= dims[j]) {
+                    return &[];
+                }
+                let k = ((d[0] * dims[1] + d[1]) * dims[2] + d[2]) as usize;
+                &items[starts[k] as usize..starts[k + 1] as usize]
+            }
+            Near::Map(map) => map.get(&c).map_or(&[][..], |v| v),
+        }
+    }
 }
 
 /// A quick hash of integer cube coordinates (a multiply and a rotation a
@@ -1054,6 +1209,86 @@ mod tests {
         let l = g.local(tp.points[k], tp.points[k + 1], g.arc(k)).unwrap();
         assert!(l.normal.z.abs() < 1e-6, "{l:?}");
         assert!((l.spacing - 0.3).abs() < 0.01, "{l:?}");
+    }
+
+    #[test]
+    fn spacing_is_measured_the_same_however_the_samples_are_listed() {
+        // two helices of pitch 0.3 far apart: the samples' box spans more
+        // cubes than the array takes, so they are listed in a map
+        let mut tp = Toolpath::new(DVec3::new(10.0, 0.0, 0.0));
+        for far in [0.0, 1e6] {
+            for i in 1..=200 * 10 {
+                let a = std::f64::consts::TAU * i as f64 / 200.0;
+                let z = 0.3 * i as f64 / 200.0;
+                tp.draw(
+                    DVec3::new(far + 10.0 * a.cos(), 10.0 * a.sin(), z),
+                    0.1,
+                    30.0,
+                );
+            }
+        }
+        let step = (tp.points.len() / 1024).max(1);
+        let samples: Vec<(DVec3, f64)> =
+            tp.points.iter().step_by(step).map(|p| (*p, 0.0)).collect();
+        let r = DVec3::splat(2.5);
+        assert!(matches!(Near::new(&samples, r, 0.5), Near::Map(_)));
+        assert!(matches!(
+            Near::new(&samples[..10], r, 0.5),
+            Near::Dense { .. }
+        ));
+        // the array lists what the map lists
+        let Near::Map(map) = Near::new(&samples, r, 0.5) else {
+            unreachable!()
+        };
+        let dense = Near::new(&samples[..500], r, 0.5);
+        for (c, list) in &map {
+            let want: Vec<u32> = list.iter().copied().filter(|&i| i < 500).collect();
+            assert_eq!(dense.get(*c), &want[..], "{c:?}");
+        }
+        assert!(dense.get([1 << 40, 0, 0]).is_empty());
+        // and the spacing is the median a grid of all the strings finds
+        let h = pass_spacing(&tp.points).unwrap();
+        assert!((h - 0.3).abs() < 0.01, "{h}");
+        for parts in [1, 3] {
+            let g = Grid::new_on(&tp.points, 2.0, parts);
+            let mut d: Vec<f64> = (0..tp.points.len())
+                .step_by(step)
+                .filter_map(|i| {
+                    let p = tp.points[i];
+                    g.nearest_other(p, g.arc(i)).map(|q| p.distance(q))
+                })
+                .collect();
+            d.sort_by(f64::total_cmp);
+            assert_eq!(h, d[d.len() / 2]);
+        }
+    }
+
+    #[test]
+    fn a_grid_in_parts_finds_what_one_grid_finds() {
+        let mut tp = Toolpath::new(DVec3::new(5.0, 0.0, 0.0));
+        for i in 1..=100 * 30 {
+            let a = std::f64::consts::TAU * i as f64 / 100.0;
+            tp.draw(
+                DVec3::new(5.0 * a.cos(), 5.0 * a.sin(), 0.2 * i as f64 / 100.0),
+                0.1,
+                30.0,
+            );
+        }
+        let one = Grid::new(&tp.points, 0.6);
+        for parts in [2, 3, 7] {
+            let many = Grid::new_on(&tp.points, 0.6, parts);
+            for k in (0..tp.points.len() - 1).step_by(7) {
+                let (a, b) = (tp.points[k], tp.points[k + 1]);
+                let sm = (one.arc(k) + one.arc(k + 1)) / 2.0;
+                for hint in [None, Some(k.saturating_sub(100))] {
+                    assert_eq!(
+                        one.local_near(a, b, sm, hint, false),
+                        many.local_near(a, b, sm, hint, false),
+                        "{parts} {k}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]

@@ -146,20 +146,66 @@ struct Px {
 /// (or the image is too small for text) the name, stats and legend; with the
 /// stats `render` returned.
 ///
-/// In phases, each over `opts.threads`, each one's memory let go before the
-/// next: the G-code is written into nothing for the stats of the header (its
-/// planner on a thread of its own); the strokes are collected in pieces of
-/// [`PIECE`] strings (each piece by whichever thread is free, coloured as it
-/// is collected, kept in its own slot so that their order is the print
-/// order); then painted in bands of [`BAND`] rows, each band by one thread. Every pixel sees the same strokes in the same order on
-/// any number of threads, so the image is the same.
+/// The G-code is written into nothing for the stats of the header (its
+/// planner on a thread of its own), beside the drawing when `opts.threads`
+/// allows more than one, before it otherwise. The drawing goes in phases,
+/// each over `opts.threads`, each one's memory let go before the next: the
+/// strokes are collected in pieces of [`PIECE`] strings (each piece by
+/// whichever thread is free, coloured as it is collected, kept in its own
+/// slot so that their order is the print order); then painted in bands of
+/// [`BAND`] rows, each band by one thread. Every pixel sees the same strokes
+/// in the same order on any number of threads, so the image is the same.
 pub fn preview(plan: &Plan, opts: &Options, render: Render) -> Result<(Rendered, Stats)> {
+    if opts.threads.get() == 1 {
+        // one thread: the planner's memory is let go before the strokes take theirs
+        let stats = render(&mut std::io::sink())?;
+        let (pm, frame, scene) = draw(plan, opts);
+        return Ok(finish(pm, frame, &scene, stats, opts));
+    }
+    // more: the G-code is written into nothing (for the header's stats) on
+    // a thread of its own while the model is drawn, filling the cores where
+    // the drawing runs on one thread (the pass spacing, the grids, the sort)
+    let (stats, (pm, frame, scene)) = std::thread::scope(|s| {
+        let stats = s.spawn(|| render(&mut std::io::sink()));
+        let drawn = draw(plan, opts);
+        let stats = stats
+            .join()
+            .unwrap_or_else(|e| std::panic::resume_unwind(e));
+        (stats, drawn)
+    });
+    Ok(finish(pm, frame, &scene, stats?, opts))
+}
+
+/// The header and legend drawn over the model (unless bare or too small).
+fn finish(
+    mut pm: Pixmap,
+    frame: Frame,
+    scene: &Scene,
+    stats: Stats,
+    opts: &Options,
+) -> (Rendered, Stats) {
+    let (_, decorate, ts) = layout(scene, opts);
+    if decorate {
+        header(&mut pm, &stats, scene, ts);
+        legend(&mut pm, scene, opts.color, ts);
+    }
+    (Rendered { pixmap: pm, frame }, stats)
+}
+
+/// The background and the model (with its marks), as [`preview`] paints them.
+fn draw<'p>(plan: &'p Plan, opts: &Options) -> (Pixmap, Frame, Scene<'p>) {
     let threads = opts.threads;
-    // first: the planner's memory is let go before the strokes take theirs
-    let stats = render(&mut std::io::sink())?;
     let scene = Scene::new(plan);
-    let (rect, decorate, ts) = layout(&scene, opts);
-    let model = Model::new(&scene, opts.view, opts.color, rect, PIECE, true);
+    let (rect, _, _) = layout(&scene, opts);
+    let model = Model::new(
+        &scene,
+        opts.view,
+        opts.color,
+        rect,
+        PIECE,
+        true,
+        threads.get(),
+    );
     let (frame, bbox) = (model.frame, model.bbox);
     let pal = Palette {
         mode: opts.color,
@@ -221,11 +267,7 @@ pub fn preview(plan: &Plan, opts: &Options, render: Render) -> Result<(Rendered,
     paint_bands(&mut pm, &strokes, threads);
     drop(strokes);
     marks(&mut pm, &scene, &frame, bbox, opts.color, rect);
-    if decorate {
-        header(&mut pm, &stats, &scene, ts);
-        legend(&mut pm, &scene, opts.color, ts);
-    }
-    Ok((Rendered { pixmap: pm, frame }, stats))
+    (pm, frame, scene)
 }
 
 /// The pieces' results in order, as one list.
@@ -274,6 +316,7 @@ pub fn thumbnail(scene: &Scene, size: Size) -> Pixmap {
         rect,
         usize::MAX,
         false,
+        1,
     );
     let slots = Mutex::new(Vec::new());
     model.work(&slots, |items| items);
@@ -317,7 +360,8 @@ struct Model<'s, 'p> {
 
 impl<'s, 'p> Model<'s, 'p> {
     /// Fits `scene` into `rect` seen from `view`; pieces of `piece` strings;
-    /// neighbouring passes followed or not (`follow`).
+    /// neighbouring passes followed or not (`follow`); each path's grid
+    /// built in `parts` on as many threads ([`Grid::for_surface_on`]).
     fn new(
         scene: &'s Scene<'p>,
         view: super::View,
@@ -325,6 +369,7 @@ impl<'s, 'p> Model<'s, 'p> {
         rect: [f64; 4],
         piece: usize,
         follow: bool,
+        parts: usize,
     ) -> Model<'s, 'p> {
         let basis = view.basis();
         let mut lo2 = (f64::INFINITY, f64::INFINITY);
@@ -346,7 +391,7 @@ impl<'s, 'p> Model<'s, 'p> {
             .paths
             .iter()
             .zip(&scene.spacing)
-            .map(|(tp, &h)| Grid::for_surface(&tp.points, h))
+            .map(|(tp, &h)| Grid::for_surface_on(&tp.points, h, parts))
             .collect();
         let mut pieces = Vec::new();
         for (pi, tp) in scene.plan.paths.iter().enumerate() {
@@ -648,6 +693,11 @@ fn capsule(band: &mut [u8], width: usize, y0: usize, y1: usize, px: &Px) {
     let l2 = dx * dx + dy * dy;
     let inv = if l2 > 0.0 { 1.0 / l2 } else { 0.0 };
     let src = px.rgb.map(u32::from);
+    let px_rgb = px.rgb;
+    // beyond r + ½ a pixel has no share (min(d + ½, r) ≤ r ≤ max(d − ½, −r));
+    // tested on the square distance, a little beyond (the square rounded
+    // in f32 stays below it), to skip the square root there
+    let far = (ext * 1.001 + 1e-3) * (ext * 1.001 + 1e-3);
     for y in top as usize..bottom as usize {
         let py = y as f32 + 0.5 - a.1;
         let row = &mut band[(y - y0) * width * 4..(y - y0 + 1) * width * 4];
@@ -655,13 +705,22 @@ fn capsule(band: &mut [u8], width: usize, y0: usize, y1: usize, px: &Px) {
             let px = x as f32 + 0.5 - a.0;
             let t = ((px * dx + py * dy) * inv).clamp(0.0, 1.0);
             let (ex, ey) = (px - t * dx, py - t * dy);
-            let d = (ex * ex + ey * ey).sqrt();
+            let d2 = ex * ex + ey * ey;
+            if d2 > far {
+                continue; // d > r + ½: no share
+            }
+            let d = d2.sqrt();
             let cov = ((d + 0.5).min(r) - (d - 0.5).max(-r)).clamp(0.0, 1.0);
             let k = (cov * alpha + 0.5) as u32;
             if k == 0 {
                 continue;
             }
             let p = &mut row[4 * x..4 * x + 3];
+            if k == 255 {
+                // (s·255 + 127) / 255 = s
+                p.copy_from_slice(&px_rgb);
+                continue;
+            }
             for (c, s) in p.iter_mut().zip(src) {
                 *c = ((s * k + u32::from(*c) * (255 - k) + 127) / 255) as u8;
             }
