@@ -143,6 +143,78 @@ struct Last {
     accel_share: f64,
 }
 
+/// The shape of the corner between two moves of unit directions `a` and
+/// `b`, which depends on nothing else (see [`Planner::junction_v2`]).
+#[derive(Clone, Copy, Debug, Default)]
+struct Turn {
+    /// |a − b|² = 4·cos²(θ/2), at most 4: 0 straight on.
+    w: f64,
+    /// cos²(θ/2).
+    cos_half2: f64,
+    /// sin(θ/2): 0 a full reversal.
+    sin_half: f64,
+    /// The junction circle's radius over δ: sin/(1 − sin) of θ/2.
+    r: f64,
+    /// cos(θ/2).
+    x: f64,
+}
+
+impl Turn {
+    /// The corner from direction `a` into direction `b`.
+    fn new(a: DVec3, b: DVec3) -> Turn {
+        // w = |u1 − u2|² = 2·(1 − cos φ) = 4·cos²(θ/2): stable for small turns
+        let w = (a - b).length_squared().min(4.0);
+        let mut t = Turn {
+            w,
+            ..Turn::default()
+        };
+        if w <= 0.0 {
+            return t; // straight on
+        }
+        t.cos_half2 = 0.25 * w; // cos²(θ/2)
+        t.sin_half = (1.0 - t.cos_half2).max(0.0).sqrt(); // sin(θ/2)
+        if t.sin_half <= 0.0 {
+            return t; // a full reversal
+        }
+        // sin/(1 − sin) = sin·(1 + sin)/cos², exact where sin is near 1
+        t.r = t.sin_half * (1.0 + t.sin_half) / t.cos_half2;
+        t.x = t.cos_half2.sqrt();
+        t
+    }
+}
+
+/// What a move to a point is before the planner's state matters: its own
+/// geometry and limits and its corner with the move before (the square
+/// roots and divisions of [`Planner::move_to`] that do not wait on the
+/// queue or the junction before it, worked out for a run of moves first).
+#[derive(Clone, Copy, Debug)]
+enum Step {
+    /// The first move: it only sets the position.
+    First,
+    /// No motion (an E-only move when it feeds filament).
+    Still,
+    /// A move of `len` mm along `dir`.
+    Moves(Geo),
+}
+
+/// A move's geometry (see [`Step`]).
+#[derive(Clone, Copy, Debug)]
+struct Geo {
+    len: f64,
+    dir: DVec3,
+    /// Its kind's acceleration, and its own (lower when the Z axis limits it).
+    base: f64,
+    accel: f64,
+    /// The Z axis's cap on its speed.
+    cap: f64,
+    /// The corner from the move before that moved (None for the first).
+    turn: Option<Turn>,
+}
+
+/// Calls replayed at a time in [`Planner::replay_batch`]: their [`Step`]s
+/// stay in the fastest cache.
+const STEPS: usize = 256;
+
 /// Marlin's block buffer as the SD reader fills it and the steppers empty it
 /// (see [`Planner::slowdown`]): times in s from the first move.
 #[derive(Clone, Debug, Default)]
@@ -175,13 +247,18 @@ pub struct Planner {
     /// Before any part: (ideal, nominal, dwell).
     pre: (f64, f64, f64),
     queue: Queue,
+    /// 1 / `command_rate`, s a line: the same division done once, not per move.
+    line_time: f64,
+    /// The direction of the last move that moved (whatever came after it).
+    prev_dir: Option<DVec3>,
+    /// The steps of the calls being replayed (see [`Planner::replay_batch`]).
+    steps: Vec<Step>,
 }
 
 impl Planner {
     /// A planner with these limits, the head at an unknown place.
     pub fn new(limits: Limits) -> Planner {
         Planner {
-            limits,
             blocks: Vec::new(),
             mcr: Vec::new(),
             pos: None,
@@ -189,6 +266,10 @@ impl Planner {
             parts: Vec::new(),
             pre: (0.0, 0.0, 0.0),
             queue: Queue::default(),
+            line_time: 1.0 / limits.command_rate,
+            prev_dir: None,
+            steps: Vec::new(),
+            limits,
         }
     }
 
@@ -285,7 +366,7 @@ impl Planner {
         }
         let size = lim.block_buffer_size as usize;
         let q = &mut self.queue;
-        let mut ready = q.read + 1.0 / lim.command_rate;
+        let mut ready = q.read + self.line_time;
         while q.ends.front().is_some_and(|&e| e <= ready) {
             q.ends.pop_front();
         }
@@ -317,83 +398,161 @@ impl Planner {
     /// E-only block at `feed` with `retract_acceleration`, from rest to rest;
     /// a move of nothing is skipped.
     pub fn move_to(&mut self, to: DVec3, e: f64, feed: f64, kind: MoveKind) {
+        let step = self.step(to, kind);
+        self.take(step, e, feed, kind);
+    }
+
+    /// The first half of [`Planner::move_to`]: the move's geometry, from the
+    /// position alone (which it updates, with the last direction). The
+    /// rest of the planner's state plays no part, so the steps of a run of
+    /// calls can be worked out before any of them is taken.
+    fn step(&mut self, to: DVec3, kind: MoveKind) -> Step {
         let Some(from) = self.pos else {
             self.pos = Some(to);
-            return;
+            return Step::First;
         };
         let d = to - from;
         let len = d.length();
-        if len > 0.0 {
-            let base = match kind {
-                MoveKind::Extrude => self.limits.max_acceleration,
-                MoveKind::Travel => self.limits.travel_acceleration,
-            };
-            let mut accel = base;
-            // the Z axis's own limits, scaled to the move as both firmwares
-            // do (Klipper's cartesian check_move: z_ratio = L / |dz|)
-            let mut cap = f64::INFINITY;
-            if d.z != 0.0 {
-                let z_ratio = len / d.z.abs();
-                if let Some(vz) = self.limits.max_z_velocity {
-                    cap = vz * z_ratio;
-                }
-                if let Some(az) = self.limits.max_z_acceleration {
-                    accel = accel.min(az * z_ratio);
-                }
+        if !(len > 0.0) {
+            return Step::Still;
+        }
+        let base = match kind {
+            MoveKind::Extrude => self.limits.max_acceleration,
+            MoveKind::Travel => self.limits.travel_acceleration,
+        };
+        let mut accel = base;
+        // the Z axis's own limits, scaled to the move as both firmwares
+        // do (Klipper's cartesian check_move: z_ratio = L / |dz|)
+        let mut cap = f64::INFINITY;
+        if d.z != 0.0 {
+            let z_ratio = len / d.z.abs();
+            if let Some(vz) = self.limits.max_z_velocity {
+                cap = vz * z_ratio;
             }
-            let v = self.nominal(len, feed, true, cap);
-            let cruise_v2 = v * v;
-            let dir = d / len;
-            let e_per_mm = if kind == MoveKind::Extrude {
-                e / len
-            } else {
-                0.0
-            };
-            let accel_share = accel / base;
-            let mut entry_v2 = match self.last {
-                Some(prev) => {
-                    let mut j = self.junction_v2(&prev, dir, len, accel, accel_share, cruise_v2);
-                    // Klipper's extruder.py calc_junction: the E speed may
-                    // change at once by at most instantaneous_corner_velocity
-                    if let Some(icv) = self.limits.instantaneous_corner_velocity {
-                        let dr = (e_per_mm - prev.e_per_mm).abs();
-                        if dr > 0.0 {
-                            j = j.min((icv / dr) * (icv / dr));
-                        }
-                    }
-                    j
+            if let Some(az) = self.limits.max_z_acceleration {
+                accel = accel.min(az * z_ratio);
+            }
+        }
+        let dir = d / len;
+        let turn = self.prev_dir.map(|p| Turn::new(p, dir));
+        self.prev_dir = Some(dir);
+        self.pos = Some(to);
+        Step::Moves(Geo {
+            len,
+            dir,
+            base,
+            accel,
+            cap,
+            turn,
+        })
+    }
+
+    /// The second half of [`Planner::move_to`]: the move taken, its step
+    /// worked out.
+    fn take(&mut self, step: Step, e: f64, feed: f64, kind: MoveKind) {
+        let g = match step {
+            Step::First => return,
+            Step::Still => {
+                if e > 0.0 {
+                    self.extrude_only(e, feed);
                 }
-                None => 0.0,
-            };
-            let (mcr_entry_v2, mcr_delta_v2) = self.klipper_entry(&mut entry_v2, base, accel, len);
-            self.push(
-                Block {
-                    len,
-                    accel,
-                    cruise_v2,
-                    entry_v2,
-                },
-                mcr_entry_v2,
-                mcr_delta_v2,
-            );
-            self.last = Some(Last {
-                dir,
+                return;
+            }
+            Step::Moves(g) => g,
+        };
+        let Geo {
+            len,
+            dir,
+            base,
+            accel,
+            cap,
+            turn,
+        } = g;
+        let v = self.nominal(len, feed, true, cap);
+        let cruise_v2 = v * v;
+        // the extruder's corner (e_per_mm) and the acceleration's share
+        // are read under Klipper's limits only: Marlin's skip the divisions
+        let icv = self.limits.instantaneous_corner_velocity;
+        let e_per_mm = if kind == MoveKind::Extrude && icv.is_some() {
+            e / len
+        } else {
+            0.0
+        };
+        let accel_share = if self.limits.square_corner_velocity.is_some() {
+            accel / base
+        } else {
+            1.0
+        };
+        let mut entry_v2 = match self.last {
+            Some(prev) => {
+                // the last block is the last move that moved: its turn
+                let t = turn.unwrap_or_else(|| Turn::new(prev.dir, dir));
+                let mut j = self.junction_v2(&prev, &t, len, accel, accel_share, cruise_v2);
+                // Klipper's extruder.py calc_junction: the E speed may
+                // change at once by at most instantaneous_corner_velocity
+                if let Some(icv) = icv {
+                    let dr = (e_per_mm - prev.e_per_mm).abs();
+                    if dr > 0.0 {
+                        j = j.min((icv / dr) * (icv / dr));
+                    }
+                }
+                j
+            }
+            None => 0.0,
+        };
+        let (mcr_entry_v2, mcr_delta_v2) = self.klipper_entry(&mut entry_v2, base, accel, len);
+        self.push(
+            Block {
                 len,
                 accel,
                 cruise_v2,
-                e_per_mm,
-                accel_share,
-            });
-            self.pos = Some(to);
-            let ideal = if feed.is_finite() && feed > 0.0 {
-                len / feed
-            } else {
-                len / v
-            };
-            self.add(ideal, len / v, 0.0);
-        } else if e > 0.0 {
-            self.extrude_only(e, feed);
+                entry_v2,
+            },
+            mcr_entry_v2,
+            mcr_delta_v2,
+        );
+        self.last = Some(Last {
+            dir,
+            len,
+            accel,
+            cruise_v2,
+            e_per_mm,
+            accel_share,
+        });
+        let ideal = if feed.is_finite() && feed > 0.0 {
+            len / feed
+        } else {
+            len / v
+        };
+        self.add(ideal, len / v, 0.0);
+    }
+
+    /// Replays recorded calls in order, as one call at a time would: each
+    /// run of [`STEPS`] calls has its moves' steps worked out first (a loop
+    /// whose moves do not wait on each other, so the processor overlaps
+    /// their square roots and divisions), then is taken. The same
+    /// operations on the same values, so the same estimate.
+    fn replay_batch(&mut self, calls: &[Call]) {
+        let mut steps = std::mem::take(&mut self.steps);
+        for run in calls.chunks(STEPS) {
+            steps.clear();
+            for c in run {
+                if let Call::MoveTo(to, _, _, kind) = *c {
+                    steps.push(self.step(to, kind));
+                }
+            }
+            let mut next = steps.iter();
+            for c in run {
+                match *c {
+                    Call::MoveTo(_, e, feed, kind) => {
+                        let step = *next.next().expect("a step for every move");
+                        self.take(step, e, feed, kind);
+                    }
+                    _ => replay(self, c),
+                }
+            }
         }
+        self.steps = steps;
     }
 
     /// A move of E alone (retraction, unretraction), `length` mm of filament
@@ -500,25 +659,20 @@ impl Planner {
     fn junction_v2(
         &self,
         prev: &Last,
-        dir: DVec3,
+        t: &Turn,
         len: f64,
         accel: f64,
         accel_share: f64,
         cruise_v2: f64,
     ) -> f64 {
         let both = cruise_v2.min(prev.cruise_v2);
-        // w = |u1 − u2|² = 2·(1 − cos φ) = 4·cos²(θ/2): stable for small turns
-        let w = (prev.dir - dir).length_squared().min(4.0);
-        if w <= 0.0 {
+        if t.w <= 0.0 {
             return both; // straight on
         }
-        let cos_half2 = 0.25 * w; // cos²(θ/2)
-        let sin_half = (1.0 - cos_half2).max(0.0).sqrt(); // sin(θ/2)
-        if sin_half <= 0.0 {
+        if t.sin_half <= 0.0 {
             return 0.0; // a full reversal stops the head
         }
-        // sin/(1 − sin) = sin·(1 + sin)/cos², exact where sin is near 1
-        let r = sin_half * (1.0 + sin_half) / cos_half2;
+        let (cos_half2, sin_half, r) = (t.cos_half2, t.sin_half, t.r);
         match (
             self.limits.square_corner_velocity,
             self.limits.junction_deviation,
@@ -526,7 +680,7 @@ impl Planner {
             (Some(scv), _) => {
                 let share = accel_share.min(prev.accel_share);
                 let jd_v2 = r * scv * scv * (std::f64::consts::SQRT_2 - 1.0) * share;
-                let tan_half = sin_half / cos_half2.sqrt();
+                let tan_half = sin_half / t.x; // t.x = √cos²(θ/2)
                 let c_this = 0.5 * len * accel * tan_half;
                 let c_prev = 0.5 * prev.len * prev.accel * tan_half;
                 jd_v2.min(c_this).min(c_prev).min(both)
@@ -539,7 +693,7 @@ impl Planner {
                 let cap = v2.min(both);
                 // 2x ≤ 2·asin x ≤ π·x: skip the asin when even the largest φ
                 // leaves a limit above the others
-                let x = cos_half2.sqrt();
+                let x = t.x;
                 if len < 1.0
                     && cos_half2 < SMALL_TURN
                     && len * accel < cap * std::f64::consts::PI * x
@@ -736,9 +890,9 @@ enum Call {
 const BATCH: usize = 4096;
 
 /// Replays one recorded call on `planner`.
-fn replay(planner: &mut Planner, call: Call) {
-    match call {
-        Call::BeginPart(name) => planner.begin_part(&name),
+fn replay(planner: &mut Planner, call: &Call) {
+    match *call {
+        Call::BeginPart(ref name) => planner.begin_part(name),
         Call::Stop => planner.stop(),
         Call::Dwell(s) => planner.dwell(s),
         Call::MoveTo(to, e, feed, kind) => planner.move_to(to, e, feed, kind),
@@ -792,9 +946,7 @@ impl Fed {
     fn catch_up(&mut self) {
         let Some(p) = &mut self.planner else { return };
         while let Ok(batch) = self.rx.try_recv() {
-            for call in batch {
-                replay(p, call);
-            }
+            p.replay_batch(&batch);
         }
     }
 
@@ -805,9 +957,7 @@ impl Fed {
             return;
         };
         while let Ok(batch) = self.rx.recv() {
-            for call in batch {
-                replay(&mut p, call);
-            }
+            p.replay_batch(&batch);
         }
         self.estimate = Some(p.finish());
     }
@@ -853,9 +1003,7 @@ impl Background {
         let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<Call>>(64);
         let worker = std::thread::spawn(move || {
             for batch in rx {
-                for call in batch {
-                    replay(&mut planner, call);
-                }
+                planner.replay_batch(&batch);
             }
             planner.finish()
         });
@@ -892,7 +1040,7 @@ impl Background {
 
     fn call(&mut self, c: Call) {
         if let Some(p) = &mut self.inline {
-            replay(p, c);
+            replay(p, &c);
             return;
         }
         self.batch.push(c);

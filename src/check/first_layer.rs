@@ -234,20 +234,37 @@ fn footprint_all(
     let mut starts = Vec::with_capacity(paths.len() + 1);
     for (j, tp) in paths.iter().enumerate() {
         starts.push(cands.len());
-        // extruded length along the path up to the current string's middle
-        let mut along = 0.0;
+        let (mut along, mut summed) = (0.0, 0);
+        // extruded length along the path up to the current string's middle,
+        // summed only when a string low enough needs it (a tall part's
+        // strings above its first layer need no length): the same lengths
+        // added in the same order, so the same sums; `summed` strings are in
         for (k, s) in tp.strings.iter().enumerate() {
             if s.travel {
                 continue;
             }
             let (a, b) = tp.ends(k);
-            let w = width(s.c, nozzle);
-            let l = a.distance(b);
-            let mid = along + l / 2.0;
-            along += l;
-            if a.z > w || b.z > w || l <= 0.0 {
+            // a string is too high when an end is over its width w ≥ the
+            // nozzle's: no end over the nozzle's diameter is never too high
+            if (a.z > nozzle || b.z > nozzle) && {
+                let w = width(s.c, nozzle);
+                a.z > w || b.z > w
+            } {
                 continue;
             }
+            let w = width(s.c, nozzle);
+            let l = a.distance(b);
+            if l <= 0.0 {
+                continue;
+            }
+            for i in summed..k {
+                if !tp.strings[i].travel {
+                    along += tp.length(i);
+                }
+            }
+            summed = k + 1;
+            let mid = along + l / 2.0;
+            along += l;
             let here = BedString {
                 a: a.truncate(),
                 b: b.truncate(),
