@@ -253,7 +253,23 @@ pub struct Planner {
     prev_dir: Option<DVec3>,
     /// The steps of the calls being replayed (see [`Planner::replay_batch`]).
     steps: Vec<Step>,
+    /// Under Marlin's model, blocks planned already (their times summed in
+    /// `planned`) and no longer kept: `blocks` starts with block `done`.
+    done: usize,
+    /// Whether `blocks[0]` is planned in both passes (a block kept from the
+    /// last [`Planner::plan_settled`]: its entry is final).
+    head_planned: bool,
+    /// The planned time so far before the parts, then of each part.
+    planned: Vec<f64>,
+    /// The range the next planned block belongs to (0: before any part).
+    slot: usize,
+    /// The block count at which to look for settled blocks next.
+    next_settle: usize,
 }
+
+/// Blocks queued between two looks for settled blocks (see
+/// [`Planner::plan_settled`]): 256 KB of them.
+const SETTLE: usize = 8192;
 
 impl Planner {
     /// A planner with these limits, the head at an unknown place.
@@ -269,6 +285,11 @@ impl Planner {
             line_time: 1.0 / limits.command_rate,
             prev_dir: None,
             steps: Vec::new(),
+            done: 0,
+            head_planned: false,
+            planned: vec![0.0],
+            slot: 0,
+            next_settle: SETTLE,
             limits,
         }
     }
@@ -282,7 +303,7 @@ impl Planner {
     pub fn begin_part(&mut self, name: &str) {
         self.parts.push(Part {
             name: name.to_string(),
-            first: self.blocks.len(),
+            first: self.done + self.blocks.len(),
             ideal: 0.0,
             nominal: 0.0,
             dwell: 0.0,
@@ -608,6 +629,9 @@ impl Planner {
     /// Queues a block, with its minimum-cruise-ratio profile under Klipper's model.
     fn push(&mut self, b: Block, mcr_entry_v2: f64, mcr_delta_v2: f64) {
         self.blocks.push(b);
+        if self.limits.square_corner_velocity.is_none() && self.blocks.len() >= self.next_settle {
+            self.plan_settled();
+        }
         if self.limits.square_corner_velocity.is_some() {
             self.mcr.push(Mcr {
                 entry_v2: mcr_entry_v2,
@@ -709,15 +733,119 @@ impl Planner {
 
     /// Plans every move (the passes of the module comment) and sums the times.
     pub fn finish(mut self) -> Estimate {
-        let mut ends: Vec<usize> = self.parts.iter().map(|p| p.first).collect();
-        ends.push(self.blocks.len());
-        let planned = if self.limits.square_corner_velocity.is_some() {
-            klipper_passes(&self.blocks, &self.mcr, &ends)
-        } else {
-            backward_pass(&mut self.blocks);
-            forward_pass(&mut self.blocks, &ends)
-        };
+        if self.limits.square_corner_velocity.is_some() {
+            let mut ends: Vec<usize> = self.parts.iter().map(|p| p.first).collect();
+            ends.push(self.blocks.len());
+            let planned = klipper_passes(&self.blocks, &self.mcr, &ends);
+            return self.estimate(&planned);
+        }
+        // the head ends at rest: the backward pass from 0 after the last block
+        let n = self.blocks.len();
+        self.backward(n, 0.0);
+        self.forward(n, true);
+        let mut planned = std::mem::take(&mut self.planned);
+        planned.resize(self.parts.len() + 1, 0.0);
         self.estimate(&planned)
+    }
+
+    /// Under Marlin's model, plans the blocks whose entries the blocks still
+    /// to come can no longer change, and forgets them (2M moves kept 64 MB
+    /// of blocks until the end).
+    ///
+    /// The backward pass is e_i = min(cap_i, e_{i+1} + 2·a_i·L_i), and each
+    /// step (a rounded sum, then a min) never lowers its result when
+    /// e_{i+1} grows. Whatever comes after the last block queued, its entry
+    /// lies in [0, ∞]: run from both ends of that range, the pass gives
+    /// bounds of every e_i, and where the two meet (bit for bit) e_i is the
+    /// one the whole print's pass gives; below it the pass is the same
+    /// operations on the same values. The forward pass and the times of the
+    /// blocks before that one follow in order, so every sum is the same.
+    fn plan_settled(&mut self) {
+        let n = self.blocks.len();
+        let (mut lo, mut hi) = (0.0f64, f64::INFINITY);
+        let mut settled = None;
+        for j in (1..n).rev() {
+            let t = self.reach(j);
+            let cap = self.cap(j);
+            lo = cap.min(lo + t);
+            hi = cap.min(hi + t);
+            if lo.to_bits() == hi.to_bits() {
+                settled = Some((j, lo));
+                break;
+            }
+        }
+        match settled {
+            Some((m, e)) => {
+                self.blocks[m].entry_v2 = e;
+                self.backward(m, e);
+                self.forward(m, false);
+                self.blocks.drain(..m);
+                self.done += m;
+                self.head_planned = true;
+                self.next_settle = self.blocks.len() + SETTLE;
+            }
+            // nothing settled yet (moves so fast that 8192 of them cannot
+            // stop): look again once the queue has doubled
+            None => self.next_settle = 2 * n,
+        }
+    }
+
+    /// 2·a·L of block j (of `blocks`): the v² it gains or loses.
+    #[inline]
+    fn reach(&self, j: usize) -> f64 {
+        2.0 * self.blocks[j].accel * self.blocks[j].len
+    }
+
+    /// The highest entry v² of block j ≥ 1 (of `blocks`): its junction's,
+    /// under both blocks' cruise v².
+    #[inline]
+    fn cap(&self, j: usize) -> f64 {
+        let b = &self.blocks;
+        b[j].entry_v2.min(b[j].cruise_v2).min(b[j - 1].cruise_v2)
+    }
+
+    /// The backward pass over `blocks[1..end]` from `next`, the entry v² of
+    /// block `end`: entries the blocks after can brake from. (The first
+    /// block of all enters at rest; a kept first block is planned already.)
+    fn backward(&mut self, end: usize, mut next: f64) {
+        for j in (1..end).rev() {
+            let e = self.cap(j).min(next + self.reach(j));
+            self.blocks[j].entry_v2 = e;
+            next = e;
+        }
+    }
+
+    /// The forward pass over `blocks[..end]` and their times, summed per
+    /// range in order; with `last` the last of them ends at rest, else each
+    /// leaves at the entry of the block after it (in `blocks`).
+    fn forward(&mut self, end: usize, last: bool) {
+        if end == 0 {
+            return;
+        }
+        if !self.head_planned {
+            // the first block of all: from rest
+            self.blocks[0].entry_v2 = 0.0;
+        }
+        for i in 0..end {
+            let g = self.done + i;
+            while self.slot < self.parts.len() && g >= self.parts[self.slot].first {
+                self.slot += 1;
+            }
+            if self.planned.len() <= self.slot {
+                self.planned.resize(self.slot + 1, 0.0);
+            }
+            let exit = if i + 1 < end || !last {
+                let reach = self.blocks[i].entry_v2 + self.reach(i);
+                let b = &mut self.blocks[i + 1];
+                b.entry_v2 = b.entry_v2.min(reach);
+                b.entry_v2
+            } else {
+                0.0
+            };
+            let b = self.blocks[i];
+            self.planned[self.slot] +=
+                trapezoid_time(b.len, b.accel, b.entry_v2, exit, b.cruise_v2);
+        }
     }
 
     /// The estimate from the planned time before the parts and of each part.
@@ -749,7 +877,7 @@ impl Planner {
 }
 
 /// Klipper's look-ahead flush (`LookAheadQueue.flush`) over the whole print
-/// and the blocks' times, summed per range as [`forward_pass`] does.
+/// and the blocks' times, summed per range as [`Planner::finish`] does.
 ///
 /// Backward from rest at the end, each block gets its entry v²
 /// s_i = min(e_i, s_{i+1} + 2·a_i·L_i) as in Marlin's model, and the same in
@@ -803,49 +931,6 @@ fn klipper_passes(b: &[Block], mcr: &[Mcr], ends: &[usize]) -> Vec<f64> {
             planned[slot] += trapezoid_time(b[i].len, b[i].accel, start.min(c), exit.min(c), c);
         }
         prev_cruise = c;
-    }
-    planned
-}
-
-/// The backward pass: entry speeds the blocks after can brake from.
-fn backward_pass(b: &mut [Block]) {
-    // exit of the last block: rest; junctions also under both blocks'
-    // (possibly lowered) cruise speeds
-    let mut next = 0.0f64;
-    for i in (0..b.len()).rev() {
-        let mut cap = b[i].entry_v2.min(b[i].cruise_v2);
-        if i > 0 {
-            cap = cap.min(b[i - 1].cruise_v2);
-        }
-        let e = cap.min(next + 2.0 * b[i].accel * b[i].len);
-        b[i].entry_v2 = e;
-        next = e;
-    }
-}
-
-/// The forward pass and the blocks' times, summed per range: `ends` are the
-/// first blocks of the parts then the block count; returns [before the
-/// parts, part 0, …].
-fn forward_pass(b: &mut [Block], ends: &[usize]) -> Vec<f64> {
-    let n = b.len();
-    // entry of the first block: rest (parts are consecutive ranges)
-    if n > 0 {
-        b[0].entry_v2 = 0.0;
-    }
-    let mut planned = vec![0.0f64; ends.len()];
-    let mut slot = 0;
-    for i in 0..n {
-        while i >= ends[slot] {
-            slot += 1;
-        }
-        let exit = if i + 1 < n {
-            let reach = b[i].entry_v2 + 2.0 * b[i].accel * b[i].len;
-            b[i + 1].entry_v2 = b[i + 1].entry_v2.min(reach);
-            b[i + 1].entry_v2
-        } else {
-            0.0
-        };
-        planned[slot] += trapezoid_time(b[i].len, b[i].accel, b[i].entry_v2, exit, b[i].cruise_v2);
     }
     planned
 }
@@ -1188,6 +1273,69 @@ mod tests {
             p.move_to(q, 0.1, feed, MoveKind::Extrude);
         }
         p.finish()
+    }
+
+    /// Feeds `p` a long varied print: 40,000 moves in four parts along a
+    /// wobbling helix (corners of every size, Z, feeds from 5 to 250 mm/s,
+    /// travels, retractions, a dwell and a stop, zero-length moves).
+    fn long_print(p: &mut Planner) {
+        p.move_to(DVec3::ZERO, 0.0, 100.0, MoveKind::Travel);
+        for k in 0..40_000usize {
+            if k % 13_000 == 0 {
+                p.begin_part(&format!("part {k}"));
+            }
+            let t = k as f64 * 0.05;
+            let r = 20.0 + 3.0 * (7.0 * t).sin() + (k % 7) as f64 * 0.01;
+            let to = DVec3::new(r * t.cos(), r * t.sin(), 0.2 + 0.0005 * k as f64);
+            let feed = 5.0 + (k % 50) as f64 * 5.0;
+            match k % 997 {
+                0 => {
+                    p.extrude_only(0.8, 35.0);
+                    p.move_to(to, 0.0, 150.0, MoveKind::Travel);
+                    p.extrude_only(0.8, 35.0);
+                }
+                1 => p.move_to(to, 0.0, feed, MoveKind::Extrude), // then again: no motion
+                500 => p.dwell(0.5),
+                600 => p.stop(),
+                _ => p.move_to(to, 0.02, feed, MoveKind::Extrude),
+            }
+            if k % 997 == 1 {
+                p.move_to(to, 0.0, feed, MoveKind::Extrude);
+            }
+        }
+    }
+
+    #[test]
+    fn planning_settled_blocks_early_changes_nothing() {
+        // Marlin's passes run as the moves come over the blocks that the
+        // rest can no longer change, and forget them: the estimate is the
+        // one of both passes over the whole print at the end, bit for bit
+        for lim in [
+            marlin(1000.0, 0.013, 300.0),
+            Limits {
+                min_segment_time: 0.02,
+                max_z_velocity: Some(5.0),
+                max_z_acceleration: Some(100.0),
+                ..marlin(500.0, 0.05, 200.0)
+            },
+        ] {
+            let mut early = Planner::new(lim.clone());
+            long_print(&mut early);
+            assert!(early.done > 30_000, "{} blocks settled", early.done);
+            assert!(early.blocks.len() < 2 * SETTLE);
+            let mut whole = Planner::new(lim);
+            whole.next_settle = usize::MAX;
+            long_print(&mut whole);
+            assert_eq!(whole.done, 0);
+            let (a, b) = (early.finish(), whole.finish());
+            assert_eq!(a.parts.len(), 4);
+            assert!(a.total.planned > a.total.nominal, "{a:?}");
+            assert_eq!(a.total.planned.to_bits(), b.total.planned.to_bits());
+            for (x, y) in a.parts.iter().zip(&b.parts) {
+                assert_eq!(x.times.planned.to_bits(), y.times.planned.to_bits());
+            }
+            assert_eq!(a, b);
+        }
     }
 
     #[test]
