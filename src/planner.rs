@@ -434,7 +434,8 @@ impl Planner {
         };
         let d = to - from;
         let len = d.length();
-        if !(len > 0.0) {
+        let moves = len > 0.0; // not when NaN
+        if !moves {
             return Step::Still;
         }
         let base = match kind {
@@ -826,26 +827,33 @@ impl Planner {
             // the first block of all: from rest
             self.blocks[0].entry_v2 = 0.0;
         }
+        // ranges: before the parts (0), then part k (k + 1) from its first block
+        if self.planned.len() <= self.parts.len() {
+            self.planned.resize(self.parts.len() + 1, 0.0);
+        }
+        let first = |slot: usize, parts: &[Part]| parts.get(slot).map_or(usize::MAX, |p| p.first);
+        let mut slot = self.slot;
+        let mut bound = first(slot, &self.parts);
+        // with `last` the last block leaves at rest, else at the next one's entry
+        let blocks = &mut self.blocks[..end + usize::from(!last)];
         for i in 0..end {
             let g = self.done + i;
-            while self.slot < self.parts.len() && g >= self.parts[self.slot].first {
-                self.slot += 1;
+            while g >= bound {
+                slot += 1;
+                bound = first(slot, &self.parts);
             }
-            if self.planned.len() <= self.slot {
-                self.planned.resize(self.slot + 1, 0.0);
-            }
-            let exit = if i + 1 < end || !last {
-                let reach = self.blocks[i].entry_v2 + self.reach(i);
-                let b = &mut self.blocks[i + 1];
-                b.entry_v2 = b.entry_v2.min(reach);
-                b.entry_v2
-            } else {
-                0.0
+            let b = blocks[i];
+            let exit = match blocks.get_mut(i + 1) {
+                Some(nb) => {
+                    let reach = b.entry_v2 + 2.0 * b.accel * b.len;
+                    nb.entry_v2 = nb.entry_v2.min(reach);
+                    nb.entry_v2
+                }
+                None => 0.0,
             };
-            let b = self.blocks[i];
-            self.planned[self.slot] +=
-                trapezoid_time(b.len, b.accel, b.entry_v2, exit, b.cruise_v2);
+            self.planned[slot] += trapezoid_time(b.len, b.accel, b.entry_v2, exit, b.cruise_v2);
         }
+        self.slot = slot;
     }
 
     /// The estimate from the planned time before the parts and of each part.
