@@ -143,6 +143,78 @@ struct Last {
     accel_share: f64,
 }
 
+/// The shape of the corner between two moves of unit directions `a` and
+/// `b`, which depends on nothing else (see [`Planner::junction_v2`]).
+#[derive(Clone, Copy, Debug, Default)]
+struct Turn {
+    /// |a − b|² = 4·cos²(θ/2), at most 4: 0 straight on.
+    w: f64,
+    /// cos²(θ/2).
+    cos_half2: f64,
+    /// sin(θ/2): 0 a full reversal.
+    sin_half: f64,
+    /// The junction circle's radius over δ: sin/(1 − sin) of θ/2.
+    r: f64,
+    /// cos(θ/2).
+    x: f64,
+}
+
+impl Turn {
+    /// The corner from direction `a` into direction `b`.
+    fn new(a: DVec3, b: DVec3) -> Turn {
+        // w = |u1 − u2|² = 2·(1 − cos φ) = 4·cos²(θ/2): stable for small turns
+        let w = (a - b).length_squared().min(4.0);
+        let mut t = Turn {
+            w,
+            ..Turn::default()
+        };
+        if w <= 0.0 {
+            return t; // straight on
+        }
+        t.cos_half2 = 0.25 * w; // cos²(θ/2)
+        t.sin_half = (1.0 - t.cos_half2).max(0.0).sqrt(); // sin(θ/2)
+        if t.sin_half <= 0.0 {
+            return t; // a full reversal
+        }
+        // sin/(1 − sin) = sin·(1 + sin)/cos², exact where sin is near 1
+        t.r = t.sin_half * (1.0 + t.sin_half) / t.cos_half2;
+        t.x = t.cos_half2.sqrt();
+        t
+    }
+}
+
+/// What a move to a point is before the planner's state matters: its own
+/// geometry and limits and its corner with the move before (the square
+/// roots and divisions of [`Planner::move_to`] that do not wait on the
+/// queue or the junction before it, worked out for a run of moves first).
+#[derive(Clone, Copy, Debug)]
+enum Step {
+    /// The first move: it only sets the position.
+    First,
+    /// No motion (an E-only move when it feeds filament).
+    Still,
+    /// A move of `len` mm along `dir`.
+    Moves(Geo),
+}
+
+/// A move's geometry (see [`Step`]).
+#[derive(Clone, Copy, Debug)]
+struct Geo {
+    len: f64,
+    dir: DVec3,
+    /// Its kind's acceleration, and its own (lower when the Z axis limits it).
+    base: f64,
+    accel: f64,
+    /// The Z axis's cap on its speed.
+    cap: f64,
+    /// The corner from the move before that moved (None for the first).
+    turn: Option<Turn>,
+}
+
+/// Calls replayed at a time in [`Planner::replay_batch`]: their [`Step`]s
+/// stay in the fastest cache.
+const STEPS: usize = 256;
+
 /// Marlin's block buffer as the SD reader fills it and the steppers empty it
 /// (see [`Planner::slowdown`]): times in s from the first move.
 #[derive(Clone, Debug, Default)]
@@ -175,13 +247,34 @@ pub struct Planner {
     /// Before any part: (ideal, nominal, dwell).
     pre: (f64, f64, f64),
     queue: Queue,
+    /// 1 / `command_rate`, s a line: the same division done once, not per move.
+    line_time: f64,
+    /// The direction of the last move that moved (whatever came after it).
+    prev_dir: Option<DVec3>,
+    /// The steps of the calls being replayed (see [`Planner::replay_batch`]).
+    steps: Vec<Step>,
+    /// Under Marlin's model, blocks planned already (their times summed in
+    /// `planned`) and no longer kept: `blocks` starts with block `done`.
+    done: usize,
+    /// Whether `blocks[0]` is planned in both passes (a block kept from the
+    /// last [`Planner::plan_settled`]: its entry is final).
+    head_planned: bool,
+    /// The planned time so far before the parts, then of each part.
+    planned: Vec<f64>,
+    /// The range the next planned block belongs to (0: before any part).
+    slot: usize,
+    /// The block count at which to look for settled blocks next.
+    next_settle: usize,
 }
+
+/// Blocks queued between two looks for settled blocks (see
+/// [`Planner::plan_settled`]): 256 KB of them.
+const SETTLE: usize = 8192;
 
 impl Planner {
     /// A planner with these limits, the head at an unknown place.
     pub fn new(limits: Limits) -> Planner {
         Planner {
-            limits,
             blocks: Vec::new(),
             mcr: Vec::new(),
             pos: None,
@@ -189,6 +282,15 @@ impl Planner {
             parts: Vec::new(),
             pre: (0.0, 0.0, 0.0),
             queue: Queue::default(),
+            line_time: 1.0 / limits.command_rate,
+            prev_dir: None,
+            steps: Vec::new(),
+            done: 0,
+            head_planned: false,
+            planned: vec![0.0],
+            slot: 0,
+            next_settle: SETTLE,
+            limits,
         }
     }
 
@@ -201,7 +303,7 @@ impl Planner {
     pub fn begin_part(&mut self, name: &str) {
         self.parts.push(Part {
             name: name.to_string(),
-            first: self.blocks.len(),
+            first: self.done + self.blocks.len(),
             ideal: 0.0,
             nominal: 0.0,
             dwell: 0.0,
@@ -285,7 +387,7 @@ impl Planner {
         }
         let size = lim.block_buffer_size as usize;
         let q = &mut self.queue;
-        let mut ready = q.read + 1.0 / lim.command_rate;
+        let mut ready = q.read + self.line_time;
         while q.ends.front().is_some_and(|&e| e <= ready) {
             q.ends.pop_front();
         }
@@ -317,83 +419,162 @@ impl Planner {
     /// E-only block at `feed` with `retract_acceleration`, from rest to rest;
     /// a move of nothing is skipped.
     pub fn move_to(&mut self, to: DVec3, e: f64, feed: f64, kind: MoveKind) {
+        let step = self.step(to, kind);
+        self.take(step, e, feed, kind);
+    }
+
+    /// The first half of [`Planner::move_to`]: the move's geometry, from the
+    /// position alone (which it updates, with the last direction). The
+    /// rest of the planner's state plays no part, so the steps of a run of
+    /// calls can be worked out before any of them is taken.
+    fn step(&mut self, to: DVec3, kind: MoveKind) -> Step {
         let Some(from) = self.pos else {
             self.pos = Some(to);
-            return;
+            return Step::First;
         };
         let d = to - from;
         let len = d.length();
-        if len > 0.0 {
-            let base = match kind {
-                MoveKind::Extrude => self.limits.max_acceleration,
-                MoveKind::Travel => self.limits.travel_acceleration,
-            };
-            let mut accel = base;
-            // the Z axis's own limits, scaled to the move as both firmwares
-            // do (Klipper's cartesian check_move: z_ratio = L / |dz|)
-            let mut cap = f64::INFINITY;
-            if d.z != 0.0 {
-                let z_ratio = len / d.z.abs();
-                if let Some(vz) = self.limits.max_z_velocity {
-                    cap = vz * z_ratio;
-                }
-                if let Some(az) = self.limits.max_z_acceleration {
-                    accel = accel.min(az * z_ratio);
-                }
+        let moves = len > 0.0; // not when NaN
+        if !moves {
+            return Step::Still;
+        }
+        let base = match kind {
+            MoveKind::Extrude => self.limits.max_acceleration,
+            MoveKind::Travel => self.limits.travel_acceleration,
+        };
+        let mut accel = base;
+        // the Z axis's own limits, scaled to the move as both firmwares
+        // do (Klipper's cartesian check_move: z_ratio = L / |dz|)
+        let mut cap = f64::INFINITY;
+        if d.z != 0.0 {
+            let z_ratio = len / d.z.abs();
+            if let Some(vz) = self.limits.max_z_velocity {
+                cap = vz * z_ratio;
             }
-            let v = self.nominal(len, feed, true, cap);
-            let cruise_v2 = v * v;
-            let dir = d / len;
-            let e_per_mm = if kind == MoveKind::Extrude {
-                e / len
-            } else {
-                0.0
-            };
-            let accel_share = accel / base;
-            let mut entry_v2 = match self.last {
-                Some(prev) => {
-                    let mut j = self.junction_v2(&prev, dir, len, accel, accel_share, cruise_v2);
-                    // Klipper's extruder.py calc_junction: the E speed may
-                    // change at once by at most instantaneous_corner_velocity
-                    if let Some(icv) = self.limits.instantaneous_corner_velocity {
-                        let dr = (e_per_mm - prev.e_per_mm).abs();
-                        if dr > 0.0 {
-                            j = j.min((icv / dr) * (icv / dr));
-                        }
-                    }
-                    j
+            if let Some(az) = self.limits.max_z_acceleration {
+                accel = accel.min(az * z_ratio);
+            }
+        }
+        let dir = d / len;
+        let turn = self.prev_dir.map(|p| Turn::new(p, dir));
+        self.prev_dir = Some(dir);
+        self.pos = Some(to);
+        Step::Moves(Geo {
+            len,
+            dir,
+            base,
+            accel,
+            cap,
+            turn,
+        })
+    }
+
+    /// The second half of [`Planner::move_to`]: the move taken, its step
+    /// worked out.
+    fn take(&mut self, step: Step, e: f64, feed: f64, kind: MoveKind) {
+        let g = match step {
+            Step::First => return,
+            Step::Still => {
+                if e > 0.0 {
+                    self.extrude_only(e, feed);
                 }
-                None => 0.0,
-            };
-            let (mcr_entry_v2, mcr_delta_v2) = self.klipper_entry(&mut entry_v2, base, accel, len);
-            self.push(
-                Block {
-                    len,
-                    accel,
-                    cruise_v2,
-                    entry_v2,
-                },
-                mcr_entry_v2,
-                mcr_delta_v2,
-            );
-            self.last = Some(Last {
-                dir,
+                return;
+            }
+            Step::Moves(g) => g,
+        };
+        let Geo {
+            len,
+            dir,
+            base,
+            accel,
+            cap,
+            turn,
+        } = g;
+        let v = self.nominal(len, feed, true, cap);
+        let cruise_v2 = v * v;
+        // the extruder's corner (e_per_mm) and the acceleration's share
+        // are read under Klipper's limits only: Marlin's skip the divisions
+        let icv = self.limits.instantaneous_corner_velocity;
+        let e_per_mm = if kind == MoveKind::Extrude && icv.is_some() {
+            e / len
+        } else {
+            0.0
+        };
+        let accel_share = if self.limits.square_corner_velocity.is_some() {
+            accel / base
+        } else {
+            1.0
+        };
+        let mut entry_v2 = match self.last {
+            Some(prev) => {
+                // the last block is the last move that moved: its turn
+                let t = turn.unwrap_or_else(|| Turn::new(prev.dir, dir));
+                let mut j = self.junction_v2(&prev, &t, len, accel, accel_share, cruise_v2);
+                // Klipper's extruder.py calc_junction: the E speed may
+                // change at once by at most instantaneous_corner_velocity
+                if let Some(icv) = icv {
+                    let dr = (e_per_mm - prev.e_per_mm).abs();
+                    if dr > 0.0 {
+                        j = j.min((icv / dr) * (icv / dr));
+                    }
+                }
+                j
+            }
+            None => 0.0,
+        };
+        let (mcr_entry_v2, mcr_delta_v2) = self.klipper_entry(&mut entry_v2, base, accel, len);
+        self.push(
+            Block {
                 len,
                 accel,
                 cruise_v2,
-                e_per_mm,
-                accel_share,
-            });
-            self.pos = Some(to);
-            let ideal = if feed.is_finite() && feed > 0.0 {
-                len / feed
-            } else {
-                len / v
-            };
-            self.add(ideal, len / v, 0.0);
-        } else if e > 0.0 {
-            self.extrude_only(e, feed);
+                entry_v2,
+            },
+            mcr_entry_v2,
+            mcr_delta_v2,
+        );
+        self.last = Some(Last {
+            dir,
+            len,
+            accel,
+            cruise_v2,
+            e_per_mm,
+            accel_share,
+        });
+        let ideal = if feed.is_finite() && feed > 0.0 {
+            len / feed
+        } else {
+            len / v
+        };
+        self.add(ideal, len / v, 0.0);
+    }
+
+    /// Replays recorded calls in order, as one call at a time would: each
+    /// run of [`STEPS`] calls has its moves' steps worked out first (a loop
+    /// whose moves do not wait on each other, so the processor overlaps
+    /// their square roots and divisions), then is taken. The same
+    /// operations on the same values, so the same estimate.
+    fn replay_batch(&mut self, calls: &[Call]) {
+        let mut steps = std::mem::take(&mut self.steps);
+        for run in calls.chunks(STEPS) {
+            steps.clear();
+            for c in run {
+                if let Call::MoveTo(to, _, _, kind) = *c {
+                    steps.push(self.step(to, kind));
+                }
+            }
+            let mut next = steps.iter();
+            for c in run {
+                match *c {
+                    Call::MoveTo(_, e, feed, kind) => {
+                        let step = *next.next().expect("a step for every move");
+                        self.take(step, e, feed, kind);
+                    }
+                    _ => replay(self, c),
+                }
+            }
         }
+        self.steps = steps;
     }
 
     /// A move of E alone (retraction, unretraction), `length` mm of filament
@@ -449,6 +630,9 @@ impl Planner {
     /// Queues a block, with its minimum-cruise-ratio profile under Klipper's model.
     fn push(&mut self, b: Block, mcr_entry_v2: f64, mcr_delta_v2: f64) {
         self.blocks.push(b);
+        if self.limits.square_corner_velocity.is_none() && self.blocks.len() >= self.next_settle {
+            self.plan_settled();
+        }
         if self.limits.square_corner_velocity.is_some() {
             self.mcr.push(Mcr {
                 entry_v2: mcr_entry_v2,
@@ -500,25 +684,20 @@ impl Planner {
     fn junction_v2(
         &self,
         prev: &Last,
-        dir: DVec3,
+        t: &Turn,
         len: f64,
         accel: f64,
         accel_share: f64,
         cruise_v2: f64,
     ) -> f64 {
         let both = cruise_v2.min(prev.cruise_v2);
-        // w = |u1 − u2|² = 2·(1 − cos φ) = 4·cos²(θ/2): stable for small turns
-        let w = (prev.dir - dir).length_squared().min(4.0);
-        if w <= 0.0 {
+        if t.w <= 0.0 {
             return both; // straight on
         }
-        let cos_half2 = 0.25 * w; // cos²(θ/2)
-        let sin_half = (1.0 - cos_half2).max(0.0).sqrt(); // sin(θ/2)
-        if sin_half <= 0.0 {
+        if t.sin_half <= 0.0 {
             return 0.0; // a full reversal stops the head
         }
-        // sin/(1 − sin) = sin·(1 + sin)/cos², exact where sin is near 1
-        let r = sin_half * (1.0 + sin_half) / cos_half2;
+        let (cos_half2, sin_half, r) = (t.cos_half2, t.sin_half, t.r);
         match (
             self.limits.square_corner_velocity,
             self.limits.junction_deviation,
@@ -526,7 +705,7 @@ impl Planner {
             (Some(scv), _) => {
                 let share = accel_share.min(prev.accel_share);
                 let jd_v2 = r * scv * scv * (std::f64::consts::SQRT_2 - 1.0) * share;
-                let tan_half = sin_half / cos_half2.sqrt();
+                let tan_half = sin_half / t.x; // t.x = √cos²(θ/2)
                 let c_this = 0.5 * len * accel * tan_half;
                 let c_prev = 0.5 * prev.len * prev.accel * tan_half;
                 jd_v2.min(c_this).min(c_prev).min(both)
@@ -539,7 +718,7 @@ impl Planner {
                 let cap = v2.min(both);
                 // 2x ≤ 2·asin x ≤ π·x: skip the asin when even the largest φ
                 // leaves a limit above the others
-                let x = cos_half2.sqrt();
+                let x = t.x;
                 if len < 1.0
                     && cos_half2 < SMALL_TURN
                     && len * accel < cap * std::f64::consts::PI * x
@@ -555,15 +734,126 @@ impl Planner {
 
     /// Plans every move (the passes of the module comment) and sums the times.
     pub fn finish(mut self) -> Estimate {
-        let mut ends: Vec<usize> = self.parts.iter().map(|p| p.first).collect();
-        ends.push(self.blocks.len());
-        let planned = if self.limits.square_corner_velocity.is_some() {
-            klipper_passes(&self.blocks, &self.mcr, &ends)
-        } else {
-            backward_pass(&mut self.blocks);
-            forward_pass(&mut self.blocks, &ends)
-        };
+        if self.limits.square_corner_velocity.is_some() {
+            let mut ends: Vec<usize> = self.parts.iter().map(|p| p.first).collect();
+            ends.push(self.blocks.len());
+            let planned = klipper_passes(&self.blocks, &self.mcr, &ends);
+            return self.estimate(&planned);
+        }
+        // the head ends at rest: the backward pass from 0 after the last block
+        let n = self.blocks.len();
+        self.backward(n, 0.0);
+        self.forward(n, true);
+        let mut planned = std::mem::take(&mut self.planned);
+        planned.resize(self.parts.len() + 1, 0.0);
         self.estimate(&planned)
+    }
+
+    /// Under Marlin's model, plans the blocks whose entries the blocks still
+    /// to come can no longer change, and forgets them (2M moves kept 64 MB
+    /// of blocks until the end).
+    ///
+    /// The backward pass is e_i = min(cap_i, e_{i+1} + 2·a_i·L_i), and each
+    /// step (a rounded sum, then a min) never lowers its result when
+    /// e_{i+1} grows. Whatever comes after the last block queued, its entry
+    /// lies in [0, ∞]: run from both ends of that range, the pass gives
+    /// bounds of every e_i, and where the two meet (bit for bit) e_i is the
+    /// one the whole print's pass gives; below it the pass is the same
+    /// operations on the same values. The forward pass and the times of the
+    /// blocks before that one follow in order, so every sum is the same.
+    fn plan_settled(&mut self) {
+        let n = self.blocks.len();
+        let (mut lo, mut hi) = (0.0f64, f64::INFINITY);
+        let mut settled = None;
+        for j in (1..n).rev() {
+            let t = self.reach(j);
+            let cap = self.cap(j);
+            lo = cap.min(lo + t);
+            hi = cap.min(hi + t);
+            if lo.to_bits() == hi.to_bits() {
+                settled = Some((j, lo));
+                break;
+            }
+        }
+        match settled {
+            Some((m, e)) => {
+                self.blocks[m].entry_v2 = e;
+                self.backward(m, e);
+                self.forward(m, false);
+                self.blocks.drain(..m);
+                self.done += m;
+                self.head_planned = true;
+                self.next_settle = self.blocks.len() + SETTLE;
+            }
+            // nothing settled yet (moves so fast that 8192 of them cannot
+            // stop): look again once the queue has doubled
+            None => self.next_settle = 2 * n,
+        }
+    }
+
+    /// 2·a·L of block j (of `blocks`): the v² it gains or loses.
+    #[inline]
+    fn reach(&self, j: usize) -> f64 {
+        2.0 * self.blocks[j].accel * self.blocks[j].len
+    }
+
+    /// The highest entry v² of block j ≥ 1 (of `blocks`): its junction's,
+    /// under both blocks' cruise v².
+    #[inline]
+    fn cap(&self, j: usize) -> f64 {
+        let b = &self.blocks;
+        b[j].entry_v2.min(b[j].cruise_v2).min(b[j - 1].cruise_v2)
+    }
+
+    /// The backward pass over `blocks[1..end]` from `next`, the entry v² of
+    /// block `end`: entries the blocks after can brake from. (The first
+    /// block of all enters at rest; a kept first block is planned already.)
+    fn backward(&mut self, end: usize, mut next: f64) {
+        for j in (1..end).rev() {
+            let e = self.cap(j).min(next + self.reach(j));
+            self.blocks[j].entry_v2 = e;
+            next = e;
+        }
+    }
+
+    /// The forward pass over `blocks[..end]` and their times, summed per
+    /// range in order; with `last` the last of them ends at rest, else each
+    /// leaves at the entry of the block after it (in `blocks`).
+    fn forward(&mut self, end: usize, last: bool) {
+        if end == 0 {
+            return;
+        }
+        if !self.head_planned {
+            // the first block of all: from rest
+            self.blocks[0].entry_v2 = 0.0;
+        }
+        // ranges: before the parts (0), then part k (k + 1) from its first block
+        if self.planned.len() <= self.parts.len() {
+            self.planned.resize(self.parts.len() + 1, 0.0);
+        }
+        let first = |slot: usize, parts: &[Part]| parts.get(slot).map_or(usize::MAX, |p| p.first);
+        let mut slot = self.slot;
+        let mut bound = first(slot, &self.parts);
+        // with `last` the last block leaves at rest, else at the next one's entry
+        let blocks = &mut self.blocks[..end + usize::from(!last)];
+        for i in 0..end {
+            let g = self.done + i;
+            while g >= bound {
+                slot += 1;
+                bound = first(slot, &self.parts);
+            }
+            let b = blocks[i];
+            let exit = match blocks.get_mut(i + 1) {
+                Some(nb) => {
+                    let reach = b.entry_v2 + 2.0 * b.accel * b.len;
+                    nb.entry_v2 = nb.entry_v2.min(reach);
+                    nb.entry_v2
+                }
+                None => 0.0,
+            };
+            self.planned[slot] += trapezoid_time(b.len, b.accel, b.entry_v2, exit, b.cruise_v2);
+        }
+        self.slot = slot;
     }
 
     /// The estimate from the planned time before the parts and of each part.
@@ -595,7 +885,7 @@ impl Planner {
 }
 
 /// Klipper's look-ahead flush (`LookAheadQueue.flush`) over the whole print
-/// and the blocks' times, summed per range as [`forward_pass`] does.
+/// and the blocks' times, summed per range as [`Planner::finish`] does.
 ///
 /// Backward from rest at the end, each block gets its entry v²
 /// s_i = min(e_i, s_{i+1} + 2·a_i·L_i) as in Marlin's model, and the same in
@@ -653,49 +943,6 @@ fn klipper_passes(b: &[Block], mcr: &[Mcr], ends: &[usize]) -> Vec<f64> {
     planned
 }
 
-/// The backward pass: entry speeds the blocks after can brake from.
-fn backward_pass(b: &mut [Block]) {
-    // exit of the last block: rest; junctions also under both blocks'
-    // (possibly lowered) cruise speeds
-    let mut next = 0.0f64;
-    for i in (0..b.len()).rev() {
-        let mut cap = b[i].entry_v2.min(b[i].cruise_v2);
-        if i > 0 {
-            cap = cap.min(b[i - 1].cruise_v2);
-        }
-        let e = cap.min(next + 2.0 * b[i].accel * b[i].len);
-        b[i].entry_v2 = e;
-        next = e;
-    }
-}
-
-/// The forward pass and the blocks' times, summed per range: `ends` are the
-/// first blocks of the parts then the block count; returns [before the
-/// parts, part 0, …].
-fn forward_pass(b: &mut [Block], ends: &[usize]) -> Vec<f64> {
-    let n = b.len();
-    // entry of the first block: rest (parts are consecutive ranges)
-    if n > 0 {
-        b[0].entry_v2 = 0.0;
-    }
-    let mut planned = vec![0.0f64; ends.len()];
-    let mut slot = 0;
-    for i in 0..n {
-        while i >= ends[slot] {
-            slot += 1;
-        }
-        let exit = if i + 1 < n {
-            let reach = b[i].entry_v2 + 2.0 * b[i].accel * b[i].len;
-            b[i + 1].entry_v2 = b[i + 1].entry_v2.min(reach);
-            b[i + 1].entry_v2
-        } else {
-            0.0
-        };
-        planned[slot] += trapezoid_time(b[i].len, b[i].accel, b[i].entry_v2, exit, b[i].cruise_v2);
-    }
-    planned
-}
-
 /// Time of one block of length `len` at acceleration `a`, entering at v0²,
 /// leaving at v1², cruising at most at vc² (all reachable: |v1² − v0²| ≤ 2aL).
 ///
@@ -736,9 +983,9 @@ enum Call {
 const BATCH: usize = 4096;
 
 /// Replays one recorded call on `planner`.
-fn replay(planner: &mut Planner, call: Call) {
-    match call {
-        Call::BeginPart(name) => planner.begin_part(&name),
+fn replay(planner: &mut Planner, call: &Call) {
+    match *call {
+        Call::BeginPart(ref name) => planner.begin_part(name),
         Call::Stop => planner.stop(),
         Call::Dwell(s) => planner.dwell(s),
         Call::MoveTo(to, e, feed, kind) => planner.move_to(to, e, feed, kind),
@@ -792,9 +1039,7 @@ impl Fed {
     fn catch_up(&mut self) {
         let Some(p) = &mut self.planner else { return };
         while let Ok(batch) = self.rx.try_recv() {
-            for call in batch {
-                replay(p, call);
-            }
+            p.replay_batch(&batch);
         }
     }
 
@@ -805,9 +1050,7 @@ impl Fed {
             return;
         };
         while let Ok(batch) = self.rx.recv() {
-            for call in batch {
-                replay(&mut p, call);
-            }
+            p.replay_batch(&batch);
         }
         self.estimate = Some(p.finish());
     }
@@ -853,9 +1096,7 @@ impl Background {
         let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<Call>>(64);
         let worker = std::thread::spawn(move || {
             for batch in rx {
-                for call in batch {
-                    replay(&mut planner, call);
-                }
+                planner.replay_batch(&batch);
             }
             planner.finish()
         });
@@ -892,7 +1133,7 @@ impl Background {
 
     fn call(&mut self, c: Call) {
         if let Some(p) = &mut self.inline {
-            replay(p, c);
+            replay(p, &c);
             return;
         }
         self.batch.push(c);
@@ -1040,6 +1281,69 @@ mod tests {
             p.move_to(q, 0.1, feed, MoveKind::Extrude);
         }
         p.finish()
+    }
+
+    /// Feeds `p` a long varied print: 40,000 moves in four parts along a
+    /// wobbling helix (corners of every size, Z, feeds from 5 to 250 mm/s,
+    /// travels, retractions, a dwell and a stop, zero-length moves).
+    fn long_print(p: &mut Planner) {
+        p.move_to(DVec3::ZERO, 0.0, 100.0, MoveKind::Travel);
+        for k in 0..40_000usize {
+            if k % 13_000 == 0 {
+                p.begin_part(&format!("part {k}"));
+            }
+            let t = k as f64 * 0.05;
+            let r = 20.0 + 3.0 * (7.0 * t).sin() + (k % 7) as f64 * 0.01;
+            let to = DVec3::new(r * t.cos(), r * t.sin(), 0.2 + 0.0005 * k as f64);
+            let feed = 5.0 + (k % 50) as f64 * 5.0;
+            match k % 997 {
+                0 => {
+                    p.extrude_only(0.8, 35.0);
+                    p.move_to(to, 0.0, 150.0, MoveKind::Travel);
+                    p.extrude_only(0.8, 35.0);
+                }
+                1 => p.move_to(to, 0.0, feed, MoveKind::Extrude), // then again: no motion
+                500 => p.dwell(0.5),
+                600 => p.stop(),
+                _ => p.move_to(to, 0.02, feed, MoveKind::Extrude),
+            }
+            if k % 997 == 1 {
+                p.move_to(to, 0.0, feed, MoveKind::Extrude);
+            }
+        }
+    }
+
+    #[test]
+    fn planning_settled_blocks_early_changes_nothing() {
+        // Marlin's passes run as the moves come over the blocks that the
+        // rest can no longer change, and forget them: the estimate is the
+        // one of both passes over the whole print at the end, bit for bit
+        for lim in [
+            marlin(1000.0, 0.013, 300.0),
+            Limits {
+                min_segment_time: 0.02,
+                max_z_velocity: Some(5.0),
+                max_z_acceleration: Some(100.0),
+                ..marlin(500.0, 0.05, 200.0)
+            },
+        ] {
+            let mut early = Planner::new(lim.clone());
+            long_print(&mut early);
+            assert!(early.done > 30_000, "{} blocks settled", early.done);
+            assert!(early.blocks.len() < 2 * SETTLE);
+            let mut whole = Planner::new(lim);
+            whole.next_settle = usize::MAX;
+            long_print(&mut whole);
+            assert_eq!(whole.done, 0);
+            let (a, b) = (early.finish(), whole.finish());
+            assert_eq!(a.parts.len(), 4);
+            assert!(a.total.planned > a.total.nominal, "{a:?}");
+            assert_eq!(a.total.planned.to_bits(), b.total.planned.to_bits());
+            for (x, y) in a.parts.iter().zip(&b.parts) {
+                assert_eq!(x.times.planned.to_bits(), y.times.planned.to_bits());
+            }
+            assert_eq!(a, b);
+        }
     }
 
     #[test]

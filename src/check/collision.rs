@@ -381,9 +381,12 @@ pub fn check(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) {
         }
         // string j becomes old enough once the path is LAG past its end
         let (mut arc, mut ek, mut earc) = (0.0, 0, 0.0);
+        // the length of string ek, kept while it waits (not measured again
+        // for every string after it)
+        let mut el: Option<f64> = None;
         let mut old_enough = |w: &mut Walk, upto: usize, arc: f64, all: bool| {
             while ek < upto {
-                let l = tp.length(ek);
+                let l = *el.get_or_insert_with(|| tp.length(ek));
                 if !all && arc - (earc + l) < LAG {
                     break;
                 }
@@ -393,6 +396,7 @@ pub fn check(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) {
                     w.elig_top = w.elig_top.max(a.z).max(b.z);
                 }
                 ek += 1;
+                el = None;
             }
             w.elig = (pi, ek);
         };

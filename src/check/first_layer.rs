@@ -74,7 +74,12 @@ const TILE: i64 = 64;
 /// one bit each, made as they are first touched.
 #[derive(Default)]
 struct Cover {
-    tiles: crate::geom::grid::CellMap<(i64, i64), Box<[u64; (TILE * TILE / 64) as usize]>>,
+    /// Each tile's place in `tiles`.
+    index: crate::geom::grid::CellMap<(i64, i64), usize>,
+    tiles: Vec<[u64; (TILE * TILE / 64) as usize]>,
+    /// The tile touched last and its place (the rows of one capsule mostly
+    /// lie in one tile: looked up once, not once a row).
+    last: Option<((i64, i64), usize)>,
 }
 
 impl Cover {
@@ -87,10 +92,19 @@ impl Cover {
         while i <= i1 {
             let (ti, ri) = (i.div_euclid(TILE), i.rem_euclid(TILE));
             let end = (i1 - i).min(TILE - 1 - ri); // squares after i in this tile
-            let tile = self
-                .tiles
-                .entry((ti, tj))
-                .or_insert_with(|| Box::new([0; (TILE * TILE / 64) as usize]));
+            let at = match self.last {
+                Some((key, at)) if key == (ti, tj) => at,
+                _ => {
+                    let fresh = self.tiles.len();
+                    let at = *self.index.entry((ti, tj)).or_insert(fresh);
+                    if at == fresh {
+                        self.tiles.push([0; (TILE * TILE / 64) as usize]);
+                    }
+                    self.last = Some(((ti, tj), at));
+                    at
+                }
+            };
+            let tile = &mut self.tiles[at];
             // one row of a tile is one u64
             let word = &mut tile[rj as usize];
             let mask = if end + 1 >= 64 {
@@ -112,10 +126,14 @@ impl Cover {
         let hi = a.max(b) + r;
         let j0 = libm::ceil(lo.y / CELL - 0.5) as i64;
         let j1 = libm::floor(hi.y / CELL - 0.5) as i64;
+        // the segment's length and direction, the same for every row
+        let d = b - a;
+        let len = d.length();
+        let axis = (len > 0.0).then(|| (d / len, len));
         let mut new = 0;
         for j in j0..=j1 {
             let y = (j as f64 + 0.5) * CELL;
-            if let Some((x0, x1)) = capsule_row(a, b, r, y) {
+            if let Some((x0, x1)) = capsule_row(a, b, r, y, axis) {
                 let i0 = libm::ceil(x0 / CELL - 0.5) as i64;
                 let i1 = libm::floor(x1 / CELL - 0.5) as i64;
                 if i0 <= i1 {
@@ -129,8 +147,15 @@ impl Cover {
 
 /// The x-interval of the line at height `y` within `r` of the segment
 /// `a`–`b` (a capsule is convex: the union of the intervals of its two end
-/// discs and its rectangle).
-fn capsule_row(a: DVec2, b: DVec2, r: f64, y: f64) -> Option<(f64, f64)> {
+/// discs and its rectangle); `axis` is the segment's unit direction and
+/// length when it has one.
+fn capsule_row(
+    a: DVec2,
+    b: DVec2,
+    r: f64,
+    y: f64,
+    axis: Option<(DVec2, f64)>,
+) -> Option<(f64, f64)> {
     let mut out: Option<(f64, f64)> = None;
     let mut join = |lo: f64, hi: f64| {
         if lo <= hi {
@@ -147,10 +172,7 @@ fn capsule_row(a: DVec2, b: DVec2, r: f64, y: f64) -> Option<(f64, f64)> {
             join(c.x - s, c.x + s);
         }
     }
-    let d = b - a;
-    let len = d.length();
-    if len > 0.0 {
-        let u = d / len;
+    if let Some((u, len)) = axis {
         // α·x + β within [lo, hi], for the distance across and the place along
         let solve = |alpha: f64, beta: f64, lo: f64, hi: f64| -> Option<(f64, f64)> {
             if alpha.abs() < 1e-12 {
@@ -234,20 +256,37 @@ fn footprint_all(
     let mut starts = Vec::with_capacity(paths.len() + 1);
     for (j, tp) in paths.iter().enumerate() {
         starts.push(cands.len());
-        // extruded length along the path up to the current string's middle
-        let mut along = 0.0;
+        let (mut along, mut summed) = (0.0, 0);
+        // extruded length along the path up to the current string's middle,
+        // summed only when a string low enough needs it (a tall part's
+        // strings above its first layer need no length): the same lengths
+        // added in the same order, so the same sums; `summed` strings are in
         for (k, s) in tp.strings.iter().enumerate() {
             if s.travel {
                 continue;
             }
             let (a, b) = tp.ends(k);
-            let w = width(s.c, nozzle);
-            let l = a.distance(b);
-            let mid = along + l / 2.0;
-            along += l;
-            if a.z > w || b.z > w || l <= 0.0 {
+            // a string is too high when an end is over its width w ≥ the
+            // nozzle's: no end over the nozzle's diameter is never too high
+            if (a.z > nozzle || b.z > nozzle) && {
+                let w = width(s.c, nozzle);
+                a.z > w || b.z > w
+            } {
                 continue;
             }
+            let w = width(s.c, nozzle);
+            let l = a.distance(b);
+            if l <= 0.0 {
+                continue;
+            }
+            for i in summed..k {
+                if !tp.strings[i].travel {
+                    along += tp.length(i);
+                }
+            }
+            summed = k + 1;
+            let mid = along + l / 2.0;
+            along += l;
             let here = BedString {
                 a: a.truncate(),
                 b: b.truncate(),

@@ -72,13 +72,19 @@ pub fn cross_sections(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) {
     let mut over: Option<Tally> = None;
     let mut thin: Option<Tally> = None;
     for (k, s) in tp.strings.iter().enumerate() {
-        if s.travel || !s.c.is_finite() || tp.length(k) <= 0.0 {
+        if s.travel || !s.c.is_finite() {
             continue;
         }
-        if s.c > hi {
+        // a declared hair is thin on purpose (toolpath::Strand::hair)
+        let (too_thick, too_thin) = (s.c > hi, s.c < lo && !s.hair);
+        // a string of no length counts for neither: measured only when it
+        // would count (a pass over the points saved on most paths)
+        if !(too_thick || too_thin) || tp.length(k) <= 0.0 {
+            continue;
+        }
+        if too_thick {
             Tally::count(&mut over, k, s.c, s.c > hard_hi, f64::max);
-        } else if s.c < lo && !s.hair {
-            // a declared hair is thin on purpose (toolpath::Strand::hair)
+        } else {
             Tally::count(&mut thin, k, s.c, s.c < hard_lo, f64::min);
         }
     }

@@ -64,8 +64,11 @@ pub fn run_between(
 ) -> (Vec<Finding>, Vec<first_layer::Footprint>) {
     let mut out = Vec::new();
     temperatures(recipe, &mut out);
+    // the geometric checks need finite points within reach (others are
+    // errors): tested in the machine limits' pass over the points
+    let mut sane = true;
     for tp in paths {
-        machine_limits(recipe, tp, &mut out);
+        sane &= machine_limits(recipe, tp, &mut out);
         strings(recipe, tp, &mut out);
         flow::cross_sections(recipe, tp, &mut out);
         out.extend(events(recipe, tp));
@@ -74,9 +77,7 @@ pub fn run_between(
     let cheap_error = out
         .iter()
         .any(|f| f.severity == Severity::Error && !allowed.iter().any(|a| a == f.code));
-    // the geometric checks need finite points within reach (others are errors)
-    let sane = |p: &DVec3| p.is_finite() && p.abs().max_element() < 1e5;
-    let geometric = !cheap_error && paths.iter().all(|tp| tp.points.iter().all(sane));
+    let geometric = !cheap_error && sane;
     std::thread::scope(|s| {
         let support_check = || {
             let mut v = Vec::new();
@@ -197,16 +198,20 @@ fn temperatures(recipe: &Recipe, out: &mut Vec<Finding>) {
 /// Counts the points failing each of the `N` tests of `bad` (one pass over
 /// the points, which is what costs on millions of them) and reports the
 /// first of each, in the order of `what`: (code, what the points are).
+/// Returns whether every point is finite and within 10⁵ mm of the origin on
+/// each axis (what the geometric checks need), found in the same pass.
 fn points_where<const N: usize>(
     tp: &Toolpath,
     what: [(&'static str, &str); N],
     bad: impl Fn(DVec3) -> [bool; N],
     recipe: &Recipe,
     out: &mut Vec<Finding>,
-) {
+) -> bool {
     let mut first = [None; N];
     let mut count = [0usize; N];
+    let mut sane = true;
     for (i, p) in tp.points.iter().enumerate() {
+        sane &= p.is_finite() && p.abs().max_element() < 1e5;
         let b = bad(*p);
         for t in 0..N {
             if b[t] {
@@ -235,9 +240,12 @@ fn points_where<const N: usize>(
             strings: Vec::new(),
         });
     }
+    sane
 }
 
-fn machine_limits(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) {
+/// The points outside the machine's reach; whether all are sane (see
+/// [`points_where`]).
+fn machine_limits(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) -> bool {
     let printer = &recipe.printer;
     let bed = printer.bed;
     let max_z = bed.max_z();
@@ -266,7 +274,7 @@ fn machine_limits(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) {
         },
         recipe,
         out,
-    );
+    )
 }
 
 fn strings(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) {
