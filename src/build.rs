@@ -3,7 +3,9 @@
 
 use std::io::{self, Write};
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::OnceLock;
 
+use crate::check;
 use crate::error::{Error, Result};
 use crate::finding;
 use crate::gcode::{Emitter, MoveStats};
@@ -93,41 +95,20 @@ impl Plan {
             return self.write_gcode(out);
         }
         let limits = self.recipe.printer.limits();
-        let (planner, feed, check_threads) = if n == 2 {
-            let (bg, feed) = Background::fed(limits);
-            (bg, Some(feed), Threads::ONE)
-        } else {
-            (
-                Background::new(limits, Threads::new(2)),
-                None,
-                Threads::new(n - 2),
-            )
-        };
+        if n == 2 {
+            return self.check_and_write_on_two(allow, stop, out, limits);
+        }
+        let planner = Background::new(limits, Threads::new(2));
+        let check_threads = Threads::new(n - 2);
         let this = &*self;
         let failed = AtomicBool::new(false);
         let failed = &failed;
-        let gives_up = move |c: &Checked| {
-            let yes = stop.is_some_and(|strict| !finding::failing(&c.0, strict).is_empty());
-            failed.store(yes, Ordering::Relaxed);
-            yes
-        };
         let (checked, written) = std::thread::scope(|s| {
-            let checks = s.spawn(move || match feed {
-                // the planner's moves wait while a check runs, and are
-                // planned between checks and after the last (not at all when
-                // the build is refused: the writer's end then plans nothing)
-                Some(f) => {
-                    let c = this.checks_between(allow, check_threads, &mut || f.catch_up());
-                    if !gives_up(&c) {
-                        f.run();
-                    }
-                    c
-                }
-                None => {
-                    let c = this.checks(allow, check_threads);
-                    gives_up(&c);
-                    c
-                }
+            let checks = s.spawn(move || {
+                let c = this.checks(allow, check_threads);
+                let yes = stop.is_some_and(|strict| !finding::failing(&c.0, strict).is_empty());
+                failed.store(yes, Ordering::Relaxed);
+                c
             });
             let out = Until { out, failed };
             let written = this.write_gcode_with(out, planner).map(|(w, m)| (w.out, m));
@@ -137,6 +118,68 @@ impl Plan {
             (checked, written)
         });
         (self.findings, self.footprints) = checked;
+        written
+    }
+
+    /// [`Plan::check_and_write_until`] on two threads. This one writes the
+    /// G-code; the other runs the cheap checks, then takes the costly ones
+    /// one at a time ([`check::Tasks`], the longest first), planning the
+    /// moves recorded so far between them. The writer, once it has written
+    /// everything, plans what is left (the other thread's catching up stops
+    /// at its next batch), writes the estimate at the end of the G-code and
+    /// takes the checks not yet taken: so neither thread waits while the
+    /// other has work. The findings are put together in one fixed order.
+    fn check_and_write_on_two<W: Write>(
+        &mut self,
+        allow: &[String],
+        stop: Option<bool>,
+        out: W,
+        limits: crate::planner::Limits,
+    ) -> Result<(W, MoveStats)> {
+        let (planner, feed) = Background::fed(limits);
+        let this = &*self;
+        let refs: Vec<&Toolpath> = this.paths.iter().collect();
+        let allowed: Vec<String> = this.recipe.allow.iter().chain(allow).cloned().collect();
+        let cell: OnceLock<check::Tasks> = OnceLock::new();
+        let failed = AtomicBool::new(false);
+        let (refs, allowed, tasks, failed) = (&refs, &allowed, &cell, &failed);
+        let written = std::thread::scope(|s| {
+            let checks = s.spawn(move || {
+                let t = tasks.get_or_init(|| {
+                    check::Tasks::new(&this.recipe, refs, allowed, &mut || feed.catch_up())
+                });
+                while t.run_next() {
+                    feed.catch_up();
+                }
+                // every check done here (none is on the writer's thread, which
+                // takes one only after writing): give up the writing if they
+                // refuse the build, else plan beside it until it is written
+                let allows: [&[String]; 2] = [&this.recipe.allow, allow];
+                let refused = t.all_done() && stop.is_some_and(|strict| t.fail(&allows, strict));
+                failed.store(refused, Ordering::Relaxed);
+                if !refused {
+                    feed.run();
+                }
+            });
+            let out = Until { out, failed };
+            let written = this.write_gcode_with(out, planner).map(|(w, m)| (w.out, m));
+            if written.is_ok() {
+                if let Some(t) = tasks.get() {
+                    while t.run_next() {}
+                }
+            }
+            checks
+                .join()
+                .unwrap_or_else(|e| std::panic::resume_unwind(e));
+            written
+        });
+        let t = cell
+            .into_inner()
+            .expect("the checks' thread made its tasks");
+        let (mut findings, footprints) = t.finish();
+        check::apply_allow(&mut findings, &self.recipe.allow);
+        check::apply_allow(&mut findings, allow);
+        (self.findings, self.footprints) = (findings, footprints);
         written
     }
 

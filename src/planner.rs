@@ -1007,6 +1007,10 @@ pub struct Background {
     inline: Option<Planner>,
     /// The planner of a [`Feed`], shared with another thread.
     fed: Option<std::sync::Arc<std::sync::Mutex<Fed>>>,
+    /// The feed's [`Feed::wanted`].
+    wanted: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    /// Batches the planner has replayed, to fill again.
+    pool: Pool,
 }
 
 /// Where recorded calls go: the planner's own thread (bounded: the writer
@@ -1025,6 +1029,9 @@ enum Tx {
 /// is the one planner's.
 pub struct Feed {
     shared: std::sync::Arc<std::sync::Mutex<Fed>>,
+    /// Set by the writer's thread when it has written everything and wants
+    /// the planner: a catch-up stops at its next batch and lets it have it.
+    wanted: std::sync::Arc<std::sync::atomic::AtomicBool>,
 }
 
 /// A planner fed by a channel, and its estimate once the calls have ended.
@@ -1032,14 +1039,43 @@ struct Fed {
     planner: Option<Planner>,
     rx: std::sync::mpsc::Receiver<Vec<Call>>,
     estimate: Option<Estimate>,
+    pool: Pool,
+}
+
+/// Replayed batches handed back to the writer to fill again: a fresh
+/// 196 KB batch each time cost the writer's thread page faults (2M moves:
+/// ~100 MB of new pages, and as much unmapped on the other thread).
+type Pool = std::sync::Arc<std::sync::Mutex<Vec<Vec<Call>>>>;
+
+/// Batches a [`Pool`] keeps at most.
+const POOL: usize = 16;
+
+/// Hands `batch` back to `pool`, emptied (dropped when the pool is full).
+fn recycle(pool: &Pool, mut batch: Vec<Call>) {
+    batch.clear();
+    if let Ok(mut p) = pool.lock() {
+        if p.len() < POOL {
+            p.push(batch);
+        }
+    }
+}
+
+/// An empty batch from `pool`, or a new one.
+fn fresh(pool: &Pool) -> Vec<Call> {
+    pool.lock()
+        .ok()
+        .and_then(|mut p| p.pop())
+        .unwrap_or_else(|| Vec::with_capacity(BATCH))
 }
 
 impl Fed {
-    /// Replays the calls recorded so far.
-    fn catch_up(&mut self) {
+    /// Replays the calls recorded so far, until `wanted` is set.
+    fn catch_up(&mut self, wanted: &std::sync::atomic::AtomicBool) {
         let Some(p) = &mut self.planner else { return };
-        while let Ok(batch) = self.rx.try_recv() {
+        while !wanted.load(std::sync::atomic::Ordering::Relaxed) {
+            let Ok(batch) = self.rx.try_recv() else { break };
             p.replay_batch(&batch);
+            recycle(&self.pool, batch);
         }
     }
 
@@ -1051,6 +1087,7 @@ impl Fed {
         };
         while let Ok(batch) = self.rx.recv() {
             p.replay_batch(&batch);
+            recycle(&self.pool, batch);
         }
         self.estimate = Some(p.finish());
     }
@@ -1064,10 +1101,12 @@ fn lock(m: &std::sync::Mutex<Fed>) -> std::sync::MutexGuard<'_, Fed> {
 
 impl Feed {
     /// Replays the calls recorded so far, without waiting for more; does
-    /// nothing if the writer's thread is planning now.
+    /// nothing if the writer's thread is planning now, and stops as soon as
+    /// it wants to (it has written everything: the rest is its to plan,
+    /// while this thread goes on with its own work).
     pub fn catch_up(&self) {
         if let Ok(mut fed) = self.shared.try_lock() {
-            fed.catch_up();
+            fed.catch_up(&self.wanted);
         }
     }
 
@@ -1091,12 +1130,17 @@ impl Background {
                 worker: None,
                 inline: Some(planner),
                 fed: None,
+                wanted: Default::default(),
+                pool: Default::default(),
             };
         }
         let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<Call>>(64);
+        let pool = Pool::default();
+        let back = pool.clone();
         let worker = std::thread::spawn(move || {
             for batch in rx {
                 planner.replay_batch(&batch);
+                recycle(&back, batch);
             }
             planner.finish()
         });
@@ -1107,6 +1151,8 @@ impl Background {
             worker: Some(worker),
             inline: None,
             fed: None,
+            wanted: Default::default(),
+            pool,
         }
     }
 
@@ -1114,11 +1160,14 @@ impl Background {
     /// [`Feed`], which another thread runs when it is free: the same calls in
     /// the same order, so the same estimate. Calls wait in memory until then.
     pub fn fed(limits: Limits) -> (Background, Feed) {
+        let wanted = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
         let (tx, rx) = std::sync::mpsc::channel::<Vec<Call>>();
+        let pool = Pool::default();
         let shared = std::sync::Arc::new(std::sync::Mutex::new(Fed {
             planner: Some(Planner::new(limits.clone())),
             rx,
             estimate: None,
+            pool: pool.clone(),
         }));
         let bg = Background {
             limits,
@@ -1127,8 +1176,10 @@ impl Background {
             worker: None,
             inline: None,
             fed: Some(shared.clone()),
+            wanted: wanted.clone(),
+            pool,
         };
-        (bg, Feed { shared })
+        (bg, Feed { shared, wanted })
     }
 
     fn call(&mut self, c: Call) {
@@ -1143,7 +1194,7 @@ impl Background {
     }
 
     fn send(&mut self) {
-        let batch = std::mem::replace(&mut self.batch, Vec::with_capacity(BATCH));
+        let batch = std::mem::replace(&mut self.batch, fresh(&self.pool));
         // a send fails only if the worker died: its panic is raised at finish
         match &self.tx {
             Some(Tx::Bounded(tx)) => {
@@ -1196,6 +1247,8 @@ impl Background {
         self.tx = None;
         if let Some(shared) = self.fed.take() {
             // every call is sent: plan what the feed's thread has not yet
+            self.wanted
+                .store(true, std::sync::atomic::Ordering::Relaxed);
             let mut fed = lock(&shared);
             fed.run();
             return fed

@@ -58,6 +58,52 @@ impl Threads {
     }
 }
 
+impl Threads {
+    /// A vector of `len` items, item k = `f(k)`, made in chunks on up to this
+    /// many threads (on the caller's alone below `min` items). Each chunk
+    /// writes its items straight into the vector's memory, so its first
+    /// touch (the page faults of a big vector) is shared out too.
+    pub fn fill_vec<T: Send>(
+        self,
+        len: usize,
+        min: usize,
+        f: impl Fn(usize) -> T + Sync,
+    ) -> Vec<T> {
+        let f = &f;
+        self.fill_vec_with(len, min, |start| {
+            let mut k = start;
+            move || {
+                k += 1;
+                f(k - 1)
+            }
+        })
+    }
+
+    /// [`Threads::fill_vec`] where a chunk's items come from one generator:
+    /// `make(start)` gives the items from index `start` on, one per call
+    /// (for items that follow from the one before more cheaply).
+    pub fn fill_vec_with<T: Send, G: FnMut() -> T>(
+        self,
+        len: usize,
+        min: usize,
+        make: impl Fn(usize) -> G + Sync,
+    ) -> Vec<T> {
+        let mut v: Vec<T> = Vec::with_capacity(len);
+        self.chunks(&mut v.spare_capacity_mut()[..len], min, |start, chunk| {
+            let mut next = make(start);
+            for slot in chunk.iter_mut() {
+                slot.write(next());
+            }
+        });
+        // SAFETY: `chunks` called the closure on chunks covering items
+        // 0..len exactly once each (a panic in one propagates through the
+        // scope, and this line is not reached), and the closure wrote every
+        // slot of its chunk: all `len` items are initialised.
+        unsafe { v.set_len(len) };
+        v
+    }
+}
+
 impl Default for Threads {
     /// [`Threads::available`].
     fn default() -> Threads {
@@ -76,5 +122,33 @@ mod tests {
         assert!(!Threads::ONE.parallel());
         assert!(Threads::new(2).parallel());
         assert!(Threads::available().get() >= 1);
+    }
+
+    #[test]
+    fn chunks_cover_every_item_once_at_its_index() {
+        for t in [1, 2, 3, 4] {
+            for n in [0, 1, 7, 100, 1001] {
+                let mut v = vec![0usize; n];
+                Threads::new(t).chunks(&mut v, 10, |start, chunk| {
+                    for (j, x) in chunk.iter_mut().enumerate() {
+                        *x += start + j + 1;
+                    }
+                });
+                let want: Vec<usize> = (1..=n).collect();
+                assert_eq!(v, want, "{t} threads, {n} items");
+            }
+        }
+    }
+
+    #[test]
+    fn filled_vectors_hold_f_of_every_index() {
+        for t in [1, 2, 3, 4] {
+            for n in [0, 1, 9, 1000] {
+                let v = Threads::new(t).fill_vec(n, 4, |k| (k * k) as u64);
+                assert_eq!(v, (0..n).map(|k| (k * k) as u64).collect::<Vec<_>>());
+                let s = Threads::new(t).fill_vec(n, 4, |k| k.to_string());
+                assert!(s.len() == n && s.iter().enumerate().all(|(k, x)| *x == k.to_string()));
+            }
+        }
     }
 }

@@ -21,6 +21,9 @@ use glam::DVec3;
 pub use crate::finding::{
     apply_allow, failing, is_code, summary, validate_allow, Finding, Severity, CODES, SAFETY,
 };
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::OnceLock;
+
 use crate::model::Recipe;
 use crate::threads::Threads;
 use crate::toolpath::Toolpath;
@@ -62,49 +65,163 @@ pub fn run_between(
     threads: Threads,
     between: &mut dyn FnMut(),
 ) -> (Vec<Finding>, Vec<first_layer::Footprint>) {
-    let mut out = Vec::new();
-    temperatures(recipe, &mut out);
-    // the geometric checks need finite points within reach (others are
-    // errors): tested in the machine limits' pass over the points
-    let mut sane = true;
-    for tp in paths {
-        sane &= machine_limits(recipe, tp, &mut out);
-        strings(recipe, tp, &mut out);
-        flow::cross_sections(recipe, tp, &mut out);
-        out.extend(events(recipe, tp));
-        between();
-    }
-    let cheap_error = out
-        .iter()
-        .any(|f| f.severity == Severity::Error && !allowed.iter().any(|a| a == f.code));
-    let geometric = !cheap_error && sane;
+    let tasks = Tasks::new(recipe, paths, allowed, between);
     std::thread::scope(|s| {
-        let support_check = || {
-            let mut v = Vec::new();
-            support::check(recipe, paths, &mut v);
-            v
-        };
-        let support = (geometric && threads.parallel()).then(|| s.spawn(support_check));
-        starvation::check(recipe, paths, &mut out);
-        between();
-        let mut collisions = Vec::new();
-        let mut footprints = Vec::new();
-        if geometric {
-            footprints = first_layer::check(recipe, paths, &mut out);
-            between();
-            collision::check(recipe, paths, &mut collisions);
+        // a second thread takes tasks too (the support check, the costliest,
+        // is the first taken) when the budget allows
+        let helper = threads
+            .parallel()
+            .then(|| s.spawn(|| while tasks.run_next() {}));
+        while tasks.run_next() {
             between();
         }
-        if let Some(h) = support {
-            out.extend(h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)));
-        } else if geometric {
-            out.extend(support_check());
+        if let Some(h) = helper {
+            h.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
         }
-        out.extend(collisions);
+    });
+    tasks.finish()
+}
+
+/// The costly checks of one plan as tasks that any thread may take, one at a
+/// time, in any interleaving: each writes its findings to its own slot, and
+/// [`Tasks::finish`] puts them together in one fixed order, so the findings
+/// are the same whichever thread ran what. [`Tasks::new`] runs the cheap
+/// checks first (see [`run`]); the geometric tasks are empty when those
+/// found an error that is not allowed, or points the geometry cannot take.
+pub struct Tasks<'a> {
+    recipe: &'a Recipe,
+    paths: &'a [&'a Toolpath],
+    geometric: bool,
+    /// The cheap checks' findings, then the pattern helix's (put last).
+    cheap: Vec<Finding>,
+    pattern: Vec<Finding>,
+    /// The next task to take (an index into [`Tasks::ORDER`]).
+    next: AtomicUsize,
+    /// How many tasks have finished.
+    finished: AtomicUsize,
+    slots: [OnceLock<Vec<Finding>>; 4],
+    footprints: OnceLock<Vec<first_layer::Footprint>>,
+}
+
+/// A task of [`Tasks`].
+#[derive(Clone, Copy)]
+enum Task {
+    Support,
+    FirstLayer,
+    Collision,
+    Starvation,
+}
+
+impl<'a> Tasks<'a> {
+    /// The order tasks are taken in: the longest first, so the last to
+    /// finish is a short one.
+    const ORDER: [Task; 4] = [
+        Task::Support,
+        Task::FirstLayer,
+        Task::Collision,
+        Task::Starvation,
+    ];
+
+    /// Runs the cheap checks (calling `between` after each part's) and
+    /// readies the costly ones.
+    pub fn new(
+        recipe: &'a Recipe,
+        paths: &'a [&'a Toolpath],
+        allowed: &[String],
+        between: &mut dyn FnMut(),
+    ) -> Tasks<'a> {
+        let mut out = Vec::new();
+        temperatures(recipe, &mut out);
+        // the geometric checks need finite points within reach (others are
+        // errors): tested in the machine limits' pass over the points
+        let mut sane = true;
+        for tp in paths {
+            sane &= machine_limits(recipe, tp, &mut out);
+            strings(recipe, tp, &mut out);
+            flow::cross_sections(recipe, tp, &mut out);
+            out.extend(events(recipe, tp));
+            between();
+        }
+        let cheap_error = out
+            .iter()
+            .any(|f| f.severity == Severity::Error && !allowed.iter().any(|a| a == f.code));
         // pattern_helix: parameters outside the paper's ranges, modulated strings
-        pattern::findings(recipe, paths, &mut out);
-        (out, footprints)
-    })
+        let mut pattern = Vec::new();
+        pattern::findings(recipe, paths, &mut pattern);
+        Tasks {
+            recipe,
+            paths,
+            geometric: !cheap_error && sane,
+            cheap: out,
+            pattern,
+            next: AtomicUsize::new(0),
+            finished: AtomicUsize::new(0),
+            slots: Default::default(),
+            footprints: OnceLock::new(),
+        }
+    }
+
+    /// Takes the next task and runs it on the caller's thread; false when
+    /// none is left to take.
+    pub fn run_next(&self) -> bool {
+        let k = self.next.fetch_add(1, Ordering::Relaxed);
+        let Some(&task) = Self::ORDER.get(k) else {
+            return false;
+        };
+        let (recipe, paths) = (self.recipe, self.paths);
+        let mut v = Vec::new();
+        match task {
+            Task::Starvation => starvation::check(recipe, paths, &mut v),
+            _ if !self.geometric => {}
+            Task::Support => support::check(recipe, paths, &mut v),
+            Task::FirstLayer => {
+                let _ = self
+                    .footprints
+                    .set(first_layer::check(recipe, paths, &mut v));
+            }
+            Task::Collision => collision::check(recipe, paths, &mut v),
+        }
+        let _ = self.slots[task as usize].set(v);
+        self.finished.fetch_add(1, Ordering::Release);
+        true
+    }
+
+    /// Whether every task has finished (on whichever thread).
+    pub fn all_done(&self) -> bool {
+        self.finished.load(Ordering::Acquire) == Self::ORDER.len()
+    }
+
+    /// Whether the findings so far (all of them once [`Tasks::all_done`]),
+    /// those of the codes in `allows` silenced, fail a build at this
+    /// strictness.
+    pub fn fail(&self, allows: &[&[String]], strict: bool) -> bool {
+        let done = self.slots.iter().filter_map(|s| s.get()).flatten();
+        let mut all: Vec<Finding> = self
+            .cheap
+            .iter()
+            .chain(done)
+            .chain(&self.pattern)
+            .cloned()
+            .collect();
+        for allow in allows {
+            apply_allow(&mut all, allow);
+        }
+        !failing(&all, strict).is_empty()
+    }
+
+    /// Every finding in the one fixed order (the cheap checks', starvation,
+    /// first layer, support, collision, the pattern helix's) and the parts'
+    /// footprints. Every task must have run (see [`Tasks::run_next`]).
+    pub fn finish(self) -> (Vec<Finding>, Vec<first_layer::Footprint>) {
+        let [support, first_layer, collision, starvation] = self
+            .slots
+            .map(|s| s.into_inner().expect("every check task ran"));
+        let mut out = self.cheap;
+        for v in [starvation, first_layer, support, collision, self.pattern] {
+            out.extend(v);
+        }
+        (out, self.footprints.into_inner().unwrap_or_default())
+    }
 }
 
 /// Temperature events (a turtle's `nozzle_temp`, `bed_temp`) above the limits: a nozzle temperature above the
