@@ -612,7 +612,7 @@ fn build_job(
                 threads,
                 ..Default::default()
             },
-            &|w| p.render(w),
+            &|w| p.render_unhashed(w),
         )?;
         files.push(stage(pv, &bytes)?);
         lines.push(line);
@@ -1305,7 +1305,7 @@ pub fn preview(a: &PreviewArgs) -> Vec<Error> {
         make_parent(&out)?;
         crate::sayln!(
             "{}",
-            crate::preview::write(&p, &out, &opts, &|w| p.render(w))?
+            crate::preview::write(&p, &out, &opts, &|w| p.render_unhashed(w))?
         );
         Ok(())
     };
