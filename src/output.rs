@@ -330,7 +330,7 @@ impl AtomicFile {
     }
 
     /// The file to write a big output to: as [`AtomicFile::file`], with the
-    /// kernel asked to start writing each 8 MB to disk as it is written.
+    /// kernel asked to start writing each 2 MB to disk as it is written.
     pub fn streaming(&mut self) -> Streaming<'_> {
         let kick = matches!(self.inner, Some(Inner::Temp(_)));
         Streaming {
@@ -374,7 +374,7 @@ pub struct Streaming<'a> {
 
 impl Streaming<'_> {
     /// How many bytes are written between two kicks.
-    pub const KICK: u64 = 8 << 20;
+    pub const KICK: u64 = 2 << 20;
 
     #[cfg(target_os = "linux")]
     fn start_write_out(&self) {
