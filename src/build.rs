@@ -58,7 +58,9 @@ impl Plan {
     /// which show neither, and need the stats only (hashing the vase's 67 MB
     /// was a tenth of the writing).
     pub fn render_unhashed<W: Write>(&self, out: W) -> Result<Stats> {
-        let (counted, moves) = self.write_gcode(Counted { out, bytes: 0 })?;
+        // the planner inline: the previews draw on the other threads meanwhile
+        let planner = Background::new(self.recipe.printer.limits(), Threads::ONE);
+        let (counted, moves) = self.write_gcode_with(Counted { out, bytes: 0 }, planner)?;
         Ok(self.stats(&moves, String::new(), counted.bytes))
     }
 
