@@ -164,3 +164,54 @@ fn a_refused_build_stops_writing_and_keeps_its_findings() {
         assert!(out.len() <= full.len() && full.starts_with(&out));
     }
 }
+
+/// The costly checks are tasks either thread may take (`check::Tasks`): on
+/// every recipe of `tests/checks/` (a finding of each kind), 1 to 4 threads
+/// give the same findings in the same order, the same footprints and the
+/// same G-code (written whatever the checks say, as `--force` does).
+#[test]
+fn the_checks_find_the_same_whichever_thread_runs_them() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/checks");
+    let mut recipes: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "yaml"))
+        .collect();
+    recipes.sort();
+    assert!(recipes.len() >= 10, "the check recipes are there");
+    let mut kinds = std::collections::BTreeSet::new();
+    for path in &recipes {
+        let run = |n: usize| {
+            let opts = Options {
+                threads: Threads::new(n),
+                ..Default::default()
+            };
+            let mut p = prepare(path, &opts).unwrap();
+            let mut out = Vec::new();
+            p.check_and_render_until(&[], None, &mut out).unwrap();
+            (p.findings, p.footprints, out)
+        };
+        let one = run(1);
+        kinds.extend(one.0.iter().map(|f| f.code));
+        for n in [2, 3, 4] {
+            let other = run(n);
+            let name = path.display();
+            assert_eq!(one.0, other.0, "{name}: other findings on {n} threads");
+            assert_eq!(one.1, other.1, "{name}: other footprints on {n} threads");
+            assert!(one.2 == other.2, "{name}: other G-code on {n} threads");
+        }
+    }
+    // the costly checks' own findings are among them
+    for code in [
+        "unsupported",
+        "bridge",
+        "nozzle-collision",
+        "first-layer",
+        "starvation",
+    ] {
+        assert!(
+            kinds.contains(code),
+            "no `{code}` finding in tests/checks: {kinds:?}"
+        );
+    }
+}
