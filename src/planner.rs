@@ -310,6 +310,18 @@ impl Planner {
         });
     }
 
+    /// Counts a move of `len` mm asked at `feed` mm/s and planned at a
+    /// nominal `v`: its ideal time at the feed (at `v` when the feed is not a
+    /// speed) and its nominal time.
+    fn add_move(&mut self, len: f64, feed: f64, v: f64) {
+        let ideal = if feed.is_finite() && feed > 0.0 {
+            len / feed
+        } else {
+            len / v
+        };
+        self.add(ideal, len / v, 0.0);
+    }
+
     fn add(&mut self, ideal: f64, nominal: f64, dwell: f64) {
         match self.parts.last_mut() {
             Some(p) => {
@@ -541,12 +553,7 @@ impl Planner {
             e_per_mm,
             accel_share,
         });
-        let ideal = if feed.is_finite() && feed > 0.0 {
-            len / feed
-        } else {
-            len / v
-        };
-        self.add(ideal, len / v, 0.0);
+        self.add_move(len, feed, v);
     }
 
     /// Replays recorded calls in order, as one call at a time would: each
@@ -609,12 +616,7 @@ impl Planner {
             mcr_entry_v2,
             mcr_delta_v2,
         );
-        let ideal = if feed.is_finite() && feed > 0.0 {
-            length / feed
-        } else {
-            length / v
-        };
-        self.add(ideal, length / v, 0.0);
+        self.add_move(length, feed, v);
     }
 
     /// Klipper's look-ahead at the time a block is queued (its
