@@ -9,7 +9,7 @@ use p3dp::build::{plan, prepare, Options};
 use p3dp::threads::Threads;
 
 /// A scaled-down `benches/vase-2m.yaml`: 60 turns of 1000 strings, so the
-/// deform step (60,000 points and strings) crosses `PAR_MIN` = 50,000.
+/// deform step (60,000 points and strings) is well above `PAR_MIN` (8,192).
 const VASE: &str = r#"p3dp: 1
 name: vase-60k
 printer: generic-220
