@@ -410,12 +410,17 @@ fn non_empty(option: &str, value: Option<&Path>) -> Result<()> {
 
 /// The files a command reads: its recipes and a `--printer` file.
 fn inputs(c: &Common) -> Vec<(String, PathBuf)> {
-    let mut v: Vec<(String, PathBuf)> = c
-        .recipes
+    inputs_of(&c.recipes, c.printer.as_deref())
+}
+
+/// The files read by a command of these `recipes` and `--printer` (a file
+/// unless it names a built-in profile).
+fn inputs_of(recipes: &[PathBuf], printer: Option<&str>) -> Vec<(String, PathBuf)> {
+    let mut v: Vec<(String, PathBuf)> = recipes
         .iter()
         .map(|r| ("the recipe".to_string(), r.clone()))
         .collect();
-    if let Some(p) = &c.printer {
+    if let Some(p) = printer {
         if crate::machine::Printer::built_in(p).is_none() {
             v.push(("the --printer profile".to_string(), PathBuf::from(p)));
         }
@@ -1284,14 +1289,7 @@ pub fn preview(a: &PreviewArgs) -> Vec<Error> {
         };
         crate::preview::Format::of(&out)?;
         non_empty("-o", Some(&out))?;
-        let mut ins = vec![("the recipe".to_string(), a.recipe.clone())];
-        if let Some(p) = a
-            .printer
-            .as_ref()
-            .filter(|p| crate::machine::Printer::built_in(p).is_none())
-        {
-            ins.push(("the --printer profile".to_string(), PathBuf::from(p)));
-        }
+        let ins = inputs_of(std::slice::from_ref(&a.recipe), a.printer.as_deref());
         crate::output::check_distinct(&[("-o".to_string(), out.clone())], &ins)?;
         let p = plan(
             &a.recipe,
@@ -1347,14 +1345,7 @@ pub fn mesh(a: &MeshArgs) -> Vec<Error> {
         };
         non_empty("-o", Some(&out))?;
         crate::mesh::write::Format::of(&out)?;
-        let mut ins = vec![("the recipe".to_string(), a.recipe.clone())];
-        if let Some(p) = a
-            .printer
-            .as_ref()
-            .filter(|p| crate::machine::Printer::built_in(p).is_none())
-        {
-            ins.push(("the --printer profile".to_string(), PathBuf::from(p)));
-        }
+        let ins = inputs_of(std::slice::from_ref(&a.recipe), a.printer.as_deref());
         crate::output::check_distinct(&[("-o".to_string(), out.clone())], &ins)?;
         let p = plan(
             &a.recipe,

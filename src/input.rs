@@ -82,11 +82,9 @@ pub fn read_text(path: &Path, what: &str) -> Result<String> {
     let shown = path.display().to_string();
     let file = std::fs::File::open(path)
         .map_err(|e| Error::io_from(&shown, format!("cannot read the {what}: {e}"), &e))?;
-    let mut bytes = Vec::new();
-    file.take(MAX_TEXT_BYTES + 1)
-        .read_to_end(&mut bytes)
+    let bytes = read_bounded(file, MAX_TEXT_BYTES)
         .map_err(|e| Error::io_from(&shown, format!("cannot read the {what}: {e}"), &e))?;
-    if bytes.len() as u64 > MAX_TEXT_BYTES {
+    let Some(bytes) = bytes else {
         return Err(Error::input(
             "",
             format!(
@@ -95,10 +93,18 @@ pub fn read_text(path: &Path, what: &str) -> Result<String> {
             ),
         )
         .in_file(&shown));
-    }
+    };
     let text = decode(bytes).map_err(|e| e.in_file(&shown))?;
     check_nesting(&text).map_err(|e| e.in_file(&shown))?;
     Ok(text)
+}
+
+/// The bytes of `file`, or `None` when it holds more than `limit` (no more
+/// than `limit + 1` bytes are read).
+pub fn read_bounded(file: std::fs::File, limit: u64) -> std::io::Result<Option<Vec<u8>>> {
+    let mut bytes = Vec::new();
+    file.take(limit + 1).read_to_end(&mut bytes)?;
+    Ok((bytes.len() as u64 <= limit).then_some(bytes))
 }
 
 /// UTF-8 text without a leading byte-order mark; an error at the line and

@@ -79,6 +79,14 @@ pub fn stop_on_signals(stop: StopHook) {
     *ON_SIGNAL.lock().unwrap_or_else(|e| e.into_inner()) = Some(stop);
 }
 
+/// The extension of `path` in lower case ("" without one): what an output's
+/// format is told by.
+pub fn extension(path: &Path) -> String {
+    path.extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default()
+}
+
 /// Whether `name` is one of our temp files: `.p3dp-` + 6 letters or digits + `.tmp`.
 pub fn is_temp_name(name: &str) -> bool {
     name.strip_prefix(".p3dp-")

@@ -15,7 +15,6 @@
 //! that the print seen from above looks like the drawing.
 
 use std::collections::HashMap;
-use std::io::Read;
 use std::path::Path;
 
 use glam::DVec2;
@@ -84,11 +83,8 @@ pub fn load(path: &Path, shown: &str, opt: &Options) -> Result<Vec<Subpath>> {
             format!("the SVG file `{shown}` is not a regular file; expected an SVG file"),
         ));
     }
-    let mut bytes = Vec::new();
-    file.take(MAX_SVG_BYTES + 1)
-        .read_to_end(&mut bytes)
-        .map_err(|e| io(&e))?;
-    if bytes.len() as u64 > MAX_SVG_BYTES {
+    let bytes = crate::input::read_bounded(file, MAX_SVG_BYTES).map_err(|e| io(&e))?;
+    let Some(bytes) = bytes else {
         return Err(Error::input(
             "",
             format!(
@@ -96,7 +92,7 @@ pub fn load(path: &Path, shown: &str, opt: &Options) -> Result<Vec<Subpath>> {
                 MAX_SVG_BYTES >> 20
             ),
         ));
-    }
+    };
     let text = String::from_utf8(bytes).map_err(|e| {
         Error::input(
             "",

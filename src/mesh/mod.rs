@@ -492,6 +492,16 @@ mod tests {
     use super::*;
     use std::collections::HashMap;
 
+    /// The mesh holds the path's filament volume, within 1 %.
+    fn same_volume(m: &Mesh, tp: &Toolpath) {
+        let want = tp.volume();
+        assert!(
+            (m.volume() - want).abs() < 0.01 * want,
+            "{} vs {want}",
+            m.volume()
+        );
+    }
+
     /// Every edge used by exactly two triangles, once each way.
     fn closed_and_oriented(m: &Mesh) -> Result<(), String> {
         let mut edges: HashMap<(u32, u32), i32> = HashMap::new();
@@ -624,12 +634,7 @@ mod tests {
         add_path(&mut m, &tp, h);
         assert_eq!(m.beads, 1);
         closed_and_oriented(&m).unwrap();
-        let want = tp.volume();
-        assert!(
-            (m.volume() - want).abs() < 0.01 * want,
-            "{} vs {want}",
-            m.volume()
-        );
+        same_volume(&m, &tp);
         // the wall is the flat bead of height `pitch`, w wide
         let flat = Section::flat(c, pitch);
         let (lo, hi) = m.bbox().unwrap();
@@ -709,12 +714,7 @@ mod tests {
         add_path(&mut m, &tp, 0.2);
         assert_eq!(m.beads, 1, "mitred at every corner");
         closed_and_oriented(&m).unwrap();
-        let want = tp.volume();
-        assert!(
-            (m.volume() - want).abs() < 0.01 * want,
-            "{} vs {want}",
-            m.volume()
-        );
+        same_volume(&m, &tp);
     }
 
     #[test]

@@ -30,11 +30,7 @@ pub enum Format {
 impl Format {
     /// The format of `path` by its extension.
     pub fn of(path: &Path) -> Result<Format> {
-        let ext = path
-            .extension()
-            .map(|e| e.to_string_lossy().to_ascii_lowercase())
-            .unwrap_or_default();
-        match ext.as_str() {
+        match crate::output::extension(path).as_str() {
             "stl" => Ok(Format::Stl),
             "3mf" => Ok(Format::ThreeMf),
             "obj" => Ok(Format::Obj),
