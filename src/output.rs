@@ -415,6 +415,11 @@ impl Write for Streaming<'_> {
     }
 
     fn flush(&mut self) -> io::Result<()> {
+        // the end of the writing: the rest goes out while the checks finish
+        if self.kick && self.written > self.kicked {
+            self.start_write_out();
+            self.kicked = self.written;
+        }
         self.file.flush()
     }
 }
