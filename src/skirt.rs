@@ -12,7 +12,12 @@ use crate::model::Skirt;
 use crate::toolpath::Toolpath;
 
 /// Convex hull of `pts`, counter-clockwise, by Andrew's monotone chain.
-pub fn convex_hull(mut pts: Vec<DVec2>) -> Vec<DVec2> {
+pub fn convex_hull(pts: Vec<DVec2>) -> Vec<DVec2> {
+    hull_of(near_outline(|| pts.iter().copied()))
+}
+
+/// [`convex_hull`] of all of `pts`.
+fn hull_of(mut pts: Vec<DVec2>) -> Vec<DVec2> {
     // unstable is the same order: two points equal under `total_cmp` on
     // both axes have the same bits
     pts.sort_unstable_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
@@ -38,6 +43,97 @@ pub fn convex_hull(mut pts: Vec<DVec2>) -> Vec<DVec2> {
         hull.pop();
     }
     hull
+}
+
+/// The points of `points()` (called twice: it gives the same points each
+/// time) that do not lie well inside the octagon of its extreme points (the
+/// largest and smallest x, y, x + y and x − y): no point well inside is a
+/// corner of the hull, so the hull of those left is the same, and sorting
+/// them (the points near the outline) is the hull's cost (Akl and
+/// Toussaint's heuristic; the sphere's skirt sorted all 15,000 points, and
+/// gathering them into a list first was as slow again). "Well inside" is
+/// more than 1e-9 × the octagon's size from each of its sides, far more
+/// than the rounding of the sides' cross products.
+fn near_outline<I: Iterator<Item = DVec2>>(points: impl Fn() -> I) -> Vec<DVec2> {
+    let mut it = points();
+    let Some(first) = it.next() else {
+        return Vec::new();
+    };
+    // the extreme points in the directions 0°, 45°, …, 315°: corners of the
+    // hull in counter-clockwise order (two may be the same point)
+    let along = |p: DVec2| {
+        [
+            p.x,
+            p.x + p.y,
+            p.y,
+            p.y - p.x,
+            -p.x,
+            -p.x - p.y,
+            -p.y,
+            p.x - p.y,
+        ]
+    };
+    let mut score = along(first);
+    let mut best = [first; 8];
+    let mut n = 1;
+    for p in it {
+        let v = along(p);
+        for k in 0..8 {
+            if v[k] > score[k] {
+                (score[k], best[k]) = (v[k], p);
+            }
+        }
+        n += 1;
+    }
+    if n < 64 || !score.iter().all(|s| s.is_finite()) {
+        return points().collect();
+    }
+    let mut corners: Vec<DVec2> = Vec::with_capacity(8);
+    for p in best {
+        if corners.last() != Some(&p) {
+            corners.push(p);
+        }
+    }
+    while corners.len() > 1 && corners.first() == corners.last() {
+        corners.pop();
+    }
+    if corners.len() < 3 {
+        return points().collect();
+    }
+    let size = (best[0].x - best[4].x).max(best[2].y - best[6].y);
+    let margin = size * 1e-9;
+    // each side as (start, direction, the least cross product of a point
+    // well inside: its length times the margin)
+    let sides: Vec<(DVec2, DVec2, f64)> = (0..corners.len())
+        .map(|i| {
+            let (a, b) = (corners[i], corners[(i + 1) % corners.len()]);
+            (a, b - a, (b - a).length() * margin)
+        })
+        .collect();
+    let inside = |p: DVec2| sides.iter().all(|&(a, d, least)| d.perp_dot(p - a) > least);
+    // a box between the octagon's west, east, south and north corners,
+    // taken as a first test only when its corners are well inside (so all
+    // of it is: the octagon less its margin is convex)
+    let (lo, hi) = (
+        DVec2::new(
+            best[3].x.max(best[4].x).max(best[5].x),
+            best[5].y.max(best[6].y).max(best[7].y),
+        ) + margin,
+        DVec2::new(
+            best[7].x.min(best[0].x).min(best[1].x),
+            best[1].y.min(best[2].y).min(best[3].y),
+        ) - margin,
+    );
+    let boxed = lo.cmplt(hi).all()
+        && [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)]
+            .into_iter()
+            .all(inside);
+    points()
+        .filter(|&p| {
+            let in_box = boxed && p.cmpgt(lo).all() && p.cmplt(hi).all();
+            !(in_box || inside(p))
+        })
+        .collect()
 }
 
 /// The hull offset outwards by `d`, corners as arcs of at most 10°.
@@ -85,30 +181,25 @@ pub fn make(
     (c, v): (f64, f64),
     max_strings: u64,
 ) -> Result<Option<Toolpath>> {
-    let mut pts = Vec::new();
-    let mut z = f64::INFINITY;
-    for tp in parts {
-        // a string's start is the string before's end: pushed once (the
-        // hull's sort and dedup would drop the copy anyway)
-        let mut pushed_end = false;
-        for k in 0..tp.len() {
-            if tp.strings[k].travel {
-                pushed_end = false;
-                continue;
-            }
-            let (a, b) = tp.ends(k);
-            if !pushed_end {
-                pts.push(a.truncate());
-            }
-            pts.push(b.truncate());
-            pushed_end = true;
-            z = z.min(a.z).min(b.z);
-        }
-    }
-    if pts.is_empty() {
+    // the extruding strings' ends (a string's start is the string before's
+    // end: given once), seen from above, and their heights
+    let ends = || {
+        parts.iter().flat_map(|tp| {
+            (0..tp.len())
+                .filter(|&k| !tp.strings[k].travel)
+                .flat_map(move |k| {
+                    let joined = k > 0 && !tp.strings[k - 1].travel;
+                    let (a, b) = tp.ends(k);
+                    (!joined).then_some(a).into_iter().chain([b])
+                })
+        })
+    };
+    let (z, any) = ends().fold((f64::INFINITY, false), |(z, _), p| (z.min(p.z), true));
+    if !any {
         return Ok(None);
     }
-    let hull = convex_hull(pts);
+    let near = near_outline(|| ends().map(|p| p.truncate()));
+    let hull = hull_of(near);
     // every loop has about as many strings as the first
     let per_loop = offset(&hull, skirt.distance.max(spacing)).len() as u64 + 1;
     if per_loop * skirt.loops as u64 > max_strings {
@@ -157,6 +248,44 @@ mod tests {
         ];
         let h = convex_hull(pts);
         assert_eq!(h.len(), 4);
+    }
+
+    #[test]
+    fn dropping_inner_points_keeps_the_hull() {
+        let mut rng = crate::rng::SplitMix64::new(21);
+        let mut u = || rng.uniform();
+        let clouds: Vec<Vec<DVec2>> = vec![
+            // a disc, a helix seen from above, a thin sliver, a square grid
+            // (many points on the octagon's sides), a segment
+            (0..5000)
+                .map(|_| DVec2::new(u() - 0.5, u() - 0.5) * 80.0)
+                .collect(),
+            (0..20000)
+                .map(|k| {
+                    let a = k as f64 * 0.0123;
+                    DVec2::new(libm::cos(a), libm::sin(a)) * (25.0 - k as f64 * 1e-3)
+                })
+                .collect(),
+            (0..3000)
+                .map(|_| DVec2::new(u() * 100.0, 50.0 + (u() - 0.5) * 1e-3))
+                .collect(),
+            (0..4096)
+                .map(|k| DVec2::new((k % 64) as f64, (k / 64) as f64) * 0.5)
+                .collect(),
+            (0..100).map(|k| DVec2::splat(k as f64)).collect(),
+            // thinner than the margin: nothing is dropped
+            (0..3000)
+                .map(|_| DVec2::new(u() * 100.0, 50.0 + (u() - 0.5) * 1e-8))
+                .collect(),
+        ];
+        for (i, pts) in clouds.into_iter().enumerate() {
+            let kept = near_outline(|| pts.iter().copied());
+            assert!(
+                i >= 4 || kept.len() < pts.len(),
+                "cloud {i} dropped nothing"
+            );
+            assert_eq!(hull_of(kept), hull_of(pts), "cloud {i}");
+        }
     }
 
     #[test]
