@@ -60,7 +60,7 @@ pub fn make_parts(recipe: &Recipe, threads: Threads) -> Result<Vec<Toolpath>> {
             extra = true;
         }
         if let Some(b) = &part.brim {
-            *tp = b.around(tp);
+            b.put_round(tp);
             extra = true;
         }
     }

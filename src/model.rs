@@ -73,8 +73,15 @@ impl Brim {
     /// bead overlaps the part's), each next one line_width further out,
     /// printed outermost first so the head ends inside, next to the part.
     pub fn around(&self, tp: &Toolpath) -> Toolpath {
+        let mut out = tp.clone();
+        self.put_round(&mut out);
+        out
+    }
+
+    /// [`Brim::around`] in place: the loops put ahead of `tp`'s strings.
+    pub fn put_round(&self, tp: &mut Toolpath) {
         if tp.is_empty() || self.loops == 0 {
-            return tp.clone();
+            return;
         }
         let (centre, reach) = first_contact(tp, self.layer_height);
         let (w, h) = (self.line_width, self.layer_height);
@@ -85,7 +92,6 @@ impl Brim {
         };
         let r_out = r_in + (self.loops - 1) as f64 * w;
         let mut out = Toolpath::new(on_circle(r_out, 0.0));
-        out.name = tp.name.clone();
         for k in (0..self.loops).rev() {
             let r = r_in + k as f64 * w;
             let n = (libm::ceil(std::f64::consts::TAU * r / Self::CHORD) as usize).max(24);
@@ -97,8 +103,7 @@ impl Brim {
                 out.draw(on_circle(r, if i == n { 0.0 } else { t }), c, self.speed);
             }
         }
-        out.append(tp, self.speed);
-        out
+        tp.prepend(out, self.speed);
     }
 }
 

@@ -286,6 +286,35 @@ impl Toolpath {
         self.strings.extend_from_slice(&other.strings);
         self.markers.extend_from_slice(&other.markers);
     }
+
+    /// Puts `before` ahead of this path: the same path as
+    /// `before.append(self)` with this one's name, made in this path's
+    /// buffers (a brim or stand ahead of a 2M-string part copied all of it
+    /// into new memory).
+    pub fn prepend(&mut self, mut before: Toolpath, travel_speed: f64) {
+        let start = self.points[0];
+        if before.head() != start {
+            before.travel(start, travel_speed);
+        }
+        let base = before.len();
+        for (k, _) in &mut self.events {
+            *k += base;
+        }
+        before.events.append(&mut self.events);
+        self.events = before.events;
+        if self.turns.is_some() || before.turns.is_some() {
+            let theirs = before.points.len();
+            let u = before.turns.unwrap_or_else(|| vec![0.0; theirs]);
+            let mine = self
+                .turns
+                .get_or_insert_with(|| vec![0.0; self.points.len()]);
+            mine.splice(0..1, u);
+        }
+        // the join is `before`'s last point, as in `append`
+        self.points.splice(0..1, before.points);
+        self.strings.splice(0..0, before.strings);
+        self.markers.splice(0..0, before.markers);
+    }
 }
 
 /// x − floor(x): the fractional part, in [0, 1).
@@ -334,6 +363,43 @@ mod tests {
         assert_eq!(t.midpoint(0), DVec3::new(1.5, 0.0, 0.0));
         // the travel string extrudes nothing
         assert!((t.volume() - (0.2 * 3.0 + 0.1 * 5.0)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn prepend_is_append_the_other_way() {
+        let path = |x: f64, turns: bool| {
+            let mut t = Toolpath::new(DVec3::new(x, 0.0, 0.2));
+            t.name = format!("at {x}");
+            t.draw(DVec3::new(x + 1.0, 0.0, 0.2), 0.1, 10.0);
+            t.events.push((1, Event::Pause));
+            t.draw(DVec3::new(x + 1.0, 1.0, 0.2), 0.2, 20.0);
+            t.markers.push(Marker {
+                pos: DVec3::splat(x),
+                heading: DVec3::X,
+                up: DVec3::Z,
+            });
+            t.events.push((2, Event::Dwell { ms: x }));
+            if turns {
+                t.turns = Some(vec![x, x + 0.5, x + 1.0]);
+            }
+            t
+        };
+        for (tb, tp) in [(false, false), (true, false), (false, true), (true, true)] {
+            // joined by a travel, and not (starting where `before` ends)
+            for same in [false, true] {
+                let (before, mut part) = (path(0.0, tb), path(5.0, tp));
+                if same {
+                    part.points[0] = before.head();
+                }
+                let mut want = before.clone();
+                want.append(&part, 99.0);
+                want.name = part.name.clone();
+                let mut got = part;
+                got.prepend(before, 99.0);
+                assert_eq!(got.len(), 4 + usize::from(!same));
+                assert_eq!(got, want, "turns {tb} {tp}, same {same}");
+            }
+        }
     }
 
     #[test]
