@@ -30,7 +30,7 @@ use serde::Serialize;
 
 use super::support::width;
 use super::{fmt_p, Finding, Severity};
-use crate::geom::grid::GrowGrid;
+use crate::geom::grid::{ceil_i64, floor_i64, GrowGrid};
 use crate::model::Recipe;
 use crate::toolpath::Toolpath;
 
@@ -112,7 +112,14 @@ impl Cover {
             } else {
                 ((1u64 << (end + 1)) - 1) << ri
             };
-            new += (mask & !*word).count_ones() as u64;
+            // (no bit count for a row all new or all covered: counting bits
+            // is a loop on CPUs before x86-64-v2, which builds target)
+            let fresh = mask & !*word;
+            if fresh == mask {
+                new += (end + 1).min(64) as u64;
+            } else if fresh != 0 {
+                new += fresh.count_ones() as u64;
+            }
             *word |= mask;
             i += end + 1;
         }
@@ -124,8 +131,8 @@ impl Cover {
     fn capsule(&mut self, a: DVec2, b: DVec2, r: f64) -> u64 {
         let lo = a.min(b) - r;
         let hi = a.max(b) + r;
-        let j0 = libm::ceil(lo.y / CELL - 0.5) as i64;
-        let j1 = libm::floor(hi.y / CELL - 0.5) as i64;
+        let j0 = ceil_i64(lo.y / CELL - 0.5);
+        let j1 = floor_i64(hi.y / CELL - 0.5);
         // the segment's length and direction, the same for every row
         let d = b - a;
         let len = d.length();
@@ -134,8 +141,8 @@ impl Cover {
         for j in j0..=j1 {
             let y = (j as f64 + 0.5) * CELL;
             if let Some((x0, x1)) = capsule_row(a, b, r, y, axis) {
-                let i0 = libm::ceil(x0 / CELL - 0.5) as i64;
-                let i1 = libm::floor(x1 / CELL - 0.5) as i64;
+                let i0 = ceil_i64(x0 / CELL - 0.5);
+                let i1 = floor_i64(x1 / CELL - 0.5);
                 if i0 <= i1 {
                     new += self.row(j, i0, i1);
                 }

@@ -22,20 +22,35 @@ pub struct SegGrid {
     items: Vec<u32>,
 }
 
+/// `libm::floor(v) as i64`, without the call: truncate, then step down
+/// when that rounded up (a negative fraction). The same for every f64: NaN
+/// is 0, and values past i64's range saturate as the cast does.
+#[inline]
+pub fn floor_i64(v: f64) -> i64 {
+    let t = v as i64;
+    if (t as f64) > v {
+        t.saturating_sub(1)
+    } else {
+        t
+    }
+}
+
+/// `libm::ceil(v) as i64`, without the call (see [`floor_i64`]).
+#[inline]
+pub fn ceil_i64(v: f64) -> i64 {
+    let t = v as i64;
+    if (t as f64) < v {
+        t.saturating_add(1)
+    } else {
+        t
+    }
+}
+
 /// Integer cube coordinates of `p` for cubes of side 1 / `inv`.
 #[inline]
 pub fn cube(p: DVec3, inv: f64) -> [i64; 3] {
-    // floor without a libm call: truncate, then step down for negatives;
     // clamped so that far-away points stay in range
-    let f = |v: f64| {
-        let v = (v * inv).clamp(-1e15, 1e15);
-        let t = v as i64;
-        if (t as f64) > v {
-            t - 1
-        } else {
-            t
-        }
-    };
+    let f = |v: f64| floor_i64((v * inv).clamp(-1e15, 1e15));
     [f(p.x), f(p.y), f(p.z)]
 }
 
@@ -282,6 +297,42 @@ pub fn closest(p: DVec3, a: DVec3, b: DVec3) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn floor_and_ceil_are_libms() {
+        let mut rng = crate::rng::SplitMix64::new(7);
+        let mut vals = vec![
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            2.5,
+            -2.5,
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::MAX,
+            f64::MIN,
+            f64::MIN_POSITIVE,
+            -f64::MIN_POSITIVE,
+            9.2e18,
+            9.3e18,
+            -9.3e18,
+            (1u64 << 63) as f64,
+            -((1u64 << 63) as f64),
+            4503599627370495.5,
+            -4503599627370495.5,
+        ];
+        // any bits, and values of a few mm on the 0.025 mm grid
+        vals.extend((0..100_000).map(|_| f64::from_bits(rng.next_u64())));
+        vals.extend((0..100_000).map(|_| (rng.uniform() - 0.5) * 1e4 / 0.025 - 0.5));
+        for v in vals {
+            assert_eq!(floor_i64(v), libm::floor(v) as i64, "floor {v:e}");
+            assert_eq!(ceil_i64(v), libm::ceil(v) as i64, "ceil {v:e}");
+        }
+    }
 
     #[test]
     fn segments_are_found_near_any_of_their_points() {
