@@ -1011,6 +1011,8 @@ pub struct Background {
     fed: Option<std::sync::Arc<std::sync::Mutex<Fed>>>,
     /// The feed's [`Feed::wanted`].
     wanted: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    /// The feed's [`Feed::sent`].
+    sent: std::sync::Arc<std::sync::atomic::AtomicUsize>,
     /// Batches the planner has replayed, to fill again.
     pool: Pool,
 }
@@ -1034,12 +1036,16 @@ pub struct Feed {
     /// Set by the writer's thread when it has written everything and wants
     /// the planner: a catch-up stops at its next batch and lets it have it.
     wanted: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    /// How many batches the writer has sent so far.
+    sent: std::sync::Arc<std::sync::atomic::AtomicUsize>,
 }
 
 /// A planner fed by a channel, and its estimate once the calls have ended.
 struct Fed {
     planner: Option<Planner>,
     rx: std::sync::mpsc::Receiver<Vec<Call>>,
+    /// How many batches it has taken from `rx`.
+    received: usize,
     estimate: Option<Estimate>,
     pool: Pool,
 }
@@ -1071,11 +1077,13 @@ fn fresh(pool: &Pool) -> Vec<Call> {
 }
 
 impl Fed {
-    /// Replays the calls recorded so far, until `wanted` is set.
-    fn catch_up(&mut self, wanted: &std::sync::atomic::AtomicBool) {
+    /// Replays the first `until` batches (those sent so far), stopping
+    /// early when `wanted` is set.
+    fn catch_up(&mut self, until: usize, wanted: &std::sync::atomic::AtomicBool) {
         let Some(p) = &mut self.planner else { return };
-        while !wanted.load(std::sync::atomic::Ordering::Relaxed) {
+        while self.received < until && !wanted.load(std::sync::atomic::Ordering::Relaxed) {
             let Ok(batch) = self.rx.try_recv() else { break };
+            self.received += 1;
             p.replay_batch(&batch);
             recycle(&self.pool, batch);
         }
@@ -1088,6 +1096,7 @@ impl Fed {
             return;
         };
         while let Ok(batch) = self.rx.recv() {
+            self.received += 1;
             p.replay_batch(&batch);
             recycle(&self.pool, batch);
         }
@@ -1102,19 +1111,22 @@ fn lock(m: &std::sync::Mutex<Fed>) -> std::sync::MutexGuard<'_, Fed> {
 }
 
 impl Feed {
-    /// Replays the calls recorded so far, without waiting for more; does
-    /// nothing if the writer's thread is planning now, and stops as soon as
-    /// it wants to (it has written everything: the rest is its to plan,
-    /// while this thread goes on with its own work).
+    /// Replays the calls recorded so far, not those recorded meanwhile (a
+    /// writer faster than the planner kept this thread planning until it
+    /// had written everything, the checks this thread had yet to start
+    /// waiting); does nothing if the writer's thread is planning now, and
+    /// stops as soon as it wants to (it has written everything: the rest is
+    /// its to plan, while this thread goes on with its own work).
     pub fn catch_up(&self) {
+        let until = self.sent.load(std::sync::atomic::Ordering::Acquire);
         if let Ok(mut fed) = self.shared.try_lock() {
-            fed.catch_up(&self.wanted);
+            fed.catch_up(until, &self.wanted);
         }
     }
 
     /// Replays the calls until the writer finishes (unless its thread has
     /// done so already), and plans them.
-    pub fn run(self) {
+    pub fn run(&self) {
         lock(&self.shared).run();
     }
 }
@@ -1133,6 +1145,7 @@ impl Background {
                 inline: Some(planner),
                 fed: None,
                 wanted: Default::default(),
+                sent: Default::default(),
                 pool: Default::default(),
             };
         }
@@ -1154,6 +1167,7 @@ impl Background {
             inline: None,
             fed: None,
             wanted: Default::default(),
+            sent: Default::default(),
             pool,
         }
     }
@@ -1163,11 +1177,13 @@ impl Background {
     /// the same order, so the same estimate. Calls wait in memory until then.
     pub fn fed(limits: Limits) -> (Background, Feed) {
         let wanted = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let sent = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
         let (tx, rx) = std::sync::mpsc::channel::<Vec<Call>>();
         let pool = Pool::default();
         let shared = std::sync::Arc::new(std::sync::Mutex::new(Fed {
             planner: Some(Planner::new(limits.clone())),
             rx,
+            received: 0,
             estimate: None,
             pool: pool.clone(),
         }));
@@ -1179,9 +1195,17 @@ impl Background {
             inline: None,
             fed: Some(shared.clone()),
             wanted: wanted.clone(),
+            sent: sent.clone(),
             pool,
         };
-        (bg, Feed { shared, wanted })
+        (
+            bg,
+            Feed {
+                shared,
+                wanted,
+                sent,
+            },
+        )
     }
 
     fn call(&mut self, c: Call) {
@@ -1202,10 +1226,10 @@ impl Background {
             Some(Tx::Bounded(tx)) => {
                 let _ = tx.send(batch);
             }
-            Some(Tx::Unbounded(tx)) => {
-                let _ = tx.send(batch);
+            Some(Tx::Unbounded(tx)) if tx.send(batch).is_ok() => {
+                self.sent.fetch_add(1, std::sync::atomic::Ordering::Release);
             }
-            None => {}
+            _ => {}
         }
     }
 
