@@ -175,9 +175,19 @@ pub fn run_parallel<T: Send>(
     f: impl Fn(usize) -> T + Sync,
     tick: impl Fn() + Sync,
 ) -> Vec<T> {
+    let workers = threads.clamp(1, n.max(1));
+    if workers == 1 {
+        // on the caller's thread: a thread to wait for would add nothing
+        return (0..n)
+            .map(|k| {
+                let r = f(k);
+                tick();
+                r
+            })
+            .collect();
+    }
     let slots: Vec<Mutex<Option<T>>> = (0..n).map(|_| Mutex::new(None)).collect();
     let next = AtomicUsize::new(0);
-    let workers = threads.clamp(1, n.max(1));
     std::thread::scope(|s| {
         for _ in 0..workers {
             s.spawn(|| loop {

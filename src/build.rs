@@ -133,13 +133,15 @@ impl Plan {
     }
 
     /// [`Plan::check_and_write_until`] on two threads. This one writes the
-    /// G-code; the other runs the cheap checks, then takes the costly ones
-    /// one at a time ([`check::Tasks`], the longest first), planning the
-    /// moves recorded so far between them. The writer, once it has written
-    /// everything, plans what is left (the other thread's catching up stops
-    /// at its next batch), writes the estimate at the end of the G-code and
-    /// takes the checks not yet taken: so neither thread waits while the
-    /// other has work. The findings are put together in one fixed order.
+    /// G-code; the other (a pool worker) runs the cheap checks, then takes
+    /// the costly ones one at a time ([`check::Tasks`], the longest first),
+    /// planning the moves recorded so far between them. The writer, once it
+    /// has written everything, plans what is left (the other thread's
+    /// catching up stops at its next batch), writes the estimate at the end
+    /// of the G-code, runs the cheap checks itself if the other thread has
+    /// not started them, and takes the checks not yet taken: so neither
+    /// thread waits while the other has work. The findings are put together
+    /// in one fixed order.
     fn check_and_write_on_two<W: Write>(
         &mut self,
         allow: &[String],
@@ -153,12 +155,16 @@ impl Plan {
         let allowed: Vec<String> = this.recipe.allow.iter().chain(allow).cloned().collect();
         let cell: OnceLock<check::Tasks> = OnceLock::new();
         let failed = AtomicBool::new(false);
-        let (refs, allowed, tasks, failed) = (&refs, &allowed, &cell, &failed);
-        let written = std::thread::scope(|s| {
-            let checks = s.spawn(move || {
-                let t = tasks.get_or_init(|| {
-                    check::Tasks::new(&this.recipe, refs, allowed, &mut || feed.catch_up())
-                });
+        let (refs, allowed, tasks, failed, feed) = (&refs, &allowed, &cell, &failed, &feed);
+        // the cheap checks, run by whichever thread comes first
+        let new_tasks =
+            move || check::Tasks::new(&this.recipe, refs, allowed, &mut || feed.catch_up());
+        // the checks on a pool worker (woken at once; a new thread could
+        // wait milliseconds to start), the writing on this thread; the scope
+        // ends when both have (a panic in the checks is raised then)
+        let written = rayon::in_place_scope(|s| {
+            s.spawn(move |_| {
+                let t = tasks.get_or_init(new_tasks);
                 while t.run_next() {
                     feed.catch_up();
                 }
@@ -175,13 +181,12 @@ impl Plan {
             let out = Until { out, failed };
             let written = this.write_gcode_with(out, planner).map(|(w, m)| (w.out, m));
             if written.is_ok() {
-                if let Some(t) = tasks.get() {
-                    while t.run_next() {}
-                }
+                // the other thread may not have made the tasks yet, or even
+                // started (its worker may be busy with another build's
+                // checks): then this one makes them
+                let t = tasks.get_or_init(new_tasks);
+                while t.run_next() {}
             }
-            checks
-                .join()
-                .unwrap_or_else(|e| std::panic::resume_unwind(e));
             written
         });
         let t = cell

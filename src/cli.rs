@@ -227,6 +227,9 @@ impl Common {
         let n = self
             .jobs
             .map_or_else(|| Threads::available().get(), |n| usize::from(n).max(1));
+        // the pool of the builds' chunks, N workers, started now so that its
+        // threads are up before the first step needs them
+        crate::threads::warm(n);
         let workers = n.min(jobs).max(1);
         (workers, Threads::new(n / workers))
     }

@@ -1,6 +1,29 @@
 //! The thread budget of one build: how many threads its pools (step chunks,
 //! the support check, the planner) may use together. `-j` sets it; nothing
 //! below the command line asks the machine for more.
+//!
+//! Chunks run on rayon's pool of parked workers ([`warm`] starts it with the
+//! command's `-j`): on a 2-core machine a newly spawned thread often waited
+//! for the core of the thread that spawned it, 1.3 ms at the median and up
+//! to a scheduler slice (3 ms), while a parked worker wakes in microseconds.
+//! Which thread runs a chunk never changes what it computes.
+
+/// Starts the pool of `n` worker threads the chunks run on (once per
+/// process: later calls, and calls after the pool has started, change
+/// nothing). Without it the pool starts at its first use, one worker per
+/// core.
+pub fn warm(n: usize) {
+    let built = rayon::ThreadPoolBuilder::new()
+        .num_threads(n.max(1))
+        .thread_name(|k| format!("p3dp-worker-{k}"))
+        .build_global();
+    if built.is_ok() {
+        // wait until every worker has run once: a new thread may sit on
+        // this one's core until it blocks, while a worker that has run and
+        // sleeps is woken on an idle core
+        rayon::broadcast(|_| ());
+    }
+}
 
 /// How many threads one build may use; at least 1.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -33,9 +56,9 @@ impl Threads {
 
 impl Threads {
     /// Calls `f(start, chunk)` on consecutive chunks of `items` (chunk j
-    /// starts at item `start`) on up to this many scoped threads, or on the
-    /// caller's alone below `min` items. For work whose every item is
-    /// computed the same way wherever the split falls.
+    /// starts at item `start`) on up to this many threads (the pool's and
+    /// the caller's), or on the caller's alone below `min` items. For work
+    /// whose every item is computed the same way wherever the split falls.
     pub fn chunks<T: Send>(self, items: &mut [T], min: usize, f: impl Fn(usize, &mut [T]) + Sync) {
         let n = items.len();
         let threads = if n < min { 1 } else { self.get() };
@@ -43,13 +66,14 @@ impl Threads {
             return f(0, items);
         }
         let size = n.div_ceil(threads);
-        std::thread::scope(|s| {
+        // a panic in a chunk is raised here once all have ended
+        rayon::in_place_scope(|s| {
             let f = &f;
             let mut rest = items;
             let mut start = 0;
             while rest.len() > size {
                 let (chunk, tail) = rest.split_at_mut(size);
-                s.spawn(move || f(start, chunk));
+                s.spawn(move |_| f(start, chunk));
                 start += size;
                 rest = tail;
             }
@@ -96,8 +120,8 @@ impl Threads {
             }
         });
         // SAFETY: `chunks` called the closure on chunks covering items
-        // 0..len exactly once each (a panic in one propagates through the
-        // scope, and this line is not reached), and the closure wrote every
+        // 0..len exactly once each (a panic in one propagates out of
+        // `chunks` once all have ended, and this line is not reached), and the closure wrote every
         // slot of its chunk: all `len` items are initialised.
         unsafe { v.set_len(len) };
         v

@@ -107,7 +107,7 @@ impl Step {
 const PAR_MIN: usize = 8_192;
 
 /// Calls `f(start, chunk)` on consecutive chunks of `items` (chunk j starts at
-/// item `start`), on up to `threads` scoped threads (the caller's budget;
+/// item `start`), on up to `threads` threads (the caller's budget;
 /// one below [`PAR_MIN`] items), and returns the error of the earliest failing chunk. Every item
 /// is computed by the same code whatever the split, and each chunk stops at
 /// its own first error, so results and error are those of one thread: the
@@ -122,20 +122,16 @@ pub(crate) fn par_chunks<T: Send>(
     if threads <= 1 {
         return f(0, items);
     }
+    // the same split as `Threads::chunks`: chunk j starts at j × size
     let size = n.div_ceil(threads);
-    let results: Vec<Result<()>> = std::thread::scope(|s| {
-        let f = &f;
-        let handles: Vec<_> = items
-            .chunks_mut(size)
-            .enumerate()
-            .map(|(j, chunk)| s.spawn(move || f(j * size, chunk)))
-            .collect();
-        handles
-            .into_iter()
-            .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
-            .collect()
+    let results: Vec<std::sync::OnceLock<Result<()>>> =
+        (0..n.div_ceil(size)).map(|_| Default::default()).collect();
+    Threads::new(threads).chunks(items, 0, |start, chunk| {
+        let _ = results[start / size].set(f(start, chunk));
     });
-    results.into_iter().collect()
+    results
+        .into_iter()
+        .try_for_each(|r| r.into_inner().expect("every chunk ran"))
 }
 
 /// Variable values for point or string `i` of `n` at `p`; r and theta only
