@@ -243,148 +243,218 @@ struct Candidate {
     k: usize,
 }
 
-/// The footprint of each of `paths` on the bed (`None` where none of its
-/// strings lies there), and per path the first bed string whose nozzle runs
-/// lower than `min_h`, with its height.
-///
-/// A string lies on the bed when its nozzle height h ≤ its width w and no
-/// earlier bed string at or below h passes under its middle within w / 2,
-/// seen from above (so a second layer at 0.4 mm, on the first, does not
-/// count, nor a helix's second turn, nor a pass over the same line at the
-/// same height: that bed is covered already).
-#[allow(clippy::type_complexity)]
-fn footprint_all(
-    paths: &[&Toolpath],
-    nozzle: f64,
-    min_h: f64,
-) -> Vec<(Option<Footprint>, Option<(usize, f64)>)> {
-    // every string low enough to touch the bed, in print order
-    let mut cands: Vec<Candidate> = Vec::new();
-    let mut starts = Vec::with_capacity(paths.len() + 1);
-    for (j, tp) in paths.iter().enumerate() {
-        starts.push(cands.len());
-        let (mut along, mut summed) = (0.0, 0);
-        // extruded length along the path up to the current string's middle,
-        // summed only when a string low enough needs it (a tall part's
-        // strings above its first layer need no length): the same lengths
-        // added in the same order, so the same sums; `summed` strings are in
-        for (k, s) in tp.strings.iter().enumerate() {
-            if s.travel {
-                continue;
-            }
-            let (a, b) = tp.ends(k);
-            // a string is too high when an end is over its width w ≥ the
-            // nozzle's: no end over the nozzle's diameter is never too high
-            if (a.z > nozzle || b.z > nozzle) && {
+/// The strings of some paths low enough to touch the bed, in print order
+/// (the work both halves of the check share: [`Bed::areas`] and
+/// [`Bed::contacts`], which may run on two threads).
+pub struct Bed {
+    cands: Vec<Candidate>,
+    /// Path j's candidates are `cands[starts[j]..starts[j + 1]]`.
+    starts: Vec<usize>,
+}
+
+/// A path's contact with the bed, less its area (see [`Bed::contacts`]).
+#[derive(Clone, Debug)]
+pub struct Contact {
+    /// Length of the strings lying on the bed, mm.
+    length: f64,
+    /// Their bounding rectangle, seen from above.
+    lo: DVec2,
+    hi: DVec2,
+    /// The lowest nozzle height of a string on the bed, mm.
+    lowest: f64,
+    /// The first string lower than the scraping height, and its height.
+    scrape: Option<(usize, f64)>,
+}
+
+impl Contact {
+    /// The footprint of part `name` with this contact and `cells` squares
+    /// of bed covered ([`Bed::areas`]).
+    fn footprint(&self, name: &str, cells: u64) -> Footprint {
+        Footprint {
+            part: name.to_string(),
+            contact_length_mm: self.length,
+            contact_area_mm2: cells as f64 * CELL * CELL,
+            min: self.lo.to_array(),
+            max: self.hi.to_array(),
+            min_height_mm: self.lowest,
+        }
+    }
+}
+
+impl Bed {
+    /// Every string of `paths` low enough to touch the bed, for a nozzle of
+    /// this diameter.
+    pub fn of(paths: &[&Toolpath], nozzle: f64) -> Bed {
+        let mut cands: Vec<Candidate> = Vec::new();
+        let mut starts = Vec::with_capacity(paths.len() + 1);
+        for (j, tp) in paths.iter().enumerate() {
+            starts.push(cands.len());
+            let (mut along, mut summed) = (0.0, 0);
+            // extruded length along the path up to the current string's middle,
+            // summed only when a string low enough needs it (a tall part's
+            // strings above its first layer need no length): the same lengths
+            // added in the same order, so the same sums; `summed` strings are in
+            for (k, s) in tp.strings.iter().enumerate() {
+                if s.travel {
+                    continue;
+                }
+                let (a, b) = tp.ends(k);
+                // a string is too high when an end is over its width w ≥ the
+                // nozzle's: no end over the nozzle's diameter is never too high
+                if (a.z > nozzle || b.z > nozzle) && {
+                    let w = width(s.c, nozzle);
+                    a.z > w || b.z > w
+                } {
+                    continue;
+                }
                 let w = width(s.c, nozzle);
-                a.z > w || b.z > w
-            } {
-                continue;
+                let l = a.distance(b);
+                if l <= 0.0 {
+                    continue;
+                }
+                for i in summed..k {
+                    if !tp.strings[i].travel {
+                        along += tp.length(i);
+                    }
+                }
+                summed = k + 1;
+                let mid = along + l / 2.0;
+                along += l;
+                let here = BedString {
+                    a: a.truncate(),
+                    b: b.truncate(),
+                    h: (a.z + b.z) / 2.0,
+                    path: j,
+                    s: mid,
+                };
+                cands.push(Candidate {
+                    here,
+                    laid: BedString { s: along, ..here },
+                    w,
+                    k,
+                });
             }
-            let w = width(s.c, nozzle);
-            let l = a.distance(b);
-            if l <= 0.0 {
-                continue;
-            }
-            for i in summed..k {
-                if !tp.strings[i].travel {
-                    along += tp.length(i);
+        }
+        starts.push(cands.len());
+        Bed { cands, starts }
+    }
+
+    /// Per path, the bed squares its bands cover that no earlier path's do
+    /// (the union of the capsules of width c / h round its strings; see the
+    /// module's comment).
+    pub fn areas(&self, paths: &[&Toolpath], nozzle: f64) -> Vec<u64> {
+        let mut painted = crate::geom::grid::CellSet::default();
+        let mut cover = Cover::default();
+        (0..paths.len())
+            .map(|j| {
+                let mut cells = 0u64;
+                for c in &self.cands[self.starts[j]..self.starts[j + 1]] {
+                    let band = band(paths[j].strings[c.k].c, c.here.h, nozzle);
+                    // the same capsule again (a line retraced, either way)
+                    // adds nothing to the union: painting it 2M times took 15 s
+                    let (a, b) = (c.here.a.to_array(), c.here.b.to_array());
+                    let (a, b) = if a <= b { (a, b) } else { (b, a) };
+                    let key = [a[0], a[1], b[0], b[1], band].map(f64::to_bits);
+                    if painted.insert(key) {
+                        cells += cover.capsule(c.here.a, c.here.b, band / 2.0);
+                    }
+                }
+                cells
+            })
+            .collect()
+    }
+
+    /// Per path, its strings lying on the bed (`None` where none does), and
+    /// the first whose nozzle runs lower than `min_h`.
+    ///
+    /// A string lies on the bed when its nozzle height h ≤ its width w and
+    /// no earlier bed string at or below h passes under its middle within
+    /// w / 2, seen from above (so a second layer at 0.4 mm, on the first,
+    /// does not count, nor a helix's second turn, nor a pass over the same
+    /// line at the same height: that bed is covered already).
+    pub fn contacts(&self, paths: &[&Toolpath], min_h: f64) -> Vec<Option<Contact>> {
+        // seen from above (z = 0): only the strings kept (not covered
+        // themselves) cover later ones, so only they are listed, as they are
+        // kept; a grid of every candidate made a path retracing one line a
+        // million times scan all the covered copies before the kept one
+        // (quadratic: minutes for 2M strings)
+        let cands = &self.cands;
+        let flat = |p: DVec2| DVec3::new(p.x, p.y, 0.0);
+        let mut grid = GrowGrid::new(1.0);
+        let mut out = Vec::with_capacity(paths.len());
+        for (j, tp) in paths.iter().enumerate() {
+            let mut len = 0.0;
+            let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+            let mut lowest = f64::INFINITY;
+            let mut scrape = None;
+            for g in self.starts[j]..self.starts[j + 1] {
+                let c = &cands[g];
+                let mid = flat(c.here.a.lerp(c.here.b, 0.5));
+                let covered = grid.search(mid, c.w / 2.0, |e| {
+                    covers(&cands[e as usize].laid, &c.here, c.w)
+                });
+                if covered {
+                    continue;
+                }
+                grid.insert(g as u32, flat(c.laid.a), flat(c.laid.b));
+                let (a2, b2) = (c.here.a, c.here.b);
+                let (a, b) = tp.ends(c.k);
+                let l = a.distance(b);
+                len += l;
+                lo = lo.min(a2).min(b2);
+                hi = hi.max(a2).max(b2);
+                let low = a.z.min(b.z);
+                lowest = f64::min(lowest, low);
+                if low < min_h && scrape.is_none() {
+                    scrape = Some((c.k, low));
                 }
             }
-            summed = k + 1;
-            let mid = along + l / 2.0;
-            along += l;
-            let here = BedString {
-                a: a.truncate(),
-                b: b.truncate(),
-                h: (a.z + b.z) / 2.0,
-                path: j,
-                s: mid,
-            };
-            cands.push(Candidate {
-                here,
-                laid: BedString { s: along, ..here },
-                w,
-                k,
-            });
+            out.push((len > 0.0).then_some(Contact {
+                length: len,
+                lo,
+                hi,
+                lowest,
+                scrape,
+            }));
         }
+        out
     }
-    starts.push(cands.len());
-    // seen from above (z = 0): only the strings kept (not covered
-    // themselves) cover later ones, so only they are listed, as they are
-    // kept; a grid of every candidate made a path retracing one line a
-    // million times scan all the covered copies before the kept one
-    // (quadratic: minutes for 2M strings)
-    let flat = |p: DVec2| DVec3::new(p.x, p.y, 0.0);
-    let mut grid = GrowGrid::new(1.0);
-    let mut painted = crate::geom::grid::CellSet::default();
-    let mut out = Vec::with_capacity(paths.len());
-    let mut cover = Cover::default();
-    for (j, tp) in paths.iter().enumerate() {
-        let (mut len, mut cells) = (0.0, 0u64);
-        let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
-        let mut lowest = f64::INFINITY;
-        let mut scrape = None;
-        for g in starts[j]..starts[j + 1] {
-            let c = &cands[g];
-            let mid = flat(c.here.a.lerp(c.here.b, 0.5));
-            let band = band(tp.strings[c.k].c, c.here.h, nozzle);
-            // the same capsule again (a line retraced, either way) adds
-            // nothing to the union: painting it 2M times took 15 s
-            let (a, b) = (c.here.a.to_array(), c.here.b.to_array());
-            let (a, b) = if a <= b { (a, b) } else { (b, a) };
-            let key = [a[0], a[1], b[0], b[1], band].map(f64::to_bits);
-            if painted.insert(key) {
-                cells += cover.capsule(c.here.a, c.here.b, band / 2.0);
-            }
-            let covered = grid.search(mid, c.w / 2.0, |e| {
-                covers(&cands[e as usize].laid, &c.here, c.w)
-            });
-            if covered {
-                continue;
-            }
-            grid.insert(g as u32, flat(c.laid.a), flat(c.laid.b));
-            let (a2, b2) = (c.here.a, c.here.b);
-            let (a, b) = tp.ends(c.k);
-            let l = a.distance(b);
-            len += l;
-            lo = lo.min(a2).min(b2);
-            hi = hi.max(a2).max(b2);
-            let low = a.z.min(b.z);
-            lowest = f64::min(lowest, low);
-            if low < min_h && scrape.is_none() {
-                scrape = Some((c.k, low));
-            }
-        }
-        let f = (len > 0.0).then(|| Footprint {
-            part: tp.name.clone(),
-            contact_length_mm: len,
-            contact_area_mm2: cells as f64 * CELL * CELL,
-            min: lo.to_array(),
-            max: hi.to_array(),
-            min_height_mm: lowest,
-        });
-        out.push((f, scrape));
-    }
-    out
 }
 
 /// The `first-layer` findings (a warning per part where the nozzle runs too
 /// close to the bed) into `out`; returns the footprints of the paths that
 /// touch the bed, in print order, for the stats.
 pub fn check(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) -> Vec<Footprint> {
+    let nozzle = recipe.printer.nozzle_diameter;
+    let bed = Bed::of(paths, nozzle);
+    let contacts = bed.contacts(paths, min_height(recipe));
+    let areas = bed.areas(paths, nozzle);
+    findings(recipe, paths, &contacts, &areas, out)
+}
+
+/// The nozzle height under which a bed string scrapes the bed, mm.
+pub fn min_height(recipe: &Recipe) -> f64 {
+    recipe.printer.checks.first_layer_min * recipe.printer.nozzle_diameter
+}
+
+/// [`check`] from the two halves of its work, [`Bed::contacts`] and
+/// [`Bed::areas`] of `paths`: the same findings and footprints.
+pub fn findings(
+    recipe: &Recipe,
+    paths: &[&Toolpath],
+    contacts: &[Option<Contact>],
+    areas: &[u64],
+    out: &mut Vec<Finding>,
+) -> Vec<Footprint> {
     let p = &recipe.printer;
-    let min_h = p.checks.first_layer_min * p.nozzle_diameter;
+    let min_h = min_height(recipe);
     let mut footprints = Vec::new();
-    for (tp, (f, scrape)) in paths
-        .iter()
-        .zip(footprint_all(paths, p.nozzle_diameter, min_h))
-    {
-        if let Some(f) = &f {
-            small_contact(recipe, tp, f, out);
-        }
-        footprints.extend(f);
-        if let Some((k, h)) = scrape {
+    for ((tp, contact), &cells) in paths.iter().zip(contacts).zip(areas) {
+        let Some(c) = contact else { continue };
+        let f = c.footprint(&tp.name, cells);
+        small_contact(recipe, tp, &f, out);
+        footprints.push(f);
+        if let Some((k, h)) = c.scrape {
             let at = tp.midpoint(k);
             out.push(Finding {
                 code: "first-layer",
@@ -443,6 +513,27 @@ fn small_contact(recipe: &Recipe, tp: &Toolpath, f: &Footprint, out: &mut Vec<Fi
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Per path, its footprint and its first scraping string, from the two
+    /// halves of the check.
+    #[allow(clippy::type_complexity)]
+    fn footprint_all(
+        paths: &[&Toolpath],
+        nozzle: f64,
+        min_h: f64,
+    ) -> Vec<(Option<Footprint>, Option<(usize, f64)>)> {
+        let bed = Bed::of(paths, nozzle);
+        let areas = bed.areas(paths, nozzle);
+        bed.contacts(paths, min_h)
+            .into_iter()
+            .zip(areas)
+            .zip(paths)
+            .map(|((c, cells), tp)| {
+                let scrape = c.as_ref().and_then(|c| c.scrape);
+                (c.map(|c| c.footprint(&tp.name, cells)), scrape)
+            })
+            .collect()
+    }
     use crate::toolpath::Strand;
 
     fn ring(r: f64, z: f64, n: usize, c: f64) -> Toolpath {

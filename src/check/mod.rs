@@ -101,22 +101,39 @@ pub struct Tasks<'a> {
     finished: AtomicUsize,
     slots: [OnceLock<Vec<Finding>>; 4],
     footprints: OnceLock<Vec<first_layer::Footprint>>,
+    /// The first-layer check's candidates and its two halves, the findings
+    /// made (into the first layer's slot) by whichever finishes second.
+    bed: OnceLock<first_layer::Bed>,
+    halves: std::sync::Mutex<Halves>,
+}
+
+/// The halves of the first-layer check done so far.
+#[derive(Default)]
+struct Halves {
+    contacts: Option<Vec<Option<first_layer::Contact>>>,
+    areas: Option<Vec<u64>>,
 }
 
 /// A task of [`Tasks`].
 #[derive(Clone, Copy)]
 enum Task {
     Support,
+    /// The first layer's strings on the bed (its findings' slot).
     FirstLayer,
     Collision,
     Starvation,
+    /// The first layer's contact area (the cover of its bands).
+    FirstLayerArea,
 }
 
 impl<'a> Tasks<'a> {
     /// The order tasks are taken in: the longest first, so the last to
-    /// finish is a short one.
-    const ORDER: [Task; 4] = [
+    /// finish is a short one (the first layer's check in two halves, each
+    /// shorter than the support check: as one it was the longest task of
+    /// the sphere, left to one thread while the other had nothing to do).
+    const ORDER: [Task; 5] = [
         Task::Support,
+        Task::FirstLayerArea,
         Task::FirstLayer,
         Task::Collision,
         Task::Starvation,
@@ -158,6 +175,8 @@ impl<'a> Tasks<'a> {
             finished: AtomicUsize::new(0),
             slots: Default::default(),
             footprints: OnceLock::new(),
+            bed: OnceLock::new(),
+            halves: Default::default(),
         }
     }
 
@@ -169,19 +188,43 @@ impl<'a> Tasks<'a> {
             return false;
         };
         let (recipe, paths) = (self.recipe, self.paths);
+        let nozzle = recipe.printer.nozzle_diameter;
         let mut v = Vec::new();
+        // whether `v` is the task's findings (the first layer's halves set
+        // their slot themselves, the second to finish)
+        let mut fill = true;
         match task {
             Task::Starvation => starvation::check(recipe, paths, &mut v),
             _ if !self.geometric => {}
             Task::Support => support::check(recipe, paths, &mut v),
-            Task::FirstLayer => {
-                let _ = self
-                    .footprints
-                    .set(first_layer::check(recipe, paths, &mut v));
+            Task::FirstLayer | Task::FirstLayerArea => {
+                fill = false;
+                // the two halves of the first-layer check, on any threads
+                let bed = self.bed.get_or_init(|| first_layer::Bed::of(paths, nozzle));
+                let (contacts, areas) = if let Task::FirstLayer = task {
+                    (
+                        Some(bed.contacts(paths, first_layer::min_height(recipe))),
+                        None,
+                    )
+                } else {
+                    (None, Some(bed.areas(paths, nozzle)))
+                };
+                let mut h = self.halves.lock().unwrap_or_else(|e| e.into_inner());
+                h.contacts = h.contacts.take().or(contacts);
+                h.areas = h.areas.take().or(areas);
+                if let (Some(c), Some(a)) = (&h.contacts, &h.areas) {
+                    let mut found = Vec::new();
+                    let _ = self
+                        .footprints
+                        .set(first_layer::findings(recipe, paths, c, a, &mut found));
+                    let _ = self.slots[Task::FirstLayer as usize].set(found);
+                }
             }
             Task::Collision => collision::check(recipe, paths, &mut v),
         }
-        let _ = self.slots[task as usize].set(v);
+        if let Some(slot) = self.slots.get(task as usize).filter(|_| fill) {
+            let _ = slot.set(v);
+        }
         self.finished.fetch_add(1, Ordering::Release);
         true
     }
