@@ -99,6 +99,7 @@ impl Plan {
     ) -> Result<(W, MoveStats)> {
         let n = self.threads.get();
         if n == 1 || !self.recipe.printer.thumbnails.is_empty() {
+            self.wake();
             self.check(allow);
             if stop.is_some_and(|strict| !self.failing(strict).is_empty()) {
                 return Err(Error::check(&self.path, "stopped: the checks failed"));
@@ -178,6 +179,7 @@ impl Plan {
                     feed.run();
                 }
             });
+            this.wake();
             let out = Until { out, failed };
             let written = this.write_gcode_with(out, planner).map(|(w, m)| (w.out, m));
             if written.is_ok() {

@@ -7,7 +7,7 @@ use crate::check::{self, Finding};
 use crate::error::{Error, Result};
 use crate::machine::Printer;
 use crate::model::Recipe;
-use crate::threads::Threads;
+use crate::threads::{Awake, Threads};
 use crate::toolpath::Toolpath;
 
 /// What the command line says about one build.
@@ -38,6 +38,9 @@ pub struct Plan {
     pub footprints: Vec<check::first_layer::Footprint>,
     /// How many threads making, checking and writing it may use.
     pub threads: Threads,
+    /// A pool worker kept awake from the end of the steps until the checks
+    /// start (see [`Awake`]).
+    pub awake: Option<std::sync::Arc<Awake>>,
 }
 
 /// Loads, builds and checks a recipe.
@@ -70,6 +73,9 @@ pub fn prepare(path: &Path, opts: &Options) -> Result<Plan> {
     // each part with its own steps, then the steps of groups
     let parts =
         crate::assembly::make_parts(&recipe, opts.threads).map_err(|e| e.in_file(&shown))?;
+    // the brims and skirt are made on this thread alone: a worker kept
+    // awake meanwhile starts the checks at once
+    let awake = Awake::keep(opts.threads).map(std::sync::Arc::new);
     let mut paths = Vec::with_capacity(parts.len() + 1);
     if let Some(s) = &recipe.skirt {
         let cv = (recipe.parts[0].cross_section, recipe.parts[0].speed);
@@ -88,6 +94,7 @@ pub fn prepare(path: &Path, opts: &Options) -> Result<Plan> {
         findings: Vec::new(),
         footprints: Vec::new(),
         threads: opts.threads,
+        awake,
     })
 }
 
@@ -122,7 +129,15 @@ impl Plan {
 
     /// Runs the checks on the plan's own budget and keeps what they found.
     pub fn check(&mut self, allow: &[String]) {
+        self.wake();
         (self.findings, self.footprints) = self.checks(allow, self.threads);
+    }
+
+    /// Lets the worker kept awake go to the work now posted.
+    pub fn wake(&self) {
+        if let Some(a) = &self.awake {
+            a.release();
+        }
     }
 
     /// Highest point of any part, recipe coordinates.

@@ -128,6 +128,49 @@ impl Threads {
     }
 }
 
+/// A pool worker kept busy until [`Awake::release`] (or drop, or a few
+/// milliseconds at most), so that its core is still awake when work comes:
+/// in a virtual machine an idle core is halted, and the system then wakes a
+/// worker for new work on the busy core of the thread that posts it, where
+/// it waited up to a scheduler slice (3 ms). The worker yields between
+/// checks, so it never takes a core another thread wants.
+#[derive(Debug)]
+pub struct Awake(std::sync::Arc<std::sync::atomic::AtomicBool>);
+
+impl Awake {
+    /// The longest a worker is kept.
+    const MAX: std::time::Duration = std::time::Duration::from_millis(5);
+
+    /// Keeps a worker of the pool busy, when the budget has a second thread.
+    pub fn keep(threads: Threads) -> Option<Awake> {
+        if !threads.parallel() {
+            return None;
+        }
+        let done = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let flag = done.clone();
+        rayon::spawn(move || {
+            let until = std::time::Instant::now() + Awake::MAX;
+            while !flag.load(std::sync::atomic::Ordering::Acquire)
+                && std::time::Instant::now() < until
+            {
+                std::thread::yield_now();
+            }
+        });
+        Some(Awake(done))
+    }
+
+    /// Lets the worker go (to the work just posted).
+    pub fn release(&self) {
+        self.0.store(true, std::sync::atomic::Ordering::Release);
+    }
+}
+
+impl Drop for Awake {
+    fn drop(&mut self) {
+        self.release();
+    }
+}
+
 impl Default for Threads {
     /// [`Threads::available`].
     fn default() -> Threads {
@@ -146,6 +189,19 @@ mod tests {
         assert!(!Threads::ONE.parallel());
         assert!(Threads::new(2).parallel());
         assert!(Threads::available().get() >= 1);
+    }
+
+    #[test]
+    fn a_worker_kept_awake_is_let_go() {
+        assert!(Awake::keep(Threads::ONE).is_none());
+        // kept, then released: the pool's workers all take work again
+        // (a broadcast waits for every one of them)
+        let a = Awake::keep(Threads::new(2)).expect("two threads keep one");
+        a.release();
+        assert_eq!(rayon::broadcast(|c| c.index()).len(), rayon::current_num_threads());
+        // dropped unreleased: the same
+        drop(Awake::keep(Threads::new(2)));
+        assert_eq!(rayon::broadcast(|c| c.index()).len(), rayon::current_num_threads());
     }
 
     #[test]
