@@ -199,10 +199,16 @@ mod tests {
         // (a broadcast waits for every one of them)
         let a = Awake::keep(Threads::new(2)).expect("two threads keep one");
         a.release();
-        assert_eq!(rayon::broadcast(|c| c.index()).len(), rayon::current_num_threads());
+        assert_eq!(
+            rayon::broadcast(|c| c.index()).len(),
+            rayon::current_num_threads()
+        );
         // dropped unreleased: the same
         drop(Awake::keep(Threads::new(2)));
-        assert_eq!(rayon::broadcast(|c| c.index()).len(), rayon::current_num_threads());
+        assert_eq!(
+            rayon::broadcast(|c| c.index()).len(),
+            rayon::current_num_threads()
+        );
     }
 
     #[test]
