@@ -1164,6 +1164,20 @@ mod tests {
         assert_eq!(fmt_value(0.0), "0");
     }
 
+    /// The median distance from every `step`-th of `points` to the nearest
+    /// point of another pass, as grid `g` finds it.
+    fn median_nearest(g: &Grid, points: &[DVec3], step: usize) -> f64 {
+        let mut d: Vec<f64> = (0..points.len())
+            .step_by(step)
+            .filter_map(|i| {
+                let p = points[i];
+                g.nearest_other(p, g.arc(i)).map(|q| p.distance(q))
+            })
+            .collect();
+        d.sort_by(f64::total_cmp);
+        d[d.len() / 2]
+    }
+
     #[test]
     fn helix_spacing_is_its_pitch() {
         // a helix of radius 10, pitch 0.3, 200 strings a turn, 20 turns
@@ -1178,15 +1192,8 @@ mod tests {
         assert!((h - 0.3).abs() < 0.01, "{h}");
         // the same median as asking a grid of all the strings
         let g = Grid::new(&tp.points, 2.0);
-        let mut d: Vec<f64> = (0..tp.points.len())
-            .step_by((tp.points.len() / 1024).max(1))
-            .filter_map(|i| {
-                let p = tp.points[i];
-                g.nearest_other(p, g.arc(i)).map(|q| p.distance(q))
-            })
-            .collect();
-        d.sort_by(f64::total_cmp);
-        assert_eq!(h, d[d.len() / 2]);
+        let step = (tp.points.len() / 1024).max(1);
+        assert_eq!(h, median_nearest(&g, &tp.points, step));
         // following a pass from a hint finds the nearest point too, here
         let (p, k) = (tp.points[2500], 2500);
         let exact = g.nearest_other_near(p, g.arc(k), None);
@@ -1247,15 +1254,7 @@ mod tests {
         assert!((h - 0.3).abs() < 0.01, "{h}");
         for parts in [1, 3] {
             let g = Grid::new_on(&tp.points, 2.0, parts);
-            let mut d: Vec<f64> = (0..tp.points.len())
-                .step_by(step)
-                .filter_map(|i| {
-                    let p = tp.points[i];
-                    g.nearest_other(p, g.arc(i)).map(|q| p.distance(q))
-                })
-                .collect();
-            d.sort_by(f64::total_cmp);
-            assert_eq!(h, d[d.len() / 2]);
+            assert_eq!(h, median_nearest(&g, &tp.points, step));
         }
     }
 
