@@ -153,7 +153,7 @@ impl Plan {
         let (planner, feed) = Background::fed(limits);
         let this = &*self;
         let refs: Vec<&Toolpath> = this.paths.iter().collect();
-        let allowed: Vec<String> = this.recipe.allow.iter().chain(allow).cloned().collect();
+        let allowed = this.allowed(allow);
         let cell: OnceLock<check::Tasks> = OnceLock::new();
         let failed = AtomicBool::new(false);
         let (refs, allowed, tasks, failed, feed) = (&refs, &allowed, &cell, &failed, &feed);
@@ -195,8 +195,7 @@ impl Plan {
             .into_inner()
             .expect("the checks' thread made its tasks");
         let (mut findings, footprints) = t.finish();
-        check::apply_allow(&mut findings, &self.recipe.allow);
-        check::apply_allow(&mut findings, allow);
+        self.silence(&mut findings, allow);
         (self.findings, self.footprints) = (findings, footprints);
         written
     }

@@ -107,24 +107,22 @@ impl Plan {
     /// `allow` (the command line's `--allow`) silencing codes beside the
     /// recipe's own; the plan is not changed: see [`Plan::check`].
     pub fn checks(&self, allow: &[String], threads: crate::threads::Threads) -> Checked {
-        self.checks_between(allow, threads, &mut || {})
+        let refs: Vec<&Toolpath> = self.paths.iter().collect();
+        let (mut findings, footprints) =
+            check::run(&self.recipe, &refs, &self.allowed(allow), threads);
+        self.silence(&mut findings, allow);
+        (findings, footprints)
     }
 
-    /// [`Plan::checks`], calling `between` after each check (see
-    /// [`check::run_between`]).
-    pub fn checks_between(
-        &self,
-        allow: &[String],
-        threads: crate::threads::Threads,
-        between: &mut dyn FnMut(),
-    ) -> Checked {
-        let refs: Vec<&Toolpath> = self.paths.iter().collect();
-        let allowed: Vec<String> = self.recipe.allow.iter().chain(allow).cloned().collect();
-        let (mut findings, footprints) =
-            check::run_between(&self.recipe, &refs, &allowed, threads, between);
-        check::apply_allow(&mut findings, &self.recipe.allow);
-        check::apply_allow(&mut findings, allow);
-        (findings, footprints)
+    /// The codes silenced: the recipe's `allow`, then the command line's.
+    pub fn allowed(&self, allow: &[String]) -> Vec<String> {
+        self.recipe.allow.iter().chain(allow).cloned().collect()
+    }
+
+    /// Marks the findings of the codes the recipe and `allow` silence.
+    pub fn silence(&self, findings: &mut Vec<Finding>, allow: &[String]) {
+        check::apply_allow(findings, &self.recipe.allow);
+        check::apply_allow(findings, allow);
     }
 
     /// Runs the checks on the plan's own budget and keeps what they found.

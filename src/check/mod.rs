@@ -43,41 +43,22 @@ pub(crate) fn fmt_p(p: DVec3) -> String {
 /// collision: their grids grow with the extent and the cross-sections) only
 /// when the cheap ones found no error that is not allowed (a helix of radius
 /// 1e4 mm or a cross-section of 1e7 mm² took 25 s and 5 GB before they
-/// refused it). The support check, the costliest, runs on a second thread
-/// beside the others when `threads` allows two; the findings are put
-/// together in one fixed order, so they are the same whether or not it does.
+/// refused it). The costly checks are tasks ([`Tasks`]) that a pool worker
+/// takes too when `threads` allows two; the findings are put together in
+/// one fixed order, so they are the same whoever ran what.
 pub fn run(
     recipe: &Recipe,
     paths: &[&Toolpath],
     allowed: &[String],
     threads: Threads,
 ) -> (Vec<Finding>, Vec<first_layer::Footprint>) {
-    run_between(recipe, paths, allowed, threads, &mut || {})
-}
-
-/// [`run`], calling `between` after each check (a thread that has other
-/// work queued, such as the print-time planner's moves, does some of it
-/// there, so less of it waits in memory); the findings are the same.
-pub fn run_between(
-    recipe: &Recipe,
-    paths: &[&Toolpath],
-    allowed: &[String],
-    threads: Threads,
-    between: &mut dyn FnMut(),
-) -> (Vec<Finding>, Vec<first_layer::Footprint>) {
-    let tasks = Tasks::new(recipe, paths, allowed, between);
-    std::thread::scope(|s| {
-        // a second thread takes tasks too (the support check, the costliest,
-        // is the first taken) when the budget allows
-        let helper = threads
-            .parallel()
-            .then(|| s.spawn(|| while tasks.run_next() {}));
-        while tasks.run_next() {
-            between();
+    let tasks = Tasks::new(recipe, paths, allowed, &mut || {});
+    // a panic in the worker's tasks is raised when the scope ends
+    rayon::in_place_scope(|s| {
+        if threads.parallel() {
+            s.spawn(|_| while tasks.run_next() {});
         }
-        if let Some(h) = helper {
-            h.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
-        }
+        while tasks.run_next() {}
     });
     tasks.finish()
 }
