@@ -24,6 +24,7 @@ pub mod finding;
 pub mod format;
 pub mod geom;
 pub mod input;
+pub mod mem;
 pub mod num;
 pub mod rng;
 pub mod safe_text;

@@ -115,6 +115,7 @@ impl Threads {
     ) -> Vec<T> {
         let mut v: Vec<T> = Vec::with_capacity(len);
         self.chunks(&mut v.spare_capacity_mut()[..len], min, |start, chunk| {
+            crate::mem::fault_in(chunk);
             let mut next = make(start);
             for slot in chunk.iter_mut() {
                 slot.write(next());

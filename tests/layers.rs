@@ -15,6 +15,7 @@ const LAYERS: &[(&str, &[&str])] = &[
             "safe_text",
             "input",
             "limits",
+            "mem",
             "threads",
             "toolpath",
             "expr",
