@@ -108,10 +108,10 @@ fn checks_against_generation(path: &Path, runs: usize) {
         let refs = [&part];
         let mut out = Vec::new();
         let t1 = Instant::now();
-        p3dp::check::support::check(&recipe, &refs, &mut out);
+        p3dp::check::support::check(&recipe, &refs, &|| {}, &mut out);
         sup.push(t1.elapsed().as_secs_f64());
         let t2 = Instant::now();
-        p3dp::check::collision::check(&recipe, &refs, &mut out);
+        p3dp::check::collision::check(&recipe, &refs, &|| {}, &mut out);
         col.push(t2.elapsed().as_secs_f64());
         found = out.len();
     }

@@ -158,8 +158,9 @@ impl Plan {
         let failed = AtomicBool::new(false);
         let (refs, allowed, tasks, failed, feed) = (&refs, &allowed, &cell, &failed, &feed);
         // the cheap checks, run by whichever thread comes first
-        let new_tasks =
-            move || check::Tasks::new(&this.recipe, refs, allowed, &mut || feed.catch_up());
+        let between = move || feed.catch_up();
+        let between = &between;
+        let new_tasks = move || check::Tasks::new(&this.recipe, refs, allowed, between);
         // the checks on a pool worker (woken at once; a new thread could
         // wait milliseconds to start), the writing on this thread; the scope
         // ends when both have (a panic in the checks is raised then)

@@ -37,7 +37,7 @@
 
 use glam::{DVec2, DVec3};
 
-use super::{fmt_p, Finding, Severity};
+use super::{fmt_p, Finding, Severity, BETWEEN};
 
 use crate::model::Recipe;
 use crate::toolpath::Toolpath;
@@ -257,11 +257,18 @@ impl Walk<'_> {
 
     /// Checks the head along a–b (`string` None for the travel between
     /// parts); pulling a hair (`hair`) is checked for the box only.
+    #[inline]
     fn segment(&mut self, a: DVec3, b: DVec3, string: Option<usize>, travel: bool, hair: bool) {
         // no filament old enough above the move's lowest point: no collision
+        // (a helix printed bottom to top, string after string)
         if a.z.min(b.z) + self.delta >= self.elig_top {
             return;
         }
+        self.sample(a, b, string, travel, hair);
+    }
+
+    /// [`Walk::segment`] past its first test: the head at points along a–b.
+    fn sample(&mut self, a: DVec3, b: DVec3, string: Option<usize>, travel: bool, hair: bool) {
         self.catch_up();
         let len = a.distance(b);
         let n = libm::ceil(len / self.map.cell()).clamp(1.0, 1e7) as usize;
@@ -328,18 +335,23 @@ impl Walk<'_> {
     }
 }
 
-/// The `nozzle-collision` and `head-collision` findings.
-pub fn check(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) {
+/// The `nozzle-collision` and `head-collision` findings; calls `between`
+/// every [`BETWEEN`] strings.
+pub fn check(recipe: &Recipe, paths: &[&Toolpath], between: &dyn Fn(), out: &mut Vec<Finding>) {
     let printer = &recipe.printer;
     let hd = &printer.head;
     // the map covers the filament's footprint
     let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
     for tp in paths {
-        for (k, s) in tp.strings.iter().enumerate() {
-            if !s.travel {
-                let (a, b) = tp.ends(k);
-                lo = lo.min(a.truncate()).min(b.truncate());
-                hi = hi.max(a.truncate()).max(b.truncate());
+        // each point once: the points at either end of an extruding string
+        // (the points are finite here: a min or max does not depend on the
+        // order it takes them in)
+        let n = tp.strings.len();
+        for (i, p) in tp.points.iter().enumerate() {
+            let before = i > 0 && !tp.strings[i - 1].travel;
+            if before || (i < n && !tp.strings[i].travel) {
+                lo = lo.min(p.truncate());
+                hi = hi.max(p.truncate());
             }
         }
     }
@@ -401,6 +413,9 @@ pub fn check(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) {
             w.elig = (pi, ek);
         };
         for k in 0..tp.len() {
+            if k % BETWEEN == BETWEEN - 1 {
+                between();
+            }
             let s = tp.strings[k];
             let (a, b) = tp.ends(k);
             w.segment(a, b, Some(k), s.travel, s.hair);

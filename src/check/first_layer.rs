@@ -290,6 +290,9 @@ impl Bed {
         for (j, tp) in paths.iter().enumerate() {
             starts.push(cands.len());
             let (mut along, mut summed) = (0.0, 0);
+            // the last string's cross-section and width (strings in a row
+            // mostly share one: a square root saved on each)
+            let (mut last_c, mut last_w) = (f64::NAN, nozzle);
             // extruded length along the path up to the current string's middle,
             // summed only when a string low enough needs it (a tall part's
             // strings above its first layer need no length): the same lengths
@@ -302,8 +305,10 @@ impl Bed {
                 // a string is too high when an end is over its width w ≥ the
                 // nozzle's: no end over the nozzle's diameter is never too high
                 if (a.z > nozzle || b.z > nozzle) && {
-                    let w = width(s.c, nozzle);
-                    a.z > w || b.z > w
+                    if s.c.to_bits() != last_c.to_bits() {
+                        (last_c, last_w) = (s.c, width(s.c, nozzle));
+                    }
+                    a.z > last_w || b.z > last_w
                 } {
                     continue;
                 }

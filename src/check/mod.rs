@@ -30,6 +30,10 @@ use crate::toolpath::Toolpath;
 
 pub use crate::machine::{CheckLimits, Head};
 
+/// Strings a long check goes through between two calls of its `between`
+/// (see [`Tasks::new`]): about a millisecond of its work.
+pub const BETWEEN: usize = 1 << 14;
+
 pub(crate) fn fmt_p(p: DVec3) -> String {
     format!("({:.3}, {:.3}, {:.3})", p.x, p.y, p.z)
 }
@@ -52,7 +56,7 @@ pub fn run(
     allowed: &[String],
     threads: Threads,
 ) -> (Vec<Finding>, Vec<first_layer::Footprint>) {
-    let tasks = Tasks::new(recipe, paths, allowed, &mut || {});
+    let tasks = Tasks::new(recipe, paths, allowed, &|| {});
     // a panic in the worker's tasks is raised when the scope ends
     rayon::in_place_scope(|s| {
         if threads.parallel() {
@@ -72,6 +76,9 @@ pub fn run(
 pub struct Tasks<'a> {
     recipe: &'a Recipe,
     paths: &'a [&'a Toolpath],
+    /// Called after each part's cheap checks and every [`BETWEEN`] strings
+    /// of the long tasks (the build plans the moves written so far there).
+    between: &'a (dyn Fn() + Sync),
     geometric: bool,
     /// The cheap checks' findings, then the pattern helix's (put last).
     cheap: Vec<Finding>,
@@ -111,22 +118,23 @@ impl<'a> Tasks<'a> {
     /// The order tasks are taken in: the longest first, so the last to
     /// finish is a short one (the first layer's check in two halves, each
     /// shorter than the support check: as one it was the longest task of
-    /// the sphere, left to one thread while the other had nothing to do).
+    /// the sphere, left to one thread while the other had nothing to do;
+    /// the vase's collision check, taken after them, was its last task).
     const ORDER: [Task; 5] = [
         Task::Support,
+        Task::Collision,
         Task::FirstLayerArea,
         Task::FirstLayer,
-        Task::Collision,
         Task::Starvation,
     ];
 
-    /// Runs the cheap checks (calling `between` after each part's) and
-    /// readies the costly ones.
+    /// Runs the cheap checks (calling `between` after each pass over a part) and
+    /// readies the costly ones (which call it every [`BETWEEN`] strings).
     pub fn new(
         recipe: &'a Recipe,
         paths: &'a [&'a Toolpath],
         allowed: &[String],
-        between: &mut dyn FnMut(),
+        between: &'a (dyn Fn() + Sync),
     ) -> Tasks<'a> {
         let mut out = Vec::new();
         temperatures(recipe, &mut out);
@@ -135,7 +143,9 @@ impl<'a> Tasks<'a> {
         let mut sane = true;
         for tp in paths {
             sane &= machine_limits(recipe, tp, &mut out);
+            between();
             strings(recipe, tp, &mut out);
+            between();
             flow::cross_sections(recipe, tp, &mut out);
             out.extend(events(recipe, tp));
             between();
@@ -149,6 +159,7 @@ impl<'a> Tasks<'a> {
         Tasks {
             recipe,
             paths,
+            between,
             geometric: !cheap_error && sane,
             cheap: out,
             pattern,
@@ -177,7 +188,7 @@ impl<'a> Tasks<'a> {
         match task {
             Task::Starvation => starvation::check(recipe, paths, &mut v),
             _ if !self.geometric => {}
-            Task::Support => support::check(recipe, paths, &mut v),
+            Task::Support => support::check(recipe, paths, self.between, &mut v),
             Task::FirstLayer | Task::FirstLayerArea => {
                 fill = false;
                 // the two halves of the first-layer check, on any threads
@@ -201,7 +212,7 @@ impl<'a> Tasks<'a> {
                     let _ = self.slots[Task::FirstLayer as usize].set(found);
                 }
             }
-            Task::Collision => collision::check(recipe, paths, &mut v),
+            Task::Collision => collision::check(recipe, paths, self.between, &mut v),
         }
         if let Some(slot) = self.slots.get(task as usize).filter(|_| fill) {
             let _ = slot.set(v);

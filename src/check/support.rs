@@ -32,8 +32,8 @@
 
 use glam::DVec3;
 
-use super::{fmt_p, Finding, Severity};
-use crate::geom::grid::{closest, SegGrid};
+use super::{fmt_p, Finding, Severity, BETWEEN};
+use crate::geom::grid::{ceil_i64, closest, SegGrid};
 use crate::model::Recipe;
 use crate::toolpath::Toolpath;
 
@@ -77,27 +77,41 @@ pub struct Deposits<'a> {
 
 impl<'a> Deposits<'a> {
     /// Lists and grids the extruding strings of `paths`.
-    pub fn new(paths: &'a [&'a Toolpath], nozzle: f64, tolerance: f64) -> Deposits<'a> {
-        let mut ids = Vec::new();
+    /// Calls `between` every [`BETWEEN`] strings.
+    pub fn new(
+        paths: &'a [&'a Toolpath],
+        nozzle: f64,
+        tolerance: f64,
+        between: &dyn Fn(),
+    ) -> Deposits<'a> {
+        // room for every string: a vector doubling as it grows copies
+        // itself and faults its pages in again
+        let mut ids = crate::mem::with_capacity(paths.iter().map(|tp| tp.len()).sum());
         let mut arc = Vec::with_capacity(paths.len());
-        let mut w_max = nozzle;
+        let mut c_max = f64::NEG_INFINITY;
         for (p, tp) in paths.iter().enumerate() {
-            let mut s = Vec::with_capacity(tp.points.len());
+            let mut s = crate::mem::with_capacity(tp.points.len());
             let mut acc = 0.0;
             s.push(0.0);
-            for k in 0..tp.len() {
-                let l = tp.length(k);
+            for (k, (st, ab)) in tp.strings.iter().zip(tp.points.windows(2)).enumerate() {
+                if k % BETWEEN == BETWEEN - 1 {
+                    between();
+                }
+                let l = ab[0].distance(ab[1]);
                 acc += l;
                 s.push(acc);
-                let st = tp.strings[k];
                 // a hair holds nothing up: it is no deposit
                 if !st.travel && !st.hair && l > 0.0 {
                     ids.push((p as u32, k as u32));
-                    w_max = w_max.max(width(st.c, nozzle));
+                    c_max = c_max.max(st.c);
                 }
             }
             arc.push(s);
         }
+        // the widest string is the one of the largest cross-section (a
+        // width is a chain of rounded steps that never decrease in c), at
+        // least the nozzle: one square root, not one a string
+        let w_max = width(c_max, nozzle);
         // cubes twice the widest reach: a sample's neighbours lie in ≤ 8 cubes
         let cell = (2.0 * tolerance * w_max).clamp(0.5, 8.0);
         Deposits {
@@ -208,14 +222,20 @@ impl Tally {
     }
 }
 
-/// The support check: `unsupported` and `bridge` findings, one per part and kind.
-pub fn check(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) {
+/// The support check: `unsupported` and `bridge` findings, one per part and
+/// kind; calls `between` every [`BETWEEN`] strings.
+pub fn check(recipe: &Recipe, paths: &[&Toolpath], between: &dyn Fn(), out: &mut Vec<Finding>) {
     let p = &recipe.printer;
-    let dep = Deposits::new(paths, p.nozzle_diameter, p.checks.support_tolerance);
+    let dep = Deposits::new(
+        paths,
+        p.nozzle_diameter,
+        p.checks.support_tolerance,
+        between,
+    );
     let mut budget = GAP_BUDGET;
     let mut g = 0u32; // global id of the current string
     for (pi, tp) in paths.iter().enumerate() {
-        let t = scan_part(recipe, &dep, pi, tp, &mut g, &mut budget);
+        let t = scan_part(recipe, &dep, pi, tp, &mut g, &mut budget, between);
         let area = filament_area(recipe);
         out.extend(unsupported_finding(tp, &t.unsup, area));
         out.extend(bridge_finding(
@@ -246,7 +266,8 @@ struct PartTally {
 }
 
 /// Samples every extruding string of part `pi` for support, counting the
-/// part's strings on from `g` and spending the gap `budget`.
+/// part's strings on from `g`, spending the gap `budget` and calling
+/// `between` every [`BETWEEN`] strings.
 fn scan_part(
     recipe: &Recipe,
     dep: &Deposits,
@@ -254,6 +275,7 @@ fn scan_part(
     tp: &Toolpath,
     g: &mut u32,
     budget: &mut usize,
+    between: &dyn Fn(),
 ) -> PartTally {
     let p = &recipe.printer;
     let nozzle = p.nozzle_diameter;
@@ -266,6 +288,8 @@ fn scan_part(
     let mut run_pts: Vec<DVec3> = Vec::new();
     let mut last_ok: Option<DVec3> = None;
     let mut hint: Option<u32> = None;
+    // the last string's cross-section and width
+    let (mut last_c, mut last_w) = (f64::NAN, nozzle);
     let mut close = |run: &mut Option<Run>, pts: &mut Vec<DVec3>, after: Option<DVec3>| {
         let Some(r) = run.take() else { return };
         let middle = pts[pts.len() / 2];
@@ -285,6 +309,9 @@ fn scan_part(
         }
     };
     for (k, s) in tp.strings.iter().enumerate() {
+        if k % BETWEEN == BETWEEN - 1 {
+            between();
+        }
         let (a, b) = tp.ends(k);
         let l = a.distance(b);
         if s.travel {
@@ -305,8 +332,14 @@ fn scan_part(
             hint = None;
             continue;
         }
-        let w = width(s.c, nozzle);
-        let n = libm::ceil(l / w).clamp(1.0, 1e6) as usize;
+        // strings in a row mostly share their cross-section: its width once
+        if s.c.to_bits() != last_c.to_bits() {
+            (last_c, last_w) = (s.c, width(s.c, nozzle));
+        }
+        let w = last_w;
+        // l is finite (the geometric checks run on finite points only) and
+        // w > 0, so l / w is never NaN: libm's ceil, clamped and cast
+        let n = ceil_i64(l / w).clamp(1, 1_000_000) as usize;
         for i in 0..n {
             let u = (i as f64 + 0.5) / n as f64;
             let q = a.lerp(b, u);
@@ -316,7 +349,9 @@ fn scan_part(
                 hint.is_some()
             };
             if ok {
-                close(&mut run, &mut run_pts, Some(q));
+                if run.is_some() {
+                    close(&mut run, &mut run_pts, Some(q));
+                }
                 last_ok = Some(q);
                 continue;
             }
@@ -465,7 +500,11 @@ fn holds(dep: &Deposits, j: u32, pi: u32, sq: f64, q: DVec3, w: f64, tol: f64) -
     if d > tol * (w + dep.w_max) / 2.0 || x.z > q.z + 0.25 * w {
         return false;
     }
-    if d > tol * (w + width(tp.strings[k].c, dep.nozzle)) / 2.0 {
+    // its own width only when the narrowest could not reach: a width is
+    // at least the nozzle, and tol > 0 (validated), so every rounded step
+    // of the bound keeps that order
+    if d > tol * (w + dep.nozzle) / 2.0 && d > tol * (w + width(tp.strings[k].c, dep.nozzle)) / 2.0
+    {
         return false;
     }
     if pj != pi {
@@ -491,8 +530,12 @@ fn rests(
     hint: Option<u32>,
 ) -> Option<u32> {
     if let Some(h) = hint {
-        for j in h..(h + 4).min(g) {
-            if holds(dep, j, pi, sq, q, w, tol) {
+        // the deposit after the last holder first: along a helix the
+        // deposit under the samples moves on by one a string (the found
+        // holder is only the next hint: whether one holds is the same
+        // whichever is tried first, as the grid search below finds any)
+        for j in [1, 0, 2, 3].map(|i| h.saturating_add(i)) {
+            if j < g && holds(dep, j, pi, sq, q, w, tol) {
                 return Some(j);
             }
         }
@@ -605,13 +648,62 @@ mod tests {
         .unwrap();
         let refs: Vec<&Toolpath> = tps.iter().collect();
         let mut out = Vec::new();
-        check(&recipe, &refs, &mut out);
+        check(&recipe, &refs, &|| {}, &mut out);
         out
     }
 
     #[test]
     fn a_helix_rests_on_its_previous_turn() {
         assert!(run(&[helix(0.3, 5, 0.15)]).is_empty());
+    }
+
+    #[test]
+    fn the_widest_deposit_is_the_widest_of_every_string() {
+        // cross-sections up and down, thin, negative and NaN ones, a
+        // travel (not a deposit: its huge c does not count) and a hair
+        let mut tp = Toolpath::new(DVec3::ZERO);
+        let cs = [0.1, 0.31, f64::NAN, -2.0, 0.3, 0.0001, 0.31 + 1e-12, 0.2];
+        for (k, &c) in cs.iter().enumerate() {
+            tp.draw(DVec3::new(k as f64 + 1.0, 0.0, 0.2), c, 30.0);
+        }
+        tp.travel(DVec3::new(20.0, 0.0, 0.2), 100.0);
+        tp.strings.last_mut().unwrap().c = 50.0;
+        tp.draw(DVec3::new(21.0, 0.0, 0.2), 0.15, 30.0);
+        let refs = [&tp];
+        let dep = Deposits::new(&refs, 0.4, 1.5, &|| {});
+        let each = tp
+            .strings
+            .iter()
+            .filter(|s| !s.travel)
+            .map(|s| width(s.c, 0.4))
+            .fold(0.4, f64::max);
+        assert_eq!(dep.w_max.to_bits(), each.to_bits());
+        assert_eq!(dep.w_max, width(0.31 + 1e-12, 0.4));
+        assert_eq!(dep.ids.len(), cs.len() + 1);
+    }
+
+    #[test]
+    fn a_long_check_calls_between_as_it_goes() {
+        // a helix of more than 3 × BETWEEN strings
+        let tp = helix(0.3, 3 * BETWEEN / 72 + 1, 0.15);
+        let calls = std::cell::Cell::new(0);
+        let recipe = crate::recipe::Recipe::resolve(
+            &crate::recipe::parse_yaml(
+                "p3dp: 1\nname: t\nparts:\n  - primitive: {circle: {radius: 1}}\n",
+                "t.yaml",
+            )
+            .unwrap(),
+            &[],
+            None,
+            std::path::Path::new("."),
+        )
+        .unwrap();
+        let mut out = Vec::new();
+        check(&recipe, &[&tp], &|| calls.set(calls.get() + 1), &mut out);
+        assert!(out.is_empty(), "{out:?}");
+        // once in making the deposits and once in the scan, each BETWEEN strings
+        assert_eq!(calls.get(), 2 * (tp.len() / BETWEEN));
+        assert!(calls.get() >= 6);
     }
 
     #[test]
