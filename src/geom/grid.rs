@@ -69,7 +69,8 @@ impl SegGrid {
     /// listed in the cube of each piece's middle, so a segment lies within
     /// [`SegGrid::slack`] of a cube it is listed in.
     pub fn build(n: usize, cell: f64, seg: impl Fn(usize) -> (DVec3, DVec3)) -> SegGrid {
-        let buckets = n.next_power_of_two().max(1024);
+        // at most 2^30 buckets: a key keeps its top bit for a mark (below)
+        let buckets = n.next_power_of_two().clamp(1024, 1 << 30);
         let mut g = SegGrid {
             cell,
             inv: 1.0 / cell,
@@ -77,11 +78,20 @@ impl SegGrid {
             ends: vec![0; buckets],
             items: Vec::new(),
         };
-        // first pass counts, second fills: ids go in ascending order
+        // first pass counts (keeping each segment's buckets, worked out
+        // once: the top bit marks a segment's first), second fills: ids go
+        // in ascending order
+        const FIRST: u32 = 1 << 31;
         let mut ends = std::mem::take(&mut g.ends);
+        let mut keys: Vec<u32> = Vec::with_capacity(n + n / 2);
         for i in 0..n {
             let (a, b) = seg(i);
-            g.each_bucket(a, b, |k| ends[k] += 1);
+            let mut flag = FIRST;
+            g.each_bucket(a, b, |k| {
+                ends[k] += 1;
+                keys.push(k as u32 | flag);
+                flag = 0;
+            });
         }
         let mut acc = 0u32;
         for e in ends.iter_mut() {
@@ -90,12 +100,12 @@ impl SegGrid {
             acc += c;
         }
         let mut items = vec![0; acc as usize];
-        for i in 0..n {
-            let (a, b) = seg(i);
-            g.each_bucket(a, b, |k| {
-                items[ends[k] as usize] = i as u32;
-                ends[k] += 1; // ends up as the bucket's end
-            });
+        let mut i = u32::MAX; // the segment of the key, counted from its first
+        for &key in &keys {
+            i = i.wrapping_add(key >> 31);
+            let k = (key & !FIRST) as usize;
+            items[ends[k] as usize] = i;
+            ends[k] += 1; // ends up as the bucket's end
         }
         g.ends = ends;
         g.items = items;
