@@ -659,9 +659,13 @@ fn paint_bands(pm: &mut Pixmap, strokes: &[Px], threads: Threads) {
             return;
         };
         let y1 = y0 + band.len() / (4 * width);
-        for &i in bin {
-            let px = &strokes[i as usize];
-            capsule(band, width, y0, y1, px);
+        for (j, &i) in bin.iter().enumerate() {
+            // a band's strokes lie scattered in the depth order: each was a
+            // cache miss when fetched only as it was painted
+            if let Some(&ahead) = bin.get(j + PREFETCH) {
+                prefetch(&strokes[ahead as usize]);
+            }
+            capsule(band, width, y0, y1, &strokes[i as usize]);
         }
     };
     std::thread::scope(|s| {
@@ -670,6 +674,23 @@ fn paint_bands(pm: &mut Pixmap, strokes: &[Px], threads: Threads) {
         }
         work();
     });
+}
+
+/// Strokes a band's painting fetches ahead of the one it paints.
+const PREFETCH: usize = 16;
+
+/// Asks the processor to fetch `x` into its caches (a hint: nothing else).
+#[inline]
+fn prefetch<T>(x: &T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a prefetch of a valid reference's address reads nothing the
+    // program sees and cannot fault (SSE, on every x86_64)
+    unsafe {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        _mm_prefetch::<_MM_HINT_T0>((x as *const T).cast());
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = x;
 }
 
 /// Blends stroke `px` into rows `y0..y1` of an opaque premultiplied RGBA
