@@ -371,17 +371,21 @@ impl<'a> Scene<'a> {
     }
 
     /// Calls `f` on the finite ends of every extruding string, in print order
-    /// (on every finite point when nothing extrudes): [`Scene::extruding_points`]
-    /// without holding them.
+    /// (on every finite point when nothing extrudes), a point the same bits
+    /// as the one just passed not again (the end two strings in a row
+    /// share): [`Scene::extruding_points`] without holding them.
     pub fn each_extruding_point(&self, mut f: impl FnMut(DVec3)) {
         let mut any = false;
+        let bits = |p: DVec3| p.to_array().map(f64::to_bits);
         for tp in &self.plan.paths {
+            let mut last = None;
             for (k, s) in tp.strings.iter().enumerate() {
                 if !s.travel {
                     any = true;
                     let (a, b) = tp.ends(k);
                     for p in [a, b] {
-                        if p.is_finite() {
+                        if p.is_finite() && last != Some(bits(p)) {
+                            last = Some(bits(p));
                             f(p);
                         }
                     }

@@ -256,7 +256,15 @@ fn draw<'p>(plan: &'p Plan, opts: &Options) -> (Pixmap, Frame, Scene<'p>) {
     for (i, px) in strokes.iter_mut().enumerate() {
         px.seq = i as u32;
     }
-    strokes.sort_unstable_by(|a, b| a.depth.total_cmp(&b.depth).then(a.seq.cmp(&b.seq)));
+    // (depth, seq) is a total order with no ties: one sorted order, on
+    // the pool's threads or not
+    let order = |a: &Px, b: &Px| a.depth.total_cmp(&b.depth).then(a.seq.cmp(&b.seq));
+    if threads.parallel() {
+        use rayon::slice::ParallelSliceMut;
+        strokes.par_sort_unstable_by(order);
+    } else {
+        strokes.sort_unstable_by(order);
+    }
     let mut pm = Pixmap::new(opts.size.width, opts.size.height).expect("sizes are 1..=8192");
     pm.fill(tiny_skia::Color::from_rgba8(
         BACKGROUND[0],
