@@ -261,6 +261,80 @@ pub struct AtomicFile {
     /// The file renamed over: the target with its symlinks followed.
     target: PathBuf,
     shown: String,
+    /// The temp file's fsync begun when its writing ended ([`Streaming`]).
+    sync: Option<std::sync::Arc<Fsync>>,
+}
+
+/// A temp file's fsync on a pool worker, begun when [`Streaming`] is
+/// flushed at the end of the writing, so that it runs while the checks
+/// finish and the commit waits for less of it (the sphere's took 0.5–0.9
+/// ms of its 10). The commit still renames only after an fsync of every
+/// byte: a write after it began cancels it (the commit syncs then), and
+/// one not yet begun (every worker busy) is done by the commit itself.
+#[derive(Default)]
+struct Fsync {
+    state: Mutex<FsyncState>,
+    done: std::sync::Condvar,
+}
+
+/// Where an [`Fsync`] is.
+#[derive(Default)]
+enum FsyncState {
+    #[default]
+    Queued,
+    Running,
+    Done(io::Result<()>),
+    /// Not to run: waited for before it began, or cancelled.
+    Dropped,
+}
+
+impl Fsync {
+    /// Queues an fsync of `file` on the pool.
+    fn start(file: std::fs::File) -> std::sync::Arc<Fsync> {
+        let sync = std::sync::Arc::new(Fsync::default());
+        let job = sync.clone();
+        rayon::spawn(move || {
+            {
+                let mut st = job.lock();
+                if !matches!(*st, FsyncState::Queued) {
+                    return;
+                }
+                *st = FsyncState::Running;
+            }
+            let r = file.sync_all();
+            *job.lock() = FsyncState::Done(r);
+            job.done.notify_all();
+        });
+        sync
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, FsyncState> {
+        self.state.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Keeps it from beginning (one running goes on, unwaited for).
+    fn cancel(&self) {
+        let mut st = self.lock();
+        if matches!(*st, FsyncState::Queued) {
+            *st = FsyncState::Dropped;
+        }
+    }
+
+    /// Its result, waiting for it if it is running; `None` when it had not
+    /// begun (it never will: the caller syncs the file itself).
+    fn wait(&self) -> Option<io::Result<()>> {
+        let mut st = self.lock();
+        loop {
+            match std::mem::replace(&mut *st, FsyncState::Dropped) {
+                FsyncState::Queued | FsyncState::Dropped => return None,
+                FsyncState::Done(r) => return Some(r),
+                FsyncState::Running => {
+                    *st = FsyncState::Running;
+                    st = self.done.wait(st).unwrap_or_else(|e| e.into_inner());
+                }
+            }
+        }
+    }
 }
 
 impl AtomicFile {
@@ -292,6 +366,7 @@ impl AtomicFile {
                     inner: Some(Inner::Direct(f)),
                     target: real,
                     shown,
+                    sync: None,
                 });
             }
             if !m.is_file() {
@@ -326,6 +401,7 @@ impl AtomicFile {
             inner: Some(Inner::Temp(tmp)),
             target: real,
             shown,
+            sync: None,
         })
     }
 
@@ -341,11 +417,16 @@ impl AtomicFile {
     /// kernel asked to start writing each 2 MB to disk as it is written.
     pub fn streaming(&mut self) -> Streaming<'_> {
         let kick = matches!(self.inner, Some(Inner::Temp(_)));
+        let file = match self.inner.as_mut().expect("not committed") {
+            Inner::Temp(t) => t.as_file_mut(),
+            Inner::Direct(f) => f,
+        };
         Streaming {
-            file: self.file(),
+            file,
             kick,
             written: 0,
             kicked: 0,
+            sync: &mut self.sync,
         }
     }
 
@@ -357,9 +438,10 @@ impl AtomicFile {
             Inner::Direct(mut f) => f.flush().map_err(io),
             Inner::Temp(mut t) => {
                 let path = t.path().to_path_buf();
-                let r = t
-                    .as_file_mut()
-                    .sync_all()
+                // the fsync begun when the writing ended, else one now
+                let synced = self.sync.take().and_then(|s| s.wait());
+                let r = synced
+                    .unwrap_or_else(|| t.as_file_mut().sync_all())
                     .map_err(io)
                     .and_then(|_| t.persist(&self.target).map(|_| ()).map_err(|e| io(e.error)));
                 live().retain(|p| *p != path);
@@ -378,6 +460,8 @@ pub struct Streaming<'a> {
     kick: bool,
     written: u64,
     kicked: u64,
+    /// The file's [`Fsync`], begun by the flush at the end of the writing.
+    sync: &'a mut Option<std::sync::Arc<Fsync>>,
 }
 
 impl Streaming<'_> {
@@ -405,6 +489,9 @@ impl Streaming<'_> {
 
 impl Write for Streaming<'_> {
     fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        if let Some(s) = self.sync.take() {
+            s.cancel(); // written after: the commit syncs it all
+        }
         let n = self.file.write(buf)?;
         self.written += n as u64;
         if self.kick && self.written - self.kicked >= Self::KICK {
@@ -420,12 +507,22 @@ impl Write for Streaming<'_> {
             self.start_write_out();
             self.kicked = self.written;
         }
-        self.file.flush()
+        self.file.flush()?;
+        // and is made durable meanwhile, on a pool worker (see Fsync)
+        if self.kick && self.sync.is_none() {
+            if let Ok(f) = self.file.try_clone() {
+                *self.sync = Some(Fsync::start(f));
+            }
+        }
+        Ok(())
     }
 }
 
 impl Drop for AtomicFile {
     fn drop(&mut self) {
+        if let Some(s) = self.sync.take() {
+            s.cancel(); // no fsync for a file about to go
+        }
         if let Some(Inner::Temp(t)) = self.inner.take() {
             let path = t.path().to_path_buf();
             drop(t); // removes the temp file
@@ -627,6 +724,35 @@ mod tests {
         assert!(!target.exists());
         f.commit().unwrap();
         assert!(std::fs::read(&target).unwrap() == bytes);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn bytes_written_after_the_early_fsync_are_committed_too() {
+        // a flush begins the fsync on the pool; a write after it cancels it
+        // (or lets it finish unwaited for), and the commit syncs it all
+        let dir = std::env::temp_dir().join(format!("p3dp-fsync-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let target = dir.join("out.gcode");
+        let mut f = AtomicFile::create(&target).unwrap();
+        {
+            let mut w = f.streaming();
+            w.write_all(b"G1 X1\n").unwrap();
+            w.flush().unwrap();
+            w.write_all(b"G1 X2\n").unwrap();
+            w.flush().unwrap();
+        }
+        assert!(f.sync.is_some(), "the last flush began an fsync");
+        f.commit().unwrap();
+        assert_eq!(std::fs::read(&target).unwrap(), b"G1 X1\nG1 X2\n");
+        // an fsync still queued when the file is dropped never runs on it
+        let mut g = AtomicFile::create(&dir.join("gone.gcode")).unwrap();
+        g.streaming().flush().unwrap();
+        drop(g);
+        assert!(!dir.join("gone.gcode").exists());
+        // waited for before it begins: the caller syncs itself
+        let s = Fsync::default();
+        assert!(s.wait().is_none());
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }
