@@ -2,7 +2,7 @@
 
 use glam::DVec3;
 
-use super::{not_finite, par_chunks, vars_with};
+use super::{not_finite, par_chunks, vars_with, Polar};
 use crate::error::{Error, Result};
 use crate::expr::{var, Expr, Lanes, LANES};
 use crate::threads::Threads;
@@ -124,12 +124,22 @@ impl Deform {
             let mut vars = [[0.0; var::COUNT]; LANES];
             let mut out = [[0.0; LANES]; 3];
             let mut lanes = Lanes::new();
+            // a helix's points repeat their (x, y) every turn: each angle's
+            // atan2 once, not once a turn
+            let mut polar = theta_too.then(Polar::new);
             for (b, block) in chunk.chunks_mut(LANES).enumerate() {
                 let first = start + b * LANES;
                 let m = block.len();
                 for (j, p) in block.iter().enumerate() {
                     let i = first + j;
-                    vars[j] = vars_with(*p, i, n, r_too, theta_too);
+                    vars[j] = match &mut polar {
+                        Some(memo) => {
+                            let mut v = vars_with(*p, i, n, false, false);
+                            (v[var::R], v[var::THETA]) = memo.of(*p);
+                            v
+                        }
+                        None => vars_with(*p, i, n, r_too, theta_too),
+                    };
                     if let Some(u) = turns {
                         vars[j][var::S] = frac(u[i]);
                     }

@@ -165,6 +165,42 @@ pub(crate) fn vars_with(p: DVec3, i: usize, n: usize, r_too: bool, theta_too: bo
     v
 }
 
+/// A point's radius and angle about the z axis ([`radius`], [`angle`]),
+/// remembered by the bits of its x and y: a helix's points come back to the
+/// same (x, y) every turn (its turn's table), and an angle is an atan2. The
+/// same bits in, the same values out: a look-up changes no result.
+pub(crate) struct Polar {
+    /// Slot h of (x, y) bits (h their hash), and its radius and angle.
+    slots: Vec<([u64; 2], [f64; 2])>,
+}
+
+impl Polar {
+    /// Slots (a power of two): a turn of up to a few thousand points.
+    const SLOTS: usize = 1 << 13;
+
+    /// An empty memory: every slot holds the values of a point whose x and
+    /// y have all bits set (NaNs), as a look-up of it would.
+    pub(crate) fn new() -> Polar {
+        let nan = f64::from_bits(u64::MAX);
+        let p = DVec3::new(nan, nan, 0.0);
+        Polar {
+            slots: vec![([u64::MAX; 2], [radius(p), angle(p)]); Self::SLOTS],
+        }
+    }
+
+    /// [`radius`] and [`angle`] of `p`.
+    #[inline]
+    pub(crate) fn of(&mut self, p: DVec3) -> (f64, f64) {
+        let key = [p.x.to_bits(), p.y.to_bits()];
+        let h = (key[0] ^ key[1].rotate_left(29)).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        let slot = &mut self.slots[(h >> (64 - Self::SLOTS.trailing_zeros())) as usize];
+        if slot.0 != key {
+            *slot = (key, [radius(p), angle(p)]);
+        }
+        (slot.1[0], slot.1[1])
+    }
+}
+
 /// The error for an expression that gave NaN or infinity (no place yet:
 /// [`crate::model::make_part`] names the step).
 pub(crate) fn not_finite(
@@ -182,4 +218,53 @@ pub(crate) fn not_finite(
             p.x, p.y, p.z
         ),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_polar_memory_gives_the_bits_of_radius_and_angle() {
+        let mut memo = Polar::new();
+        let mut rng = crate::rng::SplitMix64::new(11);
+        let nan = f64::from_bits(u64::MAX);
+        let mut pts: Vec<DVec3> = [
+            DVec3::new(nan, nan, 0.0), // the empty slots' key
+            DVec3::new(f64::NAN, 1.0, 0.0),
+            DVec3::new(0.0, -0.0, 1.0),
+            DVec3::new(-0.0, 0.0, 1.0),
+            DVec3::new(-1e-300, -0.0, 0.0),
+            DVec3::new(f64::INFINITY, 2.0, 0.0),
+        ]
+        .to_vec();
+        // a helix's turn of 1000 points three times, then random points
+        // (tens of thousands: slots shared and overwritten)
+        for turn in 0..3 {
+            for k in 0..1000 {
+                let a = std::f64::consts::TAU * k as f64 / 1000.0;
+                pts.push(DVec3::new(
+                    50.0 * libm::cos(a),
+                    50.0 * libm::sin(a),
+                    turn as f64,
+                ));
+            }
+        }
+        for _ in 0..40_000 {
+            let u = rng.next_u64();
+            pts.push(DVec3::new(
+                (u % 2001) as f64 / 10.0 - 100.0,
+                f64::from_bits(rng.next_u64() >> 2) - 1.0,
+                0.0,
+            ));
+        }
+        // the same bits, or both NaN (a NaN's payload reaches no output,
+        // and a computation folded at compile time may give another)
+        let same = |a: f64, b: f64| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan());
+        for p in pts.iter().chain(&pts) {
+            let (r, t) = memo.of(*p);
+            assert!(same(r, radius(*p)), "{p:?}: {r} {}", radius(*p));
+            assert!(same(t, angle(*p)), "{p:?}: {t} {}", angle(*p));
+        }
+    }
 }
