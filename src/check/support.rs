@@ -60,8 +60,12 @@ const GAP_BUDGET: usize = 20_000;
 pub struct Deposits<'a> {
     /// The paths, in print order.
     pub paths: &'a [&'a Toolpath],
-    /// (path, string) of each extruding string of nonzero length, in print order.
-    pub ids: Vec<(u32, u32)>,
+    /// (path, string) of each extruding string of nonzero length, in print
+    /// order ([`Deposits::id`]); none kept when they are the strings of
+    /// the first path in order (one part: 16 MB for 2M strings).
+    ids: Vec<(u32, u32)>,
+    /// How many deposits there are.
+    count: usize,
     /// Per path, the path length before each point, mm.
     pub arc: Vec<Vec<f64>>,
     /// The grid over `ids[..built]`, made when a search first needs it and
@@ -84,9 +88,9 @@ impl<'a> Deposits<'a> {
         tolerance: f64,
         between: &dyn Fn(),
     ) -> Deposits<'a> {
-        // room for every string: a vector doubling as it grows copies
-        // itself and faults its pages in again
-        let mut ids = crate::mem::with_capacity(paths.iter().map(|tp| tp.len()).sum());
+        let total: usize = paths.iter().map(|tp| tp.len()).sum();
+        let mut ids: Vec<(u32, u32)> = Vec::new();
+        let mut count = 0usize;
         let mut arc = Vec::with_capacity(paths.len());
         let mut c_max = f64::NEG_INFINITY;
         for (p, tp) in paths.iter().enumerate() {
@@ -102,7 +106,17 @@ impl<'a> Deposits<'a> {
                 s.push(acc);
                 // a hair holds nothing up: it is no deposit
                 if !st.travel && !st.hair && l > 0.0 {
-                    ids.push((p as u32, k as u32));
+                    if ids.is_empty() && (p, k) != (0, count) {
+                        // no longer the first path's strings in order: listed,
+                        // with room for every string (a vector doubling as it
+                        // grows copies itself and faults its pages in again)
+                        ids = crate::mem::with_capacity(total);
+                        ids.extend((0..count).map(|k| (0, k as u32)));
+                    }
+                    if !ids.is_empty() || (p, k) != (0, count) {
+                        ids.push((p as u32, k as u32));
+                    }
+                    count += 1;
                     c_max = c_max.max(st.c);
                 }
             }
@@ -117,6 +131,7 @@ impl<'a> Deposits<'a> {
         Deposits {
             paths,
             ids,
+            count,
             arc,
             grid: std::cell::RefCell::new((
                 SegGrid::build(0, cell, |_| (DVec3::ZERO, DVec3::ZERO)),
@@ -135,16 +150,8 @@ impl<'a> Deposits<'a> {
         if (g as usize) > grid.1 {
             // a helix mostly finds its support by coherence: grids are made
             // rarely, and each at least doubles, so all cost ≤ 2 full ones
-            let n = (g as usize).max(2 * grid.1).min(self.ids.len());
-            let ids = &self.ids;
-            let paths = self.paths;
-            *grid = (
-                SegGrid::build(n, self.cell, |i| {
-                    let (p, k) = ids[i];
-                    paths[p as usize].ends(k as usize)
-                }),
-                n,
-            );
+            let n = (g as usize).max(2 * grid.1).min(self.count);
+            *grid = (SegGrid::build(n, self.cell, |i| self.ends(i as u32)), n);
         }
         grid.0.search(p, r, g, f)
     }
@@ -152,8 +159,28 @@ impl<'a> Deposits<'a> {
     /// Ends of deposit i.
     #[inline]
     pub fn ends(&self, i: u32) -> (DVec3, DVec3) {
-        let (p, k) = self.ids[i as usize];
+        let (p, k) = self.id(i);
         self.paths[p as usize].ends(k as usize)
+    }
+
+    /// (path, string) of deposit `j`.
+    #[inline]
+    pub fn id(&self, j: u32) -> (u32, u32) {
+        if self.ids.is_empty() {
+            (0, j)
+        } else {
+            self.ids[j as usize]
+        }
+    }
+
+    /// How many deposits there are.
+    pub fn len(&self) -> usize {
+        self.count
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.count == 0
     }
 }
 
@@ -490,7 +517,7 @@ fn bridge_finding(
 /// must lie farther back along it than 3 × its distance in space, and than w).
 #[inline]
 fn holds(dep: &Deposits, j: u32, pi: u32, sq: f64, q: DVec3, w: f64, tol: f64) -> bool {
-    let (pj, kj) = dep.ids[j as usize];
+    let (pj, kj) = dep.id(j);
     let tp = dep.paths[pj as usize];
     let k = kj as usize;
     let (a, b) = (tp.points[k], tp.points[k + 1]);
@@ -578,7 +605,7 @@ fn overhang(dep: &Deposits, g: u32, pi: u32, sq: f64, q: DVec3, w: f64) -> Optio
         if visits > MAX_NEAR {
             return true;
         }
-        let (pj, kj) = dep.ids[j as usize];
+        let (pj, kj) = dep.id(j);
         let k = kj as usize;
         let tp = dep.paths[pj as usize];
         let (a, b) = tp.ends(k);
@@ -679,7 +706,24 @@ mod tests {
             .fold(0.4, f64::max);
         assert_eq!(dep.w_max.to_bits(), each.to_bits());
         assert_eq!(dep.w_max, width(0.31 + 1e-12, 0.4));
-        assert_eq!(dep.ids.len(), cs.len() + 1);
+        assert_eq!(dep.len(), cs.len() + 1);
+        // the deposits are listed past the travel (string 8), the same
+        // (path, string) as a list of every one gives
+        let want: Vec<(u32, u32)> = (0..8).chain(9..10).map(|k| (0, k)).collect();
+        let got: Vec<(u32, u32)> = (0..dep.len() as u32).map(|j| dep.id(j)).collect();
+        assert_eq!(got, want);
+        // one path of extruding strings: its strings in order, none listed
+        let h = helix(0.3, 2, 0.15);
+        let two = [&h, &tp];
+        let dep = Deposits::new(&two[..1], 0.4, 1.5, &|| {});
+        assert!(dep.ids.is_empty());
+        assert_eq!(dep.len(), h.len());
+        assert_eq!(dep.id(7), (0, 7));
+        // a second path lists them all
+        let dep = Deposits::new(&two, 0.4, 1.5, &|| {});
+        assert_eq!(dep.len(), h.len() + 9);
+        assert_eq!(dep.id(7), (0, 7));
+        assert_eq!(dep.id(h.len() as u32 + 8), (1, 9));
     }
 
     #[test]
