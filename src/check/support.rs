@@ -661,8 +661,9 @@ mod tests {
         tp
     }
 
-    fn run(tps: &[Toolpath]) -> Vec<Finding> {
-        let recipe = crate::recipe::Recipe::resolve(
+    /// A recipe of the default printer (the paths are given by the tests).
+    fn recipe() -> Recipe {
+        crate::recipe::Recipe::resolve(
             &crate::recipe::parse_yaml(
                 "p3dp: 1\nname: t\nparts:\n  - primitive: {circle: {radius: 1}}\n",
                 "t.yaml",
@@ -672,10 +673,13 @@ mod tests {
             None,
             std::path::Path::new("."),
         )
-        .unwrap();
+        .unwrap()
+    }
+
+    fn run(tps: &[Toolpath]) -> Vec<Finding> {
         let refs: Vec<&Toolpath> = tps.iter().collect();
         let mut out = Vec::new();
-        check(&recipe, &refs, &|| {}, &mut out);
+        check(&recipe(), &refs, &|| {}, &mut out);
         out
     }
 
@@ -731,19 +735,8 @@ mod tests {
         // a helix of more than 3 × BETWEEN strings
         let tp = helix(0.3, 3 * BETWEEN / 72 + 1, 0.15);
         let calls = std::cell::Cell::new(0);
-        let recipe = crate::recipe::Recipe::resolve(
-            &crate::recipe::parse_yaml(
-                "p3dp: 1\nname: t\nparts:\n  - primitive: {circle: {radius: 1}}\n",
-                "t.yaml",
-            )
-            .unwrap(),
-            &[],
-            None,
-            std::path::Path::new("."),
-        )
-        .unwrap();
         let mut out = Vec::new();
-        check(&recipe, &[&tp], &|| calls.set(calls.get() + 1), &mut out);
+        check(&recipe(), &[&tp], &|| calls.set(calls.get() + 1), &mut out);
         assert!(out.is_empty(), "{out:?}");
         // once in making the deposits and once in the scan, each BETWEEN strings
         assert_eq!(calls.get(), 2 * (tp.len() / BETWEEN));
