@@ -28,7 +28,7 @@
 use glam::{DVec2, DVec3};
 use serde::Serialize;
 
-use super::support::width;
+use super::support::{width, Widths};
 use super::{fmt_p, Finding, Severity};
 use crate::geom::grid::{ceil_i64, floor_i64, GrowGrid};
 use crate::model::Recipe;
@@ -290,9 +290,7 @@ impl Bed {
         for (j, tp) in paths.iter().enumerate() {
             starts.push(cands.len());
             let (mut along, mut summed) = (0.0, 0);
-            // the last string's cross-section and width (strings in a row
-            // mostly share one: a square root saved on each)
-            let (mut last_c, mut last_w) = (f64::NAN, nozzle);
+            let mut widths = Widths::new(nozzle);
             // extruded length along the path up to the current string's middle,
             // summed only when a string low enough needs it (a tall part's
             // strings above its first layer need no length): the same lengths
@@ -305,10 +303,8 @@ impl Bed {
                 // a string is too high when an end is over its width w ≥ the
                 // nozzle's: no end over the nozzle's diameter is never too high
                 if (a.z > nozzle || b.z > nozzle) && {
-                    if s.c.to_bits() != last_c.to_bits() {
-                        (last_c, last_w) = (s.c, width(s.c, nozzle));
-                    }
-                    a.z > last_w || b.z > last_w
+                    let w = widths.of(s.c);
+                    a.z > w || b.z > w
                 } {
                     continue;
                 }

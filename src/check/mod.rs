@@ -76,8 +76,9 @@ pub fn run(
 pub struct Tasks<'a> {
     recipe: &'a Recipe,
     paths: &'a [&'a Toolpath],
-    /// Called after each part's cheap checks and every [`BETWEEN`] strings
-    /// of the long tasks (the build plans the moves written so far there).
+    /// Called after each cheap pass over a part and every [`BETWEEN`]
+    /// strings of the long tasks (the build plans the moves written so far
+    /// there).
     between: &'a (dyn Fn() + Sync),
     geometric: bool,
     /// The cheap checks' findings, then the pattern helix's (put last).

@@ -43,6 +43,34 @@ pub fn width(c: f64, nozzle: f64) -> f64 {
     (2.0 * (c.max(0.0) / std::f64::consts::PI).sqrt()).max(nozzle)
 }
 
+/// [`width`] of strings taken in turn, worked out again only when the
+/// cross-section changes (strings in a row mostly share one: a square root
+/// and a division saved on each); the same bits in, the same width out.
+pub struct Widths {
+    nozzle: f64,
+    /// The last cross-section and its width.
+    last: (f64, f64),
+}
+
+impl Widths {
+    /// Widths for a nozzle of this diameter.
+    pub fn new(nozzle: f64) -> Widths {
+        Widths {
+            nozzle,
+            last: (f64::NAN, width(f64::NAN, nozzle)),
+        }
+    }
+
+    /// [`width`] of a string of cross-section `c`.
+    #[inline]
+    pub fn of(&mut self, c: f64) -> f64 {
+        if c.to_bits() != self.last.0.to_bits() {
+            self.last = (c, width(c, self.nozzle));
+        }
+        self.last.1
+    }
+}
+
 /// How far beyond the search radius an unsupported sample looks for the
 /// nearest filament, to say how far it hangs, mm.
 const GAP_SEARCH: f64 = 5.0;
@@ -90,7 +118,7 @@ impl<'a> Deposits<'a> {
     ) -> Deposits<'a> {
         let total: usize = paths.iter().map(|tp| tp.len()).sum();
         let mut ids: Vec<(u32, u32)> = Vec::new();
-        let mut count = 0usize;
+        let (mut count, mut listed) = (0usize, false);
         let mut arc = Vec::with_capacity(paths.len());
         let mut c_max = f64::NEG_INFINITY;
         for (p, tp) in paths.iter().enumerate() {
@@ -106,14 +134,16 @@ impl<'a> Deposits<'a> {
                 s.push(acc);
                 // a hair holds nothing up: it is no deposit
                 if !st.travel && !st.hair && l > 0.0 {
-                    if ids.is_empty() && (p, k) != (0, count) {
-                        // no longer the first path's strings in order: listed,
-                        // with room for every string (a vector doubling as it
-                        // grows copies itself and faults its pages in again)
+                    if !listed && (p, k) != (0, count) {
+                        // no longer the first path's strings in order: the
+                        // deposits so far listed, with room for every string
+                        // (a vector doubling as it grows copies itself and
+                        // faults its pages in again)
+                        listed = true;
                         ids = crate::mem::with_capacity(total);
                         ids.extend((0..count).map(|k| (0, k as u32)));
                     }
-                    if !ids.is_empty() || (p, k) != (0, count) {
+                    if listed {
                         ids.push((p as u32, k as u32));
                     }
                     count += 1;
@@ -315,8 +345,7 @@ fn scan_part(
     let mut run_pts: Vec<DVec3> = Vec::new();
     let mut last_ok: Option<DVec3> = None;
     let mut hint: Option<u32> = None;
-    // the last string's cross-section and width
-    let (mut last_c, mut last_w) = (f64::NAN, nozzle);
+    let mut widths = Widths::new(nozzle);
     let mut close = |run: &mut Option<Run>, pts: &mut Vec<DVec3>, after: Option<DVec3>| {
         let Some(r) = run.take() else { return };
         let middle = pts[pts.len() / 2];
@@ -359,11 +388,7 @@ fn scan_part(
             hint = None;
             continue;
         }
-        // strings in a row mostly share their cross-section: its width once
-        if s.c.to_bits() != last_c.to_bits() {
-            (last_c, last_w) = (s.c, width(s.c, nozzle));
-        }
-        let w = last_w;
+        let w = widths.of(s.c);
         // l is finite (the geometric checks run on finite points only) and
         // w > 0, so l / w is never NaN: libm's ceil, clamped and cast
         let n = ceil_i64(l / w).clamp(1, 1_000_000) as usize;
@@ -643,6 +668,21 @@ mod tests {
         assert!((width(0.196, 0.4) - 0.49956).abs() < 1e-4);
         assert_eq!(width(0.01, 0.4), 0.4);
         assert_eq!(width(-1.0, 0.4), 0.4);
+        // taken in turn, repeated or not, the same bits as one at a time
+        let mut ws = Widths::new(0.4);
+        for c in [
+            f64::NAN,
+            0.196,
+            0.196,
+            0.0,
+            -0.0,
+            3.5,
+            f64::NAN,
+            0.01,
+            0.196,
+        ] {
+            assert_eq!(ws.of(c).to_bits(), width(c, 0.4).to_bits(), "{c}");
+        }
     }
 
     fn helix(pitch: f64, turns: usize, c: f64) -> Toolpath {

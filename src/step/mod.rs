@@ -18,7 +18,7 @@ use glam::DVec3;
 use crate::error::{Error, Result};
 use crate::expr::{var, Vars};
 use crate::threads::Threads;
-use crate::toolpath::{angle, radius, Toolpath};
+use crate::toolpath::{angle, polar, radius, Toolpath};
 
 /// What `modulate_*` keeps when it scales the cross-section.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -165,7 +165,7 @@ pub(crate) fn vars_with(p: DVec3, i: usize, n: usize, r_too: bool, theta_too: bo
     v
 }
 
-/// A point's radius and angle about the z axis ([`radius`], [`angle`]),
+/// A point's radius and angle about the z axis ([`polar`]),
 /// remembered by the bits of its x and y: a helix's points come back to the
 /// same (x, y) every turn (its turn's table), and an angle is an atan2. The
 /// same bits in, the same values out: a look-up changes no result.
@@ -184,7 +184,7 @@ impl Polar {
         let nan = f64::from_bits(u64::MAX);
         let p = DVec3::new(nan, nan, 0.0);
         Polar {
-            slots: vec![([u64::MAX; 2], [radius(p), angle(p)]); Self::SLOTS],
+            slots: vec![([u64::MAX; 2], polar(p).into()); Self::SLOTS],
         }
     }
 
@@ -195,7 +195,8 @@ impl Polar {
         let h = (key[0] ^ key[1].rotate_left(29)).wrapping_mul(0x9E37_79B9_7F4A_7C15);
         let slot = &mut self.slots[(h >> (64 - Self::SLOTS.trailing_zeros())) as usize];
         if slot.0 != key {
-            *slot = (key, [radius(p), angle(p)]);
+            let (r, theta) = polar(p);
+            *slot = (key, [r, theta]);
         }
         (slot.1[0], slot.1[1])
     }
