@@ -16,7 +16,7 @@
 use std::path::Path;
 use std::time::Instant;
 
-use p3dp::threads::Threads;
+use p3dp::base::threads::Threads;
 
 fn peak_rss_mb() -> Option<f64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
@@ -34,7 +34,7 @@ fn main() {
     let recipe = Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/vase-2m.yaml");
     let out = std::env::temp_dir().join(format!("p3dp-bench-vase-{}.gcode", std::process::id()));
     let threads = Threads::available();
-    let opts = p3dp::build::Options {
+    let opts = p3dp::app::build::Options {
         threads,
         ..Default::default()
     };
@@ -44,7 +44,7 @@ fn main() {
     let mut strings = 0;
     for _ in 0..runs {
         let t0 = Instant::now();
-        let mut plan = p3dp::build::prepare(&recipe, &opts).expect("plan");
+        let mut plan = p3dp::app::build::prepare(&recipe, &opts).expect("plan");
         strings = plan.paths.iter().map(|p| p.len()).sum::<usize>();
         let file = std::fs::File::create(&out).expect("temp file");
         let stats = plan.check_and_render(&[], file).expect("render");
@@ -75,11 +75,11 @@ fn main() {
 
 /// Each stage alone, median of `runs`: making the strings, the checks, and
 /// writing the G-code (hashed, to a sink, planner beside it) after them.
-fn stages(path: &Path, opts: &p3dp::build::Options, runs: usize) {
+fn stages(path: &Path, opts: &p3dp::app::build::Options, runs: usize) {
     let (mut make, mut check, mut write) = (Vec::new(), Vec::new(), Vec::new());
     for _ in 0..runs {
         let t0 = Instant::now();
-        let mut plan = p3dp::build::prepare(path, opts).expect("plan");
+        let mut plan = p3dp::app::build::prepare(path, opts).expect("plan");
         make.push(t0.elapsed().as_secs_f64());
         let t1 = Instant::now();
         plan.check(&[]);
@@ -103,15 +103,15 @@ fn checks_against_generation(path: &Path, runs: usize) {
     let mut found = 0;
     for _ in 0..runs {
         let t0 = Instant::now();
-        let part = p3dp::build::make_part(&recipe, 0, Threads::available()).expect("part");
+        let part = p3dp::app::build::make_part(&recipe, 0, Threads::available()).expect("part");
         gen.push(t0.elapsed().as_secs_f64());
         let refs = [&part];
         let mut out = Vec::new();
         let t1 = Instant::now();
-        p3dp::check::support::check(&recipe, &refs, &|| {}, &mut out);
+        p3dp::analyse::check::support::check(&recipe, &refs, &|| {}, &mut out);
         sup.push(t1.elapsed().as_secs_f64());
         let t2 = Instant::now();
-        p3dp::check::collision::check(&recipe, &refs, &|| {}, &mut out);
+        p3dp::analyse::check::collision::check(&recipe, &refs, &|| {}, &mut out);
         col.push(t2.elapsed().as_secs_f64());
         found = out.len();
     }

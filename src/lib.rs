@@ -18,45 +18,12 @@
 // the library writes through `say!`/`tell!` (src/output.rs) instead
 #![deny(clippy::print_stdout, clippy::print_stderr)]
 
-pub mod error;
-pub mod expr;
-pub mod finding;
-pub mod format;
-pub mod geom;
-pub mod input;
-pub mod mem;
-pub mod num;
-pub mod rng;
-pub mod safe_text;
-pub mod svg;
-pub mod threads;
-pub mod toolpath;
-
-pub mod limits;
+pub mod analyse;
+pub mod app;
+pub mod base;
+pub mod generate;
 pub mod machine;
-
-pub mod assembly;
-pub mod model;
-pub mod primitive;
-pub mod skirt;
-pub mod step;
-
-pub mod check;
-pub mod gcode;
-pub mod planner;
-pub mod stats;
-
+pub mod output;
 pub mod recipe;
 
-pub mod batch;
-pub mod build;
-pub mod cli;
-pub mod diagnostic;
-pub mod lock;
-pub mod mesh;
-pub mod output;
-pub mod plan;
-pub mod preview;
-pub mod watch;
-
-pub use error::{Error, Result};
+pub use base::error::{Error, Result};

@@ -4,11 +4,11 @@
 use std::process::ExitCode;
 
 use clap::Parser;
-use p3dp::cli::{self, Cli};
+use p3dp::app::cli::{self, Cli};
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    p3dp::output::remove_temp_files_on_signals();
+    p3dp::output::file::remove_temp_files_on_signals();
     let errors = cli::run(cli);
     let mut code = 0;
     for e in &errors {

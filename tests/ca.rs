@@ -8,11 +8,11 @@ mod common;
 use std::path::Path;
 
 use common::{p3dp, parse, recipe, tmp};
-use p3dp::build::make_part;
-use p3dp::primitive::ca::{Automaton, CaHelix, Initial, Layout, Pattern, Rule};
-use p3dp::primitive::{PatternHelix, Primitive};
+use p3dp::app::build::make_part;
+use p3dp::base::threads::Threads;
+use p3dp::generate::primitive::ca::{Automaton, CaHelix, Initial, Layout, Pattern, Rule};
+use p3dp::generate::primitive::{PatternHelix, Primitive};
 use p3dp::recipe::Recipe;
-use p3dp::threads::Threads;
 use sha2::{Digest, Sha256};
 
 const N: usize = 288;

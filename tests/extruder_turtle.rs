@@ -9,11 +9,11 @@ use std::path::PathBuf;
 
 use common::linking_by_gauss;
 use glam::DVec3;
-use p3dp::assembly::make_parts;
-use p3dp::check::{self, Severity};
+use p3dp::analyse::check::{self, Severity};
+use p3dp::base::threads::Threads;
+use p3dp::base::toolpath::Toolpath;
+use p3dp::generate::assembly::make_parts;
 use p3dp::recipe::Recipe;
-use p3dp::threads::Threads;
-use p3dp::toolpath::Toolpath;
 
 fn load(name: &str) -> Recipe {
     load_with(name, &[])
@@ -88,11 +88,11 @@ fn hairs_are_rows_of_declared_hairs_of_the_recipes_length_that_pass_check() {
     // each hair: a blob pushed in place just before it, a retraction after it
     for k in (0..tp.len()).filter(|&k| tp.strings[k].hair) {
         assert!(tp.events.iter().any(|&(i, e)| i == k
-            && matches!(e, p3dp::toolpath::Event::Extrude { filament, .. } if filament > 0.0)));
+            && matches!(e, p3dp::base::toolpath::Event::Extrude { filament, .. } if filament > 0.0)));
         assert!(tp
             .events
             .iter()
-            .any(|&(i, e)| i == k + 1 && e == p3dp::toolpath::Event::Retract));
+            .any(|&(i, e)| i == k + 1 && e == p3dp::base::toolpath::Event::Retract));
     }
     // declared, they pass every check; the same strings undeclared are what
     // the three checks exist to find

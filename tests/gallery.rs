@@ -6,12 +6,12 @@ use std::f64::consts::{PI, TAU};
 use std::path::PathBuf;
 
 use glam::DVec3;
-use p3dp::assembly::make_parts;
-use p3dp::build::plan;
-use p3dp::check::Severity;
+use p3dp::analyse::check::Severity;
+use p3dp::app::build::plan;
+use p3dp::base::threads::Threads;
+use p3dp::base::toolpath::{polar, Toolpath};
+use p3dp::generate::assembly::make_parts;
 use p3dp::recipe::Recipe;
-use p3dp::threads::Threads;
-use p3dp::toolpath::{polar, Toolpath};
 
 /// Every recipe of the gallery.
 const GALLERY: [&str; 8] = [

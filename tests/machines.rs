@@ -9,10 +9,10 @@ use std::path::PathBuf;
 
 use common::{p3dp, recipe, root, tmp, Move};
 use glam::DVec3;
-use p3dp::build::{plan, Options};
+use p3dp::app::build::{plan, Options};
+use p3dp::base::toolpath::{Event, Toolpath};
 use p3dp::machine::{Bed, Printer};
 use p3dp::recipe::profile::built_in_names;
-use p3dp::toolpath::{Event, Toolpath};
 
 const PROFILES: [&str; 6] = [
     "generic-220",

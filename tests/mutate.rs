@@ -18,7 +18,7 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 
 use common::*;
-use p3dp::build::{plan, Options};
+use p3dp::app::build::{plan, Options};
 use p3dp::recipe::Recipe;
 
 /// xorshift64*: a small seeded generator, so a failure can be replayed.
@@ -215,7 +215,7 @@ fn try_mutant(path: &Path, build: bool) -> Result<Option<p3dp::Error>, String> {
         }
     };
     if let Some(e) = &err {
-        if e.kind != p3dp::error::Kind::Check {
+        if e.kind != p3dp::base::error::Kind::Check {
             if e.file.is_none() {
                 return Err(format!("the error names no file: {e}"));
             }
@@ -292,7 +292,7 @@ fn mutated_gallery_recipes_never_panic_and_errors_have_places() {
                 }
                 Ok(Some(e)) => {
                     errors += 1;
-                    if e.kind != p3dp::error::Kind::Check
+                    if e.kind != p3dp::base::error::Kind::Check
                         && refused.len() < 2 * gallery.len()
                         && k % 50 == 0
                     {

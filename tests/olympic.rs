@@ -15,8 +15,8 @@ use std::f64::consts::PI;
 
 use common::*;
 use glam::{DVec2, DVec3};
-use p3dp::build::Plan;
-use p3dp::check::Severity;
+use p3dp::analyse::check::Severity;
+use p3dp::app::build::Plan;
 
 /// Nozzle width of generic-220, mm.
 const NOZZLE: f64 = 0.4;
@@ -201,15 +201,15 @@ struct Pieces {
 }
 
 fn load(sets: &[(&str, &str)]) -> Pieces {
-    let opts = p3dp::build::Options {
+    let opts = p3dp::app::build::Options {
         sets: sets
             .iter()
             .map(|(k, v)| (k.to_string(), v.to_string()))
             .collect(),
         ..Default::default()
     };
-    let plan =
-        p3dp::build::plan(&recipe("olympic-rings.yaml"), &opts).unwrap_or_else(|e| panic!("{e}"));
+    let plan = p3dp::app::build::plan(&recipe("olympic-rings.yaml"), &opts)
+        .unwrap_or_else(|e| panic!("{e}"));
     let layer = plan.recipe.params["layer"];
     let mut parts = Vec::new();
     for (k, tp) in plan.paths.iter().enumerate() {

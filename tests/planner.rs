@@ -6,15 +6,15 @@ mod common;
 
 use common::*;
 use glam::DVec3;
+use p3dp::analyse::planner::{MoveKind, Planner};
 use p3dp::machine::Printer;
-use p3dp::planner::{MoveKind, Planner};
 
-fn build(recipe_name: &str, printer: Option<&str>) -> (String, p3dp::stats::Stats) {
-    let opts = p3dp::build::Options {
+fn build(recipe_name: &str, printer: Option<&str>) -> (String, p3dp::analyse::stats::Stats) {
+    let opts = p3dp::app::build::Options {
         printer: printer.map(str::to_string),
         ..Default::default()
     };
-    let plan = p3dp::build::plan(&recipe(recipe_name), &opts).unwrap();
+    let plan = p3dp::app::build::plan(&recipe(recipe_name), &opts).unwrap();
     let mut out = Vec::new();
     let stats = plan.render(&mut out).unwrap();
     (String::from_utf8(out).unwrap(), stats)
@@ -22,7 +22,7 @@ fn build(recipe_name: &str, printer: Option<&str>) -> (String, p3dp::stats::Stat
 
 /// Plans the moves of written G-code again, read back as a firmware reads
 /// them (up to the end G-code, which the estimate leaves out).
-fn replan(gcode: &str, printer: &Printer) -> p3dp::planner::Estimate {
+fn replan(gcode: &str, printer: &Printer) -> p3dp::analyse::planner::Estimate {
     let first_end_line = printer.end_gcode.lines().next().unwrap();
     let body = &gcode[..gcode.find(first_end_line).unwrap()];
     let g = parse(body);
@@ -74,7 +74,7 @@ fn globe_estimate_is_the_written_moves_planned() {
         1e-12,
     );
     // the summary comments carry the estimate, per part too
-    let hms = p3dp::format::hms;
+    let hms = p3dp::base::format::hms;
     assert!(gcode.contains(&format!(
         "; estimated printing time = {}\n",
         hms(s.print_time_s)

@@ -507,7 +507,7 @@ fn bad_preview_options_are_input_errors() {
 /// Thumbnail blocks read back: (width, height, PNG bytes). `parse` checks
 /// LEN, the line length of 78 and that every block is closed.
 fn thumbnails(gcode: &str) -> Vec<(u32, u32, Vec<u8>)> {
-    p3dp::preview::thumbnail::parse(gcode)
+    p3dp::output::preview::thumbnail::parse(gcode)
         .expect("thumbnail blocks as PrusaSlicer writes them")
         .into_iter()
         .map(|t| (t.width, t.height, t.png))

@@ -10,10 +10,10 @@ use std::path::{Path, PathBuf};
 
 use common::{p3dp, recipe, root, tmp};
 use glam::DVec3;
-use p3dp::assembly::make_parts;
+use p3dp::base::threads::Threads;
+use p3dp::base::toolpath::{polar, Toolpath};
+use p3dp::generate::assembly::make_parts;
 use p3dp::recipe::{parse_yaml, RawRecipe, Recipe};
-use p3dp::threads::Threads;
-use p3dp::toolpath::{polar, Toolpath};
 
 fn fixture(name: &str) -> PathBuf {
     root().join("tests/fixtures/procedural").join(name)
@@ -230,7 +230,7 @@ parts:
     );
     // a default over an earlier template param, with its `with` value
     let helix = |k: usize| match &recipe.parts[k].primitive {
-        p3dp::primitive::Primitive::Helix(h) => (h.radius, h.height),
+        p3dp::generate::primitive::Primitive::Helix(h) => (h.radius, h.height),
         other => panic!("{other:?}"),
     };
     assert_eq!(helix(0), (1.0, 2.0));

@@ -174,12 +174,12 @@ fn every_key_of_the_loader_is_in_the_reference() {
 fn every_variable_and_function_is_in_the_reference() {
     let doc = doc();
     let mut missing = Vec::new();
-    for v in p3dp::expr::VAR_NAMES.iter().chain(&["pi", "e"]) {
+    for v in p3dp::base::expr::VAR_NAMES.iter().chain(&["pi", "e"]) {
         if !mentioned(&doc, v) {
             missing.push(format!("variable `{v}`"));
         }
     }
-    for f in p3dp::expr::FUNCTIONS.split_whitespace() {
+    for f in p3dp::base::expr::FUNCTIONS.split_whitespace() {
         let name = f.split('(').next().unwrap();
         if !mentioned(&doc, name) {
             missing.push(format!("function `{name}`"));

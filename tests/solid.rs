@@ -9,13 +9,13 @@ use std::f64::consts::{FRAC_PI_4, PI};
 use std::path::{Path, PathBuf};
 
 use glam::{DVec2, DVec3};
-use p3dp::build::{make_part, plan};
-use p3dp::primitive::solid::piece::Piece;
-use p3dp::primitive::solid::{Loop, Region, Solid};
-use p3dp::primitive::Primitive;
+use p3dp::app::build::{make_part, plan};
+use p3dp::base::threads::Threads;
+use p3dp::base::toolpath::Toolpath;
+use p3dp::generate::primitive::solid::piece::Piece;
+use p3dp::generate::primitive::solid::{Loop, Region, Solid};
+use p3dp::generate::primitive::Primitive;
 use p3dp::recipe::Recipe;
-use p3dp::threads::Threads;
-use p3dp::toolpath::Toolpath;
 
 /// Writes a one-part recipe whose primitive is `solid: {SOLID}` (YAML flow
 /// text) into a fresh folder and returns its path.
@@ -500,9 +500,9 @@ impl Lcg {
 
 #[test]
 fn random_features_on_a_grid_agree_with_point_tests() {
-    use p3dp::primitive::solid::infill::{direction, spans};
-    use p3dp::primitive::solid::offset::offset;
-    use p3dp::primitive::solid::region::{boolean, evaluate, Op, Shape};
+    use p3dp::generate::primitive::solid::infill::{direction, spans};
+    use p3dp::generate::primitive::solid::offset::offset;
+    use p3dp::generate::primitive::solid::region::{boolean, evaluate, Op, Shape};
 
     fn holds(s: &Shape, p: DVec2) -> bool {
         match *s {
@@ -651,8 +651,8 @@ fn a_solid_refuses_a_cross_section_it_would_ignore() {
 }
 
 /// Layer settings of the z-buffer tests.
-fn zb_settings() -> p3dp::primitive::solid::Settings {
-    use p3dp::primitive::solid::{Infill, Pattern, Settings};
+fn zb_settings() -> p3dp::generate::primitive::solid::Settings {
+    use p3dp::generate::primitive::solid::{Infill, Pattern, Settings};
     Settings {
         layer_height: 0.5,
         perimeters: 1,
@@ -670,8 +670,8 @@ fn zb_settings() -> p3dp::primitive::solid::Settings {
 
 #[test]
 fn the_incremental_z_buffer_equals_a_full_rebuild_and_touches_only_its_range() {
-    use p3dp::primitive::solid::region::Op;
-    use p3dp::primitive::solid::{Body, Feature, ZBuffer};
+    use p3dp::generate::primitive::solid::region::Op;
+    use p3dp::generate::primitive::solid::{Body, Feature, ZBuffer};
     let st = zb_settings();
     let h = st.layer_height;
     for seed in 1..=6u64 {
@@ -859,7 +859,7 @@ fn grid_infill_lays_both_directions_in_every_layer_inside_the_perimeters() {
 
 #[test]
 fn connected_infill_travels_less_and_its_joins_stay_inside() {
-    use p3dp::primitive::solid::plan_join_inside as join_inside;
+    use p3dp::generate::primitive::solid::plan_join_inside as join_inside;
     for pattern in ["lines", "grid"] {
         let base = BOX_WITH_HOLE.replace(
             "infill: {angle: 45, spacing: 0.8, alternate: true}",
@@ -940,7 +940,7 @@ fn connected_infill_travels_less_and_its_joins_stay_inside() {
 
 #[test]
 fn the_zbuffer_json_is_the_exact_loops_and_the_svg_draws_a_layer() {
-    use p3dp::primitive::solid::piece::Arc;
+    use p3dp::generate::primitive::solid::piece::Arc;
     let path = recipe_file("zbuf", BOX_WITH_HOLE);
     let dir = path.parent().unwrap();
     let out = common::p3dp(
@@ -1087,7 +1087,7 @@ fn the_zbuffer_json_is_the_exact_loops_and_the_svg_draws_a_layer() {
 
 #[test]
 fn a_kept_z_buffer_re_slices_only_the_edited_feature() {
-    use p3dp::primitive::solid::{reusing, Cache};
+    use p3dp::generate::primitive::solid::{reusing, Cache};
     // as `p3dp watch` builds: the z-buffers of one build kept for the next
     let path = recipe_file("kept", BOX_WITH_HOLE);
     let (r, cache) = reusing(Cache::default(), || load(&path));

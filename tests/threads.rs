@@ -5,8 +5,8 @@
 mod common;
 
 use common::*;
-use p3dp::build::{plan, prepare, Options};
-use p3dp::threads::Threads;
+use p3dp::app::build::{plan, prepare, Options};
+use p3dp::base::threads::Threads;
 
 /// A scaled-down `benches/vase-2m.yaml`: 60 turns of 1000 strings, so the
 /// deform step (60,000 points and strings) is well above `PAR_MIN` (8,192).

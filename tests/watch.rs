@@ -321,13 +321,13 @@ parts:
     };
     let recipe = dir.join("recipe.yaml");
     std::fs::write(&recipe, text("map.png")).unwrap();
-    let opts = p3dp::plan::Options {
-        threads: p3dp::threads::Threads::ONE,
+    let opts = p3dp::app::prepare::Options {
+        threads: p3dp::base::threads::Threads::ONE,
         ..Default::default()
     };
-    let (built, files) = p3dp::input::recording(|| p3dp::plan::plan(&recipe, &opts));
+    let (built, files) = p3dp::base::input::recording(|| p3dp::app::prepare::plan(&recipe, &opts));
     if let Err(e) = built {
-        panic!("{}", p3dp::cli::render_error(&e));
+        panic!("{}", p3dp::app::cli::render_error(&e));
     }
     let ids: Vec<_> = files.iter().map(|f| f.canonicalize().unwrap()).collect();
     for f in [
@@ -342,7 +342,7 @@ parts:
     }
     // a missing image fails the build, and is followed: making it is a change
     std::fs::write(&recipe, text("later.png")).unwrap();
-    let (built, files) = p3dp::input::recording(|| p3dp::plan::plan(&recipe, &opts));
+    let (built, files) = p3dp::base::input::recording(|| p3dp::app::prepare::plan(&recipe, &opts));
     assert!(built.is_err());
     assert!(files.iter().any(|f| f.ends_with("later.png")), "{files:?}");
 }

@@ -2,7 +2,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use p3dp::expr::{eval_const, var, Expr, Params};
+use p3dp::base::expr::{eval_const, var, Expr, Params};
 
 fuzz_target!(|data: &[u8]| {
     let Ok(src) = std::str::from_utf8(data) else {

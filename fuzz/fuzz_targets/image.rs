@@ -12,6 +12,6 @@ fuzz_target!(|data: &[u8]| {
         return;
     }
     if let Ok(b) = p3dp::recipe::load_bitmap(&file, "map.png") {
-        assert!(b.width as u64 * b.height as u64 <= p3dp::input::MAX_IMAGE_PIXELS);
+        assert!(b.width as u64 * b.height as u64 <= p3dp::base::input::MAX_IMAGE_PIXELS);
     }
 });

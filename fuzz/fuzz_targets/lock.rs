@@ -2,13 +2,13 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use p3dp::lock::{first_difference, LineHashes, Lock};
+use p3dp::output::lock::{first_difference, LineHashes, Lock};
 
 fuzz_target!(|data: &[u8]| {
-    let Ok(text) = p3dp::input::decode(data.to_vec()) else {
+    let Ok(text) = p3dp::base::input::decode(data.to_vec()) else {
         return;
     };
-    if p3dp::input::check_nesting(&text).is_err() {
+    if p3dp::base::input::check_nesting(&text).is_err() {
         return;
     }
     let Ok(lock) = p3dp::recipe::parse_yaml::<Lock>(&text, "fuzz.lock") else {

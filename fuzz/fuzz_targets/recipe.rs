@@ -9,10 +9,10 @@ const BUILD_STRINGS: u64 = 20_000;
 
 fuzz_target!(|data: &[u8]| {
     // as Recipe::load reads a file: UTF-8 without a BOM, nesting capped
-    let Ok(text) = p3dp::input::decode(data.to_vec()) else {
+    let Ok(text) = p3dp::base::input::decode(data.to_vec()) else {
         return;
     };
-    if p3dp::input::check_nesting(&text).is_err() {
+    if p3dp::base::input::check_nesting(&text).is_err() {
         return;
     }
     let Ok(raw) = parse_yaml::<RawRecipe>(&text, "fuzz.yaml") else {
@@ -35,11 +35,11 @@ fuzz_target!(|data: &[u8]| {
     }
     let mut paths = Vec::new();
     for k in 0..recipe.parts.len() {
-        match p3dp::build::make_part(&recipe, k, p3dp::threads::Threads::ONE) {
+        match p3dp::app::build::make_part(&recipe, k, p3dp::base::threads::Threads::ONE) {
             Ok(tp) => paths.push(tp),
             Err(_) => return,
         }
     }
-    let refs: Vec<&p3dp::toolpath::Toolpath> = paths.iter().collect();
-    let _ = p3dp::check::run(&recipe, &refs, &recipe.allow, p3dp::threads::Threads::ONE);
+    let refs: Vec<&p3dp::base::toolpath::Toolpath> = paths.iter().collect();
+    let _ = p3dp::analyse::check::run(&recipe, &refs, &recipe.allow, p3dp::base::threads::Threads::ONE);
 });

@@ -1,10 +1,10 @@
 //! SVG text → parsed (roxmltree pre-passes, usvg) and flattened, and the
 //! first closed subpath made an outline: no panic, and bounded time and
-//! memory whatever the bytes (the limits of `p3dp::svg`).
+//! memory whatever the bytes (the limits of `p3dp::base::svg`).
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use p3dp::svg::{parse, Options, Outline};
+use p3dp::base::svg::{parse, Options, Outline};
 
 fuzz_target!(|data: &[u8]| {
     let Ok(text) = std::str::from_utf8(data) else {

@@ -9,7 +9,7 @@
 
 use serde::Deserialize;
 
-use crate::error::{Error, Result};
+use crate::base::error::{Error, Result};
 
 /// The print head as the collision check sees it (ExtruderTurtle's Fig. 13):
 /// a cone round the nozzle from its tip up to `cone_height`, and above that a

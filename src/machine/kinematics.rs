@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{Error, Result};
+use crate::base::error::{Error, Result};
 
 /// Marlin's default junction deviation, mm (`JUNCTION_DEVIATION_MM`).
 pub const MARLIN_JUNCTION_DEVIATION: f64 = 0.013;
@@ -304,12 +304,12 @@ impl Limits {
                 format!(
                     "while the {}-move buffer drains, {} lines/s",
                     self.block_buffer_size,
-                    crate::format::fmt_num(self.command_rate)
+                    crate::base::format::fmt_num(self.command_rate)
                 )
             };
             s.push_str(&format!(
                 ", min segment time {} ms {how}",
-                crate::format::fmt_num(self.min_segment_time * 1000.0)
+                crate::base::format::fmt_num(self.min_segment_time * 1000.0)
             ));
         }
         if let Some(icv) = self.instantaneous_corner_velocity {
@@ -318,8 +318,8 @@ impl Limits {
         if let (Some(v), Some(a)) = (self.max_extrude_only_velocity, self.max_extrude_only_accel) {
             s.push_str(&format!(
                 ", extrude-only max {} mm/s at {} mm/s²",
-                crate::format::fmt_num(v),
-                crate::format::fmt_num(a)
+                crate::base::format::fmt_num(v),
+                crate::base::format::fmt_num(a)
             ));
         }
         if self.minimum_cruise_ratio > 0.0 {

@@ -4,9 +4,11 @@
 
 pub mod head;
 pub mod kinematics;
+pub mod limits;
 pub mod material;
 pub mod printer;
 pub mod size;
+pub mod travel;
 
 pub use head::{CheckLimits, Head};
 pub use kinematics::{Kinematics, Limits};

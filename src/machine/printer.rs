@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use glam::DVec3;
 use serde::Deserialize;
 
-use crate::error::{Error, Result};
+use crate::base::error::{Error, Result};
 
 /// G-code dialect of the firmware.
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, Default)]
@@ -165,7 +165,7 @@ pub struct Printer {
     #[serde(default = "d_min_string")]
     pub min_string_length: f64,
     /// Fit `G2`/`G3` arcs to runs of strings on a circle or helix (see
-    /// [`crate::geom::arc`]); off by default.
+    /// [`crate::base::geom::arc`]); off by default.
     #[serde(default)]
     pub arcs: bool,
     /// Largest distance between an arc and the strings it replaces, mm.
@@ -223,7 +223,7 @@ impl Printer {
 
     /// Checks every value; errors name the key.
     pub fn validate(&self) -> Result<()> {
-        crate::safe_text::check("name", &self.name)?;
+        crate::base::safe_text::check("name", &self.name)?;
         let positive = super::head::positive;
         positive("nozzle_diameter", self.nozzle_diameter)?;
         positive("filament_diameter", self.filament_diameter)?;
@@ -275,9 +275,9 @@ impl Printer {
         Ok(())
     }
 
-    /// Refuses values outside what a machine can be (see [`crate::limits`]).
+    /// Refuses values outside what a machine can be (see [`crate::machine::limits`]).
     fn physical_ranges(&self) -> Result<()> {
-        use crate::limits::*;
+        use crate::machine::limits::*;
         range(
             "nozzle_diameter",
             self.nozzle_diameter,

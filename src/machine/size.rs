@@ -1,6 +1,6 @@
 //! Image sizes in pixels, as `WxH` (a profile's G-code thumbnails, a preview).
 
-use crate::error::{Error, Result};
+use crate::base::error::{Error, Result};
 
 /// An image size in pixels.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -7,16 +7,18 @@
 //! error, unknown key or wrong type. Then [`Recipe::resolve`] evaluates params
 //! (with `--set` overrides), every number, compiles step expressions and
 //! loads images, naming the key path of any problem; the result is a
-//! [`crate::model::Recipe`].
+//! [`crate::generate::model::Recipe`].
 
 pub mod expand;
+pub mod params;
 pub mod profile;
 pub mod resolve;
 pub mod schema;
 pub mod yaml;
 
-pub use crate::model::{Part, Recipe, Skirt};
-pub use crate::num::{Num, Num3};
-pub use resolve::{eval_params, load_bitmap, parse_set};
+pub use crate::base::num::{Num, Num3};
+pub use crate::generate::model::{Part, Recipe, Skirt};
+pub use params::{eval_params, parse_set};
+pub use resolve::load_bitmap;
 pub use schema::RawRecipe;
 pub use yaml::parse_yaml;

@@ -7,7 +7,7 @@ use std::path::Path;
 use serde::Deserialize;
 
 use super::yaml::parse_yaml;
-use crate::error::{Error, Result};
+use crate::base::error::{Error, Result};
 use crate::machine::Printer;
 
 const BUILT_IN: &[(&str, &str)] = &[
@@ -57,7 +57,7 @@ impl Printer {
     /// by key, see [`merge_yaml`]); a file without it is parsed on its own.
     pub fn from_file(path: &Path) -> Result<Printer> {
         let shown = path.display().to_string();
-        let text = crate::input::read_text(path, "printer profile")?;
+        let text = crate::base::input::read_text(path, "printer profile")?;
         let value: serde_yaml::Value = parse_yaml(&text, &shown)?;
         let p: Printer = if value.get("inherits").is_some() {
             let named = value.get("name").is_some();
@@ -92,7 +92,7 @@ impl Printer {
         } else {
             base.join(spec)
         };
-        crate::input::note_read(&path);
+        crate::base::input::note_read(&path);
         if !path.is_file() {
             let at = if path == Path::new(spec) {
                 String::new()
@@ -163,7 +163,7 @@ fn inherit(
             Some(dir) if !dir.as_os_str().is_empty() && dir != Path::new(".") => dir.join(rel),
             _ => Path::new(rel).to_path_buf(),
         };
-        crate::input::note_read(&file);
+        crate::base::input::note_read(&file);
         let canon = file.canonicalize().map_err(|e| {
             Error::input(
                 "inherits",
@@ -181,7 +181,7 @@ fn inherit(
         }
         seen.push(canon);
         let shown = file.display().to_string();
-        let text = crate::input::read_text(&file, "printer profile")?;
+        let text = crate::base::input::read_text(&file, "printer profile")?;
         let v: serde_yaml::Value = parse_yaml(&text, &shown)?;
         inherit(v, &file, seen).map_err(|e| e.in_file(&shown))?
     } else {

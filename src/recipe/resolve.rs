@@ -4,19 +4,17 @@
 
 use std::path::{Path, PathBuf};
 
-use indexmap::IndexMap;
-
 use super::schema::*;
 use super::yaml::parse_yaml;
-use crate::error::{Error, Result};
-use crate::expr::{self, var, Params};
-use crate::machine::{Material, Printer, FAN_START_Z};
-use crate::model::{
+use crate::base::error::{Error, Result};
+use crate::base::expr::var;
+use crate::base::num::{Num, Scope};
+use crate::generate::model::{
     Group, Part, Piece, Recipe, Skirt, DEFAULT_CROSS_SECTION, DEFAULT_MAX_STRINGS, DEFAULT_SPEED,
 };
-use crate::num::{finite, Num, Scope};
-use crate::primitive::turtle;
-use crate::step::{Bitmap, Deform, Keep, Modulate, ModulateMap, Step};
+use crate::generate::primitive::turtle;
+use crate::generate::step::{Bitmap, Deform, Keep, Modulate, ModulateMap, Step};
+use crate::machine::{Material, Printer, FAN_START_Z};
 
 /// Evaluates numbers of one recipe: its params, and where images and a
 /// turtle's limits come from.
@@ -59,73 +57,6 @@ const STRING_VARS: &[usize] = &[
     var::S,
 ];
 
-fn is_identifier(s: &str) -> bool {
-    let mut cs = s.chars();
-    matches!(cs.next(), Some(c) if c.is_ascii_alphabetic() || c == '_')
-        && cs.all(|c| c.is_ascii_alphanumeric() || c == '_')
-}
-
-/// Evaluates params in order, each over the ones before it; `sets` replaces
-/// a param's expression (`--set NAME=VALUE`).
-pub fn eval_params(raw: &IndexMap<String, Num>, sets: &[(String, String)]) -> Result<Params> {
-    let mut params = Params::new();
-    for (name, value) in raw {
-        let place = format!("params.{name}");
-        if !is_identifier(name) {
-            return Err(Error::input(
-                place,
-                "a param name must be letters, digits and `_`, not starting with a digit",
-            ));
-        }
-        if expr::is_reserved(name) {
-            return Err(Error::input(
-                place,
-                format!("`{name}` is a name expressions already use; choose another param name"),
-            ));
-        }
-        let v = match sets.iter().rev().find(|(n, _)| n == name) {
-            Some((_, s)) => {
-                expr::eval_const(s, &params).map_err(|e| e.at(format!("--set {name}={s}")))?
-            }
-            None => match value {
-                Num::Value(v) => finite(*v, &place)?,
-                Num::Expr(s) => expr::eval_const(s, &params).map_err(|e| e.at(&place))?,
-            },
-        };
-        params.insert(name.clone(), v);
-    }
-    for (name, s) in sets {
-        if !raw.contains_key(name) {
-            let known: Vec<&str> = raw.keys().map(String::as_str).collect();
-            return Err(Error::input(
-                format!("--set {name}={s}"),
-                if known.is_empty() {
-                    format!("unknown param `{name}`; this recipe has no params")
-                } else {
-                    format!(
-                        "unknown param `{name}`; the recipe's params are {}",
-                        known.join(", ")
-                    )
-                },
-            ));
-        }
-    }
-    Ok(params)
-}
-
-/// Parses a `NAME=VALUE` of `--set`.
-pub fn parse_set(s: &str) -> Result<(String, String)> {
-    match s.split_once('=') {
-        Some((n, v)) if !n.trim().is_empty() && !v.trim().is_empty() => {
-            Ok((n.trim().to_string(), v.trim().to_string()))
-        }
-        _ => Err(Error::input(
-            format!("--set {s}"),
-            "expected NAME=VALUE, e.g. --set radius=30",
-        )),
-    }
-}
-
 impl Recipe {
     /// Reads and resolves a recipe file. `printer` overrides the recipe's printer.
     pub fn load(
@@ -134,7 +65,7 @@ impl Recipe {
         printer: Option<&Printer>,
     ) -> Result<Recipe> {
         let shown = path.display().to_string();
-        let text = crate::input::read_text(path, "recipe")?;
+        let text = crate::base::input::read_text(path, "recipe")?;
         let raw: RawRecipe = parse_yaml(&text, &shown)?;
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         Recipe::resolve_in(&raw, sets, printer, &dir, Some(path)).map_err(|e| e.in_file(&shown))
@@ -169,10 +100,10 @@ impl Recipe {
             return Err(Error::input("name", "expected a non-empty name"));
         }
         // names reach G-code comments: one line each, no control characters
-        crate::safe_text::check("name", &raw.name)?;
+        crate::base::safe_text::check("name", &raw.name)?;
         if let Some(d) = &raw.description {
             // a block scalar's final line break is no line of its own
-            crate::safe_text::check("description", d.trim_end_matches(['\n', '\r']))?;
+            crate::base::safe_text::check("description", d.trim_end_matches(['\n', '\r']))?;
         }
         if raw.parts.is_empty() {
             return Err(Error::input("parts", "expected at least one part"));
@@ -231,7 +162,7 @@ impl Recipe {
                 part.name.clone_from(name);
             }
             part.place.clone_from(place);
-            crate::safe_text::check(&format!("{place}.name"), &part.name)?;
+            crate::base::safe_text::check(&format!("{place}.name"), &part.name)?;
             let n = part.string_count();
             if n > max_strings {
                 return Err(Error::input(
@@ -274,7 +205,7 @@ impl Recipe {
             });
         }
         let allow: Vec<String> = raw.allow.iter().map(|a| a.code().to_string()).collect();
-        crate::finding::validate_allow(&allow, |i| format!("allow[{i}]"))?;
+        crate::base::finding::validate_allow(&allow, |i| format!("allow[{i}]"))?;
         Ok(Recipe {
             name: raw.name.clone(),
             params,
@@ -300,7 +231,7 @@ fn resolve_material(ctx: &Ctx, m: Option<&RawMaterial>) -> Result<Material> {
         }),
         Some(RawMaterial::Inline(m)) => {
             if let Some(n) = &m.name {
-                crate::safe_text::check("material.name", n)?;
+                crate::base::safe_text::check("material.name", n)?;
             }
             let nozzle_temp = ctx.positive(&m.nozzle_temp, "material.nozzle_temp")?;
             let material = Material {
@@ -347,10 +278,10 @@ fn resolve_material(ctx: &Ctx, m: Option<&RawMaterial>) -> Result<Material> {
 }
 
 /// Refuses an inline material's values outside what a machine can do (see
-/// [`crate::limits`]); the nozzle temperature against the printer's own
+/// [`crate::machine::limits`]); the nozzle temperature against the printer's own
 /// limit is the `nozzle-temp` check's (a failed check, not unusable input).
 fn material_ranges(m: &Material) -> Result<()> {
-    use crate::limits::*;
+    use crate::machine::limits::*;
     if let Some(d) = m.filament_diameter {
         range("material.filament_diameter", d, FILAMENT_DIAMETER, "mm")?;
     }
@@ -402,7 +333,7 @@ fn resolve_part(ctx: &Ctx, p: &RawPart, c0: f64, v0: f64, k: usize) -> Result<Pa
             .map_err(|e| e.under(&key))?;
         // a solid's beads are layer_height × line_width: a cross_section the
         // recipe gives for it would be silently ignored, so refuse it
-        if let crate::primitive::Primitive::Solid(sol) = &primitive {
+        if let crate::generate::primitive::Primitive::Solid(sol) = &primitive {
             let bead = sol.layer_height * sol.line_width;
             let given = item.cross_section.is_some() || p.cross_section.is_some();
             if given && (c - bead).abs() > 1e-9 * bead {
@@ -415,8 +346,8 @@ fn resolve_part(ctx: &Ctx, p: &RawPart, c0: f64, v0: f64, k: usize) -> Result<Pa
                     at,
                     format!(
                         "{c} is not used by a solid: its beads are layer_height × line_width = {} mm² (infill squeezed to its spacing); remove cross_section or set it to {}",
-                        crate::format::fmt_num(bead),
-                        crate::format::fmt_num(bead)
+                        crate::base::format::fmt_num(bead),
+                        crate::base::format::fmt_num(bead)
                     ),
                 ));
             }
@@ -442,7 +373,7 @@ fn resolve_part(ctx: &Ctx, p: &RawPart, c0: f64, v0: f64, k: usize) -> Result<Pa
         place: format!("parts[{k}]"),
         brim: match &p.brim {
             Some(b) => {
-                Some(crate::model::Brim {
+                Some(crate::generate::model::Brim {
                     loops: {
                         let n = ctx.positive(&b.loops, "brim.loops")?;
                         if n.fract() != 0.0 || n > 1000.0 {
@@ -468,7 +399,7 @@ fn resolve_part(ctx: &Ctx, p: &RawPart, c0: f64, v0: f64, k: usize) -> Result<Pa
 }
 
 /// `stand:` resolved; errors name the key under `stand.`.
-fn resolve_stand(ctx: &Ctx, st: &RawStand, speed: f64) -> Result<crate::model::Stand> {
+fn resolve_stand(ctx: &Ctx, st: &RawStand, speed: f64) -> Result<crate::generate::model::Stand> {
     let radius = ctx.positive(&st.radius, "stand.radius")?;
     if radius > 1000.0 {
         return Err(Error::input(
@@ -489,7 +420,7 @@ fn resolve_stand(ctx: &Ctx, st: &RawStand, speed: f64) -> Result<crate::model::S
         }
         None => 2,
     };
-    Ok(crate::model::Stand {
+    Ok(crate::generate::model::Stand {
         radius,
         walls,
         height: match &st.height {
@@ -605,7 +536,7 @@ pub fn load_bitmap(path: &PathBuf, shown: &str) -> Result<Bitmap> {
         io_kind: Some(e.kind()),
         ..Error::input("", message)
     };
-    crate::input::note_read(path);
+    crate::base::input::note_read(path);
     let open = || {
         image::ImageReader::open(path)
             .map_err(|e| {
@@ -624,13 +555,13 @@ pub fn load_bitmap(path: &PathBuf, shown: &str) -> Result<Bitmap> {
             format!("`{shown}` is not an image p3dp can read (PNG, JPEG, BMP, GIF): {e}"),
         )
     })?;
-    crate::input::check_image_size(w, h)
+    crate::base::input::check_image_size(w, h)
         .map_err(|m| Error::input("", format!("the image `{shown}` {m}")))?;
     let mut reader = open()?;
     let mut limits = image::Limits::default();
     limits.max_image_width = Some(w.max(1));
     limits.max_image_height = Some(h.max(1));
-    limits.max_alloc = Some(crate::input::MAX_IMAGE_PIXELS * 8);
+    limits.max_alloc = Some(crate::base::input::MAX_IMAGE_PIXELS * 8);
     reader.limits(limits);
     let img = reader.decode().map_err(|e| {
         Error::input(

@@ -1,6 +1,6 @@
 //! The recipe format as written (`Raw*`: every number still a
 //! number-or-expression), deserialised from YAML with key paths in errors.
-//! The primitives' own raw forms live with them ([`crate::primitive`]).
+//! The primitives' own raw forms live with them ([`crate::generate::primitive`]).
 
 use std::fmt;
 
@@ -8,7 +8,7 @@ use indexmap::IndexMap;
 use serde::de::{self, Deserializer, MapAccess, Visitor};
 use serde::Deserialize;
 
-use crate::num::{Num, Num3};
+use crate::base::num::{Num, Num3};
 
 /// `material:` a built-in name or an inline map.
 #[derive(Clone, Debug, PartialEq)]
@@ -125,7 +125,7 @@ pub struct RawRecipe {
     /// Most strings one part may have (default 50 million).
     #[serde(default)]
     pub max_strings: Option<Num>,
-    /// Check codes silenced for this recipe (see [`crate::finding::CODES`]).
+    /// Check codes silenced for this recipe (the codes a finding names).
     #[serde(default)]
     pub allow: Vec<RawAllow>,
     /// Named, parameterised part trees (see [`super::expand`]).

@@ -2,7 +2,7 @@
 
 use serde::de;
 
-use crate::error::{Error, Result};
+use crate::base::error::{Error, Result};
 
 /// Deserializes YAML into `T`, with errors naming `file`, line, column and key path.
 ///

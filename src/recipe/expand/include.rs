@@ -12,9 +12,9 @@ use std::path::{Path, PathBuf};
 use indexmap::IndexMap;
 
 use super::schema::{RawLibrary, RawTemplate};
-use crate::error::{Error, Result};
-use crate::expr::Params;
-use crate::num::Num;
+use crate::base::error::{Error, Result};
+use crate::base::expr::Params;
+use crate::base::num::Num;
 use crate::recipe::schema::RawRecipe;
 use crate::recipe::yaml::parse_yaml;
 
@@ -72,7 +72,7 @@ impl Library {
             .iter()
             .map(|(k, (n, _))| (k.clone(), n.clone()))
             .collect();
-        crate::recipe::resolve::eval_params(&raw, sets).map_err(|e| {
+        crate::recipe::params::eval_params(&raw, sets).map_err(|e| {
             let name = e.place.as_deref().and_then(|p| p.strip_prefix("params."));
             match name.and_then(|n| self.params.get(n)) {
                 Some((_, Some(f))) => e.in_file(f),
@@ -150,7 +150,7 @@ impl Loader {
             let place = format!("include[{k}]");
             let path = dir.join(inc);
             let shown = path.display().to_string();
-            crate::input::note_read(&path);
+            crate::base::input::note_read(&path);
             let canon = std::fs::canonicalize(&path).map_err(|e| {
                 here(Error::input(
                     &place,

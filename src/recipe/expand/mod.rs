@@ -8,7 +8,7 @@
 //!
 //! - `primitive:` a list (see [`RawPrimitives`]): one part, several primitives;
 //! - `parts:` on a part: a group, whose `steps` run after its children's own
-//!   steps on all their strings (see [`crate::assembly`]);
+//!   steps on all their strings (see [`crate::generate::assembly`]);
 //! - `templates:` named part trees with `params:` defaults, used by
 //!   `template: NAME` with `with:` values;
 //! - `for: {NAME: RANGE_OR_LIST}` on any part: one copy per value;
@@ -37,9 +37,10 @@ use indexmap::IndexMap;
 pub use include::{load_library, Library, Template};
 pub use schema::{RawLibrary, RawLoop, RawPrimitiveItem, RawPrimitives, RawTemplate};
 
-use crate::error::{Error, Result};
-use crate::expr::{self, Params};
-use crate::num::Num;
+use crate::base::error::{Error, Result};
+use crate::base::expr::{self, Params};
+use crate::base::num::Num;
+use crate::recipe::params::is_identifier;
 use crate::recipe::schema::{RawPart, RawStep};
 
 /// Most leaf parts a recipe may expand to.
@@ -520,8 +521,8 @@ fn range(s: &str, params: &Params, place: &str) -> Result<Vec<f64>> {
 
 /// A number of a template's `with:` or a loop's list, evaluated in `params`.
 fn eval(n: &Num, params: &Params, place: &str) -> Result<f64> {
-    let v = crate::num::Scope::new(params).num(n, place)?;
-    crate::num::finite(v, place)
+    let v = crate::base::num::Scope::new(params).num(n, place)?;
+    crate::base::num::finite(v, place)
 }
 
 /// `name` with each `{EXPR}` replaced by the expression's value in `params`
@@ -552,7 +553,7 @@ pub fn fill_name(name: &str, params: &Params, place: &str) -> Result<String> {
 
 /// Refuses names that would break the G-code comment they are written into.
 pub fn check_name(name: &str, place: &str) -> Result<()> {
-    crate::safe_text::check(place, name)
+    crate::base::safe_text::check(place, name)
 }
 
 /// A value in a name or a place: integers without decimals, others with up
@@ -569,12 +570,6 @@ pub fn fmt_value(v: f64) -> String {
             s.to_string()
         }
     }
-}
-
-fn is_identifier(s: &str) -> bool {
-    let mut cs = s.chars();
-    matches!(cs.next(), Some(c) if c.is_ascii_alphabetic() || c == '_')
-        && cs.all(|c| c.is_ascii_alphanumeric() || c == '_')
 }
 
 fn reserved_names() -> String {

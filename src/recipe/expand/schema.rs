@@ -8,8 +8,8 @@ use indexmap::IndexMap;
 use serde::de::{self, DeserializeSeed, Deserializer, IgnoredAny, MapAccess, SeqAccess, Visitor};
 use serde::Deserialize;
 
-use crate::num::Num;
-use crate::primitive::RawPrimitive;
+use crate::base::num::Num;
+use crate::generate::primitive::RawPrimitive;
 use crate::recipe::schema::RawPart;
 
 /// `primitive:` one primitive, or a list whose strings follow each other in

@@ -1,0 +1,118 @@
+//! Cross-sections a nozzle can lay: far above nozzle² the nozzle cannot
+//! shape the bead (it floods and clogs), far below it the string breaks.
+//! Warnings past `checks.cross_section_max` / `_min` (× nozzle²), errors past
+//! the hard limits; a declared hair (`hair:`) is thin on purpose and never
+//! `thin-string` (it may still be `over-extrusion`). The volumetric flow c·v is checked in [`super::run`]'s
+//! `flow` (the hot end's `max_flow`).
+
+use super::{fmt_p, Finding, Severity};
+use crate::base::toolpath::Toolpath;
+use crate::generate::model::Recipe;
+
+/// Strings of one kind: count, first, extreme.
+struct Tally {
+    n: usize,
+    first: usize,
+    extreme: f64,
+    hard: bool,
+    /// The strings counted, as runs [first, end).
+    spans: Vec<[usize; 2]>,
+}
+
+impl Tally {
+    /// Counts string `k` of cross-section `c` into `slot`, keeping the
+    /// extreme by `pick` (max or min) and whether any passed the hard limit.
+    fn count(slot: &mut Option<Tally>, k: usize, c: f64, hard: bool, pick: fn(f64, f64) -> f64) {
+        let t = slot.get_or_insert(Tally {
+            n: 0,
+            first: k,
+            extreme: c,
+            hard: false,
+            spans: Vec::new(),
+        });
+        match t.spans.last_mut() {
+            Some(last) if last[1] == k => last[1] = k + 1,
+            _ => t.spans.push([k, k + 1]),
+        }
+        t.n += 1;
+        t.extreme = pick(t.extreme, c);
+        t.hard |= hard;
+    }
+
+    /// The finding of these strings of `tp`: an error past the hard limit,
+    /// else a warning; `what` says how their cross-sections are off.
+    fn finding(&self, tp: &Toolpath, code: &'static str, what: &str) -> Finding {
+        let m = tp.midpoint(self.first);
+        Finding {
+            code,
+            severity: if self.hard { Severity::Error } else { Severity::Warning },
+            message: format!(
+                "part `{}` has {} string{} with cross-sections {what}; the first is string {} at {}",
+                tp.name,
+                self.n,
+                if self.n == 1 { "" } else { "s" },
+                self.first,
+                fmt_p(m)
+            ),
+            part: Some(tp.name.clone()),
+            string: Some(self.first),
+            at: Some(m.to_array()),
+            strings: self.spans.clone(),
+        }
+    }
+}
+
+/// The `over-extrusion` and `thin-string` findings of one path.
+pub fn cross_sections(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) {
+    let p = &recipe.printer;
+    let n2 = p.nozzle_diameter * p.nozzle_diameter;
+    let lim = &p.checks;
+    let (hi, hard_hi) = (lim.cross_section_max * n2, lim.cross_section_hard_max * n2);
+    let (lo, hard_lo) = (lim.cross_section_min * n2, lim.cross_section_hard_min * n2);
+    let mut over: Option<Tally> = None;
+    let mut thin: Option<Tally> = None;
+    for (k, s) in tp.strings.iter().enumerate() {
+        if s.travel || !s.c.is_finite() {
+            continue;
+        }
+        // a declared hair is thin on purpose (toolpath::Strand::hair)
+        let (too_thick, too_thin) = (s.c > hi, s.c < lo && !s.hair);
+        // a string of no length counts for neither: measured only when it
+        // would count (a pass over the points saved on most paths)
+        if !(too_thick || too_thin) || tp.length(k) <= 0.0 {
+            continue;
+        }
+        if too_thick {
+            Tally::count(&mut over, k, s.c, s.c > hard_hi, f64::max);
+        } else {
+            Tally::count(&mut thin, k, s.c, s.c < hard_lo, f64::min);
+        }
+    }
+    let nozzle = p.nozzle_diameter;
+    if let Some(t) = over {
+        let hard = if t.hard {
+            format!(", past the hard limit of {hard_hi:.3} mm²: the nozzle floods and clogs")
+        } else {
+            String::new()
+        };
+        let factor = lim.cross_section_max;
+        let what = format!(
+            "above {hi:.3} mm² ({factor} × the {nozzle} mm nozzle²), up to {:.3} mm²{hard}",
+            t.extreme
+        );
+        out.push(t.finding(tp, "over-extrusion", &what));
+    }
+    if let Some(t) = thin {
+        let hard = if t.hard {
+            format!(", past the hard limit of {hard_lo:.4} mm²: the string breaks")
+        } else {
+            ": the string may break".to_string()
+        };
+        let factor = lim.cross_section_min;
+        let what = format!(
+            "below {lo:.4} mm² ({factor} × the {nozzle} mm nozzle²), down to {:.4} mm²{hard}",
+            t.extreme
+        );
+        out.push(t.finding(tp, "thin-string", &what));
+    }
+}

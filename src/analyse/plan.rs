@@ -1,0 +1,81 @@
+//! The plan of one build: a recipe resolved, its parts made into strings
+//! (skirt first) and checked, ready to write.
+
+use crate::analyse::check::{self, Finding};
+use crate::base::threads::{Awake, Threads};
+use crate::base::toolpath::Toolpath;
+use crate::generate::model::Recipe;
+
+/// A recipe made into strings and checked, ready to write.
+#[derive(Clone, Debug)]
+pub struct Plan {
+    /// The recipe file as given.
+    pub path: String,
+    /// The resolved recipe.
+    pub recipe: Recipe,
+    /// Skirt, then parts, in print order.
+    pub paths: Vec<Toolpath>,
+    /// What the checks found.
+    pub findings: Vec<Finding>,
+    /// Each part's hold on the bed, as the first-layer check measured it.
+    pub footprints: Vec<check::first_layer::Footprint>,
+    /// How many threads making, checking and writing it may use.
+    pub threads: Threads,
+    /// A pool worker kept awake from the end of the steps until the checks
+    /// start (see [`Awake`]).
+    pub awake: Option<std::sync::Arc<Awake>>,
+}
+
+/// What the checks of a plan found: its findings (those `allow`ed already
+/// marked) and the parts' footprints.
+pub type Checked = (Vec<Finding>, Vec<check::first_layer::Footprint>);
+
+impl Plan {
+    /// Runs the checks on `threads` (any budget gives the same answer),
+    /// `allow` (the command line's `--allow`) silencing codes beside the
+    /// recipe's own; the plan is not changed: see [`Plan::check`].
+    pub fn checks(&self, allow: &[String], threads: crate::base::threads::Threads) -> Checked {
+        let refs: Vec<&Toolpath> = self.paths.iter().collect();
+        let (mut findings, footprints) =
+            check::run(&self.recipe, &refs, &self.allowed(allow), threads);
+        self.silence(&mut findings, allow);
+        (findings, footprints)
+    }
+
+    /// The codes silenced: the recipe's `allow`, then the command line's.
+    pub fn allowed(&self, allow: &[String]) -> Vec<String> {
+        self.recipe.allow.iter().chain(allow).cloned().collect()
+    }
+
+    /// Marks the findings of the codes the recipe and `allow` silence.
+    pub fn silence(&self, findings: &mut Vec<Finding>, allow: &[String]) {
+        check::apply_allow(findings, &self.recipe.allow);
+        check::apply_allow(findings, allow);
+    }
+
+    /// Runs the checks on the plan's own budget and keeps what they found.
+    pub fn check(&mut self, allow: &[String]) {
+        self.wake();
+        (self.findings, self.footprints) = self.checks(allow, self.threads);
+    }
+
+    /// Lets the worker kept awake go to the work now posted.
+    pub fn wake(&self) {
+        if let Some(a) = &self.awake {
+            a.release();
+        }
+    }
+
+    /// Highest point of any part, recipe coordinates.
+    pub fn top_z(&self) -> f64 {
+        self.paths
+            .iter()
+            .flat_map(|t| t.points.iter().map(|p| p.z))
+            .fold(0.0, f64::max)
+    }
+
+    /// The findings that fail the build: errors, and warnings when `strict`.
+    pub fn failing(&self, strict: bool) -> Vec<&Finding> {
+        check::failing(&self.findings, strict)
+    }
+}

@@ -1,0 +1,264 @@
+//! Batch builds: `--sweep` expansion into variants, and running jobs in parallel.
+//!
+//! Every job is independent and deterministic, so the bytes a job writes do
+//! not depend on how many threads run or in which order jobs finish.
+
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+
+use crate::base::error::{Error, Result};
+
+/// One build: a recipe, its `--set` values, and the sweep values that name it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Job {
+    /// The recipe file.
+    pub recipe: PathBuf,
+    /// `--set` overrides, sweep values last.
+    pub sets: Vec<(String, String)>,
+    /// This variant's sweep values, in `--sweep` order.
+    pub sweep: Vec<(String, String)>,
+    /// The printer it is built for in place of the recipe's (a lock entry's);
+    /// `--printer` overrides it.
+    pub printer: Option<String>,
+}
+
+/// A number as short as it can be written: `3`, `1.5`, `0.1`.
+pub fn format_value(v: f64) -> String {
+    let r = libm::round(v * 1e9) / 1e9; // 0.30000000000000004 → 0.3
+    let s = format!("{r}");
+    if s == "-0" {
+        "0".into()
+    } else {
+        s
+    }
+}
+
+/// Most builds one command may make: recipes × the product of the sweeps.
+pub const MAX_VARIANTS: u64 = 10_000;
+
+/// Refuses a batch of more than [`MAX_VARIANTS`] builds, before any is made.
+pub fn check_count(recipes: usize, sweeps: &[(String, Vec<String>)]) -> Result<()> {
+    let n = sweeps
+        .iter()
+        .fold(recipes as u64, |n, (_, v)| n.saturating_mul(v.len() as u64));
+    if n > MAX_VARIANTS {
+        let sizes: Vec<String> = sweeps.iter().map(|(_, v)| v.len().to_string()).collect();
+        return Err(Error::input(
+            "--sweep",
+            format!(
+                "{recipes} recipe(s) × {} values make {n} builds; expected at most {MAX_VARIANTS}",
+                sizes.join(" × ")
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Parses `NAME=v1,v2,…` or `NAME=a..b:step` (b included when reached).
+pub fn parse_sweep(s: &str) -> Result<(String, Vec<String>)> {
+    let place = format!("--sweep {s}");
+    let (name, spec) = s
+        .split_once('=')
+        .filter(|(n, v)| !n.trim().is_empty() && !v.trim().is_empty())
+        .ok_or_else(|| {
+            Error::input(
+                &place,
+                "expected NAME=v1,v2,… or NAME=a..b:step, e.g. --sweep cycles=3,4,5",
+            )
+        })?;
+    let spec = spec.trim();
+    if spec.contains("..") && !spec.contains(':') {
+        return Err(Error::input(
+            &place,
+            format!(
+                "a range needs a step: NAME=a..b:step, e.g. --sweep {}={spec}:1 (or list the values: NAME=v1,v2,…)",
+                name.trim()
+            ),
+        )
+        .with_help("a sweep is NAME=v1,v2,… (a list) or NAME=a..b:step (a range, b included)"));
+    }
+    let range = spec
+        .split_once(':')
+        .filter(|_| spec.contains(".."))
+        .map(|(range, step)| (range.split_once(".."), step));
+    let values = if let Some((range, step)) = range {
+        let (a, b) = range.ok_or_else(|| {
+            Error::input(
+                &place,
+                "a range is written a..b:step, e.g. --sweep pitch=0.3..0.5:0.1",
+            )
+        })?;
+        let num = |t: &str, what: &str| -> Result<f64> {
+            t.trim().parse::<f64>().map_err(|_| {
+                Error::input(
+                    &place,
+                    format!("the {what} `{t}` is not a number; expected a..b:step"),
+                )
+            })
+        };
+        let (a, b, step) = (num(a, "start")?, num(b, "end")?, num(step, "step")?);
+        if step.is_nan() || step <= 0.0 || b < a || !a.is_finite() || !b.is_finite() {
+            return Err(Error::input(&place, "expected start ≤ end and a step > 0"));
+        }
+        // as a float first: a tiny step makes more values than u64 holds
+        let steps = libm::floor((b - a) / step + 1e-9);
+        if steps.is_nan() || steps >= MAX_VARIANTS as f64 {
+            return Err(Error::input(
+                &place,
+                format!(
+                    "{} values; expected at most {MAX_VARIANTS}",
+                    format_value(steps + 1.0)
+                ),
+            ));
+        }
+        let values: Vec<String> = (0..steps as u64 + 1)
+            .map(|k| format_value(a + step * k as f64))
+            .collect();
+        if let Some(w) = values.windows(2).find(|w| w[0] == w[1]) {
+            return Err(Error::input(
+                &place,
+                format!(
+                    "the step {step} is too small to tell the values apart ({} twice); expected a larger step",
+                    w[0]
+                ),
+            ));
+        }
+        values
+    } else {
+        let vals: Vec<String> = spec.split(',').map(|v| v.trim().to_string()).collect();
+        if vals.iter().any(String::is_empty) {
+            return Err(Error::input(&place, "an empty value; expected v1,v2,…"));
+        }
+        vals
+    };
+    Ok((name.trim().to_string(), values))
+}
+
+/// Every recipe × the cartesian product of the sweeps (first sweep outermost).
+pub fn expand(
+    recipes: &[PathBuf],
+    sets: &[(String, String)],
+    sweeps: &[(String, Vec<String>)],
+) -> Vec<Job> {
+    let mut combos: Vec<Vec<(String, String)>> = vec![Vec::new()];
+    for (name, values) in sweeps {
+        combos = combos
+            .into_iter()
+            .flat_map(|c| {
+                values.iter().map(move |v| {
+                    let mut c = c.clone();
+                    c.push((name.clone(), v.clone()));
+                    c
+                })
+            })
+            .collect();
+    }
+    recipes
+        .iter()
+        .flat_map(|r| {
+            combos.iter().map(move |sweep| Job {
+                recipe: r.clone(),
+                sets: sets.iter().chain(sweep).cloned().collect(),
+                sweep: sweep.clone(),
+                printer: None,
+            })
+        })
+        .collect()
+}
+
+/// Runs `f(0..n)` on up to `threads` threads; results in index order.
+/// `tick` is called after each job finishes (for a progress bar).
+pub fn run_parallel<T: Send>(
+    n: usize,
+    threads: usize,
+    f: impl Fn(usize) -> T + Sync,
+    tick: impl Fn() + Sync,
+) -> Vec<T> {
+    let workers = threads.clamp(1, n.max(1));
+    if workers == 1 {
+        // on the caller's thread: a thread to wait for would add nothing
+        return (0..n)
+            .map(|k| {
+                let r = f(k);
+                tick();
+                r
+            })
+            .collect();
+    }
+    let slots: Vec<Mutex<Option<T>>> = (0..n).map(|_| Mutex::new(None)).collect();
+    let next = AtomicUsize::new(0);
+    std::thread::scope(|s| {
+        for _ in 0..workers {
+            s.spawn(|| loop {
+                let k = next.fetch_add(1, Ordering::Relaxed);
+                if k >= n {
+                    break;
+                }
+                let r = f(k);
+                *slots[k].lock().unwrap() = Some(r);
+                tick();
+            });
+        }
+    });
+    slots
+        .into_iter()
+        .map(|m| m.into_inner().unwrap().expect("every job ran"))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sweeps_list_and_range() {
+        let (n, v) = parse_sweep("cycles=3,4,5,6").unwrap();
+        assert_eq!(n, "cycles");
+        assert_eq!(v, ["3", "4", "5", "6"]);
+        let (_, v) = parse_sweep("amplitude=1..3:0.5").unwrap();
+        assert_eq!(v, ["1", "1.5", "2", "2.5", "3"]);
+        let (_, v) = parse_sweep("a=0..0.3:0.1").unwrap();
+        assert_eq!(v, ["0", "0.1", "0.2", "0.3"]);
+        assert!(parse_sweep("a=3..1:1").is_err());
+        assert!(parse_sweep("a=1..2:0").is_err());
+        assert!(parse_sweep("a").is_err());
+    }
+
+    #[test]
+    fn a_range_without_a_step_says_it_needs_one() {
+        let e = parse_sweep("ripples=1..3").unwrap_err();
+        assert_eq!(e.place.as_deref(), Some("--sweep ripples=1..3"));
+        assert!(e.message.contains("a range needs a step"), "{e}");
+        assert!(e.message.contains("ripples=1..3:1"), "{e}");
+        assert!(!e.to_string().contains("--set"), "{e}");
+    }
+
+    #[test]
+    fn cartesian_product_first_sweep_outermost() {
+        let sweeps = vec![
+            ("a".to_string(), vec!["1".to_string(), "2".to_string()]),
+            (
+                "b".to_string(),
+                vec!["x".to_string(), "y".to_string(), "z".to_string()],
+            ),
+        ];
+        let jobs = expand(
+            &[PathBuf::from("r.yaml")],
+            &[("c".into(), "0".into())],
+            &sweeps,
+        );
+        assert_eq!(jobs.len(), 6);
+        assert_eq!(
+            jobs[1].sweep,
+            [("a".into(), "1".into()), ("b".into(), "y".into())]
+        );
+        assert_eq!(jobs[3].sets[0], ("c".to_string(), "0".to_string()));
+    }
+
+    #[test]
+    fn parallel_results_in_order() {
+        let r = run_parallel(50, 4, |k| k * k, || {});
+        assert_eq!(r, (0..50).map(|k| k * k).collect::<Vec<_>>());
+    }
+}

@@ -1,0 +1,9 @@
+//! Layer 7, the application: the commands, the plan of each build, batches
+//! and sweeps, the watch server, errors as the terminal shows them.
+
+pub mod batch;
+pub mod build;
+pub mod cli;
+pub mod diagnostic;
+pub mod prepare;
+pub mod watch;

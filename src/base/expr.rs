@@ -1,0 +1,1224 @@
+//! Math expressions of a recipe, compiled once and evaluated per point or string.
+//!
+//! Parsing is meval's (its tokenizer and shunting-yard turn the text into
+//! reverse Polish notation); we then resolve every name to a variable slot, a
+//! param constant or a function pointer, fold constant sub-expressions, and run
+//! the result on a small fixed stack. Every transcendental function goes
+//! through the `libm` crate, so a recipe gives bit-identical numbers on every
+//! machine (std's `sin` may call the platform's libm, which differs).
+
+use indexmap::IndexMap;
+use meval::tokenizer::{Operation, Token};
+
+use crate::base::error::Error;
+
+/// What is wrong with an expression, for a caller that must tell.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ExprErrorKind {
+    /// The text does not parse.
+    Syntax,
+    /// A name is unknown or not available here (the message lists those that are).
+    Name,
+    /// A function is unknown or given the wrong number of arguments.
+    Function,
+    /// The expression is nested too deeply to run.
+    TooDeep,
+    /// A constant expression evaluates to NaN or infinity.
+    NotFinite,
+}
+
+/// An expression that cannot be compiled or evaluated: a sentence naming it
+/// and what is wrong with it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ExprError {
+    /// What kind of problem.
+    pub kind: ExprErrorKind,
+    /// The sentence.
+    pub message: String,
+}
+
+impl ExprError {
+    /// An error of `kind` saying `message`.
+    fn new(kind: ExprErrorKind, message: impl Into<String>) -> ExprError {
+        ExprError {
+            kind,
+            message: message.into(),
+        }
+    }
+
+    /// The input error at key path `place` (empty for none).
+    pub fn at(self, place: impl Into<String>) -> Error {
+        Error::input(place, self.message)
+    }
+}
+
+impl std::fmt::Display for ExprError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for ExprError {}
+
+/// Named params of a recipe, in the order they were defined.
+pub type Params = IndexMap<String, f64>;
+
+/// Slot of each per-point / per-string variable in the value array.
+pub mod var {
+    /// x coordinate (mm).
+    pub const X: usize = 0;
+    /// y coordinate (mm).
+    pub const Y: usize = 1;
+    /// z coordinate (mm).
+    pub const Z: usize = 2;
+    /// distance from the z axis (mm).
+    pub const R: usize = 3;
+    /// angle around the z axis, in [0, 2·pi).
+    pub const THETA: usize = 4;
+    /// cross-section of the string (mm²).
+    pub const C: usize = 5;
+    /// head speed of the string (mm/s).
+    pub const V: usize = 6;
+    /// index of the point or string in the part.
+    pub const I: usize = 7;
+    /// number of points or strings in the part.
+    pub const N: usize = 8;
+    /// i / (n - 1), 0 to 1 along the part.
+    pub const T: usize = 9;
+    /// arc-length fraction 0..1 along an `outline:` (the `s` of issue 20).
+    pub const S: usize = 10;
+    /// how many slots there are.
+    pub const COUNT: usize = 11;
+}
+
+/// Names of the variable slots, indexed by [`var`].
+pub const VAR_NAMES: [&str; var::COUNT] =
+    ["x", "y", "z", "r", "theta", "c", "v", "i", "n", "t", "s"];
+
+/// Variables added after recipe v1, whose names a param, template param or
+/// loop variable may still take: such a param shadows the variable.
+pub const SHADOWABLE: [&str; 1] = ["s"];
+
+/// The values an expression sees for one point or string.
+pub type Vars = [f64; var::COUNT];
+
+/// Names that params may not take: the variables (less [`SHADOWABLE`]) and
+/// the constants.
+pub fn is_reserved(name: &str) -> bool {
+    (VAR_NAMES.contains(&name) && !SHADOWABLE.contains(&name)) || name == "pi" || name == "e"
+}
+
+const STACK: usize = 32;
+
+/// Longest expression text, in bytes: a bound on the work of compiling one.
+pub const MAX_LEN: usize = 4096;
+
+/// Deepest expression tree (operations and calls inside one another):
+/// compiling and evaluating recurse this deep.
+pub const MAX_DEPTH: u32 = 256;
+
+type F1 = fn(f64) -> f64;
+type F2 = fn(f64, f64) -> f64;
+type F3 = fn(f64, f64, f64) -> f64;
+type F4 = fn(f64, f64, f64, f64) -> f64;
+
+#[derive(Clone, Copy, Debug)]
+enum Op {
+    Num(f64),
+    Var(u8),
+    Neg,
+    Add,
+    Sub,
+    Mul,
+    Div,
+    Rem,
+    Pow,
+    F1(F1),
+    F2(F2),
+    F3(F3),
+    F4(F4),
+    Min(u8),
+    Max(u8),
+    /// A value of the extra slots of [`Expr::compile_ext`].
+    Ext(u16),
+}
+
+/// A compiled expression.
+#[derive(Clone, Debug)]
+pub struct Expr {
+    src: String,
+    ops: Vec<Op>,
+    used: u32,
+    /// `rand()` calls, read from the extra slots after the named ones.
+    rands: u16,
+}
+
+// The functions recipe authors may call, beyond meval's operators.
+fn f_mod(a: f64, b: f64) -> f64 {
+    // floored modulo: the result has the sign of b, so mod(-1, 360) = 359
+    a - b * libm::floor(a / b)
+}
+fn f_clamp(x: f64, lo: f64, hi: f64) -> f64 {
+    x.max(lo).min(hi)
+}
+fn f_step(edge: f64, x: f64) -> f64 {
+    // GLSL's step: 0 below the edge, 1 from it on
+    if x < edge {
+        0.0
+    } else {
+        1.0
+    }
+}
+fn f_smoothstep(e0: f64, e1: f64, x: f64) -> f64 {
+    let t = f_clamp((x - e0) / (e1 - e0), 0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+fn f_mix(a: f64, b: f64, t: f64) -> f64 {
+    a + (b - a) * t
+}
+fn f_sign(x: f64) -> f64 {
+    if x > 0.0 {
+        1.0
+    } else if x < 0.0 {
+        -1.0
+    } else {
+        0.0
+    }
+}
+fn f_sqrt(x: f64) -> f64 {
+    x.sqrt() // IEEE 754 correctly rounded: portable
+}
+fn f_abs(x: f64) -> f64 {
+    x.abs()
+}
+fn f_fract(x: f64) -> f64 {
+    x - libm::floor(x)
+}
+fn f_radians(x: f64) -> f64 {
+    x * (std::f64::consts::PI / 180.0)
+}
+fn f_degrees(x: f64) -> f64 {
+    x * (180.0 / std::f64::consts::PI)
+}
+
+fn lookup1(name: &str) -> Option<F1> {
+    Some(match name {
+        "sin" => libm::sin,
+        "cos" => libm::cos,
+        "tan" => libm::tan,
+        "asin" => libm::asin,
+        "acos" => libm::acos,
+        "atan" => libm::atan,
+        "sinh" => libm::sinh,
+        "cosh" => libm::cosh,
+        "tanh" => libm::tanh,
+        "asinh" => libm::asinh,
+        "acosh" => libm::acosh,
+        "atanh" => libm::atanh,
+        "sqrt" => f_sqrt,
+        "cbrt" => libm::cbrt,
+        "exp" => libm::exp,
+        "ln" | "log" => libm::log,
+        "log10" => libm::log10,
+        "log2" => libm::log2,
+        "abs" => f_abs,
+        "floor" => libm::floor,
+        "ceil" => libm::ceil,
+        "round" => libm::round,
+        "trunc" => libm::trunc,
+        "sign" | "signum" => f_sign,
+        "fract" => f_fract,
+        "radians" => f_radians,
+        "degrees" => f_degrees,
+        _ => return None,
+    })
+}
+
+fn lookup2(name: &str) -> Option<F2> {
+    Some(match name {
+        "atan2" => libm::atan2,
+        "hypot" => libm::hypot,
+        "pow" => libm::pow,
+        "mod" => f_mod,
+        "step" => f_step,
+        _ => return None,
+    })
+}
+
+/// Rows between two rows [`eca`] keeps, so any row is at most this many
+/// steps from a known one.
+const ECA_STRIDE: u64 = 256;
+
+/// The rows of one automaton computed so far on this thread.
+struct EcaCache {
+    /// Rule and ring width.
+    key: (u8, u32),
+    /// Rows 0, ECA_STRIDE, 2·ECA_STRIDE, … computed so far.
+    kept: Vec<u64>,
+    /// The last row asked for, and its cells.
+    last: (u64, u64),
+}
+
+thread_local! {
+    /// The automaton [`eca`] last computed on this thread.
+    static ECA: std::cell::RefCell<Option<EcaCache>> = const { std::cell::RefCell::new(None) };
+}
+
+/// One generation of the elementary automaton `rule` on a ring of cells
+/// (`mask` has the ring's `w` bits set): cell i's next state is bit
+/// (left·4 + self·2 + right) of the rule.
+fn eca_next(rule: u8, w: u32, mask: u64, cells: u64) -> u64 {
+    let left = (cells << 1 | cells >> (w - 1)) & mask;
+    let right = (cells >> 1 | cells << (w - 1)) & mask;
+    let mut next = 0u64;
+    for k in 0..8u64 {
+        if rule >> k & 1 == 1 {
+            let l = if k & 4 != 0 { left } else { !left };
+            let c = if k & 2 != 0 { cells } else { !cells };
+            let r = if k & 1 != 0 { right } else { !right };
+            next |= l & c & r;
+        }
+    }
+    next & mask
+}
+
+/// `eca(rule, width, row, col)`: the cell (0 or 1) at `row` and `col` of
+/// Wolfram's elementary cellular automaton `rule` (0–255) on a ring of
+/// `width` cells (1–64) whose row 0 has one live cell, at column 0; columns
+/// wrap around the ring. NaN for arguments out of range (rows up to 10⁶).
+pub fn eca(rule: f64, width: f64, row: f64, col: f64) -> f64 {
+    let whole = |x: f64, hi: f64| x.fract() == 0.0 && (0.0..=hi).contains(&x);
+    if !whole(rule, 255.0) || !whole(width, 64.0) || width < 1.0 || !whole(row, 1e6) {
+        return f64::NAN;
+    }
+    if !col.is_finite() || col.fract() != 0.0 {
+        return f64::NAN;
+    }
+    let (rule, w, row) = (rule as u8, width as u32, row as u64);
+    let mask = if w == 64 { u64::MAX } else { (1u64 << w) - 1 };
+    // An expression evaluated per point asks for rows in any order (a
+    // million rows per point of a 72,000-point helix ran for minutes, from
+    // row 0 each time when the rows went down): keep every ECA_STRIDE-th
+    // row, so a row costs at most ECA_STRIDE generations once the rows up
+    // to it have been computed, and go on from the last row when it is near.
+    let cells = ECA.with_borrow_mut(|cache| {
+        let cache = match cache {
+            Some(c) if c.key == (rule, w) => c,
+            _ => cache.insert(EcaCache {
+                key: (rule, w),
+                kept: vec![1],
+                last: (0, 1),
+            }),
+        };
+        let at = ((row / ECA_STRIDE) as usize).min(cache.kept.len() - 1);
+        let (mut from, mut cells) = (at as u64 * ECA_STRIDE, cache.kept[at]);
+        if cache.last.0 <= row && cache.last.0 > from {
+            (from, cells) = cache.last;
+        }
+        for r in from..row {
+            cells = eca_next(rule, w, mask, cells);
+            if (r + 1) % ECA_STRIDE == 0 && (r + 1) / ECA_STRIDE == cache.kept.len() as u64 {
+                cache.kept.push(cells);
+            }
+        }
+        cache.last = (row, cells);
+        cells
+    });
+    let c = f_mod(col, width) as u32;
+    (cells >> c & 1) as f64
+}
+
+fn lookup4(name: &str) -> Option<F4> {
+    Some(match name {
+        "eca" => eca,
+        _ => return None,
+    })
+}
+
+fn lookup3(name: &str) -> Option<F3> {
+    Some(match name {
+        "clamp" => f_clamp,
+        "smoothstep" => f_smoothstep,
+        "mix" | "lerp" => f_mix,
+        _ => return None,
+    })
+}
+
+/// Every function name an expression may call, for error messages.
+pub const FUNCTIONS: &str =
+    "sin cos tan asin acos atan atan2(y,x) sinh cosh tanh asinh acosh atanh \
+sqrt cbrt exp ln log log10 log2 pow(a,b) abs sign floor ceil round trunc fract \
+mod(a,b) min(a,b,…) max(a,b,…) clamp(x,lo,hi) step(edge,x) smoothstep(e0,e1,x) \
+mix(a,b,t) hypot(x,y) radians degrees eca(rule,width,row,col)";
+
+#[derive(Clone, Debug)]
+enum Node {
+    Num(f64),
+    Var(u8),
+    Ext(u16),
+    Neg(Box<Node>),
+    Bin(Op, Box<Node>, Box<Node>),
+    Call(Op, Vec<Node>),
+}
+
+impl Node {
+    fn num(&self) -> Option<f64> {
+        match self {
+            Node::Num(v) => Some(*v),
+            _ => None,
+        }
+    }
+    fn depth(&self) -> usize {
+        match self {
+            Node::Num(_) | Node::Var(_) | Node::Ext(_) => 1,
+            Node::Neg(a) => a.depth(),
+            Node::Bin(_, a, b) => a.depth().max(1 + b.depth()),
+            Node::Call(_, args) => args
+                .iter()
+                .enumerate()
+                .map(|(k, a)| k + a.depth())
+                .max()
+                .unwrap_or(1),
+        }
+    }
+    fn emit(&self, out: &mut Vec<Op>) {
+        match self {
+            Node::Num(v) => out.push(Op::Num(*v)),
+            Node::Var(s) => out.push(Op::Var(*s)),
+            Node::Ext(s) => out.push(Op::Ext(*s)),
+            Node::Neg(a) => {
+                a.emit(out);
+                out.push(Op::Neg);
+            }
+            Node::Bin(op, a, b) => {
+                a.emit(out);
+                b.emit(out);
+                out.push(*op);
+            }
+            Node::Call(op, args) => {
+                for a in args {
+                    a.emit(out);
+                }
+                out.push(*op);
+            }
+        }
+    }
+}
+
+/// Runs `ops` on a stack; the one evaluator used for folding and at run time.
+#[inline]
+fn run(ops: &[Op], vars: &Vars, ext: &[f64]) -> f64 {
+    let mut st = [0.0f64; STACK];
+    let mut sp = 0usize;
+    for op in ops {
+        match *op {
+            Op::Num(v) => {
+                st[sp] = v;
+                sp += 1;
+            }
+            Op::Var(s) => {
+                st[sp] = vars[s as usize];
+                sp += 1;
+            }
+            Op::Ext(s) => {
+                st[sp] = ext[s as usize];
+                sp += 1;
+            }
+            Op::Neg => st[sp - 1] = -st[sp - 1],
+            Op::F1(f) => st[sp - 1] = f(st[sp - 1]),
+            Op::Add | Op::Sub | Op::Mul | Op::Div | Op::Rem | Op::Pow | Op::F2(_) => {
+                sp -= 1;
+                let (a, b) = (st[sp - 1], st[sp]);
+                st[sp - 1] = match *op {
+                    Op::Add => a + b,
+                    Op::Sub => a - b,
+                    Op::Mul => a * b,
+                    Op::Div => a / b,
+                    Op::Rem => libm::fmod(a, b),
+                    Op::Pow => libm::pow(a, b),
+                    Op::F2(f) => f(a, b),
+                    _ => unreachable!(),
+                };
+            }
+            Op::F3(f) => {
+                sp -= 2;
+                st[sp - 1] = f(st[sp - 1], st[sp], st[sp + 1]);
+            }
+            Op::F4(f) => {
+                sp -= 3;
+                st[sp - 1] = f(st[sp - 1], st[sp], st[sp + 1], st[sp + 2]);
+            }
+            Op::Min(k) | Op::Max(k) => {
+                let k = k as usize;
+                let args = &st[sp - k..sp];
+                let mut m = args[0];
+                for &a in &args[1..] {
+                    m = if matches!(op, Op::Min(_)) {
+                        m.min(a)
+                    } else {
+                        m.max(a)
+                    };
+                }
+                sp -= k;
+                st[sp] = m;
+                sp += 1;
+            }
+        }
+    }
+    st[0]
+}
+
+/// Points one pass of [`Expr::eval_many`] evaluates together.
+pub const LANES: usize = 64;
+
+/// The evaluation stack of [`Expr::eval_many_in`]: one value per point in
+/// each slot.
+pub struct Lanes(Box<[[f64; LANES]; STACK]>);
+
+impl Lanes {
+    /// A stack for [`Expr::eval_many_in`].
+    pub fn new() -> Lanes {
+        Lanes(Box::new([[0.0; LANES]; STACK]))
+    }
+}
+
+impl Default for Lanes {
+    /// [`Lanes::new`].
+    fn default() -> Lanes {
+        Lanes::new()
+    }
+}
+
+/// [`run`] on up to [`LANES`] points: each stack slot holds one value per
+/// point, and every instruction is applied to all of them before the next.
+// the calls of 3, 4 and k arguments read several slots of one lane at once
+#[allow(clippy::needless_range_loop)]
+fn run_lanes(ops: &[Op], vars: &[Vars], out: &mut [f64], st: &mut [[f64; LANES]; STACK]) {
+    let n = vars.len();
+    let mut sp = 0usize;
+    for op in ops {
+        match *op {
+            Op::Num(v) => {
+                st[sp][..n].fill(v);
+                sp += 1;
+            }
+            Op::Var(s) => {
+                for (d, v) in st[sp][..n].iter_mut().zip(vars) {
+                    *d = v[s as usize];
+                }
+                sp += 1;
+            }
+            Op::Ext(s) => {
+                // as `eval`: no extra slots
+                let ext: &[f64] = &[];
+                st[sp][..n].fill(ext[s as usize]);
+                sp += 1;
+            }
+            Op::Neg => {
+                for a in &mut st[sp - 1][..n] {
+                    *a = -*a;
+                }
+            }
+            Op::F1(f) => {
+                for a in &mut st[sp - 1][..n] {
+                    *a = f(*a);
+                }
+            }
+            Op::Add | Op::Sub | Op::Mul | Op::Div | Op::Rem | Op::Pow | Op::F2(_) => {
+                sp -= 1;
+                let (left, right) = st.split_at_mut(sp);
+                let (a, b) = (&mut left[sp - 1][..n], &right[0][..n]);
+                let pairs = a.iter_mut().zip(b);
+                match *op {
+                    Op::Add => pairs.for_each(|(x, y)| *x += *y),
+                    Op::Sub => pairs.for_each(|(x, y)| *x -= *y),
+                    Op::Mul => pairs.for_each(|(x, y)| *x *= *y),
+                    Op::Div => pairs.for_each(|(x, y)| *x /= *y),
+                    Op::Rem => pairs.for_each(|(x, y)| *x = libm::fmod(*x, *y)),
+                    Op::Pow => pairs.for_each(|(x, y)| *x = libm::pow(*x, *y)),
+                    Op::F2(f) => pairs.for_each(|(x, y)| *x = f(*x, *y)),
+                    _ => unreachable!(),
+                }
+            }
+            Op::F3(f) => {
+                sp -= 2;
+                for j in 0..n {
+                    st[sp - 1][j] = f(st[sp - 1][j], st[sp][j], st[sp + 1][j]);
+                }
+            }
+            Op::F4(f) => {
+                sp -= 3;
+                for j in 0..n {
+                    st[sp - 1][j] = f(st[sp - 1][j], st[sp][j], st[sp + 1][j], st[sp + 2][j]);
+                }
+            }
+            Op::Min(k) | Op::Max(k) => {
+                let k = k as usize;
+                assert!(k > 0, "min and max take at least one argument");
+                let min = matches!(op, Op::Min(_));
+                for j in 0..n {
+                    let mut m = st[sp - k][j];
+                    for r in 1..k {
+                        let a = st[sp - k + r][j];
+                        m = if min { m.min(a) } else { m.max(a) };
+                    }
+                    st[sp - k][j] = m;
+                }
+                sp -= k - 1;
+            }
+        }
+    }
+    out.copy_from_slice(&st[0][..n]);
+}
+
+fn describe_parse_error(src: &str, e: &meval::ParseError) -> String {
+    match e {
+        meval::ParseError::UnexpectedToken(at) => {
+            let rest: String = src.get(*at..).unwrap_or("").chars().take(12).collect();
+            // comparisons are not operators here: name the functions that do their work
+            let hint = if rest.starts_with(['<', '>', '=', '!', '&', '|']) {
+                "; comparisons are functions here: `x >= a` is step(a, x) (1 or 0), `x < a` is \
+                 1 - step(a, x), and min and max combine them as `and` and `or`"
+            } else {
+                ""
+            };
+            format!(
+                "cannot read the expression `{src}`: unexpected `{rest}` at character {}{hint}",
+                at + 1
+            )
+        }
+        meval::ParseError::MissingRParen(k) => {
+            format!("cannot read the expression `{src}`: {k} closing parenthesis missing")
+        }
+        meval::ParseError::MissingArgument => {
+            format!("cannot read the expression `{src}`: it ends where a value was expected")
+        }
+    }
+}
+
+fn allowed_names(allowed: &[usize], params: &Params) -> String {
+    let mut names: Vec<&str> = allowed.iter().map(|&k| VAR_NAMES[k]).collect();
+    names.extend(["pi", "e"]);
+    let mut s = names.join(", ");
+    if !params.is_empty() {
+        let p: Vec<&str> = params.keys().map(String::as_str).collect();
+        s.push_str(" and the params ");
+        s.push_str(&p.join(", "));
+    }
+    s
+}
+
+impl Expr {
+    /// Compiles `src`, resolving params to constants and only the `allowed`
+    /// variable slots (see [`var`]) to variables. The error is a sentence
+    /// naming the expression and what is wrong with it.
+    pub fn compile(src: &str, params: &Params, allowed: &[usize]) -> Result<Expr, ExprError> {
+        Expr::compile_inner(src, params, allowed, None)
+    }
+
+    /// Compiles `src` as [`Expr::compile`] does, with `names` as extra
+    /// variables (they shadow nothing: a caller keeps them apart from params;
+    /// a name `f()` is a function of no arguments, called as `f()`)
+    /// and `rand()` allowed: name k reads extra slot k, and the j-th `rand()`
+    /// of the text reads slot `names.len() + j`, which the caller fills with a
+    /// fresh random number before each [`Expr::eval_ext`] (see [`Expr::rands`]).
+    pub fn compile_ext(
+        src: &str,
+        params: &Params,
+        allowed: &[usize],
+        names: &[&str],
+    ) -> Result<Expr, ExprError> {
+        Expr::compile_inner(src, params, allowed, Some(names))
+    }
+
+    fn compile_inner(
+        src: &str,
+        params: &Params,
+        allowed: &[usize],
+        names: Option<&[&str]>,
+    ) -> Result<Expr, ExprError> {
+        if src.len() > MAX_LEN {
+            return Err(ExprError::new(
+                ExprErrorKind::TooDeep,
+                format!(
+                    "the expression `{}…` is {} characters long; expected at most {MAX_LEN}",
+                    src.chars().take(24).collect::<String>(),
+                    src.len()
+                ),
+            ));
+        }
+        // meval's tokenizer panics on text of only white space (found by fuzz/)
+        if src.trim().is_empty() {
+            return Err(ExprError::new(
+                ExprErrorKind::Syntax,
+                "an empty expression; expected a number or an expression",
+            ));
+        }
+        // Kanada's Python recipes write powers as `**`; meval's operator is `^`.
+        let mut text = src.replace("**", "^");
+        if let Some(ns) = names {
+            text = mark_rand(&text);
+            for base in ns.iter().filter_map(|n| n.strip_suffix("()")) {
+                text = mark_call(&text, base);
+            }
+        }
+        let mut rands = 0u16;
+        let tokens = meval::tokenizer::tokenize(&text)
+            .map_err(|e| ExprError::new(ExprErrorKind::Syntax, describe_parse_error(src, &e)))?;
+        let rpn = meval::shunting_yard::to_rpn(&tokens).map_err(|e| {
+            ExprError::new(
+                ExprErrorKind::Syntax,
+                format!("cannot read the expression `{src}`: {e}"),
+            )
+        })?;
+        let mut stack: Vec<Node> = Vec::new();
+        // the height of each tree on `stack`, to refuse one nested too deeply
+        let mut heights: Vec<u32> = Vec::new();
+        let mut used = 0u32;
+        let pop = |stack: &mut Vec<Node>| -> Result<Node, ExprError> {
+            stack.pop().ok_or_else(|| {
+                ExprError::new(
+                    ExprErrorKind::Syntax,
+                    format!("cannot read the expression `{src}`: an operand is missing"),
+                )
+            })
+        };
+        for tok in rpn {
+            let takes = match &tok {
+                Token::Unary(_) => 1,
+                Token::Binary(_) => 2,
+                Token::Func(_, n) => n.unwrap_or(0),
+                _ => 0,
+            };
+            let below = heights.len().saturating_sub(takes);
+            let height = 1 + heights.drain(below..).max().unwrap_or(0);
+            if height > MAX_DEPTH {
+                return Err(ExprError::new(
+                    ExprErrorKind::TooDeep,
+                    format!(
+                        "the expression `{}…` nests operations and calls more than {MAX_DEPTH} deep; expected a simpler expression",
+                        src.chars().take(24).collect::<String>()
+                    ),
+                ));
+            }
+            heights.push(height);
+            let node = match tok {
+                Token::Number(v) => Node::Num(v),
+                Token::Var(name) => {
+                    let ext = names.and_then(|ns| {
+                        ns.iter().position(|n| match n.strip_suffix("()") {
+                            Some(base) => is_mark(&name, base),
+                            None => *n == name,
+                        })
+                    });
+                    if let Some(k) = ext {
+                        Node::Ext(k as u16)
+                    } else if names.is_some() && is_rand_mark(&name) {
+                        rands += 1;
+                        Node::Ext((names.unwrap_or(&[]).len() + rands as usize - 1) as u16)
+                    } else if let Some(v) = params
+                        .get(&name)
+                        .filter(|_| SHADOWABLE.contains(&name.as_str()))
+                    {
+                        // a param named like a later variable shadows it
+                        Node::Num(*v)
+                    } else if let Some(k) = VAR_NAMES.iter().position(|n| *n == name) {
+                        if !allowed.contains(&k) {
+                            return Err(ExprError::new(
+                                ExprErrorKind::Name,
+                                format!(
+                                    "`{name}` is not available in `{src}` here; it may use {}",
+                                    allowed_names(allowed, params)
+                                ),
+                            ));
+                        }
+                        used |= 1 << k;
+                        Node::Var(k as u8)
+                    } else if let Some(v) = params.get(&name) {
+                        Node::Num(*v)
+                    } else if name == "pi" {
+                        Node::Num(std::f64::consts::PI)
+                    } else if name == "e" {
+                        Node::Num(std::f64::consts::E)
+                    } else {
+                        return Err(ExprError::new(
+                            ExprErrorKind::Name,
+                            format!(
+                                "unknown name `{name}` in `{src}`; it may use {}",
+                                allowed_names(allowed, params)
+                            ),
+                        ));
+                    }
+                }
+                Token::Unary(Operation::Minus) => Node::Neg(Box::new(pop(&mut stack)?)),
+                Token::Unary(_) => pop(&mut stack)?,
+                Token::Binary(op) => {
+                    let b = pop(&mut stack)?;
+                    let a = pop(&mut stack)?;
+                    let op = match op {
+                        Operation::Plus => Op::Add,
+                        Operation::Minus => Op::Sub,
+                        Operation::Times => Op::Mul,
+                        Operation::Div => Op::Div,
+                        Operation::Rem => Op::Rem,
+                        Operation::Pow => Op::Pow,
+                    };
+                    Node::Bin(op, Box::new(a), Box::new(b))
+                }
+                Token::Func(name, nargs) => {
+                    let k = nargs.unwrap_or(0);
+                    let op = match (name.as_str(), k) {
+                        ("min", 1..=255) => Op::Min(k as u8),
+                        ("max", 1..=255) => Op::Max(k as u8),
+                        ("min" | "max", _) => {
+                            return Err(ExprError::new(
+                                ExprErrorKind::Function,
+                                format!(
+                                    "`{name}` takes 1 to 255 arguments but is given {k} in `{src}`"
+                                ),
+                            ))
+                        }
+                        (n, 1) if lookup1(n).is_some() => Op::F1(lookup1(n).unwrap()),
+                        (n, 2) if lookup2(n).is_some() => Op::F2(lookup2(n).unwrap()),
+                        (n, 3) if lookup3(n).is_some() => Op::F3(lookup3(n).unwrap()),
+                        (n, 4) if lookup4(n).is_some() => Op::F4(lookup4(n).unwrap()),
+                        (n, _) => {
+                            let arity = if lookup1(n).is_some() {
+                                Some(1)
+                            } else if lookup2(n).is_some() {
+                                Some(2)
+                            } else if lookup3(n).is_some() {
+                                Some(3)
+                            } else if lookup4(n).is_some() {
+                                Some(4)
+                            } else {
+                                None
+                            };
+                            return Err(ExprError::new(
+                                ExprErrorKind::Function,
+                                match arity {
+                                    Some(a) => format!(
+                                        "`{n}` takes {a} argument{} but is given {k} in `{src}`",
+                                        if a == 1 { "" } else { "s" }
+                                    ),
+                                    None => format!(
+                                    "unknown function `{n}` in `{src}`; functions are: {FUNCTIONS}"
+                                ),
+                                },
+                            ));
+                        }
+                    };
+                    if stack.len() < k {
+                        return Err(ExprError::new(
+                            ExprErrorKind::Syntax,
+                            format!("cannot read the expression `{src}`: `{name}` lacks arguments"),
+                        ));
+                    }
+                    let args = stack.split_off(stack.len() - k);
+                    Node::Call(op, args)
+                }
+                other => {
+                    return Err(ExprError::new(
+                        ExprErrorKind::Syntax,
+                        format!("cannot read the expression `{src}`: unexpected {other:?}"),
+                    ))
+                }
+            };
+            stack.push(fold(node));
+        }
+        if stack.len() != 1 {
+            return Err(ExprError::new(
+                ExprErrorKind::Syntax,
+                format!(
+                    "cannot read the expression `{src}`: expected one value, found {}",
+                    stack.len()
+                ),
+            ));
+        }
+        let root = stack.pop().unwrap();
+        if root.depth() > STACK {
+            return Err(ExprError::new(
+                ExprErrorKind::TooDeep,
+                format!("the expression `{src}` is nested too deeply"),
+            ));
+        }
+        let mut ops = Vec::new();
+        root.emit(&mut ops);
+        Ok(Expr {
+            src: src.to_string(),
+            ops,
+            used,
+            rands,
+        })
+    }
+
+    /// Evaluates with the given variable values.
+    #[inline]
+    pub fn eval(&self, vars: &Vars) -> f64 {
+        run(&self.ops, vars, &[])
+    }
+
+    /// Evaluates at many points at once: `out[j] = self.eval(&vars[j])`,
+    /// bit for bit. The program runs one instruction at a time over
+    /// [`LANES`] points (a loop per instruction instead of one dispatch per
+    /// instruction and point); each point sees exactly the operations of
+    /// [`Expr::eval`], in the same order.
+    pub fn eval_many(&self, vars: &[Vars], out: &mut [f64]) {
+        let mut lanes = Lanes::new();
+        self.eval_many_in(vars, out, &mut lanes);
+    }
+
+    /// [`Expr::eval_many`] on the stack `lanes` (made once for many calls:
+    /// it is 16 KiB, and clearing it on every call of a few points cost more
+    /// than the evaluation).
+    pub fn eval_many_in(&self, vars: &[Vars], out: &mut [f64], lanes: &mut Lanes) {
+        assert_eq!(vars.len(), out.len(), "one result per point");
+        for (v, o) in vars.chunks(LANES).zip(out.chunks_mut(LANES)) {
+            run_lanes(&self.ops, v, o, &mut lanes.0);
+        }
+    }
+
+    /// Evaluates an expression of [`Expr::compile_ext`]: `ext` holds the
+    /// named extra values, then [`Expr::rands`] random numbers.
+    #[inline]
+    pub fn eval_ext(&self, vars: &Vars, ext: &[f64]) -> f64 {
+        run(&self.ops, vars, ext)
+    }
+
+    /// How many `rand()` calls the expression makes per evaluation.
+    pub fn rands(&self) -> usize {
+        self.rands as usize
+    }
+
+    /// The value when the expression uses no variable.
+    pub fn constant(&self) -> Option<f64> {
+        match self.ops.as_slice() {
+            [Op::Num(v)] => Some(*v),
+            _ => None,
+        }
+    }
+
+    /// Whether the expression reads extra slot `k` of [`Expr::compile_ext`].
+    pub fn uses_ext(&self, k: usize) -> bool {
+        self.ops
+            .iter()
+            .any(|o| matches!(o, Op::Ext(s) if *s as usize == k))
+    }
+
+    /// Whether the expression reads variable slot `k`.
+    pub fn uses(&self, k: usize) -> bool {
+        self.used & (1 << k) != 0
+    }
+
+    /// Whether the expression is exactly variable `k` (an identity mapping).
+    pub fn is_var(&self, k: usize) -> bool {
+        matches!(self.ops.as_slice(), [Op::Var(s)] if *s as usize == k)
+    }
+
+    /// The source text as written in the recipe.
+    pub fn src(&self) -> &str {
+        &self.src
+    }
+}
+
+fn fold(node: Node) -> Node {
+    let all_const = match &node {
+        Node::Num(_) | Node::Var(_) | Node::Ext(_) => return node,
+        Node::Neg(a) => a.num().is_some(),
+        Node::Bin(_, a, b) => a.num().is_some() && b.num().is_some(),
+        Node::Call(_, args) => args.iter().all(|a| a.num().is_some()),
+    };
+    if !all_const || node.depth() > STACK {
+        return node; // too deep to fold: compile reports it
+    }
+    let mut ops = Vec::new();
+    node.emit(&mut ops);
+    Node::Num(run(&ops, &[0.0; var::COUNT], &[]))
+}
+
+fn is_rand_mark(name: &str) -> bool {
+    is_mark(name, "rand")
+}
+
+/// Whether `name` is the variable a call `base()` became (see [`mark_call`]).
+fn is_mark(name: &str, base: &str) -> bool {
+    name.strip_prefix(base)
+        .is_some_and(|rest| rest.len() >= 2 && rest.bytes().all(|c| c == b'_'))
+}
+
+/// Rewrites each `rand()` (spaces allowed inside) as a variable `rand_…` of
+/// the same length, so error positions stay those of the text as written.
+fn mark_rand(text: &str) -> String {
+    mark_call(text, "rand")
+}
+
+/// Rewrites each call `base()` (spaces allowed inside) as a variable
+/// `base__…` of the same length: meval has no functions of no arguments, and
+/// error positions stay those of the text as written.
+fn mark_call(text: &str, base: &str) -> String {
+    let b = text.as_bytes();
+    let mut out = String::with_capacity(text.len());
+    let (mut k, mut copied) = (0, 0);
+    while k < b.len() {
+        let word_start = k == 0 || !(b[k - 1].is_ascii_alphanumeric() || b[k - 1] == b'_');
+        if word_start && b[k..].starts_with(base.as_bytes()) {
+            let skip = |mut j: usize| {
+                while j < b.len() && b[j] == b' ' {
+                    j += 1;
+                }
+                j
+            };
+            let j = skip(k + base.len());
+            if b.get(j) == Some(&b'(') {
+                let m = skip(j + 1);
+                if b.get(m) == Some(&b')') {
+                    out.push_str(&text[copied..k]);
+                    out.push_str(base);
+                    out.extend(std::iter::repeat_n('_', m + 1 - k - base.len()));
+                    k = m + 1;
+                    copied = k;
+                    continue;
+                }
+            }
+        }
+        k += 1;
+    }
+    out.push_str(&text[copied..]);
+    out
+}
+
+/// Evaluates an expression over params only (a number written as text).
+pub fn eval_const(src: &str, params: &Params) -> Result<f64, ExprError> {
+    let e = Expr::compile(src, params, &[])?;
+    let v = e.eval(&[0.0; var::COUNT]);
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(ExprError::new(
+            ExprErrorKind::NotFinite,
+            format!("`{src}` evaluates to {v}, not a finite number"),
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn eval_many_gives_the_bits_of_eval_at_every_point() {
+        let all: Vec<usize> = (0..var::COUNT).collect();
+        let srcs = [
+            "r*(0.8 + 0.2*sin(pi*z/200)) + 2*sin(6*theta + z/20)",
+            "c*(1.2 - 0.4*z/200)",
+            "-x^2 + y % 3 - z/(i+1)",
+            "min(x, y, z) + max(x, -y) + clamp(x, -1, 1) + atan2(y, x) + step(0, t)",
+            "mod(i, 7) * 1e-3 + sqrt(abs(x*y)) - v",
+        ];
+        // 150 points: two full passes of LANES and a part, odd values in
+        // every variable (negative, fractional, near zero)
+        let vars: Vec<Vars> = (0..150)
+            .map(|k| {
+                let k = k as f64;
+                let mut v = [0.0; var::COUNT];
+                for (s, slot) in v.iter_mut().enumerate() {
+                    *slot = (k * 0.37 + s as f64 * 1.1).sin() * (10.0 + k) - 0.5;
+                }
+                v
+            })
+            .collect();
+        for src in srcs {
+            let e = Expr::compile(src, &Params::new(), &all).unwrap();
+            let mut out = vec![0.0; vars.len()];
+            e.eval_many(&vars, &mut out);
+            for (v, got) in vars.iter().zip(&out) {
+                assert_eq!(got.to_bits(), e.eval(v).to_bits(), "{src} at {v:?}");
+            }
+        }
+    }
+
+    fn ev(src: &str, vars: &Vars) -> f64 {
+        let all: Vec<usize> = (0..var::COUNT).collect();
+        Expr::compile(src, &Params::new(), &all).unwrap().eval(vars)
+    }
+
+    #[test]
+    fn arithmetic_and_precedence() {
+        let v = [0.0; var::COUNT];
+        assert_eq!(ev("1+2*3", &v), 7.0);
+        assert_eq!(ev("2^3^2", &v), 512.0);
+        assert_eq!(ev("2**3", &v), 8.0);
+        assert_eq!(ev("-2+5", &v), 3.0);
+        assert_eq!(ev("7 % 4", &v), 3.0);
+    }
+
+    #[test]
+    fn variables_and_params() {
+        let mut p = Params::new();
+        p.insert("radius".into(), 25.0);
+        let e = Expr::compile("radius*sin(pi*z/10)+r", &p, &[var::Z, var::R]).unwrap();
+        let mut v = [0.0; var::COUNT];
+        v[var::Z] = 5.0;
+        v[var::R] = 1.0;
+        assert_eq!(e.eval(&v), 26.0);
+        assert!(e.uses(var::Z) && e.uses(var::R) && !e.uses(var::X));
+    }
+
+    #[test]
+    fn comparisons_are_refused_with_the_functions_that_replace_them() {
+        let all: Vec<usize> = (0..var::COUNT).collect();
+        for src in ["x > 4", "x*x + y*y >= 4", "x == 1", "x < 1 && y < 1"] {
+            let e = Expr::compile(src, &Params::new(), &all).unwrap_err();
+            assert!(e.message.contains("step(a, x)"), "{src}: {e}");
+        }
+        let e = Expr::compile("x 4", &Params::new(), &all).unwrap_err();
+        assert!(!e.message.contains("step"), "{e}");
+    }
+
+    #[test]
+    fn added_functions() {
+        let v = [0.0; var::COUNT];
+        assert_eq!(ev("mod(-1, 360)", &v), 359.0);
+        assert_eq!(ev("clamp(5, 0, 2)", &v), 2.0);
+        assert_eq!(ev("step(1, 0.5)", &v), 0.0);
+        assert_eq!(ev("step(1, 1)", &v), 1.0);
+        assert_eq!(ev("hypot(3, 4)", &v), 5.0);
+        assert_eq!(ev("atan2(1, 0)", &v), std::f64::consts::FRAC_PI_2);
+        assert_eq!(ev("min(3, 1, 2)", &v), 1.0);
+        assert_eq!(ev("max(3, 1, 2)", &v), 3.0);
+    }
+
+    #[test]
+    fn constants_fold() {
+        let e = Expr::compile("2*pi*3", &Params::new(), &[]).unwrap();
+        assert_eq!(e.constant(), Some(2.0 * std::f64::consts::PI * 3.0));
+        let id = Expr::compile("theta", &Params::new(), &[var::THETA]).unwrap();
+        assert!(id.is_var(var::THETA));
+    }
+
+    #[test]
+    fn transcendental_functions_are_libm() {
+        // the same bits as libm on every machine
+        let v = [0.0; var::COUNT];
+        assert_eq!(ev("sin(1.234)", &v).to_bits(), libm::sin(1.234).to_bits());
+        assert_eq!(ev("1.5^0.3", &v).to_bits(), libm::pow(1.5, 0.3).to_bits());
+    }
+
+    #[test]
+    fn extra_names_and_rand_slots() {
+        let p = Params::new();
+        let e = Expr::compile_ext("k*10 + rand() + rand ( )", &p, &[], &["j", "k"]).unwrap();
+        assert_eq!(e.rands(), 2);
+        assert_eq!(
+            e.eval_ext(&[0.0; var::COUNT], &[1.0, 2.0, 0.25, 0.5]),
+            20.75
+        );
+        assert!(Expr::compile("rand()", &p, &[]).is_err());
+        let e = Expr::compile_ext("operand(1)", &p, &[], &[]).unwrap_err();
+        assert!(e.message.contains("operand"), "{e}");
+    }
+
+    #[test]
+    fn elementary_automaton() {
+        // Rule 30 from one cell, rows 0..3 around column 0 on a wide ring:
+        // 1 / 111 / 11001 / 1101111
+        let row = |r: f64| -> String {
+            (-3..=3)
+                .map(|c| {
+                    if eca(30.0, 64.0, r, c as f64) == 1.0 {
+                        '1'
+                    } else {
+                        '0'
+                    }
+                })
+                .collect()
+        };
+        assert_eq!(row(0.0), "0001000");
+        assert_eq!(row(1.0), "0011100");
+        assert_eq!(row(2.0), "0110010");
+        assert_eq!(row(3.0), "1101111");
+        assert!(eca(30.0, 65.0, 1.0, 0.0).is_nan());
+        assert!(eca(30.5, 8.0, 1.0, 0.0).is_nan());
+        // wraps: column -1 is column width-1
+        assert_eq!(eca(30.0, 8.0, 1.0, -1.0), eca(30.0, 8.0, 1.0, 7.0));
+    }
+
+    #[test]
+    fn automaton_rows_in_any_order_agree_with_a_plain_simulation() {
+        // a reference that knows nothing of the cache: a ring of bools
+        // stepped from row 0 by the rule's table
+        fn plain(rule: u8, w: usize, rows: usize) -> Vec<Vec<bool>> {
+            let mut cur = vec![false; w];
+            cur[0] = true;
+            let mut all = vec![cur.clone()];
+            for _ in 0..rows {
+                cur = (0..w)
+                    .map(|i| {
+                        let l = cur[(i + w - 1) % w] as u8;
+                        let c = cur[i] as u8;
+                        let r = cur[(i + 1) % w] as u8;
+                        rule >> (l * 4 + c * 2 + r) & 1 == 1
+                    })
+                    .collect();
+                all.push(cur.clone());
+            }
+            all
+        }
+        for (rule, w) in [(30u8, 64usize), (110, 37), (90, 1), (184, 13)] {
+            let want = plain(rule, w, 1200);
+            // down, up, jumping across kept rows, and a new automaton between
+            let order: Vec<usize> = (0..=1200)
+                .rev()
+                .step_by(7)
+                .chain((0..=1200).step_by(13))
+                .chain([1199, 3, 700, 256, 255, 512, 1024, 0, 1200])
+                .collect();
+            for (k, &r) in order.iter().enumerate() {
+                if k % 50 == 0 {
+                    eca(rule.wrapping_add(1) as f64, 8.0, 5.0, 0.0);
+                }
+                for c in [0, w / 2, w - 1] {
+                    let got = eca(rule as f64, w as f64, r as f64, c as f64);
+                    assert_eq!(
+                        got, want[r][c] as u8 as f64,
+                        "rule {rule} w {w} row {r} col {c}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn blank_text_is_an_error_not_a_panic() {
+        for s in [" ", "\t", "\n", " \n\t "] {
+            let e = Expr::compile(s, &Params::new(), &[]).unwrap_err();
+            assert!(e.message.contains("empty expression"), "{e}");
+        }
+    }
+
+    #[test]
+    fn errors_name_the_problem() {
+        let p = Params::new();
+        let e = Expr::compile("sin(", &p, &[]).unwrap_err();
+        assert!(e.message.contains("sin("), "{e}");
+        let e = Expr::compile("foo + 1", &p, &[var::X]).unwrap_err();
+        assert!(
+            e.message.contains("unknown name `foo`") && e.message.contains("x"),
+            "{e}"
+        );
+        let e = Expr::compile("bar(1)", &p, &[]).unwrap_err();
+        assert!(e.message.contains("unknown function `bar`"), "{e}");
+        let many = format!("max({})", vec!["1"; 40].join(","));
+        let e = Expr::compile(&many, &p, &[]).unwrap_err();
+        assert!(e.message.contains("nested too deeply"), "{e}");
+        let e = Expr::compile("atan2(1)", &p, &[]).unwrap_err();
+        assert!(e.message.contains("takes 2 arguments"), "{e}");
+        let e = Expr::compile("c*2", &p, &[var::X]).unwrap_err();
+        assert!(e.message.contains("`c` is not available"), "{e}");
+        assert_eq!(e.kind, ExprErrorKind::Name);
+        assert_eq!(
+            eval_const("1/0", &p).unwrap_err().kind,
+            ExprErrorKind::NotFinite
+        );
+    }
+}

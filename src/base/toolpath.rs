@@ -1,0 +1,413 @@
+//! The one type that carries a part between stages: the papers' strings.
+//!
+//! Kanada represents a part as a sequence of strings S_i = (P_start_i, P_end_i,
+//! c_i, v_i): straight pieces of filament with cross-section c (mm²) and head
+//! speed v (mm/s). Consecutive strings share their end and start points, so a
+//! part is stored as a polyline: string k runs from `points[k]` to
+//! `points[k + 1]`, with its attributes in `strings[k]`.
+
+use glam::DVec3;
+
+use crate::base::threads::Threads;
+
+/// Cross-section, speed and kind of one string (named `Strand` so as not to
+/// clash with Rust's `String`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Strand {
+    /// Cross-section of the extruded filament, mm².
+    pub c: f64,
+    /// Head speed, mm/s.
+    pub v: f64,
+    /// A travel move: the head moves without extruding.
+    pub travel: bool,
+    /// A declared hair (a turtle's `hair:`): a thin string pulled from a blob
+    /// into the air on purpose, which the `unsupported`, `thin-string` and
+    /// `nozzle-collision` checks pass over (and nothing else does).
+    pub hair: bool,
+}
+
+/// Something the printer does between two strings that is not a move
+/// (ExtruderTurtle's dwell, pause and temperature commands; a turtle's pen-up
+/// retraction and in-place extrusion).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Event {
+    /// Wait this many milliseconds (G4).
+    Dwell {
+        /// Milliseconds.
+        ms: f64,
+    },
+    /// A firmware pause, so a person can act (insert a thread, change colour).
+    Pause,
+    /// Set the nozzle temperature, °C, and optionally wait for it.
+    NozzleTemp {
+        /// °C.
+        celsius: f64,
+        /// Wait until it is reached.
+        wait: bool,
+    },
+    /// Set the bed temperature, °C, and optionally wait for it.
+    BedTemp {
+        /// °C.
+        celsius: f64,
+        /// Wait until it is reached.
+        wait: bool,
+    },
+    /// Set the part-cooling fan, 0 (off) to 1 (full).
+    Fan {
+        /// Fraction of full speed.
+        speed: f64,
+    },
+    /// Retract now with the profile's length; the next extruding move undoes it.
+    Retract,
+    /// Feed filament without moving the head.
+    Extrude {
+        /// Filament, mm.
+        filament: f64,
+        /// Filament speed, mm/s.
+        speed: f64,
+    },
+}
+
+/// Where a turtle stood when its program said `draw_turtle`
+/// (ExtruderTurtle's `draw_Turtle()`): drawn in the previews as a small
+/// triangle pointing along the heading, never written to the G-code.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Marker {
+    /// The turtle's position, recipe coordinates, mm.
+    pub pos: DVec3,
+    /// Its heading (unit).
+    pub heading: DVec3,
+    /// Its up axis (unit), the triangle's normal.
+    pub up: DVec3,
+}
+
+/// A part: a polyline of points and the strings between them.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Toolpath {
+    /// The part's name, for reports and error places.
+    pub name: String,
+    /// n + 1 points for n strings.
+    pub points: Vec<DVec3>,
+    /// String k runs from `points[k]` to `points[k + 1]`.
+    pub strings: Vec<Strand>,
+    /// Events in order of their string index: `(k, e)` happens before
+    /// string k (k = n: after the last string).
+    pub events: Vec<(usize, Event)>,
+    /// Turtle markers for the previews (`draw_turtle`), in program order.
+    pub markers: Vec<Marker>,
+    /// Per point, when a primitive of the part follows an `outline:`: turns
+    /// along the outline, u = k + s on turn k at arc fraction s (so it grows
+    /// along the part and interpolates linearly); expressions see
+    /// s = u − floor(u) ([`Toolpath::s_at_point`]). Points of the part's
+    /// other primitives have u = 0. `None`: no outline, and no `s`.
+    pub turns: Option<Vec<f64>>,
+}
+
+impl Toolpath {
+    /// An empty part whose head starts at `start`.
+    pub fn new(start: DVec3) -> Toolpath {
+        Toolpath {
+            name: String::new(),
+            points: vec![start],
+            strings: Vec::new(),
+            events: Vec::new(),
+            markers: Vec::new(),
+            turns: None,
+        }
+    }
+
+    /// A part through `points` (at least one) whose strings all extrude with
+    /// cross-section `c` at speed `v`: the same as `new(first)` then `draw`
+    /// to each of the rest, without a push per string.
+    pub fn uniform(points: Vec<DVec3>, c: f64, v: f64, threads: Threads) -> Toolpath {
+        assert!(!points.is_empty(), "a part starts somewhere");
+        let strand = Strand {
+            c,
+            v,
+            travel: false,
+            hair: false,
+        };
+        Toolpath {
+            name: String::new(),
+            // filled on the threads: 2M strings are 48 MB of fresh pages
+            strings: threads.fill_vec(points.len() - 1, 8_192, |_| strand),
+            points,
+            events: Vec::new(),
+            markers: Vec::new(),
+            turns: None,
+        }
+    }
+
+    /// An empty part with room for `n` strings.
+    pub fn with_capacity(start: DVec3, n: usize) -> Toolpath {
+        let mut points = Vec::with_capacity(n + 1);
+        points.push(start);
+        Toolpath {
+            name: String::new(),
+            points,
+            strings: Vec::with_capacity(n),
+            events: Vec::new(),
+            markers: Vec::new(),
+            turns: None,
+        }
+    }
+
+    /// The head's current position (the last point).
+    pub fn head(&self) -> DVec3 {
+        *self.points.last().expect("a toolpath has a start point")
+    }
+
+    /// Keeps `turns` one per point: a new point repeats the last value.
+    #[inline]
+    fn push_turns(&mut self) {
+        if let Some(u) = &mut self.turns {
+            u.push(u.last().copied().unwrap_or(0.0));
+        }
+    }
+
+    /// The `s` of point k: the arc fraction along the outline (0 with no outline).
+    #[inline]
+    pub fn s_at_point(&self, k: usize) -> f64 {
+        match &self.turns {
+            Some(u) => frac(u[k]),
+            None => 0.0,
+        }
+    }
+
+    /// The `s` of string k's midpoint (0 with no outline).
+    #[inline]
+    pub fn s_at_string(&self, k: usize) -> f64 {
+        match &self.turns {
+            Some(u) => frac(0.5 * (u[k] + u[k + 1])),
+            None => 0.0,
+        }
+    }
+
+    /// Adds an extruding string to `p` (the papers' `draw`).
+    pub fn draw(&mut self, p: DVec3, c: f64, v: f64) {
+        self.push_turns();
+        self.points.push(p);
+        self.strings.push(Strand {
+            c,
+            v,
+            travel: false,
+            hair: false,
+        });
+    }
+
+    /// Adds a declared hair to `p`: an extruding string of cross-section `c`
+    /// that is meant to hang in the air (see [`Strand::hair`]).
+    pub fn hair(&mut self, p: DVec3, c: f64, v: f64) {
+        self.push_turns();
+        self.points.push(p);
+        self.strings.push(Strand {
+            c,
+            v,
+            travel: false,
+            hair: true,
+        });
+    }
+
+    /// How many strings are declared hairs.
+    pub fn hair_count(&self) -> usize {
+        self.strings.iter().filter(|s| s.hair).count()
+    }
+
+    /// Adds a travel string to `p` (the papers' `move`).
+    pub fn travel(&mut self, p: DVec3, v: f64) {
+        self.push_turns();
+        self.points.push(p);
+        self.strings.push(Strand {
+            c: 0.0,
+            v,
+            travel: true,
+            hair: false,
+        });
+    }
+
+    /// Adds an event before the next string.
+    pub fn event(&mut self, e: Event) {
+        self.events.push((self.strings.len(), e));
+    }
+
+    /// Number of strings.
+    pub fn len(&self) -> usize {
+        self.strings.len()
+    }
+
+    /// Whether the part has no strings.
+    pub fn is_empty(&self) -> bool {
+        self.strings.is_empty()
+    }
+
+    /// Start and end point of string k.
+    pub fn ends(&self, k: usize) -> (DVec3, DVec3) {
+        (self.points[k], self.points[k + 1])
+    }
+
+    /// Length of string k, mm.
+    pub fn length(&self, k: usize) -> f64 {
+        let (a, b) = self.ends(k);
+        a.distance(b)
+    }
+
+    /// Midpoint of string k, where its c and v expressions are evaluated.
+    pub fn midpoint(&self, k: usize) -> DVec3 {
+        let (a, b) = self.ends(k);
+        (a + b) * 0.5
+    }
+
+    /// Extruded volume Σ c·L over the extruding strings, mm³.
+    pub fn volume(&self) -> f64 {
+        (0..self.len())
+            .filter(|&k| !self.strings[k].travel)
+            .map(|k| self.strings[k].c * self.length(k))
+            .sum()
+    }
+
+    /// Appends `other`, joining with a travel move when it starts elsewhere.
+    pub fn append(&mut self, other: &Toolpath, travel_speed: f64) {
+        let start = other.points[0];
+        if self.head() != start {
+            self.travel(start, travel_speed);
+        }
+        let base = self.len();
+        self.events
+            .extend(other.events.iter().map(|&(k, e)| (k + base, e)));
+        if self.turns.is_some() || other.turns.is_some() {
+            let mine = self.points.len();
+            let u = self.turns.get_or_insert_with(|| vec![0.0; mine]);
+            match &other.turns {
+                Some(o) => u.extend_from_slice(&o[1..]),
+                None => u.resize(mine + other.points.len() - 1, 0.0),
+            }
+        }
+        self.points.extend_from_slice(&other.points[1..]);
+        self.strings.extend_from_slice(&other.strings);
+        self.markers.extend_from_slice(&other.markers);
+    }
+
+    /// Puts `before` ahead of this path: the same path as
+    /// `before.append(self)` with this one's name, made in this path's
+    /// buffers (a brim or stand ahead of a 2M-string part copied all of it
+    /// into new memory).
+    pub fn prepend(&mut self, mut before: Toolpath, travel_speed: f64) {
+        let start = self.points[0];
+        if before.head() != start {
+            before.travel(start, travel_speed);
+        }
+        let base = before.len();
+        for (k, _) in &mut self.events {
+            *k += base;
+        }
+        before.events.append(&mut self.events);
+        self.events = before.events;
+        if self.turns.is_some() || before.turns.is_some() {
+            let theirs = before.points.len();
+            let u = before.turns.unwrap_or_else(|| vec![0.0; theirs]);
+            let mine = self
+                .turns
+                .get_or_insert_with(|| vec![0.0; self.points.len()]);
+            mine.splice(0..1, u);
+        }
+        // the join is `before`'s last point, as in `append`
+        self.points.splice(0..1, before.points);
+        self.strings.splice(0..0, before.strings);
+        self.markers.splice(0..0, before.markers);
+    }
+}
+
+/// x − floor(x): the fractional part, in [0, 1).
+#[inline]
+pub fn frac(x: f64) -> f64 {
+    x - libm::floor(x)
+}
+
+/// Cylinder coordinates (r, theta) of a point, theta in [0, 2·pi).
+#[inline]
+pub fn polar(p: DVec3) -> (f64, f64) {
+    (radius(p), angle(p))
+}
+
+/// Distance of a point from the z axis (the r of [`polar`]).
+#[inline]
+pub fn radius(p: DVec3) -> f64 {
+    (p.x * p.x + p.y * p.y).sqrt()
+}
+
+/// Angle of a point about the z axis in [0, 2·pi) (the theta of [`polar`]).
+#[inline]
+pub fn angle(p: DVec3) -> f64 {
+    let mut theta = libm::atan2(p.y, p.x);
+    if theta < 0.0 {
+        theta += std::f64::consts::TAU;
+        if theta >= std::f64::consts::TAU {
+            theta = 0.0; // -0 and tiny negatives round up to exactly 2·pi
+        }
+    }
+    theta
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn polyline_strings_share_points() {
+        let mut t = Toolpath::new(DVec3::ZERO);
+        t.draw(DVec3::new(3.0, 0.0, 0.0), 0.2, 10.0);
+        t.travel(DVec3::new(3.0, 4.0, 0.0), 100.0);
+        t.draw(DVec3::new(0.0, 0.0, 0.0), 0.1, 10.0);
+        assert_eq!(t.len(), 3);
+        assert_eq!(t.length(1), 4.0);
+        assert_eq!(t.midpoint(0), DVec3::new(1.5, 0.0, 0.0));
+        // the travel string extrudes nothing
+        assert!((t.volume() - (0.2 * 3.0 + 0.1 * 5.0)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn prepend_is_append_the_other_way() {
+        let path = |x: f64, turns: bool| {
+            let mut t = Toolpath::new(DVec3::new(x, 0.0, 0.2));
+            t.name = format!("at {x}");
+            t.draw(DVec3::new(x + 1.0, 0.0, 0.2), 0.1, 10.0);
+            t.events.push((1, Event::Pause));
+            t.draw(DVec3::new(x + 1.0, 1.0, 0.2), 0.2, 20.0);
+            t.markers.push(Marker {
+                pos: DVec3::splat(x),
+                heading: DVec3::X,
+                up: DVec3::Z,
+            });
+            t.events.push((2, Event::Dwell { ms: x }));
+            if turns {
+                t.turns = Some(vec![x, x + 0.5, x + 1.0]);
+            }
+            t
+        };
+        for (tb, tp) in [(false, false), (true, false), (false, true), (true, true)] {
+            // joined by a travel, and not (starting where `before` ends)
+            for same in [false, true] {
+                let (before, mut part) = (path(0.0, tb), path(5.0, tp));
+                if same {
+                    part.points[0] = before.head();
+                }
+                let mut want = before.clone();
+                want.append(&part, 99.0);
+                want.name = part.name.clone();
+                let mut got = part;
+                got.prepend(before, 99.0);
+                assert_eq!(got.len(), 4 + usize::from(!same));
+                assert_eq!(got, want, "turns {tb} {tp}, same {same}");
+            }
+        }
+    }
+
+    #[test]
+    fn polar_angle_is_in_range() {
+        let (r, th) = polar(DVec3::new(0.0, -2.0, 0.0));
+        assert_eq!(r, 2.0);
+        assert!((th - 1.5 * std::f64::consts::PI).abs() < 1e-15);
+        let (_, th) = polar(DVec3::new(1.0, -1e-300, 0.0));
+        assert!((0.0..std::f64::consts::TAU).contains(&th));
+    }
+}

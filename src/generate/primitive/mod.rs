@@ -1,0 +1,222 @@
+//! Primitives: the shapes a part starts from (Kanada's Fig. 3 "parts assembly").
+//!
+//! Each primitive knows how many strings it will make before it makes them,
+//! so an impossible recipe is refused before it allocates.
+
+mod arc;
+/// Kanada's cellular-automaton model of self-organised printing: `ca_helix`.
+pub mod ca;
+mod circle;
+mod cylinder;
+mod helix;
+/// SVG sources: `path: {svg: …}` and the `outline:` of helix, spiral, cylinder.
+pub mod outline;
+mod path;
+/// The constant-flow helix of self-organised patterns: `pattern_helix`.
+pub mod pattern;
+/// Feature-based solids printed from a z-buffer of loops: `solid`.
+pub mod solid;
+mod spiral;
+/// A 3D turtle that prints as it walks (turtle.py, ExtruderTurtle): `turtle`.
+pub mod turtle;
+
+pub use arc::{Arc, RawArc};
+pub use ca::CaHelix;
+pub use circle::{Circle, RawCircle};
+pub use cylinder::{Cylinder, RawCylinder};
+pub use helix::{Helix, RawHelix};
+pub use path::{PathCmd, RawCmd, RawPath};
+pub use pattern::PatternHelix;
+pub use solid::Solid;
+pub use spiral::{Direction, RawDirection, RawSpiral, Spiral};
+pub use turtle::Turtle;
+
+use serde::Deserialize;
+
+use crate::base::error::Result;
+use crate::base::num::{Num, Scope};
+use crate::base::threads::Threads;
+use crate::base::toolpath::Toolpath;
+
+/// A primitive as written: each kind owns its raw form and its resolution.
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+#[allow(missing_docs)]
+pub enum RawPrimitive {
+    Path(RawPath),
+    Circle(RawCircle),
+    Arc(RawArc),
+    Spiral(RawSpiral),
+    Helix(RawHelix),
+    Cylinder(RawCylinder),
+    PatternHelix(pattern::RawPatternHelix),
+    CaHelix(ca::RawCaHelix),
+    Solid(solid::RawSolid),
+    Turtle(turtle::RawTurtle),
+}
+
+impl RawPrimitive {
+    /// Resolves the primitive in `scope`; a turtle runs now, starting from
+    /// `env` (the part's cross-section and speed). Errors name `KIND.KEY`.
+    /// SVG files are read relative to `dir`.
+    pub fn resolve(
+        &self,
+        scope: &Scope,
+        env: &turtle::Env,
+        dir: &std::path::Path,
+    ) -> Result<Primitive> {
+        let num = |n: &Num, place: &str| scope.num(n, place);
+        let files = outline::Files {
+            dir,
+            max_strings: env.max_strings,
+        };
+        Ok(match self {
+            RawPrimitive::Path(p) => Primitive::Path(p.resolve(scope, files)?),
+            RawPrimitive::Circle(p) => Primitive::Circle(p.resolve(scope)?),
+            RawPrimitive::Arc(p) => Primitive::Arc(p.resolve(scope)?),
+            RawPrimitive::Spiral(p) => Primitive::Spiral(p.resolve(scope, files)?),
+            RawPrimitive::Helix(p) => Primitive::Helix(p.resolve(scope, files)?),
+            RawPrimitive::Cylinder(p) => Primitive::Cylinder(p.resolve(scope, files)?),
+            RawPrimitive::PatternHelix(p) => Primitive::PatternHelix(p.resolve(&num)?),
+            RawPrimitive::CaHelix(p) => Primitive::CaHelix(p.resolve(&num)?),
+            RawPrimitive::Solid(s) => Primitive::Solid(solid::resolve(s, &num)?),
+            RawPrimitive::Turtle(t) => {
+                Primitive::Turtle(Box::new(turtle::resolve(t, scope.params, env)?))
+            }
+        })
+    }
+}
+
+/// A primitive with every value resolved to a number.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Primitive {
+    /// The papers' low-level API: move, draw, cross_section, speed.
+    Path(Vec<PathCmd>),
+    /// One closed circle.
+    Circle(Circle),
+    /// Part of a circle, optionally rising.
+    Arc(Arc),
+    /// A flat spiral.
+    Spiral(Spiral),
+    /// A single-wall helix with no seam.
+    Helix(Helix),
+    /// A filled cylinder of stacked spirals.
+    Cylinder(Cylinder),
+    /// Boxes and cylinders combined, printed layer by layer from exact loops.
+    Solid(Solid),
+    /// Kanada's self-organised pattern print: a constant-flow helix.
+    PatternHelix(PatternHelix),
+    /// Kanada's cellular-automaton model of those patterns, as G-code.
+    CaHelix(CaHelix),
+    /// A 3D turtle program, run when the recipe was resolved.
+    Turtle(Box<Turtle>),
+}
+
+impl Primitive {
+    /// How many strings `build` will make.
+    pub fn string_count(&self) -> u64 {
+        match self {
+            Primitive::Path(cmds) => path::string_count(cmds),
+            Primitive::Circle(p) => p.string_count(),
+            Primitive::Arc(p) => p.string_count(),
+            Primitive::Spiral(p) => p.string_count(),
+            Primitive::Helix(p) => p.string_count(),
+            Primitive::Cylinder(p) => p.string_count(),
+            Primitive::Solid(p) => p.string_count(),
+            Primitive::PatternHelix(p) => p.string_count(),
+            Primitive::CaHelix(p) => p.string_count(),
+            Primitive::Turtle(p) => p.string_count(),
+        }
+    }
+
+    /// Makes the strings, with cross-section `c` and speed `v` where the
+    /// primitive sets none of its own.
+    pub fn build(&self, c: f64, v: f64) -> Toolpath {
+        self.build_on(c, v, Threads::ONE)
+    }
+
+    /// [`Primitive::build`] on up to `threads` threads where a primitive
+    /// splits its points (a helix); the same strings whatever the budget.
+    pub fn build_on(&self, c: f64, v: f64, threads: Threads) -> Toolpath {
+        if let Primitive::Helix(p) = self {
+            return p.build_on(c, v, threads);
+        }
+        match self {
+            Primitive::Path(cmds) => path::build(cmds, c, v),
+            Primitive::Circle(p) => p.build(c, v),
+            Primitive::Arc(p) => p.build(c, v),
+            Primitive::Spiral(p) => p.build(c, v),
+            Primitive::Helix(p) => p.build(c, v),
+            Primitive::Cylinder(p) => p.build(c, v),
+            Primitive::Solid(p) => p.build(c, v),
+            Primitive::PatternHelix(p) => p.build(c, v),
+            Primitive::CaHelix(p) => p.build(c, v),
+            // the part's c and v were the turtle's starting values
+            Primitive::Turtle(p) => p.build(),
+        }
+    }
+}
+
+/// Below this many points a primitive is made on one thread (as steps:
+/// a thread costs ~50 µs).
+pub(crate) const PAR_MIN: usize = 8_192;
+
+/// The point at angle `k / segments` of a turn on a circle of radius `r`.
+///
+/// The angle is reduced to one turn first (`k mod segments`) so every turn of
+/// a helix or spiral uses exactly the same sines and cosines.
+#[inline]
+pub(crate) fn on_circle(r: f64, k: u64, segments: u32) -> (f64, f64) {
+    let a = std::f64::consts::TAU * (k % segments as u64) as f64 / segments as f64;
+    (r * libm::cos(a), r * libm::sin(a))
+}
+
+/// [`on_circle`] for points 0..=`last`, its sines and cosines computed once
+/// per angle of a turn (a 2M-string helix of 1000 segments needs 1000, not
+/// 2M): point k is entry `k mod segments`, the very values `on_circle` gives.
+pub(crate) struct TurnTable {
+    points: Vec<(f64, f64)>,
+}
+
+impl TurnTable {
+    /// The table for radius `r` and `segments` a turn, up to point `last`.
+    pub(crate) fn new(r: f64, segments: u32, last: u64) -> TurnTable {
+        let len = (segments as u64).min(last.saturating_add(1));
+        TurnTable {
+            points: (0..len).map(|k| on_circle(r, k, segments)).collect(),
+        }
+    }
+
+    /// `on_circle(r, k, segments)`.
+    #[inline]
+    pub(crate) fn at(&self, k: u64) -> (f64, f64) {
+        self.points[(k % self.points.len() as u64) as usize]
+    }
+
+    /// The points `at(k)`, `at(k + 1)`, … in turn, without a division each.
+    pub(crate) fn walk_from(&self, k: u64) -> TurnWalk<'_> {
+        TurnWalk {
+            points: &self.points,
+            j: (k % self.points.len() as u64) as usize,
+        }
+    }
+}
+
+/// [`TurnTable::walk`]: the table's entries in order, round and round.
+pub(crate) struct TurnWalk<'a> {
+    points: &'a [(f64, f64)],
+    j: usize,
+}
+
+impl TurnWalk<'_> {
+    /// The next point: `at(k)` for the k-th call (from 0).
+    #[inline]
+    pub(crate) fn next_point(&mut self) -> (f64, f64) {
+        let p = self.points[self.j];
+        self.j += 1;
+        if self.j == self.points.len() {
+            self.j = 0;
+        }
+        p
+    }
+}

@@ -1,0 +1,734 @@
+//! Strings to G-code.
+//!
+//! Numbers are fixed-point, never exponent notation and never `-0.000`: each
+//! value is rounded once to integer units (µm for XYZ, 10 nm of filament for E)
+//! and printed from the integer. E is tracked as the exact running total
+//! Σ c·L / (pi·(d/2)²) and printed rounded, so the printed E values (absolute)
+//! or deltas (relative) add up to the rounded exact total with no drift.
+//!
+//! Short-string merging (Kanada's `draw`): near a globe's poles 300 strings a
+//! turn are far too short for the printer's planner. A run of consecutive
+//! extruding strings, each shorter than the printer's `min_string_length`, is
+//! written as one move from the run's start to the point where its length first
+//! reaches that minimum. The move carries the run's filament exactly, and its
+//! speed is set so that it takes the same time as the strings would.
+
+pub mod flavor;
+
+use std::collections::BTreeMap;
+use std::io::{self, Write};
+
+use glam::DVec3;
+
+pub use crate::analyse::stats::MoveStats;
+use crate::base::error::Result;
+use crate::base::format::{fmt_num, hms, units, Chunk};
+use crate::base::safe_text::one_line;
+use crate::base::threads::Threads;
+use crate::base::toolpath::{Event, Toolpath};
+use crate::generate::model::Recipe;
+use crate::machine::{Extrusion, Printer};
+
+const XYZ: f64 = 1e3;
+const E: f64 = 1e5;
+
+/// A feed of `mm_s` mm/s in whole mm/min as written after `F`, at least 1:
+/// `libm::round(mm_s * 60).max(1) as i64` (`as` is monotone and 1 exact).
+#[inline]
+fn feed_units(mm_s: f64) -> i64 {
+    crate::base::format::round_i64(mm_s * 60.0).max(1)
+}
+
+/// Writes one print: header, start G-code, parts, end G-code, summary.
+pub struct Emitter<'a, W: Write> {
+    out: W,
+    printer: &'a Printer,
+    /// Filament cross-section area, mm².
+    area: f64,
+    /// Last written machine position in µm, once known.
+    written: Option<[i64; 3]>,
+    /// `written` in mm (zero before it is known), divided once per move
+    /// where it is set, so the divisions overlap the formatting.
+    written_mm: DVec3,
+    /// Exact head position, recipe coordinates.
+    head: Option<DVec3>,
+    /// Exact filament total, mm.
+    e_exact: f64,
+    /// Last E total written, 1e-5 mm.
+    e_units: i64,
+    retracted: bool,
+    feed: i64,
+    /// `feed` in mm/s: `feed as f64 / 60.0`, kept rather than divided again
+    /// for each move.
+    feed_mm_s: f64,
+    /// The text not yet handed to `out`: lines are formatted straight into
+    /// it, and it goes out whole once full (see [`Chunk`]).
+    buf: Chunk,
+    /// Where the line being formatted starts in `buf`.
+    line_start: usize,
+    /// The moves so far.
+    pub stats: MoveStats,
+    pending: Pending,
+    /// Thumbnail blocks written after the header comments (see
+    /// `crate::output::preview::thumbnail`); empty for none.
+    pub thumbnails: String,
+    /// Every written move, for the print-time estimate.
+    planner: crate::analyse::planner::Background,
+    /// The material's fan: (speed, start z), until it is switched on or a
+    /// `fan` event takes over.
+    fan: Option<(f64, f64)>,
+}
+
+#[derive(Default)]
+struct Pending {
+    count: u64,
+    end: DVec3,
+    path: f64,
+    filament: f64,
+    time: f64,
+    v_last: f64,
+}
+
+impl<'a, W: Write> Emitter<'a, W> {
+    /// An emitter writing to `out` for `recipe`'s printer and material; its
+    /// print-time planner runs on a thread of its own if `threads` allows.
+    pub fn new(out: W, recipe: &'a Recipe, threads: Threads) -> Emitter<'a, W> {
+        let planner = crate::analyse::planner::Background::new(recipe.printer.limits(), threads);
+        Emitter::with_planner(out, recipe, planner)
+    }
+
+    /// An emitter writing to `out` whose moves go to `planner` (see
+    /// [`crate::analyse::planner::Background::fed`]).
+    pub fn with_planner(
+        out: W,
+        recipe: &'a Recipe,
+        planner: crate::analyse::planner::Background,
+    ) -> Emitter<'a, W> {
+        let d = recipe
+            .material
+            .filament_diameter
+            .unwrap_or(recipe.printer.filament_diameter);
+        Emitter {
+            out,
+            printer: &recipe.printer,
+            area: std::f64::consts::PI * (d / 2.0) * (d / 2.0),
+            written: None,
+            written_mm: DVec3::ZERO,
+            head: None,
+            e_exact: 0.0,
+            e_units: 0,
+            retracted: false,
+            feed: -1,
+            feed_mm_s: -1.0 / 60.0,
+            buf: Chunk::new(),
+            line_start: 0,
+            stats: MoveStats {
+                bbox_min: DVec3::splat(f64::INFINITY),
+                bbox_max: DVec3::splat(f64::NEG_INFINITY),
+                ..MoveStats::default()
+            },
+            pending: Pending::default(),
+            thumbnails: String::new(),
+            planner,
+            fan: (recipe.material.fan_speed > 0.0)
+                .then_some((recipe.material.fan_speed, recipe.material.fan_start_z)),
+        }
+    }
+
+    /// Filament cross-section area, mm².
+    pub fn filament_area(&self) -> f64 {
+        self.area
+    }
+
+    /// The placeholders of start and end G-code.
+    pub fn template_values(recipe: &Recipe, top_z: f64) -> BTreeMap<&'static str, String> {
+        let p = &recipe.printer;
+        let m = &recipe.material;
+        let (bx, by) = match p.bed {
+            crate::machine::Bed::Rectangle { size, .. } => (size[0], size[1]),
+            crate::machine::Bed::Circle { .. } => (0.0, 0.0),
+        };
+        let park = (p.to_machine(DVec3::new(0.0, 0.0, top_z)).z + 10.0).min(p.bed.max_z());
+        let mut v = BTreeMap::new();
+        v.insert("nozzle_temp", fmt_num(m.nozzle_temp));
+        v.insert("bed_temp", fmt_num(m.bed_temp));
+        v.insert(
+            "filament_diameter",
+            fmt_num(m.filament_diameter.unwrap_or(p.filament_diameter)),
+        );
+        v.insert("nozzle_diameter", fmt_num(p.nozzle_diameter));
+        // positions as the moves write them: fixed point, 3 decimals
+        v.insert("bed_x", format!("{bx:.3}"));
+        v.insert("bed_y", format!("{by:.3}"));
+        v.insert("max_z", format!("{:.3}", p.bed.max_z()));
+        v.insert("park_z", format!("{park:.3}"));
+        v
+    }
+
+    fn text(&mut self, s: &str) -> io::Result<()> {
+        self.buf.put(s.as_bytes());
+        if !s.ends_with('\n') && !s.is_empty() {
+            self.buf.push(b'\n');
+        }
+        self.hand_on()
+    }
+
+    /// Writes the buffered text to `out` once there is a chunk of it.
+    #[inline]
+    fn hand_on(&mut self) -> io::Result<()> {
+        if self.buf.full() {
+            self.out.write_all(self.buf.bytes())?;
+            self.buf.clear();
+        }
+        Ok(())
+    }
+
+    /// Starts a line with `head`.
+    #[inline]
+    fn begin(&mut self, head: &[u8]) {
+        self.line_start = self.buf.len();
+        self.buf.put(head);
+    }
+
+    /// Header comments, start G-code and the extrusion mode.
+    pub fn start(&mut self, recipe: &Recipe, top_z: f64) -> Result<()> {
+        let vals = Self::template_values(recipe, top_z);
+        let start = self
+            .printer
+            .fill("start_gcode", &self.printer.start_gcode, &vals)?;
+        let io = |e: io::Error| crate::base::error::Error::io_from("output", e.to_string(), &e);
+        let head = format!(
+            "; generated by p3dp {}\n; recipe: {}\n; printer: {} ({:?})\n; material: {}, {} °C nozzle, {} °C bed\n",
+            env!("CARGO_PKG_VERSION"),
+            one_line(&recipe.name),
+            one_line(&self.printer.name),
+            self.printer.flavor,
+            one_line(&recipe.material.name),
+            fmt_num(recipe.material.nozzle_temp),
+            fmt_num(recipe.material.bed_temp),
+        );
+        self.text(&head).map_err(io)?;
+        for (k, v) in &recipe.params {
+            self.text(&format!("; param {} = {}", one_line(k), fmt_num(*v)))
+                .map_err(io)?;
+        }
+        if !self.thumbnails.is_empty() {
+            let t = std::mem::take(&mut self.thumbnails);
+            self.text(&t).map_err(io)?;
+        }
+        if self.printer.arcs {
+            self.text(&format!(
+                "; arcs: G2/G3 within {} mm of the strings ({})",
+                fmt_num(self.printer.arc_tolerance),
+                flavor::arc_note(self.printer.flavor)
+            ))
+            .map_err(io)?;
+        }
+        self.text(&start).map_err(io)?;
+        let mode = match self.printer.extrusion {
+            Extrusion::Absolute => "M82 ; absolute extrusion",
+            Extrusion::Relative => "M83 ; relative extrusion",
+        };
+        self.text(&format!(
+            "G21 ; millimetres\nG90 ; absolute XYZ\n{mode}\nG92 E0"
+        ))
+        .map_err(io)?;
+        Ok(())
+    }
+
+    #[inline]
+    fn set_feed(&mut self, mm_s: f64) {
+        self.set_feed_units(feed_units(mm_s));
+    }
+
+    /// Writes ` F<f>` (mm/min) if the feed changes.
+    #[inline]
+    fn set_feed_units(&mut self, f: i64) {
+        if f != self.feed {
+            self.buf.put(b" F");
+            self.buf.put_int(f);
+            self.feed = f;
+            self.feed_mm_s = f as f64 / 60.0;
+        }
+    }
+
+    fn feed_mm_s(&self) -> f64 {
+        self.feed_mm_s
+    }
+
+    /// The last written machine position, mm (what the firmware plans with).
+    fn written_mm(&self) -> DVec3 {
+        self.written_mm
+    }
+
+    /// Starts a move line; returns whether any axis changed.
+    fn axes(&mut self, g: &[u8], to: DVec3, only: [bool; 3]) -> bool {
+        let m = self.printer.to_machine(to);
+        let u = [units(m.x, XYZ), units(m.y, XYZ), units(m.z, XYZ)];
+        self.begin(g);
+        let mut changed = false;
+        for (k, name) in [b" X", b" Y", b" Z"].iter().enumerate() {
+            if !only[k] {
+                continue;
+            }
+            if self.written.is_none_or(|w| w[k] != u[k]) {
+                self.buf.put(*name);
+                self.buf.put_fixed::<3>(u[k]);
+                changed = true;
+            }
+        }
+        let mut w = self.written.unwrap_or(u);
+        for k in 0..3 {
+            if only[k] {
+                w[k] = u[k];
+            }
+        }
+        self.written = Some(w);
+        self.written_mm = DVec3::new(w[0] as f64, w[1] as f64, w[2] as f64) / XYZ;
+        changed
+    }
+
+    fn end_line(&mut self) -> io::Result<()> {
+        self.buf.push(b'\n');
+        self.hand_on()
+    }
+
+    fn retract(&mut self) -> io::Result<()> {
+        let r = &self.printer.retraction;
+        if r.length <= 0.0 || self.retracted {
+            return Ok(());
+        }
+        let len = units(r.length, E);
+        if self.printer.firmware_retraction {
+            // G10: the firmware's length and speed; E is untouched
+            self.text(flavor::retract(self.printer.flavor))?;
+            self.retracted = true;
+            self.stats.retractions += 1;
+            self.planner.extrude_only(len as f64 / E, r.speed);
+            return Ok(());
+        }
+        self.begin(b"G1 E");
+        match self.printer.extrusion {
+            Extrusion::Absolute => self.buf.put_fixed::<5>(self.e_units - len),
+            Extrusion::Relative => self.buf.put_fixed::<5>(-len),
+        }
+        self.set_feed(r.speed);
+        self.buf.put(b" ; retract");
+        self.end_line()?;
+        self.retracted = true;
+        self.stats.retractions += 1;
+        self.planner.extrude_only(len as f64 / E, self.feed_mm_s());
+        Ok(())
+    }
+
+    #[inline]
+    fn unretract(&mut self) -> io::Result<()> {
+        if !self.retracted {
+            return Ok(());
+        }
+        self.unretract_now()
+    }
+
+    /// Writes the unretraction (see [`Emitter::unretract`]).
+    fn unretract_now(&mut self) -> io::Result<()> {
+        let r = &self.printer.retraction;
+        let len = units(r.length, E);
+        if self.printer.firmware_retraction {
+            self.text(flavor::unretract(self.printer.flavor))?;
+            self.retracted = false;
+            self.planner.extrude_only(len as f64 / E, r.speed);
+            return Ok(());
+        }
+        self.begin(b"G1 E");
+        match self.printer.extrusion {
+            Extrusion::Absolute => self.buf.put_fixed::<5>(self.e_units),
+            Extrusion::Relative => self.buf.put_fixed::<5>(len),
+        }
+        self.set_feed(r.speed);
+        self.buf.put(b" ; unretract");
+        self.end_line()?;
+        self.retracted = false;
+        self.planner.extrude_only(len as f64 / E, self.feed_mm_s());
+        Ok(())
+    }
+
+    /// A straight travel move to `to` (G0), retracting first when it is long.
+    fn travel_line(&mut self, to: DVec3, only: [bool; 3]) -> io::Result<()> {
+        let from = self.head;
+        let mut target = from.unwrap_or(to);
+        for k in 0..3 {
+            if only[k] {
+                target[k] = to[k];
+            }
+        }
+        let dist = from.map_or(0.0, |f| f.distance(target));
+        if from.is_some() && dist >= self.printer.retraction.min_travel {
+            self.retract()?;
+        }
+        let changed = self.axes(b"G0", target, only);
+        if !changed {
+            self.buf.truncate(self.line_start);
+            self.head = Some(target);
+            return Ok(());
+        }
+        let tv = self.travel_feed(from, target, dist);
+        self.set_feed(tv);
+        self.end_line()?;
+        self.stats.travel_moves += 1;
+        self.stats.travel_length += dist;
+        let (to_m, f) = (self.written_mm(), self.feed_mm_s());
+        self.planner
+            .move_to(to_m, 0.0, f, crate::analyse::planner::MoveKind::Travel);
+        self.head = Some(target);
+        Ok(())
+    }
+
+    /// The feed of a travel move from `from` to `to` (`dist` mm apart): the
+    /// profile's `travel_speed`, but no quicker than the Z axis can follow
+    /// (`kinematics.max_z_speed` scaled by L/|dz|, rounded down to a whole
+    /// mm/min), so hops and Z-only moves are written at a feed the firmware
+    /// need not clamp.
+    fn travel_feed(&self, from: Option<DVec3>, to: DVec3, dist: f64) -> f64 {
+        let tv = self.printer.travel_speed;
+        let (Some(f), Some(vz)) = (from, self.printer.kinematics.max_z_speed) else {
+            return tv;
+        };
+        let dz = (to.z - f.z).abs();
+        if dz <= 0.0 {
+            return tv;
+        }
+        let cap = vz * dist / dz;
+        if cap < tv {
+            (libm::floor(cap * 60.0) / 60.0).max(1.0 / 60.0)
+        } else {
+            tv
+        }
+    }
+
+    /// Travel to `to` between parts: up to a safe height (above everything
+    /// printed so far by the head's clearance, see
+    /// [`travel::safe_travel_z`]), across, then down, so the
+    /// head never crosses what is printed; the collision check models the same.
+    pub fn travel_to(&mut self, to: DVec3) -> io::Result<()> {
+        self.flush()?;
+        let Some(h) = self.head else {
+            return self.travel_line(to, [true; 3]);
+        };
+        let top = if self.stats.extrude_moves > 0 {
+            self.stats.bbox_max.z
+        } else {
+            f64::NEG_INFINITY
+        };
+        match crate::machine::travel::safe_travel_z(self.printer, h, to, top) {
+            Some(z) => {
+                self.travel_line(DVec3::new(h.x, h.y, z), [false, false, true])?;
+                self.travel_line(to, [true, true, false])?;
+                self.travel_line(to, [false, false, true])
+            }
+            None => self.travel_line(to, [false, false, true]),
+        }
+    }
+
+    /// The recipe sets the fan itself (a turtle's `fan`): no automatic fan.
+    pub fn manual_fan(&mut self) {
+        self.fan = None;
+    }
+
+    /// Switches the material's fan on before the first extruding move that
+    /// ends above its start height (slicers keep the first layers warm).
+    #[inline]
+    fn fan_on_above(&mut self, to: DVec3) -> io::Result<()> {
+        match self.fan {
+            Some((speed, z)) if to.z > z => {
+                self.fan = None;
+                let line = flavor::fan(self.printer.flavor, speed);
+                self.text(&format!("{line}: above z = {z} mm"))
+            }
+            _ => Ok(()),
+        }
+    }
+
+    /// Adds `filament` mm to the exact E total and writes the E value after
+    /// ` E` in the line: the rounded total (M82) or its step from the last
+    /// written one (M83), so the written values add up to the exact total.
+    fn put_e(&mut self, filament: f64) {
+        self.e_exact += filament;
+        let e_new = units(self.e_exact, E);
+        match self.printer.extrusion {
+            Extrusion::Absolute => self.buf.put_fixed::<5>(e_new),
+            Extrusion::Relative => self.buf.put_fixed::<5>(e_new - self.e_units),
+        }
+        self.e_units = e_new;
+    }
+
+    /// One G1 extruding move to `to` carrying `filament` mm at `v` mm/s.
+    fn extrude_line(&mut self, to: DVec3, filament: f64, v: f64) -> io::Result<()> {
+        self.fan_on_above(to)?;
+        self.unretract()?;
+        let from = self.head.expect("extrusion starts after a travel");
+        // the move's length, feed and time first: their square root and
+        // divisions then run while the line is formatted (the feed is the
+        // one `set_feed_units` leaves, `feed_mm_s` the same division)
+        let feed = feed_units(v);
+        let f = feed as f64 / 60.0;
+        let len = from.distance(to);
+        let t = if len > 0.0 { len / f } else { filament / f };
+        self.axes(b"G1", to, [true; 3]);
+        self.buf.put(b" E");
+        self.put_e(filament);
+        self.set_feed_units(feed);
+        self.end_line()?;
+        let to_m = self.written_mm();
+        self.planner.move_to(
+            to_m,
+            filament,
+            f,
+            crate::analyse::planner::MoveKind::Extrude,
+        );
+        self.count_extrusion(len, filament, t, &[from, to]);
+        self.head = Some(to);
+        Ok(())
+    }
+
+    /// Counts one extruding move in the stats: `len` mm through `points`,
+    /// carrying `filament` mm in `t` s.
+    fn count_extrusion(&mut self, len: f64, filament: f64, t: f64, points: &[DVec3]) {
+        let st = &mut self.stats;
+        st.extrude_moves += 1;
+        st.extrude_length += len;
+        st.filament += filament;
+        st.volume += filament * self.area;
+        if t > 0.0 {
+            st.max_flow = st.max_flow.max(filament * self.area / t);
+        }
+        for p in points {
+            st.bbox_min = st.bbox_min.min(*p);
+            st.bbox_max = st.bbox_max.max(*p);
+        }
+    }
+
+    /// One `G2`/`G3` move along `arc` (see [`crate::base::geom::arc`]), replacing strings
+    /// `arc.start..arc.end` of `tp`: E is their exact filament, the speed the
+    /// one that keeps their time, I J the centre from the written start. The
+    /// planner sees the arc as chords of at most 1 mm, as Marlin
+    /// (MAX_ARC_SEGMENT_MM) and Klipper (`resolution`) split it.
+    fn arc_move(&mut self, tp: &Toolpath, arc: &crate::base::geom::arc::Arc) -> io::Result<()> {
+        self.fan_on_above(tp.points[arc.end])?;
+        self.unretract()?;
+        let (mut filament, mut time) = (0.0, 0.0);
+        for k in arc.start..arc.end {
+            let (len, s) = (tp.length(k), tp.strings[k]);
+            filament += s.c * len / self.area;
+            time += len / s.v;
+        }
+        let len = arc.length();
+        let v = if time > 0.0 {
+            len / time
+        } else {
+            tp.strings[arc.start].v
+        };
+        let start = self.written_mm();
+        let to = tp.points[arc.end];
+        self.axes(if arc.ccw { b"G3" } else { b"G2" }, to, [true; 3]);
+        let c = self.printer.to_machine(arc.center.extend(0.0));
+        self.buf.put(b" I");
+        self.buf.put_fixed::<3>(units(c.x - start.x, XYZ));
+        self.buf.put(b" J");
+        self.buf.put_fixed::<3>(units(c.y - start.y, XYZ));
+        self.buf.put(b" E");
+        self.put_e(filament);
+        self.set_feed(v);
+        self.end_line()?;
+        let f = self.feed_mm_s();
+        let pieces = libm::ceil(len / 1.0).max(1.0) as usize;
+        for i in 1..=pieces {
+            let p = if i == pieces {
+                self.written_mm()
+            } else {
+                let phi = arc.sweep * i as f64 / pieces as f64;
+                self.printer.to_machine(arc.point_at(phi))
+            };
+            let e = filament / pieces as f64;
+            self.planner
+                .move_to(p, e, f, crate::analyse::planner::MoveKind::Extrude);
+        }
+        self.count_extrusion(len, filament, len / f, &tp.points[arc.start..=arc.end]);
+        self.head = Some(to);
+        Ok(())
+    }
+
+    /// Writes what is pending of a run of short strings.
+    fn flush(&mut self) -> io::Result<()> {
+        if self.pending.count == 0 {
+            return Ok(());
+        }
+        let p = std::mem::take(&mut self.pending);
+        let from = self.head.expect("pending strings follow the head");
+        let chord = from.distance(p.end);
+        // same time as the strings: v = chord / Σ(L_i / v_i)
+        let v = if chord > 0.0 && p.time > 0.0 {
+            chord / p.time
+        } else {
+            p.v_last
+        };
+        if p.count > 1 {
+            self.stats.merged_strings += p.count;
+        }
+        self.extrude_line(p.end, p.filament, v)
+    }
+
+    /// Writes an event between strings (see [`Event`]): a dialect command,
+    /// a retraction, or filament fed in place.
+    fn event(&mut self, e: &Event) -> io::Result<()> {
+        self.flush()?;
+        match *e {
+            Event::Retract => self.retract(),
+            Event::Extrude { filament, speed } => self.extrude_in_place(filament, speed),
+            _ => {
+                if let Event::Fan { .. } = e {
+                    self.fan = None; // the recipe sets the fan itself from here on
+                }
+                // the head stops for these; a dwell also takes its time
+                match *e {
+                    Event::Dwell { ms } => self.planner.dwell(ms.max(0.0) / 1000.0),
+                    Event::Pause
+                    | Event::NozzleTemp { wait: true, .. }
+                    | Event::BedTemp { wait: true, .. } => self.planner.stop(),
+                    _ => {}
+                }
+                let line =
+                    flavor::event_line(self.printer.flavor, e).expect("moves are handled above");
+                self.text(&line)
+            }
+        }
+    }
+
+    /// `G1 E… F…`: feeds `filament` mm at `speed` mm/s without moving.
+    fn extrude_in_place(&mut self, filament: f64, speed: f64) -> io::Result<()> {
+        if filament <= 0.0 {
+            return Ok(());
+        }
+        self.unretract()?;
+        self.begin(b"G1 E");
+        self.put_e(filament);
+        self.set_feed(speed);
+        self.buf.put(b" ; extrude in place");
+        self.end_line()?;
+        let st = &mut self.stats;
+        st.filament += filament;
+        st.volume += filament * self.area;
+        let f = self.feed_mm_s();
+        self.planner.extrude_only(filament, f);
+        Ok(())
+    }
+
+    /// Writes one part: a comment, a travel to its start, then its strings.
+    pub fn part(&mut self, tp: &Toolpath) -> io::Result<()> {
+        self.planner.begin_part(&tp.name);
+        let comment = format!("; part: {} ({} strings)", one_line(&tp.name), tp.len());
+        self.flush()?;
+        self.text(&comment)?;
+        self.travel_to(tp.points[0])?;
+        let min = self.printer.min_string_length;
+        let mut events = tp.events.iter().peekable();
+        let arcs = if self.printer.arcs {
+            let fw = flavor::arc_firmware(self.printer.flavor);
+            crate::base::geom::arc::fit_part(tp, self.printer.arc_tolerance, fw)
+        } else {
+            Vec::new()
+        };
+        let mut arcs = arcs.iter().peekable();
+        let mut skip_to = 0;
+        for k in 0..tp.len() {
+            if k < skip_to {
+                continue;
+            }
+            while let Some((_, e)) = events.next_if(|(at, _)| *at <= k) {
+                self.event(e)?;
+            }
+            if let Some(a) = arcs.next_if(|a| a.start == k) {
+                self.flush()?;
+                self.arc_move(tp, a)?;
+                skip_to = a.end;
+                continue;
+            }
+            let s = tp.strings[k];
+            let (a, b) = tp.ends(k);
+            if s.travel {
+                self.flush()?;
+                self.travel_line(b, [true; 3])?;
+                continue;
+            }
+            let len = a.distance(b);
+            let filament = s.c * len / self.area;
+            if len >= min && self.pending.count == 0 {
+                self.extrude_line(b, filament, s.v)?;
+                continue;
+            }
+            if len >= min {
+                self.flush()?;
+                self.extrude_line(b, filament, s.v)?;
+                continue;
+            }
+            let p = &mut self.pending;
+            p.count += 1;
+            p.end = b;
+            p.path += len;
+            p.filament += filament;
+            p.time += len / s.v;
+            p.v_last = s.v;
+            if p.path >= min {
+                self.flush()?;
+            }
+        }
+        self.flush()?;
+        for (_, e) in events {
+            self.event(e)?;
+        }
+        Ok(())
+    }
+
+    /// End G-code and the summary comments slicers write.
+    pub fn finish(mut self, recipe: &Recipe, top_z: f64) -> Result<(W, MoveStats)> {
+        let io = |e: io::Error| crate::base::error::Error::io_from("output", e.to_string(), &e);
+        self.flush().map_err(io)?;
+        let vals = Self::template_values(recipe, top_z);
+        let end = self
+            .printer
+            .fill("end_gcode", &self.printer.end_gcode, &vals)?;
+        self.text(&end).map_err(io)?;
+        // the planner needs the whole print: times are known only now
+        let limits = self.planner.limits().clone();
+        let est = self.planner.finish();
+        self.stats.time = est.total.planned;
+        let st = &self.stats;
+        let grams = st.volume / 1000.0 * recipe.material.density;
+        let mut summary = format!(
+            "; filament used [mm] = {:.2}\n; filament used [cm3] = {:.2}\n; filament used [g] = {:.2}\n; estimated printing time = {}\n",
+            st.filament,
+            st.volume / 1000.0,
+            grams,
+            hms(st.time)
+        );
+        for p in &est.parts {
+            summary.push_str(&format!(
+                "; estimated time part {} = {}\n",
+                one_line(&p.name),
+                hms(p.times.planned)
+            ));
+        }
+        summary.push_str(&format!(
+            "; time at the G-code's speeds (distance / speed) = {}\n; time lost to acceleration and corners = {}\n; time lost to speed limits = {}\n; planner: {}\n",
+            hms(est.total.ideal),
+            hms(est.total.lost_to_acceleration()),
+            hms(est.total.lost_to_speed_limits()),
+            limits.describe()
+        ));
+        self.stats.estimate = est;
+        self.text(&summary).map_err(io)?;
+        self.out.write_all(self.buf.bytes()).map_err(io)?;
+        self.buf.clear();
+        self.out.flush().map_err(io)?;
+        Ok((self.out, self.stats))
+    }
+}

@@ -1,0 +1,216 @@
+//! Lock files: recipes pinned to the hash of their G-code, for CI.
+//!
+//! `p3dp hash --lock p3dp.lock RECIPE…` records each recipe (path relative to
+//! the lock file), its `--set` values, the `--printer` it was built for, and
+//! the SHA-256 of its G-code, with a
+//! fingerprint of the G-code's lines: the hashes of at most 512 consecutive
+//! blocks of lines (one line per block when the output is that short).
+//! `p3dp hash --check p3dp.lock` rebuilds every entry and, for each that
+//! changed, names the first differing block and shows its first new line.
+
+use std::io::{self, Write};
+
+use serde::{Deserialize, Serialize};
+
+use crate::base::error::{Error, Result};
+
+/// The lock file.
+#[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Lock {
+    /// Format version: 1.
+    pub p3dp_lock: u32,
+    /// One entry per recipe and parameter set.
+    pub entries: Vec<Entry>,
+}
+
+/// One locked build.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Entry {
+    /// Recipe path, relative to the lock file, `/`-separated.
+    pub recipe: String,
+    /// `--set` values, `NAME=VALUE`, in order.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub set: Vec<String>,
+    /// The `--printer` it was built for: a built-in name, or a profile file
+    /// relative to the lock file, `/`-separated; the recipe's own when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub printer: Option<String>,
+    /// SHA-256 of the G-code.
+    pub sha256: String,
+    /// Lines of G-code.
+    pub lines: u64,
+    /// Lines per block of the fingerprint.
+    pub block_lines: u64,
+    /// Hash of each block, 8 hex digits each, space-separated.
+    pub blocks: String,
+}
+
+/// Most lines a locked G-code may have: far more than any build writes,
+/// few enough that no block arithmetic overflows.
+pub const MAX_LINES: u64 = 1 << 40;
+
+impl Lock {
+    /// Refuses what `hash --check` cannot use, naming the key: another
+    /// version, no entries, a hash that is not 64 hex digits, blocks that do
+    /// not fit the line count.
+    pub fn validate(&self) -> Result<()> {
+        if self.p3dp_lock != 1 {
+            return Err(Error::input(
+                "p3dp_lock",
+                format!(
+                    "lock format version {} is not known; expected 1",
+                    self.p3dp_lock
+                ),
+            ));
+        }
+        if self.entries.is_empty() {
+            return Err(Error::input(
+                "entries",
+                "no entries: a lock without recipes checks nothing; expected at least one (write it with `p3dp hash --lock FILE RECIPE…`)",
+            ));
+        }
+        for (k, e) in self.entries.iter().enumerate() {
+            let place = |key: &str| format!("entries[{k}].{key}");
+            if e.recipe.trim().is_empty() {
+                return Err(Error::input(place("recipe"), "expected a recipe path"));
+            }
+            let hex = |s: &str| {
+                s.bytes()
+                    .all(|b| b.is_ascii_digit() || (b'a'..=b'f').contains(&b))
+            };
+            if e.sha256.len() != 64 || !hex(&e.sha256) {
+                return Err(Error::input(
+                    place("sha256"),
+                    "expected a SHA-256: 64 lowercase hex digits",
+                ));
+            }
+            if e.lines > MAX_LINES {
+                return Err(Error::input(
+                    place("lines"),
+                    format!("{} lines; expected at most {MAX_LINES}", e.lines),
+                ));
+            }
+            let b = LineHashes::block_lines(e.lines);
+            if e.block_lines != b {
+                return Err(Error::input(
+                    place("block_lines"),
+                    format!(
+                        "{} is not allowed; {} lines make blocks of {b} lines",
+                        e.block_lines, e.lines
+                    ),
+                ));
+            }
+            let words: Vec<&str> = e.blocks.split_whitespace().collect();
+            if words.len() as u64 > MAX_BLOCKS || words.iter().any(|w| w.len() != 8 || !hex(w)) {
+                return Err(Error::input(
+                    place("blocks"),
+                    format!("expected at most {MAX_BLOCKS} block hashes of 8 lowercase hex digits"),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Most blocks one fingerprint has.
+pub const MAX_BLOCKS: u64 = 512;
+
+/// A writer that keeps a 64-bit FNV-1a hash of every line passing through.
+#[derive(Default)]
+pub struct LineHashes {
+    /// Hash of each complete line.
+    pub lines: Vec<u64>,
+    current: u64,
+    open: bool,
+}
+
+const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
+const FNV_PRIME: u64 = 0x0000_0100_0000_01b3;
+
+impl Write for LineHashes {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        for &b in buf {
+            if !self.open {
+                self.current = FNV_OFFSET;
+                self.open = true;
+            }
+            self.current = (self.current ^ b as u64).wrapping_mul(FNV_PRIME);
+            if b == b'\n' {
+                self.lines.push(self.current);
+                self.open = false;
+            }
+        }
+        Ok(buf.len())
+    }
+    fn flush(&mut self) -> io::Result<()> {
+        Ok(())
+    }
+}
+
+impl LineHashes {
+    /// Lines per block for `n` lines so that there are at most [`MAX_BLOCKS`].
+    pub fn block_lines(n: u64) -> u64 {
+        n.div_ceil(MAX_BLOCKS).max(1)
+    }
+
+    /// Block hashes for blocks of `b` lines (a last partial line counts as a line).
+    pub fn blocks(&self, b: u64) -> Vec<String> {
+        let mut lines = self.lines.clone();
+        if self.open {
+            lines.push(self.current);
+        }
+        lines
+            .chunks(b as usize)
+            .map(|c| {
+                let mut h = FNV_OFFSET;
+                for l in c {
+                    for byte in l.to_le_bytes() {
+                        h = (h ^ byte as u64).wrapping_mul(FNV_PRIME);
+                    }
+                }
+                format!("{:08x}", (h ^ (h >> 32)) as u32)
+            })
+            .collect()
+    }
+
+    /// Number of lines, a last partial line included.
+    pub fn count(&self) -> u64 {
+        self.lines.len() as u64 + self.open as u64
+    }
+}
+
+/// Index of the first block that differs, or `None` when all shared blocks agree.
+pub fn first_difference(old: &str, new: &[String]) -> Option<usize> {
+    let old: Vec<&str> = old.split_whitespace().collect();
+    let shared = old.len().min(new.len());
+    (0..shared)
+        .find(|&k| old[k] != new[k])
+        .or((old.len() != new.len()).then_some(shared))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fingerprint_finds_the_changed_block() {
+        let text_a: String = (0..1000).map(|k| format!("G1 X{k}\n")).collect();
+        let text_b = text_a.replace("G1 X700\n", "G1 X700.5\n");
+        let mut a = LineHashes::default();
+        a.write_all(text_a.as_bytes()).unwrap();
+        let mut b = LineHashes::default();
+        // written in odd pieces: lines still split right
+        for chunk in text_b.as_bytes().chunks(7) {
+            b.write_all(chunk).unwrap();
+        }
+        assert_eq!(a.count(), 1000);
+        let bl = LineHashes::block_lines(1000);
+        assert_eq!(bl, 2);
+        let old = a.blocks(bl).join(" ");
+        let k = first_difference(&old, &b.blocks(bl)).unwrap();
+        assert_eq!(k, 350); // lines 700 and 701 (0-based)
+        assert_eq!(first_difference(&old, &a.blocks(bl)), None);
+    }
+}

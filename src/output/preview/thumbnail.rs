@@ -1,0 +1,213 @@
+//! G-code thumbnails, in the form PrusaSlicer writes and Prusa and Creality
+//! printers (and OctoPrint, Moonraker…) read: after the header comments, per
+//! size asked for by the printer profile's `thumbnails: ["220x124", "16x16"]`,
+//!
+//! ```text
+//! ; thumbnail begin 220x124 LEN
+//! ; iVBORw0KGgo…            (base64 of a PNG, lines of at most 78 characters)
+//! ; thumbnail end
+//! ;
+//! ```
+//!
+//! with LEN the length of the base64 text. The image is the iso view of the
+//! model in filament colour on a transparent background; it is rendered from
+//! the plan, so the G-code stays a function of the recipe (and its hash
+//! deterministic).
+
+use base64::Engine;
+
+use super::{png, Scene, Size};
+use crate::analyse::plan::Plan;
+use crate::base::error::Result;
+use crate::machine::size::sizes;
+
+/// Characters of base64 per comment line (PrusaSlicer's).
+pub const LINE: usize = 78;
+
+/// One thumbnail block for a PNG of `size`.
+pub fn block(size: Size, png: &[u8]) -> String {
+    let b64 = base64::engine::general_purpose::STANDARD.encode(png);
+    let mut s = format!(
+        "; thumbnail begin {}x{} {}\n",
+        size.width,
+        size.height,
+        b64.len()
+    );
+    for chunk in b64.as_bytes().chunks(LINE) {
+        s.push_str("; ");
+        s.push_str(std::str::from_utf8(chunk).expect("base64 is ASCII"));
+        s.push('\n');
+    }
+    s.push_str("; thumbnail end\n;\n");
+    s
+}
+
+/// The thumbnail blocks `plan`'s printer asks for (empty when none).
+pub fn blocks(plan: &Plan) -> Result<String> {
+    let list = &plan.recipe.printer.thumbnails;
+    if list.is_empty() {
+        return Ok(String::new());
+    }
+    let sizes = sizes(list).map_err(|e| e.in_file(&plan.recipe.printer.name))?;
+    let scene = Scene::new(plan);
+    let mut out = String::new();
+    for size in sizes {
+        let pm = png::thumbnail(&scene, size);
+        out.push_str(&block(size, &png::encode(&pm, true)));
+    }
+    Ok(out)
+}
+
+/// A thumbnail read back from G-code.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Thumbnail {
+    /// Width named in the block header, pixels.
+    pub width: u32,
+    /// Height named in the block header, pixels.
+    pub height: u32,
+    /// The decoded PNG bytes.
+    pub png: Vec<u8>,
+}
+
+/// Why thumbnail blocks could not be read back: `line N: message`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ThumbnailError {
+    /// The 1-based line at fault (`None`: the end of the G-code).
+    pub line: Option<usize>,
+    /// What is wrong there.
+    pub message: String,
+}
+
+impl std::fmt::Display for ThumbnailError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if let Some(l) = self.line {
+            write!(f, "line {l}: ")?;
+        }
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for ThumbnailError {}
+
+/// Reads every thumbnail block of `gcode` back, checking what printers rely
+/// on: LEN is the length of the base64 text, data lines are `; ` comments of
+/// at most [`LINE`] characters, and every block is closed.
+pub fn parse(gcode: &str) -> std::result::Result<Vec<Thumbnail>, ThumbnailError> {
+    let bad = |line: usize, message: String| ThumbnailError {
+        line: Some(line),
+        message,
+    };
+    let mut out = Vec::new();
+    let mut cur: Option<(u32, u32, usize, String)> = None;
+    for (k, line) in gcode.lines().enumerate() {
+        let at = k + 1;
+        if let Some(rest) = line.strip_prefix("; thumbnail begin ") {
+            let header = || bad(at, "expected `; thumbnail begin WxH LEN`".into());
+            let (wh, len) = rest.split_once(' ').ok_or_else(header)?;
+            let (w, h) = wh.split_once('x').ok_or_else(header)?;
+            let num = |t: &str| t.parse::<u32>().map_err(|_| header());
+            let len = len.parse::<usize>().map_err(|_| header())?;
+            if cur.is_some() {
+                return Err(bad(at, "a block begins inside another".into()));
+            }
+            cur = Some((num(w)?, num(h)?, len, String::new()));
+        } else if line == "; thumbnail end" {
+            let (width, height, len, b64) = cur
+                .take()
+                .ok_or_else(|| bad(at, "an end without a begin".into()))?;
+            if b64.len() != len {
+                return Err(bad(
+                    at,
+                    format!(
+                        "the block holds {} base64 characters, its header says {len}",
+                        b64.len()
+                    ),
+                ));
+            }
+            let png = base64::engine::general_purpose::STANDARD
+                .decode(b64)
+                .map_err(|e| bad(at, format!("not base64: {e}")))?;
+            out.push(Thumbnail { width, height, png });
+        } else if let Some((.., b64)) = cur.as_mut() {
+            let data = line
+                .strip_prefix("; ")
+                .ok_or_else(|| bad(at, "a data line is not a `; ` comment".into()))?;
+            if data.len() > LINE {
+                return Err(bad(
+                    at,
+                    format!("{} characters of base64, more than {LINE}", data.len()),
+                ));
+            }
+            b64.push_str(data);
+        }
+    }
+    match cur {
+        Some(_) => Err(ThumbnailError {
+            line: None,
+            message: "a thumbnail block is not closed".into(),
+        }),
+        None => Ok(out),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn blocks_read_back_as_pngs_of_their_size() {
+        let size = Size {
+            width: 40,
+            height: 30,
+        };
+        let pm = tiny_skia::Pixmap::new(40, 30).unwrap();
+        let text = block(size, &png::encode(&pm, true));
+        assert!(text.starts_with("; thumbnail begin 40x30 "));
+        assert!(text.lines().all(|l| l.len() <= 2 + LINE));
+        let got = parse(&text).unwrap();
+        assert_eq!(got.len(), 1);
+        assert_eq!((got[0].width, got[0].height), (40, 30));
+        let img = image::load_from_memory(&got[0].png).unwrap();
+        assert_eq!((img.width(), img.height()), (40, 30));
+    }
+
+    #[test]
+    fn parse_refuses_broken_blocks() {
+        let size = Size {
+            width: 8,
+            height: 8,
+        };
+        let pm = tiny_skia::Pixmap::new(8, 8).unwrap();
+        let good = block(size, &png::encode(&pm, true));
+        let len = good
+            .lines()
+            .next()
+            .unwrap()
+            .rsplit(' ')
+            .next()
+            .unwrap()
+            .to_string();
+        let wrong_len = good.replacen(&format!(" {len}\n"), " 3\n", 1);
+        assert!(parse(&wrong_len)
+            .unwrap_err()
+            .to_string()
+            .contains("header says 3"));
+        let unclosed = good.replace("; thumbnail end\n;\n", "");
+        assert_eq!(parse(&unclosed).unwrap_err().line, None);
+        let long = format!(
+            "; thumbnail begin 1x1 80\n; {}\n; thumbnail end\n",
+            "A".repeat(80)
+        );
+        assert!(parse(&long)
+            .unwrap_err()
+            .to_string()
+            .contains("more than 78"));
+    }
+
+    #[test]
+    fn sizes_name_the_bad_entry() {
+        let e = sizes(&["16x16".into(), "big".into()]).unwrap_err();
+        assert!(e.to_string().contains("thumbnails[1]"), "{e}");
+        assert_eq!(sizes(&["220x124".into()]).unwrap()[0].height, 124);
+    }
+}
