@@ -16,6 +16,7 @@ const LAYERS: &[(&str, &[&str])] = &[
             "safe_text",
             "input",
             "mem",
+            "par",
             "threads",
             "toolpath",
             "expr",

@@ -10,6 +10,7 @@ pub mod geom;
 pub mod input;
 pub mod mem;
 pub mod num;
+pub mod par;
 pub mod rng;
 pub mod safe_text;
 pub mod svg;
