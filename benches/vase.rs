@@ -16,7 +16,7 @@
 use std::path::Path;
 use std::time::Instant;
 
-use p3dp::base::threads::Threads;
+use p3dp::app::pipeline::{self, Threads};
 
 fn peak_rss_mb() -> Option<f64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
@@ -34,22 +34,21 @@ fn main() {
     let recipe = Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/vase-2m.yaml");
     let out = std::env::temp_dir().join(format!("p3dp-bench-vase-{}.gcode", std::process::id()));
     let threads = Threads::available();
-    let opts = p3dp::app::build::Options {
-        threads,
-        ..Default::default()
-    };
+    let opts = p3dp::app::prepare::Options::default();
     let runs = 5;
     let mut times = Vec::new();
     let mut hashes = Vec::new();
     let mut strings = 0;
     for _ in 0..runs {
         let t0 = Instant::now();
-        let mut plan = p3dp::app::build::prepare(&recipe, &opts).expect("plan");
-        strings = plan.paths.iter().map(|p| p.len()).sum::<usize>();
-        let file = std::fs::File::create(&out).expect("temp file");
-        let stats = plan.check_and_render(&[], file).expect("render");
-        assert!(plan.failing(false).is_empty(), "the vase passes its checks");
-        drop(plan);
+        let stats = pipeline::run(threads, || {
+            let mut plan = p3dp::app::prepare::prepare(&recipe, &opts).expect("plan");
+            strings = plan.paths.iter().map(|p| p.len()).sum::<usize>();
+            let file = std::fs::File::create(&out).expect("temp file");
+            let stats = pipeline::check_and_render(&mut plan, &[], None, file).expect("render");
+            assert!(plan.failing(false).is_empty(), "the vase passes its checks");
+            stats
+        });
         times.push(t0.elapsed().as_secs_f64());
         hashes.push(stats.gcode_sha256);
     }
@@ -69,23 +68,23 @@ fn main() {
     println!("  wall: min {min:.3} s, median {med:.3} s (target ≤ 0.36 s through the CLI)");
     println!("  peak resident memory: {peak} (target ≤ 200 MB)");
     println!("  sha256 {}", hashes[0]);
-    stages(&recipe, &opts, runs);
+    pipeline::run(threads, || stages(&recipe, &opts, runs));
     checks_against_generation(&recipe, runs);
 }
 
 /// Each stage alone, median of `runs`: making the strings, the checks, and
 /// writing the G-code (hashed, to a sink, planner beside it) after them.
-fn stages(path: &Path, opts: &p3dp::app::build::Options, runs: usize) {
+fn stages(path: &Path, opts: &p3dp::app::prepare::Options, runs: usize) {
     let (mut make, mut check, mut write) = (Vec::new(), Vec::new(), Vec::new());
     for _ in 0..runs {
         let t0 = Instant::now();
-        let mut plan = p3dp::app::build::prepare(path, opts).expect("plan");
+        let mut plan = p3dp::app::prepare::prepare(path, opts).expect("plan");
         make.push(t0.elapsed().as_secs_f64());
         let t1 = Instant::now();
-        plan.check(&[]);
+        pipeline::check(&mut plan, &[]);
         check.push(t1.elapsed().as_secs_f64());
         let t2 = Instant::now();
-        plan.render(std::io::sink()).expect("render");
+        pipeline::render(&plan, std::io::sink()).expect("render");
         write.push(t2.elapsed().as_secs_f64());
     }
     let (m, c, w) = (median(&mut make), median(&mut check), median(&mut write));
@@ -103,15 +102,14 @@ fn checks_against_generation(path: &Path, runs: usize) {
     let mut found = 0;
     for _ in 0..runs {
         let t0 = Instant::now();
-        let part = p3dp::app::build::make_part(&recipe, 0, Threads::available()).expect("part");
+        let part = p3dp::generate::model::make_part(&recipe, 0).expect("part");
         gen.push(t0.elapsed().as_secs_f64());
         let refs = [&part];
-        let mut out = Vec::new();
         let t1 = Instant::now();
-        p3dp::analyse::check::support::check(&recipe, &refs, &|| {}, &mut out);
+        let mut out = p3dp::analyse::check::support::check(&recipe, &refs);
         sup.push(t1.elapsed().as_secs_f64());
         let t2 = Instant::now();
-        p3dp::analyse::check::collision::check(&recipe, &refs, &|| {}, &mut out);
+        out.extend(p3dp::analyse::check::collision::check(&recipe, &refs));
         col.push(t2.elapsed().as_secs_f64());
         found = out.len();
     }

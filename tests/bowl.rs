@@ -10,7 +10,6 @@
 mod common;
 
 use common::*;
-use p3dp::base::threads::Threads;
 use p3dp::generate::step::Bitmap;
 use p3dp::recipe::Recipe;
 
@@ -19,9 +18,9 @@ const TEXT: &str = "PROCEDURAL 3D PRINTING  ";
 fn letter_strings() -> (p3dp::base::toolpath::Toolpath, Vec<bool>, f64) {
     let mut recipe = Recipe::load(&recipe("bowl.yaml"), &[], None).unwrap();
     let repeat = recipe.params["repeat"];
-    let fin = p3dp::app::build::make_part(&recipe, 0, Threads::available()).unwrap();
+    let fin = p3dp::generate::model::make_part(&recipe, 0).unwrap();
     assert_eq!(recipe.parts[0].steps.pop().unwrap().key(), "modulate_map");
-    let base = p3dp::app::build::make_part(&recipe, 0, Threads::available()).unwrap();
+    let base = p3dp::generate::model::make_part(&recipe, 0).unwrap();
     let letter = fin
         .strings
         .iter()
@@ -93,7 +92,7 @@ fn letters_only_in_the_band_and_read_from_outside_once_turned_over() {
 
 #[test]
 fn dome_is_a_half_sphere_on_the_bed_and_the_stand_sits_on_it() {
-    let plan = p3dp::app::build::plan(&recipe("bowl.yaml"), &Default::default()).unwrap();
+    let plan = p3dp::app::prepare::plan(&recipe("bowl.yaml"), &Default::default()).unwrap();
     assert!(plan.failing(false).is_empty(), "{:?}", plan.findings);
     let dome = plan.paths.iter().find(|t| t.name == "dome").unwrap();
     for p in &dome.points {

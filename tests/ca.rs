@@ -8,8 +8,7 @@ mod common;
 use std::path::Path;
 
 use common::{p3dp, parse, recipe, tmp};
-use p3dp::app::build::make_part;
-use p3dp::base::threads::Threads;
+use p3dp::generate::model::make_part;
 use p3dp::generate::primitive::ca::{Automaton, CaHelix, Initial, Layout, Pattern, Rule};
 use p3dp::generate::primitive::{PatternHelix, Primitive};
 use p3dp::recipe::Recipe;
@@ -373,7 +372,7 @@ fn pattern_helix_is_constant_after_the_first_turn() {
         ..
     } = p;
     let seg = segments as usize;
-    let t = make_part(&r, 0, Threads::available()).unwrap();
+    let t = make_part(&r, 0).unwrap();
     assert_eq!(t.len(), layers as usize * seg);
     let first = t.strings[0];
     let after = t.strings[seg];

@@ -10,7 +10,6 @@ use std::path::PathBuf;
 use common::linking_by_gauss;
 use glam::DVec3;
 use p3dp::analyse::check::{self, Severity};
-use p3dp::base::threads::Threads;
 use p3dp::base::toolpath::Toolpath;
 use p3dp::generate::assembly::make_parts;
 use p3dp::recipe::Recipe;
@@ -39,7 +38,7 @@ fn param(recipe: &Recipe, name: &str) -> f64 {
 
 /// The recipe's only part, with its steps.
 fn only_part(recipe: &Recipe) -> Toolpath {
-    let mut parts = make_parts(recipe, Threads::available()).unwrap();
+    let mut parts = make_parts(recipe).unwrap();
     assert_eq!(parts.len(), 1);
     parts.swap_remove(0)
 }
@@ -47,7 +46,7 @@ fn only_part(recipe: &Recipe) -> Toolpath {
 /// The codes of the findings of `tp` (as the only part of `recipe`) that are
 /// warnings or errors.
 fn codes(recipe: &Recipe, tp: &Toolpath) -> Vec<&'static str> {
-    let (f, _) = check::run(recipe, &[tp], &[], Threads::available());
+    let (f, _) = check::run(recipe, &[tp], &[]);
     f.iter()
         .filter(|f| f.severity != Severity::Info)
         .map(|f| f.code)
@@ -213,7 +212,7 @@ fn length_at(tp: &Toolpath, z: f64) -> f64 {
 #[test]
 fn filled_shapes_fill_their_area_and_stay_inside_it() {
     let r = load("filled-shapes.yaml");
-    let parts = make_parts(&r, Threads::available()).unwrap();
+    let parts = make_parts(&r).unwrap();
     let (h, fill, sparse, cube, apothem) = (
         param(&r, "layer_height"),
         param(&r, "fill"),
@@ -424,7 +423,7 @@ fn chain_mail_links_interlock_with_their_neighbours_only_and_never_touch() {
 #[test]
 fn flexible_circles_have_a_pillar_per_side_in_every_layer_and_differ_by_rate() {
     let r = load("flexible-circles.yaml");
-    let parts = make_parts(&r, Threads::available()).unwrap();
+    let parts = make_parts(&r).unwrap();
     let (segments, poke, radius, h) = (
         param(&r, "segments") as usize,
         param(&r, "poke"),

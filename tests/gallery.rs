@@ -7,8 +7,7 @@ use std::path::PathBuf;
 
 use glam::DVec3;
 use p3dp::analyse::check::Severity;
-use p3dp::app::build::plan;
-use p3dp::base::threads::Threads;
+use p3dp::app::prepare::plan;
 use p3dp::base::toolpath::{polar, Toolpath};
 use p3dp::generate::assembly::make_parts;
 use p3dp::recipe::Recipe;
@@ -74,7 +73,7 @@ fn part(recipe: &Recipe, name: &str) -> Toolpath {
         p.brim = None;
         p.stand = None;
     }
-    make_parts(&r, Threads::available()).unwrap().swap_remove(k)
+    make_parts(&r).unwrap().swap_remove(k)
 }
 
 /// Part `name` with only its first `steps` steps (0: the bare primitives).
@@ -83,7 +82,7 @@ fn part_upto(recipe: &Recipe, name: &str, steps: usize) -> Toolpath {
     let mut r = recipe.clone();
     assert!(steps <= r.parts[k].steps.len() && r.groups.is_empty());
     r.parts[k].steps.truncate(steps);
-    make_parts(&r, Threads::available()).unwrap().swap_remove(k)
+    make_parts(&r).unwrap().swap_remove(k)
 }
 
 /// Part `name` as its primitives make it, before any step.
@@ -92,7 +91,7 @@ fn undeformed(recipe: &Recipe, name: &str) -> Toolpath {
     let mut r = recipe.clone();
     r.groups.clear();
     r.parts[k].steps.clear();
-    make_parts(&r, Threads::available()).unwrap().swap_remove(k)
+    make_parts(&r).unwrap().swap_remove(k)
 }
 
 /// The strings of a part's first primitive and those of the rest (for a

@@ -7,7 +7,6 @@
 mod common;
 
 use common::*;
-use p3dp::base::threads::Threads;
 use p3dp::base::toolpath::Toolpath;
 use p3dp::recipe::Recipe;
 
@@ -24,10 +23,10 @@ struct Globe {
 
 fn globe() -> Globe {
     let mut recipe = Recipe::load(&recipe("globe.yaml"), &[], None).unwrap();
-    let fin = p3dp::app::build::make_part(&recipe, 0, Threads::available()).unwrap();
+    let fin = p3dp::generate::model::make_part(&recipe, 0).unwrap();
     let last = recipe.parts[0].steps.pop().unwrap();
     assert_eq!(last.key(), "modulate_map");
-    let base = p3dp::app::build::make_part(&recipe, 0, Threads::available()).unwrap();
+    let base = p3dp::generate::model::make_part(&recipe, 0).unwrap();
     assert_eq!(fin.points, base.points, "modulation must not move points");
     let factor = fin
         .strings

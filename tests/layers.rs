@@ -17,7 +17,6 @@ const LAYERS: &[(&str, &[&str])] = &[
             "input",
             "mem",
             "par",
-            "threads",
             "toolpath",
             "expr",
             "num",
@@ -52,7 +51,15 @@ const LAYERS: &[(&str, &[&str])] = &[
     ),
     (
         "app",
-        &["prepare", "build", "batch", "diagnostic", "watch", "cli"],
+        &[
+            "pipeline",
+            "prepare",
+            "batch",
+            "diagnostic",
+            "watch",
+            "command",
+            "cli",
+        ],
     ),
 ];
 

@@ -9,7 +9,7 @@ use std::path::PathBuf;
 
 use common::{p3dp, recipe, root, tmp, Move};
 use glam::DVec3;
-use p3dp::app::build::{plan, Options};
+use p3dp::app::prepare::{plan, Options};
 use p3dp::base::toolpath::{Event, Toolpath};
 use p3dp::machine::{Bed, Printer};
 use p3dp::recipe::profile::built_in_names;
@@ -475,7 +475,7 @@ fn events_and_firmware_retraction_in_each_dialect() {
         tp.event(Event::Fan { speed: 0.0 });
         tp.name = "events".into();
         pl.paths = vec![tp];
-        let (bytes, _) = pl.write_gcode(Vec::new()).unwrap();
+        let (bytes, _) = p3dp::app::pipeline::write(&pl, Vec::new()).unwrap();
         let text = String::from_utf8(bytes).unwrap();
         check_dialect(&text, pl.recipe.printer.flavor.name());
         for want in [pause, heat, fan] {
@@ -550,8 +550,8 @@ fn arcs_follow_the_strings(recipe_name: &str, profile: &str) -> (usize, usize) {
     };
     let mut plain = arcs.clone();
     plain.recipe.printer = plain_printer;
-    let (a_bytes, a_stats) = arcs.write_gcode(Vec::new()).unwrap();
-    let (p_bytes, p_stats) = plain.write_gcode(Vec::new()).unwrap();
+    let (a_bytes, a_stats) = p3dp::app::pipeline::write(&arcs, Vec::new()).unwrap();
+    let (p_bytes, p_stats) = p3dp::app::pipeline::write(&plain, Vec::new()).unwrap();
     let (a_text, p_text) = (
         String::from_utf8(a_bytes).unwrap(),
         String::from_utf8(p_bytes).unwrap(),

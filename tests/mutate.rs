@@ -18,7 +18,7 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 
 use common::*;
-use p3dp::app::build::{plan, Options};
+use p3dp::app::prepare::{plan, Options};
 use p3dp::recipe::Recipe;
 
 /// xorshift64*: a small seeded generator, so a failure can be replayed.
@@ -207,7 +207,7 @@ fn try_mutant(path: &Path, build: bool) -> Result<Option<p3dp::Error>, String> {
             } else {
                 let built = catch_unwind(AssertUnwindSafe(|| {
                     plan(path, &Options::default())
-                        .and_then(|p| p.render(std::io::sink()).map(|_| ()))
+                        .and_then(|p| p3dp::app::pipeline::render(&p, std::io::sink()).map(|_| ()))
                 }))
                 .map_err(|_| "panicked while building".to_string())?;
                 built.err()

@@ -16,7 +16,7 @@ use std::f64::consts::PI;
 use common::*;
 use glam::{DVec2, DVec3};
 use p3dp::analyse::check::Severity;
-use p3dp::app::build::Plan;
+use p3dp::analyse::plan::Plan;
 
 /// Nozzle width of generic-220, mm.
 const NOZZLE: f64 = 0.4;
@@ -201,14 +201,14 @@ struct Pieces {
 }
 
 fn load(sets: &[(&str, &str)]) -> Pieces {
-    let opts = p3dp::app::build::Options {
+    let opts = p3dp::app::prepare::Options {
         sets: sets
             .iter()
             .map(|(k, v)| (k.to_string(), v.to_string()))
             .collect(),
         ..Default::default()
     };
-    let plan = p3dp::app::build::plan(&recipe("olympic-rings.yaml"), &opts)
+    let plan = p3dp::app::prepare::plan(&recipe("olympic-rings.yaml"), &opts)
         .unwrap_or_else(|e| panic!("{e}"));
     let layer = plan.recipe.params["layer"];
     let mut parts = Vec::new();

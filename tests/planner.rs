@@ -10,13 +10,13 @@ use p3dp::analyse::planner::{MoveKind, Planner};
 use p3dp::machine::Printer;
 
 fn build(recipe_name: &str, printer: Option<&str>) -> (String, p3dp::analyse::stats::Stats) {
-    let opts = p3dp::app::build::Options {
+    let opts = p3dp::app::prepare::Options {
         printer: printer.map(str::to_string),
         ..Default::default()
     };
-    let plan = p3dp::app::build::plan(&recipe(recipe_name), &opts).unwrap();
+    let plan = p3dp::app::prepare::plan(&recipe(recipe_name), &opts).unwrap();
     let mut out = Vec::new();
-    let stats = plan.render(&mut out).unwrap();
+    let stats = p3dp::app::pipeline::render(&plan, &mut out).unwrap();
     (String::from_utf8(out).unwrap(), stats)
 }
 

@@ -482,8 +482,14 @@ fn bad_preview_options_are_input_errors() {
     let dir = tmp("preview-bad");
     let sphere = recipe("sphere.yaml");
     for (args, said) in [
-        (vec!["--view", "bottom"], "unknown view `bottom`"),
-        (vec!["--color", "heat"], "unknown colour mode `heat`"),
+        (
+            vec!["--view", "bottom"],
+            "possible values: iso, top, front, side",
+        ),
+        (
+            vec!["--color", "heat"],
+            "possible values: speed, cross-section, flow, order, findings, plain",
+        ),
         (vec!["--size", "0x10"], "not a size"),
         (vec!["--size", "big"], "not a size"),
         (vec!["-o", "x.jpg"], ".png or .html"),

@@ -10,7 +10,6 @@ use std::path::{Path, PathBuf};
 
 use common::{p3dp, recipe, root, tmp};
 use glam::DVec3;
-use p3dp::base::threads::Threads;
 use p3dp::base::toolpath::{polar, Toolpath};
 use p3dp::generate::assembly::make_parts;
 use p3dp::recipe::{parse_yaml, RawRecipe, Recipe};
@@ -109,7 +108,7 @@ parts:
 fn without_groups(recipe: &Recipe) -> Vec<Toolpath> {
     let mut r = recipe.clone();
     r.groups.clear();
-    make_parts(&r, Threads::available()).unwrap()
+    make_parts(&r).unwrap()
 }
 
 #[test]
@@ -118,7 +117,7 @@ fn a_groups_deformation_applies_to_every_string_of_every_child() {
     assert_eq!(recipe.parts.len(), 2);
     assert_eq!(recipe.groups.len(), 1);
     let before = without_groups(&recipe);
-    let after = make_parts(&recipe, Threads::available()).unwrap();
+    let after = make_parts(&recipe).unwrap();
     for (p0, p1) in before.iter().zip(&after) {
         assert_eq!(p0.name, p1.name);
         assert_eq!(p0.points.len(), p1.points.len());
@@ -150,7 +149,7 @@ fn in_a_group_i_and_n_count_the_points_of_all_its_parts() {
     let text = format!("{head}      - deform_xyz: {{position: [x, y, \"z + 0.001*i + n\"]}}\n");
     let recipe = resolve(&text);
     let before = without_groups(&recipe);
-    let after = make_parts(&recipe, Threads::available()).unwrap();
+    let after = make_parts(&recipe).unwrap();
     let n: usize = before.iter().map(|t| t.points.len()).sum();
     let mut i = 0;
     for (p0, p1) in before.iter().zip(&after) {
@@ -170,7 +169,7 @@ fn a_group_subdivides_its_parts_and_keeps_them_apart() {
     );
     let recipe = resolve(&text);
     let before = without_groups(&recipe);
-    let after = make_parts(&recipe, Threads::available()).unwrap();
+    let after = make_parts(&recipe).unwrap();
     for (p0, p1) in before.iter().zip(&after) {
         assert!(p1.len() > 2 * p0.len(), "{} → {}", p0.len(), p1.len());
         // the ends of each part stay its own (deformed) ends
@@ -187,7 +186,7 @@ fn after_a_groups_subdivide_n_counts_the_parts_points_only() {
     );
     let recipe = resolve(&text);
     let before = without_groups(&recipe);
-    let after = make_parts(&recipe, Threads::available()).unwrap();
+    let after = make_parts(&recipe).unwrap();
     let n: usize = after.iter().map(|t| t.points.len()).sum();
     for (p0, p1) in before.iter().zip(&after) {
         assert!(p1.points.len() > 2 * p0.points.len());
@@ -365,7 +364,7 @@ fn plate_sampler_lays_out_plates_of_3_to_6_cycles() {
         param("wave"),
         param("bottom_top"),
     );
-    let parts = make_parts(&recipe, Threads::available()).unwrap();
+    let parts = make_parts(&recipe).unwrap();
     for (j, tp) in parts.iter().enumerate() {
         let k = 3 + j;
         let centre = DVec3::new(
@@ -427,7 +426,7 @@ fn lamp_shade_tiers_follow_their_templates_profile() {
         recipe.params["lift"],
     );
     let uses = raw.parts[0].parts.as_ref().unwrap();
-    let parts = make_parts(&recipe, Threads::available()).unwrap();
+    let parts = make_parts(&recipe).unwrap();
     for (t, tp) in parts.iter().enumerate().skip(1) {
         let with = |k: &str| match &uses[t].with[k] {
             p3dp::recipe::Num::Value(v) => *v,

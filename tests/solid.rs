@@ -9,9 +9,9 @@ use std::f64::consts::{FRAC_PI_4, PI};
 use std::path::{Path, PathBuf};
 
 use glam::{DVec2, DVec3};
-use p3dp::app::build::{make_part, plan};
-use p3dp::base::threads::Threads;
+use p3dp::app::prepare::plan;
 use p3dp::base::toolpath::Toolpath;
+use p3dp::generate::model::make_part;
 use p3dp::generate::primitive::solid::piece::Piece;
 use p3dp::generate::primitive::solid::{Loop, Region, Solid};
 use p3dp::generate::primitive::Primitive;
@@ -173,7 +173,7 @@ fn boundary_strings_stay_within_the_chord_tolerance() {
             BOX_WITH_HOLE.replace("chord_tolerance: 0.01", &format!("chord_tolerance: {tol}"));
         let r = load(&recipe_file(&format!("chords-{tol}"), &text));
         let s = solid_of(&r, 0);
-        let t = make_part(&r, 0, Threads::available()).unwrap();
+        let t = make_part(&r, 0).unwrap();
         for (index, z) in [(1, 0.2), (60, 12.0)] {
             let g = geometry(s, index);
             let (per, _) = classify(&g, &strings_at(&t, z));
@@ -204,7 +204,7 @@ fn boundary_strings_stay_within_the_chord_tolerance() {
 fn infill_lies_inside_the_innermost_perimeter_fills_it_and_alternates() {
     let r = load(&recipe_file("infill", BOX_WITH_HOLE));
     let s = solid_of(&r, 0);
-    let t = make_part(&r, 0, Threads::available()).unwrap();
+    let t = make_part(&r, 0).unwrap();
     let w = s.line_width;
     for (index, z) in [(1u64, 0.2), (2, 0.4), (30, 6.0), (61, 12.2), (62, 12.4)] {
         let g = geometry(s, index);
@@ -249,7 +249,7 @@ fn infill_lies_inside_the_innermost_perimeter_fills_it_and_alternates() {
 /// The infill strings of layer `index` of a one-part solid recipe.
 fn infill_of(r: &Recipe, index: u64) -> Vec<(DVec2, DVec2)> {
     let s = solid_of(r, 0);
-    let t = make_part(r, 0, Threads::available()).unwrap();
+    let t = make_part(r, 0).unwrap();
     let g = geometry(s, index);
     classify(&g, &strings_at(&t, index as f64 * s.layer_height)).1
 }
@@ -384,7 +384,7 @@ fn string_counts_are_exact_before_building() {
     for name in ["bracket.yaml", "cup-solid-base.yaml"] {
         let r = load(&common::recipe(name));
         for k in 0..r.parts.len() {
-            let t = make_part(&r, k, Threads::available()).unwrap();
+            let t = make_part(&r, k).unwrap();
             assert_eq!(
                 t.len() as u64,
                 r.parts[k].primitive.string_count(),
@@ -433,7 +433,7 @@ fn the_solid_recipes_build_and_print() {
     let s = solid_of(&r, 0);
     let top = s.layers().last().unwrap();
     let outer = &top.slab.unwrap().islands[0].perimeters[0];
-    let wall = make_part(&r, 1, Threads::available()).unwrap();
+    let wall = make_part(&r, 1).unwrap();
     let start = wall.points[0];
     assert!((start.z - top.z).abs() < 1e-12);
     assert!(dist_loop(&outer.loops[0], start.truncate()) < 1e-9);
@@ -442,7 +442,7 @@ fn the_solid_recipes_build_and_print() {
         DVec3::new(r.params["wall_radius"], 0.0, r.params["base"])
     );
     // the base is printed bottom up from the bed
-    let base = make_part(&r, 0, Threads::available()).unwrap();
+    let base = make_part(&r, 0).unwrap();
     assert!((base.points[0].z - r.params["layer"]).abs() < 1e-12);
     let plan = plan(&common::recipe("cup-solid-base.yaml"), &Default::default()).unwrap();
     assert!(plan.failing(true).is_empty());
@@ -457,7 +457,7 @@ fn holes_and_islands_print_one_after_another() {
         "{layer_height: 0.2, perimeters: 2, features: [{box: {center: [-15, 0, 0.3], size: [20, 20, 0.6]}}, {box: {center: [15, 0, 0.3], size: [20, 20, 0.6]}}, {cylinder: {center: [-15, 0, -1], radius: 4, height: 3, op: subtract}}, {cylinder: {center: [15, 0, -1], radius: 4, height: 3, op: subtract}}]}",
     ));
     let s = solid_of(&r, 0);
-    let t = make_part(&r, 0, Threads::available()).unwrap();
+    let t = make_part(&r, 0).unwrap();
     for layer in s.layers() {
         let slab = layer.slab.unwrap();
         assert_eq!(slab.islands.len(), 2);
@@ -615,7 +615,7 @@ fn solid_infill_fills_each_layer_with_its_area_times_height() {
         );
         let r = load(&path);
         let s = solid_of(&r, 0);
-        let t = make_part(&r, 0, Threads::available()).unwrap();
+        let t = make_part(&r, 0).unwrap();
         for layer in s.layers() {
             let Some(slab) = layer.slab else { continue };
             let area = slab.region.area();
@@ -799,7 +799,7 @@ fn grid_infill_lays_both_directions_in_every_layer_inside_the_perimeters() {
         (s.infill.spacing - 0.9).abs() < 1e-12,
         "default: 2 × line_width"
     );
-    let t = make_part(&r, 0, Threads::available()).unwrap();
+    let t = make_part(&r, 0).unwrap();
     let w = s.line_width;
     for layer in s.layers() {
         let g = geometry(s, layer.index);
@@ -870,10 +870,7 @@ fn connected_infill_travels_less_and_its_joins_stay_inside() {
             load(&recipe_file(&format!("apart-{pattern}"), &base)),
             load(&recipe_file(&format!("joined-{pattern}"), &joined)),
         );
-        let (t0, t1) = (
-            make_part(&r0, 0, Threads::available()).unwrap(),
-            make_part(&r1, 0, Threads::available()).unwrap(),
-        );
+        let (t0, t1) = (make_part(&r0, 0).unwrap(), make_part(&r1, 0).unwrap());
         let s = solid_of(&r1, 0);
         assert_eq!(t1.len() as u64, s.string_count());
         let travels = |t: &Toolpath| (0..t.len()).filter(|&k| t.strings[k].travel).count();

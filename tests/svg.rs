@@ -7,7 +7,6 @@ mod common;
 
 use common::*;
 use glam::{DVec2, DVec3};
-use p3dp::base::threads::Threads;
 use p3dp::base::toolpath::Toolpath;
 use p3dp::recipe::Recipe;
 use std::path::Path;
@@ -64,7 +63,7 @@ fn star_dir(name: &str) -> std::path::PathBuf {
 fn part(dir: &Path, recipe: &str, k: usize) -> Toolpath {
     write(dir, "r.yaml", recipe);
     let r = Recipe::load(&dir.join("r.yaml"), &[], None).unwrap();
-    p3dp::app::build::make_part(&r, k, Threads::new(1)).unwrap()
+    p3dp::generate::model::make_part(&r, k).unwrap()
 }
 
 /// The exact star as the helix places it: y flipped, its area centroid (the
@@ -241,7 +240,7 @@ fn the_star_vase_follows_its_outline_in_every_turn() {
     // without its steps the wall is the outline, turn after turn
     let mut bare = r.clone();
     bare.parts[1].steps.clear();
-    let tp = p3dp::app::build::make_part(&bare, 1, Threads::new(1)).unwrap();
+    let tp = p3dp::generate::model::make_part(&bare, 1).unwrap();
     let star: Vec<DVec2> = (0..10)
         .map(|k| {
             let rr = if k % 2 == 0 { 28.0 } else { 15.0 };
@@ -257,7 +256,7 @@ fn the_star_vase_follows_its_outline_in_every_turn() {
     }
     // the finished wall: its steps see s, so at the rim the ripple is
     // ripple·sin(2·pi·ripples·s) in r, on top of the twisted star
-    let fin = p3dp::app::build::make_part(&r, 1, Threads::new(1)).unwrap();
+    let fin = p3dp::generate::model::make_part(&r, 1).unwrap();
     assert_eq!(fin.points.len(), tp.points.len());
     let p = |k: &str| r.params[k];
     for (j, ((a, b), s)) in fin.points.iter().zip(&tp.points).zip(u).enumerate() {
@@ -425,7 +424,7 @@ fn bad_svgs_are_refused_naming_the_file_and_the_element() {
 #[test]
 fn the_drawing_recipe_plots_every_shape() {
     let r = Recipe::load(&recipe("svg-drawing.yaml"), &[], None).unwrap();
-    let tp = p3dp::app::build::make_part(&r, 0, Threads::new(1)).unwrap();
+    let tp = p3dp::generate::model::make_part(&r, 0).unwrap();
     // one travel to each subpath after the first: house (3 shapes), sun (circle
     // and 4 rays), hill, 5 pickets
     let travels = tp.strings.iter().filter(|s| s.travel).count();

@@ -1,12 +1,12 @@
-//! One thread budget: a build gives the same bytes whatever `Options.threads`
-//! (and `-j`) allows, on a vase large enough that its deform step is split
-//! among threads.
+//! One thread budget: a build gives the same bytes whatever the pipeline's
+//! pool (and `-j`) allows, on a vase large enough that its deform step is
+//! split among threads.
 
 mod common;
 
 use common::*;
-use p3dp::app::build::{plan, prepare, Options};
-use p3dp::base::threads::Threads;
+use p3dp::app::pipeline::{self, Threads};
+use p3dp::app::prepare::{plan, prepare};
 
 /// A scaled-down `benches/vase-2m.yaml`: 60 turns of 1000 strings, so the
 /// deform step (60,000 points and strings) is well above `PAR_MIN` (8,192).
@@ -37,27 +37,23 @@ fn the_vase_is_the_same_bytes_on_1_2_and_4_threads() {
     let path = dir.join("vase.yaml");
     std::fs::write(&path, VASE).unwrap();
     let build = |n: usize| {
-        let opts = Options {
-            threads: Threads::new(n),
-            ..Default::default()
-        };
-        let p = plan(&path, &opts).unwrap();
-        assert!(p.paths.iter().map(|t| t.len()).sum::<usize>() > 50_000);
-        let mut out = Vec::new();
-        let stats = p.render(&mut out).unwrap();
-        (out, stats)
+        pipeline::run(Threads::new(n), || {
+            let p = plan(&path, &Default::default()).unwrap();
+            assert!(p.paths.iter().map(|t| t.len()).sum::<usize>() > 50_000);
+            let mut out = Vec::new();
+            let stats = pipeline::render(&p, &mut out).unwrap();
+            (out, stats)
+        })
     };
     // the pipelined build: checks beside the writer (two threads: the
     // planner between checks; four: a thread of its own)
     let piped = |n: usize| {
-        let opts = Options {
-            threads: Threads::new(n),
-            ..Default::default()
-        };
-        let mut p = prepare(&path, &opts).unwrap();
-        let mut out = Vec::new();
-        let stats = p.check_and_render(&[], &mut out).unwrap();
-        (out, stats)
+        pipeline::run(Threads::new(n), || {
+            let mut p = prepare(&path, &Default::default()).unwrap();
+            let mut out = Vec::new();
+            let stats = pipeline::check_and_render(&mut p, &[], None, &mut out).unwrap();
+            (out, stats)
+        })
     };
     let one = build(1);
     assert!(
@@ -124,7 +120,7 @@ fn a_failed_check_writes_nothing_whatever_the_threads() {
     }
 }
 
-/// A build the checks refuse gives up writing (`check_and_write_until`):
+/// A build the checks refuse gives up writing (`pipeline::check_and_write`):
 /// on one thread nothing is written at all; on more, the writer stops once
 /// the checks have failed, or (when it was quicker) has written the whole
 /// G-code, never a prefix passed off as done; the findings are the same.
@@ -136,23 +132,21 @@ fn a_refused_build_stops_writing_and_keeps_its_findings() {
         .replace("pitch: 0.1", "pitch: 5");
     let path = dir.join("tall.yaml");
     std::fs::write(&path, tall).unwrap();
-    let prepared = |n: usize| {
-        let opts = Options {
-            threads: Threads::new(n),
-            ..Default::default()
-        };
-        prepare(&path, &opts).unwrap()
-    };
+    let prepared = || prepare(&path, &Default::default()).unwrap();
     // the whole G-code, as `--force` writes it
-    let mut forced = prepared(2);
+    let mut forced = prepared();
     let mut full = Vec::new();
-    forced.check_and_render_until(&[], None, &mut full).unwrap();
+    pipeline::run(Threads::new(2), || {
+        pipeline::check_and_render(&mut forced, &[], None, &mut full).unwrap()
+    });
     assert!(!forced.failing(false).is_empty(), "the tall vase fails");
     assert!(full.len() > 100_000);
     for n in [1, 2, 4] {
-        let mut p = prepared(n);
+        let mut p = prepared();
         let mut out = Vec::new();
-        let r = p.check_and_render_until(&[], Some(false), &mut out);
+        let r = pipeline::run(Threads::new(n), || {
+            pipeline::check_and_render(&mut p, &[], Some(false), &mut out)
+        });
         assert_eq!(p.findings, forced.findings, "{n} threads: other findings");
         match r {
             Err(e) => assert!(e.to_string().contains("stopped"), "{n} threads: {e}"),
@@ -165,7 +159,7 @@ fn a_refused_build_stops_writing_and_keeps_its_findings() {
     }
 }
 
-/// The costly checks are tasks either thread may take (`check::Tasks`): on
+/// The costly checks are tasks any thread may take (`pipeline`): on
 /// every recipe of `tests/checks/` (a finding of each kind), 1 to 4 threads
 /// give the same findings in the same order, the same footprints and the
 /// same G-code (written whatever the checks say, as `--force` does).
@@ -182,14 +176,12 @@ fn the_checks_find_the_same_whichever_thread_runs_them() {
     let mut kinds = std::collections::BTreeSet::new();
     for path in &recipes {
         let run = |n: usize| {
-            let opts = Options {
-                threads: Threads::new(n),
-                ..Default::default()
-            };
-            let mut p = prepare(path, &opts).unwrap();
-            let mut out = Vec::new();
-            p.check_and_render_until(&[], None, &mut out).unwrap();
-            (p.findings, p.footprints, out)
+            pipeline::run(Threads::new(n), || {
+                let mut p = prepare(path, &Default::default()).unwrap();
+                let mut out = Vec::new();
+                pipeline::check_and_render(&mut p, &[], None, &mut out).unwrap();
+                (p.findings, p.footprints, out)
+            })
         };
         let one = run(1);
         kinds.extend(one.0.iter().map(|f| f.code));

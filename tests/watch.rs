@@ -321,11 +321,9 @@ parts:
     };
     let recipe = dir.join("recipe.yaml");
     std::fs::write(&recipe, text("map.png")).unwrap();
-    let opts = p3dp::app::prepare::Options {
-        threads: p3dp::base::threads::Threads::ONE,
-        ..Default::default()
-    };
-    let (built, files) = p3dp::base::input::recording(|| p3dp::app::prepare::plan(&recipe, &opts));
+    let opts = p3dp::app::prepare::Options::default();
+    let (built, files) =
+        p3dp::base::input::recording(|| p3dp::app::prepare::prepare(&recipe, &opts));
     if let Err(e) = built {
         panic!("{}", p3dp::app::cli::render_error(&e));
     }

@@ -2,7 +2,6 @@
 //! (skirt first) and checked, ready to write.
 
 use crate::analyse::check::{self, Finding};
-use crate::base::threads::{Awake, Threads};
 use crate::base::toolpath::Toolpath;
 use crate::generate::model::Recipe;
 
@@ -19,11 +18,6 @@ pub struct Plan {
     pub findings: Vec<Finding>,
     /// Each part's hold on the bed, as the first-layer check measured it.
     pub footprints: Vec<check::first_layer::Footprint>,
-    /// How many threads making, checking and writing it may use.
-    pub threads: Threads,
-    /// A pool worker kept awake from the end of the steps until the checks
-    /// start (see [`Awake`]).
-    pub awake: Option<std::sync::Arc<Awake>>,
 }
 
 /// What the checks of a plan found: its findings (those `allow`ed already
@@ -31,13 +25,24 @@ pub struct Plan {
 pub type Checked = (Vec<Finding>, Vec<check::first_layer::Footprint>);
 
 impl Plan {
-    /// Runs the checks on `threads` (any budget gives the same answer),
-    /// `allow` (the command line's `--allow`) silencing codes beside the
-    /// recipe's own; the plan is not changed: see [`Plan::check`].
-    pub fn checks(&self, allow: &[String], threads: crate::base::threads::Threads) -> Checked {
+    /// A plan of `paths` (skirt first) of `recipe`, read from `path`, not yet
+    /// checked.
+    pub fn new(path: String, recipe: Recipe, paths: Vec<Toolpath>) -> Plan {
+        Plan {
+            path,
+            recipe,
+            paths,
+            findings: Vec::new(),
+            footprints: Vec::new(),
+        }
+    }
+
+    /// Every check, one after the other (see [`check::run`]), `allow` (the
+    /// command line's `--allow`) silencing codes beside the recipe's own;
+    /// the plan is not changed.
+    pub fn checks(&self, allow: &[String]) -> Checked {
         let refs: Vec<&Toolpath> = self.paths.iter().collect();
-        let (mut findings, footprints) =
-            check::run(&self.recipe, &refs, &self.allowed(allow), threads);
+        let (mut findings, footprints) = check::run(&self.recipe, &refs, &self.allowed(allow));
         self.silence(&mut findings, allow);
         (findings, footprints)
     }
@@ -51,19 +56,6 @@ impl Plan {
     pub fn silence(&self, findings: &mut Vec<Finding>, allow: &[String]) {
         check::apply_allow(findings, &self.recipe.allow);
         check::apply_allow(findings, allow);
-    }
-
-    /// Runs the checks on the plan's own budget and keeps what they found.
-    pub fn check(&mut self, allow: &[String]) {
-        self.wake();
-        (self.findings, self.footprints) = self.checks(allow, self.threads);
-    }
-
-    /// Lets the worker kept awake go to the work now posted.
-    pub fn wake(&self) {
-        if let Some(a) = &self.awake {
-            a.release();
-        }
     }
 
     /// Highest point of any part, recipe coordinates.

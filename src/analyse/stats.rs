@@ -4,6 +4,7 @@ use glam::DVec3;
 use serde::Serialize;
 
 use crate::analyse::check::Finding;
+use crate::analyse::plan::Plan;
 use crate::base::format::hms;
 use crate::generate::model::Recipe;
 use crate::generate::primitive::solid::{LayerStats, SolidStats};
@@ -127,6 +128,35 @@ pub struct Stats {
     /// The z-buffer of each `solid` part: loops and area per layer (absent without solids).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub solids: Vec<crate::generate::primitive::solid::SolidStats>,
+}
+
+impl Stats {
+    /// The stats of `plan`'s G-code, written with `moves`, its SHA-256 hex
+    /// `digest` (empty when not hashed) and size in bytes.
+    pub fn of(plan: &Plan, moves: &MoveStats, digest: String, bytes: u64) -> Stats {
+        let parts = plan
+            .paths
+            .iter()
+            .zip(&moves.estimate.parts)
+            .map(|(t, pt)| PartStats {
+                name: t.name.clone(),
+                strings: t.len(),
+                print_time_s: pt.times.planned,
+                time_lost_s: pt.times.lost(),
+            })
+            .collect();
+        let mut stats = Stats::new(
+            &plan.path,
+            &plan.recipe,
+            moves,
+            parts,
+            digest,
+            bytes,
+            plan.findings.clone(),
+        );
+        stats.first_layer = plan.footprints.clone();
+        stats
+    }
 }
 
 impl Stats {

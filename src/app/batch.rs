@@ -4,8 +4,6 @@
 //! not depend on how many threads run or in which order jobs finish.
 
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
 
 use crate::base::error::{Error, Result};
 
@@ -167,44 +165,19 @@ pub fn expand(
         .collect()
 }
 
-/// Runs `f(0..n)` on up to `threads` threads; results in index order.
+/// Runs `f(0..n)` side by side on the pool; results in index order.
 /// `tick` is called after each job finishes (for a progress bar).
 pub fn run_parallel<T: Send>(
     n: usize,
-    threads: usize,
-    f: impl Fn(usize) -> T + Sync,
-    tick: impl Fn() + Sync,
+    f: impl Fn(usize) -> T + Sync + Send,
+    tick: impl Fn() + Sync + Send,
 ) -> Vec<T> {
-    let workers = threads.clamp(1, n.max(1));
-    if workers == 1 {
-        // on the caller's thread: a thread to wait for would add nothing
-        return (0..n)
-            .map(|k| {
-                let r = f(k);
-                tick();
-                r
-            })
-            .collect();
-    }
-    let slots: Vec<Mutex<Option<T>>> = (0..n).map(|_| Mutex::new(None)).collect();
-    let next = AtomicUsize::new(0);
-    std::thread::scope(|s| {
-        for _ in 0..workers {
-            s.spawn(|| loop {
-                let k = next.fetch_add(1, Ordering::Relaxed);
-                if k >= n {
-                    break;
-                }
-                let r = f(k);
-                *slots[k].lock().unwrap() = Some(r);
-                tick();
-            });
-        }
-    });
-    slots
-        .into_iter()
-        .map(|m| m.into_inner().unwrap().expect("every job ran"))
-        .collect()
+    let jobs: Vec<usize> = (0..n).collect();
+    crate::base::par::map(&jobs, |&k| {
+        let r = f(k);
+        tick();
+        r
+    })
 }
 
 #[cfg(test)]
@@ -258,7 +231,7 @@ mod tests {
 
     #[test]
     fn parallel_results_in_order() {
-        let r = run_parallel(50, 4, |k| k * k, || {});
+        let r = crate::base::par::on_threads(4, || run_parallel(50, |k| k * k, || {}));
         assert_eq!(r, (0..50).map(|k| k * k).collect::<Vec<_>>());
     }
 }

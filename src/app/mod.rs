@@ -2,8 +2,9 @@
 //! and sweeps, the watch server, errors as the terminal shows them.
 
 pub mod batch;
-pub mod build;
 pub mod cli;
+pub mod command;
 pub mod diagnostic;
+pub mod pipeline;
 pub mod prepare;
 pub mod watch;

@@ -6,7 +6,6 @@ use std::path::Path;
 use crate::analyse::check;
 use crate::analyse::plan::Plan;
 use crate::base::error::{Error, Result};
-use crate::base::threads::{Awake, Threads};
 use crate::generate::model::Recipe;
 use crate::machine::Printer;
 
@@ -19,19 +18,17 @@ pub struct Options {
     pub printer: Option<String>,
     /// `--allow CODE`: check codes silenced for this build.
     pub allow: Vec<String>,
-    /// How many threads the build may use (default: one per core).
-    pub threads: Threads,
 }
 
-/// Loads, builds and checks a recipe.
+/// Loads, builds and checks a recipe (on the pool it runs in, if any).
 pub fn plan(path: &Path, opts: &Options) -> Result<Plan> {
     let mut p = prepare(path, opts)?;
-    p.check(&opts.allow);
+    crate::app::pipeline::check(&mut p, &opts.allow);
     Ok(p)
 }
 
-/// Loads and builds a recipe without checking it: no findings until
-/// [`Plan::check`] (or [`Plan::checks`]) has run.
+/// Loads and builds a recipe without checking it: no findings until the
+/// checks have run ([`crate::app::pipeline::check`]).
 pub fn prepare(path: &Path, opts: &Options) -> Result<Plan> {
     let shown = path.display().to_string();
     // the command line's own mistakes name the option, not the recipe
@@ -51,11 +48,7 @@ pub fn prepare(path: &Path, opts: &Options) -> Result<Plan> {
     };
     let recipe = Recipe::load(path, &opts.sets, printer.as_ref())?;
     // each part with its own steps, then the steps of groups
-    let parts = crate::generate::assembly::make_parts(&recipe, opts.threads)
-        .map_err(|e| e.in_file(&shown))?;
-    // the brims and skirt are made on this thread alone: a worker kept
-    // awake meanwhile starts the checks at once
-    let awake = Awake::keep(opts.threads).map(std::sync::Arc::new);
+    let parts = crate::generate::assembly::make_parts(&recipe).map_err(|e| e.in_file(&shown))?;
     let mut paths = Vec::with_capacity(parts.len() + 1);
     if let Some(s) = &recipe.skirt {
         let cv = (recipe.parts[0].cross_section, recipe.parts[0].speed);
@@ -67,13 +60,5 @@ pub fn prepare(path: &Path, opts: &Options) -> Result<Plan> {
         }
     }
     paths.extend(parts);
-    Ok(Plan {
-        path: shown,
-        recipe,
-        paths,
-        findings: Vec::new(),
-        footprints: Vec::new(),
-        threads: opts.threads,
-        awake,
-    })
+    Ok(Plan::new(shown, recipe, paths))
 }

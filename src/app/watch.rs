@@ -29,7 +29,7 @@ use std::time::{Duration, Instant};
 
 use serde_json::{json, Value};
 
-use crate::app::prepare::{plan, Options as BuildOptions};
+use crate::app::prepare::{prepare, Options as BuildOptions};
 use crate::base::error::{Error, Result};
 use crate::output::file::identity;
 
@@ -54,8 +54,10 @@ const MAX_STREAMS: usize = 32;
 pub struct Options {
     /// The recipe file.
     pub recipe: PathBuf,
-    /// `--set`, `--printer`, `--allow` and the thread budget of each build.
+    /// `--set`, `--printer`, `--allow` of each build.
     pub build: BuildOptions,
+    /// `-j`: the threads of each build.
+    pub threads: crate::app::pipeline::Threads,
     /// `--port`: 0 takes any free port.
     pub port: u16,
     /// `--open`: open the page in the system's browser.
@@ -359,9 +361,14 @@ fn start_build(opts: &Options, number: u64, tx: &Sender<Wake>, buffers: &Buffers
 
 /// One build: the plan, its G-code (in memory) and the viewer's data.
 fn build(opts: &Options) -> Result<Built> {
-    let p = plan(&opts.recipe, &opts.build)?;
+    // loaded here, where the files read are recorded; checked and written
+    // in the pipeline's pool
+    let mut p = prepare(&opts.recipe, &opts.build)?;
     let mut gcode = Vec::new();
-    let stats = p.render(&mut gcode)?;
+    let stats = crate::app::pipeline::run(opts.threads, || {
+        crate::app::pipeline::check(&mut p, &opts.build.allow);
+        crate::app::pipeline::render(&p, &mut gcode)
+    })?;
     let text = String::from_utf8_lossy(&gcode);
     let view = crate::output::preview::Options::default();
     let (data, _) = crate::output::preview::html::data(&p, &text, &stats, &view);

@@ -14,5 +14,4 @@ pub mod par;
 pub mod rng;
 pub mod safe_text;
 pub mod svg;
-pub mod threads;
 pub mod toolpath;

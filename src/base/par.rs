@@ -37,6 +37,31 @@ pub(crate) fn chunks<T: Send>(items: &mut [T], min: usize, f: impl Fn(usize, &mu
     });
 }
 
+/// [`chunks`] for work that can fail: each chunk stops at its own first
+/// error, and the error returned is that of the earliest failing chunk, so
+/// results and error are those of one thread whatever the split.
+pub(crate) fn try_chunks<T: Send, E: Send + Sync>(
+    items: &mut [T],
+    min: usize,
+    f: impl Fn(usize, &mut [T]) -> Result<(), E> + Sync,
+) -> Result<(), E> {
+    let n = items.len();
+    let threads = if n < min { 1 } else { width() };
+    if threads <= 1 {
+        return f(0, items);
+    }
+    // the same split as `chunks`: chunk j starts at j × size
+    let size = n.div_ceil(threads);
+    let results: Vec<std::sync::OnceLock<Result<(), E>>> =
+        (0..n.div_ceil(size)).map(|_| Default::default()).collect();
+    chunks(items, 0, |start, chunk| {
+        let _ = results[start / size].set(f(start, chunk));
+    });
+    results
+        .into_iter()
+        .try_for_each(|r| r.into_inner().expect("every chunk ran"))
+}
+
 /// A vector of `len` items, item k = `f(k)`, made in chunks (see
 /// [`chunks`]); each chunk writes its items straight into the vector's
 /// memory, so the first touch of a big vector's pages is shared out too.
@@ -85,6 +110,7 @@ pub(crate) fn map<T: Sync, U: Send>(items: &[T], f: impl Fn(&T) -> U + Sync + Se
 }
 
 /// `a()` and `b()`, side by side when the pool has a second thread.
+#[allow(dead_code)] // the previews' two halves will use it
 pub(crate) fn join<A: Send, B: Send>(
     a: impl FnOnce() -> A + Send,
     b: impl FnOnce() -> B + Send,
@@ -95,12 +121,26 @@ pub(crate) fn join<A: Send, B: Send>(
     rayon::join(a, b)
 }
 
+/// Runs `f` in a pool of `n` threads of its own: for the tests of code that
+/// splits its work, which must give the same result on any number.
+#[cfg(test)]
+pub(crate) fn on_threads<R: Send>(n: usize, f: impl FnOnce() -> R + Send) -> R {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build()
+        .expect("a pool for a test")
+        .install(f)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn pool(n: usize) -> rayon::ThreadPool {
-        rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap()
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .unwrap()
     }
 
     #[test]

@@ -8,8 +8,6 @@
 
 use glam::DVec3;
 
-use crate::base::threads::Threads;
-
 /// Cross-section, speed and kind of one string (named `Strand` so as not to
 /// clash with Rust's `String`).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -119,7 +117,7 @@ impl Toolpath {
     /// A part through `points` (at least one) whose strings all extrude with
     /// cross-section `c` at speed `v`: the same as `new(first)` then `draw`
     /// to each of the rest, without a push per string.
-    pub fn uniform(points: Vec<DVec3>, c: f64, v: f64, threads: Threads) -> Toolpath {
+    pub fn uniform(points: Vec<DVec3>, c: f64, v: f64) -> Toolpath {
         assert!(!points.is_empty(), "a part starts somewhere");
         let strand = Strand {
             c,
@@ -129,8 +127,8 @@ impl Toolpath {
         };
         Toolpath {
             name: String::new(),
-            // filled on the threads: 2M strings are 48 MB of fresh pages
-            strings: threads.fill_vec(points.len() - 1, 8_192, |_| strand),
+            // filled in chunks: a big part's fresh pages are shared out too
+            strings: crate::base::par::fill_vec(points.len() - 1, 8_192, |_| strand),
             points,
             events: Vec::new(),
             markers: Vec::new(),

@@ -15,7 +15,6 @@
 //! part alone.
 
 use crate::base::error::{Error, Result};
-use crate::base::threads::Threads;
 use crate::base::toolpath::{Strand, Toolpath};
 use crate::generate::model::{make_part_within, Group, Recipe};
 use crate::generate::step::Step;
@@ -27,14 +26,14 @@ pub fn total_limit(recipe: &Recipe) -> u64 {
 }
 
 /// Makes every part with its own steps, then runs the group steps.
-pub fn make_parts(recipe: &Recipe, threads: Threads) -> Result<Vec<Toolpath>> {
+pub fn make_parts(recipe: &Recipe) -> Result<Vec<Toolpath>> {
     let limit = total_limit(recipe);
     let mut parts = Vec::with_capacity(recipe.parts.len());
     let mut total = 0u64;
     for k in 0..recipe.parts.len() {
         // each part's steps get what the limits leave after the parts before it
         let budget = recipe.max_strings.min(limit.saturating_sub(total));
-        let tp = make_part_within(recipe, k, budget, threads)?;
+        let tp = make_part_within(recipe, k, budget)?;
         total = total.saturating_add(tp.len() as u64);
         if total > limit {
             return Err(over_total(&recipe.parts[k].place, total, limit));
@@ -42,7 +41,7 @@ pub fn make_parts(recipe: &Recipe, threads: Threads) -> Result<Vec<Toolpath>> {
         parts.push(tp);
     }
     for g in &recipe.groups {
-        apply(g, &mut parts[g.first..g.end], recipe.max_strings, threads)?;
+        apply(g, &mut parts[g.first..g.end], recipe.max_strings)?;
     }
     // stands, then brims, last: under and round each part's first contact
     // as printed, undeformed (a brim goes round its part's stand); their
@@ -100,13 +99,13 @@ fn is_join(s: &Strand) -> bool {
 }
 
 /// Runs a group's steps on `parts` as one string set.
-fn apply(g: &Group, parts: &mut [Toolpath], max_strings: u64, threads: Threads) -> Result<()> {
+fn apply(g: &Group, parts: &mut [Toolpath], max_strings: u64) -> Result<()> {
     let names: Vec<String> = parts.iter().map(|t| t.name.clone()).collect();
     // the previews' turtle markers stay with their parts (not moved by steps)
     let markers: Vec<_> = parts.iter().map(|t| t.markers.clone()).collect();
     let mut all = join(parts);
     for (j, step) in g.steps.iter().enumerate() {
-        step.apply(&mut all, max_strings, threads)
+        step.apply(&mut all, max_strings)
             .map_err(|e| e.under(&format!("{}.steps[{j}].{}", g.place, step.key())))?;
         if matches!(step, Step::Subdivide(_)) {
             // one string again between two parts, for the steps after it
@@ -233,7 +232,7 @@ mod tests {
         let parts = vec![line(0.0, 2), line(30.0, 1)];
         let mut all = join(&parts);
         crate::generate::step::Step::Subdivide(1.0)
-            .apply(&mut all, 1000, Threads::ONE)
+            .apply(&mut all, 1000)
             .unwrap();
         let back = split(all);
         assert_eq!(back.len(), 2);

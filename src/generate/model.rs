@@ -4,7 +4,6 @@
 
 use crate::base::error::{Error, Result};
 use crate::base::expr::Params;
-use crate::base::threads::Threads;
 use crate::base::toolpath::Toolpath;
 use crate::generate::primitive::{CaHelix, Primitive};
 use crate::generate::step::Step;
@@ -396,13 +395,11 @@ impl Part {
     }
 
     /// Builds the primitives in order, joined by travel strings where one
-    /// ends away from the next one's start; on up to `threads` threads.
-    pub fn build_primitives(&self, threads: Threads) -> Toolpath {
-        let mut tp = self
-            .primitive
-            .build_on(self.cross_section, self.speed, threads);
+    /// ends away from the next one's start.
+    pub fn build_primitives(&self) -> Toolpath {
+        let mut tp = self.primitive.build(self.cross_section, self.speed);
         for p in &self.more {
-            let next = p.primitive.build_on(p.cross_section, p.speed, threads);
+            let next = p.primitive.build(p.cross_section, p.speed);
             tp.append(&next, p.speed);
         }
         tp
@@ -411,25 +408,19 @@ impl Part {
 
 /// Makes a part's strings (without its brim, which
 /// [`crate::generate::assembly::make_parts`] adds last): its primitives, then each of its own steps in
-/// order (a group's steps are [`crate::generate::assembly::make_parts`]'s), on up to
-/// `threads` threads.
-pub fn make_part(recipe: &Recipe, k: usize, threads: Threads) -> Result<Toolpath> {
-    make_part_within(recipe, k, recipe.max_strings, threads)
+/// order (a group's steps are [`crate::generate::assembly::make_parts`]'s).
+pub fn make_part(recipe: &Recipe, k: usize) -> Result<Toolpath> {
+    make_part_within(recipe, k, recipe.max_strings)
 }
 
 /// Makes a part as [`make_part`] does, its steps refused past `budget`
 /// strings (what the recipe's limits leave after the parts before it).
-pub fn make_part_within(
-    recipe: &Recipe,
-    k: usize,
-    budget: u64,
-    threads: Threads,
-) -> Result<Toolpath> {
+pub fn make_part_within(recipe: &Recipe, k: usize, budget: u64) -> Result<Toolpath> {
     let part = &recipe.parts[k];
-    let mut tp = part.build_primitives(threads);
+    let mut tp = part.build_primitives();
     tp.name = part.name.clone();
     for (j, step) in part.steps.iter().enumerate() {
-        step.apply(&mut tp, budget, threads)
+        step.apply(&mut tp, budget)
             .map_err(|e| e.under(&format!("{}.steps[{j}].{}", part.place, step.key())))?;
     }
     Ok(tp)

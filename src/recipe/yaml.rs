@@ -265,3 +265,7 @@ fn shorten_quoted(msg: &str) -> String {
     }
     out
 }
+/// `value` as YAML text (for the files p3dp writes in YAML: lock files).
+pub fn to_yaml<T: serde::Serialize>(value: &T) -> String {
+    serde_yaml::to_string(value).expect("p3dp's own values serialise")
+}

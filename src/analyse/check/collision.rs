@@ -37,7 +37,7 @@
 
 use glam::{DVec2, DVec3};
 
-use super::{fmt_p, Finding, Severity, BETWEEN};
+use super::{fmt_p, Finding, Severity};
 
 use crate::base::toolpath::Toolpath;
 use crate::generate::model::Recipe;
@@ -335,9 +335,15 @@ impl Walk<'_> {
     }
 }
 
-/// The `nozzle-collision` and `head-collision` findings; calls `between`
-/// every [`BETWEEN`] strings.
-pub fn check(recipe: &Recipe, paths: &[&Toolpath], between: &dyn Fn(), out: &mut Vec<Finding>) {
+/// The `nozzle-collision` and `head-collision` findings.
+pub fn check(recipe: &Recipe, paths: &[&Toolpath]) -> Vec<Finding> {
+    let mut out = Vec::new();
+    walk(recipe, paths, &mut out);
+    out
+}
+
+/// [`check`] into `out`.
+fn walk(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) {
     let printer = &recipe.printer;
     let hd = &printer.head;
     // the map covers the filament's footprint
@@ -413,9 +419,6 @@ pub fn check(recipe: &Recipe, paths: &[&Toolpath], between: &dyn Fn(), out: &mut
             w.elig = (pi, ek);
         };
         for k in 0..tp.len() {
-            if k % BETWEEN == BETWEEN - 1 {
-                between();
-            }
             let s = tp.strings[k];
             let (a, b) = tp.ends(k);
             w.segment(a, b, Some(k), s.travel, s.hair);

@@ -423,14 +423,14 @@ impl Bed {
 }
 
 /// The `first-layer` findings (a warning per part where the nozzle runs too
-/// close to the bed) into `out`; returns the footprints of the paths that
-/// touch the bed, in print order, for the stats.
-pub fn check(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) -> Vec<Footprint> {
+/// close to the bed, and small contacts), and the footprints of the paths
+/// that touch the bed, in print order, for the stats.
+pub fn check(recipe: &Recipe, paths: &[&Toolpath]) -> (Vec<Finding>, Vec<Footprint>) {
     let nozzle = recipe.printer.nozzle_diameter;
     let bed = Bed::of(paths, nozzle);
     let contacts = bed.contacts(paths, min_height(recipe));
     let areas = bed.areas(paths, nozzle);
-    findings(recipe, paths, &contacts, &areas, out)
+    findings(recipe, paths, &contacts, &areas)
 }
 
 /// The nozzle height under which a bed string scrapes the bed, mm.
@@ -445,8 +445,9 @@ pub fn findings(
     paths: &[&Toolpath],
     contacts: &[Option<Contact>],
     areas: &[u64],
-    out: &mut Vec<Finding>,
-) -> Vec<Footprint> {
+) -> (Vec<Finding>, Vec<Footprint>) {
+    let mut findings = Vec::new();
+    let out = &mut findings;
     let p = &recipe.printer;
     let min_h = min_height(recipe);
     let mut footprints = Vec::new();
@@ -474,7 +475,7 @@ pub fn findings(
             });
         }
     }
-    footprints
+    (findings, footprints)
 }
 
 /// The `small-contact` warning of part `tp` with footprint `f`: its bed

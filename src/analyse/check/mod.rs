@@ -21,246 +21,126 @@ use glam::DVec3;
 pub use crate::base::finding::{
     apply_allow, failing, is_code, summary, validate_allow, Finding, Severity, CODES, SAFETY,
 };
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::OnceLock;
 
-use crate::base::threads::Threads;
 use crate::base::toolpath::Toolpath;
 use crate::generate::model::Recipe;
 
 pub use crate::machine::{CheckLimits, Head};
 
-/// Strings a long check goes through between two calls of its `between`
-/// (see [`Tasks::new`]): about a millisecond of its work.
-pub const BETWEEN: usize = 1 << 14;
-
 pub(crate) fn fmt_p(p: DVec3) -> String {
     format!("({:.3}, {:.3}, {:.3})", p.x, p.y, p.z)
 }
 
-/// Runs every check on the toolpaths of `recipe` (skirt first, then parts):
-/// the findings, and each part's footprint on the bed (none when a point is
-/// not finite or out of reach, or a cheap check found an error that is not
-/// in `allowed`, where the geometric checks do not run).
+/// Runs every check on the toolpaths of `recipe` (skirt first, then parts),
+/// one after the other: the findings, and each part's footprint on the bed.
 ///
-/// The cheap checks run first, and the geometric ones (support, first layer,
-/// collision: their grids grow with the extent and the cross-sections) only
-/// when the cheap ones found no error that is not allowed (a helix of radius
-/// 1e4 mm or a cross-section of 1e7 mm² took 25 s and 5 GB before they
-/// refused it). The costly checks are tasks ([`Tasks`]) that a pool worker
-/// takes too when `threads` allows two; the findings are put together in
-/// one fixed order, so they are the same whoever ran what.
+/// The cheap checks run first ([`cheap`]), and the costly ones only when
+/// [`Cheap::geometric`] allows (their grids grow with the extent and the
+/// cross-sections: a helix of radius 1e4 mm would have them fill memory
+/// before the cheap ones refuse it). The costly checks are plain functions
+/// of the parts, independent of each other ([`Costly`] lists them), so the
+/// application may run them side by side; [`merge`] puts their findings in
+/// one fixed order.
 pub fn run(
     recipe: &Recipe,
     paths: &[&Toolpath],
     allowed: &[String],
-    threads: Threads,
 ) -> (Vec<Finding>, Vec<first_layer::Footprint>) {
-    let tasks = Tasks::new(recipe, paths, allowed, &|| {});
-    // a panic in the worker's tasks is raised when the scope ends
-    rayon::in_place_scope(|s| {
-        if threads.parallel() {
-            s.spawn(|_| while tasks.run_next() {});
-        }
-        while tasks.run_next() {}
-    });
-    tasks.finish()
+    let cheap = cheap(recipe, paths, allowed);
+    let costly = Costly::run(recipe, paths, cheap.geometric);
+    merge(cheap, costly)
 }
 
-/// The costly checks of one plan as tasks that any thread may take, one at a
-/// time, in any interleaving: each writes its findings to its own slot, and
-/// [`Tasks::finish`] puts them together in one fixed order, so the findings
-/// are the same whichever thread ran what. [`Tasks::new`] runs the cheap
-/// checks first (see [`run`]); the geometric tasks are empty when those
-/// found an error that is not allowed, or points the geometry cannot take.
-pub struct Tasks<'a> {
-    recipe: &'a Recipe,
-    paths: &'a [&'a Toolpath],
-    /// Called after each cheap pass over a part and every [`BETWEEN`]
-    /// strings of the long tasks (the build plans the moves written so far
-    /// there).
-    between: &'a (dyn Fn() + Sync),
-    geometric: bool,
-    /// The cheap checks' findings, then the pattern helix's (put last).
-    cheap: Vec<Finding>,
-    pattern: Vec<Finding>,
-    /// The next task to take (an index into [`Tasks::ORDER`]).
-    next: AtomicUsize,
-    /// How many tasks have finished.
-    finished: AtomicUsize,
-    slots: [OnceLock<Vec<Finding>>; 4],
-    footprints: OnceLock<Vec<first_layer::Footprint>>,
-    /// The first-layer check's candidates and its two halves, the findings
-    /// made (into the first layer's slot) by whichever finishes second.
-    bed: OnceLock<first_layer::Bed>,
-    halves: std::sync::Mutex<Halves>,
+/// What the cheap checks found (one pass over each part's points and
+/// strings): the machine's limits, speeds and flows, cross-sections, events;
+/// the pattern helix's parameters.
+pub struct Cheap {
+    /// Their findings, in order.
+    pub findings: Vec<Finding>,
+    /// The pattern helix's, put last when merged.
+    pub pattern: Vec<Finding>,
+    /// Whether the costly checks may run: no error that is not allowed, and
+    /// every point finite and within reach of the geometry.
+    pub geometric: bool,
 }
 
-/// The halves of the first-layer check done so far.
+/// The cheap checks of `paths`; `allowed` are the codes silenced (an error
+/// of theirs does not stop the costly checks).
+pub fn cheap(recipe: &Recipe, paths: &[&Toolpath], allowed: &[String]) -> Cheap {
+    let mut out = Vec::new();
+    temperatures(recipe, &mut out);
+    // the geometric checks need finite points within reach (others are
+    // errors): tested in the machine limits' pass over the points
+    let mut sane = true;
+    for tp in paths {
+        sane &= machine_limits(recipe, tp, &mut out);
+        strings(recipe, tp, &mut out);
+        flow::cross_sections(recipe, tp, &mut out);
+        out.extend(events(recipe, tp));
+    }
+    let cheap_error = out
+        .iter()
+        .any(|f| f.severity == Severity::Error && !allowed.iter().any(|a| a == f.code));
+    // pattern_helix: parameters outside the paper's ranges, modulated strings
+    let mut pattern = Vec::new();
+    pattern::findings(recipe, paths, &mut pattern);
+    Cheap {
+        findings: out,
+        pattern,
+        geometric: !cheap_error && sane,
+    }
+}
+
+/// The costly checks' findings, each from a plain function of the parts:
+/// [`support::check`], [`collision::check`], [`starvation::check`], and the
+/// first layer's two halves ([`first_layer::Bed::contacts`] and
+/// [`first_layer::Bed::areas`], put together by [`first_layer::findings`]).
 #[derive(Default)]
-struct Halves {
-    contacts: Option<Vec<Option<first_layer::Contact>>>,
-    areas: Option<Vec<u64>>,
+pub struct Costly {
+    /// Runs of moves too short for the firmware's planner.
+    pub starvation: Vec<Finding>,
+    /// The first layer's hold on the bed.
+    pub first_layer: Vec<Finding>,
+    /// Strings that rest on nothing, and bridges.
+    pub support: Vec<Finding>,
+    /// The head meeting printed filament.
+    pub collision: Vec<Finding>,
+    /// Each part's footprint on the bed.
+    pub footprints: Vec<first_layer::Footprint>,
 }
 
-/// A task of [`Tasks`].
-#[derive(Clone, Copy)]
-enum Task {
-    Support,
-    /// The first layer's strings on the bed (its findings' slot).
-    FirstLayer,
-    Collision,
-    Starvation,
-    /// The first layer's contact area (the cover of its bands).
-    FirstLayerArea,
-}
-
-impl<'a> Tasks<'a> {
-    /// The order tasks are taken in: the longest first, so the last to
-    /// finish is a short one (the first layer's check in two halves, each
-    /// shorter than the support check: as one it was the longest task of
-    /// the sphere, left to one thread while the other had nothing to do).
-    /// The half that comes first finds the strings on the bed for both:
-    /// the sphere's longest after support (its skirt and brim). The vase's
-    /// collision check (36 ms), taken after both halves, was its last
-    /// task while the other thread had nothing to do: it comes between.
-    const ORDER: [Task; 5] = [
-        Task::Support,
-        Task::FirstLayerArea,
-        Task::Collision,
-        Task::FirstLayer,
-        Task::Starvation,
-    ];
-
-    /// Runs the cheap checks (calling `between` after each pass over a part) and
-    /// readies the costly ones (which call it every [`BETWEEN`] strings).
-    pub fn new(
-        recipe: &'a Recipe,
-        paths: &'a [&'a Toolpath],
-        allowed: &[String],
-        between: &'a (dyn Fn() + Sync),
-    ) -> Tasks<'a> {
-        let mut out = Vec::new();
-        temperatures(recipe, &mut out);
-        // the geometric checks need finite points within reach (others are
-        // errors): tested in the machine limits' pass over the points
-        let mut sane = true;
-        for tp in paths {
-            sane &= machine_limits(recipe, tp, &mut out);
-            between();
-            strings(recipe, tp, &mut out);
-            between();
-            flow::cross_sections(recipe, tp, &mut out);
-            out.extend(events(recipe, tp));
-            between();
-        }
-        let cheap_error = out
-            .iter()
-            .any(|f| f.severity == Severity::Error && !allowed.iter().any(|a| a == f.code));
-        // pattern_helix: parameters outside the paper's ranges, modulated strings
-        let mut pattern = Vec::new();
-        pattern::findings(recipe, paths, &mut pattern);
-        Tasks {
-            recipe,
-            paths,
-            between,
-            geometric: !cheap_error && sane,
-            cheap: out,
-            pattern,
-            next: AtomicUsize::new(0),
-            finished: AtomicUsize::new(0),
-            slots: Default::default(),
-            footprints: OnceLock::new(),
-            bed: OnceLock::new(),
-            halves: Default::default(),
-        }
-    }
-
-    /// Takes the next task and runs it on the caller's thread; false when
-    /// none is left to take.
-    pub fn run_next(&self) -> bool {
-        let k = self.next.fetch_add(1, Ordering::Relaxed);
-        let Some(&task) = Self::ORDER.get(k) else {
-            return false;
+impl Costly {
+    /// Every costly check, one after the other; the geometric ones only when
+    /// `geometric` (see [`Cheap::geometric`]).
+    pub fn run(recipe: &Recipe, paths: &[&Toolpath], geometric: bool) -> Costly {
+        let mut c = Costly {
+            starvation: starvation::check(recipe, paths),
+            ..Costly::default()
         };
-        let (recipe, paths) = (self.recipe, self.paths);
-        let nozzle = recipe.printer.nozzle_diameter;
-        let mut v = Vec::new();
-        // whether `v` is the task's findings (the first layer's halves set
-        // their slot themselves, the second to finish)
-        let mut fill = true;
-        match task {
-            Task::Starvation => starvation::check(recipe, paths, &mut v),
-            _ if !self.geometric => {}
-            Task::Support => support::check(recipe, paths, self.between, &mut v),
-            Task::FirstLayer | Task::FirstLayerArea => {
-                fill = false;
-                // the two halves of the first-layer check, on any threads
-                let bed = self.bed.get_or_init(|| first_layer::Bed::of(paths, nozzle));
-                let (contacts, areas) = if let Task::FirstLayer = task {
-                    (
-                        Some(bed.contacts(paths, first_layer::min_height(recipe))),
-                        None,
-                    )
-                } else {
-                    (None, Some(bed.areas(paths, nozzle)))
-                };
-                let mut h = self.halves.lock().unwrap_or_else(|e| e.into_inner());
-                h.contacts = h.contacts.take().or(contacts);
-                h.areas = h.areas.take().or(areas);
-                if let (Some(c), Some(a)) = (&h.contacts, &h.areas) {
-                    let mut found = Vec::new();
-                    let _ = self
-                        .footprints
-                        .set(first_layer::findings(recipe, paths, c, a, &mut found));
-                    let _ = self.slots[Task::FirstLayer as usize].set(found);
-                }
-            }
-            Task::Collision => collision::check(recipe, paths, self.between, &mut v),
+        if geometric {
+            (c.first_layer, c.footprints) = first_layer::check(recipe, paths);
+            c.support = support::check(recipe, paths);
+            c.collision = collision::check(recipe, paths);
         }
-        if let Some(slot) = self.slots.get(task as usize).filter(|_| fill) {
-            let _ = slot.set(v);
-        }
-        self.finished.fetch_add(1, Ordering::Release);
-        true
+        c
     }
+}
 
-    /// Whether every task has finished (on whichever thread).
-    pub fn all_done(&self) -> bool {
-        self.finished.load(Ordering::Acquire) == Self::ORDER.len()
+/// Every finding in the one fixed order (the cheap checks', starvation,
+/// first layer, support, collision, the pattern helix's) and the parts'
+/// footprints.
+pub fn merge(cheap: Cheap, costly: Costly) -> (Vec<Finding>, Vec<first_layer::Footprint>) {
+    let mut out = cheap.findings;
+    for v in [
+        costly.starvation,
+        costly.first_layer,
+        costly.support,
+        costly.collision,
+        cheap.pattern,
+    ] {
+        out.extend(v);
     }
-
-    /// Whether the findings so far (all of them once [`Tasks::all_done`]),
-    /// those of the codes in `allows` silenced, fail a build at this
-    /// strictness.
-    pub fn fail(&self, allows: &[&[String]], strict: bool) -> bool {
-        let done = self.slots.iter().filter_map(|s| s.get()).flatten();
-        let mut all: Vec<Finding> = self
-            .cheap
-            .iter()
-            .chain(done)
-            .chain(&self.pattern)
-            .cloned()
-            .collect();
-        for allow in allows {
-            apply_allow(&mut all, allow);
-        }
-        !failing(&all, strict).is_empty()
-    }
-
-    /// Every finding in the one fixed order (the cheap checks', starvation,
-    /// first layer, support, collision, the pattern helix's) and the parts'
-    /// footprints. Every task must have run (see [`Tasks::run_next`]).
-    pub fn finish(self) -> (Vec<Finding>, Vec<first_layer::Footprint>) {
-        let [support, first_layer, collision, starvation] = self
-            .slots
-            .map(|s| s.into_inner().expect("every check task ran"));
-        let mut out = self.cheap;
-        for v in [starvation, first_layer, support, collision, self.pattern] {
-            out.extend(v);
-        }
-        (out, self.footprints.into_inner().unwrap_or_default())
-    }
+    (out, costly.footprints)
 }
 
 /// Temperature events (a turtle's `nozzle_temp`, `bed_temp`) above the limits: a nozzle temperature above the

@@ -65,7 +65,14 @@ impl Runs {
 }
 
 /// The `starvation` warnings.
-pub fn check(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) {
+pub fn check(recipe: &Recipe, paths: &[&Toolpath]) -> Vec<Finding> {
+    let mut out = Vec::new();
+    scan(recipe, paths, &mut out);
+    out
+}
+
+/// [`check`] into `out`.
+fn scan(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) {
     let p = &recipe.printer;
     let t_min = p.checks.min_move_time;
     let stretch = p.limits().min_segment_time.max(t_min);

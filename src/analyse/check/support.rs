@@ -32,7 +32,7 @@
 
 use glam::DVec3;
 
-use super::{fmt_p, Finding, Severity, BETWEEN};
+use super::{fmt_p, Finding, Severity};
 use crate::base::geom::grid::{ceil_i64, closest, SegGrid};
 use crate::base::toolpath::Toolpath;
 use crate::generate::model::Recipe;
@@ -109,13 +109,7 @@ pub struct Deposits<'a> {
 
 impl<'a> Deposits<'a> {
     /// Lists and grids the extruding strings of `paths`.
-    /// Calls `between` every [`BETWEEN`] strings.
-    pub fn new(
-        paths: &'a [&'a Toolpath],
-        nozzle: f64,
-        tolerance: f64,
-        between: &dyn Fn(),
-    ) -> Deposits<'a> {
+    pub fn new(paths: &'a [&'a Toolpath], nozzle: f64, tolerance: f64) -> Deposits<'a> {
         let total: usize = paths.iter().map(|tp| tp.len()).sum();
         let mut ids: Vec<(u32, u32)> = Vec::new();
         let (mut count, mut listed) = (0usize, false);
@@ -126,9 +120,6 @@ impl<'a> Deposits<'a> {
             let mut acc = 0.0;
             s.push(0.0);
             for (k, (st, ab)) in tp.strings.iter().zip(tp.points.windows(2)).enumerate() {
-                if k % BETWEEN == BETWEEN - 1 {
-                    between();
-                }
                 let l = ab[0].distance(ab[1]);
                 acc += l;
                 s.push(acc);
@@ -280,19 +271,15 @@ impl Tally {
 }
 
 /// The support check: `unsupported` and `bridge` findings, one per part and
-/// kind; calls `between` every [`BETWEEN`] strings.
-pub fn check(recipe: &Recipe, paths: &[&Toolpath], between: &dyn Fn(), out: &mut Vec<Finding>) {
+/// kind.
+pub fn check(recipe: &Recipe, paths: &[&Toolpath]) -> Vec<Finding> {
+    let mut out = Vec::new();
     let p = &recipe.printer;
-    let dep = Deposits::new(
-        paths,
-        p.nozzle_diameter,
-        p.checks.support_tolerance,
-        between,
-    );
+    let dep = Deposits::new(paths, p.nozzle_diameter, p.checks.support_tolerance);
     let mut budget = GAP_BUDGET;
     let mut g = 0u32; // global id of the current string
     for (pi, tp) in paths.iter().enumerate() {
-        let t = scan_part(recipe, &dep, pi, tp, &mut g, &mut budget, between);
+        let t = scan_part(recipe, &dep, pi, tp, &mut g, &mut budget);
         let area = filament_area(recipe);
         out.extend(unsupported_finding(tp, &t.unsup, area));
         out.extend(bridge_finding(
@@ -303,6 +290,7 @@ pub fn check(recipe: &Recipe, paths: &[&Toolpath], between: &dyn Fn(), out: &mut
             area,
         ));
     }
+    out
 }
 
 /// The filament's cross-section, mm² (the material's diameter, else the printer's).
@@ -323,8 +311,7 @@ struct PartTally {
 }
 
 /// Samples every extruding string of part `pi` for support, counting the
-/// part's strings on from `g`, spending the gap `budget` and calling
-/// `between` every [`BETWEEN`] strings.
+/// part's strings on from `g` and spending the gap `budget`.
 fn scan_part(
     recipe: &Recipe,
     dep: &Deposits,
@@ -332,7 +319,6 @@ fn scan_part(
     tp: &Toolpath,
     g: &mut u32,
     budget: &mut usize,
-    between: &dyn Fn(),
 ) -> PartTally {
     let p = &recipe.printer;
     let nozzle = p.nozzle_diameter;
@@ -365,9 +351,6 @@ fn scan_part(
         }
     };
     for (k, s) in tp.strings.iter().enumerate() {
-        if k % BETWEEN == BETWEEN - 1 {
-            between();
-        }
         let (a, b) = tp.ends(k);
         let l = a.distance(b);
         if s.travel {
@@ -718,9 +701,7 @@ mod tests {
 
     fn run(tps: &[Toolpath]) -> Vec<Finding> {
         let refs: Vec<&Toolpath> = tps.iter().collect();
-        let mut out = Vec::new();
-        check(&recipe(), &refs, &|| {}, &mut out);
-        out
+        check(&recipe(), &refs)
     }
 
     #[test]
@@ -741,7 +722,7 @@ mod tests {
         tp.strings.last_mut().unwrap().c = 50.0;
         tp.draw(DVec3::new(21.0, 0.0, 0.2), 0.15, 30.0);
         let refs = [&tp];
-        let dep = Deposits::new(&refs, 0.4, 1.5, &|| {});
+        let dep = Deposits::new(&refs, 0.4, 1.5);
         let each = tp
             .strings
             .iter()
@@ -759,28 +740,15 @@ mod tests {
         // one path of extruding strings: its strings in order, none listed
         let h = helix(0.3, 2, 0.15);
         let two = [&h, &tp];
-        let dep = Deposits::new(&two[..1], 0.4, 1.5, &|| {});
+        let dep = Deposits::new(&two[..1], 0.4, 1.5);
         assert!(dep.ids.is_empty());
         assert_eq!(dep.len(), h.len());
         assert_eq!(dep.id(7), (0, 7));
         // a second path lists them all
-        let dep = Deposits::new(&two, 0.4, 1.5, &|| {});
+        let dep = Deposits::new(&two, 0.4, 1.5);
         assert_eq!(dep.len(), h.len() + 9);
         assert_eq!(dep.id(7), (0, 7));
         assert_eq!(dep.id(h.len() as u32 + 8), (1, 9));
-    }
-
-    #[test]
-    fn a_long_check_calls_between_as_it_goes() {
-        // a helix of more than 3 × BETWEEN strings
-        let tp = helix(0.3, 3 * BETWEEN / 72 + 1, 0.15);
-        let calls = std::cell::Cell::new(0);
-        let mut out = Vec::new();
-        check(&recipe(), &[&tp], &|| calls.set(calls.get() + 1), &mut out);
-        assert!(out.is_empty(), "{out:?}");
-        // once in making the deposits and once in the scan, each BETWEEN strings
-        assert_eq!(calls.get(), 2 * (tp.len() / BETWEEN));
-        assert!(calls.get() >= 6);
     }
 
     #[test]

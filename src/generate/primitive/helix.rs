@@ -7,7 +7,6 @@ use glam::DVec3;
 use super::outline::{along, radius_or_outline, turn_points, Files, RawOutline};
 use super::{TurnTable, PAR_MIN};
 use crate::base::svg::Outline;
-use crate::base::threads::Threads;
 use crate::base::toolpath::Toolpath;
 use serde::Deserialize;
 
@@ -57,23 +56,17 @@ impl Helix {
 
     /// Point k is at angle 2·pi·k/segments and height `height·k/n`, so the
     /// angle steps are uniform and the last point sits exactly at `height`.
+    /// The points are computed in chunks, each the same whatever the split.
     pub fn build(&self, c: f64, v: f64) -> Toolpath {
-        self.build_on(c, v, Threads::ONE)
-    }
-
-    /// [`Helix::build`], the points computed on up to `threads` threads
-    /// (each point the same whatever the split).
-    pub fn build_on(&self, c: f64, v: f64, threads: Threads) -> Toolpath {
         if let Some(o) = &self.outline {
             return self.build_outline(o, c, v);
         }
         let n = self.string_count();
         let circle = TurnTable::new(self.radius, self.segments, n);
         // the turn's table walked in step (k mod segments without a division
-        // per point); the points written in place on the threads (a fresh
-        // 48 MB for 2M strings: its page faults shared out too), then the
+        // per point); the points written in place in chunks, then the
         // strings likewise
-        let points = threads.fill_vec_with(n as usize + 1, PAR_MIN, |start| {
+        let points = crate::base::par::fill_vec_with(n as usize + 1, PAR_MIN, |start| {
             let mut turn = circle.walk_from(start as u64);
             let mut k = start as u64;
             move || {
@@ -87,7 +80,7 @@ impl Helix {
                 self.center + DVec3::new(x, y, z)
             }
         });
-        Toolpath::uniform(points, c, v, threads)
+        Toolpath::uniform(points, c, v)
     }
 }
 
@@ -185,7 +178,8 @@ mod tests {
         assert!(big.string_count() as usize > PAR_MIN);
         let one = big.build(0.2, 30.0);
         for threads in [2, 3, 4] {
-            assert_eq!(big.build_on(0.2, 30.0, Threads::new(threads)), one);
+            let on = crate::base::par::on_threads(threads, || big.build(0.2, 30.0));
+            assert_eq!(on, one);
         }
     }
 }

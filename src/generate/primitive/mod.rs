@@ -35,7 +35,6 @@ use serde::Deserialize;
 
 use crate::base::error::Result;
 use crate::base::num::{Num, Scope};
-use crate::base::threads::Threads;
 use crate::base::toolpath::Toolpath;
 
 /// A primitive as written: each kind owns its raw form and its resolution.
@@ -131,16 +130,9 @@ impl Primitive {
 
     /// Makes the strings, with cross-section `c` and speed `v` where the
     /// primitive sets none of its own.
+    /// A primitive that splits its points (a helix) makes the same strings
+    /// whatever the threads.
     pub fn build(&self, c: f64, v: f64) -> Toolpath {
-        self.build_on(c, v, Threads::ONE)
-    }
-
-    /// [`Primitive::build`] on up to `threads` threads where a primitive
-    /// splits its points (a helix); the same strings whatever the budget.
-    pub fn build_on(&self, c: f64, v: f64, threads: Threads) -> Toolpath {
-        if let Primitive::Helix(p) = self {
-            return p.build_on(c, v, threads);
-        }
         match self {
             Primitive::Path(cmds) => path::build(cmds, c, v),
             Primitive::Circle(p) => p.build(c, v),

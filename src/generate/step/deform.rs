@@ -2,10 +2,10 @@
 
 use glam::DVec3;
 
-use super::{not_finite, par_chunks, vars_with, Polar};
+use super::{not_finite, vars_with, Polar, PAR_MIN};
 use crate::base::error::{Error, Result};
 use crate::base::expr::{var, Expr, Lanes, LANES};
-use crate::base::threads::Threads;
+use crate::base::par::try_chunks;
 use crate::base::toolpath::{frac, Toolpath};
 
 /// A deformation: new positions and/or new cross-sections and speeds.
@@ -32,24 +32,24 @@ impl Deform {
     }
 
     /// Applies the deformation: c and v first, at the old midpoints, then the
-    /// points; on up to `threads` threads (the output is the same for any).
-    pub fn apply(&self, tp: &mut Toolpath, threads: Threads) -> Result<()> {
+    /// points; in chunks (the output is the same for any number of threads).
+    pub fn apply(&self, tp: &mut Toolpath) -> Result<()> {
         if self.cross_section.is_some() || self.speed.is_some() {
-            self.apply_strings(tp, threads)?;
+            self.apply_strings(tp)?;
         }
         if let Some(pos) = &self.position {
-            self.apply_points(tp, pos, threads)?;
+            self.apply_points(tp, pos)?;
         }
         Ok(())
     }
 
-    fn apply_strings(&self, tp: &mut Toolpath, threads: Threads) -> Result<()> {
+    fn apply_strings(&self, tp: &mut Toolpath) -> Result<()> {
         let exprs: Vec<&Expr> = self.cross_section.iter().chain(&self.speed).collect();
         let (r_too, theta_too) = Self::needs_polar(&exprs);
         let n = tp.len();
         let points = &tp.points;
         let turns = &tp.turns;
-        par_chunks(&mut tp.strings, threads, |start, chunk| {
+        try_chunks(&mut tp.strings, PAR_MIN, |start, chunk| {
             // LANES strings at a time (Expr::eval_many: the same values as
             // eval); travel strings are evaluated too but keep their c and v
             let mut vars = [[0.0; var::COUNT]; LANES];
@@ -102,7 +102,7 @@ impl Deform {
         })
     }
 
-    fn apply_points(&self, tp: &mut Toolpath, pos: &[Expr; 3], threads: Threads) -> Result<()> {
+    fn apply_points(&self, tp: &mut Toolpath, pos: &[Expr; 3]) -> Result<()> {
         let n = tp.points.len();
         let [f0, f1, f2] = pos;
         let cylinder = self.cylinder;
@@ -118,7 +118,7 @@ impl Deform {
         let (r_used, theta_too) = Self::needs_polar(&evaluated);
         let r_too = cylinder || r_used;
         let turns = &tp.turns;
-        par_chunks(&mut tp.points, threads, |start, chunk| {
+        try_chunks(&mut tp.points, PAR_MIN, |start, chunk| {
             // LANES points at a time: their variables, then each expression
             // over all of them (Expr::eval_many: the same values as eval)
             let mut vars = [[0.0; var::COUNT]; LANES];
@@ -235,7 +235,7 @@ mod tests {
             speed: None,
         };
         let mut t = line();
-        d.apply(&mut t, Threads::new(4)).unwrap();
+        crate::base::par::on_threads(4, || d.apply(&mut t)).unwrap();
         assert!((t.points[1] - DVec3::new(0.0, 2.0, 2.0)).length() < 1e-12);
         // c evaluated at the old midpoint of string 0 (z = 0.5)
         assert!((t.strings[0].c - 0.1).abs() < 1e-12);
@@ -250,7 +250,7 @@ mod tests {
             speed: None,
         };
         let mut t = line();
-        d.apply(&mut t, Threads::new(4)).unwrap();
+        crate::base::par::on_threads(4, || d.apply(&mut t)).unwrap();
         assert!((t.points[0] - DVec3::new(0.0, 1.0, 0.0)).length() < 1e-12);
     }
 
@@ -262,7 +262,7 @@ mod tests {
             cross_section: None,
             speed: None,
         };
-        let e = d.apply(&mut line(), Threads::new(4)).unwrap_err();
+        let e = crate::base::par::on_threads(4, || d.apply(&mut line())).unwrap_err();
         assert!(
             e.message.contains("position[1] `sqrt(y - 0.5)`") && e.message.contains("point 0"),
             "{e}"
@@ -298,7 +298,7 @@ mod tests {
         };
         let mut t = long_helix(n);
         let old = t.clone();
-        d.apply(&mut t, Threads::new(4)).unwrap();
+        crate::base::par::on_threads(4, || d.apply(&mut t)).unwrap();
         let [f0, _, f2] = d.position.as_ref().unwrap();
         for (i, p) in old.points.iter().enumerate() {
             let vars = vars_at(*p, i, n + 1, true);
@@ -320,7 +320,7 @@ mod tests {
             cross_section: None,
             speed: None,
         };
-        let e = bad.apply(&mut long_helix(n), Threads::new(4)).unwrap_err();
+        let e = crate::base::par::on_threads(4, || bad.apply(&mut long_helix(n))).unwrap_err();
         assert!(e.message.contains("at point 30001,"), "{e}");
     }
 }

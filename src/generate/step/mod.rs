@@ -17,7 +17,6 @@ use glam::DVec3;
 
 use crate::base::error::{Error, Result};
 use crate::base::expr::{var, Vars};
-use crate::base::threads::Threads;
 use crate::base::toolpath::{angle, polar, radius, Toolpath};
 
 /// What `modulate_*` keeps when it scales the cross-section.
@@ -75,9 +74,9 @@ impl Step {
         }
     }
 
-    /// Applies the step in place, on up to `threads` threads. `max_strings`
-    /// bounds what `subdivide` may make.
-    pub fn apply(&self, tp: &mut Toolpath, max_strings: u64, threads: Threads) -> Result<()> {
+    /// Applies the step in place (the same result whatever the threads).
+    /// `max_strings` bounds what `subdivide` may make.
+    pub fn apply(&self, tp: &mut Toolpath, max_strings: u64) -> Result<()> {
         if tp.turns.is_none() && self.uses(var::S) {
             return Err(Error::input(
                 "",
@@ -85,7 +84,7 @@ impl Step {
             ));
         }
         match self {
-            Step::DeformXyz(d) | Step::DeformCylinder(d) => d.apply(tp, threads),
+            Step::DeformXyz(d) | Step::DeformCylinder(d) => d.apply(tp),
             Step::ModulateCylinder(m) => m.apply(tp),
             Step::ModulateMap(m) => m.apply(tp),
             Step::Subdivide(max) => subdivide::apply(tp, *max, max_strings),
@@ -102,37 +101,8 @@ impl Step {
     }
 }
 
-/// Below this many items a step runs on one thread (a thread costs ~50 µs;
-/// 8k points of a deform take ~0.5 ms).
-const PAR_MIN: usize = 8_192;
-
-/// Calls `f(start, chunk)` on consecutive chunks of `items` (chunk j starts at
-/// item `start`), on up to `threads` threads (the caller's budget;
-/// one below [`PAR_MIN`] items), and returns the error of the earliest failing chunk. Every item
-/// is computed by the same code whatever the split, and each chunk stops at
-/// its own first error, so results and error are those of one thread: the
-/// output cannot depend on the thread count.
-pub(crate) fn par_chunks<T: Send>(
-    items: &mut [T],
-    threads: Threads,
-    f: impl Fn(usize, &mut [T]) -> Result<()> + Sync,
-) -> Result<()> {
-    let n = items.len();
-    let threads = if n < PAR_MIN { 1 } else { threads.get() };
-    if threads <= 1 {
-        return f(0, items);
-    }
-    // the same split as `Threads::chunks`: chunk j starts at j × size
-    let size = n.div_ceil(threads);
-    let results: Vec<std::sync::OnceLock<Result<()>>> =
-        (0..n.div_ceil(size)).map(|_| Default::default()).collect();
-    Threads::new(threads).chunks(items, 0, |start, chunk| {
-        let _ = results[start / size].set(f(start, chunk));
-    });
-    results
-        .into_iter()
-        .try_for_each(|r| r.into_inner().expect("every chunk ran"))
-}
+/// Below this many items a step runs in one piece.
+pub(crate) const PAR_MIN: usize = 8_192;
 
 /// Variable values for point or string `i` of `n` at `p`; r and theta only
 /// when `polar_too` (atan2 is the costly part).

@@ -20,11 +20,12 @@ use std::io::{self, Write};
 
 use glam::DVec3;
 
+use crate::analyse::plan::Plan;
+use crate::analyse::planner::{Estimate, MoveKind, Moves};
 pub use crate::analyse::stats::MoveStats;
 use crate::base::error::Result;
 use crate::base::format::{fmt_num, hms, units, Chunk};
 use crate::base::safe_text::one_line;
-use crate::base::threads::Threads;
 use crate::base::toolpath::{Event, Toolpath};
 use crate::generate::model::Recipe;
 use crate::machine::{Extrusion, Printer};
@@ -39,8 +40,36 @@ fn feed_units(mm_s: f64) -> i64 {
     crate::base::format::round_i64(mm_s * 60.0).max(1)
 }
 
+/// Writes the G-code of `plan` to `out`: the header, `thumbnails` (blocks
+/// of comments, see `output::preview::thumbnail`), the start G-code, every
+/// part, the end G-code and the summary. Every move goes to `moves` as it
+/// is written; `estimate` turns them into the print's times for the summary.
+pub fn write<W: Write, M: Moves>(
+    plan: &Plan,
+    thumbnails: String,
+    out: W,
+    moves: M,
+    estimate: impl FnOnce(&mut M) -> Estimate,
+) -> Result<(W, MoveStats)> {
+    let io = |e: io::Error| {
+        crate::base::error::Error::io_from(&plan.path, format!("cannot write the G-code: {e}"), &e)
+    };
+    let top = plan.top_z();
+    let mut em = Emitter::new(out, &plan.recipe, moves);
+    em.thumbnails = thumbnails;
+    let fan_events = |t: &Toolpath| t.events.iter().any(|(_, e)| matches!(e, Event::Fan { .. }));
+    if plan.paths.iter().any(fan_events) {
+        em.manual_fan();
+    }
+    em.start(&plan.recipe, top)?;
+    for tp in &plan.paths {
+        em.part(tp).map_err(io)?;
+    }
+    em.finish(&plan.recipe, top, estimate)
+}
+
 /// Writes one print: header, start G-code, parts, end G-code, summary.
-pub struct Emitter<'a, W: Write> {
+pub struct Emitter<'a, W: Write, M: Moves> {
     out: W,
     printer: &'a Printer,
     /// Filament cross-section area, mm².
@@ -73,7 +102,7 @@ pub struct Emitter<'a, W: Write> {
     /// `crate::output::preview::thumbnail`); empty for none.
     pub thumbnails: String,
     /// Every written move, for the print-time estimate.
-    planner: crate::analyse::planner::Background,
+    moves: M,
     /// The material's fan: (speed, start z), until it is switched on or a
     /// `fan` event takes over.
     fan: Option<(f64, f64)>,
@@ -89,21 +118,10 @@ struct Pending {
     v_last: f64,
 }
 
-impl<'a, W: Write> Emitter<'a, W> {
-    /// An emitter writing to `out` for `recipe`'s printer and material; its
-    /// print-time planner runs on a thread of its own if `threads` allows.
-    pub fn new(out: W, recipe: &'a Recipe, threads: Threads) -> Emitter<'a, W> {
-        let planner = crate::analyse::planner::Background::new(recipe.printer.limits(), threads);
-        Emitter::with_planner(out, recipe, planner)
-    }
-
-    /// An emitter writing to `out` whose moves go to `planner` (see
-    /// [`crate::analyse::planner::Background::fed`]).
-    pub fn with_planner(
-        out: W,
-        recipe: &'a Recipe,
-        planner: crate::analyse::planner::Background,
-    ) -> Emitter<'a, W> {
+impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
+    /// An emitter writing to `out` for `recipe`'s printer and material, its
+    /// moves (in machine coordinates) handed to `moves` as they are written.
+    pub fn new(out: W, recipe: &'a Recipe, moves: M) -> Emitter<'a, W, M> {
         let d = recipe
             .material
             .filament_diameter
@@ -129,7 +147,7 @@ impl<'a, W: Write> Emitter<'a, W> {
             },
             pending: Pending::default(),
             thumbnails: String::new(),
-            planner,
+            moves,
             fan: (recipe.material.fan_speed > 0.0)
                 .then_some((recipe.material.fan_speed, recipe.material.fan_start_z)),
         }
@@ -304,7 +322,7 @@ impl<'a, W: Write> Emitter<'a, W> {
             self.text(flavor::retract(self.printer.flavor))?;
             self.retracted = true;
             self.stats.retractions += 1;
-            self.planner.extrude_only(len as f64 / E, r.speed);
+            self.moves.extrude_only(len as f64 / E, r.speed);
             return Ok(());
         }
         self.begin(b"G1 E");
@@ -317,7 +335,7 @@ impl<'a, W: Write> Emitter<'a, W> {
         self.end_line()?;
         self.retracted = true;
         self.stats.retractions += 1;
-        self.planner.extrude_only(len as f64 / E, self.feed_mm_s());
+        self.moves.extrude_only(len as f64 / E, self.feed_mm_s());
         Ok(())
     }
 
@@ -336,7 +354,7 @@ impl<'a, W: Write> Emitter<'a, W> {
         if self.printer.firmware_retraction {
             self.text(flavor::unretract(self.printer.flavor))?;
             self.retracted = false;
-            self.planner.extrude_only(len as f64 / E, r.speed);
+            self.moves.extrude_only(len as f64 / E, r.speed);
             return Ok(());
         }
         self.begin(b"G1 E");
@@ -348,7 +366,7 @@ impl<'a, W: Write> Emitter<'a, W> {
         self.buf.put(b" ; unretract");
         self.end_line()?;
         self.retracted = false;
-        self.planner.extrude_only(len as f64 / E, self.feed_mm_s());
+        self.moves.extrude_only(len as f64 / E, self.feed_mm_s());
         Ok(())
     }
 
@@ -377,8 +395,7 @@ impl<'a, W: Write> Emitter<'a, W> {
         self.stats.travel_moves += 1;
         self.stats.travel_length += dist;
         let (to_m, f) = (self.written_mm(), self.feed_mm_s());
-        self.planner
-            .move_to(to_m, 0.0, f, crate::analyse::planner::MoveKind::Travel);
+        self.moves.move_to(to_m, 0.0, f, MoveKind::Travel);
         self.head = Some(target);
         Ok(())
     }
@@ -479,12 +496,7 @@ impl<'a, W: Write> Emitter<'a, W> {
         self.set_feed_units(feed);
         self.end_line()?;
         let to_m = self.written_mm();
-        self.planner.move_to(
-            to_m,
-            filament,
-            f,
-            crate::analyse::planner::MoveKind::Extrude,
-        );
+        self.moves.move_to(to_m, filament, f, MoveKind::Extrude);
         self.count_extrusion(len, filament, t, &[from, to]);
         self.head = Some(to);
         Ok(())
@@ -549,8 +561,7 @@ impl<'a, W: Write> Emitter<'a, W> {
                 self.printer.to_machine(arc.point_at(phi))
             };
             let e = filament / pieces as f64;
-            self.planner
-                .move_to(p, e, f, crate::analyse::planner::MoveKind::Extrude);
+            self.moves.move_to(p, e, f, MoveKind::Extrude);
         }
         self.count_extrusion(len, filament, len / f, &tp.points[arc.start..=arc.end]);
         self.head = Some(to);
@@ -590,10 +601,10 @@ impl<'a, W: Write> Emitter<'a, W> {
                 }
                 // the head stops for these; a dwell also takes its time
                 match *e {
-                    Event::Dwell { ms } => self.planner.dwell(ms.max(0.0) / 1000.0),
+                    Event::Dwell { ms } => self.moves.dwell(ms.max(0.0) / 1000.0),
                     Event::Pause
                     | Event::NozzleTemp { wait: true, .. }
-                    | Event::BedTemp { wait: true, .. } => self.planner.stop(),
+                    | Event::BedTemp { wait: true, .. } => self.moves.stop(),
                     _ => {}
                 }
                 let line =
@@ -618,13 +629,13 @@ impl<'a, W: Write> Emitter<'a, W> {
         st.filament += filament;
         st.volume += filament * self.area;
         let f = self.feed_mm_s();
-        self.planner.extrude_only(filament, f);
+        self.moves.extrude_only(filament, f);
         Ok(())
     }
 
     /// Writes one part: a comment, a travel to its start, then its strings.
     pub fn part(&mut self, tp: &Toolpath) -> io::Result<()> {
-        self.planner.begin_part(&tp.name);
+        self.moves.begin_part(&tp.name);
         let comment = format!("; part: {} ({} strings)", one_line(&tp.name), tp.len());
         self.flush()?;
         self.text(&comment)?;
@@ -688,8 +699,15 @@ impl<'a, W: Write> Emitter<'a, W> {
         Ok(())
     }
 
-    /// End G-code and the summary comments slicers write.
-    pub fn finish(mut self, recipe: &Recipe, top_z: f64) -> Result<(W, MoveStats)> {
+    /// End G-code and the summary comments slicers write: `estimate` turns
+    /// the moves' sink, every move handed to it, into the print's estimate
+    /// (the planner's times are known only once it has them all).
+    pub fn finish(
+        mut self,
+        recipe: &Recipe,
+        top_z: f64,
+        estimate: impl FnOnce(&mut M) -> Estimate,
+    ) -> Result<(W, MoveStats)> {
         let io = |e: io::Error| crate::base::error::Error::io_from("output", e.to_string(), &e);
         self.flush().map_err(io)?;
         let vals = Self::template_values(recipe, top_z);
@@ -697,9 +715,8 @@ impl<'a, W: Write> Emitter<'a, W> {
             .printer
             .fill("end_gcode", &self.printer.end_gcode, &vals)?;
         self.text(&end).map_err(io)?;
-        // the planner needs the whole print: times are known only now
-        let limits = self.planner.limits().clone();
-        let est = self.planner.finish();
+        let limits = self.printer.limits();
+        let est = estimate(&mut self.moves);
         self.stats.time = est.total.planned;
         let st = &self.stats;
         let grams = st.volume / 1000.0 * recipe.material.density;

@@ -208,6 +208,28 @@ impl ColorMode {
     }
 }
 
+/// How many threads the drawing may split over (by default the pool's).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Threads(usize);
+
+impl Threads {
+    /// `n` threads, at least 1.
+    pub fn new(n: usize) -> Threads {
+        Threads(n.max(1))
+    }
+
+    /// The number of threads.
+    pub fn get(self) -> usize {
+        self.0
+    }
+}
+
+impl Default for Threads {
+    fn default() -> Threads {
+        Threads::new(rayon::current_num_threads())
+    }
+}
+
 /// What a preview shows and how big.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Options {
@@ -220,7 +242,7 @@ pub struct Options {
     /// Only the model: no title, stats or legend (PNG only).
     pub bare: bool,
     /// How many threads drawing it may use (`-j`); the output is the same on any number.
-    pub threads: crate::base::threads::Threads,
+    pub threads: Threads,
 }
 
 /// The plan read for drawing: per path the spacing of its passes, per string
@@ -1307,7 +1329,8 @@ mod flag_tests {
     fn every_string_of_an_unsupported_run_is_flagged() {
         let path =
             std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/checks/pitch-gap.yaml");
-        let plan = crate::app::build::plan(&path, &crate::app::build::Options::default()).unwrap();
+        let plan =
+            crate::app::prepare::plan(&path, &crate::app::prepare::Options::default()).unwrap();
         let f = plan
             .findings
             .iter()

@@ -15,6 +15,7 @@ use std::sync::Mutex;
 use glam::DVec3;
 use tiny_skia::{LineCap, Paint, PathBuilder, Pixmap, Rect, Stroke, Transform};
 
+use super::Threads;
 use super::{
     colormap, fmt_value, round_diameter, text, Basis, ColorMode, Grid, Options, Render, Scene, Size,
 };
@@ -23,7 +24,6 @@ use crate::analyse::plan::Plan;
 use crate::analyse::stats::Stats;
 use crate::base::error::Result;
 use crate::base::format::hms;
-use crate::base::threads::Threads;
 
 /// Where recipe space lands in the image.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -259,7 +259,7 @@ fn draw<'p>(plan: &'p Plan, opts: &Options) -> (Pixmap, Frame, Scene<'p>) {
     // (depth, seq) is a total order with no ties: one sorted order, on
     // the pool's threads or not
     let order = |a: &Px, b: &Px| a.depth.total_cmp(&b.depth).then(a.seq.cmp(&b.seq));
-    if threads.parallel() {
+    if threads.get() >= 2 {
         use rayon::slice::ParallelSliceMut;
         strokes.par_sort_unstable_by(order);
     } else {

@@ -43,9 +43,15 @@
 //! Everything is + − × ÷ and `sqrt` (IEEE-exact), plus `libm::asin`, so the
 //! estimate is the same on every machine.
 
+mod junction;
+mod klipper;
+mod marlin;
+
 use glam::DVec3;
 
-use crate::base::threads::Threads;
+use junction::Turn;
+use klipper::{klipper_passes, Mcr};
+use marlin::{Queue, SETTLE};
 
 pub use crate::machine::kinematics::{
     Kinematics, Limits, KLIPPER_MINIMUM_CRUISE_RATIO, MARLIN_JUNCTION_DEVIATION,
@@ -119,16 +125,6 @@ struct Block {
     entry_v2: f64,
 }
 
-/// A block's minimum-cruise-ratio profile, kept beside it under Klipper's
-/// model only (Marlin's has none: 16 bytes a move saved).
-#[derive(Clone, Copy, Debug)]
-struct Mcr {
-    /// The highest entry v² in the minimum-cruise-ratio profile.
-    entry_v2: f64,
-    /// The v² this block can gain in that profile, 2·L·a_mcr.
-    delta_v2: f64,
-}
-
 /// The last XYZ block, for the next junction.
 #[derive(Clone, Copy, Debug)]
 struct Last {
@@ -141,46 +137,6 @@ struct Last {
     /// Its acceleration over its kind's nominal one (below 1 when the Z axis
     /// limits it): Klipper's junction deviation scales with it.
     accel_share: f64,
-}
-
-/// The shape of the corner between two moves of unit directions `a` and
-/// `b`, which depends on nothing else (see [`Planner::junction_v2`]).
-#[derive(Clone, Copy, Debug, Default)]
-struct Turn {
-    /// |a − b|² = 4·cos²(θ/2), at most 4: 0 straight on.
-    w: f64,
-    /// cos²(θ/2).
-    cos_half2: f64,
-    /// sin(θ/2): 0 a full reversal.
-    sin_half: f64,
-    /// The junction circle's radius over δ: sin/(1 − sin) of θ/2.
-    r: f64,
-    /// cos(θ/2).
-    x: f64,
-}
-
-impl Turn {
-    /// The corner from direction `a` into direction `b`.
-    fn new(a: DVec3, b: DVec3) -> Turn {
-        // w = |u1 − u2|² = 2·(1 − cos φ) = 4·cos²(θ/2): stable for small turns
-        let w = (a - b).length_squared().min(4.0);
-        let mut t = Turn {
-            w,
-            ..Turn::default()
-        };
-        if w <= 0.0 {
-            return t; // straight on
-        }
-        t.cos_half2 = 0.25 * w; // cos²(θ/2)
-        t.sin_half = (1.0 - t.cos_half2).max(0.0).sqrt(); // sin(θ/2)
-        if t.sin_half <= 0.0 {
-            return t; // a full reversal
-        }
-        // sin/(1 − sin) = sin·(1 + sin)/cos², exact where sin is near 1
-        t.r = t.sin_half * (1.0 + t.sin_half) / t.cos_half2;
-        t.x = t.cos_half2.sqrt();
-        t
-    }
 }
 
 /// What a move to a point is before the planner's state matters: its own
@@ -211,21 +167,9 @@ struct Geo {
     turn: Option<Turn>,
 }
 
-/// Calls replayed at a time in [`Planner::replay_batch`]: their [`Step`]s
+/// Calls replayed at a time in [`Planner::replay`]: their [`Step`]s
 /// stay in the fastest cache.
 const STEPS: usize = 256;
-
-/// Marlin's block buffer as the SD reader fills it and the steppers empty it
-/// (see [`Planner::slowdown`]): times in s from the first move.
-#[derive(Clone, Debug, Default)]
-struct Queue {
-    /// When the reader has the next line ready.
-    read: f64,
-    /// When the last queued block finishes.
-    busy_until: f64,
-    /// End times of the blocks in the buffer, oldest first.
-    ends: std::collections::VecDeque<f64>,
-}
 
 struct Part {
     name: String,
@@ -251,7 +195,7 @@ pub struct Planner {
     line_time: f64,
     /// The direction of the last move that moved (whatever came after it).
     prev_dir: Option<DVec3>,
-    /// The steps of the calls being replayed (see [`Planner::replay_batch`]).
+    /// The steps of the calls being replayed (see [`Planner::replay`]).
     steps: Vec<Step>,
     /// Under Marlin's model, blocks planned already (their times summed in
     /// `planned`) and no longer kept: `blocks` starts with block `done`.
@@ -266,10 +210,6 @@ pub struct Planner {
     /// The block count at which to look for settled blocks next.
     next_settle: usize,
 }
-
-/// Blocks queued between two looks for settled blocks (see
-/// [`Planner::plan_settled`]): 256 KB of them.
-const SETTLE: usize = 8192;
 
 impl Planner {
     /// A planner with these limits, the head at an unknown place.
@@ -344,15 +284,6 @@ impl Planner {
         self.drain(0.0);
     }
 
-    /// The buffer empties (the firmware waits for its moves, then `seconds`
-    /// more) before the reader goes on.
-    fn drain(&mut self, seconds: f64) {
-        let q = &mut self.queue;
-        q.read = q.read.max(q.busy_until) + seconds;
-        q.busy_until = q.read;
-        q.ends.clear();
-    }
-
     /// The head stands still for `seconds` (e.g. `G4`): counted in every time.
     pub fn dwell(&mut self, seconds: f64) {
         self.last = None;
@@ -375,54 +306,6 @@ impl Planner {
         }
         v = v.min(cap);
         self.slowdown(len, v)
-    }
-
-    /// Marlin's minimum segment time, as `planner.cpp` (`_populate_block`,
-    /// `#if ENABLED(SLOWDOWN)`) applies it: only while the buffer is draining,
-    /// with `moves_queued` blocks in it and `2 ≤ moves_queued ≤
-    /// BLOCK_BUFFER_SIZE/2 − 1`, a move of nominal time t < min_segment_time
-    /// gets `t + 2·(min_segment_time − t)/moves_queued`; a full buffer (the
-    /// reader keeping ahead) or an empty one slows nothing. The buffer is
-    /// modelled as filled by a reader that makes a line ready every
-    /// 1/`command_rate` s (when there is room: BLOCK_BUFFER_SIZE − 1 blocks)
-    /// and emptied by the steppers at each block's nominal time (its
-    /// acceleration is left out). With `min_segment_time_floor` every move
-    /// lasts at least `min_segment_time` instead. Returns the speed.
-    fn slowdown(&mut self, len: f64, v: f64) -> f64 {
-        let lim = &self.limits;
-        let m = lim.min_segment_time;
-        if m <= 0.0 {
-            return v;
-        }
-        if lim.min_segment_time_floor {
-            return v.min(len / m);
-        }
-        let size = lim.block_buffer_size as usize;
-        let q = &mut self.queue;
-        let mut ready = q.read + self.line_time;
-        while q.ends.front().is_some_and(|&e| e <= ready) {
-            q.ends.pop_front();
-        }
-        if q.ends.len() + 1 >= size {
-            // full: the reader waits for the oldest block to finish
-            ready = ready.max(q.ends.pop_front().unwrap_or(ready));
-            while q.ends.front().is_some_and(|&e| e <= ready) {
-                q.ends.pop_front();
-            }
-        }
-        let queued = q.ends.len();
-        let mut t = len / v;
-        if (2..size / 2).contains(&queued) && t < m {
-            t += 2.0 * (m - t) / queued as f64;
-        }
-        q.read = ready;
-        q.busy_until = q.busy_until.max(ready) + t;
-        q.ends.push_back(q.busy_until);
-        if t > 0.0 {
-            len / t
-        } else {
-            v
-        }
     }
 
     /// A move to `to` (machine coordinates, mm) at `feed` mm/s, feeding `e` mm
@@ -561,7 +444,7 @@ impl Planner {
     /// whose moves do not wait on each other, so the processor overlaps
     /// their square roots and divisions), then is taken. The same
     /// operations on the same values, so the same estimate.
-    fn replay_batch(&mut self, calls: &[Call]) {
+    pub fn replay(&mut self, calls: &[Call]) {
         let mut steps = std::mem::take(&mut self.steps);
         for run in calls.chunks(STEPS) {
             steps.clear();
@@ -577,7 +460,7 @@ impl Planner {
                         let step = *next.next().expect("a step for every move");
                         self.take(step, e, feed, kind);
                     }
-                    _ => replay(self, c),
+                    _ => self.call(c),
                 }
             }
         }
@@ -619,16 +502,6 @@ impl Planner {
         self.add_move(length, feed, v);
     }
 
-    /// Klipper's look-ahead at the time a block is queued (its
-    /// `Move.calc_junction`): the block's highest entry v² `entry_v2` is also
-    /// held to what the block before can reach, e_prev + 2·a_prev·L_prev (a
-    /// forward pass as the moves come), and the same is done in the
-    /// minimum-cruise-ratio profile, where every block gains at most
-    /// 2·L·min(a_nom·(1 − ratio), a) of v² (`a_nom` the kind's acceleration,
-    /// Klipper's `max_accel`; `a` the block's own, lower where the Z axis or
-    /// the extruder limits it). Returns that profile's (entry v², gain); with
-    /// no previous XYZ block the head is at rest. Marlin's model keeps the
-    /// junction limit alone: (0, 0).
     /// Queues a block, with its minimum-cruise-ratio profile under Klipper's model.
     fn push(&mut self, b: Block, mcr_entry_v2: f64, mcr_delta_v2: f64) {
         self.blocks.push(b);
@@ -640,97 +513,6 @@ impl Planner {
                 entry_v2: mcr_entry_v2,
                 delta_v2: mcr_delta_v2,
             });
-        }
-    }
-
-    fn klipper_entry(&self, entry_v2: &mut f64, base: f64, accel: f64, len: f64) -> (f64, f64) {
-        if self.limits.square_corner_velocity.is_none() {
-            return (0.0, 0.0);
-        }
-        let mcr_delta_v2 = 2.0 * len * (base * (1.0 - self.limits.minimum_cruise_ratio)).min(accel);
-        let (prev, prev_mcr) = match (self.last, self.blocks.last(), self.mcr.last()) {
-            (Some(_), Some(b), Some(m)) => (b, m),
-            _ => {
-                *entry_v2 = 0.0;
-                return (0.0, mcr_delta_v2);
-            }
-        };
-        *entry_v2 = entry_v2.min(prev.entry_v2 + 2.0 * prev.accel * prev.len);
-        let mcr_entry_v2 = entry_v2.min(prev_mcr.entry_v2 + prev_mcr.delta_v2);
-        (mcr_entry_v2, mcr_delta_v2)
-    }
-
-    /// Highest v² at the corner from `prev` into a block along `dir` of length
-    /// `len`, acceleration `accel` (`accel_share` of its kind's) and cruise
-    /// v² `cruise_v2` (never above either block's cruise v²).
-    ///
-    /// With θ the angle between the reversed incoming direction and the
-    /// outgoing one (θ = 180° straight on, 90° a square corner, 0 a reversal),
-    /// both firmwares use the "approximated centripetal acceleration" of
-    /// Grbl (Marlin's junction deviation; Klipper's Kinematics document): a
-    /// circle tangent to both moves whose closest approach to the corner is δ
-    /// has radius R = δ·sin(θ/2) / (1 − sin(θ/2)), and the speed on it at
-    /// acceleration a is v² = a·R.
-    ///
-    /// - Marlin: δ = `junction_deviation`, a the outgoing block's
-    ///   acceleration. With `JD_HANDLE_SMALL_SEGMENTS` (on in Marlin's default
-    ///   configuration) a block shorter than 1 mm turning by less than 45° is
-    ///   taken as a chord of an arc of radius L / φ (φ = π − θ the turn), so
-    ///   also v² ≤ a·L / φ. (Marlin approximates φ by a polynomial that never
-    ///   goes below 0.033 rad; here φ is exact.)
-    /// - Klipper: δ = scv²·(√2 − 1) / a_nom with a_nom its `max_accel`, and
-    ///   v² = R·δ·a for each of the two moves' own a, so a 90° corner gets
-    ///   exactly scv (less where the Z axis lowers a move's a); and the
-    ///   circle must touch each move no further than its middle:
-    ///   v² ≤ ½·L·a·tan(θ/2) for both moves.
-    fn junction_v2(
-        &self,
-        prev: &Last,
-        t: &Turn,
-        len: f64,
-        accel: f64,
-        accel_share: f64,
-        cruise_v2: f64,
-    ) -> f64 {
-        let both = cruise_v2.min(prev.cruise_v2);
-        if t.w <= 0.0 {
-            return both; // straight on
-        }
-        if t.sin_half <= 0.0 {
-            return 0.0; // a full reversal stops the head
-        }
-        let (cos_half2, sin_half, r) = (t.cos_half2, t.sin_half, t.r);
-        match (
-            self.limits.square_corner_velocity,
-            self.limits.junction_deviation,
-        ) {
-            (Some(scv), _) => {
-                let share = accel_share.min(prev.accel_share);
-                let jd_v2 = r * scv * scv * (std::f64::consts::SQRT_2 - 1.0) * share;
-                let tan_half = sin_half / t.x; // t.x = √cos²(θ/2)
-                let c_this = 0.5 * len * accel * tan_half;
-                let c_prev = 0.5 * prev.len * prev.accel * tan_half;
-                jd_v2.min(c_this).min(c_prev).min(both)
-            }
-            (None, Some(delta)) => {
-                let mut v2 = r * accel * delta;
-                // turn φ = π − θ = 2·asin(cos(θ/2)); φ < 45° ⇔ θ > 135°
-                // ⇔ cos²(θ/2) < sin²(22.5°) = (1 − √½)/2
-                const SMALL_TURN: f64 = 0.5 * (1.0 - std::f64::consts::FRAC_1_SQRT_2);
-                let cap = v2.min(both);
-                // 2x ≤ 2·asin x ≤ π·x: skip the asin when even the largest φ
-                // leaves a limit above the others
-                let x = t.x;
-                if len < 1.0
-                    && cos_half2 < SMALL_TURN
-                    && len * accel < cap * std::f64::consts::PI * x
-                {
-                    let phi = 2.0 * libm::asin(x.min(1.0));
-                    v2 = v2.min(len * accel / phi);
-                }
-                v2.min(both)
-            }
-            (None, None) => both,
         }
     }
 
@@ -749,113 +531,6 @@ impl Planner {
         let mut planned = std::mem::take(&mut self.planned);
         planned.resize(self.parts.len() + 1, 0.0);
         self.estimate(&planned)
-    }
-
-    /// Under Marlin's model, plans the blocks whose entries the blocks still
-    /// to come can no longer change, and forgets them (2M moves kept 64 MB
-    /// of blocks until the end).
-    ///
-    /// The backward pass is e_i = min(cap_i, e_{i+1} + 2·a_i·L_i), and each
-    /// step (a rounded sum, then a min) never lowers its result when
-    /// e_{i+1} grows. Whatever comes after the last block queued, its entry
-    /// lies in [0, ∞]: run from both ends of that range, the pass gives
-    /// bounds of every e_i, and where the two meet (bit for bit) e_i is the
-    /// one the whole print's pass gives; below it the pass is the same
-    /// operations on the same values. The forward pass and the times of the
-    /// blocks before that one follow in order, so every sum is the same.
-    fn plan_settled(&mut self) {
-        let n = self.blocks.len();
-        let (mut lo, mut hi) = (0.0f64, f64::INFINITY);
-        let mut settled = None;
-        for j in (1..n).rev() {
-            let t = self.reach(j);
-            let cap = self.cap(j);
-            lo = cap.min(lo + t);
-            hi = cap.min(hi + t);
-            if lo.to_bits() == hi.to_bits() {
-                settled = Some((j, lo));
-                break;
-            }
-        }
-        match settled {
-            Some((m, e)) => {
-                self.blocks[m].entry_v2 = e;
-                self.backward(m, e);
-                self.forward(m, false);
-                self.blocks.drain(..m);
-                self.done += m;
-                self.head_planned = true;
-                self.next_settle = self.blocks.len() + SETTLE;
-            }
-            // nothing settled yet (moves so fast that 8192 of them cannot
-            // stop): look again once the queue has doubled
-            None => self.next_settle = 2 * n,
-        }
-    }
-
-    /// 2·a·L of block j (of `blocks`): the v² it gains or loses.
-    #[inline]
-    fn reach(&self, j: usize) -> f64 {
-        2.0 * self.blocks[j].accel * self.blocks[j].len
-    }
-
-    /// The highest entry v² of block j ≥ 1 (of `blocks`): its junction's,
-    /// under both blocks' cruise v².
-    #[inline]
-    fn cap(&self, j: usize) -> f64 {
-        let b = &self.blocks;
-        b[j].entry_v2.min(b[j].cruise_v2).min(b[j - 1].cruise_v2)
-    }
-
-    /// The backward pass over `blocks[1..end]` from `next`, the entry v² of
-    /// block `end`: entries the blocks after can brake from. (The first
-    /// block of all enters at rest; a kept first block is planned already.)
-    fn backward(&mut self, end: usize, mut next: f64) {
-        for j in (1..end).rev() {
-            let e = self.cap(j).min(next + self.reach(j));
-            self.blocks[j].entry_v2 = e;
-            next = e;
-        }
-    }
-
-    /// The forward pass over `blocks[..end]` and their times, summed per
-    /// range in order; with `last` the last of them ends at rest, else each
-    /// leaves at the entry of the block after it (in `blocks`).
-    fn forward(&mut self, end: usize, last: bool) {
-        if end == 0 {
-            return;
-        }
-        if !self.head_planned {
-            // the first block of all: from rest
-            self.blocks[0].entry_v2 = 0.0;
-        }
-        // ranges: before the parts (0), then part k (k + 1) from its first block
-        if self.planned.len() <= self.parts.len() {
-            self.planned.resize(self.parts.len() + 1, 0.0);
-        }
-        let first = |slot: usize, parts: &[Part]| parts.get(slot).map_or(usize::MAX, |p| p.first);
-        let mut slot = self.slot;
-        let mut bound = first(slot, &self.parts);
-        // with `last` the last block leaves at rest, else at the next one's entry
-        let blocks = &mut self.blocks[..end + usize::from(!last)];
-        for i in 0..end {
-            let g = self.done + i;
-            while g >= bound {
-                slot += 1;
-                bound = first(slot, &self.parts);
-            }
-            let b = blocks[i];
-            let exit = match blocks.get_mut(i + 1) {
-                Some(nb) => {
-                    let reach = b.entry_v2 + 2.0 * b.accel * b.len;
-                    nb.entry_v2 = nb.entry_v2.min(reach);
-                    nb.entry_v2
-                }
-                None => 0.0,
-            };
-            self.planned[slot] += trapezoid_time(b.len, b.accel, b.entry_v2, exit, b.cruise_v2);
-        }
-        self.slot = slot;
     }
 
     /// The estimate from the planned time before the parts and of each part.
@@ -886,65 +561,6 @@ impl Planner {
     }
 }
 
-/// Klipper's look-ahead flush (`LookAheadQueue.flush`) over the whole print
-/// and the blocks' times, summed per range as [`Planner::finish`] does.
-///
-/// Backward from rest at the end, each block gets its entry v²
-/// s_i = min(e_i, s_{i+1} + 2·a_i·L_i) as in Marlin's model, and the same in
-/// the minimum-cruise-ratio profile (entry limits `mcr_entry_v2` and gains
-/// `mcr_delta_v2` of [`Planner::klipper_entry`], whose acceleration is
-/// a·(1 − ratio)): m_i = min(me_i, m_{i+1} + d_i). A block with
-/// m_i < m_{i+1} + d_i can speed up in that profile; the peak v² of the run of
-/// such blocks is where the profile's triangle tops out, (m_i + m_{i+1} + d_i)/2,
-/// taken at the block that can both speed up and slow down (or that
-/// accelerates all along just before blocks that only slow down), and shared
-/// by the blocks before it that accelerate all along. Such a block cruises at
-/// most at that peak and at its own triangle's top (s_i + s_{i+1} + 2·a_i·L_i)/2.
-/// Reaching the peak at a instead of a·(1 − ratio) takes (1 − ratio) of the
-/// distance the profile's ramps take, which leaves at least `ratio` of a run
-/// from rest to rest cruising. A block that can only slow down cruises at
-/// the cruise of the block before it, or its own entry if lower. Then each
-/// block is a trapezoid from min(s_i, c_i) to min(s_{i+1}, c_i) cruising at c_i.
-fn klipper_passes(b: &[Block], mcr: &[Mcr], ends: &[usize]) -> Vec<f64> {
-    let n = b.len();
-    // (entry v², cruise v² if known, exit v²), filled backward
-    let mut plan: Vec<(f64, Option<f64>, f64)> = vec![(0.0, None, 0.0); n];
-    let (mut next, mut next_mcr, mut peak) = (0.0f64, 0.0f64, 0.0f64);
-    let mut pending = 0usize;
-    for i in (0..n).rev() {
-        let reach = next + 2.0 * b[i].accel * b[i].len;
-        let start = b[i].entry_v2.min(reach);
-        pending += 1;
-        let reach_mcr = next_mcr + mcr[i].delta_v2;
-        let start_mcr = mcr[i].entry_v2.min(reach_mcr);
-        let mut cruise = None;
-        if start_mcr < reach_mcr {
-            if start_mcr + mcr[i].delta_v2 > next_mcr || pending > 1 {
-                peak = 0.5 * (start_mcr + reach_mcr);
-            }
-            cruise = Some(b[i].cruise_v2.min(0.5 * (start + reach)).min(peak));
-            pending = 0;
-        }
-        plan[i] = (start, cruise, next);
-        next = start;
-        next_mcr = start_mcr;
-    }
-    let mut planned = vec![0.0f64; ends.len()];
-    let mut slot = 0;
-    let mut prev_cruise = 0.0f64;
-    for (i, &(start, cruise, exit)) in plan.iter().enumerate() {
-        while i >= ends[slot] {
-            slot += 1;
-        }
-        let c = cruise.unwrap_or(prev_cruise.min(start));
-        if c > 0.0 {
-            planned[slot] += trapezoid_time(b[i].len, b[i].accel, start.min(c), exit.min(c), c);
-        }
-        prev_cruise = c;
-    }
-    planned
-}
-
 /// Time of one block of length `len` at acceleration `a`, entering at v0²,
 /// leaving at v1², cruising at most at vc² (all reachable: |v1² − v0²| ≤ 2aL).
 ///
@@ -971,330 +587,82 @@ pub fn trapezoid_time(len: f64, a: f64, v0_2: f64, v1_2: f64, vc_2: f64) -> f64 
     }
 }
 
-/// One call on a [`Planner`], recorded to replay on another thread.
+/// Where the G-code writer's moves go, in the order it writes them: a
+/// [`Planner`], or a [`Call`] list that one replays later (elsewhere).
+pub trait Moves {
+    /// See [`Planner::begin_part`].
+    fn begin_part(&mut self, name: &str);
+    /// See [`Planner::stop`].
+    fn stop(&mut self);
+    /// See [`Planner::dwell`].
+    fn dwell(&mut self, seconds: f64);
+    /// See [`Planner::move_to`].
+    fn move_to(&mut self, to: DVec3, e: f64, feed: f64, kind: MoveKind);
+    /// See [`Planner::extrude_only`].
+    fn extrude_only(&mut self, length: f64, feed: f64);
+}
+
+impl Moves for Planner {
+    fn begin_part(&mut self, name: &str) {
+        Planner::begin_part(self, name)
+    }
+    fn stop(&mut self) {
+        Planner::stop(self)
+    }
+    fn dwell(&mut self, seconds: f64) {
+        Planner::dwell(self, seconds)
+    }
+    fn move_to(&mut self, to: DVec3, e: f64, feed: f64, kind: MoveKind) {
+        Planner::move_to(self, to, e, feed, kind)
+    }
+    fn extrude_only(&mut self, length: f64, feed: f64) {
+        Planner::extrude_only(self, length, feed)
+    }
+}
+
+/// One call on a [`Planner`], recorded to [`Planner::replay`] later: the
+/// same calls in the same order give the same estimate.
 #[derive(Clone, Debug)]
-enum Call {
+pub enum Call {
+    /// [`Planner::begin_part`].
     BeginPart(String),
+    /// [`Planner::stop`].
     Stop,
+    /// [`Planner::dwell`].
     Dwell(f64),
+    /// [`Planner::move_to`].
     MoveTo(DVec3, f64, f64, MoveKind),
+    /// [`Planner::extrude_only`].
     ExtrudeOnly(f64, f64),
 }
 
-/// Calls sent to the planner's thread at a time.
-const BATCH: usize = 4096;
-
-/// Replays one recorded call on `planner`.
-fn replay(planner: &mut Planner, call: &Call) {
-    match *call {
-        Call::BeginPart(ref name) => planner.begin_part(name),
-        Call::Stop => planner.stop(),
-        Call::Dwell(s) => planner.dwell(s),
-        Call::MoveTo(to, e, feed, kind) => planner.move_to(to, e, feed, kind),
-        Call::ExtrudeOnly(l, feed) => planner.extrude_only(l, feed),
+impl Moves for Vec<Call> {
+    fn begin_part(&mut self, name: &str) {
+        self.push(Call::BeginPart(name.to_string()));
+    }
+    fn stop(&mut self) {
+        self.push(Call::Stop);
+    }
+    fn dwell(&mut self, seconds: f64) {
+        self.push(Call::Dwell(seconds));
+    }
+    fn move_to(&mut self, to: DVec3, e: f64, feed: f64, kind: MoveKind) {
+        self.push(Call::MoveTo(to, e, feed, kind));
+    }
+    fn extrude_only(&mut self, length: f64, feed: f64) {
+        self.push(Call::ExtrudeOnly(length, feed));
     }
 }
 
-/// A [`Planner`] on its own thread: the same calls, recorded in batches and
-/// replayed there in order while the G-code is written, so the estimate is
-/// exactly the one planner's and costs the writer almost nothing. With a
-/// budget of one thread it runs inline instead: the same calls, in the same
-/// order, on the caller's thread.
-pub struct Background {
-    limits: Limits,
-    batch: Vec<Call>,
-    tx: Option<Tx>,
-    worker: Option<std::thread::JoinHandle<Estimate>>,
-    /// The planner itself when it runs inline (a budget of one thread).
-    inline: Option<Planner>,
-    /// The planner of a [`Feed`], shared with another thread.
-    fed: Option<std::sync::Arc<std::sync::Mutex<Fed>>>,
-    /// The feed's [`Feed::wanted`].
-    wanted: std::sync::Arc<std::sync::atomic::AtomicBool>,
-    /// The feed's [`Feed::sent`].
-    sent: std::sync::Arc<std::sync::atomic::AtomicUsize>,
-    /// Batches the planner has replayed, to fill again.
-    pool: Pool,
-}
-
-/// Where recorded calls go: the planner's own thread (bounded: the writer
-/// waits when it is too far ahead) or a [`Feed`] (unbounded: its thread may
-/// have other work first).
-enum Tx {
-    Bounded(std::sync::mpsc::SyncSender<Vec<Call>>),
-    Unbounded(std::sync::mpsc::Sender<Vec<Call>>),
-}
-
-/// The receiving end of [`Background::fed`]: a planner that a thread the
-/// caller already has runs between and after its other work, replaying every
-/// recorded call in order. The writer's thread takes over what is left once
-/// it has written everything (see [`Background::finish`]), so whichever
-/// thread is free plans; one lock keeps the calls in order, so the estimate
-/// is the one planner's.
-pub struct Feed {
-    shared: std::sync::Arc<std::sync::Mutex<Fed>>,
-    /// Set by the writer's thread when it has written everything and wants
-    /// the planner: a catch-up stops at its next batch and lets it have it.
-    wanted: std::sync::Arc<std::sync::atomic::AtomicBool>,
-    /// How many batches the writer has sent so far.
-    sent: std::sync::Arc<std::sync::atomic::AtomicUsize>,
-}
-
-/// A planner fed by a channel, and its estimate once the calls have ended.
-struct Fed {
-    planner: Option<Planner>,
-    rx: std::sync::mpsc::Receiver<Vec<Call>>,
-    /// How many batches it has taken from `rx`.
-    received: usize,
-    estimate: Option<Estimate>,
-    pool: Pool,
-}
-
-/// Replayed batches handed back to the writer to fill again: a fresh
-/// 196 KB batch each time cost the writer's thread page faults (2M moves:
-/// ~100 MB of new pages, and as much unmapped on the other thread).
-type Pool = std::sync::Arc<std::sync::Mutex<Vec<Vec<Call>>>>;
-
-/// Batches a [`Pool`] keeps at most.
-const POOL: usize = 16;
-
-/// Hands `batch` back to `pool`, emptied (dropped when the pool is full).
-fn recycle(pool: &Pool, mut batch: Vec<Call>) {
-    batch.clear();
-    if let Ok(mut p) = pool.lock() {
-        if p.len() < POOL {
-            p.push(batch);
-        }
-    }
-}
-
-/// An empty batch from `pool`, or a new one.
-fn fresh(pool: &Pool) -> Vec<Call> {
-    pool.lock()
-        .ok()
-        .and_then(|mut p| p.pop())
-        .unwrap_or_else(|| Vec::with_capacity(BATCH))
-}
-
-impl Fed {
-    /// Replays the first `until` batches (those sent so far), stopping
-    /// early when `wanted` is set.
-    fn catch_up(&mut self, until: usize, wanted: &std::sync::atomic::AtomicBool) {
-        let Some(p) = &mut self.planner else { return };
-        while self.received < until && !wanted.load(std::sync::atomic::Ordering::Relaxed) {
-            let Ok(batch) = self.rx.try_recv() else { break };
-            self.received += 1;
-            p.replay_batch(&batch);
-            recycle(&self.pool, batch);
-        }
-    }
-
-    /// Replays the calls until the writer has sent the last and dropped its
-    /// end (or is gone), then plans them.
-    fn run(&mut self) {
-        let Some(mut p) = self.planner.take() else {
-            return;
-        };
-        while let Ok(batch) = self.rx.recv() {
-            self.received += 1;
-            p.replay_batch(&batch);
-            recycle(&self.pool, batch);
-        }
-        self.estimate = Some(p.finish());
-    }
-}
-
-/// The shared planner, even if a thread panicked while it held it (that
-/// panic is raised where the scope joins it).
-fn lock(m: &std::sync::Mutex<Fed>) -> std::sync::MutexGuard<'_, Fed> {
-    m.lock().unwrap_or_else(|e| e.into_inner())
-}
-
-impl Feed {
-    /// Replays the calls recorded so far, not those recorded meanwhile (a
-    /// writer faster than the planner kept this thread planning until it
-    /// had written everything, the checks this thread had yet to start
-    /// waiting); does nothing if the writer's thread is planning now, and
-    /// stops as soon as it wants to (it has written everything: the rest is
-    /// its to plan, while this thread goes on with its own work).
-    pub fn catch_up(&self) {
-        let until = self.sent.load(std::sync::atomic::Ordering::Acquire);
-        if let Ok(mut fed) = self.shared.try_lock() {
-            fed.catch_up(until, &self.wanted);
-        }
-    }
-
-    /// Replays the calls until the writer finishes (unless its thread has
-    /// done so already), and plans them.
-    pub fn run(&self) {
-        lock(&self.shared).run();
-    }
-}
-
-impl Background {
-    /// A planner with these limits, started on a thread of its own when
-    /// `threads` allows a second one, else run inline.
-    pub fn new(limits: Limits, threads: Threads) -> Background {
-        let mut planner = Planner::new(limits.clone());
-        if !threads.parallel() {
-            return Background {
-                limits,
-                batch: Vec::new(),
-                tx: None,
-                worker: None,
-                inline: Some(planner),
-                fed: None,
-                wanted: Default::default(),
-                sent: Default::default(),
-                pool: Default::default(),
-            };
-        }
-        let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<Call>>(64);
-        let pool = Pool::default();
-        let back = pool.clone();
-        let worker = std::thread::spawn(move || {
-            for batch in rx {
-                planner.replay_batch(&batch);
-                recycle(&back, batch);
-            }
-            planner.finish()
-        });
-        Background {
-            limits,
-            batch: Vec::with_capacity(BATCH),
-            tx: Some(Tx::Bounded(tx)),
-            worker: Some(worker),
-            inline: None,
-            fed: None,
-            wanted: Default::default(),
-            sent: Default::default(),
-            pool,
-        }
-    }
-
-    /// A planner with these limits whose calls are recorded for the returned
-    /// [`Feed`], which another thread runs when it is free: the same calls in
-    /// the same order, so the same estimate. Calls wait in memory until then.
-    pub fn fed(limits: Limits) -> (Background, Feed) {
-        let wanted = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
-        let sent = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
-        let (tx, rx) = std::sync::mpsc::channel::<Vec<Call>>();
-        let pool = Pool::default();
-        let shared = std::sync::Arc::new(std::sync::Mutex::new(Fed {
-            planner: Some(Planner::new(limits.clone())),
-            rx,
-            received: 0,
-            estimate: None,
-            pool: pool.clone(),
-        }));
-        let bg = Background {
-            limits,
-            batch: Vec::with_capacity(BATCH),
-            tx: Some(Tx::Unbounded(tx)),
-            worker: None,
-            inline: None,
-            fed: Some(shared.clone()),
-            wanted: wanted.clone(),
-            sent: sent.clone(),
-            pool,
-        };
-        (
-            bg,
-            Feed {
-                shared,
-                wanted,
-                sent,
-            },
-        )
-    }
-
-    fn call(&mut self, c: Call) {
-        if let Some(p) = &mut self.inline {
-            replay(p, &c);
-            return;
-        }
-        self.batch.push(c);
-        if self.batch.len() >= BATCH && self.tx.is_some() {
-            self.send();
-        }
-    }
-
-    fn send(&mut self) {
-        let batch = std::mem::replace(&mut self.batch, fresh(&self.pool));
-        // a send fails only if the worker died: its panic is raised at finish
-        match &self.tx {
-            Some(Tx::Bounded(tx)) => {
-                let _ = tx.send(batch);
-            }
-            Some(Tx::Unbounded(tx)) if tx.send(batch).is_ok() => {
-                self.sent.fetch_add(1, std::sync::atomic::Ordering::Release);
-            }
-            _ => {}
-        }
-    }
-
-    /// The limits in use.
-    pub fn limits(&self) -> &Limits {
-        &self.limits
-    }
-
-    /// See [`Planner::begin_part`].
-    pub fn begin_part(&mut self, name: &str) {
-        self.call(Call::BeginPart(name.to_string()));
-    }
-
-    /// See [`Planner::stop`].
-    pub fn stop(&mut self) {
-        self.call(Call::Stop);
-    }
-
-    /// See [`Planner::dwell`].
-    pub fn dwell(&mut self, seconds: f64) {
-        self.call(Call::Dwell(seconds));
-    }
-
-    /// See [`Planner::move_to`].
-    pub fn move_to(&mut self, to: DVec3, e: f64, feed: f64, kind: MoveKind) {
-        self.call(Call::MoveTo(to, e, feed, kind));
-    }
-
-    /// See [`Planner::extrude_only`].
-    pub fn extrude_only(&mut self, length: f64, feed: f64) {
-        self.call(Call::ExtrudeOnly(length, feed));
-    }
-
-    /// Sends what is left, waits for the thread and returns its estimate;
-    /// calls after it are ignored.
-    pub fn finish(&mut self) -> Estimate {
-        if let Some(p) = self.inline.take() {
-            return p.finish();
-        }
-        self.send();
-        self.tx = None;
-        if let Some(shared) = self.fed.take() {
-            // every call is sent: plan what the feed's thread has not yet
-            self.wanted
-                .store(true, std::sync::atomic::Ordering::Relaxed);
-            let mut fed = lock(&shared);
-            fed.run();
-            return fed
-                .estimate
-                .take()
-                .unwrap_or_else(|| panic!("the planner's estimate was taken twice"));
-        }
-        let worker = self.worker.take().expect("finish is called once");
-        worker
-            .join()
-            .unwrap_or_else(|e| std::panic::resume_unwind(e))
-    }
-}
-
-impl Drop for Background {
-    fn drop(&mut self) {
-        // an emitter dropped on an error: let the thread end, ignore its result
-        self.tx = None;
-        if let Some(w) = self.worker.take() {
-            let _ = w.join();
+impl Planner {
+    /// Replays one recorded call.
+    fn call(&mut self, c: &Call) {
+        match *c {
+            Call::BeginPart(ref name) => self.begin_part(name),
+            Call::Stop => self.stop(),
+            Call::Dwell(s) => self.dwell(s),
+            Call::MoveTo(to, e, feed, kind) => self.move_to(to, e, feed, kind),
+            Call::ExtrudeOnly(l, feed) => self.extrude_only(l, feed),
         }
     }
 }

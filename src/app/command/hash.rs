@@ -1,0 +1,306 @@
+//! `p3dp hash`: the SHA-256 of exactly what `build` writes; lock files
+//! written and checked, a change located to its first differing lines.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use super::{non_empty, Builds};
+use crate::app::batch::{self, Job};
+use crate::app::pipeline;
+use crate::base::error::{Error, Result};
+use crate::output::file::{write_atomic, HashWriter};
+use crate::output::lock::{self, Entry, LineHashes, Lock};
+use crate::recipe::{parse_set, parse_yaml};
+
+/// What `hash` takes from the command line.
+#[derive(Clone, Debug, Default)]
+pub struct Options {
+    /// The recipes and how each is built.
+    pub builds: Builds,
+    /// `--lock FILE`: write the hashes there.
+    pub lock: Option<PathBuf>,
+    /// `--check FILE`: rebuild every entry of this lock file.
+    pub check: Option<PathBuf>,
+}
+
+/// Builds a job on `threads` into nothing but its hash and line fingerprint.
+/// The fingerprints of `jobs`, built in parallel within `-j`'s budget.
+fn fingerprints(c: &Builds, jobs: &[Job]) -> Vec<Result<(String, LineHashes)>> {
+    batch::run_parallel(jobs.len(), |k| fingerprint(c, &jobs[k]), || {})
+}
+
+fn fingerprint(c: &Builds, job: &Job) -> Result<(String, LineHashes)> {
+    // nothing is written: the G-code is hashed while the checks run
+    let mut p = c.prepared(job)?;
+    let stop = (!c.force).then_some(c.strict);
+    let written = pipeline::check_and_write(
+        &mut p,
+        &c.allow,
+        stop,
+        HashWriter::new(LineHashes::default()),
+    );
+    c.refuse_failing(&p)?;
+    let (hw, _) = written?;
+    let (digest, _, lines) = hw.finish_into();
+    Ok((digest, lines))
+}
+
+/// `p3dp hash`: prints `SHA256  RECIPE`, the hash of exactly what `build` writes;
+/// with `--lock` writes a lock file, with `--check` verifies one.
+pub fn run(a: &Options) -> Vec<Error> {
+    if let Some(lockfile) = &a.check {
+        return check_lock(a, lockfile);
+    }
+    let c = &a.builds;
+    let jobs = match c.jobs() {
+        Ok(j) => j,
+        Err(e) => return vec![e],
+    };
+    if let Some(lockfile) = &a.lock {
+        let outs = [("--lock".to_string(), lockfile.clone())];
+        if let Err(e) = non_empty("--lock", Some(lockfile))
+            .and_then(|_| crate::output::file::check_distinct(&outs, &c.inputs()))
+        {
+            return vec![e];
+        }
+    }
+    let results = fingerprints(c, &jobs);
+    let mut errors = Vec::new();
+    let mut entries = Vec::new();
+    for (job, r) in jobs.iter().zip(results) {
+        match r {
+            Ok((digest, lines)) => {
+                let mut line = format!("{digest}  {}", job.recipe.display());
+                if !job.sweep.is_empty() {
+                    let v: Vec<String> =
+                        job.sweep.iter().map(|(n, v)| format!("{n}={v}")).collect();
+                    line.push_str(&format!("  {}", v.join(" ")));
+                }
+                crate::sayln!("{line}");
+                if let Some(lockfile) = &a.lock {
+                    let printer = c.printer.as_deref();
+                    entries.push(lock_entry(lockfile, job, printer, digest, &lines));
+                }
+            }
+            Err(e) => errors.push(e),
+        }
+    }
+    if let Some(lockfile) = &a.lock {
+        if !errors.is_empty() {
+            errors.push(Error::check(
+                lockfile.display().to_string(),
+                "not written: some recipes failed to build",
+            ));
+            return errors;
+        }
+        let lock = Lock {
+            p3dp_lock: 1,
+            entries,
+        };
+        let text = format!(
+            "# p3dp lock file: each recipe's G-code hash. Verify with: p3dp hash --check {}\n# An intended change of output is a commit that updates this file and says why.\n{}",
+            lockfile.display(),
+            crate::recipe::yaml::to_yaml(&lock)
+        );
+        if let Err(e) = write_atomic(lockfile, |f| {
+            f.write_all(text.as_bytes())
+                .map_err(|e| Error::io_from(lockfile.display().to_string(), e.to_string(), &e))
+        }) {
+            errors.push(e);
+        }
+    }
+    errors
+}
+
+/// The path of `file` relative to the lock file's folder, `/`-separated
+/// (with `..` where the file lies outside that folder), so the lock and its
+/// recipes can move together.
+fn relative_to_lock(lockfile: &Path, file: &Path) -> String {
+    use std::path::Component;
+    let base = lockfile
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let words = |p: &Path| -> Vec<String> {
+        p.components()
+            .filter(|c| !matches!(c, Component::RootDir | Component::CurDir))
+            .map(|c| c.as_os_str().to_string_lossy().into_owned())
+            .collect()
+    };
+    let (b, f) = match (base.canonicalize(), file.canonicalize()) {
+        (Ok(b), Ok(f)) => (words(&b), words(&f)),
+        _ => return words(file).join("/"),
+    };
+    let common = b.iter().zip(&f).take_while(|(x, y)| x == y).count();
+    let mut rel = vec!["..".to_string(); b.len() - common];
+    rel.extend(f[common..].iter().cloned());
+    rel.join("/")
+}
+
+fn lock_entry(
+    lockfile: &Path,
+    job: &Job,
+    printer: Option<&str>,
+    digest: String,
+    lines: &LineHashes,
+) -> Entry {
+    let b = LineHashes::block_lines(lines.count());
+    Entry {
+        recipe: relative_to_lock(lockfile, &job.recipe),
+        set: job.sets.iter().map(|(n, v)| format!("{n}={v}")).collect(),
+        printer: printer.map(|p| {
+            if crate::machine::Printer::built_in(p).is_some() {
+                p.to_string()
+            } else {
+                relative_to_lock(lockfile, Path::new(p))
+            }
+        }),
+        sha256: digest,
+        lines: lines.count(),
+        block_lines: b,
+        blocks: lines.blocks(b).join(" "),
+    }
+}
+
+fn check_lock(a: &Options, lockfile: &Path) -> Vec<Error> {
+    let shown = lockfile.display().to_string();
+    let lock: Lock = match crate::base::input::read_text(lockfile, "lock file")
+        .and_then(|t| parse_yaml::<Lock>(&t, &shown))
+        .and_then(|l| l.validate().map(|_| l).map_err(|e| e.in_file(&shown)))
+    {
+        Ok(l) => l,
+        Err(e) => return vec![e],
+    };
+    let base = lockfile.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let mut jobs = Vec::new();
+    for (k, e) in lock.entries.iter().enumerate() {
+        // a missing recipe or printer is the lock's mistake: name its entry
+        let recipe = base.join(&e.recipe);
+        if !recipe.exists() {
+            return vec![Error::input(
+                format!("entries[{k}].recipe"),
+                format!(
+                    "no recipe file at `{}` ({}); expected a path relative to the lock file",
+                    e.recipe,
+                    recipe.display()
+                ),
+            )
+            .in_file(&shown)];
+        }
+        if let Some(p) = &e.printer {
+            if crate::machine::Printer::built_in(p).is_none() && !base.join(p).exists() {
+                return vec![Error::input(
+                    format!("entries[{k}].printer"),
+                    format!(
+                        "`{p}` is neither a built-in printer ({}) nor a profile file relative to the lock file",
+                        crate::recipe::profile::built_in_names().join(", ")
+                    ),
+                )
+                .in_file(&shown)];
+            }
+        }
+        let sets: Result<Vec<(String, String)>> = e.set.iter().map(|s| parse_set(s)).collect();
+        match sets {
+            Ok(sets) => jobs.push(Job {
+                recipe: base.join(&e.recipe),
+                sets,
+                sweep: Vec::new(),
+                printer: e.printer.as_ref().map(|p| {
+                    if crate::machine::Printer::built_in(p).is_some() {
+                        p.clone()
+                    } else {
+                        base.join(p).to_string_lossy().into_owned()
+                    }
+                }),
+            }),
+            Err(err) => return vec![err.under(&format!("entries[{k}].set")).in_file(&shown)],
+        }
+    }
+    let c = &a.builds;
+    let results = fingerprints(c, &jobs);
+    let mut errors = Vec::new();
+    for ((entry, job), r) in lock.entries.iter().zip(&jobs).zip(results) {
+        let mut label = entry.recipe.clone();
+        if !entry.set.is_empty() {
+            label.push_str(&format!(" [{}]", entry.set.join(" ")));
+        }
+        if let Some(p) = &entry.printer {
+            label.push_str(&format!(" (printer {p})"));
+        }
+        match r {
+            Ok((digest, _)) if digest == entry.sha256 => crate::sayln!("ok       {label}"),
+            Ok((digest, lines)) => {
+                let new = lines.blocks(entry.block_lines);
+                let place = match lock::first_difference(&entry.blocks, &new) {
+                    Some(k) => {
+                        let first = k as u64 * entry.block_lines;
+                        let block = new_lines(c, job, first, entry.block_lines);
+                        let text = block.first().map_or("(end of file)", String::as_str);
+                        if entry.block_lines == 1 {
+                            format!("first differing line {}: `{text}`", first + 1)
+                        } else {
+                            changed_block(first, entry.block_lines, &block)
+                        }
+                    }
+                    None => "the lines hash alike block by block (a hash collision?)".into(),
+                };
+                crate::sayln!("CHANGED  {label}");
+                errors.push(Error::check(
+                    &entry.recipe,
+                    format!(
+                        "G-code changed: sha256 was {}, now {digest}; {place}",
+                        &entry.sha256[..12]
+                    ),
+                ));
+            }
+            Err(e) => errors.push(e),
+        }
+    }
+    errors
+}
+
+/// Lines `k..k + n` (0-based) of the job's G-code, rebuilt.
+fn new_lines(c: &Builds, job: &Job, k: u64, n: u64) -> Vec<String> {
+    let Some(text) = c
+        .checked_plan(job)
+        .ok()
+        .and_then(|p| pipeline::write(&p, Vec::new()).ok())
+        .and_then(|(buf, _)| String::from_utf8(buf).ok())
+    else {
+        return Vec::new();
+    };
+    text.lines()
+        .skip(k as usize)
+        .take(n as usize)
+        .map(str::to_string)
+        .collect()
+}
+
+/// Where a block of `n` lines from line `first` (0-based) changed: the lock
+/// keeps one hash per block, so the changed line is one of them; a short
+/// block is quoted whole, a long one by its first and last lines and the
+/// `; param` comments between them (where a changed param shows).
+fn changed_block(first: u64, n: u64, block: &[String]) -> String {
+    let range = format!("lines {}–{}", first + 1, first + n);
+    if block.is_empty() {
+        return format!("first difference in {range}, now past the end of the file");
+    }
+    let quote = |k: usize| format!("{}: `{}`", first + 1 + k as u64, block[k]);
+    let picked: Vec<String> = if block.len() <= 4 {
+        (0..block.len()).map(quote).collect()
+    } else {
+        let last = block.len() - 1;
+        let mut v = vec![quote(0)];
+        v.extend(
+            (1..last)
+                .filter(|&k| block[k].starts_with("; param "))
+                .map(quote),
+        );
+        v.extend(["…".to_string(), quote(last)]);
+        v
+    };
+    format!(
+        "first difference in {range} (the lock keeps one hash per {n} lines, so it cannot tell which of them changed); they now read {}",
+        picked.join(", ")
+    )
+}

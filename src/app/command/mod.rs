@@ -1,0 +1,215 @@
+//! The commands, one file each, from their plain options (the command line
+//! makes them: [`crate::app::cli`]) to what they print and write; each
+//! returns the errors it met, one per failed job.
+
+pub mod build;
+pub mod check;
+pub mod hash;
+pub mod mesh;
+pub mod new;
+pub mod preview;
+pub mod printers;
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use crate::analyse::plan::Plan;
+use crate::app::batch::{self, Job};
+use crate::app::pipeline;
+use crate::app::prepare::{prepare, Options};
+use crate::base::error::{Error, Result};
+use crate::output::file::AtomicFile;
+use crate::recipe::{parse_yaml, RawRecipe};
+
+/// What the builds of a command take from the command line: the recipes,
+/// each built once per combination of the sweeps' values.
+#[derive(Clone, Debug, Default)]
+pub struct Builds {
+    /// Recipe files.
+    pub recipes: Vec<PathBuf>,
+    /// `--set NAME=VALUE`, in order.
+    pub sets: Vec<(String, String)>,
+    /// `--sweep NAME=VALUES`: each name and its values.
+    pub sweeps: Vec<(String, Vec<String>)>,
+    /// `--printer NAME|FILE`.
+    pub printer: Option<String>,
+    /// `--allow CODE`.
+    pub allow: Vec<String>,
+    /// `--strict`: warnings fail the build too.
+    pub strict: bool,
+    /// `--force`: write even when checks fail.
+    pub force: bool,
+}
+
+impl Builds {
+    /// The jobs: every recipe with every combination of the sweeps.
+    pub(crate) fn jobs(&self) -> Result<Vec<Job>> {
+        if self.recipes.is_empty() {
+            return Err(Error::input(
+                "",
+                "no recipe given; expected one or more RECIPE files",
+            ));
+        }
+        batch::check_count(self.recipes.len(), &self.sweeps)?;
+        Ok(batch::expand(&self.recipes, &self.sets, &self.sweeps))
+    }
+
+    /// Plans a job and refuses it when its checks fail (unless forced).
+    pub(crate) fn checked_plan(&self, job: &Job) -> Result<Plan> {
+        let mut p = self.prepared(job)?;
+        pipeline::check(&mut p, &self.allow);
+        self.refuse_failing(&p)?;
+        Ok(p)
+    }
+
+    /// Plans a job without checking it yet.
+    pub(crate) fn prepared(&self, job: &Job) -> Result<Plan> {
+        let opts = Options {
+            sets: job.sets.clone(),
+            printer: self.printer.clone().or_else(|| job.printer.clone()),
+            allow: self.allow.clone(),
+        };
+        prepare(&job.recipe, &opts)
+    }
+
+    /// A plan of the one recipe, checked; drawn or meshed whatever its
+    /// findings.
+    pub(crate) fn plan_one(&self) -> Result<Plan> {
+        let jobs = self.jobs()?;
+        let mut p = self.prepared(&jobs[0])?;
+        pipeline::check(&mut p, &self.allow);
+        Ok(p)
+    }
+
+    /// The files a command reads: its recipes and a `--printer` file.
+    pub(crate) fn inputs(&self) -> Vec<(String, PathBuf)> {
+        inputs_of(&self.recipes, self.printer.as_deref())
+    }
+
+    /// The error of a checked plan whose checks fail (unless forced).
+    pub(crate) fn refuse_failing(&self, p: &Plan) -> Result<()> {
+        let failing = p.failing(self.strict);
+        if !failing.is_empty() && !self.force {
+            let mut msg = format!(
+                "{} check{} failed, nothing written (--force writes anyway):",
+                failing.len(),
+                plural(failing.len())
+            );
+            for f in failing {
+                msg.push_str(&format!("\n  [{}] {}", f.code, f.message));
+            }
+            return Err(Error::check(&p.path, msg));
+        }
+        Ok(())
+    }
+}
+
+pub(crate) fn plural(n: usize) -> &'static str {
+    if n == 1 {
+        ""
+    } else {
+        "s"
+    }
+}
+
+/// A file name made of the recipe name: letters, digits, `.`, `_` and `-`.
+pub fn file_stem(name: &str) -> String {
+    name.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || "._-".contains(c) {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+/// `name_param-value_…`: the file stem of a sweep variant.
+pub fn variant_stem(name: &str, sweep: &[(String, String)]) -> String {
+    let mut s = file_stem(name);
+    for (n, v) in sweep {
+        s.push_str(&format!("_{}-{}", file_stem(n), file_stem(v)));
+    }
+    s
+}
+
+pub(crate) fn job_label(job: &Job) -> String {
+    let mut s = job.recipe.display().to_string();
+    if !job.sweep.is_empty() {
+        let v: Vec<String> = job.sweep.iter().map(|(n, v)| format!("{n}={v}")).collect();
+        s.push_str(&format!(" [{}]", v.join(" ")));
+    }
+    s
+}
+
+/// The recipe's name, read without building it.
+pub(crate) fn recipe_name(path: &Path) -> Result<String> {
+    let shown = path.display().to_string();
+    let text = crate::base::input::read_text(path, "recipe")?;
+    Ok(parse_yaml::<RawRecipe>(&text, &shown)?.name)
+}
+
+/// Makes the folder `file` goes in, if missing.
+pub(crate) fn make_parent(file: &Path) -> Result<()> {
+    match file.parent() {
+        Some(d) if !d.as_os_str().is_empty() => std::fs::create_dir_all(d).map_err(|e| {
+            Error::io_from(
+                d.display().to_string(),
+                format!("cannot create the folder: {e}"),
+                &e,
+            )
+        }),
+        _ => Ok(()),
+    }
+}
+
+/// An option naming a file must not be empty (`-o ''`).
+pub(crate) fn non_empty(option: &str, value: Option<&Path>) -> Result<()> {
+    match value {
+        Some(v) if v.as_os_str().is_empty() => Err(Error::input(
+            option,
+            "an empty file name; expected the name of a file to write",
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// The files read by a command of these `recipes` and `--printer` (a file
+/// unless it names a built-in profile).
+pub(crate) fn inputs_of(recipes: &[PathBuf], printer: Option<&str>) -> Vec<(String, PathBuf)> {
+    let mut v: Vec<(String, PathBuf)> = recipes
+        .iter()
+        .map(|r| ("the recipe".to_string(), r.clone()))
+        .collect();
+    if let Some(p) = printer {
+        if crate::machine::Printer::built_in(p).is_none() {
+            v.push(("the --printer profile".to_string(), PathBuf::from(p)));
+        }
+    }
+    v
+}
+
+/// A file's bytes into an uncommitted [`AtomicFile`] (its folder made first).
+pub(crate) fn stage(file: &Path, bytes: &[u8]) -> Result<AtomicFile> {
+    make_parent(file)?;
+    let mut f = AtomicFile::create(file)?;
+    f.file().write_all(bytes).map_err(|e| {
+        Error::io_from(file.display().to_string(), format!("cannot write: {e}"), &e)
+    })?;
+    Ok(f)
+}
+
+/// Bytes to standard output, as they are (a closed pipe ends quietly).
+pub fn print(bytes: &[u8]) {
+    let _ = crate::output::file::Stdout.write_all(bytes);
+}
+
+/// `p3dp schema`: the JSON Schema of the recipe format.
+pub fn schema() {
+    let s = crate::recipe::schema::json_schema();
+    crate::sayln!(
+        "{}",
+        serde_json::to_string_pretty(&s).expect("a schema serialises")
+    );
+}
