@@ -296,11 +296,11 @@ pub fn eca(rule: f64, width: f64, row: f64, col: f64) -> f64 {
     }
     let (rule, w, row) = (rule as u8, width as u32, row as u64);
     let mask = if w == 64 { u64::MAX } else { (1u64 << w) - 1 };
-    // An expression evaluated per point asks for rows in any order (a
-    // million rows per point of a 72,000-point helix ran for minutes, from
-    // row 0 each time when the rows went down): keep every ECA_STRIDE-th
-    // row, so a row costs at most ECA_STRIDE generations once the rows up
-    // to it have been computed, and go on from the last row when it is near.
+    // An expression evaluated per point asks for rows in any order (from
+    // row 0 each time, n points of row r would cost n·r generations): keep
+    // every ECA_STRIDE-th row, so a row costs at most ECA_STRIDE generations
+    // once the rows up to it have been computed, and go on from the last
+    // row when it is near.
     let cells = ECA.with_borrow_mut(|cache| {
         let cache = match cache {
             Some(c) if c.key == (rule, w) => c,
@@ -869,8 +869,7 @@ impl Expr {
     }
 
     /// [`Expr::eval_many`] on the stack `lanes` (made once for many calls:
-    /// it is 16 KiB, and clearing it on every call of a few points cost more
-    /// than the evaluation).
+    /// it is 16 KiB, more to clear than a few points are to evaluate).
     pub fn eval_many_in(&self, vars: &[Vars], out: &mut [f64], lanes: &mut Lanes) {
         assert_eq!(vars.len(), out.len(), "one result per point");
         for (v, o) in vars.chunks(LANES).zip(out.chunks_mut(LANES)) {

@@ -1,13 +1,10 @@
 //! Big vectors faulted in ahead: the first touch of fresh memory costs a
-//! page fault per 4 KiB page, and on the project's 2-core VM a fault costs
-//! 1.1–1.8 µs beyond zeroing the page. Asking the system to fill a big
-//! range at once (`MADV_POPULATE_WRITE`, Linux 5.14) makes the same pages
-//! for about two thirds of that (48 MB: 14 ms, not 20). Only advice: the
-//! contents, and so every output, are the same with or without it.
-//!
-//! (2 MiB pages, `MADV_HUGEPAGE`, made 48 MB in 6 ms when the memory was
-//! at hand but 80–130 ms when it was not: this VM's host backs its free
-//! memory lazily. Not used.)
+//! page fault per 4 KiB page; asking the system to fill a big range at once
+//! (`MADV_POPULATE_WRITE`, Linux 5.14) makes the same pages with one call
+//! (docs/performance.md has the figures). Only advice: the contents, and so
+//! every output, are the same with or without it. Huge pages
+//! (`MADV_HUGEPAGE`) are not asked for: their cost depends on how the host
+//! backs free memory.
 
 /// Bytes from which a range is faulted in ahead.
 const AHEAD_MIN: usize = 1 << 20;
