@@ -124,6 +124,32 @@ struct Prepared {
 /// Expands the jobs and refuses flag combinations before anything is built.
 fn prepare(a: &Options) -> Result<Prepared> {
     let jobs = a.builds.jobs()?;
+    refuse_flags(a, jobs.len())?;
+    let (targets, dir) = targets(a, &jobs)?;
+    // no output over another, nor over an input: refused before any is written
+    crate::output::file::check_distinct(&outputs(a, &targets, &dir), &a.builds.inputs())?;
+    // open the stats file first where its folder exists: if it cannot be
+    // written, no G-code is; a missing folder is made only after a build
+    let mut stats_file = None;
+    if let Some(p) = &a.stats_json {
+        let folder_exists = p
+            .parent()
+            .is_none_or(|d| d.as_os_str().is_empty() || d.is_dir());
+        if folder_exists {
+            stats_file = Some(AtomicFile::create(p)?);
+        }
+    }
+    Ok(Prepared {
+        jobs,
+        targets,
+        dir,
+        stats_file,
+    })
+}
+
+/// Refuses empty file names, and the outputs of one build asked of `jobs`
+/// builds, or asked wrongly.
+fn refuse_flags(a: &Options, jobs: usize) -> Result<()> {
     for (option, value) in [
         ("-o", a.output.as_deref().map(Path::new)),
         ("--stats-json", a.stats_json.as_deref()),
@@ -134,17 +160,15 @@ fn prepare(a: &Options) -> Result<Prepared> {
     ] {
         non_empty(option, value)?;
     }
-    for (option, given) in [
-        ("--zbuffer", a.zbuffer.is_some()),
-        ("--zbuffer-svg", a.zbuffer_svg.is_some()),
-    ] {
-        if given && jobs.len() > 1 {
-            return Err(Error::input(
-                option,
-                "writes the z-buffer of one build; expected one recipe and no --sweep",
-            ));
+    let one = |option: &str, given: bool, what: &str| {
+        if given && jobs > 1 {
+            return Err(Error::input(option, what.to_string()));
         }
-    }
+        Ok(())
+    };
+    let zbuffer = "writes the z-buffer of one build; expected one recipe and no --sweep";
+    one("--zbuffer", a.zbuffer.is_some(), zbuffer)?;
+    one("--zbuffer-svg", a.zbuffer_svg.is_some(), zbuffer)?;
     if let Some(n) = a.zbuffer_layer {
         if a.zbuffer_svg.is_none() {
             return Err(Error::input(
@@ -159,23 +183,24 @@ fn prepare(a: &Options) -> Result<Prepared> {
             ));
         }
     }
-    if a.pattern.is_some() && jobs.len() > 1 {
-        return Err(Error::input(
-            "--pattern",
-            "writes the cell array of one build; expected one recipe and no --sweep",
-        ));
-    }
+    one(
+        "--pattern",
+        a.pattern.is_some(),
+        "writes the cell array of one build; expected one recipe and no --sweep",
+    )?;
+    one(
+        "--preview",
+        a.preview.is_some(),
+        "a preview is of one build; give one recipe (or run `p3dp preview` per recipe)",
+    )?;
     if let Some(pv) = &a.preview {
-        if jobs.len() > 1 {
-            return Err(Error::input(
-                "--preview",
-                "a preview is of one build; give one recipe (or run `p3dp preview` per recipe)",
-            ));
-        }
         crate::output::preview::Format::of(pv)?;
     }
-    let (targets, dir) = targets(a, &jobs)?;
-    // no output over another, nor over an input: refused before any is written
+    Ok(())
+}
+
+/// Every file the build writes, with the option that names it.
+fn outputs(a: &Options, targets: &[Result<Target>], dir: &Path) -> Vec<(String, PathBuf)> {
     let mut outs: Vec<(String, PathBuf)> = targets
         .iter()
         .filter_map(|t| match t {
@@ -200,24 +225,7 @@ fn prepare(a: &Options) -> Result<Prepared> {
             dir.join("summary.csv"),
         ));
     }
-    crate::output::file::check_distinct(&outs, &a.builds.inputs())?;
-    // open the stats file first where its folder exists: if it cannot be
-    // written, no G-code is; a missing folder is made only after a build
-    let mut stats_file = None;
-    if let Some(p) = &a.stats_json {
-        let folder_exists = p
-            .parent()
-            .is_none_or(|d| d.as_os_str().is_empty() || d.is_dir());
-        if folder_exists {
-            stats_file = Some(AtomicFile::create(p)?);
-        }
-    }
-    Ok(Prepared {
-        jobs,
-        targets,
-        dir,
-        stats_file,
-    })
+    outs
 }
 
 /// Builds one job to its target (with its preview and pattern, if asked):

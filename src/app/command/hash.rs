@@ -163,59 +163,10 @@ fn lock_entry(
 }
 
 fn check_lock(a: &Options, lockfile: &Path) -> Vec<Error> {
-    let shown = lockfile.display().to_string();
-    let lock: Lock = match crate::base::input::read_text(lockfile, "lock file")
-        .and_then(|t| parse_yaml::<Lock>(&t, &shown))
-        .and_then(|l| l.validate().map(|_| l).map_err(|e| e.in_file(&shown)))
-    {
+    let (lock, jobs) = match read_lock(lockfile) {
         Ok(l) => l,
         Err(e) => return vec![e],
     };
-    let base = lockfile.parent().unwrap_or(Path::new(".")).to_path_buf();
-    let mut jobs = Vec::new();
-    for (k, e) in lock.entries.iter().enumerate() {
-        // a missing recipe or printer is the lock's mistake: name its entry
-        let recipe = base.join(&e.recipe);
-        if !recipe.exists() {
-            return vec![Error::input(
-                format!("entries[{k}].recipe"),
-                format!(
-                    "no recipe file at `{}` ({}); expected a path relative to the lock file",
-                    e.recipe,
-                    recipe.display()
-                ),
-            )
-            .in_file(&shown)];
-        }
-        if let Some(p) = &e.printer {
-            if crate::machine::Printer::built_in(p).is_none() && !base.join(p).exists() {
-                return vec![Error::input(
-                    format!("entries[{k}].printer"),
-                    format!(
-                        "`{p}` is neither a built-in printer ({}) nor a profile file relative to the lock file",
-                        crate::recipe::profile::built_in_names().join(", ")
-                    ),
-                )
-                .in_file(&shown)];
-            }
-        }
-        let sets: Result<Vec<(String, String)>> = e.set.iter().map(|s| parse_set(s)).collect();
-        match sets {
-            Ok(sets) => jobs.push(Job {
-                recipe: base.join(&e.recipe),
-                sets,
-                sweep: Vec::new(),
-                printer: e.printer.as_ref().map(|p| {
-                    if crate::machine::Printer::built_in(p).is_some() {
-                        p.clone()
-                    } else {
-                        base.join(p).to_string_lossy().into_owned()
-                    }
-                }),
-            }),
-            Err(err) => return vec![err.under(&format!("entries[{k}].set")).in_file(&shown)],
-        }
-    }
     let c = &a.builds;
     let results = fingerprints(c, &jobs);
     let mut errors = Vec::new();
@@ -257,6 +208,69 @@ fn check_lock(a: &Options, lockfile: &Path) -> Vec<Error> {
         }
     }
     errors
+}
+
+/// A lock file read and checked, and the job of each entry (its recipe and
+/// printer relative to the lock file's folder).
+fn read_lock(lockfile: &Path) -> Result<(Lock, Vec<Job>)> {
+    let shown = lockfile.display().to_string();
+    let text = crate::base::input::read_text(lockfile, "lock file")?;
+    let lock = parse_yaml::<Lock>(&text, &shown)?;
+    lock.validate().map_err(|e| e.in_file(&shown))?;
+    let base = lockfile.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let jobs = lock
+        .entries
+        .iter()
+        .enumerate()
+        .map(|(k, e)| entry_job(&base, k, e).map_err(|err| err.in_file(&shown)))
+        .collect::<Result<_>>()?;
+    Ok((lock, jobs))
+}
+
+/// The job of entry `k` of a lock file in folder `base`; a missing recipe or
+/// printer is the lock's mistake, and the error names its entry.
+fn entry_job(base: &Path, k: usize, e: &Entry) -> Result<Job> {
+    let recipe = base.join(&e.recipe);
+    if !recipe.exists() {
+        return Err(Error::input(
+            format!("entries[{k}].recipe"),
+            format!(
+                "no recipe file at `{}` ({}); expected a path relative to the lock file",
+                e.recipe,
+                recipe.display()
+            ),
+        ));
+    }
+    let built_in = |p: &str| crate::machine::Printer::built_in(p).is_some();
+    if let Some(p) = &e.printer {
+        if !built_in(p) && !base.join(p).exists() {
+            return Err(Error::input(
+                format!("entries[{k}].printer"),
+                format!(
+                    "`{p}` is neither a built-in printer ({}) nor a profile file relative to the lock file",
+                    crate::recipe::profile::built_in_names().join(", ")
+                ),
+            ));
+        }
+    }
+    let sets = e
+        .set
+        .iter()
+        .map(|s| parse_set(s))
+        .collect::<Result<Vec<_>>>()
+        .map_err(|err| err.under(&format!("entries[{k}].set")))?;
+    Ok(Job {
+        recipe,
+        sets,
+        sweep: Vec::new(),
+        printer: e.printer.as_ref().map(|p| {
+            if built_in(p) {
+                p.clone()
+            } else {
+                base.join(p).to_string_lossy().into_owned()
+            }
+        }),
+    })
 }
 
 /// Lines `k..k + n` (0-based) of the job's G-code, rebuilt.
