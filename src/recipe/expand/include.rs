@@ -11,11 +11,10 @@ use std::path::{Path, PathBuf};
 
 use indexmap::IndexMap;
 
-use super::schema::{RawLibrary, RawTemplate};
 use crate::base::error::{Error, Result};
 use crate::base::expr::Params;
 use crate::base::num::Num;
-use crate::recipe::schema::RawRecipe;
+use crate::recipe::schema::{RawLibrary, RawRecipe, RawTemplate};
 use crate::recipe::yaml::parse_yaml;
 
 /// Largest file `include:` reads, bytes.

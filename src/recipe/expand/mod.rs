@@ -6,7 +6,8 @@
 //! part assembly "become generation functions of complex parts" (paper 000,
 //! §3.3–3.4). In a recipe these are:
 //!
-//! - `primitive:` a list (see [`RawPrimitives`]): one part, several primitives;
+//! - `primitive:` a list (see [`crate::recipe::schema::RawPrimitives`]): one
+//!   part, several primitives;
 //! - `parts:` on a part: a group, whose `steps` run after its children's own
 //!   steps on all their strings (see [`crate::generate::assembly`]);
 //! - `templates:` named part trees with `params:` defaults, used by
@@ -28,20 +29,18 @@
 //! template `ring`'s part in its copy with k = 3, used at `parts[1].parts[0]`.
 
 mod include;
-mod schema;
 
 use std::path::Path;
 
 use indexmap::IndexMap;
 
 pub use include::{load_library, Library, Template};
-pub use schema::{RawLibrary, RawLoop, RawPrimitiveItem, RawPrimitives, RawTemplate};
 
 use crate::base::error::{Error, Result};
 use crate::base::expr::{self, Params};
 use crate::base::num::Num;
 use crate::recipe::params::is_identifier;
-use crate::recipe::schema::{RawPart, RawStep};
+use crate::recipe::schema::{RawLoop, RawPart, RawStep};
 
 /// Most leaf parts a recipe may expand to.
 pub const MAX_PARTS: usize = 10_000;
