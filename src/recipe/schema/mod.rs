@@ -7,6 +7,7 @@
 //! steps in `step.rs`.
 
 mod part;
+mod primitive;
 mod step;
 
 use std::fmt;
@@ -18,6 +19,10 @@ use serde::Deserialize;
 use crate::base::num::Num;
 
 pub use part::{RawBrim, RawLoop, RawPart, RawPrimitiveItem, RawPrimitives, RawStand};
+pub use primitive::{
+    RawArc, RawCaHelix, RawCircle, RawCmd, RawCylinder, RawDirection, RawFirstLayer, RawHelix,
+    RawInitial, RawLayout, RawOutline, RawPath, RawPatternHelix, RawPrimitive, RawRule, RawSpiral,
+};
 pub use step::{RawDeform, RawKeep, RawStep};
 
 /// `material:` a built-in name or an inline map.

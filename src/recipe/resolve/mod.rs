@@ -2,6 +2,9 @@
 //! evaluated and every expression compiled, images loaded, each error naming
 //! its key path.
 
+mod pattern;
+mod primitive;
+
 use std::path::{Path, PathBuf};
 
 use super::schema::*;
