@@ -4,6 +4,8 @@
 
 mod pattern;
 mod primitive;
+mod solid;
+mod turtle;
 
 use std::path::{Path, PathBuf};
 
@@ -15,7 +17,7 @@ use crate::base::num::{Num, Scope};
 use crate::generate::model::{
     Group, Part, Piece, Recipe, Skirt, DEFAULT_CROSS_SECTION, DEFAULT_MAX_STRINGS, DEFAULT_SPEED,
 };
-use crate::generate::primitive::turtle;
+use crate::generate::primitive::turtle::Env;
 use crate::generate::step::{Bitmap, Deform, Keep, Modulate, ModulateMap, Step};
 use crate::machine::{Material, Printer, FAN_START_Z};
 
@@ -324,7 +326,7 @@ fn resolve_part(ctx: &Ctx, p: &RawPart, c0: f64, v0: f64, k: usize) -> Result<Pa
             None => speed,
         };
         // a turtle runs now: its strings start with the part's c and v
-        let env = turtle::Env {
+        let env = Env {
             cross_section: c,
             speed: v,
             filament_area: ctx.turtle.0,

@@ -8,9 +8,9 @@ use crate::base::error::{Error, Result};
 use crate::base::num::{Num, Num3, Scope};
 use crate::base::svg::{self, Outline, Subpath};
 use crate::generate::primitive::outline::drawing_commands;
-use crate::generate::primitive::turtle;
+use crate::generate::primitive::turtle::Env;
 use crate::generate::primitive::{
-    solid, Arc as ArcPrimitive, Circle, Cylinder, Direction, Helix, PathCmd, Primitive, Spiral,
+    Arc as ArcPrimitive, Circle, Cylinder, Direction, Helix, PathCmd, Primitive, Spiral,
 };
 use crate::recipe::schema::{
     RawArc, RawCircle, RawCmd, RawCylinder, RawDirection, RawHelix, RawOutline, RawPath,
@@ -21,12 +21,7 @@ impl RawPrimitive {
     /// Resolves the primitive in `scope`; a turtle runs now, starting from
     /// `env` (the part's cross-section and speed). Errors name `KIND.KEY`.
     /// SVG files are read relative to `dir`.
-    pub fn resolve(
-        &self,
-        scope: &Scope,
-        env: &turtle::Env,
-        dir: &std::path::Path,
-    ) -> Result<Primitive> {
+    pub fn resolve(&self, scope: &Scope, env: &Env, dir: &std::path::Path) -> Result<Primitive> {
         let num = |n: &Num, place: &str| scope.num(n, place);
         let files = Files {
             dir,
@@ -41,9 +36,9 @@ impl RawPrimitive {
             RawPrimitive::Cylinder(p) => Primitive::Cylinder(p.resolve(scope, files)?),
             RawPrimitive::PatternHelix(p) => Primitive::PatternHelix(p.resolve(&num)?),
             RawPrimitive::CaHelix(p) => Primitive::CaHelix(p.resolve(&num)?),
-            RawPrimitive::Solid(s) => Primitive::Solid(solid::resolve(s, &num)?),
+            RawPrimitive::Solid(s) => Primitive::Solid(super::solid::resolve(s, &num)?),
             RawPrimitive::Turtle(t) => {
-                Primitive::Turtle(Box::new(turtle::resolve(t, scope.params, env)?))
+                Primitive::Turtle(Box::new(super::turtle::resolve(t, scope.params, env)?))
             }
         })
     }

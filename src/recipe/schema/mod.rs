@@ -8,7 +8,9 @@
 
 mod part;
 mod primitive;
+mod solid;
 mod step;
+mod turtle;
 
 use std::fmt;
 
@@ -23,7 +25,9 @@ pub use primitive::{
     RawArc, RawCaHelix, RawCircle, RawCmd, RawCylinder, RawDirection, RawFirstLayer, RawHelix,
     RawInitial, RawLayout, RawOutline, RawPath, RawPatternHelix, RawPrimitive, RawRule, RawSpiral,
 };
+pub use solid::{RawBox, RawFeature, RawInfill, RawOp, RawPattern, RawSolid};
 pub use step::{RawDeform, RawKeep, RawStep};
+pub use turtle::{RawCommand, RawLsystem, RawProcedure, RawStart, RawTurtle};
 
 /// `material:` a built-in name or an inline map.
 #[derive(Clone, Debug, PartialEq)]

@@ -3,9 +3,9 @@
 
 use serde::Deserialize;
 
+use super::solid::RawSolid;
+use super::turtle::RawTurtle;
 use crate::base::num::{Num, Num3};
-use crate::generate::primitive::solid::RawSolid;
-use crate::generate::primitive::turtle::RawTurtle;
 
 /// A primitive as written: one key naming its kind.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]

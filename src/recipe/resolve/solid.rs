@@ -1,6 +1,11 @@
 //! Resolving `solid:`: numbers evaluated, the z-buffer computed.
 
-use super::*;
+use glam::DVec3;
+
+use crate::base::error::{Error, Result};
+use crate::base::num::{Num, Num3};
+use crate::generate::primitive::solid::{Body, Feature, Infill, Op, Pattern, Solid};
+use crate::recipe::schema::{RawFeature, RawOp, RawPattern, RawSolid};
 
 /// Resolves `solid:`; `num` evaluates a number (or expression) at a key path.
 /// Places are relative to the primitive (`solid.features[1].cylinder.radius`).
