@@ -625,6 +625,21 @@ mod tests {
     }
 
     #[test]
+    fn deep_calls_and_derivations_run_on_a_small_stack() {
+        // 199 nested calls, each in an `if` and a `repeat`, then an L-system
+        // 18 deep: the interpreter's tasks are on the heap, not the stack
+        let yaml = "procedures:\n  down:\n    params: [n]\n    do:\n      - if: \"n\"\n        do:\n          - repeat: 1\n            do: [{forward: 1}, {call: down, args: [\"n - 1\"]}]\nprogram:\n  - {call: down, args: [199]}\n  - lsystem: {axiom: A, rules: {A: AB, B: A}, iterations: 18, commands: {A: [{left: 1}], B: [{forward: 1}]}}\n";
+        let strings = std::thread::Builder::new()
+            .stack_size(256 << 10)
+            .spawn(move || run(yaml).len())
+            .unwrap()
+            .join()
+            .unwrap();
+        // the word after 18 iterations of A -> AB, B -> A has F(18) = 2584 Bs
+        assert_eq!(strings, 199 + 2584);
+    }
+
+    #[test]
     fn rand_is_seeded() {
         let yaml = |seed: u32| {
             format!("seed: {seed}\nprogram:\n  - repeat: 20\n    do: [{{forward: \"1 + rand()\"}}, {{left: \"90*rand()\"}}]\n")

@@ -7,8 +7,9 @@
 //! do nothing, as `X` and `Y` of the Hilbert curve). The word grows
 //! exponentially, so it is never built: the interpreter walks the derivation
 //! tree depth first, a symbol at depth d < iterations standing for its
-//! rule's symbols at depth d + 1. Memory is one stack frame per iteration,
-//! and the interpreter's budget of strings and steps bounds the time.
+//! rule's symbols at depth d + 1. Memory is one task on the interpreter's
+//! stack per iteration, and the interpreter's budget of strings and steps
+//! bounds the time.
 
 use super::program::{Cmd, Val};
 

@@ -25,9 +25,6 @@ pub use frame::Frame;
 use crate::base::error::{Error, Result};
 use crate::base::toolpath::Toolpath;
 
-/// Stack of the interpreter's thread, bytes (only the pages used are touched).
-const INTERPRETER_STACK: usize = 256 << 20;
-
 /// What a turtle needs from its part and recipe.
 #[derive(Clone, Copy, Debug)]
 pub struct Env {
@@ -67,22 +64,9 @@ pub fn run(prog: &interp::Program, env: &Env) -> Result<Turtle> {
         max_strings: env.max_strings,
         max_steps: env.max_strings.saturating_mul(8).saturating_add(1_000_000),
     };
-    // the interpreter recurses (blocks, calls, L-system derivations): give it
-    // a stack deep enough for MAX_CALL_DEPTH calls whatever thread we are on.
-    // This thread exists only for its stack: the caller waits on it, so it
-    // runs alone and takes no share of the build's thread budget
-    // (`crate::base::threads::Threads`), which is why it is not passed one.
-    let path = std::thread::scope(|s| {
-        std::thread::Builder::new()
-            .name("turtle".into())
-            .stack_size(INTERPRETER_STACK)
-            .spawn_scoped(s, || {
-                prog.run(env.cross_section, env.speed, env.filament_area, limits)
-            })
-            .map_err(|e| Error::input("program", format!("cannot start the interpreter: {e}")))?
-            .join()
-            .unwrap_or_else(|p| std::panic::resume_unwind(p))
-    })?;
+    // the interpreter keeps its own stack of tasks (blocks, calls, L-system
+    // derivations) on the heap, so it runs here, on the caller's thread
+    let path = prog.run(env.cross_section, env.speed, env.filament_area, limits)?;
     if path.strings.iter().all(|s| s.travel) {
         return Err(Error::input(
             "program",
