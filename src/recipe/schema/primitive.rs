@@ -238,8 +238,8 @@ pub struct RawCaHelix {
 
 /// Which of the paper's rules decides a cell.
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, schemars::JsonSchema)]
-#[serde(rename_all = "snake_case")]
-#[schemars(rename = "Rule")]
+// serde's messages name the type ("expected enum Rule"), the schema too
+#[serde(rename = "Rule", rename_all = "snake_case", expecting = "enum Rule")]
 pub enum RawRule {
     /// Fig. 5: straight up at p0, else on the next cell (i + 1) at p1.
     Basic,
@@ -249,8 +249,11 @@ pub enum RawRule {
 
 /// How the cells' turns are laid out: one helix, or one circle per layer.
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, schemars::JsonSchema)]
-#[serde(rename_all = "snake_case")]
-#[schemars(rename = "Layout")]
+#[serde(
+    rename = "Layout",
+    rename_all = "snake_case",
+    expecting = "enum Layout"
+)]
 pub enum RawLayout {
     /// One helix, the paper's method (section 2): a cell's neighbours below
     /// run on across the seam into the turn being printed.
@@ -270,4 +273,23 @@ pub enum RawInitial {
     Ones,
     /// Each cell of the first turn empty with probability `noise` (Fig. 11b).
     Random,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::recipe::yaml::parse_yaml;
+
+    #[test]
+    fn messages_name_the_types_as_before_the_raw_forms() {
+        // the rule and layout were read straight into generation's types
+        let e =
+            parse_yaml::<RawCaHelix>("{radius: 1, layers: 2, layer_height: 0.2, rule: [1]}", "t")
+                .unwrap_err();
+        assert!(e.message.ends_with("expected enum Rule"), "{e}");
+        let e =
+            parse_yaml::<RawCaHelix>("{radius: 1, layers: 2, layer_height: 0.2, layout: 7}", "t")
+                .unwrap_err();
+        assert!(e.message.ends_with("expected enum Layout"), "{e}");
+    }
 }
