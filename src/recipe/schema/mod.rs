@@ -4,10 +4,12 @@
 //!
 //! Here: the top level of a file (a recipe, [`RawRecipe`], or a library it
 //! includes, [`RawLibrary`]) and its keys; a part's keys in `part.rs`, the
-//! steps in `step.rs`.
+//! primitives in `primitive.rs` (`solid:` and `turtle:` in `solid.rs` and
+//! `turtle.rs`), the steps in `step.rs`; a printer profile in `profile.rs`.
 
 mod part;
 mod primitive;
+mod profile;
 mod solid;
 mod step;
 mod turtle;
@@ -24,6 +26,10 @@ pub use part::{RawBrim, RawLoop, RawPart, RawPrimitiveItem, RawPrimitives, RawSt
 pub use primitive::{
     RawArc, RawCaHelix, RawCircle, RawCmd, RawCylinder, RawDirection, RawFirstLayer, RawHelix,
     RawInitial, RawLayout, RawOutline, RawPath, RawPatternHelix, RawPrimitive, RawRule, RawSpiral,
+};
+pub use profile::{
+    RawBed, RawCheckLimits, RawExtrusion, RawFlavor, RawHead, RawKinematics, RawPrinter,
+    RawRetraction,
 };
 pub use solid::{RawBox, RawFeature, RawInfill, RawOp, RawPattern, RawSolid};
 pub use step::{RawDeform, RawKeep, RawStep};
