@@ -20,7 +20,6 @@ const LAYERS: &[(&str, &[&str])] = &[
             "threads",
             "toolpath",
             "expr",
-            "num",
             "finding",
             "rng",
             "format",
@@ -48,7 +47,9 @@ const LAYERS: &[(&str, &[&str])] = &[
     ("output", &["file", "gcode", "preview", "mesh", "lock"]),
     (
         "recipe",
-        &["yaml", "params", "schema", "expand", "resolve", "profile"],
+        &[
+            "yaml", "schema", "eval", "params", "expand", "profile", "resolve",
+        ],
     ),
     (
         "app",

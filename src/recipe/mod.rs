@@ -9,6 +9,7 @@
 //! loads images, naming the key path of any problem; the result is a
 //! [`crate::generate::model::Recipe`].
 
+pub mod eval;
 pub mod expand;
 pub mod params;
 pub mod profile;
@@ -16,9 +17,9 @@ pub mod resolve;
 pub mod schema;
 pub mod yaml;
 
-pub use crate::base::num::{Num, Num3};
 pub use crate::generate::model::{Part, Recipe, Skirt};
 pub use params::{eval_params, parse_set};
 pub use resolve::load_bitmap;
 pub use schema::RawRecipe;
+pub use schema::{Num, Num3};
 pub use yaml::parse_yaml;

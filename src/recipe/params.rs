@@ -5,7 +5,8 @@ use indexmap::IndexMap;
 
 use crate::base::error::{Error, Result};
 use crate::base::expr::{self, Params};
-use crate::base::num::{finite, Num};
+use crate::recipe::eval::finite;
+use crate::recipe::schema::Num;
 
 pub(crate) fn is_identifier(s: &str) -> bool {
     let mut cs = s.chars();

@@ -13,7 +13,7 @@ use indexmap::IndexMap;
 
 use crate::base::error::{Error, Result};
 use crate::base::expr::Params;
-use crate::base::num::Num;
+use crate::recipe::schema::Num;
 use crate::recipe::schema::{RawLibrary, RawRecipe, RawTemplate};
 use crate::recipe::yaml::parse_yaml;
 

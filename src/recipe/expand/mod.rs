@@ -38,8 +38,8 @@ pub use include::{load_library, Library, Template};
 
 use crate::base::error::{Error, Result};
 use crate::base::expr::{self, Params};
-use crate::base::num::Num;
 use crate::recipe::params::is_identifier;
+use crate::recipe::schema::Num;
 use crate::recipe::schema::{RawLoop, RawPart, RawStep};
 
 /// Most leaf parts a recipe may expand to.
@@ -520,8 +520,8 @@ fn range(s: &str, params: &Params, place: &str) -> Result<Vec<f64>> {
 
 /// A number of a template's `with:` or a loop's list, evaluated in `params`.
 fn eval(n: &Num, params: &Params, place: &str) -> Result<f64> {
-    let v = crate::base::num::Scope::new(params).num(n, place)?;
-    crate::base::num::finite(v, place)
+    let v = crate::recipe::eval::Scope::new(params).num(n, place)?;
+    crate::recipe::eval::finite(v, place)
 }
 
 /// `name` with each `{EXPR}` replaced by the expression's value in `params`

@@ -9,11 +9,11 @@ mod turtle;
 
 use std::path::{Path, PathBuf};
 
+use super::eval::Scope;
 use super::schema::*;
 use super::yaml::parse_yaml;
 use crate::base::error::{Error, Result};
 use crate::base::expr::var;
-use crate::base::num::{Num, Scope};
 use crate::generate::model::{
     Group, Part, Piece, Recipe, Skirt, DEFAULT_CROSS_SECTION, DEFAULT_MAX_STRINGS, DEFAULT_SPEED,
 };

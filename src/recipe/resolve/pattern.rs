@@ -4,9 +4,10 @@
 use glam::DVec3;
 
 use crate::base::error::{Error, Result};
-use crate::base::num::{Num, Num3, NumFn};
 use crate::generate::primitive::ca::{Automaton, CaHelix, Initial, Layout, Rule};
 use crate::generate::primitive::pattern::{FirstLayer, PatternHelix, FIRST_LAYER};
+use crate::recipe::eval::NumFn;
+use crate::recipe::schema::{Num, Num3};
 use crate::recipe::schema::{RawCaHelix, RawInitial, RawLayout, RawPatternHelix, RawRule};
 
 impl RawPatternHelix {

@@ -5,13 +5,14 @@ use std::path::Path;
 use std::sync::Arc;
 
 use crate::base::error::{Error, Result};
-use crate::base::num::{Num, Num3, Scope};
 use crate::base::svg::{self, Outline, Subpath};
 use crate::generate::primitive::outline::drawing_commands;
 use crate::generate::primitive::turtle::Env;
 use crate::generate::primitive::{
     Arc as ArcPrimitive, Circle, Cylinder, Direction, Helix, PathCmd, Primitive, Spiral,
 };
+use crate::recipe::eval::Scope;
+use crate::recipe::schema::{Num, Num3};
 use crate::recipe::schema::{
     RawArc, RawCircle, RawCmd, RawCylinder, RawDirection, RawHelix, RawOutline, RawPath,
     RawPrimitive, RawSpiral,

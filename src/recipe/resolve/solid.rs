@@ -3,8 +3,8 @@
 use glam::DVec3;
 
 use crate::base::error::{Error, Result};
-use crate::base::num::{Num, Num3};
 use crate::generate::primitive::solid::{Body, Feature, Infill, Op, Pattern, Solid};
+use crate::recipe::schema::{Num, Num3};
 use crate::recipe::schema::{RawFeature, RawOp, RawPattern, RawSolid};
 
 /// Resolves `solid:`; `num` evaluates a number (or expression) at a key path.

@@ -10,11 +10,11 @@ use indexmap::IndexMap;
 
 use crate::base::error::{Error, Result};
 use crate::base::expr::{self, var, Expr, ExprErrorKind, Params};
-use crate::base::num::{Num, Num3};
 use crate::generate::primitive::turtle::interp::Program;
 use crate::generate::primitive::turtle::lsystem::Lsystem;
 use crate::generate::primitive::turtle::program::{Axis, Cmd, Op, Proc, Setting, Val, STATE};
 use crate::generate::primitive::turtle::{self, Env, Frame, Turtle};
+use crate::recipe::schema::{Num, Num3};
 use crate::recipe::schema::{RawCommand, RawLsystem, RawProcedure, RawTurtle};
 
 /// Compiles and runs a turtle; errors name key paths under `turtle`.

@@ -7,6 +7,7 @@
 //! primitives in `primitive.rs` (`solid:` and `turtle:` in `solid.rs` and
 //! `turtle.rs`), the steps in `step.rs`; a printer profile in `profile.rs`.
 
+mod num;
 mod part;
 mod primitive;
 mod profile;
@@ -20,8 +21,7 @@ use indexmap::IndexMap;
 use serde::de::{self, Deserializer, IgnoredAny, MapAccess, Visitor};
 use serde::Deserialize;
 
-use crate::base::num::Num;
-
+pub use num::{Num, Num3};
 pub use part::{RawBrim, RawLoop, RawPart, RawPrimitiveItem, RawPrimitives, RawStand};
 pub use primitive::{
     RawArc, RawCaHelix, RawCircle, RawCmd, RawCylinder, RawDirection, RawFirstLayer, RawHelix,

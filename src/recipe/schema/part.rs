@@ -9,9 +9,9 @@ use indexmap::IndexMap;
 use serde::de::{self, DeserializeSeed, Deserializer, IgnoredAny, MapAccess, SeqAccess, Visitor};
 use serde::Deserialize;
 
+use super::num::Num;
 use super::primitive::RawPrimitive;
 use super::step::RawStep;
-use crate::base::num::Num;
 
 /// One part.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]

@@ -3,9 +3,9 @@
 
 use serde::Deserialize;
 
+use super::num::{Num, Num3};
 use super::solid::RawSolid;
 use super::turtle::RawTurtle;
-use crate::base::num::{Num, Num3};
 
 /// A primitive as written: one key naming its kind.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]

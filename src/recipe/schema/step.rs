@@ -2,7 +2,7 @@
 
 use serde::Deserialize;
 
-use crate::base::num::{Num, Num3};
+use super::num::{Num, Num3};
 
 /// `keep:` of a modulation.
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, schemars::JsonSchema)]

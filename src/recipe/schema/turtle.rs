@@ -7,7 +7,7 @@ use indexmap::IndexMap;
 use serde::de::{self, Deserializer, MapAccess, Visitor};
 use serde::Deserialize;
 
-use crate::base::num::{Num, Num3};
+use super::num::{Num, Num3};
 
 /// `turtle:` as written.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]

@@ -1,73 +1,11 @@
-//! Numbers as a recipe writes them: a literal or an expression string over
-//! the params, and their evaluation with the place named in every error.
-
-use std::fmt;
+//! Numbers as written ([`Num`]: a literal or an expression string over the
+//! params) evaluated, with the key path named in every error.
 
 use glam::DVec3;
-use serde::de::{self, Deserializer, Visitor};
-use serde::Deserialize;
 
 use crate::base::error::{Error, Result};
 use crate::base::expr::{self, Expr, Params};
-
-/// A number, or an expression over params written as a string.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Num {
-    /// A literal number.
-    Value(f64),
-    /// An expression string, e.g. `"pi/2*radius"`.
-    Expr(String),
-}
-
-impl Num {
-    /// The expression text (a literal number becomes its decimal text).
-    pub fn src(&self) -> String {
-        match self {
-            Num::Value(v) => format!("{v}"),
-            Num::Expr(s) => s.clone(),
-        }
-    }
-}
-
-impl<'de> Deserialize<'de> for Num {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Num, D::Error> {
-        struct V;
-        impl Visitor<'_> for V {
-            type Value = Num;
-            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-                f.write_str("a number or an expression string")
-            }
-            fn visit_f64<E: de::Error>(self, v: f64) -> std::result::Result<Num, E> {
-                Ok(Num::Value(v))
-            }
-            fn visit_i64<E: de::Error>(self, v: i64) -> std::result::Result<Num, E> {
-                Ok(Num::Value(v as f64))
-            }
-            fn visit_u64<E: de::Error>(self, v: u64) -> std::result::Result<Num, E> {
-                Ok(Num::Value(v as f64))
-            }
-            fn visit_str<E: de::Error>(self, v: &str) -> std::result::Result<Num, E> {
-                Ok(Num::Expr(v.to_string()))
-            }
-        }
-        d.deserialize_any(V)
-    }
-}
-
-/// A point or vector of three numbers.
-pub type Num3 = [Num; 3];
-
-impl schemars::JsonSchema for Num {
-    fn schema_name() -> std::borrow::Cow<'static, str> {
-        "Num".into()
-    }
-    fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
-        schemars::json_schema!({
-            "description": "A number, or an expression string over the params before it (e.g. \"pi/2*radius\").",
-            "type": ["number", "string"]
-        })
-    }
-}
+use crate::recipe::schema::{Num, Num3};
 
 /// Evaluates one number with the place named (a primitive's view of a [`Scope`]).
 pub type NumFn<'a> = &'a dyn Fn(&Num, &str) -> Result<f64>;
