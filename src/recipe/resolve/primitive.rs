@@ -1,48 +1,47 @@
 //! Resolving the primitives as written: every number evaluated, SVG files
-//! read, errors naming `KIND.KEY`.
+//! read, errors naming `KIND.KEY` (KIND the primitive's key, KEY the field's
+//! own name, see [`crate::recipe::eval`]).
 
 use std::path::Path;
 use std::sync::Arc;
 
-use crate::base::error::{Error, Result};
+use crate::base::error::Result;
 use crate::base::svg::{self, Outline, Subpath};
 use crate::generate::primitive::outline::drawing_commands;
 use crate::generate::primitive::turtle::Env;
 use crate::generate::primitive::{
     Arc as ArcPrimitive, Circle, Cylinder, Direction, Helix, PathCmd, Primitive, Spiral,
 };
-use crate::recipe::eval::Scope;
-use crate::recipe::schema::{Num, Num3};
+use crate::recipe::eval::{at, key, At, Scope};
+use crate::recipe::schema::Num;
 use crate::recipe::schema::{
     RawArc, RawCircle, RawCmd, RawCylinder, RawDirection, RawHelix, RawOutline, RawPath,
     RawPrimitive, RawSpiral,
 };
 
-impl RawPrimitive {
-    /// Resolves the primitive in `scope`; a turtle runs now, starting from
-    /// `env` (the part's cross-section and speed). Errors name `KIND.KEY`.
-    /// SVG files are read relative to `dir`.
-    pub fn resolve(&self, scope: &Scope, env: &Env, dir: &std::path::Path) -> Result<Primitive> {
-        let num = |n: &Num, place: &str| scope.num(n, place);
-        let files = Files {
-            dir,
-            max_strings: env.max_strings,
-        };
-        Ok(match self {
-            RawPrimitive::Path(p) => Primitive::Path(p.resolve(scope, files)?),
-            RawPrimitive::Circle(p) => Primitive::Circle(p.resolve(scope)?),
-            RawPrimitive::Arc(p) => Primitive::Arc(p.resolve(scope)?),
-            RawPrimitive::Spiral(p) => Primitive::Spiral(p.resolve(scope, files)?),
-            RawPrimitive::Helix(p) => Primitive::Helix(p.resolve(scope, files)?),
-            RawPrimitive::Cylinder(p) => Primitive::Cylinder(p.resolve(scope, files)?),
-            RawPrimitive::PatternHelix(p) => Primitive::PatternHelix(p.resolve(&num)?),
-            RawPrimitive::CaHelix(p) => Primitive::CaHelix(p.resolve(&num)?),
-            RawPrimitive::Solid(s) => Primitive::Solid(super::solid::resolve(s, &num)?),
-            RawPrimitive::Turtle(t) => {
-                Primitive::Turtle(Box::new(super::turtle::resolve(t, scope.params, env)?))
-            }
-        })
-    }
+/// Resolves the primitive in `scope`; a turtle runs now, starting from
+/// `env` (the part's cross-section and speed). Errors name `KIND.KEY`.
+/// SVG files are read relative to `dir`.
+pub fn resolve(raw: &RawPrimitive, scope: &Scope, env: &Env, dir: &Path) -> Result<Primitive> {
+    let files = Files {
+        dir,
+        max_strings: env.max_strings,
+    };
+    let s = scope.under(raw.key());
+    Ok(match raw {
+        RawPrimitive::Path(p) => Primitive::Path(path(p, &s, files)?),
+        RawPrimitive::Circle(p) => Primitive::Circle(circle(p, &s)?),
+        RawPrimitive::Arc(p) => Primitive::Arc(arc(p, &s)?),
+        RawPrimitive::Spiral(p) => Primitive::Spiral(spiral(p, &s, files)?),
+        RawPrimitive::Helix(p) => Primitive::Helix(helix(p, &s, files)?),
+        RawPrimitive::Cylinder(p) => Primitive::Cylinder(cylinder(p, &s, files)?),
+        RawPrimitive::PatternHelix(p) => {
+            Primitive::PatternHelix(super::pattern::pattern_helix(p, &s)?)
+        }
+        RawPrimitive::CaHelix(p) => Primitive::CaHelix(super::pattern::ca_helix(p, &s)?),
+        RawPrimitive::Solid(p) => Primitive::Solid(super::solid::resolve(p, &s)?),
+        RawPrimitive::Turtle(t) => Primitive::Turtle(Box::new(super::turtle::resolve(t, &s, env)?)),
+    })
 }
 
 /// Where a primitive reads files and how many points it may make.
@@ -54,255 +53,210 @@ pub struct Files<'a> {
     pub max_strings: u64,
 }
 
-impl RawPath {
-    /// Evaluates every command (or reads the SVG drawing); errors name
-    /// `path.commands[k].KEY` or `path.KEY`.
-    pub fn resolve(&self, s: &Scope, files: Files) -> Result<Vec<PathCmd>> {
-        let svg_only = [
-            ("id", self.id.is_some()),
-            ("scale", self.scale.is_some()),
-            ("tolerance", self.tolerance.is_some()),
-            ("center", self.center.is_some()),
-        ];
-        let commands = match (&self.commands, &self.svg) {
-            (Some(c), None) => {
-                if let Some((k, _)) = svg_only.iter().find(|(_, set)| *set) {
-                    return Err(Error::input(
-                        format!("path.{k}"),
-                        "this key belongs with `svg`; expected it only when the path draws an SVG file",
-                    ));
-                }
-                c
+/// `path:` its commands evaluated (or the SVG drawing read); `s` is under
+/// `path`.
+fn path(raw: &RawPath, s: &Scope, files: Files) -> Result<Vec<PathCmd>> {
+    let svg_only = [
+        (key!(raw.id), raw.id.is_some()),
+        (key!(raw.scale), raw.scale.is_some()),
+        (key!(raw.tolerance), raw.tolerance.is_some()),
+        (key!(raw.center), raw.center.is_some()),
+    ];
+    let commands = match (&raw.commands, &raw.svg) {
+        (Some(c), None) => {
+            if let Some((k, _)) = svg_only.iter().find(|(_, set)| *set) {
+                return Err(s.error(
+                    k,
+                    "this key belongs with `svg`; expected it only when the path draws an SVG file",
+                ));
             }
-            (None, Some(file)) => {
-                return drawing(
-                    s,
-                    files,
-                    file,
-                    self.id.as_deref(),
-                    &self.scale,
-                    &self.tolerance,
-                    &self.center,
-                )
-            }
-            _ => {
-                return Err(Error::input(
-                    "path",
-                    "expected exactly one of `commands` (move, draw, …) and `svg` (an SVG file to draw)",
-                ))
-            }
-        };
-        let mut cmds = Vec::with_capacity(commands.len());
-        for (k, c) in commands.iter().enumerate() {
-            let place = format!("path.commands[{k}]");
-            cmds.push(match c {
-                RawCmd::Move(n) => PathCmd::Move(s.point(n, &format!("{place}.move"))?),
-                RawCmd::Draw(n) => PathCmd::Draw(s.point(n, &format!("{place}.draw"))?),
-                RawCmd::CrossSection(n) => {
-                    PathCmd::CrossSection(s.positive(n, &format!("{place}.cross_section"))?)
-                }
-                RawCmd::Speed(n) => PathCmd::Speed(s.positive(n, &format!("{place}.speed"))?),
-            });
+            c
         }
-        if !cmds.iter().any(|c| matches!(c, PathCmd::Draw(_))) {
-            return Err(Error::input(
-                "path.commands",
-                "expected at least one `draw` command (a path that extrudes nothing prints nothing)",
-            ));
+        (None, Some(file)) => {
+            let center = s.center(at!(raw.center))?;
+            let svg = At::new(file, key!(raw.svg));
+            let sub = read(
+                s,
+                files,
+                svg,
+                at!(raw.id),
+                at!(raw.scale),
+                at!(raw.tolerance),
+            )?;
+            return Ok(drawing_commands(&sub, center));
         }
-        Ok(cmds)
+        _ => return Err(s.error(
+            "",
+            "expected exactly one of `commands` (move, draw, …) and `svg` (an SVG file to draw)",
+        )),
+    };
+    let list = s.under(key!(raw.commands));
+    let mut cmds = Vec::with_capacity(commands.len());
+    for (k, c) in commands.iter().enumerate() {
+        let s = list.under(&format!("[{k}]"));
+        // each command is an enum's variant: its key is the variant's name
+        cmds.push(match c {
+            RawCmd::Move(n) => PathCmd::Move(s.point(At::new(n, "move"))?),
+            RawCmd::Draw(n) => PathCmd::Draw(s.point(At::new(n, "draw"))?),
+            RawCmd::CrossSection(n) => {
+                PathCmd::CrossSection(s.positive(At::new(n, "cross_section"))?)
+            }
+            RawCmd::Speed(n) => PathCmd::Speed(s.positive(At::new(n, "speed"))?),
+        });
     }
+    if !cmds.iter().any(|c| matches!(c, PathCmd::Draw(_))) {
+        return Err(list.error(
+            "",
+            "expected at least one `draw` command (a path that extrudes nothing prints nothing)",
+        ));
+    }
+    Ok(cmds)
 }
 
-impl RawCircle {
-    /// Evaluates every number; errors name `circle.KEY`.
-    pub fn resolve(&self, s: &Scope) -> Result<Circle> {
-        Ok(Circle {
-            radius: s.positive(&self.radius, "circle.radius")?,
-            center: s.center(&self.center, "circle")?,
-            segments: s.segments(&self.segments, "circle")?,
-        })
-    }
+fn circle(raw: &RawCircle, s: &Scope) -> Result<Circle> {
+    Ok(Circle {
+        radius: s.positive(at!(raw.radius))?,
+        center: s.center(at!(raw.center))?,
+        segments: s.segments(at!(raw.segments))?,
+    })
 }
 
-impl RawArc {
-    /// Evaluates every number; errors name `arc.KEY`.
-    pub fn resolve(&self, s: &Scope) -> Result<ArcPrimitive> {
-        let (start, end) = (
-            s.num(&self.start, "arc.start")?,
-            s.num(&self.end, "arc.end")?,
-        );
-        if start == end {
-            return Err(Error::input(
-                "arc.end",
-                "expected an end angle other than start",
-            ));
-        }
-        Ok(ArcPrimitive {
-            radius: s.positive(&self.radius, "arc.radius")?,
-            center: s.center(&self.center, "arc")?,
-            start,
-            end,
-            segments: s.segments(&self.segments, "arc")?,
-            rise: match &self.rise {
-                Some(n) => s.num(n, "arc.rise")?,
-                None => 0.0,
-            },
-        })
+fn arc(raw: &RawArc, s: &Scope) -> Result<ArcPrimitive> {
+    let (start, end) = (s.num(at!(raw.start))?, s.num(at!(raw.end))?);
+    if start == end {
+        return Err(s.error(key!(raw.end), "expected an end angle other than start"));
     }
-}
-
-impl RawSpiral {
-    /// Evaluates every number; errors name `spiral.KEY`.
-    pub fn resolve(&self, s: &Scope, files: Files) -> Result<Spiral> {
-        let (radius, outline) = radius_or_outline(s, files, "spiral", &self.radius, &self.outline)?;
-        let inner = match &self.inner_radius {
-            Some(n) => s.non_negative(n, "spiral.inner_radius")?,
+    Ok(ArcPrimitive {
+        radius: s.positive(at!(raw.radius))?,
+        center: s.center(at!(raw.center))?,
+        start,
+        end,
+        segments: s.segments(at!(raw.segments))?,
+        rise: match at!(raw.rise).some() {
+            Some(n) => s.num(n)?,
             None => 0.0,
-        };
-        if inner >= radius {
-            return Err(Error::input(
-                "spiral.inner_radius",
-                format!("{inner} is not allowed; expected less than radius {radius}"),
-            ));
-        }
-        Ok(Spiral {
-            radius,
-            pitch: s.positive(&self.pitch, "spiral.pitch")?,
-            center: s.center(&self.center, "spiral")?,
-            segments: s.segments(&self.segments, "spiral")?,
-            inner_radius: inner,
-            direction: match self.direction {
-                Some(RawDirection::Inward) => Direction::Inward,
-                _ => Direction::Outward,
-            },
-            outline,
-        })
-    }
+        },
+    })
 }
 
-impl RawHelix {
-    /// Evaluates every number; errors name `helix.KEY`.
-    pub fn resolve(&self, s: &Scope, files: Files) -> Result<Helix> {
-        let (radius, outline) = radius_or_outline(s, files, "helix", &self.radius, &self.outline)?;
-        Ok(Helix {
-            radius,
-            outline,
-            height: s.positive(&self.height, "helix.height")?,
-            pitch: s.positive(&self.pitch, "helix.pitch")?,
-            center: s.center(&self.center, "helix")?,
-            segments: s.segments(&self.segments, "helix")?,
-        })
+fn spiral(raw: &RawSpiral, s: &Scope, files: Files) -> Result<Spiral> {
+    let (radius, outline) = radius_or_outline(s, files, at!(raw.radius), at!(raw.outline))?;
+    let inner = match at!(raw.inner_radius).some() {
+        Some(n) => s.non_negative(n)?,
+        None => 0.0,
+    };
+    if inner >= radius {
+        return Err(s.error(
+            key!(raw.inner_radius),
+            format!("{inner} is not allowed; expected less than radius {radius}"),
+        ));
     }
+    Ok(Spiral {
+        radius,
+        pitch: s.positive(at!(raw.pitch))?,
+        center: s.center(at!(raw.center))?,
+        segments: s.segments(at!(raw.segments))?,
+        inner_radius: inner,
+        direction: match raw.direction {
+            Some(RawDirection::Inward) => Direction::Inward,
+            _ => Direction::Outward,
+        },
+        outline,
+    })
 }
 
-impl RawCylinder {
-    /// Evaluates every number; errors name `cylinder.KEY`.
-    pub fn resolve(&self, s: &Scope, files: Files) -> Result<Cylinder> {
-        let (radius, outline) =
-            radius_or_outline(s, files, "cylinder", &self.radius, &self.outline)?;
-        Ok(Cylinder {
-            radius,
-            outline,
-            height: s.positive(&self.height, "cylinder.height")?,
-            vpitch: s.positive(&self.vpitch, "cylinder.vpitch")?,
-            hpitch: s.positive(&self.hpitch, "cylinder.hpitch")?,
-            center: s.center(&self.center, "cylinder")?,
-            segments: s.segments(&self.segments, "cylinder")?,
-        })
-    }
+fn helix(raw: &RawHelix, s: &Scope, files: Files) -> Result<Helix> {
+    let (radius, outline) = radius_or_outline(s, files, at!(raw.radius), at!(raw.outline))?;
+    Ok(Helix {
+        radius,
+        outline,
+        height: s.positive(at!(raw.height))?,
+        pitch: s.positive(at!(raw.pitch))?,
+        center: s.center(at!(raw.center))?,
+        segments: s.segments(at!(raw.segments))?,
+    })
 }
 
-/// Reads the SVG `file` (relative to `files.dir`); errors name `KEY.svg`,
-/// `KEY.scale` or `KEY.tolerance` under `key`.
+fn cylinder(raw: &RawCylinder, s: &Scope, files: Files) -> Result<Cylinder> {
+    let (radius, outline) = radius_or_outline(s, files, at!(raw.radius), at!(raw.outline))?;
+    Ok(Cylinder {
+        radius,
+        outline,
+        height: s.positive(at!(raw.height))?,
+        vpitch: s.positive(at!(raw.vpitch))?,
+        hpitch: s.positive(at!(raw.hpitch))?,
+        center: s.center(at!(raw.center))?,
+        segments: s.segments(at!(raw.segments))?,
+    })
+}
+
+/// Reads the SVG file `svg` (relative to `files.dir`), only the element
+/// `id` when given, at `scale` and `tolerance`; errors name those keys in `s`.
 fn read(
     s: &Scope,
     files: Files,
-    key: &str,
-    file: &str,
-    id: Option<&str>,
-    scale: &Option<Num>,
-    tolerance: &Option<Num>,
+    svg: At<String>,
+    id: At<Option<String>>,
+    scale: At<Option<Num>>,
+    tolerance: At<Option<Num>>,
 ) -> Result<Vec<Subpath>> {
-    let scale = s.positive_or(scale, &format!("{key}.scale"), 1.0)?;
-    let tolerance = s.positive_or(
-        tolerance,
-        &format!("{key}.tolerance"),
-        svg::DEFAULT_TOLERANCE,
-    )?;
-    crate::base::safe_text::check(&format!("{key}.svg"), file)?;
+    let scale = s.positive_or(scale, 1.0)?;
+    let tolerance = s.positive_or(tolerance, svg::DEFAULT_TOLERANCE)?;
+    let file = svg.value.as_str();
+    crate::base::safe_text::check(&s.place(svg.key), file)?;
     let opt = svg::Options {
-        id,
+        id: id.value.as_deref(),
         scale,
         tolerance,
         max_points: files.max_strings,
     };
-    svg::load(&files.dir.join(file), file, &opt).map_err(|e| e.under(&format!("{key}.svg")))
+    svg::load(&files.dir.join(file), file, &opt).map_err(|e| e.under(&s.place(svg.key)))
 }
 
-impl RawOutline {
-    /// The outline, centroid at the origin; errors name `KEY.outline.…`.
-    pub fn resolve(&self, s: &Scope, files: Files, key: &str) -> Result<Arc<Outline>> {
-        let key = format!("{key}.outline");
-        let sub = read(
-            s,
-            files,
-            &key,
-            &self.svg,
-            self.id.as_deref(),
-            &self.scale,
-            &self.tolerance,
-        )?;
-        let o = Outline::from_subpaths(&sub).map_err(|m| {
-            let what = match &self.id {
-                Some(id) => format!("the element with id=\"{id}\" of `{}`", self.svg),
-                None => format!("the SVG file `{}`", self.svg),
-            };
-            Error::input(format!("{key}.svg"), format!("{what} {m}"))
-        })?;
-        Ok(Arc::new(o))
-    }
+/// `outline:` the closed outline, centroid at the origin; `s` is under
+/// `KIND.outline`.
+fn outline(raw: &RawOutline, s: &Scope, files: Files) -> Result<Arc<Outline>> {
+    let svg = at!(raw.svg);
+    let sub = read(
+        s,
+        files,
+        svg,
+        at!(raw.id),
+        at!(raw.scale),
+        at!(raw.tolerance),
+    )?;
+    let o = Outline::from_subpaths(&sub).map_err(|m| {
+        let what = match &raw.id {
+            Some(id) => format!("the element with id=\"{id}\" of `{}`", raw.svg),
+            None => format!("the SVG file `{}`", raw.svg),
+        };
+        s.error(svg.key, format!("{what} {m}"))
+    })?;
+    Ok(Arc::new(o))
 }
 
 /// A radius or an outline, as `helix`, `spiral` and `cylinder` take them:
 /// exactly one; with an outline, the radius is its farthest distance from
 /// its centroid.
-pub fn radius_or_outline(
+fn radius_or_outline(
     s: &Scope,
     files: Files,
-    key: &str,
-    radius: &Option<Num>,
-    outline: &Option<RawOutline>,
+    radius: At<Option<Num>>,
+    outline_at: At<Option<RawOutline>>,
 ) -> Result<(f64, Option<Arc<Outline>>)> {
-    match (radius, outline) {
-        (Some(r), None) => Ok((s.positive(r, &format!("{key}.radius"))?, None)),
+    match (radius.some(), outline_at.some()) {
+        (Some(r), None) => Ok((s.positive(r)?, None)),
         (None, Some(o)) => {
-            let o = o.resolve(s, files, key)?;
+            let o = outline(o.value, &s.under(o.key), files)?;
             Ok((o.max_radius(), Some(o)))
         }
-        (None, None) => Err(Error::input(
-            key,
+        (None, None) => Err(s.error(
+            "",
             "expected `radius` (a circle) or `outline` (a closed SVG outline)",
         )),
-        (Some(_), Some(_)) => Err(Error::input(
-            format!("{key}.radius"),
+        (Some(_), Some(_)) => Err(s.error(
+            radius.key,
             "expected either `radius` or `outline`, not both (an outline keeps its drawn size times `scale`)",
         )),
     }
-}
-
-/// The SVG drawing `file` as `path` commands (see [`drawing_commands`]);
-/// errors name `path.KEY`.
-pub fn drawing(
-    s: &Scope,
-    files: Files,
-    file: &str,
-    id: Option<&str>,
-    scale: &Option<Num>,
-    tolerance: &Option<Num>,
-    center: &Option<Num3>,
-) -> Result<Vec<PathCmd>> {
-    let center = s.center(center, "path")?;
-    let sub = read(s, files, "path", file, id, scale, tolerance)?;
-    Ok(drawing_commands(&sub, center))
 }

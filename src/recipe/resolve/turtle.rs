@@ -9,71 +9,48 @@ use glam::DVec3;
 use indexmap::IndexMap;
 
 use crate::base::error::{Error, Result};
-use crate::base::expr::{self, var, Expr, ExprErrorKind, Params};
+use crate::base::expr::{var, Expr, ExprErrorKind, Params};
 use crate::generate::primitive::turtle::interp::Program;
 use crate::generate::primitive::turtle::lsystem::Lsystem;
 use crate::generate::primitive::turtle::program::{Axis, Cmd, Op, Proc, Setting, Val, STATE};
 use crate::generate::primitive::turtle::{self, Env, Frame, Turtle};
+use crate::recipe::eval::{at, join, key, Scope};
 use crate::recipe::schema::{Num, Num3};
 use crate::recipe::schema::{RawCommand, RawLsystem, RawProcedure, RawTurtle};
 
-/// Compiles and runs a turtle; errors name key paths under `turtle`.
-pub fn resolve(raw: &RawTurtle, params: &Params, env: &Env) -> Result<Turtle> {
-    compile(raw, params)
+/// Compiles and runs a turtle; `s` is under `turtle`, the key paths of its
+/// errors too.
+pub fn resolve(raw: &RawTurtle, s: &Scope, env: &Env) -> Result<Turtle> {
+    // the program's places are relative to `turtle` (the interpreter's too)
+    compile(raw, &Scope::new(s.params))
         .and_then(|prog| turtle::run(&prog, env))
-        .map_err(|e| e.under("turtle"))
+        .map_err(|e| e.under(s.here()))
 }
 
-/// The program of `raw` over the recipe's `params`: its start, seed,
+/// The program of `raw` over the recipe's params: its start, seed,
 /// procedures and commands.
-fn compile(raw: &RawTurtle, params: &Params) -> Result<Program> {
+fn compile(raw: &RawTurtle, s: &Scope) -> Result<Program> {
     let start = raw.start.clone().unwrap_or_default();
-    let pos = point(&start.position, params, "start.position", DVec3::ZERO)?;
-    let heading = point(&start.heading, params, "start.heading", DVec3::X)?;
-    let up = point(&start.up, params, "start.up", DVec3::Z)?;
-    let frame = Frame::new(pos, heading, up).map_err(|e| Error::input("start", e.to_string()))?;
-    let seed = match &raw.seed {
-        Some(n) => {
-            let s = constant(n, params, "seed")?;
-            if s.fract() != 0.0 || !(0.0..=9007199254740992.0).contains(&s) {
-                return Err(Error::input(
-                    "seed",
-                    format!("{s} is not allowed; expected a whole number from 0 to 2^53"),
-                ));
-            }
-            s as u64
-        }
-        None => 0,
-    };
-    let compiler = Compiler::new(params, &raw.procedures);
-    let procs = compiler.procedures()?;
-    let main = compiler.block(&raw.program, "program", &Arc::new(Vec::new()))?;
+    let st = s.under(key!(raw.start));
+    let pos = st.point_or(at!(start.position), DVec3::ZERO)?;
+    let heading = st.point_or(at!(start.heading), DVec3::X)?;
+    let up = st.point_or(at!(start.up), DVec3::Z)?;
+    let frame = Frame::new(pos, heading, up).map_err(|e| st.error("", e.to_string()))?;
+    let seed = s.checked_or(
+        at!(raw.seed),
+        0.0,
+        |x| x.fract() == 0.0 && (0.0..=9007199254740992.0).contains(&x),
+        "a whole number from 0 to 2^53",
+    )? as u64;
+    let compiler = Compiler::new(s.params, &raw.procedures);
+    let procs = compiler.procedures(key!(raw.procedures))?;
+    let main = compiler.block(&raw.program, key!(raw.program), &Arc::new(Vec::new()))?;
     Ok(Program {
         start: frame,
         seed,
         main,
         procs,
     })
-}
-
-fn constant(n: &Num, params: &Params, place: &str) -> Result<f64> {
-    match n {
-        Num::Value(v) if v.is_finite() => Ok(*v),
-        Num::Value(v) => Err(Error::input(
-            place,
-            format!("{v} is not allowed; expected a finite number"),
-        )),
-        Num::Expr(s) => expr::eval_const(s, params).map_err(|e| e.at(place)),
-    }
-}
-
-fn point(n: &Option<Num3>, params: &Params, place: &str, default: DVec3) -> Result<DVec3> {
-    let Some(n) = n else { return Ok(default) };
-    Ok(DVec3::new(
-        constant(&n[0], params, &format!("{place}[0]"))?,
-        constant(&n[1], params, &format!("{place}[1]"))?,
-        constant(&n[2], params, &format!("{place}[2]"))?,
-    ))
 }
 
 /// Compiles the commands of one turtle.
@@ -114,20 +91,23 @@ impl<'a> Compiler<'a> {
         }
     }
 
-    /// Compiles every procedure (in the order written; calls may refer forward).
-    pub fn procedures(&self) -> Result<Vec<Proc>> {
+    /// Compiles every procedure (in the order written; calls may refer
+    /// forward), written under `key`.
+    pub fn procedures(&self, key: &str) -> Result<Vec<Proc>> {
         let mut out = Vec::with_capacity(self.procs.len());
         for (name, p) in &self.procs {
-            let place = format!("procedures.{name}");
+            let place = join(key, name);
+            let params = join(&place, key!(p.params));
             let mut scope = Vec::new();
             for (k, param) in p.params.iter().enumerate() {
-                check_name(param, self.params, &scope, &format!("{place}.params[{k}]"))?;
+                check_name(param, self.params, &scope, &format!("{params}[{k}]"))?;
                 scope.push(param.clone());
             }
             out.push(Proc {
                 name: name.clone(),
                 arity: p.params.len(),
-                body: self.block(&p.body, &format!("{place}.do"), &Arc::new(scope))?,
+                // `body` is read as `do`
+                body: self.block(&p.body, &join(&place, "do"), &Arc::new(scope))?,
             });
         }
         Ok(out)
@@ -340,7 +320,7 @@ impl<'a> Compiler<'a> {
         };
         if raw.axiom.is_empty() {
             return Err(Error::input(
-                format!("{place}.axiom"),
+                join(place, key!(raw.axiom)),
                 "expected a non-empty word",
             ));
         }
@@ -350,7 +330,7 @@ impl<'a> Compiler<'a> {
         }
         let mut rules_at = Vec::new();
         for (key, rhs) in &raw.rules {
-            let p = format!("{place}.rules.{key}");
+            let p = join(&join(place, key!(raw.rules)), key);
             let s = number(one_symbol(key, &p)?, &mut symbols)?;
             let mut word = Vec::new();
             for ch in rhs.chars() {
@@ -360,7 +340,7 @@ impl<'a> Compiler<'a> {
         }
         let mut commands_at = Vec::new();
         for (key, cmds) in &raw.commands {
-            let p = format!("{place}.commands.{key}");
+            let p = join(&join(place, key!(raw.commands)), key);
             let s = number(one_symbol(key, &p)?, &mut symbols)?;
             commands_at.push((s, self.block(cmds, &p, scope)?));
         }
@@ -378,7 +358,7 @@ impl<'a> Compiler<'a> {
             axiom,
             rules,
             commands,
-            iterations: self.val(&raw.iterations, scope, &format!("{place}.iterations"))?,
+            iterations: self.val(&raw.iterations, scope, &join(place, key!(raw.iterations)))?,
         })
     }
 }
@@ -444,7 +424,7 @@ mod tests {
         let raw: RawTurtle = crate::recipe::parse_yaml(yaml, "t.yaml")?;
         let mut params = Params::new();
         params.insert("side".into(), 13.7);
-        resolve(&raw, &params, env).map(|t| t.path)
+        resolve(&raw, &Scope::new(&params).under("turtle"), env).map(|t| t.path)
     }
 
     fn run(yaml: &str) -> Toolpath {

@@ -106,15 +106,15 @@ pub enum RawPrimitives {
 }
 
 impl RawPrimitives {
-    /// The primitives in order, each with its key path below the part
-    /// (`primitive` for one, `primitive[k]` in a list).
-    pub fn items(&self) -> Vec<(String, &RawPrimitiveItem)> {
+    /// The primitives in order, each with its key path below the part: `key`
+    /// (the part's key for them, `primitive`) for one, `key[k]` in a list.
+    pub fn items(&self, key: &str) -> Vec<(String, &RawPrimitiveItem)> {
         match self {
-            RawPrimitives::One(p) => vec![("primitive".to_string(), &**p)],
+            RawPrimitives::One(p) => vec![(key.to_string(), &**p)],
             RawPrimitives::List(v) => v
                 .iter()
                 .enumerate()
-                .map(|(k, p)| (format!("primitive[{k}]"), p))
+                .map(|(k, p)| (format!("{key}[{k}]"), p))
                 .collect(),
         }
     }
@@ -409,7 +409,7 @@ mod tests {
             "t",
         )
         .unwrap();
-        let items = list.items();
+        let items = list.items("primitive");
         assert_eq!(items[1].0, "primitive[1]");
         assert_eq!(items[0].1.cross_section, Some(Num::Value(0.1)));
         assert!(matches!(items[1].1.primitive, RawPrimitive::Helix { .. }));

@@ -24,6 +24,25 @@ pub enum RawPrimitive {
     Turtle(RawTurtle),
 }
 
+impl RawPrimitive {
+    /// The primitive's key (`helix`, `pattern_helix`): the variant's name as
+    /// serde reads it (snake_case), the first segment of its key paths.
+    pub fn key(&self) -> &'static str {
+        match self {
+            RawPrimitive::Path(_) => "path",
+            RawPrimitive::Circle(_) => "circle",
+            RawPrimitive::Arc(_) => "arc",
+            RawPrimitive::Spiral(_) => "spiral",
+            RawPrimitive::Helix(_) => "helix",
+            RawPrimitive::Cylinder(_) => "cylinder",
+            RawPrimitive::PatternHelix(_) => "pattern_helix",
+            RawPrimitive::CaHelix(_) => "ca_helix",
+            RawPrimitive::Solid(_) => "solid",
+            RawPrimitive::Turtle(_) => "turtle",
+        }
+    }
+}
+
 /// A `path` command as written.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
@@ -279,6 +298,25 @@ pub enum RawInitial {
 mod tests {
     use super::*;
     use crate::recipe::yaml::parse_yaml;
+
+    #[test]
+    fn each_primitive_knows_the_key_it_was_read_by() {
+        for (key, map) in [
+            ("path", "{commands: []}"),
+            ("circle", "{radius: 1}"),
+            ("arc", "{radius: 1, start: 0, end: 1}"),
+            ("spiral", "{pitch: 1}"),
+            ("helix", "{height: 1, pitch: 1}"),
+            ("cylinder", "{height: 1, vpitch: 1, hpitch: 1}"),
+            ("pattern_helix", "{radius: 1, layers: 1, layer_height: 1}"),
+            ("ca_helix", "{radius: 1, layers: 1, layer_height: 1}"),
+            ("solid", "{features: []}"),
+            ("turtle", "{program: []}"),
+        ] {
+            let p: RawPrimitive = parse_yaml(&format!("{{{key}: {map}}}"), "t").unwrap();
+            assert_eq!(p.key(), key);
+        }
+    }
 
     #[test]
     fn messages_name_the_types_as_before_the_raw_forms() {

@@ -59,3 +59,39 @@ pub enum RawStep {
     },
     Translate(Num3),
 }
+
+impl RawStep {
+    /// The step's key (`deform_xyz`, `translate`): the variant's name as
+    /// serde reads it (snake_case), the first segment of its key paths.
+    pub fn key(&self) -> &'static str {
+        match self {
+            RawStep::DeformXyz(_) => "deform_xyz",
+            RawStep::DeformCylinder(_) => "deform_cylinder",
+            RawStep::ModulateCylinder { .. } => "modulate_cylinder",
+            RawStep::ModulateMap { .. } => "modulate_map",
+            RawStep::Subdivide { .. } => "subdivide",
+            RawStep::Translate(_) => "translate",
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::recipe::yaml::parse_yaml;
+
+    #[test]
+    fn each_step_knows_the_key_it_was_read_by() {
+        for (key, map) in [
+            ("deform_xyz", "{}"),
+            ("deform_cylinder", "{}"),
+            ("modulate_cylinder", "{factor: 1}"),
+            ("modulate_map", "{u: x, v: y}"),
+            ("subdivide", "{max_length: 1}"),
+            ("translate", "[0, 0, 1]"),
+        ] {
+            let s: RawStep = parse_yaml(&format!("{{{key}: {map}}}"), "t").unwrap();
+            assert_eq!(s.key(), key);
+        }
+    }
+}
