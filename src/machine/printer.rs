@@ -151,13 +151,13 @@ pub struct Printer {
     pub thumbnails: Vec<String>,
     /// The firmware planner's limits, for the print-time estimate (see
     /// [`super::Kinematics`]).
-    pub kinematics: super::Kinematics,
+    pub kinematics: super::kinematics::Kinematics,
     /// The print head's geometry for the collision check and the travel
     /// height between parts (see [`super::Head`]).
-    pub head: super::Head,
+    pub head: super::head::Head,
     /// Thresholds of the flow, support and planner checks (see
     /// [`super::CheckLimits`]).
-    pub checks: super::CheckLimits,
+    pub checks: super::head::CheckLimits,
 }
 
 impl Printer {
