@@ -1,9 +1,9 @@
 //! Numbers as written ([`Num`]: a literal or an expression string over the
 //! params) evaluated, with the key path named in every error.
 //!
-//! Key paths come from the field names: [`at!`]`(raw.height)` is the field
+//! Key paths come from the field names: `at!``(raw.height)` is the field
 //! and its key `height` (its own name, which is the key serde reads it by),
-//! [`key!`]`(raw.infill)` the key alone; a [`Scope`] holds the path above
+//! `key!``(raw.infill)` the key alone; a [`Scope`] holds the path above
 //! (`solid.infill`) and joins them. Only keys that are no field's name
 //! (a serde `rename`, an enum's variant, a list index) are written out.
 
@@ -13,7 +13,7 @@ use crate::base::error::{Error, Result};
 use crate::base::expr::{self, Expr, Params};
 use crate::recipe::schema::{Num, Num3};
 
-/// A value as written and its key: what [`at!`] makes of a field.
+/// A value as written and its key: what `at!` makes of a field.
 #[derive(Debug)]
 pub struct At<'v, T> {
     /// The value.

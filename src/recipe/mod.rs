@@ -8,6 +8,14 @@
 //! (with `--set` overrides), every number, compiles step expressions and
 //! loads images, naming the key path of any problem; the result is a
 //! [`crate::generate::model::Recipe`].
+//!
+//! The modules, each using only those before it: [`yaml`] (the one that
+//! knows the YAML library), [`schema`] (every serde form: the recipe, its
+//! primitives and steps, printer profiles; the JSON Schema), [`eval`]
+//! (numbers evaluated, key paths derived from field names), [`params`],
+//! [`expand`] (templates, loops, groups, includes), [`profile`] (printer
+//! profiles loaded into [`crate::machine::Printer`]) and [`resolve`] (the raw
+//! forms into generation's types; a turtle's program compiled and run).
 
 pub mod eval;
 pub mod expand;

@@ -56,7 +56,7 @@ impl Printer {
 
     /// A profile from a YAML file. With `inherits: NAME|FILE` the file's keys
     /// override those of a built-in profile or another file (maps merged key
-    /// by key, see [`merge_yaml`]); a file without it is parsed on its own.
+    /// by key, see [`Tree::merge`]); a file without it is parsed on its own.
     pub fn from_file(path: &Path) -> Result<Printer> {
         let shown = path.display().to_string();
         let text = crate::base::input::read_text(path, "printer profile")?;

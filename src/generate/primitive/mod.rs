@@ -1,7 +1,9 @@
 //! Primitives: the shapes a part starts from (Kanada's Fig. 3 "parts assembly").
 //!
 //! Each primitive knows how many strings it will make before it makes them,
-//! so an impossible recipe is refused before it allocates.
+//! so an impossible recipe is refused before it allocates. The primitives
+//! as written and their resolution into these types are the recipe's
+//! (`crate::recipe::schema`, `crate::recipe::resolve`).
 
 mod arc;
 /// Kanada's cellular-automaton model of self-organised printing: `ca_helix`.
