@@ -1,7 +1,8 @@
 //! The layering rule of `docs/ARCHITECTURE.md`: `src/` is one folder per
 //! layer (and `main.rs`, `lib.rs`), and no module names a module of a layer
 //! above its own, nor one later in its own layer (so no two modules depend on
-//! each other). Test modules (`#[cfg(test)]`) may use any layer to build
+//! each other). A path is `crate::…`, or `super::…` read as the `crate::…`
+//! path it names. Test modules (`#[cfg(test)]`) may use any layer to build
 //! their inputs, and comments may link anywhere.
 
 use std::path::Path;
@@ -19,7 +20,6 @@ const LAYERS: &[(&str, &[&str])] = &[
             "par",
             "toolpath",
             "expr",
-            "num",
             "finding",
             "rng",
             "format",
@@ -47,7 +47,9 @@ const LAYERS: &[(&str, &[&str])] = &[
     ("output", &["file", "gcode", "preview", "mesh", "lock"]),
     (
         "recipe",
-        &["yaml", "params", "schema", "expand", "resolve", "profile"],
+        &[
+            "yaml", "schema", "eval", "params", "expand", "profile", "resolve",
+        ],
     ),
     (
         "app",
@@ -127,6 +129,85 @@ fn crate_refs(code: &str) -> Vec<(String, String)> {
             out.push((a, b));
         }
         rest = after;
+    }
+    out
+}
+
+/// The module path of a file of `src/` (`recipe/resolve/part.rs`: recipe,
+/// resolve, part; a `mod.rs` is its folder's module).
+fn module_path(rel: &Path) -> Vec<String> {
+    let mut parts: Vec<String> = rel
+        .components()
+        .map(|c| {
+            c.as_os_str()
+                .to_string_lossy()
+                .trim_end_matches(".rs")
+                .to_string()
+        })
+        .collect();
+    if parts.last().is_some_and(|m| m == "mod") {
+        parts.pop();
+    }
+    parts
+}
+
+/// Every `super::…` path of a piece of code in the module `module`, as the
+/// (A, B) of the `crate::A::B` it names (`super::NAME` in
+/// `recipe/resolve/part.rs` names `crate::recipe::resolve::NAME`). Inside an
+/// inline `mod NAME { … }` the module is one deeper.
+fn super_refs(code: &str, module: &[String]) -> Vec<(String, String)> {
+    let mut out = Vec::new();
+    // inline modules open here: their names and closing lines
+    let mut inline: Vec<(String, String)> = Vec::new();
+    for line in code.lines() {
+        if inline.last().is_some_and(|(_, close)| line == close) {
+            inline.pop();
+            continue;
+        }
+        let t = line.trim_start();
+        let decl = t
+            .strip_prefix("pub(crate) mod ")
+            .or_else(|| t.strip_prefix("pub mod "))
+            .or_else(|| t.strip_prefix("mod "));
+        if let Some(rest) = decl.filter(|r| r.trim_end().ends_with('{')) {
+            let indent = line.len() - t.len();
+            inline.push((ident(rest), format!("{}}}", " ".repeat(indent))));
+            continue;
+        }
+        let mut rest = line;
+        while let Some(k) = rest.find("super::") {
+            let part_of_a_name = rest[..k]
+                .chars()
+                .last()
+                .is_some_and(|c| c.is_ascii_alphanumeric() || c == '_');
+            let mut after = &rest[k..];
+            if part_of_a_name {
+                rest = &after[7..];
+                continue;
+            }
+            let mut path: Vec<String> = module.to_vec();
+            path.extend(inline.iter().map(|(name, _)| name.clone()));
+            while let Some(a) = after.strip_prefix("super::") {
+                path.pop();
+                after = a;
+            }
+            loop {
+                let name = ident(after);
+                if name.is_empty() {
+                    break;
+                }
+                after = &after[name.len()..];
+                path.push(name);
+                match after.strip_prefix("::") {
+                    Some(a) => after = a,
+                    None => break,
+                }
+            }
+            if let Some(a) = path.first() {
+                out.push((a.clone(), path.get(1).cloned().unwrap_or_default()));
+            }
+            rest = after;
+        }
     }
     out
 }
@@ -234,7 +315,10 @@ fn no_module_imports_from_a_layer_above_it() {
         let (me, my_rank) = rank(&layer, module.as_deref())
             .unwrap_or_else(|| panic!("src/{} is in no layer of tests/layers.rs", rel.display()));
         let text = std::fs::read_to_string(f).unwrap();
-        for (a, b) in crate_refs(&code(&text)) {
+        let code = code(&text);
+        let mut refs = crate_refs(&code);
+        refs.extend(super_refs(&code, &module_path(rel)));
+        for (a, b) in refs {
             let (a, b) = match macros.get(&a) {
                 Some((l, m)) => (l.clone(), m.clone().unwrap_or_default()),
                 None => (a, b),
@@ -281,4 +365,27 @@ fn the_scan_sees_qualified_paths_but_not_tests_or_comments() {
     let refs = crate_refs(&c);
     let got: Vec<(&str, &str)> = refs.iter().map(|(a, b)| (a.as_str(), b.as_str())).collect();
     assert_eq!(got, [("a", "b"), ("d", "e"), ("h", "")]);
+}
+
+#[test]
+fn super_paths_name_the_crate_paths_they_mean() {
+    let module: Vec<String> = ["recipe", "resolve", "part"].map(String::from).to_vec();
+    let refs = super_refs(
+        "use super::Ctx;\nuse super::super::schema::{RawPart};\nfn f() { super::super::eval::join(); }\nmod inner {\n    use super::super::step;\n}\nlet a = my_super::x;\n",
+        &module,
+    );
+    let got: Vec<(&str, &str)> = refs.iter().map(|(a, b)| (a.as_str(), b.as_str())).collect();
+    assert_eq!(
+        got,
+        [
+            ("recipe", "resolve"),
+            ("recipe", "schema"),
+            ("recipe", "eval"),
+            ("recipe", "resolve"),
+        ]
+    );
+    assert_eq!(
+        module_path(Path::new("recipe/schema/mod.rs")),
+        ["recipe", "schema"]
+    );
 }

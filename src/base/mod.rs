@@ -9,7 +9,6 @@ pub mod format;
 pub mod geom;
 pub mod input;
 pub mod mem;
-pub mod num;
 pub mod par;
 pub mod rng;
 pub mod safe_text;

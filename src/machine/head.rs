@@ -7,15 +7,12 @@
 //! checks: { cross_section_max: 2.5, max_bridge: 10, min_move_time: 0.005 }
 //! ```
 
-use serde::Deserialize;
-
 use crate::base::error::{Error, Result};
 
 /// The print head as the collision check sees it (ExtruderTurtle's Fig. 13):
 /// a cone round the nozzle from its tip up to `cone_height`, and above that a
 /// box (heater block, fan duct, carriage) reaching `box` round the nozzle.
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields, default)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Head {
     /// Half-angle of the nozzle's cone from the vertical axis, degrees (0 a
     /// needle, 90 a flat plate at the tip).
@@ -26,7 +23,6 @@ pub struct Head {
     pub tip_diameter: f64,
     /// The box round the nozzle, `[x_min, x_max, y_min, y_max]` in mm relative
     /// to the nozzle (machine axes), from `cone_height` above the tip upwards.
-    #[serde(rename = "box")]
     pub head_box: [f64; 4],
     /// Travel between parts rises this far above the highest filament printed
     /// so far (within max z), mm.
@@ -46,8 +42,7 @@ impl Default for Head {
 }
 
 /// Thresholds of the flow, support and planner checks (printer key `checks:`).
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields, default)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CheckLimits {
     /// `over-extrusion` warning above this × nozzle² of cross-section.
     pub cross_section_max: f64,

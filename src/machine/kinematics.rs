@@ -1,7 +1,7 @@
 //! A printer profile's `kinematics:`: the limits the firmware's planner works
 //! with, and those limits with every default filled in.
 
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
 use crate::base::error::{Error, Result};
 
@@ -19,74 +19,53 @@ pub const MARLIN_BLOCK_BUFFER_SIZE: u32 = 16;
 /// (lines/s): about 2 ms a line on an 8-bit board; an assumption, not a measurement.
 pub const MARLIN_COMMAND_RATE: f64 = 500.0;
 
-fn d_accel() -> f64 {
-    1000.0
-}
-
 /// A printer profile's `kinematics:` block: the limits the firmware's planner
 /// works with. Give `junction_deviation` (Marlin) or `square_corner_velocity`
 /// (Klipper), not both; with neither, Marlin's 0.013 mm.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Kinematics {
     /// Highest head speed, mm/s; the profile's `max_speed` when absent.
-    #[serde(default)]
     pub max_velocity: Option<f64>,
     /// Acceleration of printing moves, mm/s² (Marlin's `M204 P`, Klipper's `max_accel`).
-    #[serde(default = "d_accel")]
     pub max_acceleration: f64,
     /// Acceleration of travel moves, mm/s² (Marlin's `M204 T`); `max_acceleration` when absent.
-    #[serde(default)]
     pub travel_acceleration: Option<f64>,
     /// Acceleration of E-only moves (retractions), mm/s² of filament
     /// (Marlin's `M204 R`); `max_acceleration` when absent.
-    #[serde(default)]
     pub retract_acceleration: Option<f64>,
     /// Marlin's junction deviation, mm (`M205 J`).
-    #[serde(default)]
     pub junction_deviation: Option<f64>,
     /// Klipper's square-corner velocity: the speed of a 90° corner, mm/s.
-    #[serde(default)]
     pub square_corner_velocity: Option<f64>,
     /// Shortest time a move may take, s (Marlin's `M205 B`, in s here); 0.02
     /// with junction deviation, 0 with square-corner velocity (Klipper has none).
-    #[serde(default)]
     pub min_segment_time: Option<f64>,
     /// Klipper's `minimum_cruise_ratio`: the share of a move that must cruise;
     /// 0.5 with square-corner velocity, 0 with junction deviation (Marlin has none).
-    #[serde(default)]
     pub minimum_cruise_ratio: Option<f64>,
     /// Highest speed of the Z axis, mm/s (Marlin's `M203 Z`, Klipper's
     /// `max_z_velocity`); none when absent.
-    #[serde(default)]
     pub max_z_speed: Option<f64>,
     /// Highest acceleration of the Z axis, mm/s² (Marlin's `M201 Z`,
     /// Klipper's `max_z_accel`); none when absent.
-    #[serde(default)]
     pub max_z_acceleration: Option<f64>,
     /// Klipper's `[extruder] instantaneous_corner_velocity`, mm/s of filament:
     /// the largest instant change of E speed at a junction; 1 with
     /// square-corner velocity, none with junction deviation.
-    #[serde(default)]
     pub instantaneous_corner_velocity: Option<f64>,
     /// Klipper's `[extruder] max_extrude_only_velocity`, mm/s of filament;
     /// Klipper's default with square-corner velocity, none with junction deviation.
-    #[serde(default)]
     pub max_extrude_only_velocity: Option<f64>,
     /// Klipper's `[extruder] max_extrude_only_accel`, mm/s² of filament;
     /// Klipper's default with square-corner velocity, none with junction deviation.
-    #[serde(default)]
     pub max_extrude_only_accel: Option<f64>,
     /// Hold every move to at least `min_segment_time` (the old, pessimistic
     /// model) instead of Marlin's buffer-draining slowdown; off by default.
-    #[serde(default)]
     pub min_segment_time_floor: bool,
     /// Marlin's `BLOCK_BUFFER_SIZE`, moves (16 by default).
-    #[serde(default)]
     pub block_buffer_size: Option<u32>,
     /// Lines per second the firmware reads, parses and plans from SD (500 by
     /// default, an assumption): what refills Marlin's buffer.
-    #[serde(default)]
     pub command_rate: Option<f64>,
 }
 
@@ -94,7 +73,7 @@ impl Default for Kinematics {
     fn default() -> Self {
         Kinematics {
             max_velocity: None,
-            max_acceleration: d_accel(),
+            max_acceleration: 1000.0,
             travel_acceleration: None,
             retract_acceleration: None,
             junction_deviation: None,

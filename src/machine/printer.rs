@@ -4,13 +4,11 @@
 use std::collections::BTreeMap;
 
 use glam::DVec3;
-use serde::Deserialize;
 
 use crate::base::error::{Error, Result};
 
 /// G-code dialect of the firmware.
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, Default)]
-#[serde(rename_all = "lowercase")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Flavor {
     /// Marlin (and Prusa's Marlin).
     #[default]
@@ -25,8 +23,7 @@ pub enum Flavor {
 }
 
 /// Absolute (M82) or relative (M83) E values.
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, Default)]
-#[serde(rename_all = "lowercase")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Extrusion {
     /// M82: E is the total filament fed so far.
     #[default]
@@ -37,8 +34,7 @@ pub enum Extrusion {
 
 /// The printable area. Rectangle beds span machine X in [0, width] and Y in
 /// [0, depth]; round (delta) beds are centred on machine (0, 0).
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
-#[serde(tag = "shape", rename_all = "lowercase", deny_unknown_fields)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Bed {
     /// A rectangular bed.
     Rectangle {
@@ -85,20 +81,14 @@ impl Bed {
 }
 
 /// Retraction before long travel moves.
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Retraction {
     /// Filament pulled back, mm (0 for none).
     pub length: f64,
     /// Retraction speed, mm/s of filament.
     pub speed: f64,
     /// Travel moves shorter than this are not retracted, mm.
-    #[serde(default = "d_min_travel")]
     pub min_travel: f64,
-}
-
-fn d_min_travel() -> f64 {
-    2.0
 }
 
 impl Default for Retraction {
@@ -106,19 +96,17 @@ impl Default for Retraction {
         Retraction {
             length: 0.0,
             speed: 35.0,
-            min_travel: d_min_travel(),
+            min_travel: 2.0,
         }
     }
 }
 
 /// A printer profile: the spec's keys plus the limits p3dp checks against.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Printer {
     /// Profile name.
     pub name: String,
     /// Firmware dialect.
-    #[serde(default)]
     pub flavor: Flavor,
     /// Printable area.
     pub bed: Bed,
@@ -129,86 +117,47 @@ pub struct Printer {
     /// Filament diameter, mm (a material may override it).
     pub filament_diameter: f64,
     /// Absolute or relative E.
-    #[serde(default)]
     pub extrusion: Extrusion,
     /// G-code before the print; `{nozzle_temp}`, `{bed_temp}` and the other
     /// placeholders of [`Printer::fill`] are filled in.
-    #[serde(default)]
     pub start_gcode: String,
     /// G-code after the print, with the same placeholders.
-    #[serde(default)]
     pub end_gcode: String,
     /// Head speed of travel moves, mm/s.
-    #[serde(default = "d_travel")]
     pub travel_speed: f64,
     /// Retraction before long travel moves.
-    #[serde(default)]
     pub retraction: Retraction,
     /// Retract with the firmware's `G10`/`G11` (its own length and speed,
     /// `M207`/`M208` or Klipper's `[firmware_retraction]`) instead of E moves.
-    #[serde(default)]
     pub firmware_retraction: bool,
     /// Hottest nozzle the hot end allows, °C.
-    #[serde(default = "d_max_nozzle")]
     pub max_nozzle_temp: f64,
     /// Hottest bed allowed, °C.
-    #[serde(default = "d_max_bed")]
     pub max_bed_temp: f64,
     /// Fastest head speed, mm/s.
-    #[serde(default = "d_max_speed")]
     pub max_speed: f64,
     /// Hot-end volumetric flow limit, mm³/s.
-    #[serde(default = "d_max_flow")]
     pub max_flow: f64,
     /// Runs of extruding strings shorter than this are merged into one move
     /// (Kanada's `draw` does the same near a globe's poles), mm.
-    #[serde(default = "d_min_string")]
     pub min_string_length: f64,
     /// Fit `G2`/`G3` arcs to runs of strings on a circle or helix (see
     /// [`crate::base::geom::arc`]); off by default.
-    #[serde(default)]
     pub arcs: bool,
     /// Largest distance between an arc and the strings it replaces, mm.
-    #[serde(default = "d_arc_tolerance")]
     pub arc_tolerance: f64,
     /// PNG thumbnails to embed in the G-code, as `WxH` sizes (PrusaSlicer's
     /// `; thumbnail begin` blocks); none by default.
-    #[serde(default)]
     pub thumbnails: Vec<String>,
     /// The firmware planner's limits, for the print-time estimate (see
     /// [`super::Kinematics`]).
-    #[serde(default)]
-    pub kinematics: super::Kinematics,
+    pub kinematics: super::kinematics::Kinematics,
     /// The print head's geometry for the collision check and the travel
     /// height between parts (see [`super::Head`]).
-    #[serde(default)]
-    pub head: super::Head,
+    pub head: super::head::Head,
     /// Thresholds of the flow, support and planner checks (see
     /// [`super::CheckLimits`]).
-    #[serde(default)]
-    pub checks: super::CheckLimits,
-}
-
-fn d_travel() -> f64 {
-    120.0
-}
-fn d_max_nozzle() -> f64 {
-    260.0
-}
-fn d_max_bed() -> f64 {
-    110.0
-}
-fn d_max_speed() -> f64 {
-    300.0
-}
-fn d_max_flow() -> f64 {
-    12.0
-}
-fn d_min_string() -> f64 {
-    0.1
-}
-fn d_arc_tolerance() -> f64 {
-    0.025
+    pub checks: super::head::CheckLimits,
 }
 
 impl Printer {
@@ -412,23 +361,6 @@ mod tests {
         assert_eq!(p.to_machine(DVec3::ZERO), DVec3::new(110.0, 110.0, 0.0));
         assert!(p.bed.contains_xy(DVec3::new(220.0, 0.0, 0.0)));
         assert!(!p.bed.contains_xy(DVec3::new(220.5, 0.0, 0.0)));
-    }
-
-    #[test]
-    fn round_bed_and_unknown_keys() {
-        let p: Printer = crate::recipe::yaml::parse_yaml(
-            "name: d\nbed: {shape: circle, diameter: 280, max_z: 300}\norigin: [0,0,0]\nnozzle_diameter: 0.4\nfilament_diameter: 1.75\n",
-            "d.yaml",
-        )
-        .unwrap();
-        assert!(p.bed.contains_xy(DVec3::new(0.0, 139.9, 0.0)));
-        assert!(!p.bed.contains_xy(DVec3::new(100.0, 100.0, 0.0)));
-        let e = crate::recipe::yaml::parse_yaml::<Printer>(
-            "name: d\nbed: {shape: circle, diameter: 280, max_z: 300, size: 3}\norigin: [0,0,0]\nnozzle_diameter: 0.4\nfilament_diameter: 1.75\n",
-            "d.yaml",
-        )
-        .unwrap_err();
-        assert!(e.to_string().contains("size"), "{e}");
     }
 
     #[test]

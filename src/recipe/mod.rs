@@ -8,7 +8,16 @@
 //! (with `--set` overrides), every number, compiles step expressions and
 //! loads images, naming the key path of any problem; the result is a
 //! [`crate::generate::model::Recipe`].
+//!
+//! The modules, each using only those before it: [`yaml`] (the one that
+//! knows the YAML library), [`schema`] (every serde form: the recipe, its
+//! primitives and steps, printer profiles; the JSON Schema), [`eval`]
+//! (numbers evaluated, key paths derived from field names), [`params`],
+//! [`expand`] (templates, loops, groups, includes), [`profile`] (printer
+//! profiles loaded into [`crate::machine::Printer`]) and [`resolve`] (the raw
+//! forms into generation's types; a turtle's program compiled and run).
 
+pub mod eval;
 pub mod expand;
 pub mod params;
 pub mod profile;
@@ -16,9 +25,9 @@ pub mod resolve;
 pub mod schema;
 pub mod yaml;
 
-pub use crate::base::num::{Num, Num3};
 pub use crate::generate::model::{Part, Recipe, Skirt};
 pub use params::{eval_params, parse_set};
 pub use resolve::load_bitmap;
 pub use schema::RawRecipe;
+pub use schema::{Num, Num3};
 pub use yaml::parse_yaml;

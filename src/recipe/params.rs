@@ -5,7 +5,8 @@ use indexmap::IndexMap;
 
 use crate::base::error::{Error, Result};
 use crate::base::expr::{self, Params};
-use crate::base::num::{finite, Num};
+use crate::recipe::eval::{finite, join, key};
+use crate::recipe::schema::{Num, RawRecipe};
 
 pub(crate) fn is_identifier(s: &str) -> bool {
     let mut cs = s.chars();
@@ -18,7 +19,7 @@ pub(crate) fn is_identifier(s: &str) -> bool {
 pub fn eval_params(raw: &IndexMap<String, Num>, sets: &[(String, String)]) -> Result<Params> {
     let mut params = Params::new();
     for (name, value) in raw {
-        let place = format!("params.{name}");
+        let place = join(key!(RawRecipe, params), name);
         if !is_identifier(name) {
             return Err(Error::input(
                 place,

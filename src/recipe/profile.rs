@@ -4,11 +4,13 @@
 
 use std::path::Path;
 
-use serde::Deserialize;
-
-use super::yaml::parse_yaml;
+use super::schema::{
+    RawBed, RawCheckLimits, RawExtrusion, RawFlavor, RawHead, RawKinematics, RawPrinter,
+    RawRetraction,
+};
+use super::yaml::{parse_yaml, Tree};
 use crate::base::error::{Error, Result};
-use crate::machine::Printer;
+use crate::machine::{Bed, CheckLimits, Extrusion, Flavor, Head, Kinematics, Printer, Retraction};
 
 const BUILT_IN: &[(&str, &str)] = &[
     (
@@ -42,8 +44,8 @@ pub fn built_in_names() -> Vec<&'static str> {
 /// A built-in profile by name.
 pub fn built_in(name: &str) -> Option<Printer> {
     let (_, text) = BUILT_IN.iter().find(|(n, _)| *n == name)?;
-    let p: Printer = parse_yaml(text, name).expect("built-in profiles parse");
-    Some(p)
+    let p: RawPrinter = parse_yaml(text, name).expect("built-in profiles parse");
+    Some(printer(p))
 }
 
 impl Printer {
@@ -54,26 +56,26 @@ impl Printer {
 
     /// A profile from a YAML file. With `inherits: NAME|FILE` the file's keys
     /// override those of a built-in profile or another file (maps merged key
-    /// by key, see [`merge_yaml`]); a file without it is parsed on its own.
+    /// by key, see [`Tree::merge`]); a file without it is parsed on its own.
     pub fn from_file(path: &Path) -> Result<Printer> {
         let shown = path.display().to_string();
         let text = crate::base::input::read_text(path, "printer profile")?;
-        let value: serde_yaml::Value = parse_yaml(&text, &shown)?;
-        let p: Printer = if value.get("inherits").is_some() {
-            let named = value.get("name").is_some();
+        let tree = Tree::parse(&text, &shown)?;
+        let raw: RawPrinter = if tree.has("inherits") {
+            let named = tree.has("name");
             let mut seen = vec![path.canonicalize().unwrap_or_else(|_| path.to_path_buf())];
-            let mut merged = inherit(value, path, &mut seen).map_err(|e| e.in_file(&shown))?;
+            let mut merged = inherit(tree, path, &mut seen).map_err(|e| e.in_file(&shown))?;
             if !named {
                 // a profile named after its file, not after its base
-                let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned());
-                if let (Some(m), Some(stem)) = (merged.as_mapping_mut(), stem) {
-                    m.insert("name".into(), stem.into());
+                if let Some(stem) = path.file_stem() {
+                    merged.set_str("name", stem.to_string_lossy().into_owned());
                 }
             }
-            from_value(merged, &shown)?
+            merged.read(&shown)?
         } else {
             parse_yaml(&text, &shown)?
         };
+        let p = printer(raw);
         p.validate().map_err(|e| e.in_file(&shown))?;
         Ok(p)
     }
@@ -131,17 +133,14 @@ fn unknown_printer(key: &str, spec: &str) -> Error {
 /// Deepest chain of `inherits` followed.
 const MAX_INHERITS: usize = 16;
 
-/// Resolves the `inherits:` of a profile file's YAML `value` (read from
+/// Resolves the `inherits:` of a profile file's YAML `tree` (read from
 /// `path`): the base (a built-in name, or a file relative to `path`, itself
-/// resolved) with `value`'s keys merged over it. `seen` holds the files of
-/// the chain so far, to refuse cycles.
-fn inherit(
-    mut value: serde_yaml::Value,
-    path: &Path,
-    seen: &mut Vec<std::path::PathBuf>,
-) -> Result<serde_yaml::Value> {
-    let Some(spec) = value.as_mapping_mut().and_then(|m| m.remove("inherits")) else {
-        return Ok(value);
+/// resolved) with `tree`'s keys merged over it (maps merged key by key, but
+/// a map whose `shape` differs replaces the base's whole: a round bed over a
+/// rectangle). `seen` holds the files of the chain so far, to refuse cycles.
+fn inherit(mut tree: Tree, path: &Path, seen: &mut Vec<std::path::PathBuf>) -> Result<Tree> {
+    let Some(spec) = tree.remove("inherits") else {
+        return Ok(tree);
     };
     let Some(spec) = spec.as_str().map(str::to_string) else {
         return Err(Error::input(
@@ -155,8 +154,8 @@ fn inherit(
             format!("more than {MAX_INHERITS} profiles inherit one from another"),
         ));
     }
-    let base = if let Some((_, text)) = BUILT_IN.iter().find(|(n, _)| *n == spec) {
-        serde_yaml::from_str(text).expect("built-in profiles parse")
+    let base = if let Some((name, text)) = BUILT_IN.iter().find(|(n, _)| *n == spec) {
+        Tree::parse(text, name).expect("built-in profiles parse")
     } else if names_a_file(&spec) {
         let rel = spec.trim_start_matches("./");
         let file = match path.parent() {
@@ -182,49 +181,125 @@ fn inherit(
         seen.push(canon);
         let shown = file.display().to_string();
         let text = crate::base::input::read_text(&file, "printer profile")?;
-        let v: serde_yaml::Value = parse_yaml(&text, &shown)?;
-        inherit(v, &file, seen).map_err(|e| e.in_file(&shown))?
+        let t = Tree::parse(&text, &shown)?;
+        inherit(t, &file, seen).map_err(|e| e.in_file(&shown))?
     } else {
         return Err(unknown_printer("inherits", &spec));
     };
-    Ok(merge_yaml(base, value))
+    Ok(Tree::merge(base, tree, "shape"))
 }
 
-/// Deep merge: keys of `over` replace those of `base`, maps are merged key by
-/// key, except two maps whose `shape` differs (a round bed replacing a
-/// rectangle), where `over` replaces `base` whole.
-pub fn merge_yaml(base: serde_yaml::Value, over: serde_yaml::Value) -> serde_yaml::Value {
-    use serde_yaml::Value;
-    match (base, over) {
-        (Value::Mapping(mut b), Value::Mapping(o)) => {
-            let shape = |m: &serde_yaml::Mapping| m.get("shape").cloned();
-            if shape(&o).is_some() && shape(&b).is_some() && shape(&o) != shape(&b) {
-                return Value::Mapping(o);
-            }
-            for (k, v) in o {
-                let merged = match b.remove(&k) {
-                    Some(old) => merge_yaml(old, v),
-                    None => v,
-                };
-                b.insert(k, merged);
-            }
-            Value::Mapping(b)
-        }
-        (_, over) => over,
+/// The profile as written, in the machine's types (checked by
+/// [`Printer::validate`], which names the key of a value out of range).
+fn printer(raw: RawPrinter) -> Printer {
+    Printer {
+        name: raw.name,
+        flavor: flavor(raw.flavor),
+        bed: match raw.bed {
+            RawBed::Rectangle { size, max_z } => Bed::Rectangle { size, max_z },
+            RawBed::Circle { diameter, max_z } => Bed::Circle { diameter, max_z },
+        },
+        origin: raw.origin,
+        nozzle_diameter: raw.nozzle_diameter,
+        filament_diameter: raw.filament_diameter,
+        extrusion: match raw.extrusion {
+            RawExtrusion::Absolute => Extrusion::Absolute,
+            RawExtrusion::Relative => Extrusion::Relative,
+        },
+        start_gcode: raw.start_gcode,
+        end_gcode: raw.end_gcode,
+        travel_speed: raw.travel_speed,
+        retraction: retraction(raw.retraction),
+        firmware_retraction: raw.firmware_retraction,
+        max_nozzle_temp: raw.max_nozzle_temp,
+        max_bed_temp: raw.max_bed_temp,
+        max_speed: raw.max_speed,
+        max_flow: raw.max_flow,
+        min_string_length: raw.min_string_length,
+        arcs: raw.arcs,
+        arc_tolerance: raw.arc_tolerance,
+        thumbnails: raw.thumbnails,
+        kinematics: kinematics(raw.kinematics),
+        head: head(raw.head),
+        checks: checks(raw.checks),
     }
 }
 
-/// Deserialises a merged profile, naming the key path of any error.
-fn from_value(value: serde_yaml::Value, file: &str) -> Result<Printer> {
-    let mut track = serde_path_to_error::Track::new();
-    let tracked = serde_path_to_error::Deserializer::new(value, &mut track);
-    Printer::deserialize(tracked).map_err(|e| {
-        let path = track.path().to_string();
-        let mut err = Error::input(
-            if path == "." { String::new() } else { path },
-            e.to_string(),
-        );
-        err.file = Some(file.to_string());
-        err
-    })
+fn flavor(f: RawFlavor) -> Flavor {
+    match f {
+        RawFlavor::Marlin => Flavor::Marlin,
+        RawFlavor::Klipper => Flavor::Klipper,
+        RawFlavor::Reprap => Flavor::Reprap,
+        RawFlavor::Prusa => Flavor::Prusa,
+    }
+}
+
+fn retraction(r: RawRetraction) -> Retraction {
+    Retraction {
+        length: r.length,
+        speed: r.speed,
+        min_travel: r.min_travel,
+    }
+}
+
+fn kinematics(k: RawKinematics) -> Kinematics {
+    Kinematics {
+        max_velocity: k.max_velocity,
+        max_acceleration: k.max_acceleration,
+        travel_acceleration: k.travel_acceleration,
+        retract_acceleration: k.retract_acceleration,
+        junction_deviation: k.junction_deviation,
+        square_corner_velocity: k.square_corner_velocity,
+        min_segment_time: k.min_segment_time,
+        minimum_cruise_ratio: k.minimum_cruise_ratio,
+        max_z_speed: k.max_z_speed,
+        max_z_acceleration: k.max_z_acceleration,
+        instantaneous_corner_velocity: k.instantaneous_corner_velocity,
+        max_extrude_only_velocity: k.max_extrude_only_velocity,
+        max_extrude_only_accel: k.max_extrude_only_accel,
+        min_segment_time_floor: k.min_segment_time_floor,
+        block_buffer_size: k.block_buffer_size,
+        command_rate: k.command_rate,
+    }
+}
+
+fn head(h: RawHead) -> Head {
+    Head {
+        cone_angle: h.cone_angle,
+        cone_height: h.cone_height,
+        tip_diameter: h.tip_diameter,
+        head_box: h.head_box,
+        clearance: h.clearance,
+    }
+}
+
+fn checks(c: RawCheckLimits) -> CheckLimits {
+    CheckLimits {
+        cross_section_max: c.cross_section_max,
+        cross_section_hard_max: c.cross_section_hard_max,
+        cross_section_min: c.cross_section_min,
+        cross_section_hard_min: c.cross_section_hard_min,
+        flow_hard_max: c.flow_hard_max,
+        max_bridge: c.max_bridge,
+        support_tolerance: c.support_tolerance,
+        min_move_time: c.min_move_time,
+        planner_buffer: c.planner_buffer,
+        first_layer_min: c.first_layer_min,
+        min_contact_per_height: c.min_contact_per_height,
+        min_contact_per_gram: c.min_contact_per_gram,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn flavor_names_round_trip() {
+        // the name the G-code layer gives a flavour is the one a profile reads
+        for f in Flavor::ALL {
+            let raw: RawFlavor = parse_yaml(f.name(), "p.yaml").unwrap();
+            assert_eq!(flavor(raw), f);
+        }
+    }
 }

@@ -1,4 +1,6 @@
-//! YAML read with places: every error names the file, line, column and key path.
+//! YAML read with places: every error names the file, line, column and key
+//! path. The one module that knows the YAML library: the rest of the crate
+//! reads through [`parse_yaml`] and, to merge profiles, [`Tree`].
 
 use serde::de;
 
@@ -58,6 +60,84 @@ pub fn parse_yaml<T: de::DeserializeOwned>(text: &str, file: &str) -> Result<T> 
         }
         explain(err, text)
     })
+}
+
+/// A YAML document held as a tree, to be merged with another (a printer
+/// profile's `inherits:`) before it is read into a type.
+#[derive(Clone, Debug)]
+pub struct Tree(serde_yaml::Value);
+
+impl Tree {
+    /// Parses `text`, errors as [`parse_yaml`]'s (naming `file`).
+    pub fn parse(text: &str, file: &str) -> Result<Tree> {
+        parse_yaml(text, file).map(Tree)
+    }
+
+    /// Whether the top-level map has `key`.
+    pub fn has(&self, key: &str) -> bool {
+        self.0.get(key).is_some()
+    }
+
+    /// Takes `key` out of the top-level map.
+    pub fn remove(&mut self, key: &str) -> Option<Tree> {
+        self.0.as_mapping_mut()?.remove(key).map(Tree)
+    }
+
+    /// The text, when the tree is a string.
+    pub fn as_str(&self) -> Option<&str> {
+        self.0.as_str()
+    }
+
+    /// Sets `key` of the top-level map (when it is a map) to `value`.
+    pub fn set_str(&mut self, key: &str, value: String) {
+        if let Some(m) = self.0.as_mapping_mut() {
+            m.insert(key.into(), value.into());
+        }
+    }
+
+    /// Deep merge: keys of `over` replace those of `base`, maps are merged
+    /// key by key, except two maps whose `tag` key differs (a round bed
+    /// replacing a rectangle: `shape`), where `over` replaces `base` whole.
+    pub fn merge(base: Tree, over: Tree, tag: &str) -> Tree {
+        Tree(merge(base.0, over.0, tag))
+    }
+
+    /// Reads the tree into `T`, naming the key path of any error (and
+    /// `file`; a merged tree has no lines).
+    pub fn read<T: de::DeserializeOwned>(self, file: &str) -> Result<T> {
+        let mut track = serde_path_to_error::Track::new();
+        let tracked = serde_path_to_error::Deserializer::new(self.0, &mut track);
+        T::deserialize(tracked).map_err(|e| {
+            let path = track.path().to_string();
+            let mut err = Error::input(
+                if path == "." { String::new() } else { path },
+                e.to_string(),
+            );
+            err.file = Some(file.to_string());
+            err
+        })
+    }
+}
+
+fn merge(base: serde_yaml::Value, over: serde_yaml::Value, tag: &str) -> serde_yaml::Value {
+    use serde_yaml::Value;
+    match (base, over) {
+        (Value::Mapping(mut b), Value::Mapping(o)) => {
+            let tagged = |m: &serde_yaml::Mapping| m.get(tag).cloned();
+            if tagged(&o).is_some() && tagged(&b).is_some() && tagged(&o) != tagged(&b) {
+                return Value::Mapping(o);
+            }
+            for (k, v) in o {
+                let merged = match b.remove(&k) {
+                    Some(old) => merge(old, v, tag),
+                    None => v,
+                };
+                b.insert(k, merged);
+            }
+            Value::Mapping(b)
+        }
+        (_, over) => over,
+    }
 }
 
 /// A line and column, 1-based.

@@ -6,10 +6,6 @@
 use glam::DVec3;
 
 use crate::base::toolpath::Toolpath;
-use serde::Deserialize;
-
-use crate::base::error::{Error, Result};
-use crate::base::num::{Num, Num3, Scope};
 
 /// An arc from angle `start` to `end` (radians, counter-clockwise when
 /// `end > start`), rising by `rise` from start to end.
@@ -54,49 +50,6 @@ impl Arc {
             t.draw(at(k), c, v);
         }
         t
-    }
-}
-
-/// `arc:` as written.
-#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
-#[serde(deny_unknown_fields)]
-#[allow(missing_docs)]
-pub struct RawArc {
-    pub radius: Num,
-    pub start: Num,
-    pub end: Num,
-    #[serde(default)]
-    pub center: Option<Num3>,
-    #[serde(default)]
-    pub segments: Option<Num>,
-    #[serde(default)]
-    pub rise: Option<Num>,
-}
-
-impl RawArc {
-    /// Evaluates every number; errors name `arc.KEY`.
-    pub fn resolve(&self, s: &Scope) -> Result<Arc> {
-        let (start, end) = (
-            s.num(&self.start, "arc.start")?,
-            s.num(&self.end, "arc.end")?,
-        );
-        if start == end {
-            return Err(Error::input(
-                "arc.end",
-                "expected an end angle other than start",
-            ));
-        }
-        Ok(Arc {
-            radius: s.positive(&self.radius, "arc.radius")?,
-            center: s.center(&self.center, "arc")?,
-            start,
-            end,
-            segments: s.segments(&self.segments, "arc")?,
-            rise: match &self.rise {
-                Some(n) => s.num(n, "arc.rise")?,
-                None => 0.0,
-            },
-        })
     }
 }
 

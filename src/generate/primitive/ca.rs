@@ -57,17 +57,14 @@
 //! `p3dp build --pattern FILE.png` writes the cell array as an image.
 
 use glam::DVec3;
-use serde::Deserialize;
 
 use super::on_circle;
 use crate::base::error::{Error, Result};
-use crate::base::num::{Num, Num3, NumFn};
 use crate::base::rng::SplitMix64;
 use crate::base::toolpath::Toolpath;
 
 /// Which of the paper's rules decides a cell.
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, schemars::JsonSchema)]
-#[serde(rename_all = "snake_case")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Rule {
     /// Fig. 5: straight up at p0, else on the next cell (i + 1) at p1.
     Basic,
@@ -76,8 +73,7 @@ pub enum Rule {
 }
 
 /// How the cells' turns are laid out: one helix, or one circle per layer.
-#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq, schemars::JsonSchema)]
-#[serde(rename_all = "snake_case")]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Layout {
     /// One helix, the paper's method (section 2): a cell's neighbours below
     /// run on across the seam into the turn being printed.
@@ -88,16 +84,6 @@ pub enum Layout {
     /// layer is a ring of its own, so its neighbours below wrap round in the
     /// layer below.
     Layers,
-}
-
-/// `initial:` as written.
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, schemars::JsonSchema)]
-#[serde(rename_all = "snake_case")]
-pub enum RawInitial {
-    /// Every cell of the first turn filled (the paper's usual start).
-    Ones,
-    /// Each cell of the first turn empty with probability `noise` (Fig. 11b).
-    Random,
 }
 
 /// The first turn of the automaton.
@@ -421,198 +407,6 @@ impl CaHelix {
             }
         }
         t
-    }
-}
-
-/// `ca_helix:` as written in a recipe. Required: `radius`, `layers` (turns,
-/// the first included), `layer_height`; optional (default): `cells` (288),
-/// `rule` (`basic`), `layout` (`helix`), `p0` (0.99), `p1` (1), `consume` (0.5, split_merge only),
-/// `e1` (0.3), `initial` (`ones`), `noise` (0.5, `initial: random` only),
-/// `seed` (0), `center` ([0, 0, layer_height]). Filled cells are extruded at
-/// the part's cross-section and speed.
-#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
-#[serde(deny_unknown_fields)]
-#[allow(missing_docs)]
-pub struct RawCaHelix {
-    pub radius: Num,
-    pub layers: Num,
-    pub layer_height: Num,
-    #[serde(default)]
-    pub cells: Option<Num>,
-    #[serde(default)]
-    pub rule: Option<Rule>,
-    #[serde(default)]
-    pub layout: Option<Layout>,
-    #[serde(default)]
-    pub p0: Option<Num>,
-    #[serde(default)]
-    pub p1: Option<Num>,
-    #[serde(default)]
-    pub consume: Option<Num>,
-    #[serde(default)]
-    pub e1: Option<Num>,
-    #[serde(default)]
-    pub initial: Option<RawInitial>,
-    #[serde(default)]
-    pub noise: Option<Num>,
-    #[serde(default)]
-    pub seed: Option<Num>,
-    #[serde(default)]
-    pub center: Option<Num3>,
-}
-
-/// Range-checked numbers for the pattern primitives, errors naming `key.name`.
-pub(super) struct Values<'a> {
-    /// The recipe's evaluator.
-    pub num: NumFn<'a>,
-    /// `ca_helix` or `pattern_helix`.
-    pub key: &'static str,
-}
-
-impl Values<'_> {
-    fn place(&self, name: &str) -> String {
-        format!("{}.{name}", self.key)
-    }
-
-    fn bad(&self, name: &str, v: f64, expected: &str) -> Error {
-        Error::input(
-            self.place(name),
-            format!("{v} is not allowed; expected {expected}"),
-        )
-    }
-
-    /// A number in `ok`, else an error saying `expected`.
-    pub fn checked(
-        &self,
-        n: &Num,
-        name: &str,
-        ok: impl Fn(f64) -> bool,
-        expected: &str,
-    ) -> Result<f64> {
-        let v = (self.num)(n, &self.place(name))?;
-        if ok(v) {
-            Ok(v)
-        } else {
-            Err(self.bad(name, v, expected))
-        }
-    }
-
-    /// `n`, or `default` when absent, checked the same way.
-    pub fn opt(
-        &self,
-        n: &Option<Num>,
-        name: &str,
-        default: f64,
-        ok: impl Fn(f64) -> bool,
-        expected: &str,
-    ) -> Result<f64> {
-        match n {
-            Some(n) => self.checked(n, name, ok, expected),
-            None => Ok(default),
-        }
-    }
-
-    /// A number > 0.
-    pub fn positive(&self, n: &Num, name: &str) -> Result<f64> {
-        self.checked(n, name, |v| v > 0.0, "a number > 0")
-    }
-
-    /// A whole number from `min` to 10000000.
-    pub fn whole(&self, n: &Num, name: &str, min: u32) -> Result<u32> {
-        let ok = |v: f64| v.fract() == 0.0 && v >= min as f64 && v <= 1e7;
-        let expected = format!("a whole number from {min} to 10000000");
-        Ok(self.checked(n, name, ok, &expected)? as u32)
-    }
-
-    /// The centre, [0, 0, `z`] when absent.
-    pub fn center(&self, c: &Option<Num3>, z: f64) -> Result<DVec3> {
-        match c {
-            Some(c) => {
-                let at = |k: usize| (self.num)(&c[k], &self.place(&format!("center[{k}]")));
-                Ok(DVec3::new(at(0)?, at(1)?, at(2)?))
-            }
-            None => Ok(DVec3::new(0.0, 0.0, z)),
-        }
-    }
-}
-
-const PROBABILITY: &str = "a probability from 0 to 1";
-
-impl RawCaHelix {
-    /// Resolves every number, naming `ca_helix.KEY` in errors.
-    pub fn resolve(&self, num: NumFn) -> Result<CaHelix> {
-        let v = Values {
-            num,
-            key: "ca_helix",
-        };
-        let radius = v.positive(&self.radius, "radius")?;
-        let layers = v.whole(&self.layers, "layers", 1)?;
-        let layer_height = v.positive(&self.layer_height, "layer_height")?;
-        let cells = match &self.cells {
-            Some(n) => v.whole(n, "cells", 3)?,
-            None => 4 * 72,
-        };
-        let rule = self.rule.unwrap_or(Rule::Basic);
-        let unit = |x: f64| (0.0..=1.0).contains(&x);
-        let open = |x: f64| x > 0.0 && x < 1.0;
-        let p0 = v.opt(&self.p0, "p0", 0.99, unit, PROBABILITY)?;
-        let p1 = v.opt(&self.p1, "p1", 1.0, unit, PROBABILITY)?;
-        let e1 = v.opt(
-            &self.e1,
-            "e1",
-            0.3,
-            open,
-            "a number between 0 and 1 (0 < e1 < 1): the filament extruded per cell, in units of one chunk",
-        )?;
-        if rule == Rule::Basic && self.consume.is_some() {
-            return Err(Error::input(
-                v.place("consume"),
-                "only the split_merge rule uses `consume` (C); expected `rule: split_merge` or no `consume`",
-            ));
-        }
-        let consume = v.opt(
-            &self.consume,
-            "consume",
-            0.5,
-            open,
-            "a number between 0 and 1 (0 < C < 1): the filament a straight stack uses",
-        )?;
-        let initial = match (self.initial.unwrap_or(RawInitial::Ones), &self.noise) {
-            (RawInitial::Ones, Some(_)) => {
-                return Err(Error::input(
-                    v.place("noise"),
-                    "`noise` is the fraction of zeros of a random first turn; expected `initial: random` or no `noise`",
-                ))
-            }
-            (RawInitial::Ones, None) => Initial::Ones,
-            (RawInitial::Random, noise) => Initial::Random {
-                noise: v.opt(noise, "noise", 0.5, unit, "a fraction from 0 to 1")?,
-            },
-        };
-        let seed = v.opt(
-            &self.seed,
-            "seed",
-            0.0,
-            |s| s.fract() == 0.0 && (0.0..=9007199254740992.0).contains(&s),
-            "a whole number from 0 to 9007199254740992 (2^53)",
-        )? as u64;
-        Ok(CaHelix {
-            radius,
-            layer_height,
-            center: v.center(&self.center, layer_height)?,
-            model: Automaton {
-                cells,
-                layers,
-                rule,
-                layout: self.layout.unwrap_or_default(),
-                p0,
-                p1,
-                consume,
-                e1,
-                initial,
-                seed,
-            },
-        })
     }
 }
 

@@ -4,10 +4,6 @@ use glam::DVec3;
 
 use super::on_circle;
 use crate::base::toolpath::Toolpath;
-use serde::Deserialize;
-
-use crate::base::error::Result;
-use crate::base::num::{Num, Num3, Scope};
 
 /// One closed circle at height `center.z`, starting at angle 0, counter-clockwise.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -37,29 +33,6 @@ impl Circle {
             t.draw(at(k), c, v);
         }
         t
-    }
-}
-
-/// `circle:` as written.
-#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
-#[serde(deny_unknown_fields)]
-#[allow(missing_docs)]
-pub struct RawCircle {
-    pub radius: Num,
-    #[serde(default)]
-    pub center: Option<Num3>,
-    #[serde(default)]
-    pub segments: Option<Num>,
-}
-
-impl RawCircle {
-    /// Evaluates every number; errors name `circle.KEY`.
-    pub fn resolve(&self, s: &Scope) -> Result<Circle> {
-        Ok(Circle {
-            radius: s.positive(&self.radius, "circle.radius")?,
-            center: s.center(&self.center, "circle")?,
-            segments: s.segments(&self.segments, "circle")?,
-        })
     }
 }
 

@@ -4,14 +4,9 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
-use super::outline::{radius_or_outline, Files, RawOutline};
 use super::spiral::{Direction, Spiral};
 use crate::base::svg::Outline;
 use crate::base::toolpath::Toolpath;
-use serde::Deserialize;
-
-use crate::base::error::Result;
-use crate::base::num::{Num, Num3, Scope};
 
 /// Flat spirals every `vpitch`, `hpitch` apart, alternately outward and
 /// inward, so each layer starts where the last one ended, one `vpitch` up.
@@ -73,41 +68,6 @@ impl Cylinder {
             t.append(&layer, v);
         }
         t
-    }
-}
-
-/// `cylinder:` as written.
-#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
-#[serde(deny_unknown_fields)]
-#[allow(missing_docs)]
-pub struct RawCylinder {
-    #[serde(default)]
-    pub radius: Option<Num>,
-    pub height: Num,
-    pub vpitch: Num,
-    pub hpitch: Num,
-    #[serde(default)]
-    pub center: Option<Num3>,
-    #[serde(default)]
-    pub segments: Option<Num>,
-    #[serde(default)]
-    pub outline: Option<RawOutline>,
-}
-
-impl RawCylinder {
-    /// Evaluates every number; errors name `cylinder.KEY`.
-    pub fn resolve(&self, s: &Scope, files: Files) -> Result<Cylinder> {
-        let (radius, outline) =
-            radius_or_outline(s, files, "cylinder", &self.radius, &self.outline)?;
-        Ok(Cylinder {
-            radius,
-            outline,
-            height: s.positive(&self.height, "cylinder.height")?,
-            vpitch: s.positive(&self.vpitch, "cylinder.vpitch")?,
-            hpitch: s.positive(&self.hpitch, "cylinder.hpitch")?,
-            center: s.center(&self.center, "cylinder")?,
-            segments: s.segments(&self.segments, "cylinder")?,
-        })
     }
 }
 

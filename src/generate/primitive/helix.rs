@@ -4,14 +4,10 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
-use super::outline::{along, radius_or_outline, turn_points, Files, RawOutline};
+use super::outline::{along, turn_points};
 use super::{TurnTable, PAR_MIN};
 use crate::base::svg::Outline;
 use crate::base::toolpath::Toolpath;
-use serde::Deserialize;
-
-use crate::base::error::Result;
-use crate::base::num::{Num, Num3, Scope};
 
 /// A helix rising continuously from `center.z` to `center.z + height`.
 #[derive(Clone, Debug, PartialEq)]
@@ -81,38 +77,6 @@ impl Helix {
             }
         });
         Toolpath::uniform(points, c, v)
-    }
-}
-
-/// `helix:` as written.
-#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
-#[serde(deny_unknown_fields)]
-#[allow(missing_docs)]
-pub struct RawHelix {
-    #[serde(default)]
-    pub radius: Option<Num>,
-    pub height: Num,
-    pub pitch: Num,
-    #[serde(default)]
-    pub center: Option<Num3>,
-    #[serde(default)]
-    pub segments: Option<Num>,
-    #[serde(default)]
-    pub outline: Option<RawOutline>,
-}
-
-impl RawHelix {
-    /// Evaluates every number; errors name `helix.KEY`.
-    pub fn resolve(&self, s: &Scope, files: Files) -> Result<Helix> {
-        let (radius, outline) = radius_or_outline(s, files, "helix", &self.radius, &self.outline)?;
-        Ok(Helix {
-            radius,
-            outline,
-            height: s.positive(&self.height, "helix.height")?,
-            pitch: s.positive(&self.pitch, "helix.pitch")?,
-            center: s.center(&self.center, "helix")?,
-            segments: s.segments(&self.segments, "helix")?,
-        })
     }
 }
 

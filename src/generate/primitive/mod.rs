@@ -1,7 +1,9 @@
 //! Primitives: the shapes a part starts from (Kanada's Fig. 3 "parts assembly").
 //!
 //! Each primitive knows how many strings it will make before it makes them,
-//! so an impossible recipe is refused before it allocates.
+//! so an impossible recipe is refused before it allocates. The primitives
+//! as written and their resolution into these types are the recipe's
+//! (`crate::recipe::schema`, `crate::recipe::resolve`).
 
 mod arc;
 /// Kanada's cellular-automaton model of self-organised printing: `ca_helix`.
@@ -9,7 +11,7 @@ pub mod ca;
 mod circle;
 mod cylinder;
 mod helix;
-/// SVG sources: `path: {svg: …}` and the `outline:` of helix, spiral, cylinder.
+/// Primitives over SVG sources: `path: {svg: …}` and the `outline:` of helix, spiral, cylinder.
 pub mod outline;
 mod path;
 /// The constant-flow helix of self-organised patterns: `pattern_helix`.
@@ -20,71 +22,18 @@ mod spiral;
 /// A 3D turtle that prints as it walks (turtle.py, ExtruderTurtle): `turtle`.
 pub mod turtle;
 
-pub use arc::{Arc, RawArc};
+pub use arc::Arc;
 pub use ca::CaHelix;
-pub use circle::{Circle, RawCircle};
-pub use cylinder::{Cylinder, RawCylinder};
-pub use helix::{Helix, RawHelix};
-pub use path::{PathCmd, RawCmd, RawPath};
+pub use circle::Circle;
+pub use cylinder::Cylinder;
+pub use helix::Helix;
+pub use path::PathCmd;
 pub use pattern::PatternHelix;
 pub use solid::Solid;
-pub use spiral::{Direction, RawDirection, RawSpiral, Spiral};
+pub use spiral::{Direction, Spiral};
 pub use turtle::Turtle;
 
-use serde::Deserialize;
-
-use crate::base::error::Result;
-use crate::base::num::{Num, Scope};
 use crate::base::toolpath::Toolpath;
-
-/// A primitive as written: each kind owns its raw form and its resolution.
-#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
-#[serde(rename_all = "snake_case", deny_unknown_fields)]
-#[allow(missing_docs)]
-pub enum RawPrimitive {
-    Path(RawPath),
-    Circle(RawCircle),
-    Arc(RawArc),
-    Spiral(RawSpiral),
-    Helix(RawHelix),
-    Cylinder(RawCylinder),
-    PatternHelix(pattern::RawPatternHelix),
-    CaHelix(ca::RawCaHelix),
-    Solid(solid::RawSolid),
-    Turtle(turtle::RawTurtle),
-}
-
-impl RawPrimitive {
-    /// Resolves the primitive in `scope`; a turtle runs now, starting from
-    /// `env` (the part's cross-section and speed). Errors name `KIND.KEY`.
-    /// SVG files are read relative to `dir`.
-    pub fn resolve(
-        &self,
-        scope: &Scope,
-        env: &turtle::Env,
-        dir: &std::path::Path,
-    ) -> Result<Primitive> {
-        let num = |n: &Num, place: &str| scope.num(n, place);
-        let files = outline::Files {
-            dir,
-            max_strings: env.max_strings,
-        };
-        Ok(match self {
-            RawPrimitive::Path(p) => Primitive::Path(p.resolve(scope, files)?),
-            RawPrimitive::Circle(p) => Primitive::Circle(p.resolve(scope)?),
-            RawPrimitive::Arc(p) => Primitive::Arc(p.resolve(scope)?),
-            RawPrimitive::Spiral(p) => Primitive::Spiral(p.resolve(scope, files)?),
-            RawPrimitive::Helix(p) => Primitive::Helix(p.resolve(scope, files)?),
-            RawPrimitive::Cylinder(p) => Primitive::Cylinder(p.resolve(scope, files)?),
-            RawPrimitive::PatternHelix(p) => Primitive::PatternHelix(p.resolve(&num)?),
-            RawPrimitive::CaHelix(p) => Primitive::CaHelix(p.resolve(&num)?),
-            RawPrimitive::Solid(s) => Primitive::Solid(solid::resolve(s, &num)?),
-            RawPrimitive::Turtle(t) => {
-                Primitive::Turtle(Box::new(turtle::resolve(t, scope.params, env)?))
-            }
-        })
-    }
-}
 
 /// A primitive with every value resolved to a number.
 #[derive(Clone, Debug, PartialEq)]

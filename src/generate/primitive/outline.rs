@@ -1,119 +1,14 @@
-//! SVG sources of primitives: `path: {svg: …}` (a drawing as strings) and
-//! `outline: {svg: …}` of `helix`, `spiral` and `cylinder` (a closed outline
-//! in place of the circle). Parsing and flattening are [`crate::base::svg`]'s.
-
-use std::path::Path;
-use std::sync::Arc;
+//! Primitives over SVG sources: `path: {svg: …}` (a drawing as strings)
+//! and `outline: {svg: …}` of `helix`, `spiral` and `cylinder` (a closed
+//! outline in place of the circle). Parsing and flattening are
+//! [`crate::base::svg`]'s; reading the files is the recipe's
+//! (`crate::recipe::resolve`).
 
 use glam::{DVec2, DVec3};
-use serde::Deserialize;
 
 use super::path::PathCmd;
-use crate::base::error::{Error, Result};
-use crate::base::num::{Num, Num3, Scope};
-use crate::base::svg::{self, Outline, Subpath};
+use crate::base::svg::{Outline, Subpath};
 use crate::base::toolpath::Toolpath;
-
-/// Where a primitive reads files and how many points it may make.
-#[derive(Clone, Copy, Debug)]
-pub struct Files<'a> {
-    /// The folder file names are relative to (the recipe's).
-    pub dir: &'a Path,
-    /// The recipe's `max_strings`: most points a drawing may flatten to.
-    pub max_strings: u64,
-}
-
-/// `outline:` as written: a closed SVG outline.
-#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
-#[serde(deny_unknown_fields)]
-#[allow(missing_docs)]
-pub struct RawOutline {
-    pub svg: String,
-    #[serde(default)]
-    pub id: Option<String>,
-    #[serde(default)]
-    pub scale: Option<Num>,
-    #[serde(default)]
-    pub tolerance: Option<Num>,
-}
-
-/// Reads the SVG `file` (relative to `files.dir`); errors name `KEY.svg`,
-/// `KEY.scale` or `KEY.tolerance` under `key`.
-fn read(
-    s: &Scope,
-    files: Files,
-    key: &str,
-    file: &str,
-    id: Option<&str>,
-    scale: &Option<Num>,
-    tolerance: &Option<Num>,
-) -> Result<Vec<Subpath>> {
-    let scale = s.positive_or(scale, &format!("{key}.scale"), 1.0)?;
-    let tolerance = s.positive_or(
-        tolerance,
-        &format!("{key}.tolerance"),
-        svg::DEFAULT_TOLERANCE,
-    )?;
-    crate::base::safe_text::check(&format!("{key}.svg"), file)?;
-    let opt = svg::Options {
-        id,
-        scale,
-        tolerance,
-        max_points: files.max_strings,
-    };
-    svg::load(&files.dir.join(file), file, &opt).map_err(|e| e.under(&format!("{key}.svg")))
-}
-
-impl RawOutline {
-    /// The outline, centroid at the origin; errors name `KEY.outline.…`.
-    pub fn resolve(&self, s: &Scope, files: Files, key: &str) -> Result<Arc<Outline>> {
-        let key = format!("{key}.outline");
-        let sub = read(
-            s,
-            files,
-            &key,
-            &self.svg,
-            self.id.as_deref(),
-            &self.scale,
-            &self.tolerance,
-        )?;
-        let o = Outline::from_subpaths(&sub).map_err(|m| {
-            let what = match &self.id {
-                Some(id) => format!("the element with id=\"{id}\" of `{}`", self.svg),
-                None => format!("the SVG file `{}`", self.svg),
-            };
-            Error::input(format!("{key}.svg"), format!("{what} {m}"))
-        })?;
-        Ok(Arc::new(o))
-    }
-}
-
-/// A radius or an outline, as `helix`, `spiral` and `cylinder` take them:
-/// exactly one; with an outline, the radius is its farthest distance from
-/// its centroid.
-pub fn radius_or_outline(
-    s: &Scope,
-    files: Files,
-    key: &str,
-    radius: &Option<Num>,
-    outline: &Option<RawOutline>,
-) -> Result<(f64, Option<Arc<Outline>>)> {
-    match (radius, outline) {
-        (Some(r), None) => Ok((s.positive(r, &format!("{key}.radius"))?, None)),
-        (None, Some(o)) => {
-            let o = o.resolve(s, files, key)?;
-            Ok((o.max_radius(), Some(o)))
-        }
-        (None, None) => Err(Error::input(
-            key,
-            "expected `radius` (a circle) or `outline` (a closed SVG outline)",
-        )),
-        (Some(_), Some(_)) => Err(Error::input(
-            format!("{key}.radius"),
-            "expected either `radius` or `outline`, not both (an outline keeps its drawn size times `scale`)",
-        )),
-    }
-}
 
 /// The points of one turn along `o`, at the arc fractions `f`.
 pub fn turn_points(o: &Outline, f: &[f64]) -> Vec<DVec2> {
@@ -153,20 +48,11 @@ pub fn along(
     t
 }
 
-/// The drawing as `path` commands: each subpath a `move` to its start and a
-/// `draw` to each further point (back to the start when it is closed), the
-/// centre of the drawing's bounding box at `center`, all at `center.z`.
-pub fn drawing_commands(
-    s: &Scope,
-    files: Files,
-    file: &str,
-    id: Option<&str>,
-    scale: &Option<Num>,
-    tolerance: &Option<Num>,
-    center: &Option<Num3>,
-) -> Result<Vec<PathCmd>> {
-    let center = s.center(center, "path")?;
-    let sub = read(s, files, "path", file, id, scale, tolerance)?;
+/// The drawing `sub` as `path` commands: each subpath a `move` to its start
+/// and a `draw` to each further point (back to the start when it is
+/// closed), the centre of the drawing's bounding box at `center`, all at
+/// `center.z`.
+pub fn drawing_commands(sub: &[Subpath], center: DVec3) -> Vec<PathCmd> {
     let all = sub.iter().flat_map(|p| &p.points);
     let (lo, hi) = all.fold(
         (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
@@ -175,14 +61,14 @@ pub fn drawing_commands(
     let shift = center.truncate() - (lo + hi) * 0.5;
     let at = |p: DVec2| (p + shift).extend(center.z);
     let mut cmds = Vec::new();
-    for p in &sub {
+    for p in sub {
         cmds.push(PathCmd::Move(at(p.points[0])));
         cmds.extend(p.points[1..].iter().map(|&q| PathCmd::Draw(at(q))));
         if p.closed {
             cmds.push(PathCmd::Draw(at(p.points[0])));
         }
     }
-    Ok(cmds)
+    cmds
 }
 
 #[cfg(test)]

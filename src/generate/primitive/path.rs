@@ -3,10 +3,6 @@
 use glam::DVec3;
 
 use crate::base::toolpath::Toolpath;
-use serde::Deserialize;
-
-use crate::base::error::{Error, Result};
-use crate::base::num::{Num, Num3, Scope};
 
 /// One command of a `path` primitive, with numbers resolved.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -70,101 +66,6 @@ pub fn build(cmds: &[PathCmd], c0: f64, v0: f64) -> Toolpath {
         }
     }
     t
-}
-
-/// A `path` command as written.
-#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
-#[serde(rename_all = "snake_case")]
-#[allow(missing_docs)]
-pub enum RawCmd {
-    Move(Num3),
-    Draw(Num3),
-    CrossSection(Num),
-    Speed(Num),
-}
-
-/// `path:` as written: commands, or an SVG drawing.
-#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct RawPath {
-    /// The commands, in order.
-    #[serde(default)]
-    pub commands: Option<Vec<RawCmd>>,
-    /// An SVG file whose paths are drawn as strings (instead of `commands`).
-    #[serde(default)]
-    pub svg: Option<String>,
-    /// Only the SVG element with this id.
-    #[serde(default)]
-    pub id: Option<String>,
-    /// Factor on the SVG's drawn size (mm).
-    #[serde(default)]
-    pub scale: Option<Num>,
-    /// Chord tolerance of flattened curves, mm.
-    #[serde(default)]
-    pub tolerance: Option<Num>,
-    /// Where the centre of the drawing's bounding box goes.
-    #[serde(default)]
-    pub center: Option<Num3>,
-}
-
-impl RawPath {
-    /// Evaluates every command (or reads the SVG drawing); errors name
-    /// `path.commands[k].KEY` or `path.KEY`.
-    pub fn resolve(&self, s: &Scope, files: super::outline::Files) -> Result<Vec<PathCmd>> {
-        let svg_only = [
-            ("id", self.id.is_some()),
-            ("scale", self.scale.is_some()),
-            ("tolerance", self.tolerance.is_some()),
-            ("center", self.center.is_some()),
-        ];
-        let commands = match (&self.commands, &self.svg) {
-            (Some(c), None) => {
-                if let Some((k, _)) = svg_only.iter().find(|(_, set)| *set) {
-                    return Err(Error::input(
-                        format!("path.{k}"),
-                        "this key belongs with `svg`; expected it only when the path draws an SVG file",
-                    ));
-                }
-                c
-            }
-            (None, Some(file)) => {
-                return super::outline::drawing_commands(
-                    s,
-                    files,
-                    file,
-                    self.id.as_deref(),
-                    &self.scale,
-                    &self.tolerance,
-                    &self.center,
-                )
-            }
-            _ => {
-                return Err(Error::input(
-                    "path",
-                    "expected exactly one of `commands` (move, draw, …) and `svg` (an SVG file to draw)",
-                ))
-            }
-        };
-        let mut cmds = Vec::with_capacity(commands.len());
-        for (k, c) in commands.iter().enumerate() {
-            let place = format!("path.commands[{k}]");
-            cmds.push(match c {
-                RawCmd::Move(n) => PathCmd::Move(s.point(n, &format!("{place}.move"))?),
-                RawCmd::Draw(n) => PathCmd::Draw(s.point(n, &format!("{place}.draw"))?),
-                RawCmd::CrossSection(n) => {
-                    PathCmd::CrossSection(s.positive(n, &format!("{place}.cross_section"))?)
-                }
-                RawCmd::Speed(n) => PathCmd::Speed(s.positive(n, &format!("{place}.speed"))?),
-            });
-        }
-        if !cmds.iter().any(|c| matches!(c, PathCmd::Draw(_))) {
-            return Err(Error::input(
-                "path.commands",
-                "expected at least one `draw` command (a path that extrudes nothing prints nothing)",
-            ));
-        }
-        Ok(cmds)
-    }
 }
 
 #[cfg(test)]

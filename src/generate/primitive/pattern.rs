@@ -18,12 +18,8 @@
 //! step has made the strings after the first turn differ.
 
 use glam::DVec3;
-use serde::Deserialize;
 
-use super::ca::Values;
 use super::TurnTable;
-use crate::base::error::Result;
-use crate::base::num::{Num, Num3, NumFn};
 use crate::base::toolpath::Toolpath;
 
 /// The filled, slow first turn when a recipe names none: a normal string, slowly.
@@ -91,84 +87,6 @@ impl PatternHelix {
             }
         }
         t
-    }
-}
-
-/// `pattern_helix:` as written in a recipe. Required: `radius`, `layers`
-/// (turns, the first included), `layer_height`; optional (default):
-/// `segments` (72), `cross_section` and `speed` (the part's), `first_layer:
-/// {cross_section, speed}` ({0.2, 15}), `center` ([0, 0, layer_height]).
-#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
-#[serde(deny_unknown_fields)]
-#[allow(missing_docs)]
-pub struct RawPatternHelix {
-    pub radius: Num,
-    pub layers: Num,
-    pub layer_height: Num,
-    #[serde(default)]
-    pub segments: Option<Num>,
-    #[serde(default)]
-    pub cross_section: Option<Num>,
-    #[serde(default)]
-    pub speed: Option<Num>,
-    #[serde(default)]
-    pub first_layer: Option<RawFirstLayer>,
-    #[serde(default)]
-    pub center: Option<Num3>,
-}
-
-/// `first_layer:` of a `pattern_helix`.
-#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
-#[serde(deny_unknown_fields)]
-#[allow(missing_docs)]
-pub struct RawFirstLayer {
-    #[serde(default)]
-    pub cross_section: Option<Num>,
-    #[serde(default)]
-    pub speed: Option<Num>,
-}
-
-impl RawPatternHelix {
-    /// Resolves every number, naming `pattern_helix.KEY` in errors.
-    pub fn resolve(&self, num: NumFn) -> Result<PatternHelix> {
-        let v = Values {
-            num,
-            key: "pattern_helix",
-        };
-        let positive = |n: &Option<Num>, name: &str, default: f64| {
-            v.opt(n, name, default, |x| x > 0.0, "a number > 0")
-        };
-        let layer_height = v.positive(&self.layer_height, "layer_height")?;
-        let (fc, fv) = match &self.first_layer {
-            Some(f) => (&f.cross_section, &f.speed),
-            None => (&None, &None),
-        };
-        Ok(PatternHelix {
-            radius: v.positive(&self.radius, "radius")?,
-            layers: v.whole(&self.layers, "layers", 1)?,
-            layer_height,
-            segments: match &self.segments {
-                Some(n) => v.whole(n, "segments", 3)?,
-                None => 72,
-            },
-            cross_section: match &self.cross_section {
-                Some(n) => Some(v.positive(n, "cross_section")?),
-                None => None,
-            },
-            speed: match &self.speed {
-                Some(n) => Some(v.positive(n, "speed")?),
-                None => None,
-            },
-            first_layer: FirstLayer {
-                cross_section: positive(
-                    fc,
-                    "first_layer.cross_section",
-                    FIRST_LAYER.cross_section,
-                )?,
-                speed: positive(fv, "first_layer.speed", FIRST_LAYER.speed)?,
-            },
-            center: v.center(&self.center, layer_height)?,
-        })
     }
 }
 

@@ -4,13 +4,9 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
-use super::outline::{along, radius_or_outline, turn_points, Files, RawOutline};
+use super::outline::{along, turn_points};
 use crate::base::svg::Outline;
 use crate::base::toolpath::Toolpath;
-use serde::Deserialize;
-
-use crate::base::error::{Error, Result};
-use crate::base::num::{Num, Num3, Scope};
 
 /// Which way a spiral runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -106,64 +102,6 @@ impl Spiral {
             t.draw(at(k), c, v);
         }
         t
-    }
-}
-
-/// `direction:` of a spiral as written.
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
-#[serde(rename_all = "snake_case")]
-#[allow(missing_docs)]
-pub enum RawDirection {
-    Outward,
-    Inward,
-}
-
-/// `spiral:` as written.
-#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
-#[serde(deny_unknown_fields)]
-#[allow(missing_docs)]
-pub struct RawSpiral {
-    #[serde(default)]
-    pub radius: Option<Num>,
-    pub pitch: Num,
-    #[serde(default)]
-    pub center: Option<Num3>,
-    #[serde(default)]
-    pub segments: Option<Num>,
-    #[serde(default)]
-    pub inner_radius: Option<Num>,
-    #[serde(default)]
-    pub direction: Option<RawDirection>,
-    #[serde(default)]
-    pub outline: Option<RawOutline>,
-}
-
-impl RawSpiral {
-    /// Evaluates every number; errors name `spiral.KEY`.
-    pub fn resolve(&self, s: &Scope, files: Files) -> Result<Spiral> {
-        let (radius, outline) = radius_or_outline(s, files, "spiral", &self.radius, &self.outline)?;
-        let inner = match &self.inner_radius {
-            Some(n) => s.non_negative(n, "spiral.inner_radius")?,
-            None => 0.0,
-        };
-        if inner >= radius {
-            return Err(Error::input(
-                "spiral.inner_radius",
-                format!("{inner} is not allowed; expected less than radius {radius}"),
-            ));
-        }
-        Ok(Spiral {
-            radius,
-            pitch: s.positive(&self.pitch, "spiral.pitch")?,
-            center: s.center(&self.center, "spiral")?,
-            segments: s.segments(&self.segments, "spiral")?,
-            inner_radius: inner,
-            direction: match self.direction {
-                Some(RawDirection::Inward) => Direction::Inward,
-                _ => Direction::Outward,
-            },
-            outline,
-        })
     }
 }
 

@@ -11,11 +11,11 @@ use std::path::{Path, PathBuf};
 
 use indexmap::IndexMap;
 
-use super::schema::{RawLibrary, RawTemplate};
 use crate::base::error::{Error, Result};
 use crate::base::expr::Params;
-use crate::base::num::Num;
-use crate::recipe::schema::RawRecipe;
+use crate::recipe::eval::key;
+use crate::recipe::schema::Num;
+use crate::recipe::schema::{RawLibrary, RawRecipe, RawTemplate};
 use crate::recipe::yaml::parse_yaml;
 
 /// Largest file `include:` reads, bytes.
@@ -73,7 +73,8 @@ impl Library {
             .map(|(k, (n, _))| (k.clone(), n.clone()))
             .collect();
         crate::recipe::params::eval_params(&raw, sets).map_err(|e| {
-            let name = e.place.as_deref().and_then(|p| p.strip_prefix("params."));
+            let params = format!("{}.", key!(RawRecipe, params));
+            let name = e.place.as_deref().and_then(|p| p.strip_prefix(&params));
             match name.and_then(|n| self.params.get(n)) {
                 Some((_, Some(f))) => e.in_file(f),
                 _ => e,
@@ -147,7 +148,7 @@ impl Loader {
             None => e,
         };
         for (k, inc) in list.iter().enumerate() {
-            let place = format!("include[{k}]");
+            let place = format!("{}[{k}]", key!(RawRecipe, include));
             let path = dir.join(inc);
             let shown = path.display().to_string();
             crate::base::input::note_read(&path);

@@ -6,7 +6,8 @@
 //! part assembly "become generation functions of complex parts" (paper 000,
 //! §3.3–3.4). In a recipe these are:
 //!
-//! - `primitive:` a list (see [`RawPrimitives`]): one part, several primitives;
+//! - `primitive:` a list (see [`crate::recipe::schema::RawPrimitives`]): one
+//!   part, several primitives;
 //! - `parts:` on a part: a group, whose `steps` run after its children's own
 //!   steps on all their strings (see [`crate::generate::assembly`]);
 //! - `templates:` named part trees with `params:` defaults, used by
@@ -28,20 +29,19 @@
 //! template `ring`'s part in its copy with k = 3, used at `parts[1].parts[0]`.
 
 mod include;
-mod schema;
 
 use std::path::Path;
 
 use indexmap::IndexMap;
 
 pub use include::{load_library, Library, Template};
-pub use schema::{RawLibrary, RawLoop, RawPrimitiveItem, RawPrimitives, RawTemplate};
 
 use crate::base::error::{Error, Result};
 use crate::base::expr::{self, Params};
-use crate::base::num::Num;
+use crate::recipe::eval::{join, key};
 use crate::recipe::params::is_identifier;
-use crate::recipe::schema::{RawPart, RawStep};
+use crate::recipe::schema::Num;
+use crate::recipe::schema::{RawLoop, RawPart, RawRecipe, RawStep, RawTemplate};
 
 /// Most leaf parts a recipe may expand to.
 pub const MAX_PARTS: usize = 10_000;
@@ -112,7 +112,7 @@ pub fn expand<'a>(
         dir,
     };
     for (k, p) in parts.iter().enumerate() {
-        w.part(p, &scope, &format!("parts[{k}]"), None)?;
+        w.part(p, &scope, &format!("{}[{k}]", key!(RawRecipe, parts)), None)?;
     }
     Ok(w.out)
 }
@@ -161,6 +161,7 @@ impl<'a> Walker<'a> {
         if copies > MAX_PARTS || before + copies > MAX_PARTS {
             let sizes: Vec<String> = loops.iter().map(|(_, v)| v.len().to_string()).collect();
             return Err(Error::input(
+                // the field `repeat` is read as `for`
                 format!("{place}.for"),
                 format!(
                     "this `for` makes {} copies{}{}, more than the limit of {MAX_PARTS} parts in a recipe; expected fewer values",
@@ -224,7 +225,7 @@ impl<'a> Walker<'a> {
         }
         if !p.with.is_empty() {
             return Err(Error::input(
-                format!("{here}.with"),
+                join(&here, key!(p.with)),
                 "`with` gives a template's params; expected `template: NAME` beside it",
             ));
         }
@@ -241,13 +242,13 @@ impl<'a> Walker<'a> {
                 let name = match name {
                     Some(n) => Some(n),
                     None => match &p.name {
-                        Some(n) => Some(fill_name(n, &scope.params, &format!("{here}.name"))?),
+                        Some(n) => Some(fill_name(n, &scope.params, &join(&here, key!(p.name)))?),
                         None => None,
                     },
                 }
                 .map(|n| n + &scope.suffix);
                 if let Some(n) = &name {
-                    check_name(n, &format!("{here}.name"))?;
+                    check_name(n, &join(&here, key!(p.name)))?;
                 }
                 if self.out.leaves.len() >= MAX_PARTS {
                     return Err(Error::input(
@@ -266,26 +267,26 @@ impl<'a> Walker<'a> {
             }
             (None, Some(children)) => {
                 for (key, given) in [
-                    ("cross_section", p.cross_section.is_some()),
-                    ("speed", p.speed.is_some()),
+                    (key!(p.cross_section), p.cross_section.is_some()),
+                    (key!(p.speed), p.speed.is_some()),
                 ] {
                     if given {
                         return Err(Error::input(
-                            format!("{here}.{key}"),
+                            join(&here, key),
                             format!("a group has no strings of its own; expected `{key}` on its parts (or in `defaults`)"),
                         ));
                     }
                 }
                 if children.is_empty() {
                     return Err(Error::input(
-                        format!("{here}.parts"),
+                        join(&here, key!(p.parts)),
                         "expected at least one part in a group",
                     ));
                 }
                 if let Some(n) = &p.name {
                     check_name(
-                        &fill_name(n, &scope.params, &format!("{here}.name"))?,
-                        &format!("{here}.name"),
+                        &fill_name(n, &scope.params, &join(&here, key!(p.name)))?,
+                        &join(&here, key!(p.name)),
                     )?;
                 }
                 let inner = Scope {
@@ -294,7 +295,8 @@ impl<'a> Walker<'a> {
                 };
                 let first = self.out.leaves.len();
                 for (j, c) in children.iter().enumerate() {
-                    self.part(c, &inner, &format!("{here}.parts[{j}]"), None)?;
+                    let at = format!("{}[{j}]", join(&here, key!(p.parts)));
+                    self.part(c, &inner, &at, None)?;
                 }
                 self.group(first, &p.steps, scope, here);
                 Ok(())
@@ -315,14 +317,14 @@ impl<'a> Walker<'a> {
         name: Option<String>,
     ) -> Result<()> {
         for (key, given) in [
-            ("primitive", p.primitive.is_some()),
-            ("parts", p.parts.is_some()),
-            ("cross_section", p.cross_section.is_some()),
-            ("speed", p.speed.is_some()),
+            (key!(p.primitive), p.primitive.is_some()),
+            (key!(p.parts), p.parts.is_some()),
+            (key!(p.cross_section), p.cross_section.is_some()),
+            (key!(p.speed), p.speed.is_some()),
         ] {
             if given {
                 return Err(Error::input(
-                    format!("{here}.{key}"),
+                    join(here, key),
                     format!("`{key}` beside `template`; a template use takes only `name`, `with`, `for` and `steps` (steps run after the template's own)"),
                 ));
             }
@@ -330,7 +332,7 @@ impl<'a> Walker<'a> {
         let Some(tpl) = self.templates.get(t) else {
             let known: Vec<&str> = self.templates.keys().map(String::as_str).collect();
             return Err(Error::input(
-                format!("{here}.template"),
+                join(here, key!(p.template)),
                 if known.is_empty() {
                     format!("unknown template `{t}`; this recipe defines no templates (add them under `templates:` or `include:` a file that has them)")
                 } else {
@@ -345,7 +347,7 @@ impl<'a> Walker<'a> {
             let mut chain: Vec<&str> = scope.stack.clone();
             chain.push(t);
             return Err(Error::input(
-                format!("{here}.template"),
+                join(here, key!(p.template)),
                 format!(
                     "template `{t}` uses itself: {}; expected templates that end",
                     chain.join(" → ")
@@ -356,7 +358,7 @@ impl<'a> Walker<'a> {
             if !tpl.raw.params.contains_key(key) {
                 let known: Vec<&str> = tpl.raw.params.keys().map(String::as_str).collect();
                 return Err(Error::input(
-                    format!("{here}.with.{key}"),
+                    [here, key!(p.with), key].join("."),
                     if known.is_empty() {
                         format!("template `{t}` has no params")
                     } else {
@@ -371,7 +373,8 @@ impl<'a> Walker<'a> {
         // the template's body sees the recipe's params and its own
         let mut params = self.global.clone();
         for (pn, default) in &tpl.raw.params {
-            let def_place = format!("templates.{t}.params.{pn}");
+            let def_place =
+                [key!(RawRecipe, templates), t, key!(RawTemplate, params), pn].join(".");
             let in_def = |e: Error| match &tpl.file {
                 Some(f) => e.in_file(f),
                 None => e,
@@ -383,7 +386,7 @@ impl<'a> Walker<'a> {
                 )));
             }
             let v = match p.with.get(pn) {
-                Some(n) => eval(n, &scope.params, &format!("{here}.with.{pn}"))?,
+                Some(n) => eval(n, &scope.params, &[here, key!(p.with), pn].join("."))?,
                 None => eval(default, &params, &def_place).map_err(in_def)?,
             };
             params.insert(pn.clone(), v);
@@ -391,7 +394,7 @@ impl<'a> Walker<'a> {
         // a name given where the template is used wins over the one inside it
         let name = match (name, &p.name) {
             (Some(n), _) => Some(n),
-            (None, Some(n)) => Some(fill_name(n, &scope.params, &format!("{here}.name"))?),
+            (None, Some(n)) => Some(fill_name(n, &scope.params, &join(here, key!(p.name)))?),
             (None, None) => None,
         };
         let from = match &tpl.file {
@@ -440,6 +443,7 @@ fn loop_values<'p>(
 ) -> Result<Vec<(&'p str, Vec<f64>)>> {
     let mut out = Vec::with_capacity(p.repeat.len());
     for (var, l) in &p.repeat {
+        // the field `repeat` is read as `for`
         let at = format!("{place}.for.{var}");
         if !is_identifier(var) || expr::is_reserved(var) {
             return Err(Error::input(
@@ -521,8 +525,8 @@ fn range(s: &str, params: &Params, place: &str) -> Result<Vec<f64>> {
 
 /// A number of a template's `with:` or a loop's list, evaluated in `params`.
 fn eval(n: &Num, params: &Params, place: &str) -> Result<f64> {
-    let v = crate::base::num::Scope::new(params).num(n, place)?;
-    crate::base::num::finite(v, place)
+    let v = crate::recipe::eval::eval(n, params, place)?;
+    crate::recipe::eval::finite(v, place)
 }
 
 /// `name` with each `{EXPR}` replaced by the expression's value in `params`

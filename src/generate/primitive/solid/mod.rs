@@ -47,10 +47,9 @@ pub use crate::base::geom::{offset, piece, region};
 use std::sync::Arc;
 
 use glam::{DVec2, DVec3};
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
 use crate::base::error::{Error, Result};
-use crate::base::num::{Num, Num3};
 use crate::base::toolpath::Toolpath;
 
 pub use region::{Loop, Op, Region, Shape};
@@ -63,8 +62,6 @@ pub const MAX_LINES: f64 = 1e5;
 mod export;
 mod model;
 mod plan;
-mod resolve;
-mod schema;
 mod stats;
 mod zbuffer;
 
@@ -72,8 +69,6 @@ pub use export::*;
 pub use model::*;
 pub use plan::join_inside as plan_join_inside;
 pub use plan::JOIN_SPACINGS;
-pub use resolve::resolve;
-pub use schema::*;
 pub use stats::*;
 pub use zbuffer::{reusing, Cache, Reuse, Update, ZBuffer};
 

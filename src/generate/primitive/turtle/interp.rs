@@ -67,6 +67,32 @@ struct Run<'a> {
     out: Option<Toolpath>,
 }
 
+/// Work a run has left, innermost last: the interpreter's own stack.
+enum Task<'a> {
+    /// The commands of a block still to run.
+    Block(std::slice::Iter<'a, Cmd>),
+    /// A `repeat` of `n` iterations, `next` the one to start (iteration
+    /// next − 1 has run when this is on top again; its counter, with
+    /// `counter`, is the last of the values).
+    Repeat {
+        body: &'a [Cmd],
+        next: u64,
+        n: u64,
+        counter: bool,
+    },
+    /// The end of a call: the caller's values, to run on with.
+    Return(Vec<f64>),
+    /// L-system symbols still to run at derivation depth `d` of `n`, the
+    /// `lsystem` command at `place`.
+    Symbols {
+        ls: &'a Lsystem,
+        symbols: std::slice::Iter<'a, u16>,
+        d: u32,
+        n: u32,
+        place: &'a str,
+    },
+}
+
 /// Counts of a run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Counts {
@@ -218,7 +244,7 @@ fn least_steps(cmds: &[Cmd], max_steps: u64) -> Result<u64> {
     Ok(total)
 }
 
-impl Run<'_> {
+impl<'a> Run<'a> {
     fn step(&mut self, place: &str) -> Result<()> {
         self.steps += 1;
         // work is budgeted by what it makes: a program may run IDLE_STEPS
@@ -392,17 +418,158 @@ impl Run<'_> {
         Ok(())
     }
 
-    fn block(&mut self, cmds: &[Cmd], vals: &mut Vec<f64>) -> Result<()> {
-        for cmd in cmds {
-            self.command(cmd, vals)?;
+    /// Runs `cmds` and everything they start, on the run's own stack of
+    /// [`Task`]s (on the heap): the nesting of blocks, calls and L-system
+    /// derivations uses no thread stack, so the interpreter runs on any
+    /// thread. Commands, counters, calls and symbols come in exactly the
+    /// order of a depth-first walk of the program.
+    fn block(&mut self, cmds: &'a [Cmd], vals: &mut Vec<f64>) -> Result<()> {
+        let mut tasks = vec![Task::Block(cmds.iter())];
+        while let Some(task) = tasks.last_mut() {
+            match task {
+                Task::Block(cmds) => match cmds.next() {
+                    Some(cmd) => self.command(cmd, vals, &mut tasks)?,
+                    None => {
+                        tasks.pop();
+                    }
+                },
+                Task::Repeat {
+                    body,
+                    next,
+                    n,
+                    counter,
+                } => {
+                    // the counter of the iteration just run comes off first
+                    if *counter && *next > 0 {
+                        vals.pop();
+                    }
+                    if *next < *n {
+                        if *counter {
+                            vals.push(*next as f64);
+                        }
+                        *next += 1;
+                        let body = *body;
+                        tasks.push(Task::Block(body.iter()));
+                    } else {
+                        tasks.pop();
+                    }
+                }
+                Task::Return(caller) => {
+                    *vals = std::mem::take(caller);
+                    self.depth -= 1;
+                    tasks.pop();
+                }
+                Task::Symbols {
+                    ls,
+                    symbols,
+                    d,
+                    n,
+                    place,
+                } => {
+                    let (ls, d, n, place) = (*ls, *d, *n, *place);
+                    match symbols.next() {
+                        Some(&s) => self.symbol(ls, s, d, n, place, &mut tasks)?,
+                        None => {
+                            tasks.pop();
+                        }
+                    }
+                }
+            }
         }
         Ok(())
     }
 
-    fn command(&mut self, cmd: &Cmd, vals: &mut Vec<f64>) -> Result<()> {
+    /// Symbol `s` at derivation depth `d` of `n` (see [`super::lsystem`]):
+    /// its rule's symbols at depth d + 1 while d < n, else its commands.
+    fn symbol(
+        &mut self,
+        ls: &'a Lsystem,
+        s: u16,
+        d: u32,
+        n: u32,
+        place: &'a str,
+        tasks: &mut Vec<Task<'a>>,
+    ) -> Result<()> {
+        self.step(place)?;
+        if d < n {
+            if let Some(rule) = &ls.rules[s as usize] {
+                tasks.push(Task::Symbols {
+                    ls,
+                    symbols: rule.iter(),
+                    d: d + 1,
+                    n,
+                    place,
+                });
+                return Ok(());
+            }
+        }
+        tasks.push(Task::Block(ls.commands[s as usize].iter()));
+        Ok(())
+    }
+
+    /// Runs one command; one that runs others (`repeat`, `if`, `call`,
+    /// `lsystem`) pushes them as tasks.
+    fn command(
+        &mut self,
+        cmd: &'a Cmd,
+        vals: &mut Vec<f64>,
+        tasks: &mut Vec<Task<'a>>,
+    ) -> Result<()> {
         let place = cmd.place.as_str();
         self.step(place)?;
         match &cmd.op {
+            Op::Forward(..) | Op::Lift(_) | Op::Goto(_) | Op::Turn(..) | Op::SetHeading(_) => {
+                self.movement(&cmd.op, vals, place)
+            }
+            Op::PenUp | Op::PenDown | Op::Pause | Op::DrawTurtle | Op::Push | Op::Pop => {
+                self.pen(&cmd.op, place)
+            }
+            Op::Set(..) | Op::Extrude(..) | Op::Dwell(_) | Op::Fan(_) | Op::Temp { .. } => {
+                self.setting(&cmd.op, vals, place)
+            }
+            Op::Hair { length, blob, rate } => self.hair(length, blob, rate, vals, place),
+            Op::Repeat {
+                count,
+                counter,
+                body,
+            } => {
+                let n = self.whole(count, vals, place, 1e12)?;
+                tasks.push(Task::Repeat {
+                    body,
+                    next: 0,
+                    n,
+                    counter: *counter,
+                });
+                Ok(())
+            }
+            Op::If {
+                cond,
+                then,
+                otherwise,
+            } => {
+                let x = self.eval(cond, vals, place)?;
+                tasks.push(Task::Block(if x != 0.0 { then } else { otherwise }.iter()));
+                Ok(())
+            }
+            Op::Call { proc, args } => self.call(*proc, args, vals, place, tasks),
+            Op::Lsystem(ls) => {
+                let p = format!("{place}.iterations");
+                let n = self.whole(&ls.iterations, vals, &p, MAX_ITERATIONS as f64)? as u32;
+                tasks.push(Task::Symbols {
+                    ls,
+                    symbols: ls.axiom.iter(),
+                    d: 0,
+                    n,
+                    place,
+                });
+                Ok(())
+            }
+        }
+    }
+
+    /// `forward`, `backward`, `lift`, `goto`, the turns and `set_heading`.
+    fn movement(&mut self, op: &Op, vals: &mut Vec<f64>, place: &str) -> Result<()> {
+        match op {
             Op::Forward(d, sign) => {
                 let d = sign * self.eval(d, vals, place)?;
                 let to = self.frame.pos + self.frame.heading * d;
@@ -436,11 +603,18 @@ impl Run<'_> {
                     .set_heading(h, up)
                     .map_err(|e| Error::input(place, e.to_string()))?;
             }
-            Op::PenUp => {
-                if self.pen_down {
-                    self.event(Event::Retract, place)?;
-                    self.pen_down = false;
-                }
+            _ => {}
+        }
+        Ok(())
+    }
+
+    /// The pen, `pause`, `draw_turtle`, `push` and `pop`.
+    fn pen(&mut self, op: &Op, place: &str) -> Result<()> {
+        match op {
+            // a pen already up stays up without a second retraction
+            Op::PenUp if self.pen_down => {
+                self.event(Event::Retract, place)?;
+                self.pen_down = false;
             }
             Op::PenDown => self.pen_down = true,
             Op::Pause => self.event(Event::Pause, place)?,
@@ -483,6 +657,15 @@ impl Run<'_> {
                 self.pen_down = pen;
                 self.frame = f;
             }
+            _ => {}
+        }
+        Ok(())
+    }
+
+    /// The settings (`extrude_rate`, `cross_section`, `speed`) and the
+    /// events `extrude`, `dwell`, `fan` and the temperatures.
+    fn setting(&mut self, op: &Op, vals: &mut Vec<f64>, place: &str) -> Result<()> {
+        match op {
             Op::Set(what, x) => {
                 let x = self.positive(x, vals, place)?;
                 match what {
@@ -532,123 +715,89 @@ impl Run<'_> {
                 };
                 self.event(e, place)?;
             }
-            Op::Repeat {
-                count,
-                counter,
-                body,
-            } => {
-                let n = self.whole(count, vals, place, 1e12)?;
-                for k in 0..n {
-                    if *counter {
-                        vals.push(k as f64);
-                    }
-                    let r = self.block(body, vals);
-                    if *counter {
-                        vals.pop();
-                    }
-                    r?;
-                }
-            }
-            Op::If {
-                cond,
-                then,
-                otherwise,
-            } => {
-                let x = self.eval(cond, vals, place)?;
-                self.block(if x != 0.0 { then } else { otherwise }, vals)?;
-            }
-            Op::Call { proc, args } => {
-                let mut inner = Vec::with_capacity(args.len());
-                for (j, a) in args.iter().enumerate() {
-                    let p = format!("{}.args[{j}]", place.trim_end_matches(".call"));
-                    let x = self.eval(a, vals, &p)?;
-                    inner.push(x);
-                }
-                let prog = self.prog;
-                let p = &prog.procs[*proc];
-                if self.depth >= MAX_CALL_DEPTH {
-                    return Err(Error::input(
-                        place,
-                        format!(
-                            "calls nest deeper than {MAX_CALL_DEPTH} here: procedure `{}` recurses without bound; expected an `if` that stops the recursion",
-                            p.name
-                        ),
-                    ));
-                }
-                self.depth += 1;
-                let r = self.block(&p.body, &mut inner);
-                self.depth -= 1;
-                r?;
-            }
-            Op::Hair { length, blob, rate } => {
-                // Laput et al.'s blob-and-pull (ExtruderTurtle §4.3): a blob
-                // in place, a thin pull along the heading, a retraction that
-                // snaps it; the pen is up afterwards
-                let len = self.positive(length, vals, place)?;
-                let blob = match blob {
-                    Some(b) => {
-                        let p = place.replace(".hair", ".blob");
-                        self.within(b, vals, &p, 0.0, 1000.0)?
-                    }
-                    None => DEFAULT_HAIR_BLOB,
-                };
-                let rate = match rate {
-                    Some(r) => {
-                        let p = place.replace(".hair", ".rate");
-                        self.positive(r, vals, &p)?
-                    }
-                    None => DEFAULT_HAIR_RATE,
-                };
-                if blob > 0.0 {
-                    let e = Event::Extrude {
-                        filament: blob,
-                        speed: DEFAULT_FEED,
-                    };
-                    self.event(e, place)?;
-                }
-                let to = self.frame.pos + self.frame.heading * len;
-                if !to.is_finite() {
-                    return Err(Error::input(place, "the hair's tip is not finite"));
-                }
-                self.strings += 1;
-                self.made(place)?;
-                if let Some(tp) = &mut self.out {
-                    tp.hair(to, rate * self.area, self.v);
-                }
-                self.frame.pos = to;
-                self.event(Event::Retract, place)?;
-                self.pen_down = false;
-            }
-            Op::Lsystem(ls) => {
-                let p = format!("{place}.iterations");
-                let n = self.whole(&ls.iterations, vals, &p, MAX_ITERATIONS as f64)? as u32;
-                for &s in &ls.axiom {
-                    self.expand(ls, s, 0, n, vals, place)?;
-                }
-            }
+            _ => {}
         }
         Ok(())
     }
 
-    /// Runs symbol `s` at derivation depth `d` of `n` (see [`super::lsystem`]).
-    fn expand(
+    /// `call`: the arguments evaluated in the caller's values, then the
+    /// procedure's body pushed above the caller's values to come back to.
+    fn call(
         &mut self,
-        ls: &Lsystem,
-        s: u16,
-        d: u32,
-        n: u32,
+        proc: usize,
+        args: &[Val],
+        vals: &mut Vec<f64>,
+        place: &str,
+        tasks: &mut Vec<Task<'a>>,
+    ) -> Result<()> {
+        let mut inner = Vec::with_capacity(args.len());
+        for (j, a) in args.iter().enumerate() {
+            let p = format!("{}.args[{j}]", place.trim_end_matches(".call"));
+            let x = self.eval(a, vals, &p)?;
+            inner.push(x);
+        }
+        let prog = self.prog;
+        let p = &prog.procs[proc];
+        if self.depth >= MAX_CALL_DEPTH {
+            return Err(Error::input(
+                place,
+                format!(
+                    "calls nest deeper than {MAX_CALL_DEPTH} here: procedure `{}` recurses without bound; expected an `if` that stops the recursion",
+                    p.name
+                ),
+            ));
+        }
+        self.depth += 1;
+        tasks.push(Task::Return(std::mem::replace(vals, inner)));
+        tasks.push(Task::Block(p.body.iter()));
+        Ok(())
+    }
+
+    /// `hair`: Laput et al.'s blob-and-pull (ExtruderTurtle §4.3): a blob in
+    /// place, a thin pull along the heading, a retraction that snaps it; the
+    /// pen is up afterwards.
+    fn hair(
+        &mut self,
+        length: &Val,
+        blob: &Option<Val>,
+        rate: &Option<Val>,
         vals: &mut Vec<f64>,
         place: &str,
     ) -> Result<()> {
-        self.step(place)?;
-        if d < n {
-            if let Some(rule) = &ls.rules[s as usize] {
-                for &t in rule {
-                    self.expand(ls, t, d + 1, n, vals, place)?;
-                }
-                return Ok(());
+        let len = self.positive(length, vals, place)?;
+        let blob = match blob {
+            Some(b) => {
+                let p = place.replace(".hair", ".blob");
+                self.within(b, vals, &p, 0.0, 1000.0)?
             }
+            None => DEFAULT_HAIR_BLOB,
+        };
+        let rate = match rate {
+            Some(r) => {
+                let p = place.replace(".hair", ".rate");
+                self.positive(r, vals, &p)?
+            }
+            None => DEFAULT_HAIR_RATE,
+        };
+        if blob > 0.0 {
+            let e = Event::Extrude {
+                filament: blob,
+                speed: DEFAULT_FEED,
+            };
+            self.event(e, place)?;
         }
-        self.block(&ls.commands[s as usize], vals)
+        let to = self.frame.pos + self.frame.heading * len;
+        if !to.is_finite() {
+            return Err(Error::input(place, "the hair's tip is not finite"));
+        }
+        self.strings += 1;
+        self.made(place)?;
+        if let Some(tp) = &mut self.out {
+            tp.hair(to, rate * self.area, self.v);
+        }
+        self.frame.pos = to;
+        self.event(Event::Retract, place)?;
+        self.pen_down = false;
+        Ok(())
     }
 }

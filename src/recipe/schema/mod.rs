@@ -1,14 +1,39 @@
 //! The recipe format as written (`Raw*`: every number still a
-//! number-or-expression), deserialised from YAML with key paths in errors.
-//! The primitives' own raw forms live with them ([`crate::generate::primitive`]).
+//! number-or-expression), deserialised from YAML with key paths in errors,
+//! and the JSON Schema made from the same types ([`json_schema`]).
+//!
+//! Here: the top level of a file (a recipe, [`RawRecipe`], or a library it
+//! includes, [`RawLibrary`]) and its keys; a part's keys in `part.rs`, the
+//! primitives in `primitive.rs` (`solid:` and `turtle:` in `solid.rs` and
+//! `turtle.rs`), the steps in `step.rs`; a printer profile in `profile.rs`.
+
+mod num;
+mod part;
+mod primitive;
+mod profile;
+mod solid;
+mod step;
+mod turtle;
 
 use std::fmt;
 
 use indexmap::IndexMap;
-use serde::de::{self, Deserializer, MapAccess, Visitor};
+use serde::de::{self, Deserializer, IgnoredAny, MapAccess, Visitor};
 use serde::Deserialize;
 
-use crate::base::num::{Num, Num3};
+pub use num::{Num, Num3};
+pub use part::{RawBrim, RawLoop, RawPart, RawPrimitiveItem, RawPrimitives, RawStand};
+pub use primitive::{
+    RawArc, RawCaHelix, RawCircle, RawCmd, RawCylinder, RawDirection, RawFirstLayer, RawHelix,
+    RawInitial, RawLayout, RawOutline, RawPath, RawPatternHelix, RawPrimitive, RawRule, RawSpiral,
+};
+pub use profile::{
+    RawBed, RawCheckLimits, RawExtrusion, RawFlavor, RawHead, RawKinematics, RawPrinter,
+    RawRetraction,
+};
+pub use solid::{RawBox, RawFeature, RawInfill, RawOp, RawPattern, RawSolid};
+pub use step::{RawDeform, RawKeep, RawStep};
+pub use turtle::{RawCommand, RawLsystem, RawProcedure, RawStart, RawTurtle};
 
 /// `material:` a built-in name or an inline map.
 #[derive(Clone, Debug, PartialEq)]
@@ -130,8 +155,58 @@ pub struct RawRecipe {
     pub allow: Vec<RawAllow>,
     /// Named, parameterised part trees (see [`super::expand`]).
     #[serde(default)]
-    pub templates: IndexMap<String, super::expand::RawTemplate>,
+    pub templates: IndexMap<String, RawTemplate>,
     /// Files whose params and templates this recipe uses, relative to it.
+    #[serde(default)]
+    pub include: Vec<String>,
+}
+
+/// A named, parameterised part tree (draw3dp's part-assembly functions).
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RawTemplate {
+    /// The params and their defaults, in order; a default may use the
+    /// recipe's params and the template params before it.
+    #[serde(default)]
+    pub params: IndexMap<String, Num>,
+    /// The part (or group) it makes.
+    pub part: RawPart,
+}
+
+/// An included file: a recipe or a library of params and templates. Only
+/// `params`, `templates` and `include` are taken; a recipe's other keys are
+/// allowed and ignored, so any recipe can serve as a library.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawLibrary {
+    /// Format version; must be 1.
+    pub p3dp: u32,
+    #[serde(default)]
+    pub name: Option<IgnoredAny>,
+    #[serde(default)]
+    pub description: Option<IgnoredAny>,
+    #[serde(default)]
+    pub printer: Option<IgnoredAny>,
+    #[serde(default)]
+    pub material: Option<IgnoredAny>,
+    #[serde(default)]
+    pub defaults: Option<IgnoredAny>,
+    #[serde(default)]
+    pub skirt: Option<IgnoredAny>,
+    #[serde(default)]
+    pub parts: Option<IgnoredAny>,
+    #[serde(default)]
+    pub max_strings: Option<IgnoredAny>,
+    #[serde(default)]
+    pub allow: Option<IgnoredAny>,
+    /// Params, in order.
+    #[serde(default)]
+    pub params: IndexMap<String, Num>,
+    /// Templates.
+    #[serde(default)]
+    pub templates: IndexMap<String, RawTemplate>,
+    /// Files it includes in turn.
     #[serde(default)]
     pub include: Vec<String>,
 }
@@ -233,144 +308,6 @@ impl RawAllow {
             RawAllow::Code(c) | RawAllow::WithReason { code: c, .. } => c,
         }
     }
-}
-
-/// One part.
-#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct RawPart {
-    /// Name for reports.
-    #[serde(default)]
-    pub name: Option<String>,
-    /// mm², overrides defaults.
-    #[serde(default)]
-    pub cross_section: Option<Num>,
-    /// mm/s, overrides defaults.
-    #[serde(default)]
-    pub speed: Option<Num>,
-    /// One primitive, or a list whose strings follow each other.
-    #[serde(default)]
-    pub primitive: Option<super::expand::RawPrimitives>,
-    /// Steps in order.
-    #[serde(default)]
-    pub steps: Vec<RawStep>,
-    /// Loops on the bed round the part's first contact, printed first.
-    #[serde(default)]
-    pub brim: Option<RawBrim>,
-    /// A short printed tube under the part's first contact, printed first.
-    #[serde(default)]
-    pub stand: Option<RawStand>,
-    /// Child parts, making this part a group (see [`super::expand`]).
-    #[serde(default)]
-    pub parts: Option<Vec<RawPart>>,
-    /// A template to use instead of `primitive` or `parts`.
-    #[serde(default)]
-    pub template: Option<String>,
-    /// The template's params for this use.
-    #[serde(default)]
-    pub with: IndexMap<String, Num>,
-    /// Repeat the part once per value of each name (`for:` in a recipe).
-    #[serde(default, rename = "for")]
-    pub repeat: IndexMap<String, super::expand::RawLoop>,
-}
-
-/// `brim:` of a part: loops on the bed round its first contact.
-#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct RawBrim {
-    /// Number of loops.
-    pub loops: Num,
-    /// Width of a loop and the step between loops, mm (0.45).
-    #[serde(default)]
-    pub line_width: Option<Num>,
-    /// Height of the loops' bead, mm (0.2).
-    #[serde(default)]
-    pub layer_height: Option<Num>,
-    /// mm/s (the part's speed).
-    #[serde(default)]
-    pub speed: Option<Num>,
-}
-
-/// `stand:` of a part: a short printed tube round its first contact, its top
-/// just under where the part passes over it.
-#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct RawStand {
-    /// Radius of the outer wall's centre line, mm, about the middle of the
-    /// part's first contact.
-    pub radius: Num,
-    /// Number of walls, `line_width` apart, from `radius` inwards (2).
-    #[serde(default)]
-    pub walls: Option<Num>,
-    /// Height, mm, in whole layers (as tall as the part leaves room for: no
-    /// higher than the nozzle where the part passes over the walls).
-    #[serde(default)]
-    pub height: Option<Num>,
-    /// Width of a wall, mm (0.45).
-    #[serde(default)]
-    pub line_width: Option<Num>,
-    /// Height of a layer, mm (0.2).
-    #[serde(default)]
-    pub layer_height: Option<Num>,
-    /// mm/s (the part's speed).
-    #[serde(default)]
-    pub speed: Option<Num>,
-}
-
-/// `keep:` of a modulation.
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
-#[serde(rename_all = "snake_case")]
-#[allow(missing_docs)]
-pub enum RawKeep {
-    Flow,
-    Speed,
-}
-
-/// The keys of `deform_xyz` and `deform_cylinder`.
-#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
-#[serde(deny_unknown_fields)]
-#[allow(missing_docs)]
-pub struct RawDeform {
-    #[serde(default)]
-    pub position: Option<Num3>,
-    #[serde(default)]
-    pub cross_section: Option<Num>,
-    #[serde(default)]
-    pub speed: Option<Num>,
-}
-
-/// A step as written.
-#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
-#[serde(rename_all = "snake_case", deny_unknown_fields)]
-#[allow(missing_docs)]
-pub enum RawStep {
-    DeformXyz(RawDeform),
-    DeformCylinder(RawDeform),
-    ModulateCylinder {
-        factor: Num,
-        #[serde(default)]
-        keep: Option<RawKeep>,
-    },
-    ModulateMap {
-        #[serde(default)]
-        image: Option<String>,
-        #[serde(default)]
-        text: Option<String>,
-        u: Num,
-        v: Num,
-        #[serde(default)]
-        dark: Option<Num>,
-        #[serde(default)]
-        light: Option<Num>,
-        #[serde(default)]
-        threshold: Option<Num>,
-        #[serde(default)]
-        keep: Option<RawKeep>,
-    },
-    Subdivide {
-        max_length: Num,
-    },
-    Translate(Num3),
 }
 
 /// Deserializes a map that refuses a key given twice (an `IndexMap` would

@@ -1,6 +1,8 @@
-//! `solid:` as written: the YAML schema of the primitive.
+//! `solid:` as written: features combined, layer and infill settings.
 
-use super::*;
+use serde::Deserialize;
+
+use super::num::{Num, Num3};
 
 /// `solid:` as written.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]

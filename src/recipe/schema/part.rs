@@ -1,6 +1,7 @@
-//! The raw schema of procedural recipes (issue 15): primitive lists,
-//! templates, `for` loops and included libraries. Each type reads as
-//! `crate::recipe::parse_yaml` does (enums as one-key maps, exact key paths).
+//! A part as written: its keys, `brim:` and `stand:`, `for:` loops
+//! (issue 15), and `primitive:` one primitive or a list of them. Each type
+//! reads as `crate::recipe::parse_yaml` does (enums as one-key maps, exact
+//! key paths).
 
 use std::fmt;
 
@@ -8,9 +9,91 @@ use indexmap::IndexMap;
 use serde::de::{self, DeserializeSeed, Deserializer, IgnoredAny, MapAccess, SeqAccess, Visitor};
 use serde::Deserialize;
 
-use crate::base::num::Num;
-use crate::generate::primitive::RawPrimitive;
-use crate::recipe::schema::RawPart;
+use super::num::Num;
+use super::primitive::RawPrimitive;
+use super::step::RawStep;
+
+/// One part.
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RawPart {
+    /// Name for reports.
+    #[serde(default)]
+    pub name: Option<String>,
+    /// mm², overrides defaults.
+    #[serde(default)]
+    pub cross_section: Option<Num>,
+    /// mm/s, overrides defaults.
+    #[serde(default)]
+    pub speed: Option<Num>,
+    /// One primitive, or a list whose strings follow each other.
+    #[serde(default)]
+    pub primitive: Option<RawPrimitives>,
+    /// Steps in order.
+    #[serde(default)]
+    pub steps: Vec<RawStep>,
+    /// Loops on the bed round the part's first contact, printed first.
+    #[serde(default)]
+    pub brim: Option<RawBrim>,
+    /// A short printed tube under the part's first contact, printed first.
+    #[serde(default)]
+    pub stand: Option<RawStand>,
+    /// Child parts, making this part a group (see [`super::expand`]).
+    #[serde(default)]
+    pub parts: Option<Vec<RawPart>>,
+    /// A template to use instead of `primitive` or `parts`.
+    #[serde(default)]
+    pub template: Option<String>,
+    /// The template's params for this use.
+    #[serde(default)]
+    pub with: IndexMap<String, Num>,
+    /// Repeat the part once per value of each name (`for:` in a recipe).
+    #[serde(default, rename = "for")]
+    pub repeat: IndexMap<String, RawLoop>,
+}
+
+/// `brim:` of a part: loops on the bed round its first contact.
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RawBrim {
+    /// Number of loops.
+    pub loops: Num,
+    /// Width of a loop and the step between loops, mm (0.45).
+    #[serde(default)]
+    pub line_width: Option<Num>,
+    /// Height of the loops' bead, mm (0.2).
+    #[serde(default)]
+    pub layer_height: Option<Num>,
+    /// mm/s (the part's speed).
+    #[serde(default)]
+    pub speed: Option<Num>,
+}
+
+/// `stand:` of a part: a short printed tube round its first contact, its top
+/// just under where the part passes over it.
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RawStand {
+    /// Radius of the outer wall's centre line, mm, about the middle of the
+    /// part's first contact.
+    pub radius: Num,
+    /// Number of walls, `line_width` apart, from `radius` inwards (2).
+    #[serde(default)]
+    pub walls: Option<Num>,
+    /// Height, mm, in whole layers (as tall as the part leaves room for: no
+    /// higher than the nozzle where the part passes over the walls).
+    #[serde(default)]
+    pub height: Option<Num>,
+    /// Width of a wall, mm (0.45).
+    #[serde(default)]
+    pub line_width: Option<Num>,
+    /// Height of a layer, mm (0.2).
+    #[serde(default)]
+    pub layer_height: Option<Num>,
+    /// mm/s (the part's speed).
+    #[serde(default)]
+    pub speed: Option<Num>,
+}
 
 /// `primitive:` one primitive, or a list whose strings follow each other in
 /// order (draw3dp's `Trace`).
@@ -23,15 +106,15 @@ pub enum RawPrimitives {
 }
 
 impl RawPrimitives {
-    /// The primitives in order, each with its key path below the part
-    /// (`primitive` for one, `primitive[k]` in a list).
-    pub fn items(&self) -> Vec<(String, &RawPrimitiveItem)> {
+    /// The primitives in order, each with its key path below the part: `key`
+    /// (the part's key for them, `primitive`) for one, `key[k]` in a list.
+    pub fn items(&self, key: &str) -> Vec<(String, &RawPrimitiveItem)> {
         match self {
-            RawPrimitives::One(p) => vec![("primitive".to_string(), &**p)],
+            RawPrimitives::One(p) => vec![(key.to_string(), &**p)],
             RawPrimitives::List(v) => v
                 .iter()
                 .enumerate()
-                .map(|(k, p)| (format!("primitive[{k}]"), p))
+                .map(|(k, p)| (format!("{key}[{k}]"), p))
                 .collect(),
         }
     }
@@ -312,56 +395,6 @@ impl<'de> Deserialize<'de> for RawLoop {
     }
 }
 
-/// A named, parameterised part tree (draw3dp's part-assembly functions).
-#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct RawTemplate {
-    /// The params and their defaults, in order; a default may use the
-    /// recipe's params and the template params before it.
-    #[serde(default)]
-    pub params: IndexMap<String, Num>,
-    /// The part (or group) it makes.
-    pub part: RawPart,
-}
-
-/// An included file: a recipe or a library of params and templates. Only
-/// `params`, `templates` and `include` are taken; a recipe's other keys are
-/// allowed and ignored, so any recipe can serve as a library.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-#[allow(missing_docs)]
-pub struct RawLibrary {
-    /// Format version; must be 1.
-    pub p3dp: u32,
-    #[serde(default)]
-    pub name: Option<IgnoredAny>,
-    #[serde(default)]
-    pub description: Option<IgnoredAny>,
-    #[serde(default)]
-    pub printer: Option<IgnoredAny>,
-    #[serde(default)]
-    pub material: Option<IgnoredAny>,
-    #[serde(default)]
-    pub defaults: Option<IgnoredAny>,
-    #[serde(default)]
-    pub skirt: Option<IgnoredAny>,
-    #[serde(default)]
-    pub parts: Option<IgnoredAny>,
-    #[serde(default)]
-    pub max_strings: Option<IgnoredAny>,
-    #[serde(default)]
-    pub allow: Option<IgnoredAny>,
-    /// Params, in order.
-    #[serde(default)]
-    pub params: IndexMap<String, Num>,
-    /// Templates.
-    #[serde(default)]
-    pub templates: IndexMap<String, RawTemplate>,
-    /// Files it includes in turn.
-    #[serde(default)]
-    pub include: Vec<String>,
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -376,7 +409,7 @@ mod tests {
             "t",
         )
         .unwrap();
-        let items = list.items();
+        let items = list.items("primitive");
         assert_eq!(items[1].0, "primitive[1]");
         assert_eq!(items[0].1.cross_section, Some(Num::Value(0.1)));
         assert!(matches!(items[1].1.primitive, RawPrimitive::Helix { .. }));

@@ -1,0 +1,306 @@
+//! Resolution: params evaluated in order (with `--set`), every number
+//! evaluated and every expression compiled, images loaded, each error naming
+//! its key path (derived from the raw forms' field names, see
+//! [`crate::recipe::eval`]).
+//!
+//! Here the recipe's top level; a part in `part.rs`, its primitives in
+//! `primitive.rs` (`pattern.rs`, `solid.rs`, `turtle.rs` for the larger
+//! ones), steps in `step.rs`, an inline material in `material.rs`.
+
+mod material;
+mod part;
+mod pattern;
+mod primitive;
+mod solid;
+mod step;
+mod turtle;
+
+use std::path::Path;
+
+use super::eval::{at, join, key, Scope};
+use super::expand::Expansion;
+use super::schema::{RawPart, RawRecipe};
+use super::yaml::parse_yaml;
+use crate::base::error::{Error, Result};
+use crate::generate::model::{
+    Group, Part, Recipe, Skirt, DEFAULT_CROSS_SECTION, DEFAULT_MAX_STRINGS, DEFAULT_SPEED,
+};
+use crate::machine::Printer;
+
+pub use step::load_bitmap;
+
+/// Evaluates numbers of one recipe: its params, and where images and a
+/// turtle's limits come from.
+struct Ctx<'a> {
+    scope: Scope<'a>,
+    dir: &'a Path,
+    /// Filament area (mm²) and max_strings, for a turtle (set once known).
+    turtle: (f64, u64),
+}
+
+impl<'a> std::ops::Deref for Ctx<'a> {
+    type Target = Scope<'a>;
+    fn deref(&self) -> &Scope<'a> {
+        &self.scope
+    }
+}
+
+impl Recipe {
+    /// Reads and resolves a recipe file. `printer` overrides the recipe's printer.
+    pub fn load(
+        path: &Path,
+        sets: &[(String, String)],
+        printer: Option<&Printer>,
+    ) -> Result<Recipe> {
+        let shown = path.display().to_string();
+        let text = crate::base::input::read_text(path, "recipe")?;
+        let raw: RawRecipe = parse_yaml(&text, &shown)?;
+        let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        Recipe::resolve_in(&raw, sets, printer, &dir, Some(path)).map_err(|e| e.in_file(&shown))
+    }
+
+    /// Resolves a parsed recipe; relative paths are taken from `dir`.
+    pub fn resolve(
+        raw: &RawRecipe,
+        sets: &[(String, String)],
+        printer: Option<&Printer>,
+        dir: &Path,
+    ) -> Result<Recipe> {
+        Recipe::resolve_in(raw, sets, printer, dir, None)
+    }
+
+    /// [`Recipe::resolve`] for the recipe read from `file` (so that an
+    /// include cycle through it is named).
+    fn resolve_in(
+        raw: &RawRecipe,
+        sets: &[(String, String)],
+        printer: Option<&Printer>,
+        dir: &Path,
+        file: Option<&Path>,
+    ) -> Result<Recipe> {
+        check_top(raw)?;
+        let library = super::expand::load_library(raw, file, dir)?;
+        let params = library.eval_params(sets)?;
+        let top = Scope::new(&params);
+        let printer = match printer {
+            Some(p) => p.clone(),
+            None => Printer::resolve(raw.printer.as_deref().unwrap_or("generic-220"), dir)?,
+        };
+        let material = material::resolve(&top.under(key!(raw.material)), raw.material.as_ref())?;
+        let defaults = &raw.defaults;
+        let ds = top.under(key!(raw.defaults));
+        let c0 = ds.positive_or(at!(defaults.cross_section), DEFAULT_CROSS_SECTION)?;
+        let v0 = ds.positive_or(at!(defaults.speed), DEFAULT_SPEED)?;
+        let skirt = match &raw.skirt {
+            Some(s) => {
+                let ss = top.under(key!(raw.skirt));
+                Some(Skirt {
+                    distance: ss.non_negative(at!(s.distance))?,
+                    loops: ss.whole_max(at!(s.loops), 1, 1000)?,
+                })
+            }
+            None => None,
+        };
+        let max_strings = match at!(raw.max_strings).some() {
+            Some(n) => top.whole(n, 1)? as u64,
+            None => DEFAULT_MAX_STRINGS,
+        };
+        let d = material
+            .filament_diameter
+            .unwrap_or(printer.filament_diameter);
+        let turtle = (std::f64::consts::PI * (d / 2.0) * (d / 2.0), max_strings);
+        // templates, loops and groups expanded into leaf parts
+        let expansion = super::expand::expand(&raw.parts, &library.templates, &params, dir)?;
+        let parts = leaves(&expansion, turtle, (c0, v0), max_strings)?;
+        let groups = groups(&expansion, turtle)?;
+        let allow: Vec<String> = raw.allow.iter().map(|a| a.code().to_string()).collect();
+        let allow_key = key!(raw.allow);
+        crate::base::finding::validate_allow(&allow, |i| format!("{allow_key}[{i}]"))?;
+        Ok(Recipe {
+            name: raw.name.clone(),
+            params,
+            printer,
+            material,
+            skirt,
+            parts,
+            max_strings,
+            allow,
+            groups,
+        })
+    }
+}
+
+/// The top level's own checks: the format version, a name, some parts.
+fn check_top(raw: &RawRecipe) -> Result<()> {
+    if raw.p3dp != 1 {
+        return Err(Error::input(
+            key!(raw.p3dp),
+            format!("format version {} is not known; expected 1", raw.p3dp),
+        ));
+    }
+    if raw.name.trim().is_empty() {
+        return Err(Error::input(key!(raw.name), "expected a non-empty name"));
+    }
+    // names reach G-code comments: one line each, no control characters
+    crate::base::safe_text::check(key!(raw.name), &raw.name)?;
+    if let Some(d) = &raw.description {
+        // a block scalar's final line break is no line of its own
+        crate::base::safe_text::check(key!(raw.description), d.trim_end_matches(['\n', '\r']))?;
+    }
+    if raw.parts.is_empty() {
+        return Err(Error::input(key!(raw.parts), "expected at least one part"));
+    }
+    Ok(())
+}
+
+/// The leaf parts resolved, each with the params in its scope; `c0` and
+/// `v0` are the defaults' cross-section and speed. Each part, and all of
+/// them together, must stay within `max_strings`.
+fn leaves(
+    expansion: &Expansion,
+    turtle: (f64, u64),
+    (c0, v0): (f64, f64),
+    max_strings: u64,
+) -> Result<Vec<Part>> {
+    // the limit holds for all parts together too (YAML aliases, loops)
+    let total_limit = max_strings;
+    let mut total = 0u64;
+    let mut parts = Vec::with_capacity(expansion.leaves.len());
+    for (k, leaf) in expansion.leaves.iter().enumerate() {
+        let place = &leaf.place;
+        let ctx = Ctx {
+            scope: Scope::new(&leaf.params),
+            dir: leaf.dir,
+            turtle,
+        };
+        let raw = leaf.part;
+        let mut part = part::resolve(&ctx, raw, c0, v0, k).map_err(|e| e.under(place))?;
+        if let Some(name) = &leaf.name {
+            part.name.clone_from(name);
+        }
+        part.place.clone_from(place);
+        crate::base::safe_text::check(&join(place, key!(raw.name)), &part.name)?;
+        let n = part.string_count();
+        let at = join(place, key!(raw.primitive));
+        if n > max_strings {
+            return Err(Error::input(
+                at,
+                format!(
+                    "this primitive would make {n} strings, more than the limit of {max_strings}; expected a larger pitch or fewer segments (or raise max_strings)"
+                ),
+            ));
+        }
+        total = total.saturating_add(n);
+        if total > total_limit {
+            return Err(Error::input(
+                at,
+                format!(
+                    "the parts up to this one make {total} strings, more than the limit of {total_limit} for the whole recipe (all parts together); expected fewer or smaller parts (or raise max_strings)"
+                ),
+            ));
+        }
+        parts.push(part);
+    }
+    Ok(parts)
+}
+
+/// The groups' steps resolved, each with the params where it is written.
+fn groups(expansion: &Expansion, turtle: (f64, u64)) -> Result<Vec<Group>> {
+    let mut groups = Vec::with_capacity(expansion.groups.len());
+    for g in &expansion.groups {
+        let ctx = Ctx {
+            scope: Scope::new(&g.params),
+            dir: g.dir,
+            turtle,
+        };
+        let mut steps = Vec::with_capacity(g.steps.len());
+        for (j, s) in g.steps.iter().enumerate() {
+            let at = join(key!(RawPart, steps), &format!("[{j}]"));
+            steps.push(step::resolve(&ctx, s).map_err(|e| e.under(&at).under(&g.place))?);
+        }
+        groups.push(Group {
+            first: g.first,
+            end: g.end,
+            steps,
+            place: g.place.clone(),
+        });
+    }
+    Ok(groups)
+}
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn load(text: &str) -> Result<Recipe> {
+        let raw: RawRecipe = parse_yaml(text, "t.yaml")?;
+        Recipe::resolve(&raw, &[], None, Path::new("."))
+    }
+
+    const HELIX: &str = "p3dp: 1\nname: h\nparams:\n  radius: 10\n  height: \"2*radius\"\nparts:\n  - primitive: {helix: {radius: radius, height: height, pitch: 0.5}}\n";
+
+    #[test]
+    fn params_chain_and_set_overrides() {
+        let r = load(HELIX).unwrap();
+        assert_eq!(r.params["height"], 20.0);
+        let raw: RawRecipe = parse_yaml(HELIX, "t.yaml").unwrap();
+        let r = Recipe::resolve(
+            &raw,
+            &[("radius".into(), "3*4".into())],
+            None,
+            Path::new("."),
+        )
+        .unwrap();
+        assert_eq!(r.params["height"], 24.0);
+        let e = Recipe::resolve(&raw, &[("radios".into(), "3".into())], None, Path::new("."))
+            .unwrap_err();
+        assert!(e.to_string().contains("unknown param `radios`"), "{e}");
+    }
+
+    #[test]
+    fn unknown_key_names_the_path_and_line() {
+        let e = load(&HELIX.replace("pitch: 0.5", "pitch: 0.5, pich: 1")).unwrap_err();
+        assert_eq!(e.place.as_deref(), Some("parts[0].primitive.helix.pich"));
+        assert_eq!(e.line.map(|l| l.0), Some(7));
+        assert!(e.message.contains("expected one of"), "{e}");
+    }
+
+    #[test]
+    fn bad_values_name_the_key() {
+        let e = load(&HELIX.replace("pitch: 0.5", "pitch: -1")).unwrap_err();
+        assert_eq!(e.place.as_deref(), Some("parts[0].primitive.helix.pitch"));
+        let e = load(&HELIX.replace("pitch: 0.5", "pitch: 0.5, segments: 2.5")).unwrap_err();
+        assert_eq!(
+            e.place.as_deref(),
+            Some("parts[0].primitive.helix.segments")
+        );
+        let e = load(&HELIX.replace("pitch: 0.5", "pitch: 0.0000001")).unwrap_err();
+        assert!(e.message.contains("more than the limit"), "{e}");
+    }
+
+    #[test]
+    fn step_expressions_compile_with_places() {
+        let text = format!(
+            "{HELIX}    steps:\n      - deform_cylinder: {{position: [r, theta, \"z + \"]}}\n"
+        );
+        let e = load(&text).unwrap_err();
+        assert_eq!(
+            e.place.as_deref(),
+            Some("parts[0].steps[0].deform_cylinder.position[2]")
+        );
+        assert!(e.message.contains("z + "), "{e}");
+    }
+
+    #[test]
+    fn materials() {
+        let r = load(&HELIX.replace("name: h", "name: h\nmaterial: petg")).unwrap();
+        assert_eq!(r.material.name, "petg");
+        let r = load(&HELIX.replace(
+            "name: h",
+            "name: h\nmaterial: {filament_diameter: 2.85, density: 1.2, nozzle_temp: 200, bed_temp: 50}",
+        ))
+        .unwrap();
+        assert_eq!(r.material.filament_diameter, Some(2.85));
+        let e = load(&HELIX.replace("name: h", "name: h\nmaterial: wood")).unwrap_err();
+        assert_eq!(e.place.as_deref(), Some("material"));
+    }
+}

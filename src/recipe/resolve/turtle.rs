@@ -1,0 +1,763 @@
+//! Resolving `turtle:`: the program compiled (every value an expression
+//! compiled once, every name — procedure, loop counter, parameter —
+//! resolved, every command tagged with its key path for errors), then run
+//! by generation's interpreter ([`crate::generate::primitive::turtle::run`]).
+
+use std::sync::Arc;
+
+use glam::DVec3;
+use indexmap::IndexMap;
+
+use crate::base::error::{Error, Result};
+use crate::base::expr::{var, Expr, ExprErrorKind, Params};
+use crate::generate::primitive::turtle::interp::Program;
+use crate::generate::primitive::turtle::lsystem::Lsystem;
+use crate::generate::primitive::turtle::program::{Axis, Cmd, Op, Proc, Setting, Val, STATE};
+use crate::generate::primitive::turtle::{self, Env, Frame, Turtle};
+use crate::recipe::eval::{at, join, key, Scope};
+use crate::recipe::schema::{Num, Num3};
+use crate::recipe::schema::{RawCommand, RawLsystem, RawProcedure, RawTurtle};
+
+/// Compiles and runs a turtle; `s` is under `turtle`, the key paths of its
+/// errors too.
+pub fn resolve(raw: &RawTurtle, s: &Scope, env: &Env) -> Result<Turtle> {
+    // the program's places are relative to `turtle` (the interpreter's too)
+    compile(raw, &Scope::new(s.params))
+        .and_then(|prog| turtle::run(&prog, env))
+        .map_err(|e| e.under(s.here()))
+}
+
+/// The program of `raw` over the recipe's params: its start, seed,
+/// procedures and commands.
+fn compile(raw: &RawTurtle, s: &Scope) -> Result<Program> {
+    let start = raw.start.clone().unwrap_or_default();
+    let st = s.under(key!(raw.start));
+    let pos = st.point_or(at!(start.position), DVec3::ZERO)?;
+    let heading = st.point_or(at!(start.heading), DVec3::X)?;
+    let up = st.point_or(at!(start.up), DVec3::Z)?;
+    let frame = Frame::new(pos, heading, up).map_err(|e| st.error("", e.to_string()))?;
+    let seed = s.checked_or(
+        at!(raw.seed),
+        0.0,
+        |x| x.fract() == 0.0 && (0.0..=9007199254740992.0).contains(&x),
+        "a whole number from 0 to 2^53",
+    )? as u64;
+    let compiler = Compiler::new(s.params, &raw.procedures);
+    let procs = compiler.procedures(key!(raw.procedures))?;
+    let main = compiler.block(&raw.program, key!(raw.program), &Arc::new(Vec::new()))?;
+    Ok(Program {
+        start: frame,
+        seed,
+        main,
+        procs,
+    })
+}
+
+/// Compiles the commands of one turtle.
+pub struct Compiler<'a> {
+    params: &'a Params,
+    procs: IndexMap<String, RawProcedure>,
+}
+
+fn check_name(name: &str, params: &Params, scope: &[String], place: &str) -> Result<()> {
+    let ident = {
+        let mut cs = name.chars();
+        matches!(cs.next(), Some(c) if c.is_ascii_alphabetic() || c == '_')
+            && cs.all(|c| c.is_ascii_alphanumeric() || c == '_')
+    };
+    let why = if !ident {
+        "a name must be letters, digits and `_`, not starting with a digit"
+    } else if matches!(name, "x" | "y" | "z" | "pi" | "e" | "rand") {
+        "turtle expressions already use it (x y z are the turtle's position; pi, e, rand())"
+    } else if params.contains_key(name) {
+        "it is a param of the recipe"
+    } else if scope.iter().any(|s| s == name) {
+        "it is already a loop counter or parameter here"
+    } else {
+        return Ok(());
+    };
+    Err(Error::input(
+        place,
+        format!("`{name}` cannot name a loop counter or parameter: {why}"),
+    ))
+}
+
+impl<'a> Compiler<'a> {
+    /// A compiler for one turtle's procedures over the recipe's params.
+    pub fn new(params: &'a Params, procs: &IndexMap<String, RawProcedure>) -> Compiler<'a> {
+        Compiler {
+            params,
+            procs: procs.clone(),
+        }
+    }
+
+    /// Compiles every procedure (in the order written; calls may refer
+    /// forward), written under `key`.
+    pub fn procedures(&self, key: &str) -> Result<Vec<Proc>> {
+        let mut out = Vec::with_capacity(self.procs.len());
+        for (name, p) in &self.procs {
+            let place = join(key, name);
+            let params = join(&place, key!(p.params));
+            let mut scope = Vec::new();
+            for (k, param) in p.params.iter().enumerate() {
+                check_name(param, self.params, &scope, &format!("{params}[{k}]"))?;
+                scope.push(param.clone());
+            }
+            out.push(Proc {
+                name: name.clone(),
+                arity: p.params.len(),
+                // `body` is read as `do`
+                body: self.block(&p.body, &join(&place, "do"), &Arc::new(scope))?,
+            });
+        }
+        Ok(out)
+    }
+
+    /// Compiles `src` in `scope` (turtle position x, y, z; counters; `rand()`).
+    pub fn val(&self, n: &Num, scope: &Arc<Vec<String>>, place: &str) -> Result<Val> {
+        let mut names: Vec<&str> = scope.iter().map(String::as_str).collect();
+        names.extend(STATE);
+        let expr = Expr::compile_ext(&n.src(), self.params, &[var::X, var::Y, var::Z], &names)
+            .map_err(|e| {
+                let m = e.message;
+                let m = if e.kind == ExprErrorKind::Name {
+                    let mut more: Vec<&str> = scope.iter().map(String::as_str).collect();
+                    more.extend(STATE);
+                    more.push("rand()");
+                    format!("{m}; a turtle also has {}", more.join(", "))
+                } else {
+                    m
+                };
+                Error::input(place, m)
+            })?;
+        let reads_state = (0..STATE.len()).any(|k| expr.uses_ext(scope.len() + k));
+        Ok(Val {
+            expr,
+            scope: scope.clone(),
+            reads_state,
+        })
+    }
+
+    fn val3(&self, n: &Num3, scope: &Arc<Vec<String>>, place: &str) -> Result<[Val; 3]> {
+        Ok([
+            self.val(&n[0], scope, &format!("{place}[0]"))?,
+            self.val(&n[1], scope, &format!("{place}[1]"))?,
+            self.val(&n[2], scope, &format!("{place}[2]"))?,
+        ])
+    }
+
+    fn opt_val(
+        &self,
+        n: &Option<Num>,
+        scope: &Arc<Vec<String>>,
+        place: &str,
+    ) -> Result<Option<Val>> {
+        match n {
+            Some(n) => Ok(Some(self.val(n, scope, place)?)),
+            None => Ok(None),
+        }
+    }
+
+    /// Compiles a list of commands written at key path `place`.
+    pub fn block(
+        &self,
+        cmds: &[RawCommand],
+        place: &str,
+        scope: &Arc<Vec<String>>,
+    ) -> Result<Vec<Cmd>> {
+        let mut out = Vec::with_capacity(cmds.len());
+        for (k, c) in cmds.iter().enumerate() {
+            out.push(self.command(c, &format!("{place}[{k}]"), scope)?);
+        }
+        Ok(out)
+    }
+
+    /// One command, list item `item`: its place is `item.KEY`, KEY its command key.
+    fn command(&self, c: &RawCommand, item: &str, scope: &Arc<Vec<String>>) -> Result<Cmd> {
+        let at = |key: &str| format!("{item}.{key}");
+        let (place, op) = match c {
+            RawCommand::Bare(w) => (at(w), bare(w)),
+            RawCommand::Scalar(w, n) => (at(w), scalar(w, self.val(n, scope, &at(w))?)),
+            RawCommand::Goto(p) => (at("goto"), Op::Goto(self.val3(p, scope, &at("goto"))?)),
+            RawCommand::SetHeading { heading, up } => (
+                at("set_heading"),
+                Op::SetHeading(Box::new((
+                    self.val3(heading, scope, &at("set_heading"))?,
+                    match up {
+                        Some(u) => Some(self.val3(u, scope, &at("up"))?),
+                        None => None,
+                    },
+                ))),
+            ),
+            RawCommand::Extrude { filament, feed } => (
+                at("extrude"),
+                Op::Extrude(
+                    self.val(filament, scope, &at("extrude"))?,
+                    self.opt_val(feed, scope, &at("feed"))?,
+                ),
+            ),
+            RawCommand::Temp { bed, celsius, wait } => {
+                let key = if *bed { "bed_temp" } else { "nozzle_temp" };
+                let celsius = self.val(celsius, scope, &at(key))?;
+                let (bed, wait) = (*bed, *wait);
+                (at(key), Op::Temp { bed, celsius, wait })
+            }
+            RawCommand::Repeat { count, var, body } => {
+                (at("repeat"), self.repeat(count, var, body, item, scope)?)
+            }
+            RawCommand::If {
+                cond,
+                then,
+                otherwise,
+            } => (
+                at("if"),
+                Op::If {
+                    cond: self.val(cond, scope, &at("if"))?,
+                    then: self.block(then, &at("do"), scope)?,
+                    otherwise: self.block(otherwise, &at("else"), scope)?,
+                },
+            ),
+            RawCommand::Call { name, args } => (at("call"), self.call(name, args, item, scope)?),
+            RawCommand::Lsystem(l) => {
+                let ls = self.lsystem(l, scope, &at("lsystem"))?;
+                (at("lsystem"), Op::Lsystem(Box::new(ls)))
+            }
+            RawCommand::Hair { length, blob, rate } => (
+                at("hair"),
+                Op::Hair {
+                    length: self.val(length, scope, &at("hair"))?,
+                    blob: self.opt_val(blob, scope, &at("blob"))?,
+                    rate: self.opt_val(rate, scope, &at("rate"))?,
+                },
+            ),
+        };
+        Ok(Cmd { place, op })
+    }
+
+    /// `repeat: count` with `as: var` and `do: body`, list item `item`.
+    fn repeat(
+        &self,
+        count: &Num,
+        var: &Option<String>,
+        body: &[RawCommand],
+        item: &str,
+        scope: &Arc<Vec<String>>,
+    ) -> Result<Op> {
+        let at = |key: &str| format!("{item}.{key}");
+        let count = self.val(count, scope, &at("repeat"))?;
+        let inner = match var {
+            Some(name) => {
+                check_name(name, self.params, scope, &at("as"))?;
+                let mut s = (**scope).clone();
+                s.push(name.clone());
+                Arc::new(s)
+            }
+            None => scope.clone(),
+        };
+        Ok(Op::Repeat {
+            count,
+            counter: var.is_some(),
+            body: self.block(body, &at("do"), &inner)?,
+        })
+    }
+
+    /// `call: name` with `args`, list item `item`.
+    fn call(&self, name: &str, args: &[Num], item: &str, scope: &Arc<Vec<String>>) -> Result<Op> {
+        let at = |key: &str| format!("{item}.{key}");
+        let Some((proc, _, p)) = self.procs.get_full(name) else {
+            let known: Vec<&str> = self.procs.keys().map(String::as_str).collect();
+            return Err(Error::input(
+                at("call"),
+                if known.is_empty() {
+                    format!(
+                        "undefined procedure `{name}`; this turtle defines none under `procedures:`"
+                    )
+                } else {
+                    format!(
+                        "undefined procedure `{name}`; the procedures are {}",
+                        known.join(", ")
+                    )
+                },
+            ));
+        };
+        if args.len() != p.params.len() {
+            return Err(Error::input(
+                at("args"),
+                format!(
+                    "procedure `{name}` takes {} argument{} ({}) but is given {}",
+                    p.params.len(),
+                    if p.params.len() == 1 { "" } else { "s" },
+                    p.params.join(", "),
+                    args.len()
+                ),
+            ));
+        }
+        let mut vals = Vec::with_capacity(args.len());
+        for (j, a) in args.iter().enumerate() {
+            vals.push(self.val(a, scope, &format!("{}[{j}]", at("args")))?);
+        }
+        Ok(Op::Call { proc, args: vals })
+    }
+
+    /// Compiles the L-system `raw` written at `place`, its commands seeing
+    /// `scope`: symbols numbered in order of first appearance.
+    pub fn lsystem(
+        &self,
+        raw: &RawLsystem,
+        scope: &Arc<Vec<String>>,
+        place: &str,
+    ) -> Result<Lsystem> {
+        let mut symbols: Vec<char> = Vec::new();
+        let number = |ch: char, symbols: &mut Vec<char>| -> Result<u16> {
+            if let Some(k) = symbols.iter().position(|&s| s == ch) {
+                return Ok(k as u16);
+            }
+            if symbols.len() >= u16::MAX as usize {
+                return Err(Error::input(place, "too many different symbols"));
+            }
+            symbols.push(ch);
+            Ok(symbols.len() as u16 - 1)
+        };
+        if raw.axiom.is_empty() {
+            return Err(Error::input(
+                join(place, key!(raw.axiom)),
+                "expected a non-empty word",
+            ));
+        }
+        let mut axiom = Vec::new();
+        for ch in raw.axiom.chars() {
+            axiom.push(number(ch, &mut symbols)?);
+        }
+        let mut rules_at = Vec::new();
+        for (key, rhs) in &raw.rules {
+            let p = join(&join(place, key!(raw.rules)), key);
+            let s = number(one_symbol(key, &p)?, &mut symbols)?;
+            let mut word = Vec::new();
+            for ch in rhs.chars() {
+                word.push(number(ch, &mut symbols)?);
+            }
+            rules_at.push((s, word));
+        }
+        let mut commands_at = Vec::new();
+        for (key, cmds) in &raw.commands {
+            let p = join(&join(place, key!(raw.commands)), key);
+            let s = number(one_symbol(key, &p)?, &mut symbols)?;
+            commands_at.push((s, self.block(cmds, &p, scope)?));
+        }
+        let n = symbols.len();
+        let mut rules = vec![None; n];
+        for (s, w) in rules_at {
+            rules[s as usize] = Some(w);
+        }
+        let mut commands = vec![Vec::new(); n];
+        for (s, cmds) in commands_at {
+            commands[s as usize] = cmds;
+        }
+        Ok(Lsystem {
+            symbols,
+            axiom,
+            rules,
+            commands,
+            iterations: self.val(&raw.iterations, scope, &join(place, key!(raw.iterations)))?,
+        })
+    }
+}
+
+fn one_symbol(key: &str, place: &str) -> Result<char> {
+    let mut cs = key.chars();
+    match (cs.next(), cs.next()) {
+        (Some(c), None) => Ok(c),
+        _ => Err(Error::input(
+            place,
+            format!("`{key}` is not one symbol; expected a single character such as F or +"),
+        )),
+    }
+}
+
+/// What a bare word does.
+fn bare(w: &str) -> Op {
+    match w {
+        "pen_up" => Op::PenUp,
+        "pen_down" => Op::PenDown,
+        "pause" => Op::Pause,
+        "push" => Op::Push,
+        "draw_turtle" => Op::DrawTurtle,
+        _ => Op::Pop,
+    }
+}
+
+/// What a command of one number does with its value `v`.
+fn scalar(w: &str, v: Val) -> Op {
+    match w {
+        "forward" => Op::Forward(v, 1.0),
+        "backward" => Op::Forward(v, -1.0),
+        "lift" => Op::Lift(v),
+        "yaw" | "left" => Op::Turn(Axis::Yaw, v, 1.0),
+        "right" => Op::Turn(Axis::Yaw, v, -1.0),
+        "pitch" => Op::Turn(Axis::Pitch, v, 1.0),
+        "roll" => Op::Turn(Axis::Roll, v, 1.0),
+        "extrude_rate" => Op::Set(Setting::ExtrudeRate, v),
+        "cross_section" => Op::Set(Setting::CrossSection, v),
+        "speed" => Op::Set(Setting::Speed, v),
+        "dwell" => Op::Dwell(v),
+        _ => Op::Fan(v),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::base::toolpath::{Event, Toolpath};
+    use crate::generate::primitive::Primitive;
+    use crate::recipe::Recipe;
+
+    fn env() -> Env {
+        Env {
+            cross_section: 0.2,
+            speed: 30.0,
+            filament_area: 2.0,
+            max_strings: 1_000_000,
+        }
+    }
+
+    fn run_with(yaml: &str, env: &Env) -> Result<Toolpath> {
+        let raw: RawTurtle = crate::recipe::parse_yaml(yaml, "t.yaml")?;
+        let mut params = Params::new();
+        params.insert("side".into(), 13.7);
+        resolve(&raw, &Scope::new(&params).under("turtle"), env).map(|t| t.path)
+    }
+
+    fn run(yaml: &str) -> Toolpath {
+        run_with(yaml, &env()).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    fn err(yaml: &str) -> Error {
+        run_with(yaml, &env()).unwrap_err()
+    }
+
+    #[test]
+    fn expressions_read_the_turtles_state() {
+        // each `forward` goes as far as the state it reads: yaw 30, pitch
+        // -20, roll 45, pen 0 then 1 (ExtruderTurtle's getYaw() and friends)
+        let t = run("program:\n  - {left: 30}\n  - {forward: \"yaw()\"}\n  - {pitch: -20}\n  - {forward: \"-pitch()\"}\n  - {roll: 45}\n  - {forward: \"roll ( )\"}\n  - pen_up\n  - {forward: \"1 + pen()\"}\n  - pen_down\n  - {forward: \"pen()*2 + rand()*0\"}\n");
+        let lens: Vec<f64> = t.points.windows(2).map(|w| w[0].distance(w[1])).collect();
+        let want = [30.0, 20.0, 45.0, 1.0, 2.0];
+        assert_eq!(lens.len(), want.len(), "{lens:?}");
+        for (got, w) in lens.iter().zip(want) {
+            assert!((got - w).abs() < 1e-9, "{lens:?}");
+        }
+        // a counter or parameter keeps its own name beside them
+        let t = run("program:\n  - repeat: 2\n    as: yaw\n    do: [{forward: \"yaw + 1\"}]\n");
+        assert!((t.points[2].x - 3.0).abs() < 1e-12, "{:?}", t.points);
+        // an unknown name lists what a turtle has
+        let e = err("program:\n  - {forward: \"heading\"}\n");
+        assert!(
+            e.message.contains("yaw(), pitch(), roll(), pen(), rand()"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_hair_is_a_blob_a_declared_pull_and_a_retraction() {
+        let t = run("program:\n  - {pitch: 90}\n  - {hair: 6, blob: 0.2, rate: 0.5}\n  - {forward: 2}\n  - pen_down\n  - {forward: 1}\n");
+        // the pull, then (pen up) a travel, then a drawn string
+        assert_eq!(t.len(), 3);
+        assert!(t.strings[0].hair && !t.strings[0].travel);
+        assert_eq!(t.points[1], DVec3::new(0.0, 0.0, 6.0));
+        assert_eq!(t.strings[0].c, 0.5 * 2.0);
+        assert!(t.strings[1].travel && !t.strings[1].hair);
+        assert!(!t.strings[2].hair && !t.strings[2].travel);
+        assert_eq!(
+            t.events,
+            vec![
+                (
+                    0,
+                    Event::Extrude {
+                        filament: 0.2,
+                        speed: 1.0
+                    }
+                ),
+                (1, Event::Retract)
+            ]
+        );
+        let e = err("program:\n  - {hair: -1}\n");
+        assert_eq!(e.place.as_deref(), Some("turtle.program[0].hair"));
+        let e = err("program:\n  - {hair: 1, rate: 0}\n");
+        assert_eq!(e.place.as_deref(), Some("turtle.program[0].rate"));
+        let e = err("program:\n  - {hair: 1, feed: 2}\n");
+        assert!(e.message.contains("its other keys are blob, rate"), "{e}");
+    }
+
+    #[test]
+    fn closed_polygons_return_to_their_start() {
+        for (sides, turn) in [(3, "right"), (6, "left"), (7, "left"), (17, "right")] {
+            let t = run(&format!(
+                "program:\n  - repeat: {sides}\n    do: [{{forward: side}}, {{{turn}: 360/{sides}}}]\n"
+            ));
+            assert_eq!(t.len(), sides);
+            let d = t.head().distance(t.points[0]);
+            assert!(d < 1e-9, "{sides}-gon misses its start by {d} mm");
+        }
+        // a star {7/3} and a square in a tilted plane
+        let t = run("program:\n  - repeat: 7\n    do: [{forward: 50}, {right: 3*360/7}]\n");
+        assert!(t.head().distance(t.points[0]) < 1e-9);
+        let t = run("start: {position: [1, 2, 3]}\nprogram:\n  - {roll: 37}\n  - {pitch: 21}\n  - repeat: 4\n    do: [{forward: 10}, {left: 90}]\n");
+        assert!(t.head().distance(t.points[0]) < 1e-9);
+        assert!((t.points[2].z - t.points[0].z).abs() > 1.0, "tilted");
+    }
+
+    #[test]
+    fn turns_are_rotations_of_the_own_frame() {
+        // a sequence of turns and its inverse: forward goes along the start heading
+        let t = run("program:\n  - {yaw: 30}\n  - {pitch: -55}\n  - {roll: 100}\n  - {left: 12}\n  - {left: -12}\n  - {roll: -100}\n  - {pitch: 55}\n  - {right: 30}\n  - {forward: 10}\n");
+        assert!((t.head() - DVec3::new(10.0, 0.0, 0.0)).length() < 1e-12);
+        // yaw turns about the turtle's own up, which a roll has tilted
+        let t = run("program:\n  - {roll: 90}\n  - {yaw: 90}\n  - {forward: 1}\n");
+        assert!((t.head() - DVec3::Z).length() < 1e-15, "{}", t.head());
+    }
+
+    #[test]
+    fn goto_and_forward_agree() {
+        let a = run("program:\n  - {yaw: 30}\n  - {pitch: 20}\n  - {forward: 10}\n  - {lift: 2}\n");
+        let (s30, c30, s20, c20) = (
+            0.5,
+            0.75f64.sqrt(),
+            libm::sin(20f64.to_radians()),
+            libm::cos(20f64.to_radians()),
+        );
+        let fwd = DVec3::new(10.0 * c20 * c30, 10.0 * c20 * s30, 10.0 * s20);
+        let up = DVec3::new(-2.0 * s20 * c30, -2.0 * s20 * s30, 2.0 * c20);
+        assert!((a.points[1] - fwd).length() < 1e-12);
+        assert!((a.points[2] - fwd - up).length() < 1e-12);
+        let b = run(&format!(
+            "program:\n  - goto: [{}, {}, {}]\n  - {{backward: 5}}\n",
+            fwd.x, fwd.y, fwd.z
+        ));
+        // goto keeps the heading: backward goes back along +x
+        assert_eq!(b.points[1], fwd);
+        assert!((b.points[2] - fwd + DVec3::new(5.0, 0.0, 0.0)).length() < 1e-12);
+    }
+
+    #[test]
+    fn settings_and_events() {
+        let t = run("program:\n  - {forward: 1}\n  - pen_up\n  - {forward: 2}\n  - pen_down\n  - {extrude_rate: 0.05}\n  - {speed: 12}\n  - {forward: 3}\n  - {cross_section: 0.3}\n  - {extrude: 2, feed: 3}\n  - {dwell: 250}\n  - pause\n  - {nozzle_temp: 200, wait: true}\n  - {fan: 0.5}\n  - {forward: 1}\n");
+        assert_eq!(t.len(), 4);
+        assert!(!t.strings[0].travel && t.strings[1].travel && !t.strings[2].travel);
+        assert_eq!((t.strings[0].c, t.strings[0].v), (0.2, 30.0));
+        assert_eq!((t.strings[2].c, t.strings[2].v), (0.05 * 2.0, 12.0));
+        assert_eq!(t.strings[3].c, 0.3);
+        assert_eq!(t.events[0], (1, Event::Retract));
+        assert_eq!(
+            t.events[1],
+            (
+                3,
+                Event::Extrude {
+                    filament: 2.0,
+                    speed: 3.0
+                }
+            )
+        );
+        assert_eq!(t.events.len(), 6);
+        assert_eq!(
+            t.events[4],
+            (
+                3,
+                Event::NozzleTemp {
+                    celsius: 200.0,
+                    wait: true
+                }
+            )
+        );
+    }
+
+    #[test]
+    fn counters_procedures_if_and_push_pop() {
+        let t = run("procedures:\n  leg:\n    params: [n, len]\n    do:\n      - if: \"n\"\n        do: [{forward: len}, {call: leg, args: [\"n - 1\", len]}]\n        else: [{lift: 1}]\nprogram:\n  - repeat: 3\n    as: k\n    do:\n      - push\n      - call: leg\n        args: [\"k + 1\", \"2*k + 1\"]\n      - pop\n");
+        // k = 0: 1 × 1 mm + lift; k = 1: 2 × 3 mm + lift; k = 2: 3 × 5 mm + lift; and pops
+        let travel = t.strings.iter().filter(|s| s.travel).count();
+        assert_eq!(t.len() - travel, 6 + 3);
+        assert_eq!(travel, 3);
+        assert_eq!(t.head(), DVec3::ZERO);
+        assert!(t.points.contains(&DVec3::new(15.0, 0.0, 1.0)));
+    }
+
+    #[test]
+    fn lsystems_expand_lazily_as_their_words() {
+        let yaml = |k: u32| {
+            format!("program:\n  - lsystem:\n      axiom: F--F--F\n      rules: {{F: F+F--F+F}}\n      iterations: {k}\n      commands: {{F: [{{forward: 1}}], \"+\": [{{left: 60}}], \"-\": [{{right: 60}}]}}\n")
+        };
+        for k in 0..5 {
+            let t = run(&yaml(k));
+            assert_eq!(t.len(), 3 * 4usize.pow(k));
+            assert!(t.head().distance(t.points[0]) < 1e-9);
+        }
+        let raw: RawTurtle = crate::recipe::parse_yaml(&yaml(2), "t.yaml").unwrap();
+        let params = Params::new();
+        let c = Compiler::new(&params, &raw.procedures);
+        let prog = c
+            .block(&raw.program, "program", &Arc::new(Vec::new()))
+            .unwrap();
+        let Op::Lsystem(ls) = &prog[0].op else {
+            panic!()
+        };
+        assert_eq!(ls.word(1, 100).unwrap(), "F+F--F+F--F+F--F+F--F+F--F+F");
+        assert!(ls.word(30, 1000).is_none());
+    }
+
+    #[test]
+    fn deep_calls_and_derivations_run_on_a_small_stack() {
+        // 199 nested calls, each in an `if` and a `repeat`, then an L-system
+        // 18 deep: the interpreter's tasks are on the heap, not the stack
+        let yaml = "procedures:\n  down:\n    params: [n]\n    do:\n      - if: \"n\"\n        do:\n          - repeat: 1\n            do: [{forward: 1}, {call: down, args: [\"n - 1\"]}]\nprogram:\n  - {call: down, args: [199]}\n  - lsystem: {axiom: A, rules: {A: AB, B: A}, iterations: 18, commands: {A: [{left: 1}], B: [{forward: 1}]}}\n";
+        let strings = std::thread::Builder::new()
+            .stack_size(256 << 10)
+            .spawn(move || run(yaml).len())
+            .unwrap()
+            .join()
+            .unwrap();
+        // the word after 18 iterations of A -> AB, B -> A has F(18) = 2584 Bs
+        assert_eq!(strings, 199 + 2584);
+    }
+
+    #[test]
+    fn rand_is_seeded() {
+        let yaml = |seed: u32| {
+            format!("seed: {seed}\nprogram:\n  - repeat: 20\n    do: [{{forward: \"1 + rand()\"}}, {{left: \"90*rand()\"}}]\n")
+        };
+        assert_eq!(run(&yaml(7)), run(&yaml(7)));
+        assert_ne!(run(&yaml(7)), run(&yaml(8)));
+        let t = run(&yaml(7));
+        assert!((0..t.len()).all(|k| (1.0..2.0).contains(&t.length(k))));
+    }
+
+    #[test]
+    fn limits_refuse_before_allocating() {
+        let small = Env {
+            max_strings: 1000,
+            ..env()
+        };
+        // a constant count: refused before running, at the repeat
+        let e = run_with(
+            "program:\n  - repeat: 1e12\n    do: [{forward: 1}, {left: 1}]\n",
+            &small,
+        )
+        .unwrap_err();
+        assert_eq!(e.place.as_deref(), Some("turtle.program[0].repeat"));
+        assert!(e.message.contains("at least 2000000000001 steps"), "{e}");
+        // a count known only when it runs: refused at the string past the limit
+        let e = run_with(
+            "program:\n  - repeat: 1\n    as: k\n    do:\n      - repeat: \"1e12 + k\"\n        do: [{forward: 1}, {left: 1}]\n",
+            &small,
+        )
+        .unwrap_err();
+        assert_eq!(
+            e.place.as_deref(),
+            Some("turtle.program[0].do[0].do[0].forward")
+        );
+        assert!(e.message.contains("limit of 1000"), "{e}");
+        let e = run_with(
+            "program:\n  - {forward: 1}\n  - repeat: 1e12\n    do: [{left: 1}]\n",
+            &small,
+        )
+        .unwrap_err();
+        assert!(e.message.contains("steps"), "{e}");
+        let e = run_with("program:\n  - lsystem: {axiom: F, rules: {F: FF}, iterations: 40, commands: {F: [{forward: 1}]}}\n", &small).unwrap_err();
+        assert!(e.message.contains("limit"), "{e}");
+        let e = run_with("program:\n  - lsystem: {axiom: F, rules: {F: FF}, iterations: 41, commands: {F: [{forward: 1}]}}\n", &small).unwrap_err();
+        assert_eq!(
+            e.place.as_deref(),
+            Some("turtle.program[0].lsystem.iterations")
+        );
+    }
+
+    #[test]
+    fn the_bound_before_running_is_exact_for_constant_programs() {
+        // max_strings 1000 allows 8 × 1000 + 10^6 = 1008000 steps
+        let small = Env {
+            max_strings: 1000,
+            ..env()
+        };
+        let turns = |n: u64| {
+            format!("program:\n  - {{forward: 1}}\n  - repeat: {n}\n    do: [{{left: 1}}]\n")
+        };
+        assert!(run_with(&turns(1_007_998), &small).is_ok());
+        let e = run_with(&turns(1_007_999), &small).unwrap_err();
+        assert_eq!(e.place.as_deref(), Some("turtle.program[0].forward"));
+        assert!(e.message.contains("at least 1008001 steps"), "{e}");
+        // the Fibonacci L-system A → AB, B → A: symbols visited at every
+        // depth, counted here by walking the derivation tree
+        fn visits(s: char, d: u32, n: u32) -> u64 {
+            let here = match (d < n, s) {
+                (true, 'A') => visits('A', d + 1, n) + visits('B', d + 1, n),
+                (true, _) => visits('A', d + 1, n),
+                (false, 'A') => 1, // {left: 1}
+                (false, _) => 2,   // {left: 2}, {left: 3}
+            };
+            1 + here
+        }
+        let want = 1 + visits('A', 0, 27); // the lsystem command and its symbols
+        assert!(want > 1_008_000);
+        let e = run_with(
+            "program:\n  - lsystem: {axiom: A, rules: {A: AB, B: A}, iterations: 27, commands: {A: [{left: 1}], B: [{left: 2}, {left: 3}]}}\n",
+            &small,
+        )
+        .unwrap_err();
+        assert_eq!(e.place.as_deref(), Some("turtle.program[0].lsystem"));
+        assert!(e.message.contains(&format!("at least {want} steps")), "{e}");
+    }
+
+    #[test]
+    fn errors_name_the_key_path() {
+        let e = err("program:\n  - {forward: 1}\n  - {fowrard: 1}\n");
+        assert_eq!(e.place.as_deref(), Some("program[1]"));
+        assert!(
+            e.message.contains("unknown turtle command `fowrard`"),
+            "{e}"
+        );
+        let e = err("program:\n  - forward\n");
+        assert!(e.message.contains("needs a value"), "{e}");
+        let e = err("program:\n  - {goto: [1, 2]}\n");
+        assert_eq!(e.place.as_deref(), Some("program[0].goto"));
+        let e = err("program:\n  - {forward: 1, left: 2}\n");
+        assert!(e.message.contains("one command per list item"), "{e}");
+        let e = err("program:\n  - {call: nope}\n");
+        assert_eq!(e.place.as_deref(), Some("turtle.program[0].call"));
+        assert!(e.message.contains("undefined procedure `nope`"), "{e}");
+        let e = err("procedures:\n  p: {params: [a], do: [{forward: a}]}\nprogram:\n  - {call: p, args: [1, 2]}\n");
+        assert_eq!(e.place.as_deref(), Some("turtle.program[0].args"));
+        let e = err("procedures:\n  spin: {do: [{left: 1}, {call: spin}]}\nprogram:\n  - {forward: 1}\n  - {call: spin}\n");
+        assert_eq!(
+            e.place.as_deref(),
+            Some("turtle.procedures.spin.do[1].call")
+        );
+        assert!(e.message.contains("recurses without bound"), "{e}");
+        let e = err("program:\n  - repeat: 3\n    as: k\n    do: [{forward: \"1/(k - 1)\"}]\n");
+        assert_eq!(e.place.as_deref(), Some("turtle.program[0].do[0].forward"));
+        assert!(e.message.contains("with k = 1"), "{e}");
+        let e = err("program:\n  - {forward: \"q\"}\n");
+        assert!(e.message.contains("unknown name `q`"), "{e}");
+        let e = err("program:\n  - pen_up\n  - {forward: 1}\n");
+        assert!(e.message.contains("extrudes nothing"), "{e}");
+        let e = err("program:\n  - repeat: 2\n    as: x\n    do: [{forward: 1}]\n");
+        assert_eq!(e.place.as_deref(), Some("turtle.program[0].as"));
+        let e = err("program:\n  - pop\n");
+        assert!(e.message.contains("without a `push`"), "{e}");
+        let e = err("start: {heading: [0, 0, 1]}\nprogram: [{forward: 1}]\n");
+        assert_eq!(e.place.as_deref(), Some("turtle.start"));
+    }
+
+    #[test]
+    fn temperature_events_are_checked() {
+        let text = "p3dp: 1\nname: t\nparts:\n  - primitive:\n      turtle:\n        program:\n          - {nozzle_temp: 300}\n          - {forward: 10}\n          - {bed_temp: 60}\n          - {bed_temp: 150}\n          - {forward: 10}\n";
+        let raw: crate::recipe::RawRecipe = crate::recipe::parse_yaml(text, "t.yaml").unwrap();
+        let r = Recipe::resolve(&raw, &[], None, std::path::Path::new(".")).unwrap();
+        let Primitive::Turtle(t) = &r.parts[0].primitive else {
+            panic!()
+        };
+        let f = crate::analyse::check::events(&r, &t.path);
+        assert_eq!(f.len(), 2, "{f:?}");
+        assert_eq!((f[0].code, f[0].string), ("nozzle-temp", Some(0)));
+        assert_eq!((f[1].code, f[1].string), ("bed-temp", Some(1)));
+        assert!(f[1].message.contains("150"), "{}", f[1].message);
+    }
+}

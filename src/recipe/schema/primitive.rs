@@ -1,0 +1,333 @@
+//! The primitives as written: one key naming the kind (`{helix: {…}}`) and
+//! its map. `solid:` and `turtle:` have files of their own.
+
+use serde::Deserialize;
+
+use super::num::{Num, Num3};
+use super::solid::RawSolid;
+use super::turtle::RawTurtle;
+
+/// A primitive as written: one key naming its kind.
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+#[allow(missing_docs)]
+pub enum RawPrimitive {
+    Path(RawPath),
+    Circle(RawCircle),
+    Arc(RawArc),
+    Spiral(RawSpiral),
+    Helix(RawHelix),
+    Cylinder(RawCylinder),
+    PatternHelix(RawPatternHelix),
+    CaHelix(RawCaHelix),
+    Solid(RawSolid),
+    Turtle(RawTurtle),
+}
+
+impl RawPrimitive {
+    /// The primitive's key (`helix`, `pattern_helix`): the variant's name as
+    /// serde reads it (snake_case), the first segment of its key paths.
+    pub fn key(&self) -> &'static str {
+        match self {
+            RawPrimitive::Path(_) => "path",
+            RawPrimitive::Circle(_) => "circle",
+            RawPrimitive::Arc(_) => "arc",
+            RawPrimitive::Spiral(_) => "spiral",
+            RawPrimitive::Helix(_) => "helix",
+            RawPrimitive::Cylinder(_) => "cylinder",
+            RawPrimitive::PatternHelix(_) => "pattern_helix",
+            RawPrimitive::CaHelix(_) => "ca_helix",
+            RawPrimitive::Solid(_) => "solid",
+            RawPrimitive::Turtle(_) => "turtle",
+        }
+    }
+}
+
+/// A `path` command as written.
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+#[allow(missing_docs)]
+pub enum RawCmd {
+    Move(Num3),
+    Draw(Num3),
+    CrossSection(Num),
+    Speed(Num),
+}
+
+/// `path:` as written: commands, or an SVG drawing.
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RawPath {
+    /// The commands, in order.
+    #[serde(default)]
+    pub commands: Option<Vec<RawCmd>>,
+    /// An SVG file whose paths are drawn as strings (instead of `commands`).
+    #[serde(default)]
+    pub svg: Option<String>,
+    /// Only the SVG element with this id.
+    #[serde(default)]
+    pub id: Option<String>,
+    /// Factor on the SVG's drawn size (mm).
+    #[serde(default)]
+    pub scale: Option<Num>,
+    /// Chord tolerance of flattened curves, mm.
+    #[serde(default)]
+    pub tolerance: Option<Num>,
+    /// Where the centre of the drawing's bounding box goes.
+    #[serde(default)]
+    pub center: Option<Num3>,
+}
+
+/// `circle:` as written.
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawCircle {
+    pub radius: Num,
+    #[serde(default)]
+    pub center: Option<Num3>,
+    #[serde(default)]
+    pub segments: Option<Num>,
+}
+
+/// `arc:` as written.
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawArc {
+    pub radius: Num,
+    pub start: Num,
+    pub end: Num,
+    #[serde(default)]
+    pub center: Option<Num3>,
+    #[serde(default)]
+    pub segments: Option<Num>,
+    #[serde(default)]
+    pub rise: Option<Num>,
+}
+
+/// `direction:` of a spiral as written.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+#[allow(missing_docs)]
+pub enum RawDirection {
+    Outward,
+    Inward,
+}
+
+/// `spiral:` as written.
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawSpiral {
+    #[serde(default)]
+    pub radius: Option<Num>,
+    pub pitch: Num,
+    #[serde(default)]
+    pub center: Option<Num3>,
+    #[serde(default)]
+    pub segments: Option<Num>,
+    #[serde(default)]
+    pub inner_radius: Option<Num>,
+    #[serde(default)]
+    pub direction: Option<RawDirection>,
+    #[serde(default)]
+    pub outline: Option<RawOutline>,
+}
+
+/// `helix:` as written.
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawHelix {
+    #[serde(default)]
+    pub radius: Option<Num>,
+    pub height: Num,
+    pub pitch: Num,
+    #[serde(default)]
+    pub center: Option<Num3>,
+    #[serde(default)]
+    pub segments: Option<Num>,
+    #[serde(default)]
+    pub outline: Option<RawOutline>,
+}
+
+/// `cylinder:` as written.
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawCylinder {
+    #[serde(default)]
+    pub radius: Option<Num>,
+    pub height: Num,
+    pub vpitch: Num,
+    pub hpitch: Num,
+    #[serde(default)]
+    pub center: Option<Num3>,
+    #[serde(default)]
+    pub segments: Option<Num>,
+    #[serde(default)]
+    pub outline: Option<RawOutline>,
+}
+
+/// `outline:` as written: a closed SVG outline.
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawOutline {
+    pub svg: String,
+    #[serde(default)]
+    pub id: Option<String>,
+    #[serde(default)]
+    pub scale: Option<Num>,
+    #[serde(default)]
+    pub tolerance: Option<Num>,
+}
+
+/// `pattern_helix:` as written in a recipe. Required: `radius`, `layers`
+/// (turns, the first included), `layer_height`; optional (default):
+/// `segments` (72), `cross_section` and `speed` (the part's), `first_layer:
+/// {cross_section, speed}` ({0.2, 15}), `center` ([0, 0, layer_height]).
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawPatternHelix {
+    pub radius: Num,
+    pub layers: Num,
+    pub layer_height: Num,
+    #[serde(default)]
+    pub segments: Option<Num>,
+    #[serde(default)]
+    pub cross_section: Option<Num>,
+    #[serde(default)]
+    pub speed: Option<Num>,
+    #[serde(default)]
+    pub first_layer: Option<RawFirstLayer>,
+    #[serde(default)]
+    pub center: Option<Num3>,
+}
+
+/// `first_layer:` of a `pattern_helix`.
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawFirstLayer {
+    #[serde(default)]
+    pub cross_section: Option<Num>,
+    #[serde(default)]
+    pub speed: Option<Num>,
+}
+
+/// `ca_helix:` as written in a recipe. Required: `radius`, `layers` (turns,
+/// the first included), `layer_height`; optional (default): `cells` (288),
+/// `rule` (`basic`), `layout` (`helix`), `p0` (0.99), `p1` (1), `consume` (0.5, split_merge only),
+/// `e1` (0.3), `initial` (`ones`), `noise` (0.5, `initial: random` only),
+/// `seed` (0), `center` ([0, 0, layer_height]). Filled cells are extruded at
+/// the part's cross-section and speed.
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawCaHelix {
+    pub radius: Num,
+    pub layers: Num,
+    pub layer_height: Num,
+    #[serde(default)]
+    pub cells: Option<Num>,
+    #[serde(default)]
+    pub rule: Option<RawRule>,
+    #[serde(default)]
+    pub layout: Option<RawLayout>,
+    #[serde(default)]
+    pub p0: Option<Num>,
+    #[serde(default)]
+    pub p1: Option<Num>,
+    #[serde(default)]
+    pub consume: Option<Num>,
+    #[serde(default)]
+    pub e1: Option<Num>,
+    #[serde(default)]
+    pub initial: Option<RawInitial>,
+    #[serde(default)]
+    pub noise: Option<Num>,
+    #[serde(default)]
+    pub seed: Option<Num>,
+    #[serde(default)]
+    pub center: Option<Num3>,
+}
+
+/// Which of the paper's rules decides a cell.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, schemars::JsonSchema)]
+// serde's messages name the type ("expected enum Rule"), the schema too
+#[serde(rename = "Rule", rename_all = "snake_case", expecting = "enum Rule")]
+pub enum RawRule {
+    /// Fig. 5: straight up at p0, else on the next cell (i + 1) at p1.
+    Basic,
+    /// Section 4.2: on i − 1, else on i + 1 at p1, else straight up at p0 using C.
+    SplitMerge,
+}
+
+/// How the cells' turns are laid out: one helix, or one circle per layer.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, schemars::JsonSchema)]
+#[serde(
+    rename = "Layout",
+    rename_all = "snake_case",
+    expecting = "enum Layout"
+)]
+pub enum RawLayout {
+    /// One helix, the paper's method (section 2): a cell's neighbours below
+    /// run on across the seam into the turn being printed.
+    Helix,
+    /// Layered circles with a layer change, the "layered-circle-based
+    /// (non-helical) algorithm in the previous study" of Fig. 11a: each
+    /// layer is a ring of its own, so its neighbours below wrap round in the
+    /// layer below.
+    Layers,
+}
+
+/// `initial:` as written.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum RawInitial {
+    /// Every cell of the first turn filled (the paper's usual start).
+    Ones,
+    /// Each cell of the first turn empty with probability `noise` (Fig. 11b).
+    Random,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::recipe::yaml::parse_yaml;
+
+    #[test]
+    fn each_primitive_knows_the_key_it_was_read_by() {
+        for (key, map) in [
+            ("path", "{commands: []}"),
+            ("circle", "{radius: 1}"),
+            ("arc", "{radius: 1, start: 0, end: 1}"),
+            ("spiral", "{pitch: 1}"),
+            ("helix", "{height: 1, pitch: 1}"),
+            ("cylinder", "{height: 1, vpitch: 1, hpitch: 1}"),
+            ("pattern_helix", "{radius: 1, layers: 1, layer_height: 1}"),
+            ("ca_helix", "{radius: 1, layers: 1, layer_height: 1}"),
+            ("solid", "{features: []}"),
+            ("turtle", "{program: []}"),
+        ] {
+            let p: RawPrimitive = parse_yaml(&format!("{{{key}: {map}}}"), "t").unwrap();
+            assert_eq!(p.key(), key);
+        }
+    }
+
+    #[test]
+    fn messages_name_the_types_as_before_the_raw_forms() {
+        // the rule and layout were read straight into generation's types
+        let e =
+            parse_yaml::<RawCaHelix>("{radius: 1, layers: 2, layer_height: 0.2, rule: [1]}", "t")
+                .unwrap_err();
+        assert!(e.message.ends_with("expected enum Rule"), "{e}");
+        let e =
+            parse_yaml::<RawCaHelix>("{radius: 1, layers: 2, layer_height: 0.2, layout: 7}", "t")
+                .unwrap_err();
+        assert!(e.message.ends_with("expected enum Layout"), "{e}");
+    }
+}

@@ -1,0 +1,356 @@
+//! A printer profile as written (a built-in one or a user's file): the
+//! keys of [`crate::machine::Printer`] and its parts, with their defaults.
+//! Every value is a plain number already (profiles take no expressions);
+//! `crate::recipe::profile` copies them into the machine's types and
+//! checks them.
+//!
+//! serde's messages name the type a value should have ("expected struct
+//! Printer"): each form keeps the name of the machine type it becomes
+//! (`expecting`), so the messages read as they did when profiles were read
+//! straight into the machine's types.
+
+use serde::Deserialize;
+
+use crate::machine::{CheckLimits, Head, Kinematics, Retraction};
+
+/// `flavor:` the G-code dialect of the firmware.
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase", expecting = "enum Flavor")]
+#[allow(missing_docs)]
+pub enum RawFlavor {
+    #[default]
+    Marlin,
+    Klipper,
+    Reprap,
+    Prusa,
+}
+
+/// `extrusion:` absolute (M82) or relative (M83) E values.
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase", expecting = "enum Extrusion")]
+#[allow(missing_docs)]
+pub enum RawExtrusion {
+    #[default]
+    Absolute,
+    Relative,
+}
+
+/// `bed:` the printable area, `shape: rectangle` or `shape: circle`.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(
+    tag = "shape",
+    rename_all = "lowercase",
+    deny_unknown_fields,
+    expecting = "internally tagged enum Bed"
+)]
+pub enum RawBed {
+    /// A rectangular bed.
+    Rectangle {
+        /// Width and depth, mm.
+        size: [f64; 2],
+        /// Highest reachable nozzle height, mm.
+        max_z: f64,
+    },
+    /// A round bed.
+    Circle {
+        /// Diameter, mm.
+        diameter: f64,
+        /// Highest reachable nozzle height, mm.
+        max_z: f64,
+    },
+}
+
+/// `retraction:` before long travel moves.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, expecting = "struct Retraction")]
+pub struct RawRetraction {
+    /// Filament pulled back, mm (0 for none).
+    pub length: f64,
+    /// Retraction speed, mm/s of filament.
+    pub speed: f64,
+    /// Travel moves shorter than this are not retracted, mm.
+    #[serde(default = "d_min_travel")]
+    pub min_travel: f64,
+}
+
+fn d_min_travel() -> f64 {
+    Retraction::default().min_travel
+}
+
+impl Default for RawRetraction {
+    fn default() -> Self {
+        let r = Retraction::default();
+        RawRetraction {
+            length: r.length,
+            speed: r.speed,
+            min_travel: r.min_travel,
+        }
+    }
+}
+
+/// A printer profile: the spec's keys plus the limits p3dp checks against.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, expecting = "struct Printer")]
+pub struct RawPrinter {
+    /// Profile name.
+    pub name: String,
+    /// Firmware dialect.
+    #[serde(default)]
+    pub flavor: RawFlavor,
+    /// Printable area.
+    pub bed: RawBed,
+    /// Where recipe (0, 0, 0) lands, in machine coordinates.
+    pub origin: [f64; 3],
+    /// Nozzle diameter, mm.
+    pub nozzle_diameter: f64,
+    /// Filament diameter, mm (a material may override it).
+    pub filament_diameter: f64,
+    /// Absolute or relative E.
+    #[serde(default)]
+    pub extrusion: RawExtrusion,
+    /// G-code before the print, with placeholders.
+    #[serde(default)]
+    pub start_gcode: String,
+    /// G-code after the print, with the same placeholders.
+    #[serde(default)]
+    pub end_gcode: String,
+    /// Head speed of travel moves, mm/s (120).
+    #[serde(default = "d_travel")]
+    pub travel_speed: f64,
+    /// Retraction before long travel moves (none).
+    #[serde(default)]
+    pub retraction: RawRetraction,
+    /// Retract with the firmware's `G10`/`G11` instead of E moves.
+    #[serde(default)]
+    pub firmware_retraction: bool,
+    /// Hottest nozzle the hot end allows, °C (260).
+    #[serde(default = "d_max_nozzle")]
+    pub max_nozzle_temp: f64,
+    /// Hottest bed allowed, °C (110).
+    #[serde(default = "d_max_bed")]
+    pub max_bed_temp: f64,
+    /// Fastest head speed, mm/s (300).
+    #[serde(default = "d_max_speed")]
+    pub max_speed: f64,
+    /// Hot-end volumetric flow limit, mm³/s (12).
+    #[serde(default = "d_max_flow")]
+    pub max_flow: f64,
+    /// Shortest extruding run kept as its own move, mm (0.1).
+    #[serde(default = "d_min_string")]
+    pub min_string_length: f64,
+    /// Fit `G2`/`G3` arcs to runs of strings (off).
+    #[serde(default)]
+    pub arcs: bool,
+    /// Largest distance between an arc and the strings it replaces, mm (0.025).
+    #[serde(default = "d_arc_tolerance")]
+    pub arc_tolerance: f64,
+    /// PNG thumbnails to embed in the G-code, as `WxH` sizes (none).
+    #[serde(default)]
+    pub thumbnails: Vec<String>,
+    /// The firmware planner's limits.
+    #[serde(default)]
+    pub kinematics: RawKinematics,
+    /// The print head's geometry.
+    #[serde(default)]
+    pub head: RawHead,
+    /// Thresholds of the flow, support and planner checks.
+    #[serde(default)]
+    pub checks: RawCheckLimits,
+}
+
+fn d_travel() -> f64 {
+    120.0
+}
+fn d_max_nozzle() -> f64 {
+    260.0
+}
+fn d_max_bed() -> f64 {
+    110.0
+}
+fn d_max_speed() -> f64 {
+    300.0
+}
+fn d_max_flow() -> f64 {
+    12.0
+}
+fn d_min_string() -> f64 {
+    0.1
+}
+fn d_arc_tolerance() -> f64 {
+    0.025
+}
+
+/// `kinematics:` the limits the firmware's planner works with; each absent
+/// key has the default [`Kinematics::limits`] explains.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, expecting = "struct Kinematics")]
+#[allow(missing_docs)]
+pub struct RawKinematics {
+    #[serde(default)]
+    pub max_velocity: Option<f64>,
+    #[serde(default = "d_accel")]
+    pub max_acceleration: f64,
+    #[serde(default)]
+    pub travel_acceleration: Option<f64>,
+    #[serde(default)]
+    pub retract_acceleration: Option<f64>,
+    #[serde(default)]
+    pub junction_deviation: Option<f64>,
+    #[serde(default)]
+    pub square_corner_velocity: Option<f64>,
+    #[serde(default)]
+    pub min_segment_time: Option<f64>,
+    #[serde(default)]
+    pub minimum_cruise_ratio: Option<f64>,
+    #[serde(default)]
+    pub max_z_speed: Option<f64>,
+    #[serde(default)]
+    pub max_z_acceleration: Option<f64>,
+    #[serde(default)]
+    pub instantaneous_corner_velocity: Option<f64>,
+    #[serde(default)]
+    pub max_extrude_only_velocity: Option<f64>,
+    #[serde(default)]
+    pub max_extrude_only_accel: Option<f64>,
+    #[serde(default)]
+    pub min_segment_time_floor: bool,
+    #[serde(default)]
+    pub block_buffer_size: Option<u32>,
+    #[serde(default)]
+    pub command_rate: Option<f64>,
+}
+
+fn d_accel() -> f64 {
+    Kinematics::default().max_acceleration
+}
+
+impl Default for RawKinematics {
+    fn default() -> Self {
+        let k = Kinematics::default();
+        RawKinematics {
+            max_velocity: k.max_velocity,
+            max_acceleration: k.max_acceleration,
+            travel_acceleration: k.travel_acceleration,
+            retract_acceleration: k.retract_acceleration,
+            junction_deviation: k.junction_deviation,
+            square_corner_velocity: k.square_corner_velocity,
+            min_segment_time: k.min_segment_time,
+            minimum_cruise_ratio: k.minimum_cruise_ratio,
+            max_z_speed: k.max_z_speed,
+            max_z_acceleration: k.max_z_acceleration,
+            instantaneous_corner_velocity: k.instantaneous_corner_velocity,
+            max_extrude_only_velocity: k.max_extrude_only_velocity,
+            max_extrude_only_accel: k.max_extrude_only_accel,
+            min_segment_time_floor: k.min_segment_time_floor,
+            block_buffer_size: k.block_buffer_size,
+            command_rate: k.command_rate,
+        }
+    }
+}
+
+/// `head:` the print head as the collision check sees it; each absent key
+/// is [`Head::default`]'s.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default, expecting = "struct Head")]
+#[allow(missing_docs)]
+pub struct RawHead {
+    pub cone_angle: f64,
+    pub cone_height: f64,
+    pub tip_diameter: f64,
+    #[serde(rename = "box")]
+    pub head_box: [f64; 4],
+    pub clearance: f64,
+}
+
+impl Default for RawHead {
+    fn default() -> Self {
+        let h = Head::default();
+        RawHead {
+            cone_angle: h.cone_angle,
+            cone_height: h.cone_height,
+            tip_diameter: h.tip_diameter,
+            head_box: h.head_box,
+            clearance: h.clearance,
+        }
+    }
+}
+
+/// `checks:` thresholds of the flow, support and planner checks; each
+/// absent key is [`CheckLimits::default`]'s.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default, expecting = "struct CheckLimits")]
+#[allow(missing_docs)]
+pub struct RawCheckLimits {
+    pub cross_section_max: f64,
+    pub cross_section_hard_max: f64,
+    pub cross_section_min: f64,
+    pub cross_section_hard_min: f64,
+    pub flow_hard_max: f64,
+    pub max_bridge: f64,
+    pub support_tolerance: f64,
+    pub min_move_time: f64,
+    pub planner_buffer: u32,
+    pub first_layer_min: f64,
+    pub min_contact_per_height: f64,
+    pub min_contact_per_gram: f64,
+}
+
+impl Default for RawCheckLimits {
+    fn default() -> Self {
+        let c = CheckLimits::default();
+        RawCheckLimits {
+            cross_section_max: c.cross_section_max,
+            cross_section_hard_max: c.cross_section_hard_max,
+            cross_section_min: c.cross_section_min,
+            cross_section_hard_min: c.cross_section_hard_min,
+            flow_hard_max: c.flow_hard_max,
+            max_bridge: c.max_bridge,
+            support_tolerance: c.support_tolerance,
+            min_move_time: c.min_move_time,
+            planner_buffer: c.planner_buffer,
+            first_layer_min: c.first_layer_min,
+            min_contact_per_height: c.min_contact_per_height,
+            min_contact_per_gram: c.min_contact_per_gram,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::recipe::yaml::parse_yaml;
+
+    #[test]
+    fn round_bed_and_unknown_keys() {
+        let p: RawPrinter = parse_yaml(
+            "name: d\nbed: {shape: circle, diameter: 280, max_z: 300}\norigin: [0,0,0]\nnozzle_diameter: 0.4\nfilament_diameter: 1.75\n",
+            "d.yaml",
+        )
+        .unwrap();
+        assert!(matches!(p.bed, RawBed::Circle { diameter, .. } if diameter == 280.0));
+        let e = parse_yaml::<RawPrinter>(
+            "name: d\nbed: {shape: circle, diameter: 280, max_z: 300, size: 3}\norigin: [0,0,0]\nnozzle_diameter: 0.4\nfilament_diameter: 1.75\n",
+            "d.yaml",
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("size"), "{e}");
+    }
+
+    #[test]
+    fn messages_name_the_machine_types() {
+        let e = parse_yaml::<RawPrinter>("5", "p.yaml").unwrap_err();
+        assert!(e.message.ends_with("expected struct Printer"), "{e}");
+        for (key, ty) in [
+            ("flavor: [1]", "enum Flavor"),
+            ("extrusion: 3", "enum Extrusion"),
+            ("bed: 5", "internally tagged enum Bed"),
+            ("retraction: 3", "struct Retraction"),
+            ("kinematics: 3", "struct Kinematics"),
+            ("head: 3", "struct Head"),
+            ("checks: 3", "struct CheckLimits"),
+        ] {
+            let e = parse_yaml::<RawPrinter>(&format!("name: p\n{key}\n"), "p.yaml").unwrap_err();
+            assert!(e.message.ends_with(&format!("expected {ty}")), "{key}: {e}");
+        }
+    }
+}

@@ -1,0 +1,374 @@
+//! `turtle:` as written: the start, the seed, procedures, and the program's
+//! commands (one-key maps with a few companion keys, or bare words).
+
+use std::fmt;
+
+use indexmap::IndexMap;
+use serde::de::{self, Deserializer, MapAccess, Visitor};
+use serde::Deserialize;
+
+use super::num::{Num, Num3};
+
+/// `turtle:` as written.
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RawTurtle {
+    /// Start position and frame.
+    #[serde(default)]
+    pub start: Option<RawStart>,
+    /// Seed of `rand()` (0 when absent).
+    #[serde(default)]
+    pub seed: Option<Num>,
+    /// Named procedures with parameters, run by `call`.
+    #[serde(default)]
+    pub procedures: IndexMap<String, RawProcedure>,
+    /// The commands, run in order.
+    pub program: Vec<RawCommand>,
+}
+
+/// `start:` of a turtle.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RawStart {
+    /// Where the turtle starts ([0, 0, 0]).
+    #[serde(default)]
+    pub position: Option<Num3>,
+    /// Which way it faces ([1, 0, 0]).
+    #[serde(default)]
+    pub heading: Option<Num3>,
+    /// Its up axis ([0, 0, 1]), made perpendicular to the heading.
+    #[serde(default)]
+    pub up: Option<Num3>,
+}
+
+/// A procedure: parameter names and a body.
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RawProcedure {
+    /// Parameter names, bound in order to a call's `args`.
+    #[serde(default)]
+    pub params: Vec<String>,
+    /// The commands.
+    #[serde(rename = "do")]
+    pub body: Vec<RawCommand>,
+}
+
+/// `lsystem:` as written.
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RawLsystem {
+    /// The starting word.
+    pub axiom: String,
+    /// Rewriting rules: one symbol → its replacement, applied to every symbol at once.
+    #[serde(default)]
+    pub rules: IndexMap<String, String>,
+    /// How many times the rules are applied (may use loop counters).
+    pub iterations: Num,
+    /// What each symbol of the final word does.
+    pub commands: IndexMap<String, Vec<RawCommand>>,
+}
+
+/// One command as written: a one-key map (`{forward: 10}`) with, for a few
+/// commands, companion keys (`as`, `do`, `else`, `args`, `up`, `feed`,
+/// `wait`), or a bare word (`pen_up`).
+#[derive(Clone, Debug, PartialEq)]
+#[allow(missing_docs)]
+pub enum RawCommand {
+    /// A command without a value: `pen_up`, `pen_down`, `pause`, `push`, `pop`, `draw_turtle`.
+    Bare(&'static str),
+    /// A command with one number: movement, turns, settings, events.
+    Scalar(&'static str, Num),
+    Goto(Num3),
+    SetHeading {
+        heading: Num3,
+        up: Option<Num3>,
+    },
+    Extrude {
+        filament: Num,
+        feed: Option<Num>,
+    },
+    Temp {
+        bed: bool,
+        celsius: Num,
+        wait: bool,
+    },
+    Repeat {
+        count: Num,
+        var: Option<String>,
+        body: Vec<RawCommand>,
+    },
+    If {
+        cond: Num,
+        then: Vec<RawCommand>,
+        otherwise: Vec<RawCommand>,
+    },
+    Call {
+        name: String,
+        args: Vec<Num>,
+    },
+    Lsystem(Box<RawLsystem>),
+    /// `hair: L` with `blob:` and `rate:`: a declared hair (see
+    /// [`crate::generate::primitive::turtle::program::Op::Hair`]).
+    Hair {
+        length: Num,
+        blob: Option<Num>,
+        rate: Option<Num>,
+    },
+}
+
+/// Commands written as bare words.
+pub const BARE: &[&str] = &["pen_up", "pen_down", "pause", "push", "pop", "draw_turtle"];
+/// Commands taking one number.
+pub const SCALAR: &[&str] = &[
+    "forward",
+    "backward",
+    "lift",
+    "yaw",
+    "pitch",
+    "roll",
+    "left",
+    "right",
+    "extrude_rate",
+    "cross_section",
+    "speed",
+    "dwell",
+    "fan",
+];
+/// Every command, for error messages.
+pub const COMMANDS: &str = "forward, backward, lift, goto, yaw, pitch, roll, left, right, \
+set_heading, pen_up, pen_down, extrude_rate, cross_section, speed, extrude, dwell, pause, \
+nozzle_temp, bed_temp, fan, push, pop, draw_turtle, repeat, if, call, lsystem, hair";
+
+impl schemars::JsonSchema for RawCommand {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "RawCommand".into()
+    }
+    fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        let mut keys: Vec<&str> = COMMANDS.split(", ").collect();
+        keys.extend([
+            "as", "do", "else", "args", "up", "feed", "wait", "blob", "rate",
+        ]);
+        schemars::json_schema!({
+            "description": "A turtle command: a one-key map such as {forward: 10} (with companion keys for a few), or a bare word such as pen_up.",
+            "anyOf": [
+                {"type": "string", "enum": BARE},
+                {"type": "object", "minProperties": 1, "propertyNames": {"enum": keys}}
+            ]
+        })
+    }
+}
+
+fn find(list: &[&'static str], word: &str) -> Option<&'static str> {
+    list.iter().copied().find(|w| *w == word)
+}
+
+impl<'de> Deserialize<'de> for RawCommand {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<RawCommand, D::Error> {
+        d.deserialize_any(CommandVisitor)
+    }
+}
+
+struct CommandVisitor;
+
+#[derive(Default)]
+struct Keys {
+    cmd: Option<&'static str>,
+    num: Option<Num>,
+    vec: Option<Num3>,
+    name: Option<String>,
+    lsystem: Option<RawLsystem>,
+    var: Option<String>,
+    body: Option<Vec<RawCommand>>,
+    otherwise: Option<Vec<RawCommand>>,
+    args: Option<Vec<Num>>,
+    up: Option<Num3>,
+    feed: Option<Num>,
+    wait: Option<bool>,
+    blob: Option<Num>,
+    rate: Option<Num>,
+}
+
+impl<'de> Visitor<'de> for CommandVisitor {
+    type Value = RawCommand;
+
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("a turtle command: a map like {forward: 10} or a bare word like pen_up")
+    }
+
+    fn visit_str<E: de::Error>(self, v: &str) -> std::result::Result<RawCommand, E> {
+        if let Some(w) = find(BARE, v) {
+            return Ok(RawCommand::Bare(w));
+        }
+        if find(SCALAR, v).is_some() || COMMANDS.split(", ").any(|c| c == v) {
+            return Err(E::custom(format!(
+                "`{v}` needs a value; expected a map such as `{{{v}: …}}`"
+            )));
+        }
+        Err(E::custom(format!(
+            "unknown turtle command `{v}`; expected one of {COMMANDS}"
+        )))
+    }
+
+    fn visit_map<A: MapAccess<'de>>(self, mut m: A) -> std::result::Result<RawCommand, A::Error> {
+        let mut k = Keys::default();
+        while let Some(key) = m.next_key::<String>()? {
+            match key.as_str() {
+                w if find(SCALAR, w).is_some() => {
+                    set(&mut k.cmd, find(SCALAR, w).unwrap())?;
+                    k.num = Some(m.next_value()?);
+                }
+                "repeat" | "if" | "extrude" | "nozzle_temp" | "bed_temp" | "hair" => {
+                    let name = match key.as_str() {
+                        "repeat" => "repeat",
+                        "if" => "if",
+                        "extrude" => "extrude",
+                        "hair" => "hair",
+                        "nozzle_temp" => "nozzle_temp",
+                        _ => "bed_temp",
+                    };
+                    set(&mut k.cmd, name)?;
+                    k.num = Some(m.next_value()?);
+                }
+                "goto" | "set_heading" => {
+                    let name = if key == "goto" { "goto" } else { "set_heading" };
+                    set(&mut k.cmd, name)?;
+                    k.vec = Some(m.next_value()?);
+                }
+                "call" => {
+                    set(&mut k.cmd, "call")?;
+                    k.name = Some(m.next_value()?);
+                }
+                "lsystem" => {
+                    set(&mut k.cmd, "lsystem")?;
+                    k.lsystem = Some(m.next_value()?);
+                }
+                "as" => k.var = Some(m.next_value()?),
+                "do" => k.body = Some(m.next_value()?),
+                "else" => k.otherwise = Some(m.next_value()?),
+                "args" => k.args = Some(m.next_value()?),
+                "up" => k.up = Some(m.next_value()?),
+                "feed" => k.feed = Some(m.next_value()?),
+                "wait" => k.wait = Some(m.next_value()?),
+                "blob" => k.blob = Some(m.next_value()?),
+                "rate" => k.rate = Some(m.next_value()?),
+                w if find(BARE, w).is_some() => {
+                    return Err(de::Error::custom(format!(
+                        "`{w}` takes no value; write it as a bare word: `- {w}`"
+                    )))
+                }
+                other => {
+                    return Err(de::Error::custom(format!(
+                        "unknown turtle command `{other}`; expected one of {COMMANDS}"
+                    )))
+                }
+            }
+        }
+        k.build()
+    }
+}
+
+/// Records the command key of an item; a second one is an error.
+fn set<E: de::Error>(
+    cmd: &mut Option<&'static str>,
+    name: &'static str,
+) -> std::result::Result<(), E> {
+    match cmd.replace(name) {
+        Some(first) => Err(E::custom(format!(
+            "one command per list item, found `{first}` and `{name}`; write them as two items"
+        ))),
+        None => Ok(()),
+    }
+}
+
+impl Keys {
+    /// The command the keys of one list item make, or the deserializer's error.
+    fn build<E: de::Error>(self) -> std::result::Result<RawCommand, E> {
+        let Some(cmd) = self.cmd else {
+            return Err(E::custom(format!(
+                "expected a command key (one of {COMMANDS}) beside `as`, `do`, `else`, `args`, `up`, `feed`, `wait`, `blob` or `rate`"
+            )));
+        };
+        self.companions(cmd)?;
+        Ok(match cmd {
+            "goto" => RawCommand::Goto(self.vec.unwrap()),
+            "set_heading" => RawCommand::SetHeading {
+                heading: self.vec.unwrap(),
+                up: self.up,
+            },
+            "extrude" => RawCommand::Extrude {
+                filament: self.num.unwrap(),
+                feed: self.feed,
+            },
+            "nozzle_temp" | "bed_temp" => RawCommand::Temp {
+                bed: cmd == "bed_temp",
+                celsius: self.num.unwrap(),
+                wait: self.wait.unwrap_or(false),
+            },
+            "repeat" => RawCommand::Repeat {
+                count: self.num.unwrap(),
+                var: self.var,
+                body: self.body.unwrap(),
+            },
+            "if" => RawCommand::If {
+                cond: self.num.unwrap(),
+                then: self.body.unwrap(),
+                otherwise: self.otherwise.unwrap_or_default(),
+            },
+            "call" => RawCommand::Call {
+                name: self.name.unwrap(),
+                args: self.args.unwrap_or_default(),
+            },
+            "lsystem" => RawCommand::Lsystem(Box::new(self.lsystem.unwrap())),
+            "hair" => RawCommand::Hair {
+                length: self.num.unwrap(),
+                blob: self.blob,
+                rate: self.rate,
+            },
+            _ => RawCommand::Scalar(cmd, self.num.unwrap()),
+        })
+    }
+
+    /// Refuses companion keys `cmd` does not take, and a `repeat` or `if`
+    /// without its `do`.
+    fn companions<E: de::Error>(&self, cmd: &str) -> std::result::Result<(), E> {
+        let allowed: &[&str] = match cmd {
+            "repeat" => &["as", "do"],
+            "if" => &["do", "else"],
+            "call" => &["args"],
+            "set_heading" => &["up"],
+            "extrude" => &["feed"],
+            "nozzle_temp" | "bed_temp" => &["wait"],
+            "hair" => &["blob", "rate"],
+            _ => &[],
+        };
+        let present = [
+            ("as", self.var.is_some()),
+            ("do", self.body.is_some()),
+            ("else", self.otherwise.is_some()),
+            ("args", self.args.is_some()),
+            ("up", self.up.is_some()),
+            ("feed", self.feed.is_some()),
+            ("wait", self.wait.is_some()),
+            ("blob", self.blob.is_some()),
+            ("rate", self.rate.is_some()),
+        ];
+        for (key, here) in present {
+            if here && !allowed.contains(&key) {
+                return Err(E::custom(if allowed.is_empty() {
+                    format!("`{cmd}` takes no `{key}`; it stands alone")
+                } else {
+                    format!(
+                        "`{cmd}` takes no `{key}`; its other keys are {}",
+                        allowed.join(", ")
+                    )
+                }));
+            }
+        }
+        if matches!(cmd, "repeat" | "if") && self.body.is_none() {
+            return Err(E::custom(format!(
+                "`{cmd}` needs `do: [ … ]`, the commands it runs"
+            )));
+        }
+        Ok(())
+    }
+}
