@@ -48,7 +48,7 @@ const LAYERS: &[(&str, &[&str])] = &[
     (
         "recipe",
         &[
-            "yaml", "schema", "eval", "params", "expand", "profile", "resolve",
+            "yaml", "context", "schema", "eval", "params", "expand", "profile", "resolve",
         ],
     ),
     (

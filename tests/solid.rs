@@ -1084,10 +1084,19 @@ fn the_zbuffer_json_is_the_exact_loops_and_the_svg_draws_a_layer() {
 
 #[test]
 fn a_kept_z_buffer_re_slices_only_the_edited_feature() {
-    use p3dp::generate::primitive::solid::{reusing, Cache};
+    use p3dp::generate::primitive::solid::{Cache, Reusing};
+    use p3dp::recipe::context::Context;
     // as `p3dp watch` builds: the z-buffers of one build kept for the next
+    let reusing = |cache: Cache, path: &std::path::Path| {
+        let cx = Context {
+            zbuffers: Some(Reusing::new(cache)),
+            ..Context::default()
+        };
+        let r = Recipe::load_in(path, &[], None, &cx).unwrap_or_else(|e| panic!("{e}"));
+        (r, cx.zbuffers.map(Reusing::finish).unwrap_or_default())
+    };
     let path = recipe_file("kept", BOX_WITH_HOLE);
-    let (r, cache) = reusing(Cache::default(), || load(&path));
+    let (r, cache) = reusing(Cache::default(), &path);
     assert_eq!(cache.last.len(), 1);
     assert_eq!((cache.last[0].layers, cache.last[0].recomputed), (80, 80));
     drop(r);
@@ -1098,7 +1107,7 @@ fn a_kept_z_buffer_re_slices_only_the_edited_feature() {
         text.replace("radius: 5, height: 6", "radius: 5, height: 4"),
     )
     .unwrap();
-    let (r, cache) = reusing(cache, || load(&path));
+    let (r, cache) = reusing(cache, &path);
     assert_eq!((cache.last[0].layers, cache.last[0].recomputed), (70, 20));
     let fresh = load(&path);
     assert_eq!(
@@ -1109,15 +1118,15 @@ fn a_kept_z_buffer_re_slices_only_the_edited_feature() {
     // the hole widened (z 0 … 10): the layers below the boss only
     let text = std::fs::read_to_string(&path).unwrap();
     std::fs::write(&path, text.replace("radius: 8", "radius: 9")).unwrap();
-    let (r, cache) = reusing(cache, || load(&path));
+    let (r, cache) = reusing(cache, &path);
     assert_eq!((cache.last[0].layers, cache.last[0].recomputed), (70, 50));
     assert_eq!(solid_of(&r, 0), solid_of(&load(&path), 0));
     // a setting changed: everything again
     let text = std::fs::read_to_string(&path).unwrap();
     std::fs::write(&path, text.replace("perimeters: 2", "perimeters: 3")).unwrap();
-    let (_, cache) = reusing(cache, || load(&path));
+    let (_, cache) = reusing(cache, &path);
     assert_eq!((cache.last[0].layers, cache.last[0].recomputed), (70, 70));
     // nothing changed: nothing recomputed
-    let (_, cache) = reusing(cache, || load(&path));
+    let (_, cache) = reusing(cache, &path);
     assert_eq!((cache.last[0].layers, cache.last[0].recomputed), (70, 0));
 }

@@ -278,8 +278,9 @@ fn the_svg_file_is_recorded_for_watch() {
         "r.yaml",
         &format!("{HEAD}parts:\n  - name: w\n    primitive:\n      helix: {{ outline: {{ svg: star.svg }}, height: 1, pitch: 0.5 }}\n"),
     );
-    let (r, files) = p3dp::base::input::recording(|| Recipe::load(&dir.join("r.yaml"), &[], None));
-    r.unwrap();
+    let cx = p3dp::recipe::context::Context::default();
+    Recipe::load_in(&dir.join("r.yaml"), &[], None, &cx).unwrap();
+    let files = cx.reads.files();
     assert!(files.contains(&dir.join("star.svg")), "{files:?}");
 }
 

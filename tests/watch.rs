@@ -322,8 +322,9 @@ parts:
     let recipe = dir.join("recipe.yaml");
     std::fs::write(&recipe, text("map.png")).unwrap();
     let opts = p3dp::app::prepare::Options::default();
-    let (built, files) =
-        p3dp::base::input::recording(|| p3dp::app::prepare::prepare(&recipe, &opts));
+    let cx = p3dp::recipe::context::Context::default();
+    let built = p3dp::app::prepare::prepare_in(&recipe, &opts, &cx);
+    let files = cx.reads.files();
     if let Err(e) = built {
         panic!("{}", p3dp::app::cli::render_error(&e));
     }
@@ -340,7 +341,9 @@ parts:
     }
     // a missing image fails the build, and is followed: making it is a change
     std::fs::write(&recipe, text("later.png")).unwrap();
-    let (built, files) = p3dp::base::input::recording(|| p3dp::app::prepare::plan(&recipe, &opts));
+    let cx = p3dp::recipe::context::Context::default();
+    let built = p3dp::app::prepare::prepare_in(&recipe, &opts, &cx);
+    let files = cx.reads.files();
     assert!(built.is_err());
     assert!(files.iter().any(|f| f.ends_with("later.png")), "{files:?}");
 }

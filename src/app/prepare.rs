@@ -8,6 +8,7 @@ use crate::analyse::plan::Plan;
 use crate::base::error::{Error, Result};
 use crate::generate::model::Recipe;
 use crate::machine::Printer;
+use crate::recipe::context::Context;
 
 /// What the command line says about one build.
 #[derive(Clone, Debug, Default)]
@@ -30,23 +31,31 @@ pub fn plan(path: &Path, opts: &Options) -> Result<Plan> {
 /// Loads and builds a recipe without checking it: no findings until the
 /// checks have run ([`crate::app::pipeline::check`]).
 pub fn prepare(path: &Path, opts: &Options) -> Result<Plan> {
+    prepare_in(path, opts, &Context::default())
+}
+
+/// [`prepare`] in the loading context `cx` (the files read noted there,
+/// its lent z-buffers used).
+pub fn prepare_in(path: &Path, opts: &Options, cx: &Context) -> Result<Plan> {
     let shown = path.display().to_string();
     // the command line's own mistakes name the option, not the recipe
     check::validate_allow(&opts.allow, |i| format!("--allow {}", opts.allow[i]))?;
     let printer = match &opts.printer {
-        Some(spec) => Some(Printer::resolve(spec, Path::new(".")).map_err(|e| {
-            if e.file.is_none() && e.place.as_deref() == Some("printer") {
-                Error {
-                    place: Some(format!("--printer {spec}")),
-                    ..e
+        Some(spec) => Some(
+            Printer::resolve(spec, Path::new("."), &cx.reads).map_err(|e| {
+                if e.file.is_none() && e.place.as_deref() == Some("printer") {
+                    Error {
+                        place: Some(format!("--printer {spec}")),
+                        ..e
+                    }
+                } else {
+                    e
                 }
-            } else {
-                e
-            }
-        })?),
+            })?,
+        ),
         None => None,
     };
-    let recipe = Recipe::load(path, &opts.sets, printer.as_ref())?;
+    let recipe = Recipe::load_in(path, &opts.sets, printer.as_ref(), cx)?;
     // each part with its own steps, then the steps of groups
     let parts = crate::generate::assembly::make_parts(&recipe).map_err(|e| e.in_file(&shown))?;
     let mut paths = Vec::with_capacity(parts.len() + 1);

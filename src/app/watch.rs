@@ -4,14 +4,14 @@
 //! checks is shown too, its findings listed) and the viewer page served at
 //! `http://127.0.0.1:PORT/`. Every file the build read or tried to read
 //! (the recipe, its `include:`s, images, printer profiles and what they
-//! `inherits`; see [`crate::base::input::recording`]) is followed by watching its
+//! `inherits`; the [`crate::recipe::context::Context`] of its load) is followed by watching its
 //! folder (so an editor that saves by writing a new file and renaming it
 //! over the old one is seen too); a change, settled for [`SETTLE`], starts a
 //! new build. The page follows `/events` (server-sent events): `model` swaps
 //! the geometry in place (the camera stays), `build-error` shows the error,
 //! rendered as in the terminal, beside the last good model.
 //! The `solid` parts' z-buffers are kept from one build to the next
-//! ([`crate::generate::primitive::solid::reusing`]): an edited feature re-slices only
+//! ([`crate::generate::primitive::solid::Reusing`]): an edited feature re-slices only
 //! the layers it reaches, and the build line says how many.
 //!
 //! The server binds 127.0.0.1 only and answers only requests addressed to
@@ -29,9 +29,11 @@ use std::time::{Duration, Instant};
 
 use serde_json::{json, Value};
 
-use crate::app::prepare::{prepare, Options as BuildOptions};
+use crate::app::prepare::{prepare_in, Options as BuildOptions};
 use crate::base::error::{Error, Result};
+use crate::generate::primitive::solid::Reusing;
 use crate::output::file::identity;
+use crate::recipe::context::Context;
 
 /// The port `p3dp watch` serves on unless `--port` says otherwise.
 pub const DEFAULT_PORT: u16 = 8430;
@@ -111,7 +113,7 @@ enum Wake {
     Stop,
 }
 
-/// The solids' z-buffers kept between builds (see [`crate::generate::primitive::solid::reusing`]).
+/// The solids' z-buffers kept between builds (lent to each, see [`crate::generate::primitive::solid::Reusing`]).
 type Buffers = Arc<Mutex<crate::generate::primitive::solid::Cache>>;
 
 /// One build's result.
@@ -322,18 +324,19 @@ fn start_build(opts: &Options, number: u64, tx: &Sender<Wake>, buffers: &Buffers
             let t0 = Instant::now();
             // a bug in a stage must not leave the loop waiting for this build
             let mut kept = buffers.lock().unwrap_or_else(|e| e.into_inner());
-            let cache = std::mem::take(&mut *kept);
-            let ((result, inputs), cache) = crate::generate::primitive::solid::reusing(cache, || {
-                crate::base::input::recording(|| {
-                    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| build(&opts)))
-                        .unwrap_or_else(|_| {
-                            Err(Error::io(
-                                "p3dp watch",
-                                "the build stopped on an internal error (a bug of p3dp; please report it with the recipe)",
-                            ))
-                        })
-                })
-            });
+            let cx = Context {
+                zbuffers: Some(Reusing::new(std::mem::take(&mut *kept))),
+                ..Context::default()
+            };
+            let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| build(&opts, &cx)))
+                .unwrap_or_else(|_| {
+                    Err(Error::io(
+                        "p3dp watch",
+                        "the build stopped on an internal error (a bug of p3dp; please report it with the recipe)",
+                    ))
+                });
+            let inputs = cx.reads.files();
+            let cache = cx.zbuffers.map(Reusing::finish).unwrap_or_default();
             let solids = cache.last.clone();
             *kept = cache;
             drop(kept);
@@ -359,15 +362,15 @@ fn start_build(opts: &Options, number: u64, tx: &Sender<Wake>, buffers: &Buffers
     }
 }
 
-/// One build: the plan, its G-code (in memory) and the viewer's data.
-fn build(opts: &Options) -> Result<Built> {
-    // loaded here, where the files read are recorded; checked and written
-    // in the pipeline's pool
-    let mut p = prepare(&opts.recipe, &opts.build)?;
+/// One build in the loading context `cx`: the plan, its G-code (in
+/// memory) and the viewer's data.
+fn build(opts: &Options, cx: &Context) -> Result<Built> {
     let mut gcode = Vec::new();
-    let stats = crate::app::pipeline::run(opts.threads, || {
+    let (p, stats) = crate::app::pipeline::run(opts.threads, || {
+        let mut p = prepare_in(&opts.recipe, &opts.build, cx)?;
         crate::app::pipeline::check(&mut p, &opts.build.allow);
-        crate::app::pipeline::render(&p, &mut gcode)
+        let stats = crate::app::pipeline::render(&p, &mut gcode)?;
+        Ok::<_, Error>((p, stats))
     })?;
     let text = String::from_utf8_lossy(&gcode);
     let view = crate::output::preview::Options::default();

@@ -8,11 +8,10 @@
 //! [`MAX_NESTING`] (the parser's time grows faster than the nesting).
 //!
 //! Every file a build reads or tries to read (recipe, included files,
-//! images, printer profiles and those they inherit from) is noted through
-//! [`note_read`], so that [`recording`] can tell `p3dp watch` which files to
-//! follow, the missing ones included (creating one is a change too).
+//! images, SVGs, printer profiles and those they inherit from) is noted in
+//! the [`Reads`] its loader was given, so that `p3dp watch` knows which files
+//! to follow, the missing ones included (creating one is a change too).
 
-use std::cell::RefCell;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
@@ -48,37 +47,35 @@ pub fn check_image_size(width: u32, height: u32) -> std::result::Result<(), Stri
     Ok(())
 }
 
-thread_local! {
-    /// The files noted on this thread while [`recording`] runs (`None`: not recording).
-    static READS: RefCell<Option<Vec<PathBuf>>> = const { RefCell::new(None) };
-}
+/// The files one build read or tried to read (a missing one too: creating
+/// it is a change), in order, each once: what `p3dp watch` follows. Passed
+/// down by whoever loads a recipe, never kept anywhere else.
+#[derive(Debug, Default)]
+pub struct Reads(std::sync::Mutex<Vec<PathBuf>>);
 
-/// Notes that `path` is read, or tried (a missing file too), for
-/// [`recording`]; does nothing when no recording runs on this thread.
-pub fn note_read(path: &Path) {
-    READS.with(|r| {
-        if let Some(list) = r.borrow_mut().as_mut() {
-            if !list.iter().any(|p| p == path) {
-                list.push(path.to_path_buf());
-            }
+impl Reads {
+    /// Notes that `path` is read, or tried.
+    pub fn note(&self, path: &Path) {
+        let mut list = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        if !list.iter().any(|p| p == path) {
+            list.push(path.to_path_buf());
         }
-    });
-}
+    }
 
-/// Runs `f` and returns, with what it gives, every file noted by
-/// [`note_read`] on this thread meanwhile (in order, each once), whether `f`
-/// succeeded or not. The loading stages (recipe, includes, images, profiles)
-/// run on the calling thread.
-pub fn recording<T>(f: impl FnOnce() -> T) -> (T, Vec<PathBuf>) {
-    let outer = READS.with(|r| r.borrow_mut().replace(Vec::new()));
-    let value = f();
-    let list = READS.with(|r| std::mem::replace(&mut *r.borrow_mut(), outer));
-    (value, list.unwrap_or_default())
+    /// [`read_text`], noted.
+    pub fn read_text(&self, path: &Path, what: &str) -> Result<String> {
+        self.note(path);
+        read_text(path, what)
+    }
+
+    /// The files noted, in order.
+    pub fn files(&self) -> Vec<PathBuf> {
+        self.0.lock().unwrap_or_else(|e| e.into_inner()).clone()
+    }
 }
 
 /// Reads `path` (a `what`, e.g. "recipe", for messages) as text, bounded.
 pub fn read_text(path: &Path, what: &str) -> Result<String> {
-    note_read(path);
     let shown = path.display().to_string();
     let file = std::fs::File::open(path)
         .map_err(|e| Error::io_from(&shown, format!("cannot read the {what}: {e}"), &e))?;
@@ -205,19 +202,18 @@ mod tests {
     use super::*;
 
     #[test]
-    fn recording_notes_each_file_once_missing_ones_too() {
-        let missing = Path::new("no-such-p3dp-recipe.yaml");
-        let (r, files) = recording(|| {
-            note_read(Path::new("a.png"));
-            let r = read_text(missing, "recipe");
-            note_read(Path::new("a.png"));
-            r
-        });
+    fn reads_note_each_file_once_missing_ones_too() {
+        let missing = Path::new("/nonexistent/p3dp/recipe.yaml");
+        let reads = Reads::default();
+        reads.note(Path::new("a.png"));
+        let r = reads.read_text(missing, "recipe");
+        reads.note(Path::new("a.png"));
         assert!(r.is_err());
-        assert_eq!(files, [PathBuf::from("a.png"), missing.to_path_buf()]);
-        // nothing is kept outside a recording
-        note_read(Path::new("b.png"));
-        assert!(recording(|| ()).1.is_empty());
+        assert_eq!(
+            reads.files(),
+            [PathBuf::from("a.png"), missing.to_path_buf()]
+        );
+        assert!(Reads::default().files().is_empty());
     }
 
     #[test]

@@ -69,9 +69,14 @@ pub struct Options<'a> {
 
 /// Reads and flattens the SVG file at `path`; errors name the file as
 /// `shown` and, where there is one, the element and its line. The file is
-/// noted for `p3dp watch` ([`crate::base::input::note_read`]).
-pub fn load(path: &Path, shown: &str, opt: &Options) -> Result<Vec<Subpath>> {
-    crate::base::input::note_read(path);
+/// noted in `reads` for `p3dp watch`.
+pub fn load(
+    path: &Path,
+    shown: &str,
+    opt: &Options,
+    reads: &crate::base::input::Reads,
+) -> Result<Vec<Subpath>> {
+    reads.note(path);
     let io = |e: &std::io::Error| Error {
         io_kind: Some(e.kind()),
         ..Error::input("", format!("cannot read the SVG file `{shown}`: {e}"))

@@ -17,6 +17,7 @@
 //! profiles loaded into [`crate::machine::Printer`]) and [`resolve`] (the raw
 //! forms into generation's types; a turtle's program compiled and run).
 
+pub mod context;
 pub mod eval;
 pub mod expand;
 pub mod params;

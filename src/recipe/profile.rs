@@ -2,6 +2,7 @@
 //! binary, parsed by the same code as a user's file), a user's file, and
 //! `inherits:` chains merged key by key.
 
+use crate::base::input::Reads;
 use std::path::Path;
 
 use super::schema::{
@@ -58,13 +59,19 @@ impl Printer {
     /// override those of a built-in profile or another file (maps merged key
     /// by key, see [`Tree::merge`]); a file without it is parsed on its own.
     pub fn from_file(path: &Path) -> Result<Printer> {
+        Printer::from_file_in(path, &Reads::default())
+    }
+
+    /// [`Printer::from_file`], every file read noted in `reads`.
+    pub fn from_file_in(path: &Path, reads: &Reads) -> Result<Printer> {
         let shown = path.display().to_string();
-        let text = crate::base::input::read_text(path, "printer profile")?;
+        let text = reads.read_text(path, "printer profile")?;
         let tree = Tree::parse(&text, &shown)?;
         let raw: RawPrinter = if tree.has("inherits") {
             let named = tree.has("name");
             let mut seen = vec![path.canonicalize().unwrap_or_else(|_| path.to_path_buf())];
-            let mut merged = inherit(tree, path, &mut seen).map_err(|e| e.in_file(&shown))?;
+            let mut merged =
+                inherit(tree, path, &mut seen, reads).map_err(|e| e.in_file(&shown))?;
             if !named {
                 // a profile named after its file, not after its base
                 if let Some(stem) = path.file_stem() {
@@ -80,8 +87,9 @@ impl Printer {
         Ok(p)
     }
 
-    /// A built-in name, or else a path (relative paths from `base`).
-    pub fn resolve(spec: &str, base: &Path) -> Result<Printer> {
+    /// A built-in name, or else a path (relative paths from `base`); every
+    /// file read noted in `reads`.
+    pub fn resolve(spec: &str, base: &Path, reads: &Reads) -> Result<Printer> {
         if let Some(p) = Printer::built_in(spec) {
             return Ok(p);
         }
@@ -94,7 +102,7 @@ impl Printer {
         } else {
             base.join(spec)
         };
-        crate::base::input::note_read(&path);
+        reads.note(&path);
         if !path.is_file() {
             let at = if path == Path::new(spec) {
                 String::new()
@@ -109,7 +117,7 @@ impl Printer {
                 ),
             ));
         }
-        Printer::from_file(&path)
+        Printer::from_file_in(&path, reads)
     }
 }
 
@@ -138,7 +146,12 @@ const MAX_INHERITS: usize = 16;
 /// resolved) with `tree`'s keys merged over it (maps merged key by key, but
 /// a map whose `shape` differs replaces the base's whole: a round bed over a
 /// rectangle). `seen` holds the files of the chain so far, to refuse cycles.
-fn inherit(mut tree: Tree, path: &Path, seen: &mut Vec<std::path::PathBuf>) -> Result<Tree> {
+fn inherit(
+    mut tree: Tree,
+    path: &Path,
+    seen: &mut Vec<std::path::PathBuf>,
+    reads: &Reads,
+) -> Result<Tree> {
     let Some(spec) = tree.remove("inherits") else {
         return Ok(tree);
     };
@@ -162,7 +175,7 @@ fn inherit(mut tree: Tree, path: &Path, seen: &mut Vec<std::path::PathBuf>) -> R
             Some(dir) if !dir.as_os_str().is_empty() && dir != Path::new(".") => dir.join(rel),
             _ => Path::new(rel).to_path_buf(),
         };
-        crate::base::input::note_read(&file);
+        reads.note(&file);
         let canon = file.canonicalize().map_err(|e| {
             Error::input(
                 "inherits",
@@ -180,9 +193,9 @@ fn inherit(mut tree: Tree, path: &Path, seen: &mut Vec<std::path::PathBuf>) -> R
         }
         seen.push(canon);
         let shown = file.display().to_string();
-        let text = crate::base::input::read_text(&file, "printer profile")?;
+        let text = reads.read_text(&file, "printer profile")?;
         let t = Tree::parse(&text, &shown)?;
-        inherit(t, &file, seen).map_err(|e| e.in_file(&shown))?
+        inherit(t, &file, seen, reads).map_err(|e| e.in_file(&shown))?
     } else {
         return Err(unknown_printer("inherits", &spec));
     };

@@ -13,6 +13,7 @@ use indexmap::IndexMap;
 
 use crate::base::error::{Error, Result};
 use crate::base::expr::Params;
+use crate::base::input::Reads;
 use crate::recipe::eval::key;
 use crate::recipe::schema::Num;
 use crate::recipe::schema::{RawLibrary, RawRecipe, RawTemplate};
@@ -47,11 +48,17 @@ pub struct Library {
 
 /// Reads the includes of `raw` (the recipe at `file`, when known, in `dir`)
 /// and gathers its params and templates after theirs.
-pub fn load_library(raw: &RawRecipe, file: Option<&Path>, dir: &Path) -> Result<Library> {
+pub fn load_library(
+    raw: &RawRecipe,
+    file: Option<&Path>,
+    dir: &Path,
+    reads: &Reads,
+) -> Result<Library> {
     let mut lib = Library::default();
     let mut loader = Loader {
         seen: Vec::new(),
         stack: Vec::new(),
+        reads,
     };
     if let Some(f) = file {
         let canon = std::fs::canonicalize(f).unwrap_or_else(|_| f.to_path_buf());
@@ -127,14 +134,16 @@ impl Library {
     }
 }
 
-struct Loader {
+struct Loader<'a> {
     /// Files read so far (canonical paths).
     seen: Vec<PathBuf>,
     /// The chain of files being included: canonical path and shown name.
     stack: Vec<(PathBuf, String)>,
+    /// Where every file read is noted.
+    reads: &'a Reads,
 }
 
-impl Loader {
+impl Loader<'_> {
     /// Reads `list` (written in the file `from`, `None`: the recipe, in `dir`).
     fn includes(
         &mut self,
@@ -151,7 +160,7 @@ impl Loader {
             let place = format!("{}[{k}]", key!(RawRecipe, include));
             let path = dir.join(inc);
             let shown = path.display().to_string();
-            crate::base::input::note_read(&path);
+            self.reads.note(&path);
             let canon = std::fs::canonicalize(&path).map_err(|e| {
                 here(Error::input(
                     &place,

@@ -17,6 +17,7 @@ mod turtle;
 
 use std::path::Path;
 
+use super::context::Context;
 use super::eval::{at, join, key, Scope};
 use super::expand::Expansion;
 use super::schema::{RawPart, RawRecipe};
@@ -34,6 +35,8 @@ pub use step::load_bitmap;
 struct Ctx<'a> {
     scope: Scope<'a>,
     dir: &'a Path,
+    /// The load's files read and z-buffers lent.
+    cx: &'a Context,
     /// Filament area (mm²) and max_strings, for a turtle (set once known).
     turtle: (f64, u64),
 }
@@ -52,11 +55,22 @@ impl Recipe {
         sets: &[(String, String)],
         printer: Option<&Printer>,
     ) -> Result<Recipe> {
+        Recipe::load_in(path, sets, printer, &Context::default())
+    }
+
+    /// [`Recipe::load`] in the context `cx`: every file read noted there, the
+    /// z-buffers it lends used.
+    pub fn load_in(
+        path: &Path,
+        sets: &[(String, String)],
+        printer: Option<&Printer>,
+        cx: &Context,
+    ) -> Result<Recipe> {
         let shown = path.display().to_string();
-        let text = crate::base::input::read_text(path, "recipe")?;
+        let text = cx.reads.read_text(path, "recipe")?;
         let raw: RawRecipe = parse_yaml(&text, &shown)?;
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-        Recipe::resolve_in(&raw, sets, printer, &dir, Some(path)).map_err(|e| e.in_file(&shown))
+        Recipe::resolve_in(&raw, sets, printer, &dir, Some(path), cx).map_err(|e| e.in_file(&shown))
     }
 
     /// Resolves a parsed recipe; relative paths are taken from `dir`.
@@ -66,7 +80,7 @@ impl Recipe {
         printer: Option<&Printer>,
         dir: &Path,
     ) -> Result<Recipe> {
-        Recipe::resolve_in(raw, sets, printer, dir, None)
+        Recipe::resolve_in(raw, sets, printer, dir, None, &Context::default())
     }
 
     /// [`Recipe::resolve`] for the recipe read from `file` (so that an
@@ -77,14 +91,18 @@ impl Recipe {
         printer: Option<&Printer>,
         dir: &Path,
         file: Option<&Path>,
+        cx: &Context,
     ) -> Result<Recipe> {
         check_top(raw)?;
-        let library = super::expand::load_library(raw, file, dir)?;
+        let library = super::expand::load_library(raw, file, dir, &cx.reads)?;
         let params = library.eval_params(sets)?;
         let top = Scope::new(&params);
         let printer = match printer {
             Some(p) => p.clone(),
-            None => Printer::resolve(raw.printer.as_deref().unwrap_or("generic-220"), dir)?,
+            None => {
+                let spec = raw.printer.as_deref().unwrap_or("generic-220");
+                Printer::resolve(spec, dir, &cx.reads)?
+            }
         };
         let material = material::resolve(&top.under(key!(raw.material)), raw.material.as_ref())?;
         let defaults = &raw.defaults;
@@ -111,8 +129,8 @@ impl Recipe {
         let turtle = (std::f64::consts::PI * (d / 2.0) * (d / 2.0), max_strings);
         // templates, loops and groups expanded into leaf parts
         let expansion = super::expand::expand(&raw.parts, &library.templates, &params, dir)?;
-        let parts = leaves(&expansion, turtle, (c0, v0), max_strings)?;
-        let groups = groups(&expansion, turtle)?;
+        let parts = leaves(&expansion, turtle, (c0, v0), max_strings, cx)?;
+        let groups = groups(&expansion, turtle, cx)?;
         let allow: Vec<String> = raw.allow.iter().map(|a| a.code().to_string()).collect();
         let allow_key = key!(raw.allow);
         crate::base::finding::validate_allow(&allow, |i| format!("{allow_key}[{i}]"))?;
@@ -161,6 +179,7 @@ fn leaves(
     turtle: (f64, u64),
     (c0, v0): (f64, f64),
     max_strings: u64,
+    cx: &Context,
 ) -> Result<Vec<Part>> {
     // the limit holds for all parts together too (YAML aliases, loops)
     let total_limit = max_strings;
@@ -171,6 +190,7 @@ fn leaves(
         let ctx = Ctx {
             scope: Scope::new(&leaf.params),
             dir: leaf.dir,
+            cx,
             turtle,
         };
         let raw = leaf.part;
@@ -205,12 +225,13 @@ fn leaves(
 }
 
 /// The groups' steps resolved, each with the params where it is written.
-fn groups(expansion: &Expansion, turtle: (f64, u64)) -> Result<Vec<Group>> {
+fn groups(expansion: &Expansion, turtle: (f64, u64), cx: &Context) -> Result<Vec<Group>> {
     let mut groups = Vec::with_capacity(expansion.groups.len());
     for g in &expansion.groups {
         let ctx = Ctx {
             scope: Scope::new(&g.params),
             dir: g.dir,
+            cx,
             turtle,
         };
         let mut steps = Vec::with_capacity(g.steps.len());

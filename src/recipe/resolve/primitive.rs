@@ -2,6 +2,8 @@
 //! read, errors naming `KIND.KEY` (KIND the primitive's key, KEY the field's
 //! own name, see [`crate::recipe::eval`]).
 
+use crate::base::input::Reads;
+use crate::recipe::context::Context;
 use std::path::Path;
 use std::sync::Arc;
 
@@ -21,11 +23,19 @@ use crate::recipe::schema::{
 
 /// Resolves the primitive in `scope`; a turtle runs now, starting from
 /// `env` (the part's cross-section and speed). Errors name `KIND.KEY`.
-/// SVG files are read relative to `dir`.
-pub fn resolve(raw: &RawPrimitive, scope: &Scope, env: &Env, dir: &Path) -> Result<Primitive> {
+/// SVG files are read relative to `dir`, noted in `cx`, whose lent
+/// z-buffers a solid starts from.
+pub fn resolve(
+    raw: &RawPrimitive,
+    scope: &Scope,
+    env: &Env,
+    dir: &Path,
+    cx: &Context,
+) -> Result<Primitive> {
     let files = Files {
         dir,
         max_strings: env.max_strings,
+        reads: &cx.reads,
     };
     let s = scope.under(raw.key());
     Ok(match raw {
@@ -39,7 +49,9 @@ pub fn resolve(raw: &RawPrimitive, scope: &Scope, env: &Env, dir: &Path) -> Resu
             Primitive::PatternHelix(super::pattern::pattern_helix(p, &s)?)
         }
         RawPrimitive::CaHelix(p) => Primitive::CaHelix(super::pattern::ca_helix(p, &s)?),
-        RawPrimitive::Solid(p) => Primitive::Solid(super::solid::resolve(p, &s)?),
+        RawPrimitive::Solid(p) => {
+            Primitive::Solid(super::solid::resolve(p, &s, cx.zbuffers.as_ref())?)
+        }
         RawPrimitive::Turtle(t) => Primitive::Turtle(Box::new(super::turtle::resolve(t, &s, env)?)),
     })
 }
@@ -51,6 +63,8 @@ pub struct Files<'a> {
     pub dir: &'a Path,
     /// The recipe's `max_strings`: most points a drawing may flatten to.
     pub max_strings: u64,
+    /// Where every file read is noted.
+    pub reads: &'a Reads,
 }
 
 /// `path:` its commands evaluated (or the SVG drawing read); `s` is under
@@ -210,7 +224,8 @@ fn read(
         tolerance,
         max_points: files.max_strings,
     };
-    svg::load(&files.dir.join(file), file, &opt).map_err(|e| e.under(&s.place(svg.key)))
+    svg::load(&files.dir.join(file), file, &opt, files.reads)
+        .map_err(|e| e.under(&s.place(svg.key)))
 }
 
 /// `outline:` the closed outline, centroid at the origin; `s` is under

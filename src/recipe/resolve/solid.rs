@@ -1,13 +1,14 @@
 //! Resolving `solid:`: numbers evaluated, the z-buffer computed.
 
 use crate::base::error::Result;
+use crate::generate::primitive::solid::Reusing;
 use crate::generate::primitive::solid::{Body, Feature, Infill, Op, Pattern, Solid};
 use crate::recipe::eval::{at, key, At, Scope};
 use crate::recipe::schema::{RawFeature, RawInfill, RawOp, RawPattern, RawSolid};
 
 /// Resolves `solid:`; `s` is under `solid`, so places read
 /// `solid.features[1].cylinder.radius`.
-pub fn resolve(raw: &RawSolid, s: &Scope) -> Result<Solid> {
+pub fn resolve(raw: &RawSolid, s: &Scope, reuse: Option<&Reusing>) -> Result<Solid> {
     let layer_height = s.positive_or(at!(raw.layer_height), 0.2)?;
     let line_width = s.positive_or(at!(raw.line_width), 0.45)?;
     let chord_tolerance = s.positive_or(at!(raw.chord_tolerance), 0.01)?;
@@ -43,6 +44,7 @@ pub fn resolve(raw: &RawSolid, s: &Scope) -> Result<Solid> {
         chord_tolerance,
         infill,
         features,
+        reuse,
     )
 }
 

@@ -124,9 +124,8 @@ fn modulate_map(ctx: &Ctx, s: &Scope, step: &RawStep) -> Result<ModulateMap> {
     };
     let (image_key, text_key) = (at!(image).key, at!(text).key);
     let bitmap = match (image, text) {
-        (Some(image), None) => {
-            load_bitmap(&ctx.dir.join(image), image).map_err(|e| e.under(&s.place(image_key)))?
-        }
+        (Some(image), None) => load_bitmap(&ctx.dir.join(image), image, &ctx.cx.reads)
+            .map_err(|e| e.under(&s.place(image_key)))?,
         (None, Some(text)) => Bitmap::from_text(text).map_err(|e| e.under(&s.place(text_key)))?,
         _ => {
             return Err(s.error(
@@ -149,12 +148,16 @@ fn modulate_map(ctx: &Ctx, s: &Scope, step: &RawStep) -> Result<ModulateMap> {
 /// Loads an image as grey levels 0..1; the error names the image as written
 /// (an input error with no place: the caller names the key; an I/O failure
 /// keeps its [`std::io::ErrorKind`]).
-pub fn load_bitmap(path: &PathBuf, shown: &str) -> Result<Bitmap> {
+pub fn load_bitmap(
+    path: &PathBuf,
+    shown: &str,
+    reads: &crate::base::input::Reads,
+) -> Result<Bitmap> {
     let io = |message: String, e: &std::io::Error| Error {
         io_kind: Some(e.kind()),
         ..Error::input("", message)
     };
-    crate::base::input::note_read(path);
+    reads.note(path);
     let open = || {
         image::ImageReader::open(path)
             .map_err(|e| {

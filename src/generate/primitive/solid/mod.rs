@@ -70,7 +70,7 @@ pub use model::*;
 pub use plan::join_inside as plan_join_inside;
 pub use plan::JOIN_SPACINGS;
 pub use stats::*;
-pub use zbuffer::{reusing, Cache, Reuse, Update, ZBuffer};
+pub use zbuffer::{Cache, Reuse, Reusing, Update, ZBuffer};
 
 #[cfg(test)]
 mod tests {
@@ -108,6 +108,7 @@ mod tests {
                     op: Op::Subtract,
                 },
             ],
+            None,
         )
         .unwrap()
     }
@@ -194,6 +195,7 @@ mod tests {
                 },
                 op: Op::Union,
             }],
+            None,
         )
         .unwrap_err();
         assert_eq!(e.place.as_deref(), Some("solid.features"));

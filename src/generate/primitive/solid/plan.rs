@@ -3,8 +3,9 @@
 use super::*;
 
 impl Solid {
-    /// A solid with its z-buffer computed; the error names the key at fault
-    /// (relative to the primitive, as [`resolve`] does).
+    /// A solid with its z-buffer computed (from `reuse`'s when a cache is
+    /// lent: see [`Reusing`]); the error names the key at fault (relative to
+    /// the primitive, as the recipe's resolution does).
     pub fn new(
         layer_height: f64,
         perimeters: u32,
@@ -12,6 +13,7 @@ impl Solid {
         chord_tolerance: f64,
         infill: Infill,
         features: Vec<Feature>,
+        reuse: Option<&Reusing>,
     ) -> Result<Solid> {
         let settings = Settings {
             layer_height,
@@ -20,7 +22,7 @@ impl Solid {
             chord_tolerance,
             infill,
         };
-        Solid::from_zbuffer(&zbuffer::cached(settings, features)?)
+        Solid::from_zbuffer(&zbuffer::cached(settings, features, reuse)?)
     }
 
     /// The solid printed from a z-buffer (its slabs shared, not recomputed);

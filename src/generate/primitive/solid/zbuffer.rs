@@ -266,7 +266,7 @@ fn check(st: &Settings, features: &[Feature]) -> Result<u64> {
     Ok(layers as u64)
 }
 
-/// What a build did with one solid's z-buffer under [`reusing`].
+/// What a build did with one solid's z-buffer when a cache was lent to it ([`Reusing`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Reuse {
     /// Layers of the solid.
@@ -276,55 +276,75 @@ pub struct Reuse {
 }
 
 /// The z-buffers a long-running command keeps between builds (`p3dp
-/// watch`), in the order a build resolves its solids.
+/// watch`), in the order a build resolves its solids; lent to each build as
+/// [`Reusing`].
 #[derive(Clone, Debug, Default)]
 pub struct Cache {
     buffers: Vec<ZBuffer>,
-    /// What the last build under [`reusing`] did with each solid, in order.
+    /// What the last build it was lent to did with each solid, in order.
     pub last: Vec<Reuse>,
 }
 
-/// The cache installed on this thread by [`reusing`], and the buffers of the build so far.
-type Installed = (Vec<ZBuffer>, Vec<ZBuffer>, Vec<Reuse>);
+/// A [`Cache`] lent to one build: the k-th solid it resolves starts from
+/// the cache's k-th z-buffer when the settings are the same, and only the
+/// features that differ (those between the longest common head and tail of
+/// the two feature lists) are removed and added (see [`ZBuffer::splice`]).
+#[derive(Debug, Default)]
+pub struct Reusing(std::sync::Mutex<Lent>);
 
-thread_local! {
-    static CACHE: std::cell::RefCell<Option<Installed>> = const { std::cell::RefCell::new(None) };
+/// The buffers of the cache, those of the build so far, and what it did.
+#[derive(Debug, Default)]
+struct Lent {
+    old: Vec<ZBuffer>,
+    new: Vec<ZBuffer>,
+    last: Vec<Reuse>,
 }
 
-/// Runs `f` (a build) with `cache` installed on this thread: the k-th solid
-/// it resolves starts from the cache's k-th z-buffer when the settings are
-/// the same, and only the features that differ (those between the longest
-/// common head and tail of the two feature lists) are removed and added
-/// (see [`ZBuffer::splice`]). Returns `f`'s value and the cache to keep.
-pub fn reusing<T>(cache: Cache, f: impl FnOnce() -> T) -> (T, Cache) {
-    let outer = CACHE.with(|c| {
-        c.borrow_mut()
-            .replace((cache.buffers, Vec::new(), Vec::new()))
-    });
-    let value = f();
-    let (mut old, mut new, last) = CACHE
-        .with(|c| std::mem::replace(&mut *c.borrow_mut(), outer))
-        .unwrap_or_default();
-    // a build that stopped early keeps the rest for the next one
-    if old.len() > new.len() {
-        new.extend(old.drain(new.len()..));
+impl Reusing {
+    /// Lends `cache` to a build.
+    pub fn new(cache: Cache) -> Reusing {
+        Reusing(std::sync::Mutex::new(Lent {
+            old: cache.buffers,
+            ..Lent::default()
+        }))
     }
-    (value, Cache { buffers: new, last })
+
+    /// The cache to keep once the build has ended.
+    pub fn finish(self) -> Cache {
+        let Lent {
+            mut old,
+            mut new,
+            last,
+        } = self.0.into_inner().unwrap_or_else(|e| e.into_inner());
+        // a build that stopped early keeps the rest for the next one
+        if old.len() > new.len() {
+            new.extend(old.drain(new.len()..));
+        }
+        Cache { buffers: new, last }
+    }
+
+    fn lent(&self) -> std::sync::MutexGuard<'_, Lent> {
+        self.0.lock().unwrap_or_else(|e| e.into_inner())
+    }
 }
 
-/// The z-buffer of `features`: from the installed cache when there is one
+/// The z-buffer of `features`: from the lent cache when there is one
 /// (noting what was recomputed), else built whole.
-pub(super) fn cached(settings: Settings, features: Vec<Feature>) -> Result<ZBuffer> {
-    let taken = CACHE.with(|c| {
-        c.borrow_mut().as_mut().map(|(old, new, _)| {
-            let k = new.len();
-            old.get_mut(k)
-                .filter(|zb| zb.settings == settings)
-                .map(|zb| zb.clone())
-        })
-    });
-    let Some(old) = taken else {
+pub(super) fn cached(
+    settings: Settings,
+    features: Vec<Feature>,
+    reuse: Option<&Reusing>,
+) -> Result<ZBuffer> {
+    let Some(reuse) = reuse else {
         return ZBuffer::build(settings, features);
+    };
+    let old = {
+        let lent = reuse.lent();
+        let k = lent.new.len();
+        lent.old
+            .get(k)
+            .filter(|zb| zb.settings == settings)
+            .cloned()
     };
     let (zb, recomputed) = match old {
         Some(mut zb) => {
@@ -348,14 +368,11 @@ pub(super) fn cached(settings: Settings, features: Vec<Feature>) -> Result<ZBuff
             (zb, n)
         }
     };
-    CACHE.with(|c| {
-        if let Some((_, new, last)) = c.borrow_mut().as_mut() {
-            new.push(zb.clone());
-            last.push(Reuse {
-                layers: zb.layer_count(),
-                recomputed,
-            });
-        }
+    let mut lent = reuse.lent();
+    lent.new.push(zb.clone());
+    lent.last.push(Reuse {
+        layers: zb.layer_count(),
+        recomputed,
     });
     Ok(zb)
 }

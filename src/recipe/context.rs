@@ -1,0 +1,17 @@
+//! What loading one recipe shares with the command that asked for it,
+//! passed down explicitly (no state of a thread's own): the files it read,
+//! and the z-buffers a long-running command lends each build.
+
+use crate::base::input::Reads;
+use crate::generate::primitive::solid::Reusing;
+
+/// The context of one load: [`Context::default`] keeps nothing for later.
+#[derive(Debug, Default)]
+pub struct Context {
+    /// Every file the load read or tried (recipe, includes, images, SVGs,
+    /// printer profiles and what they inherit).
+    pub reads: Reads,
+    /// The z-buffers of the build before, for its solids to start from
+    /// (`p3dp watch`).
+    pub zbuffers: Option<Reusing>,
+}
