@@ -1,11 +1,9 @@
 //! Hostile input (issue 17): no G-code injection, no clobbered files, no
 //! panics, bounded machines. Each test runs the real binary.
 
-mod common;
-
 use std::path::{Path, PathBuf};
 
-use common::*;
+use crate::common::*;
 
 fn code(out: &std::process::Output) -> Option<i32> {
     out.status.code()

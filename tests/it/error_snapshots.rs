@@ -3,12 +3,10 @@
 //! with the place underlined, and a `help:` line where one is known.
 //!
 //! The expected texts are `tests/snapshots/errors/NAME.txt` (plain: standard
-//! error is a pipe here). `UPDATE_SNAPSHOTS=1 cargo test --test error_snapshots`
-//! rewrites them; review the diff before committing.
+//! error is a pipe here). `UPDATE_SNAPSHOTS=1 cargo test --test it
+//! error_snapshots::` rewrites them; review the diff before committing.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use std::path::Path;
 
 /// The recipes of the mistakes that are not in `tests/bad/`: (file, text).

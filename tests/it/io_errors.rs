@@ -1,9 +1,7 @@
 //! An I/O error on the output keeps its kind, so a caller can tell a broken
 //! pipe (`p3dp build -o - | head`) from a full disk.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use std::io::{self, Write};
 
 /// A writer whose reader has gone away.

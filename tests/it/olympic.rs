@@ -8,12 +8,10 @@
 //! except where one rests on another, that the nozzle never goes below
 //! filament printed earlier (printing or travelling), and the print order.
 
-mod common;
-
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
 
-use common::*;
+use crate::common::*;
 use glam::{DVec2, DVec3};
 use p3dp::analyse::check::Severity;
 use p3dp::app::build::Plan;

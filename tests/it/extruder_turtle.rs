@@ -3,11 +3,9 @@
 //! parabola (Fig. 9 left) and filled shapes (Fig. 4), each read back from
 //! its strings and checked for the property its recipe promises.
 
-mod common;
-
 use std::path::PathBuf;
 
-use common::linking_by_gauss;
+use crate::common::linking_by_gauss;
 use glam::DVec3;
 use p3dp::analyse::check::{self, Severity};
 use p3dp::base::threads::Threads;

@@ -1,9 +1,7 @@
 //! The authoring loop: plain-worded errors for a newcomer's mistakes, starter
 //! recipes that build, shell completions and the manual page.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use std::path::Path;
 use std::process::Output;
 

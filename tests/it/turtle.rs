@@ -1,11 +1,11 @@
 //! The `turtle` primitive through the real binary: the papers' turtle prints
 //! (ExtruderTurtle, TEI '22) read back from their G-code.
 
-mod common;
+use crate::common;
 
 use std::collections::{BTreeMap, HashSet};
 
-use common::{p3dp, parse, recipe, root, tmp, to_recipe, Move};
+use crate::common::{p3dp, parse, recipe, root, tmp, to_recipe, Move};
 
 /// Builds `path` with `sets` and returns the G-code text.
 fn gcode(path: &std::path::Path, sets: &[&str], tag: &str) -> String {

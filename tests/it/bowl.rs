@@ -7,9 +7,7 @@
 //! counter-clockwise seen from above. The glyph grid so reconstructed must
 //! match the 8 × 8 font's rendering of the text, not its mirror image.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use p3dp::base::threads::Threads;
 use p3dp::generate::step::Bitmap;
 use p3dp::recipe::Recipe;

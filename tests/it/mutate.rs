@@ -12,12 +12,10 @@
 //! `P3DP_MUTANTS=N` sets the mutants per recipe (default 200), and
 //! `P3DP_MUTATE_SEED=S` the seed.
 
-mod common;
-
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 
-use common::*;
+use crate::common::*;
 use p3dp::app::build::{plan, Options};
 use p3dp::recipe::Recipe;
 

@@ -3,12 +3,12 @@
 //! out by hand), a group's steps reach every string of its parts, and the
 //! gallery's procedural recipes have the geometry their comments promise.
 
-mod common;
+use crate::common;
 
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 
-use common::{p3dp, recipe, root, tmp};
+use crate::common::{p3dp, recipe, root, tmp};
 use glam::DVec3;
 use p3dp::base::threads::Threads;
 use p3dp::base::toolpath::{polar, Toolpath};

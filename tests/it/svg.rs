@@ -3,9 +3,7 @@
 //! the gallery's star vase does, and bad SVGs are refused naming the file
 //! and the element.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use glam::{DVec2, DVec3};
 use p3dp::base::threads::Threads;
 use p3dp::base::toolpath::Toolpath;

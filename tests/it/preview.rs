@@ -1,12 +1,10 @@
 //! Previews, through the real binary: `p3dp preview` to PNG and HTML,
 //! `build --preview`, and G-code thumbnails asked for by a printer profile.
 
-mod common;
-
 use std::path::Path;
 
+use crate::common::*;
 use base64::Engine;
-use common::*;
 
 /// The PNG preview's background colour.
 const BG: [u8; 3] = [30, 33, 39];

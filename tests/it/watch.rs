@@ -3,8 +3,6 @@
 //! shown beside the last good model, a clean stop on SIGINT. HTTP by hand
 //! over `std::net::TcpStream` (no client crate).
 
-mod common;
-
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::TcpStream;
 use std::path::Path;
@@ -12,7 +10,7 @@ use std::process::{Child, Command, Stdio};
 use std::sync::mpsc::{self, Receiver};
 use std::time::{Duration, Instant};
 
-use common::*;
+use crate::common::*;
 
 const RECIPE: &str = "p3dp: 1
 name: watched

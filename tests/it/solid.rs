@@ -3,7 +3,7 @@
 //! library (the exact loops, the strings made from them) and the binary
 //! (the gallery recipes, the stats, bad input).
 
-mod common;
+use crate::common;
 
 use std::f64::consts::{FRAC_PI_4, PI};
 use std::path::{Path, PathBuf};

@@ -2,9 +2,7 @@
 //! moves written, it is deterministic, and it shows that the globe's short
 //! strings do not run at full speed on a Marlin printer.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use glam::DVec3;
 use p3dp::analyse::planner::{MoveKind, Planner};
 use p3dp::machine::Printer;

@@ -1,8 +1,6 @@
 //! The command-line contract of the spec: build, hash, --set, -o, --stats-json.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use sha2::{Digest, Sha256};
 
 fn sha256(bytes: &[u8]) -> String {

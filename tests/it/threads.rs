@@ -2,9 +2,7 @@
 //! (and `-j`) allows, on a vase large enough that its deform step is split
 //! among threads.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use p3dp::app::build::{plan, prepare, Options};
 use p3dp::base::threads::Threads;
 

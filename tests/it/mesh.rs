@@ -6,13 +6,11 @@
 //! The 3MF and OBJ carry the same mesh, and every format is the same bytes
 //! on every run.
 
-mod common;
-
 use std::collections::HashMap;
 use std::path::Path;
 use std::process::Command;
 
-use common::{p3dp, recipe, tmp};
+use crate::common::{p3dp, recipe, tmp};
 
 /// A binary STL read back: its triangles' corners.
 fn read_stl(path: &Path) -> Vec<[[f32; 3]; 3]> {

@@ -4,9 +4,7 @@
 //! `modulate_map` step, so each string's factor (land 1, sea 0.65) is read off
 //! the result, not recomputed the way the recipe computes it.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use p3dp::base::threads::Threads;
 use p3dp::base::toolpath::Toolpath;
 use p3dp::recipe::Recipe;

@@ -1,8 +1,6 @@
 //! Batch builds and lock files: --sweep, -j, summary.csv, hash --lock / --check.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 
 fn ok(out: &std::process::Output) {
     assert!(

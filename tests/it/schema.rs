@@ -4,9 +4,7 @@
 //! type; the committed `docs/recipe.schema.json` (which the recipes name for
 //! editors) is exactly what `p3dp schema` prints.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use serde_json::Value;
 
 fn schema() -> Value {

@@ -2,12 +2,12 @@
 //! firmware dialects (every line of the output parsed by a table of that
 //! dialect's commands), the origin, and G2/G3 arc fitting.
 
-mod common;
+use crate::common;
 
 use std::f64::consts::PI;
 use std::path::PathBuf;
 
-use common::{p3dp, recipe, root, tmp, Move};
+use crate::common::{p3dp, recipe, root, tmp, Move};
 use glam::DVec3;
 use p3dp::app::build::{plan, Options};
 use p3dp::base::toolpath::{Event, Toolpath};

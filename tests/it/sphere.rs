@@ -1,8 +1,6 @@
 //! The empty sphere of Kanada's Fig. 9, built by the real binary and read back.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 
 fn build_sphere(dir: &std::path::Path) -> String {
     let out = p3dp(

@@ -7,11 +7,9 @@
 //! of the expected one. Every recipe of the gallery has no errors; `allow:`
 //! and `--allow` silence checks; unknown codes are unusable input.
 
-mod common;
-
 use std::path::{Path, PathBuf};
 
-use common::{p3dp, root, tmp};
+use crate::common::{p3dp, root, tmp};
 
 /// What a corpus recipe's header expects.
 #[derive(Debug)]

@@ -3,11 +3,9 @@
 //! and the `ca_helix` automaton, checked on the cell array against the
 //! paper's Figs. 6, 7 and 9, and through the real binary on the recipes.
 
-mod common;
-
 use std::path::Path;
 
-use common::{p3dp, parse, recipe, tmp};
+use crate::common::{p3dp, parse, recipe, tmp};
 use p3dp::app::build::make_part;
 use p3dp::base::threads::Threads;
 use p3dp::generate::primitive::ca::{Automaton, CaHelix, Initial, Layout, Pattern, Rule};

@@ -3,6 +3,7 @@
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// The crate root.
 pub fn root() -> PathBuf {
@@ -14,9 +15,13 @@ pub fn recipe(name: &str) -> PathBuf {
     root().join("recipes").join(name)
 }
 
-/// A fresh empty temporary folder for one test.
+/// A fresh empty temporary folder for one test. The tests of every module
+/// share one process, so a counter keeps two calls apart even when two
+/// modules pick the same name.
 pub fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("p3dp-test-{}-{name}", std::process::id()));
+    static CALLS: AtomicUsize = AtomicUsize::new(0);
+    let n = CALLS.fetch_add(1, Ordering::Relaxed);
+    let d = std::env::temp_dir().join(format!("p3dp-test-{}-{n}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
