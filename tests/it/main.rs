@@ -3,8 +3,11 @@
 //! One binary links the crate and its dependencies once, where a file per
 //! subject under `tests/` linked them once a file. `cargo test --test it
 //! NAME` runs the tests whose path holds NAME (`mutate::`, `watch::`).
-//! Fixtures stay where they were: `tests/fixtures`, `tests/bad`,
-//! `tests/checks`, `tests/snapshots`, `tests/browser`.
+//!
+//! The modules here use the crate's public face; those under `internals`
+//! reach past it (see `internals/mod.rs`). Fixtures stay where they were:
+//! `tests/fixtures`, `tests/bad`, `tests/checks`, `tests/snapshots`,
+//! `tests/browser`.
 
 mod common;
 
@@ -12,9 +15,12 @@ mod authoring;
 mod bad_inputs;
 mod batch;
 mod bowl;
+mod ca;
 mod checks;
 mod cli;
 mod error_snapshots;
+mod extruder_turtle;
+mod gallery;
 mod hostile;
 mod internals;
 mod io_errors;
@@ -24,7 +30,9 @@ mod mesh;
 mod olympic;
 mod planner;
 mod preview;
+mod procedural;
 mod schema;
+mod solid;
 mod sphere;
 mod svg;
 mod threads;

@@ -1,29 +1,20 @@
 //! The gallery of Kanada's prints (cup, plates, heart, vases, deformed sphere,
 //! lamp shades): each recipe checked for the geometry its comment promises,
-//! through the library (parts before and after their steps) and the binary.
+//! part by part, before and after its steps.
+//!
+//! Past the public face: the parts are built with their steps cut short or
+//! without brim and stand (`Part::steps`, `brim`, `stand`, `more`,
+//! `Recipe::groups`, `Primitive::string_count`). Home: beside
+//! `generate::assembly`.
 
 use std::f64::consts::{PI, TAU};
-use std::path::PathBuf;
 
+use crate::gallery::{extruding_points, path};
 use glam::DVec3;
-use p3dp::analyse::check::Severity;
-use p3dp::app::build::plan;
 use p3dp::base::threads::Threads;
 use p3dp::base::toolpath::{polar, Toolpath};
 use p3dp::generate::assembly::make_parts;
 use p3dp::recipe::Recipe;
-
-/// Every recipe of the gallery.
-const GALLERY: [&str; 8] = [
-    "cup.yaml",
-    "plate.yaml",
-    "heart-plate.yaml",
-    "vase.yaml",
-    "twisted-heart-vase.yaml",
-    "deformed-sphere.yaml",
-    "lamp-shade.yaml",
-    "lamp-shade-textured.yaml",
-];
 
 /// The recipes made of a filled bottom and a wall standing on it.
 const ON_A_BOTTOM: [&str; 5] = [
@@ -33,12 +24,6 @@ const ON_A_BOTTOM: [&str; 5] = [
     "vase.yaml",
     "twisted-heart-vase.yaml",
 ];
-
-fn path(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("recipes")
-        .join(name)
-}
 
 fn load(name: &str, sets: &[(&str, &str)]) -> Recipe {
     let sets: Vec<(String, String)> = sets
@@ -139,13 +124,6 @@ fn bottom_and_wall(recipe: &Recipe, deformed: bool) -> (Toolpath, Toolpath) {
     split_first(recipe, 0, &tp)
 }
 
-/// Points of extruding strings (both ends).
-fn extruding_points(tp: &Toolpath) -> impl Iterator<Item = DVec3> + '_ {
-    (0..tp.len())
-        .filter(|&k| !tp.strings[k].travel)
-        .flat_map(|k| [tp.points[k], tp.points[k + 1]])
-}
-
 fn r_of(p: DVec3) -> f64 {
     polar(p).0
 }
@@ -170,66 +148,6 @@ fn turning(pts: &[DVec3]) -> Vec<f64> {
 /// Local maxima of `f` over the interior of a sequence.
 fn maxima(f: &[f64]) -> usize {
     f.windows(3).filter(|w| w[1] > w[0] && w[1] >= w[2]).count()
-}
-
-#[test]
-fn every_gallery_recipe_plans_cleanly_and_starts_on_the_bed() {
-    for name in GALLERY {
-        let plan = plan(&path(name), &Default::default()).unwrap_or_else(|e| panic!("{e}"));
-        let errors: Vec<_> = plan
-            .findings
-            .iter()
-            .filter(|f| f.severity == Severity::Error)
-            .collect();
-        assert!(errors.is_empty(), "{name}: {errors:?}");
-        // and no warning either (flow under the hot end's limit)
-        assert!(plan.findings.is_empty(), "{name}: {:?}", plan.findings);
-        let lowest = plan
-            .paths
-            .iter()
-            .flat_map(extruding_points)
-            .map(|p| p.z)
-            .fold(f64::INFINITY, f64::min);
-        assert!(
-            (0.0..=0.5).contains(&lowest),
-            "{name}: lowest extruding point at z = {lowest}"
-        );
-        for tp in &plan.paths {
-            assert!(tp.len() < 300_000, "{name}: {} has {}", tp.name, tp.len());
-            for s in tp.strings.iter().filter(|s| !s.travel) {
-                assert!(
-                    (0.05..=0.3).contains(&s.c) && (3.0..=60.0).contains(&s.v),
-                    "{name}: {} has a string with c = {}, v = {}",
-                    tp.name,
-                    s.c,
-                    s.v
-                );
-            }
-        }
-    }
-}
-
-#[test]
-fn the_binary_checks_every_gallery_recipe_clean() {
-    let mut args = vec!["check".to_string()];
-    args.extend(GALLERY.iter().map(|n| path(n).display().to_string()));
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_p3dp"))
-        .args(&args)
-        .output()
-        .unwrap();
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{stdout}{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    for name in GALLERY {
-        let line = stdout
-            .lines()
-            .find(|l| l.contains(&format!("/{name}:")))
-            .unwrap_or_else(|| panic!("no line for {name} in\n{stdout}"));
-        assert!(line.ends_with("0 warnings, 0 errors"), "{line}");
-    }
 }
 
 #[test]

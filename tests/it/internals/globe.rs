@@ -3,6 +3,10 @@
 //! The strings are compared with the same recipe built without its
 //! `modulate_map` step, so each string's factor (land 1, sea 0.65) is read off
 //! the result, not recomputed the way the recipe computes it.
+//!
+//! Past the public face: the `modulate_map` step is taken off
+//! `Recipe::parts[0].steps` (`Step::key`). Home: beside
+//! `generate::step::modulate`.
 
 use crate::common::*;
 use p3dp::base::threads::Threads;

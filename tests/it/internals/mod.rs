@@ -8,11 +8,15 @@
 //! the public face only. When the face shrinks (issue 29, part 7) these
 //! move beside their code as unit tests, one module at a time.
 
+mod bowl;
 mod ca;
 mod extruder_turtle;
 mod gallery;
 mod globe;
 mod mutate;
+mod planner;
+mod preview;
 mod procedural;
 mod recipe_doc;
 mod solid;
+mod svg;

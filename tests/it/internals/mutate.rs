@@ -11,6 +11,11 @@
 //!
 //! `P3DP_MUTANTS=N` sets the mutants per recipe (default 200), and
 //! `P3DP_MUTATE_SEED=S` the seed.
+//!
+//! Past the public face only for the budget: the mutant's string count
+//! before building (`Primitive::string_count` off `Recipe::parts`). It runs
+//! the binary too, so it stays an integration test: a public string count
+//! of a loaded recipe would bring it back to the public modules.
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};

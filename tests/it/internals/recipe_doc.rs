@@ -2,6 +2,10 @@
 //! (found by asking the loader itself: an unknown key `__probe__` at each
 //! place makes it list the keys it takes there), every variable and every
 //! expression function must appear in the reference as a code span.
+//!
+//! Past the public face: the loader's raw form (`recipe::parse_yaml`,
+//! `RawRecipe`) and the expression language's names (`base::expr::VAR_NAMES`,
+//! `FUNCTIONS`). Home: beside `recipe::schema` (the keys) and `base::expr`.
 
 use p3dp::recipe::{parse_yaml, RawRecipe};
 

@@ -2,6 +2,13 @@
 //! ±45° infill → strings (feature-based modelling, paper 003). Through the
 //! library (the exact loops, the strings made from them) and the binary
 //! (the gallery recipes, the stats, bad input).
+//!
+//! Past the public face: `Primitive::Solid` and its layers, the z-buffer
+//! (`ZBuffer`, `Body`, `Feature`, `Cache`, `reusing`), the regions of
+//! `base::geom` (`region`, `offset`, `piece`) and the infill (`infill`,
+//! `plan_join_inside`). Home: beside `generate::primitive::solid` (the
+//! region, offset and piece tests beside `base::geom`); the tests that also
+//! run the binary keep that half here.
 
 use crate::common;
 
@@ -635,19 +642,6 @@ fn solid_infill_fills_each_layer_with_its_area_times_height() {
             );
         }
     }
-}
-
-#[test]
-fn a_solid_refuses_a_cross_section_it_would_ignore() {
-    let dir = common::tmp("solid-cross-section");
-    let path = dir.join("c.yaml");
-    let text = "p3dp: 1\nname: c\nprinter: generic-220\nmaterial: pla\nparts:\n  - name: solid\n    cross_section: 0.15\n    primitive:\n      solid: {layer_height: 0.2, line_width: 0.45, features: [{box: {center: [0, 0, 1], size: [10, 10, 2]}}]}\n";
-    std::fs::write(&path, text).unwrap();
-    let e = Recipe::load(&path, &[], None).unwrap_err().to_string();
-    assert!(e.contains("cross_section") && e.contains("0.09"), "{e}");
-    // the bead's own value is accepted
-    std::fs::write(&path, text.replace("0.15", "0.09")).unwrap();
-    Recipe::load(&path, &[], None).unwrap();
 }
 
 /// Layer settings of the z-buffer tests.
