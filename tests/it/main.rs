@@ -1,0 +1,40 @@
+//! The integration tests: one binary, one module per subject.
+//!
+//! One binary links the crate and its dependencies once, where a file per
+//! subject under `tests/` linked them once a file. `cargo test --test it
+//! NAME` runs the tests whose path holds NAME (`mutate::`, `watch::`).
+//!
+//! The modules here use the crate's public face; those under `internals`
+//! reach past it (see `internals/mod.rs`). Fixtures stay where they were:
+//! `tests/fixtures`, `tests/bad`, `tests/checks`, `tests/snapshots`,
+//! `tests/browser`.
+
+mod common;
+
+mod authoring;
+mod bad_inputs;
+mod batch;
+mod bowl;
+mod ca;
+mod checks;
+mod cli;
+mod error_snapshots;
+mod extruder_turtle;
+mod gallery;
+mod hostile;
+mod internals;
+mod io_errors;
+mod layers;
+mod machines;
+mod mesh;
+mod olympic;
+mod planner;
+mod preview;
+mod procedural;
+mod schema;
+mod solid;
+mod sphere;
+mod svg;
+mod threads;
+mod turtle;
+mod watch;
