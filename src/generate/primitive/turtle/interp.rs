@@ -399,6 +399,7 @@ impl Run<'_> {
         Ok(())
     }
 
+    /// Runs one command: the moves and turns here, the rest in a method each.
     fn command(&mut self, cmd: &Cmd, vals: &mut Vec<f64>) -> Result<()> {
         let place = cmd.place.as_str();
         self.step(place)?;
@@ -425,17 +426,7 @@ impl Run<'_> {
                     Axis::Roll => self.frame.roll(a),
                 }
             }
-            Op::SetHeading(hu) => {
-                let (h, up) = &**hu;
-                let h = self.eval3(h, vals, place)?;
-                let up = match up {
-                    Some(u) => Some(self.eval3(u, vals, place)?),
-                    None => None,
-                };
-                self.frame
-                    .set_heading(h, up)
-                    .map_err(|e| Error::input(place, e.to_string()))?;
-            }
+            Op::SetHeading(hu) => self.set_heading(&hu.0, hu.1.as_ref(), vals, place)?,
             Op::PenUp => {
                 if self.pen_down {
                     self.event(Event::Retract, place)?;
@@ -444,64 +435,11 @@ impl Run<'_> {
             }
             Op::PenDown => self.pen_down = true,
             Op::Pause => self.event(Event::Pause, place)?,
-            Op::DrawTurtle => {
-                // ExtruderTurtle's draw_Turtle(): seen in the previews only
-                if let Some(tp) = &mut self.out {
-                    if tp.markers.len() < MAX_MARKERS {
-                        tp.markers.push(crate::base::toolpath::Marker {
-                            pos: self.frame.pos,
-                            heading: self.frame.heading,
-                            up: self.frame.up,
-                        });
-                    }
-                }
-            }
-            Op::Push => {
-                // each saved frame is memory: a push without a pop is bounded
-                if self.saved.len() >= MAX_SAVED {
-                    return Err(Error::input(
-                        place,
-                        format!("more than {MAX_SAVED} frames pushed and not popped; expected a `pop` for each `push`"),
-                    ));
-                }
-                self.saved.push(self.frame)
-            }
-            Op::Pop => {
-                let Some(f) = self.saved.pop() else {
-                    return Err(Error::input(
-                        place,
-                        "`pop` without a `push` before it; expected one `push` per `pop`",
-                    ));
-                };
-                // back to the saved place without drawing over what is printed
-                let pen = self.pen_down;
-                if pen && f.pos != self.frame.pos {
-                    self.event(Event::Retract, place)?;
-                }
-                self.pen_down = false;
-                self.go(f.pos, place)?;
-                self.pen_down = pen;
-                self.frame = f;
-            }
-            Op::Set(what, x) => {
-                let x = self.positive(x, vals, place)?;
-                match what {
-                    Setting::ExtrudeRate => self.c = x * self.area,
-                    Setting::CrossSection => self.c = x,
-                    Setting::Speed => self.v = x,
-                }
-            }
-            Op::Extrude(mm, feed) => {
-                let filament = self.within(mm, vals, place, 0.0, 1000.0)?;
-                let speed = match feed {
-                    Some(f) => {
-                        let p = place.replace(".extrude", ".feed");
-                        self.positive(f, vals, &p)?
-                    }
-                    None => DEFAULT_FEED,
-                };
-                self.event(Event::Extrude { filament, speed }, place)?;
-            }
+            Op::DrawTurtle => self.draw_turtle(),
+            Op::Push => self.push(place)?,
+            Op::Pop => self.pop(place)?,
+            Op::Set(what, x) => self.set(*what, x, vals, place)?,
+            Op::Extrude(mm, feed) => self.extrude(mm, feed.as_ref(), vals, place)?,
             Op::Dwell(ms) => {
                 let ms = self.within(ms, vals, place, 0.0, 3.6e6)?;
                 self.event(Event::Dwell { ms }, place)?;
@@ -510,45 +448,12 @@ impl Run<'_> {
                 let speed = self.within(s, vals, place, 0.0, 1.0)?;
                 self.event(Event::Fan { speed }, place)?;
             }
-            Op::Temp { bed, celsius, wait } => {
-                // the physical bounds of crate::machine::limits: a hotter one is
-                // refused, not left to a check that --force skips
-                let max = if *bed {
-                    crate::machine::limits::BED_TEMP_MAX
-                } else {
-                    crate::machine::limits::NOZZLE_TEMP_MAX
-                };
-                let t = self.within(celsius, vals, place, 0.0, max)?;
-                let e = if *bed {
-                    Event::BedTemp {
-                        celsius: t,
-                        wait: *wait,
-                    }
-                } else {
-                    Event::NozzleTemp {
-                        celsius: t,
-                        wait: *wait,
-                    }
-                };
-                self.event(e, place)?;
-            }
+            Op::Temp { bed, celsius, wait } => self.temp(*bed, celsius, *wait, vals, place)?,
             Op::Repeat {
                 count,
                 counter,
                 body,
-            } => {
-                let n = self.whole(count, vals, place, 1e12)?;
-                for k in 0..n {
-                    if *counter {
-                        vals.push(k as f64);
-                    }
-                    let r = self.block(body, vals);
-                    if *counter {
-                        vals.pop();
-                    }
-                    r?;
-                }
-            }
+            } => self.repeat(count, *counter, body, vals, place)?,
             Op::If {
                 cond,
                 then,
@@ -557,76 +462,244 @@ impl Run<'_> {
                 let x = self.eval(cond, vals, place)?;
                 self.block(if x != 0.0 { then } else { otherwise }, vals)?;
             }
-            Op::Call { proc, args } => {
-                let mut inner = Vec::with_capacity(args.len());
-                for (j, a) in args.iter().enumerate() {
-                    let p = format!("{}.args[{j}]", place.trim_end_matches(".call"));
-                    let x = self.eval(a, vals, &p)?;
-                    inner.push(x);
-                }
-                let prog = self.prog;
-                let p = &prog.procs[*proc];
-                if self.depth >= MAX_CALL_DEPTH {
-                    return Err(Error::input(
-                        place,
-                        format!(
-                            "calls nest deeper than {MAX_CALL_DEPTH} here: procedure `{}` recurses without bound; expected an `if` that stops the recursion",
-                            p.name
-                        ),
-                    ));
-                }
-                self.depth += 1;
-                let r = self.block(&p.body, &mut inner);
-                self.depth -= 1;
-                r?;
-            }
+            Op::Call { proc, args } => self.call(*proc, args, vals, place)?,
             Op::Hair { length, blob, rate } => {
-                // Laput et al.'s blob-and-pull (ExtruderTurtle §4.3): a blob
-                // in place, a thin pull along the heading, a retraction that
-                // snaps it; the pen is up afterwards
-                let len = self.positive(length, vals, place)?;
-                let blob = match blob {
-                    Some(b) => {
-                        let p = place.replace(".hair", ".blob");
-                        self.within(b, vals, &p, 0.0, 1000.0)?
-                    }
-                    None => DEFAULT_HAIR_BLOB,
-                };
-                let rate = match rate {
-                    Some(r) => {
-                        let p = place.replace(".hair", ".rate");
-                        self.positive(r, vals, &p)?
-                    }
-                    None => DEFAULT_HAIR_RATE,
-                };
-                if blob > 0.0 {
-                    let e = Event::Extrude {
-                        filament: blob,
-                        speed: DEFAULT_FEED,
-                    };
-                    self.event(e, place)?;
-                }
-                let to = self.frame.pos + self.frame.heading * len;
-                if !to.is_finite() {
-                    return Err(Error::input(place, "the hair's tip is not finite"));
-                }
-                self.strings += 1;
-                self.made(place)?;
-                if let Some(tp) = &mut self.out {
-                    tp.hair(to, rate * self.area, self.v);
-                }
-                self.frame.pos = to;
-                self.event(Event::Retract, place)?;
-                self.pen_down = false;
+                self.hair(length, blob.as_ref(), rate.as_ref(), vals, place)?
             }
-            Op::Lsystem(ls) => {
-                let p = format!("{place}.iterations");
-                let n = self.whole(&ls.iterations, vals, &p, MAX_ITERATIONS as f64)? as u32;
-                for &s in &ls.axiom {
-                    self.expand(ls, s, 0, n, vals, place)?;
-                }
+            Op::Lsystem(ls) => self.lsystem(ls, vals, place)?,
+        }
+        Ok(())
+    }
+
+    /// `lsystem`: expands each symbol of the axiom `iterations` times deep.
+    fn lsystem(&mut self, ls: &Lsystem, vals: &mut Vec<f64>, place: &str) -> Result<()> {
+        let p = format!("{place}.iterations");
+        let n = self.whole(&ls.iterations, vals, &p, MAX_ITERATIONS as f64)? as u32;
+        for &s in &ls.axiom {
+            self.expand(ls, s, 0, n, vals, place)?;
+        }
+        Ok(())
+    }
+
+    /// `set_heading`: turns the frame to heading `h`, and `up` if given
+    /// (see [`Frame::set_heading`]).
+    fn set_heading(
+        &mut self,
+        h: &[Val; 3],
+        up: Option<&[Val; 3]>,
+        vals: &mut Vec<f64>,
+        place: &str,
+    ) -> Result<()> {
+        let h = self.eval3(h, vals, place)?;
+        let up = match up {
+            Some(u) => Some(self.eval3(u, vals, place)?),
+            None => None,
+        };
+        self.frame
+            .set_heading(h, up)
+            .map_err(|e| Error::input(place, e.to_string()))
+    }
+
+    /// `draw_turtle`: a marker of the frame, up to [`MAX_MARKERS`].
+    fn draw_turtle(&mut self) {
+        // ExtruderTurtle's draw_Turtle(): seen in the previews only
+        if let Some(tp) = &mut self.out {
+            if tp.markers.len() < MAX_MARKERS {
+                tp.markers.push(crate::base::toolpath::Marker {
+                    pos: self.frame.pos,
+                    heading: self.frame.heading,
+                    up: self.frame.up,
+                });
             }
         }
+    }
+
+    /// `push`: saves the frame, up to [`MAX_SAVED`].
+    fn push(&mut self, place: &str) -> Result<()> {
+        // each saved frame is memory: a push without a pop is bounded
+        if self.saved.len() >= MAX_SAVED {
+            return Err(Error::input(
+                place,
+                format!("more than {MAX_SAVED} frames pushed and not popped; expected a `pop` for each `push`"),
+            ));
+        }
+        self.saved.push(self.frame);
+        Ok(())
+    }
+
+    /// `pop`: travels back to the last saved frame (a retraction first when
+    /// the pen is down) and takes it, the pen as it was.
+    fn pop(&mut self, place: &str) -> Result<()> {
+        let Some(f) = self.saved.pop() else {
+            return Err(Error::input(
+                place,
+                "`pop` without a `push` before it; expected one `push` per `pop`",
+            ));
+        };
+        // back to the saved place without drawing over what is printed
+        let pen = self.pen_down;
+        if pen && f.pos != self.frame.pos {
+            self.event(Event::Retract, place)?;
+        }
+        self.pen_down = false;
+        self.go(f.pos, place)?;
+        self.pen_down = pen;
+        self.frame = f;
+        Ok(())
+    }
+
+    /// `extrude_rate` / `cross_section` / `speed`: the strings to come
+    /// take value `x` (> 0); an extrude rate times the filament's area is
+    /// a cross-section.
+    fn set(&mut self, what: Setting, x: &Val, vals: &mut Vec<f64>, place: &str) -> Result<()> {
+        let x = self.positive(x, vals, place)?;
+        match what {
+            Setting::ExtrudeRate => self.c = x * self.area,
+            Setting::CrossSection => self.c = x,
+            Setting::Speed => self.v = x,
+        }
+        Ok(())
+    }
+
+    /// `extrude`: `mm` of filament in place, at `feed` mm/s or [`DEFAULT_FEED`].
+    fn extrude(
+        &mut self,
+        mm: &Val,
+        feed: Option<&Val>,
+        vals: &mut Vec<f64>,
+        place: &str,
+    ) -> Result<()> {
+        let filament = self.within(mm, vals, place, 0.0, 1000.0)?;
+        let speed = match feed {
+            Some(f) => {
+                let p = place.replace(".extrude", ".feed");
+                self.positive(f, vals, &p)?
+            }
+            None => DEFAULT_FEED,
+        };
+        self.event(Event::Extrude { filament, speed }, place)
+    }
+
+    /// `bed_temp` / `nozzle_temp`: a temperature event within the physical bounds.
+    fn temp(
+        &mut self,
+        bed: bool,
+        celsius: &Val,
+        wait: bool,
+        vals: &mut Vec<f64>,
+        place: &str,
+    ) -> Result<()> {
+        // the physical bounds of crate::machine::limits: a hotter one is
+        // refused, not left to a check that --force skips
+        let max = if bed {
+            crate::machine::limits::BED_TEMP_MAX
+        } else {
+            crate::machine::limits::NOZZLE_TEMP_MAX
+        };
+        let t = self.within(celsius, vals, place, 0.0, max)?;
+        let e = if bed {
+            Event::BedTemp { celsius: t, wait }
+        } else {
+            Event::NozzleTemp { celsius: t, wait }
+        };
+        self.event(e, place)
+    }
+
+    /// `repeat`: runs `body` `count` times, the counter (0, 1, …) in scope
+    /// when it has one.
+    fn repeat(
+        &mut self,
+        count: &Val,
+        counter: bool,
+        body: &[Cmd],
+        vals: &mut Vec<f64>,
+        place: &str,
+    ) -> Result<()> {
+        let n = self.whole(count, vals, place, 1e12)?;
+        for k in 0..n {
+            if counter {
+                vals.push(k as f64);
+            }
+            let r = self.block(body, vals);
+            if counter {
+                vals.pop();
+            }
+            r?;
+        }
+        Ok(())
+    }
+
+    /// `call`: runs procedure `proc` with `args` as its scope, up to
+    /// [`MAX_CALL_DEPTH`] calls deep.
+    fn call(&mut self, proc: usize, args: &[Val], vals: &mut Vec<f64>, place: &str) -> Result<()> {
+        let mut inner = Vec::with_capacity(args.len());
+        for (j, a) in args.iter().enumerate() {
+            let p = format!("{}.args[{j}]", place.trim_end_matches(".call"));
+            let x = self.eval(a, vals, &p)?;
+            inner.push(x);
+        }
+        let prog = self.prog;
+        let p = &prog.procs[proc];
+        if self.depth >= MAX_CALL_DEPTH {
+            return Err(Error::input(
+                place,
+                format!(
+                    "calls nest deeper than {MAX_CALL_DEPTH} here: procedure `{}` recurses without bound; expected an `if` that stops the recursion",
+                    p.name
+                ),
+            ));
+        }
+        self.depth += 1;
+        let r = self.block(&p.body, &mut inner);
+        self.depth -= 1;
+        r
+    }
+
+    /// `hair`: Laput et al.'s blob-and-pull (ExtruderTurtle §4.3): a blob
+    /// in place, a thin pull of `length` along the heading, a retraction
+    /// that snaps it; the pen is up afterwards.
+    fn hair(
+        &mut self,
+        length: &Val,
+        blob: Option<&Val>,
+        rate: Option<&Val>,
+        vals: &mut Vec<f64>,
+        place: &str,
+    ) -> Result<()> {
+        let len = self.positive(length, vals, place)?;
+        let blob = match blob {
+            Some(b) => {
+                let p = place.replace(".hair", ".blob");
+                self.within(b, vals, &p, 0.0, 1000.0)?
+            }
+            None => DEFAULT_HAIR_BLOB,
+        };
+        let rate = match rate {
+            Some(r) => {
+                let p = place.replace(".hair", ".rate");
+                self.positive(r, vals, &p)?
+            }
+            None => DEFAULT_HAIR_RATE,
+        };
+        if blob > 0.0 {
+            let e = Event::Extrude {
+                filament: blob,
+                speed: DEFAULT_FEED,
+            };
+            self.event(e, place)?;
+        }
+        let to = self.frame.pos + self.frame.heading * len;
+        if !to.is_finite() {
+            return Err(Error::input(place, "the hair's tip is not finite"));
+        }
+        self.strings += 1;
+        self.made(place)?;
+        if let Some(tp) = &mut self.out {
+            tp.hair(to, rate * self.area, self.v);
+        }
+        self.frame.pos = to;
+        self.event(Event::Retract, place)?;
+        self.pen_down = false;
         Ok(())
     }
 
