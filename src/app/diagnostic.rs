@@ -333,20 +333,7 @@ fn block_child(
         if is_blank(line) {
             continue;
         }
-        // an entry's column: where it starts, or after the `- ` of the block's first line
-        let (indent, mut rest) = content(line);
-        let mut at = indent;
-        if k == start && at < col {
-            // the first line of a sequence item: `- key: …`
-            while at < col {
-                let Some(r) = rest.strip_prefix('-') else {
-                    break;
-                };
-                let r2 = r.trim_start_matches(' ');
-                at += 1 + r.len() - r2.len();
-                rest = r2;
-            }
-        }
+        let (at, rest) = entry_column(line, k == start, col);
         if at != col {
             continue;
         }
@@ -359,85 +346,122 @@ fn block_child(
                     continue;
                 }
                 if items == *n {
-                    let item_end = block_end(lines, k + 1, end, at);
-                    let inner = after.trim_start_matches(' ');
-                    let inner_col = at + 1 + after.len() - inner.len();
-                    if inner.is_empty() {
-                        let c = next_col(lines, k + 1, item_end)?;
-                        return Some((
-                            Node::Block {
-                                start: k + 1,
-                                end: item_end,
-                                col: c,
-                            },
-                            Span {
-                                line: k + 1,
-                                start: at,
-                                end: at + 1,
-                            },
-                        ));
-                    }
-                    if inner.starts_with(['{', '[', '"', '\'']) || !has_key(inner) {
-                        let s = Span {
-                            line: k + 1,
-                            start: inner_col,
-                            end: word_end(line, inner_col),
-                        };
-                        return Some((Node::Inline(s), s));
-                    }
-                    let s = Span {
-                        line: k + 1,
-                        start: at,
-                        end: at + 1,
-                    };
-                    return Some((
-                        Node::Block {
-                            start: k,
-                            end: item_end,
-                            col: inner_col,
-                        },
-                        s,
-                    ));
+                    return item_child(lines, k, end, at, after);
                 }
                 items += 1;
             }
             Seg::Key(key) => {
-                let Some(after) = rest.strip_prefix(key.as_str()) else {
-                    continue;
-                };
-                let after_colon = after.trim_start_matches(' ');
-                let Some(value) = after_colon.strip_prefix(':') else {
-                    continue;
-                };
-                let key_span = Span {
-                    line: k + 1,
-                    start: at,
-                    end: at + key.len(),
-                };
-                let v = value.trim_start_matches(' ');
-                let v_col = line.len() - v.len();
-                if !is_blank(v) {
-                    let s = Span {
-                        line: k + 1,
-                        start: v_col,
-                        end: word_end(line, v_col),
-                    };
-                    return Some((Node::Inline(s), s));
+                if let Some(child) = key_child(lines, k, end, at, rest, key) {
+                    return Some(child);
                 }
-                let child_end = block_end(lines, k + 1, end, at);
-                let c = next_col(lines, k + 1, child_end).unwrap_or(at + 2);
-                return Some((
-                    Node::Block {
-                        start: k + 1,
-                        end: child_end,
-                        col: c,
-                    },
-                    key_span,
-                ));
             }
         }
     }
     None
+}
+
+/// Where the entry of `line` starts, and its text from there: its indent,
+/// or on the block's `first` line, past the `- ` of the sequence items that
+/// open it, up to the block's column `col`.
+fn entry_column(line: &str, first: bool, col: usize) -> (usize, &str) {
+    let (indent, mut rest) = content(line);
+    let mut at = indent;
+    if first && at < col {
+        // the first line of a sequence item: `- key: …`
+        while at < col {
+            let Some(r) = rest.strip_prefix('-') else {
+                break;
+            };
+            let r2 = r.trim_start_matches(' ');
+            at += 1 + r.len() - r2.len();
+            rest = r2;
+        }
+    }
+    (at, rest)
+}
+
+/// The sequence item whose `-` is on line `k` at column `at`, `after` the
+/// text after its `-`, in a block ending at `end`: a block below it, a
+/// value on its line, or a block of entries starting on its line.
+fn item_child(
+    lines: &[&str],
+    k: usize,
+    end: usize,
+    at: usize,
+    after: &str,
+) -> Option<(Node, Span)> {
+    let line = lines[k];
+    let item_end = block_end(lines, k + 1, end, at);
+    let inner = after.trim_start_matches(' ');
+    let inner_col = at + 1 + after.len() - inner.len();
+    let dash = Span {
+        line: k + 1,
+        start: at,
+        end: at + 1,
+    };
+    if inner.is_empty() {
+        let c = next_col(lines, k + 1, item_end)?;
+        let node = Node::Block {
+            start: k + 1,
+            end: item_end,
+            col: c,
+        };
+        return Some((node, dash));
+    }
+    if inner.starts_with(['{', '[', '"', '\'']) || !has_key(inner) {
+        let s = Span {
+            line: k + 1,
+            start: inner_col,
+            end: word_end(line, inner_col),
+        };
+        return Some((Node::Inline(s), s));
+    }
+    let node = Node::Block {
+        start: k,
+        end: item_end,
+        col: inner_col,
+    };
+    Some((node, dash))
+}
+
+/// The entry `key:` if line `k`'s entry at column `at`, `rest` its text,
+/// is one, in a block ending at `end`: its value on the line, or the block
+/// below it (shown by its key); None when the entry is another.
+fn key_child(
+    lines: &[&str],
+    k: usize,
+    end: usize,
+    at: usize,
+    rest: &str,
+    key: &str,
+) -> Option<(Node, Span)> {
+    let line = lines[k];
+    let after = rest.strip_prefix(key)?;
+    let after_colon = after.trim_start_matches(' ');
+    let value = after_colon.strip_prefix(':')?;
+    let key_span = Span {
+        line: k + 1,
+        start: at,
+        end: at + key.len(),
+    };
+    let v = value.trim_start_matches(' ');
+    let v_col = line.len() - v.len();
+    if !is_blank(v) {
+        let s = Span {
+            line: k + 1,
+            start: v_col,
+            end: word_end(line, v_col),
+        };
+        return Some((Node::Inline(s), s));
+    }
+    let child_end = block_end(lines, k + 1, end, at);
+    let c = next_col(lines, k + 1, child_end).unwrap_or(at + 2);
+    let node = Node::Block {
+        start: k + 1,
+        end: child_end,
+        col: c,
+    };
+    Some((node, key_span))
 }
 
 /// Whether a line's content is a `key: …` entry.

@@ -637,32 +637,7 @@ impl Expr {
         allowed: &[usize],
         names: Option<&[&str]>,
     ) -> Result<Expr, ExprError> {
-        if src.len() > MAX_LEN {
-            return Err(ExprError::new(
-                ExprErrorKind::TooDeep,
-                format!(
-                    "the expression `{}…` is {} characters long; expected at most {MAX_LEN}",
-                    src.chars().take(24).collect::<String>(),
-                    src.len()
-                ),
-            ));
-        }
-        // meval's tokenizer panics on text of only white space (found by fuzz/)
-        if src.trim().is_empty() {
-            return Err(ExprError::new(
-                ExprErrorKind::Syntax,
-                "an empty expression; expected a number or an expression",
-            ));
-        }
-        // Kanada's Python recipes write powers as `**`; meval's operator is `^`.
-        let mut text = src.replace("**", "^");
-        if let Some(ns) = names {
-            text = mark_rand(&text);
-            for base in ns.iter().filter_map(|n| n.strip_suffix("()")) {
-                text = mark_call(&text, base);
-            }
-        }
-        let mut rands = 0u16;
+        let text = source_text(src, names)?;
         let tokens = meval::tokenizer::tokenize(&text)
             .map_err(|e| ExprError::new(ExprErrorKind::Syntax, describe_parse_error(src, &e)))?;
         let rpn = meval::shunting_yard::to_rpn(&tokens).map_err(|e| {
@@ -671,185 +646,20 @@ impl Expr {
                 format!("cannot read the expression `{src}`: {e}"),
             )
         })?;
-        let mut stack: Vec<Node> = Vec::new();
-        // the height of each tree on `stack`, to refuse one nested too deeply
-        let mut heights: Vec<u32> = Vec::new();
-        let mut used = 0u32;
-        let pop = |stack: &mut Vec<Node>| -> Result<Node, ExprError> {
-            stack.pop().ok_or_else(|| {
-                ExprError::new(
-                    ExprErrorKind::Syntax,
-                    format!("cannot read the expression `{src}`: an operand is missing"),
-                )
-            })
+        let mut c = Compiler {
+            src,
+            params,
+            allowed,
+            names,
+            stack: Vec::new(),
+            heights: Vec::new(),
+            used: 0,
+            rands: 0,
         };
         for tok in rpn {
-            let takes = match &tok {
-                Token::Unary(_) => 1,
-                Token::Binary(_) => 2,
-                Token::Func(_, n) => n.unwrap_or(0),
-                _ => 0,
-            };
-            let below = heights.len().saturating_sub(takes);
-            let height = 1 + heights.drain(below..).max().unwrap_or(0);
-            if height > MAX_DEPTH {
-                return Err(ExprError::new(
-                    ExprErrorKind::TooDeep,
-                    format!(
-                        "the expression `{}…` nests operations and calls more than {MAX_DEPTH} deep; expected a simpler expression",
-                        src.chars().take(24).collect::<String>()
-                    ),
-                ));
-            }
-            heights.push(height);
-            let node = match tok {
-                Token::Number(v) => Node::Num(v),
-                Token::Var(name) => {
-                    let ext = names.and_then(|ns| {
-                        ns.iter().position(|n| match n.strip_suffix("()") {
-                            Some(base) => is_mark(&name, base),
-                            None => *n == name,
-                        })
-                    });
-                    if let Some(k) = ext {
-                        Node::Ext(k as u16)
-                    } else if names.is_some() && is_rand_mark(&name) {
-                        rands += 1;
-                        Node::Ext((names.unwrap_or(&[]).len() + rands as usize - 1) as u16)
-                    } else if let Some(v) = params
-                        .get(&name)
-                        .filter(|_| SHADOWABLE.contains(&name.as_str()))
-                    {
-                        // a param named like a later variable shadows it
-                        Node::Num(*v)
-                    } else if let Some(k) = VAR_NAMES.iter().position(|n| *n == name) {
-                        if !allowed.contains(&k) {
-                            return Err(ExprError::new(
-                                ExprErrorKind::Name,
-                                format!(
-                                    "`{name}` is not available in `{src}` here; it may use {}",
-                                    allowed_names(allowed, params)
-                                ),
-                            ));
-                        }
-                        used |= 1 << k;
-                        Node::Var(k as u8)
-                    } else if let Some(v) = params.get(&name) {
-                        Node::Num(*v)
-                    } else if name == "pi" {
-                        Node::Num(std::f64::consts::PI)
-                    } else if name == "e" {
-                        Node::Num(std::f64::consts::E)
-                    } else {
-                        return Err(ExprError::new(
-                            ExprErrorKind::Name,
-                            format!(
-                                "unknown name `{name}` in `{src}`; it may use {}",
-                                allowed_names(allowed, params)
-                            ),
-                        ));
-                    }
-                }
-                Token::Unary(Operation::Minus) => Node::Neg(Box::new(pop(&mut stack)?)),
-                Token::Unary(_) => pop(&mut stack)?,
-                Token::Binary(op) => {
-                    let b = pop(&mut stack)?;
-                    let a = pop(&mut stack)?;
-                    let op = match op {
-                        Operation::Plus => Op::Add,
-                        Operation::Minus => Op::Sub,
-                        Operation::Times => Op::Mul,
-                        Operation::Div => Op::Div,
-                        Operation::Rem => Op::Rem,
-                        Operation::Pow => Op::Pow,
-                    };
-                    Node::Bin(op, Box::new(a), Box::new(b))
-                }
-                Token::Func(name, nargs) => {
-                    let k = nargs.unwrap_or(0);
-                    let op = match (name.as_str(), k) {
-                        ("min", 1..=255) => Op::Min(k as u8),
-                        ("max", 1..=255) => Op::Max(k as u8),
-                        ("min" | "max", _) => {
-                            return Err(ExprError::new(
-                                ExprErrorKind::Function,
-                                format!(
-                                    "`{name}` takes 1 to 255 arguments but is given {k} in `{src}`"
-                                ),
-                            ))
-                        }
-                        (n, 1) if lookup1(n).is_some() => Op::F1(lookup1(n).unwrap()),
-                        (n, 2) if lookup2(n).is_some() => Op::F2(lookup2(n).unwrap()),
-                        (n, 3) if lookup3(n).is_some() => Op::F3(lookup3(n).unwrap()),
-                        (n, 4) if lookup4(n).is_some() => Op::F4(lookup4(n).unwrap()),
-                        (n, _) => {
-                            let arity = if lookup1(n).is_some() {
-                                Some(1)
-                            } else if lookup2(n).is_some() {
-                                Some(2)
-                            } else if lookup3(n).is_some() {
-                                Some(3)
-                            } else if lookup4(n).is_some() {
-                                Some(4)
-                            } else {
-                                None
-                            };
-                            return Err(ExprError::new(
-                                ExprErrorKind::Function,
-                                match arity {
-                                    Some(a) => format!(
-                                        "`{n}` takes {a} argument{} but is given {k} in `{src}`",
-                                        if a == 1 { "" } else { "s" }
-                                    ),
-                                    None => format!(
-                                    "unknown function `{n}` in `{src}`; functions are: {FUNCTIONS}"
-                                ),
-                                },
-                            ));
-                        }
-                    };
-                    if stack.len() < k {
-                        return Err(ExprError::new(
-                            ExprErrorKind::Syntax,
-                            format!("cannot read the expression `{src}`: `{name}` lacks arguments"),
-                        ));
-                    }
-                    let args = stack.split_off(stack.len() - k);
-                    Node::Call(op, args)
-                }
-                other => {
-                    return Err(ExprError::new(
-                        ExprErrorKind::Syntax,
-                        format!("cannot read the expression `{src}`: unexpected {other:?}"),
-                    ))
-                }
-            };
-            stack.push(fold(node));
+            c.push(tok)?;
         }
-        if stack.len() != 1 {
-            return Err(ExprError::new(
-                ExprErrorKind::Syntax,
-                format!(
-                    "cannot read the expression `{src}`: expected one value, found {}",
-                    stack.len()
-                ),
-            ));
-        }
-        let root = stack.pop().unwrap();
-        if root.depth() > STACK {
-            return Err(ExprError::new(
-                ExprErrorKind::TooDeep,
-                format!("the expression `{src}` is nested too deeply"),
-            ));
-        }
-        let mut ops = Vec::new();
-        root.emit(&mut ops);
-        Ok(Expr {
-            src: src.to_string(),
-            ops,
-            used,
-            rands,
-        })
+        c.finish()
     }
 
     /// Evaluates with the given variable values.
@@ -918,6 +728,283 @@ impl Expr {
     pub fn src(&self) -> &str {
         &self.src
     }
+}
+
+/// The text meval reads for `src`: refuses one too long or blank, writes
+/// Kanada's `**` as `^`, and (with extra `names`) marks `rand()` and the
+/// calls of no arguments as variables (see [`mark_call`]).
+fn source_text(src: &str, names: Option<&[&str]>) -> Result<String, ExprError> {
+    if src.len() > MAX_LEN {
+        return Err(ExprError::new(
+            ExprErrorKind::TooDeep,
+            format!(
+                "the expression `{}…` is {} characters long; expected at most {MAX_LEN}",
+                src.chars().take(24).collect::<String>(),
+                src.len()
+            ),
+        ));
+    }
+    // meval's tokenizer panics on text of only white space (found by fuzz/)
+    if src.trim().is_empty() {
+        return Err(ExprError::new(
+            ExprErrorKind::Syntax,
+            "an empty expression; expected a number or an expression",
+        ));
+    }
+    // Kanada's Python recipes write powers as `**`; meval's operator is `^`.
+    let mut text = src.replace("**", "^");
+    if let Some(ns) = names {
+        text = mark_rand(&text);
+        for base in ns.iter().filter_map(|n| n.strip_suffix("()")) {
+            text = mark_call(&text, base);
+        }
+    }
+    Ok(text)
+}
+
+/// The state of [`Expr::compile_inner`] while it turns reverse Polish
+/// tokens into a tree, one token at a time.
+struct Compiler<'a> {
+    /// The expression as written, for error messages.
+    src: &'a str,
+    /// The recipe's params, folded in as constants.
+    params: &'a Params,
+    /// The variable slots the expression may read.
+    allowed: &'a [usize],
+    /// The extra names of [`Expr::compile_ext`], if any.
+    names: Option<&'a [&'a str]>,
+    /// The trees built so far: the operands of the tokens to come.
+    stack: Vec<Node>,
+    /// The height of each tree on `stack`, to refuse one nested too deeply.
+    heights: Vec<u32>,
+    /// Bit k set when variable slot k is read.
+    used: u32,
+    /// `rand()` calls met so far.
+    rands: u16,
+}
+
+impl Compiler<'_> {
+    /// Takes one token: checks the depth, builds its node from the operands
+    /// on the stack, and pushes it folded.
+    fn push(&mut self, tok: Token) -> Result<(), ExprError> {
+        self.check_height(&tok)?;
+        let node = match tok {
+            Token::Number(v) => Node::Num(v),
+            Token::Var(name) => self.name(name)?,
+            Token::Unary(Operation::Minus) => Node::Neg(Box::new(self.pop()?)),
+            Token::Unary(_) => self.pop()?,
+            Token::Binary(op) => {
+                let b = self.pop()?;
+                let a = self.pop()?;
+                Node::Bin(binary_op(op), Box::new(a), Box::new(b))
+            }
+            Token::Func(name, nargs) => self.call(name, nargs)?,
+            other => {
+                return Err(ExprError::new(
+                    ExprErrorKind::Syntax,
+                    format!(
+                        "cannot read the expression `{}`: unexpected {other:?}",
+                        self.src
+                    ),
+                ))
+            }
+        };
+        self.stack.push(fold(node));
+        Ok(())
+    }
+
+    /// Records the height of the tree `tok` makes (one more than its
+    /// highest operand's) and refuses one over [`MAX_DEPTH`].
+    fn check_height(&mut self, tok: &Token) -> Result<(), ExprError> {
+        let takes = match tok {
+            Token::Unary(_) => 1,
+            Token::Binary(_) => 2,
+            Token::Func(_, n) => n.unwrap_or(0),
+            _ => 0,
+        };
+        let below = self.heights.len().saturating_sub(takes);
+        let height = 1 + self.heights.drain(below..).max().unwrap_or(0);
+        if height > MAX_DEPTH {
+            return Err(ExprError::new(
+                ExprErrorKind::TooDeep,
+                format!(
+                    "the expression `{}…` nests operations and calls more than {MAX_DEPTH} deep; expected a simpler expression",
+                    self.src.chars().take(24).collect::<String>()
+                ),
+            ));
+        }
+        self.heights.push(height);
+        Ok(())
+    }
+
+    /// The operand on top of the stack.
+    fn pop(&mut self) -> Result<Node, ExprError> {
+        self.stack.pop().ok_or_else(|| {
+            ExprError::new(
+                ExprErrorKind::Syntax,
+                format!(
+                    "cannot read the expression `{}`: an operand is missing",
+                    self.src
+                ),
+            )
+        })
+    }
+
+    /// What `name` stands for, first match wins: an extra name, a `rand()`,
+    /// a param shadowing a later variable, an allowed variable, a param,
+    /// `pi`, `e`.
+    fn name(&mut self, name: String) -> Result<Node, ExprError> {
+        let (src, params, allowed, names) = (self.src, self.params, self.allowed, self.names);
+        let ext = names.and_then(|ns| {
+            ns.iter().position(|n| match n.strip_suffix("()") {
+                Some(base) => is_mark(&name, base),
+                None => *n == name,
+            })
+        });
+        Ok(if let Some(k) = ext {
+            Node::Ext(k as u16)
+        } else if names.is_some() && is_rand_mark(&name) {
+            self.rands += 1;
+            Node::Ext((names.unwrap_or(&[]).len() + self.rands as usize - 1) as u16)
+        } else if let Some(v) = params
+            .get(&name)
+            .filter(|_| SHADOWABLE.contains(&name.as_str()))
+        {
+            // a param named like a later variable shadows it
+            Node::Num(*v)
+        } else if let Some(k) = VAR_NAMES.iter().position(|n| *n == name) {
+            if !allowed.contains(&k) {
+                return Err(ExprError::new(
+                    ExprErrorKind::Name,
+                    format!(
+                        "`{name}` is not available in `{src}` here; it may use {}",
+                        allowed_names(allowed, params)
+                    ),
+                ));
+            }
+            self.used |= 1 << k;
+            Node::Var(k as u8)
+        } else if let Some(v) = params.get(&name) {
+            Node::Num(*v)
+        } else if name == "pi" {
+            Node::Num(std::f64::consts::PI)
+        } else if name == "e" {
+            Node::Num(std::f64::consts::E)
+        } else {
+            return Err(ExprError::new(
+                ExprErrorKind::Name,
+                format!(
+                    "unknown name `{name}` in `{src}`; it may use {}",
+                    allowed_names(allowed, params)
+                ),
+            ));
+        })
+    }
+
+    /// The call of `name` on the top `nargs` trees of the stack.
+    fn call(&mut self, name: String, nargs: Option<usize>) -> Result<Node, ExprError> {
+        let k = nargs.unwrap_or(0);
+        let op = function_op(&name, k, self.src)?;
+        if self.stack.len() < k {
+            return Err(ExprError::new(
+                ExprErrorKind::Syntax,
+                format!(
+                    "cannot read the expression `{}`: `{name}` lacks arguments",
+                    self.src
+                ),
+            ));
+        }
+        let args = self.stack.split_off(self.stack.len() - k);
+        Ok(Node::Call(op, args))
+    }
+
+    /// The compiled expression: one tree left, shallow enough for the
+    /// run-time stack, emitted in reverse Polish order.
+    fn finish(mut self) -> Result<Expr, ExprError> {
+        let src = self.src;
+        if self.stack.len() != 1 {
+            return Err(ExprError::new(
+                ExprErrorKind::Syntax,
+                format!(
+                    "cannot read the expression `{src}`: expected one value, found {}",
+                    self.stack.len()
+                ),
+            ));
+        }
+        let root = self.stack.pop().unwrap();
+        if root.depth() > STACK {
+            return Err(ExprError::new(
+                ExprErrorKind::TooDeep,
+                format!("the expression `{src}` is nested too deeply"),
+            ));
+        }
+        let mut ops = Vec::new();
+        root.emit(&mut ops);
+        Ok(Expr {
+            src: src.to_string(),
+            ops,
+            used: self.used,
+            rands: self.rands,
+        })
+    }
+}
+
+/// The instruction of meval's binary operator `op`.
+fn binary_op(op: Operation) -> Op {
+    match op {
+        Operation::Plus => Op::Add,
+        Operation::Minus => Op::Sub,
+        Operation::Times => Op::Mul,
+        Operation::Div => Op::Div,
+        Operation::Rem => Op::Rem,
+        Operation::Pow => Op::Pow,
+    }
+}
+
+/// The instruction calling function `name` with `k` arguments, or the error
+/// saying how many it takes or that it is unknown.
+fn function_op(name: &str, k: usize, src: &str) -> Result<Op, ExprError> {
+    Ok(match (name, k) {
+        ("min", 1..=255) => Op::Min(k as u8),
+        ("max", 1..=255) => Op::Max(k as u8),
+        ("min" | "max", _) => {
+            return Err(ExprError::new(
+                ExprErrorKind::Function,
+                format!("`{name}` takes 1 to 255 arguments but is given {k} in `{src}`"),
+            ))
+        }
+        (n, 1) if lookup1(n).is_some() => Op::F1(lookup1(n).unwrap()),
+        (n, 2) if lookup2(n).is_some() => Op::F2(lookup2(n).unwrap()),
+        (n, 3) if lookup3(n).is_some() => Op::F3(lookup3(n).unwrap()),
+        (n, 4) if lookup4(n).is_some() => Op::F4(lookup4(n).unwrap()),
+        (n, _) => return Err(arity_error(n, k, src)),
+    })
+}
+
+/// The error for function `n` given `k` arguments, which no function of
+/// that name takes: how many it does take, or that it is unknown.
+fn arity_error(n: &str, k: usize, src: &str) -> ExprError {
+    let arity = if lookup1(n).is_some() {
+        Some(1)
+    } else if lookup2(n).is_some() {
+        Some(2)
+    } else if lookup3(n).is_some() {
+        Some(3)
+    } else if lookup4(n).is_some() {
+        Some(4)
+    } else {
+        None
+    };
+    ExprError::new(
+        ExprErrorKind::Function,
+        match arity {
+            Some(a) => format!(
+                "`{n}` takes {a} argument{} but is given {k} in `{src}`",
+                if a == 1 { "" } else { "s" }
+            ),
+            None => format!("unknown function `{n}` in `{src}`; functions are: {FUNCTIONS}"),
+        },
+    )
 }
 
 fn fold(node: Node) -> Node {

@@ -174,7 +174,9 @@ pub fn check_nesting(text: &str) -> Result<()> {
             Some(_) => {}
             None => match c {
                 '#' if prev.is_whitespace() => comment = true,
-                '"' | '\'' if prev.is_whitespace() || "[{,:".contains(prev) => quote = Some(c),
+                '"' | '\'' if prev.is_whitespace() || matches!(prev, '[' | '{' | ',' | ':') => {
+                    quote = Some(c)
+                }
                 '[' | '{' => {
                     depth += 1;
                     if depth > MAX_NESTING {

@@ -125,28 +125,7 @@ pub fn parse(text: &str, opt: &Options) -> std::result::Result<Vec<Subpath>, Str
             "cannot read it as XML: {e}; expected an SVG file (no DTD, at most {MAX_NODES} nodes)"
         )
     })?;
-    check_expansion(&doc)?;
-    check_style_work(&doc)?;
-    // usvg copies a marker's content to every vertex of every path that
-    // names it (in an attribute or a style sheet): a small marker on a long
-    // path is a bomb the `<use>` count does not see, and markers are
-    // decoration (arrowheads), not outlines. Refused, naming the first.
-    if let Some(m) = doc
-        .descendants()
-        .find(|n| n.is_element() && n.tag_name().name() == "marker")
-    {
-        return Err(format!(
-            "{} is a marker, which p3dp does not draw (usvg would copy it to every vertex of the paths that use it); expected a drawing without `<marker>` elements",
-            describe(&doc, m)
-        ));
-    }
-    if let Some(id) = opt.id {
-        if !doc.descendants().any(|n| n.attribute("id") == Some(id)) {
-            return Err(format!(
-                "no element has id=\"{id}\"; expected the id of a shape or group"
-            ));
-        }
-    }
+    check_xml(&doc, opt)?;
     let uopt = usvg::Options {
         // never read a file or decode a picture an `<image>` names
         image_href_resolver: usvg::ImageHrefResolver {
@@ -157,6 +136,41 @@ pub fn parse(text: &str, opt: &Options) -> std::result::Result<Vec<Subpath>, Str
     };
     let tree = usvg::Tree::from_xmltree(&doc, &uopt)
         .map_err(|e| format!("cannot read it as SVG: {e}; expected an SVG file"))?;
+    let out = flatten(&tree, opt)?;
+    drawn(out, opt)
+}
+
+/// The checks on the XML before usvg sees it: the `<use>` expansion, the
+/// style sheets' work, no `<marker>`, and an element of id `opt.id` if one
+/// is asked for.
+fn check_xml(doc: &roxmltree::Document, opt: &Options) -> std::result::Result<(), String> {
+    check_expansion(doc)?;
+    check_style_work(doc)?;
+    // usvg copies a marker's content to every vertex of every path that
+    // names it (in an attribute or a style sheet): a small marker on a long
+    // path is a bomb the `<use>` count does not see, and markers are
+    // decoration (arrowheads), not outlines. Refused, naming the first.
+    if let Some(m) = doc
+        .descendants()
+        .find(|n| n.is_element() && n.tag_name().name() == "marker")
+    {
+        return Err(format!(
+            "{} is a marker, which p3dp does not draw (usvg would copy it to every vertex of the paths that use it); expected a drawing without `<marker>` elements",
+            describe(doc, m)
+        ));
+    }
+    if let Some(id) = opt.id {
+        if !doc.descendants().any(|n| n.attribute("id") == Some(id)) {
+            return Err(format!(
+                "no element has id=\"{id}\"; expected the id of a shape or group"
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The subpaths of the whole drawing, or of the element of id `opt.id`.
+fn flatten(tree: &usvg::Tree, opt: &Options) -> std::result::Result<Vec<Subpath>, String> {
     let mut out = Vec::new();
     let mut count = 0u64;
     let mut ctx = Flatten {
@@ -175,6 +189,12 @@ pub fn parse(text: &str, opt: &Options) -> std::result::Result<Vec<Subpath>, Str
         },
         None => ctx.group(tree.root(), "")?,
     }
+    Ok(out)
+}
+
+/// The subpaths of two points or more, refusing a drawing that has none
+/// or that reaches beyond [`MAX_MM`].
+fn drawn(mut out: Vec<Subpath>, opt: &Options) -> std::result::Result<Vec<Subpath>, String> {
     if out.iter().all(|s| s.points.len() < 2) {
         let what = match opt.id {
             Some(id) => format!("the element with id=\"{id}\""),
@@ -351,31 +371,14 @@ impl Flatten<'_, '_> {
         Ok(())
     }
 
+    /// Flattens the visible path `p`, of element `id`, into subpaths.
     fn path(&mut self, p: &usvg::Path, id: &str) -> std::result::Result<(), String> {
         if !p.is_visible() {
             return Ok(());
         }
-        let t = p.abs_transform();
-        let k = MM_PER_PX * self.opt.scale;
-        // the affine map of user units to mm, y flipped: applied to control
-        // points, so the curves stay Béziers and are flattened in mm
-        let map = |q: usvg::tiny_skia_path::Point| -> DVec2 {
-            let (x, y) = (q.x as f64, q.y as f64);
-            let ux = t.sx as f64 * x + t.kx as f64 * y + t.tx as f64;
-            let uy = t.ky as f64 * x + t.sy as f64 * y + t.ty as f64;
-            DVec2::new(ux * k, -uy * k)
-        };
+        let map = to_mm(p.abs_transform(), MM_PER_PX * self.opt.scale);
         let tol = self.opt.tolerance;
         let mut cur: Option<Subpath> = None;
-        let finish = |cur: &mut Option<Subpath>, out: &mut Vec<Subpath>| {
-            if let Some(mut s) = cur.take() {
-                if s.points.len() > 2 && s.points[0] == *s.points.last().unwrap() {
-                    s.points.pop();
-                    s.closed = true;
-                }
-                out.push(s);
-            }
-        };
         for seg in p.data().segments() {
             use usvg::tiny_skia_path::PathSegment as S;
             let added: Vec<DVec2> = match seg {
@@ -398,50 +401,92 @@ impl Flatten<'_, '_> {
                     cubic(p0, map(a), map(b), map(c), tol)
                 }
                 S::Close => {
-                    if let Some(s) = cur.as_mut() {
-                        s.closed = true;
-                        if s.points.len() > 1 && s.points[0] == *s.points.last().unwrap() {
-                            s.points.pop();
-                        }
-                    }
-                    let reopen = cur.as_ref().map(|s| s.points[0]);
-                    finish(&mut cur, self.out);
-                    // a segment after Z starts at the closed subpath's start
-                    if let Some(start) = reopen {
-                        cur = Some(Subpath {
-                            points: vec![start],
-                            closed: false,
-                            element: id.to_string(),
-                        });
-                        *self.count += 1;
-                    }
+                    self.close(&mut cur, id);
                     continue;
                 }
             };
-            *self.count += added.len() as u64;
-            if *self.count > self.opt.max_points {
-                let what = if id.is_empty() {
-                    "the drawing".to_string()
-                } else {
-                    format!("the element with id=\"{id}\"")
-                };
-                return Err(format!(
-                    "{what} flattens to more than {} points at tolerance {} mm (the recipe's max_strings); expected a larger tolerance or a simpler drawing",
-                    self.opt.max_points, tol
-                ));
-            }
-            if let Some(s) = cur.as_mut() {
-                for q in added {
-                    if s.points.last() != Some(&q) {
-                        s.points.push(q);
-                    }
-                }
-            }
+            self.add(&mut cur, added, id)?;
         }
         finish(&mut cur, self.out);
         // a lone start point left after a final Z draws nothing
         self.out.retain(|s| s.points.len() >= 2 || s.closed);
         Ok(())
+    }
+
+    /// `Z`: closes the subpath `cur` and starts the next at its first point
+    /// (a segment after Z starts there).
+    fn close(&mut self, cur: &mut Option<Subpath>, id: &str) {
+        if let Some(s) = cur.as_mut() {
+            s.closed = true;
+            if s.points.len() > 1 && s.points[0] == *s.points.last().unwrap() {
+                s.points.pop();
+            }
+        }
+        let reopen = cur.as_ref().map(|s| s.points[0]);
+        finish(cur, self.out);
+        // a segment after Z starts at the closed subpath's start
+        if let Some(start) = reopen {
+            *cur = Some(Subpath {
+                points: vec![start],
+                closed: false,
+                element: id.to_string(),
+            });
+            *self.count += 1;
+        }
+    }
+
+    /// Appends the points `added` to the subpath `cur` (less repeats of its
+    /// last point), refusing a drawing past `opt.max_points`.
+    fn add(
+        &mut self,
+        cur: &mut Option<Subpath>,
+        added: Vec<DVec2>,
+        id: &str,
+    ) -> std::result::Result<(), String> {
+        *self.count += added.len() as u64;
+        if *self.count > self.opt.max_points {
+            let what = if id.is_empty() {
+                "the drawing".to_string()
+            } else {
+                format!("the element with id=\"{id}\"")
+            };
+            return Err(format!(
+                "{what} flattens to more than {} points at tolerance {} mm (the recipe's max_strings); expected a larger tolerance or a simpler drawing",
+                self.opt.max_points, self.opt.tolerance
+            ));
+        }
+        if let Some(s) = cur.as_mut() {
+            for q in added {
+                if s.points.last() != Some(&q) {
+                    s.points.push(q);
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The affine map `t` of user units to mm (`k` mm a unit), y flipped:
+/// applied to control points, so the curves stay Béziers and are flattened
+/// in mm.
+fn to_mm(t: usvg::Transform, k: f64) -> impl Fn(usvg::tiny_skia_path::Point) -> DVec2 {
+    move |q| {
+        let (x, y) = (q.x as f64, q.y as f64);
+        let ux = t.sx as f64 * x + t.kx as f64 * y + t.tx as f64;
+        let uy = t.ky as f64 * x + t.sy as f64 * y + t.ty as f64;
+        DVec2::new(ux * k, -uy * k)
+    }
+}
+
+/// Ends the subpath `cur`, if any, into `out`: closed when it comes back to
+/// its first point (which it then does not repeat).
+fn finish(cur: &mut Option<Subpath>, out: &mut Vec<Subpath>) {
+    if let Some(mut s) = cur.take() {
+        if s.points.len() > 2 && s.points[0] == *s.points.last().unwrap() {
+            s.points.pop();
+            s.closed = true;
+        }
+        out.push(s);
     }
 }
 

@@ -183,7 +183,26 @@ impl Stand {
     /// a micron's tolerance for the rounding of the division).
     pub fn layers(&self, tp: &Toolpath, tip_radius: f64) -> Result<(glam::DVec2, u32)> {
         let (centre, _) = first_contact(tp, self.layer_height);
-        let (w, h) = (self.line_width, self.layer_height);
+        let (lo, hi) = self.band(tip_radius)?;
+        let over = lowest_over(tp, centre, lo, hi);
+        let n = match self.height {
+            Some(want) => self.wanted_layers(want, over)?,
+            None => self.fitted_layers(over)?,
+        };
+        if n > 10_000.0 {
+            return Err(Error::input(
+                "stand.height",
+                format!("{} layers is too many; expected at most 10000", n),
+            ));
+        }
+        Ok((centre, n as u32))
+    }
+
+    /// The band of the tube seen from above, widened by the nozzle's
+    /// `tip_radius` on either side: its inner and outer radius; an error
+    /// when the walls do not fit in the radius.
+    fn band(&self, tip_radius: f64) -> Result<(f64, f64)> {
+        let w = self.line_width;
         let inner = self.radius - self.walls.saturating_sub(1) as f64 * w;
         if self.walls == 0 || inner - 0.5 * w <= 0.0 {
             return Err(Error::input(
@@ -194,84 +213,67 @@ impl Stand {
                 ),
             ));
         }
-        let (lo, hi) = (
+        Ok((
             inner - 0.5 * w - tip_radius,
             self.radius + 0.5 * w + tip_radius,
-        );
-        // the lowest end of a string that comes over the widened band:
-        // nearest point of the segment to the centre within `hi`, farthest
-        // end beyond `lo`
-        let mut over = f64::INFINITY;
-        for k in 0..tp.len() {
-            let (a, b) = tp.ends(k);
-            let (a2, b2) = (a.truncate() - centre, b.truncate() - centre);
-            let d = b2 - a2;
-            let t = if d.length_squared() > 0.0 {
-                (-a2.dot(d) / d.length_squared()).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            let near = (a2 + t * d).length();
-            let far = a2.length().max(b2.length());
-            if near <= hi && far >= lo {
-                over = over.min(a.z.min(b.z));
-            }
-        }
-        let room = over;
-        let fit = |top: f64| libm::floor(top / h + 1e-6);
-        let n = match self.height {
-            Some(want) => {
-                let n = fit(want);
-                if n < 1.0 {
-                    return Err(Error::input(
-                        "stand.height",
-                        format!(
-                            "{want} mm is less than one layer of {h} mm; expected at least {h}"
-                        ),
-                    ));
-                }
-                if n * h > room + 1e-6 {
-                    return Err(Error::input(
-                        "stand.height",
-                        format!(
-                            "the part passes over the stand's walls (radius {} mm, with the nozzle's room) at z = {over:.3} mm, so a stand of {:.3} mm would be hit; expected at most {:.3} mm (whole layers of {h} mm no higher than the nozzle there), or leave `height` out to fit it",
-                            self.radius,
-                            n * h,
-                            (fit(room) * h).max(0.0)
-                        ),
-                    ));
-                }
-                n
-            }
-            None => {
-                if !over.is_finite() {
-                    return Err(Error::input(
-                        "stand",
-                        format!(
-                            "nothing of the part passes over a stand of radius {} mm, so its height cannot be fitted under the part; expected `height`",
-                            self.radius
-                        ),
-                    ));
-                }
-                let n = fit(room);
-                if n < 1.0 {
-                    return Err(Error::input(
-                        "stand.radius",
-                        format!(
-                            "the part passes over the stand's walls at z = {over:.3} mm: no room for one layer of {h} mm under it; expected a larger radius (where the part is higher)"
-                        ),
-                    ));
-                }
-                n
-            }
-        };
-        if n > 10_000.0 {
+        ))
+    }
+
+    /// Whole layers up to `top`: ⌊top / layer_height⌋, with a micron's
+    /// tolerance for the rounding of the division.
+    fn fit(&self, top: f64) -> f64 {
+        libm::floor(top / self.layer_height + 1e-6)
+    }
+
+    /// The layers of a stand `want` mm high, refused when less than one
+    /// layer or higher than `over`, the lowest string over the band.
+    fn wanted_layers(&self, want: f64, over: f64) -> Result<f64> {
+        let h = self.layer_height;
+        let n = self.fit(want);
+        if n < 1.0 {
             return Err(Error::input(
                 "stand.height",
-                format!("{} layers is too many; expected at most 10000", n),
+                format!("{want} mm is less than one layer of {h} mm; expected at least {h}"),
             ));
         }
-        Ok((centre, n as u32))
+        if n * h > over + 1e-6 {
+            return Err(Error::input(
+                "stand.height",
+                format!(
+                    "the part passes over the stand's walls (radius {} mm, with the nozzle's room) at z = {over:.3} mm, so a stand of {:.3} mm would be hit; expected at most {:.3} mm (whole layers of {h} mm no higher than the nozzle there), or leave `height` out to fit it",
+                    self.radius,
+                    n * h,
+                    (self.fit(over) * h).max(0.0)
+                ),
+            ));
+        }
+        Ok(n)
+    }
+
+    /// The layers of a stand as tall as fits under `over`, the lowest
+    /// string over the band: refused when nothing passes over it, or when
+    /// not even one layer fits.
+    fn fitted_layers(&self, over: f64) -> Result<f64> {
+        let h = self.layer_height;
+        if !over.is_finite() {
+            return Err(Error::input(
+                "stand",
+                format!(
+                    "nothing of the part passes over a stand of radius {} mm, so its height cannot be fitted under the part; expected `height`",
+                    self.radius
+                ),
+            ));
+        }
+        let n = self.fit(over);
+        if n < 1.0 {
+            return Err(Error::input(
+                "stand.radius",
+                format!(
+                    "the part passes over the stand's walls at z = {over:.3} mm: no room for one layer of {h} mm under it; expected a larger radius (where the part is higher)"
+                ),
+            ));
+        }
+        Ok(n)
     }
 
     /// How many strings a stand of `layers` layers has.
@@ -326,6 +328,29 @@ impl Stand {
         out.append(tp, self.speed);
         Ok(out)
     }
+}
+
+/// The lowest end of a string of `tp` that comes over the band `lo`..`hi`
+/// round `centre` (seen from above): the segment's nearest point to the
+/// centre within `hi`, its farthest end beyond `lo`; infinity for none.
+fn lowest_over(tp: &Toolpath, centre: glam::DVec2, lo: f64, hi: f64) -> f64 {
+    let mut over = f64::INFINITY;
+    for k in 0..tp.len() {
+        let (a, b) = tp.ends(k);
+        let (a2, b2) = (a.truncate() - centre, b.truncate() - centre);
+        let d = b2 - a2;
+        let t = if d.length_squared() > 0.0 {
+            (-a2.dot(d) / d.length_squared()).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let near = (a2 + t * d).length();
+        let far = a2.length().max(b2.length());
+        if near <= hi && far >= lo {
+            over = over.min(a.z.min(b.z));
+        }
+    }
+    over
 }
 
 /// A recipe resolved and ready to build.

@@ -55,28 +55,41 @@ fn hull_of(mut pts: Vec<DVec2>) -> Vec<DVec2> {
 /// more than 1e-9 × the octagon's size from each of its sides, far more
 /// than the rounding of the sides' cross products.
 fn near_outline<I: Iterator<Item = DVec2>>(points: impl Fn() -> I) -> Vec<DVec2> {
-    let mut it = points();
-    let Some(first) = it.next() else {
+    let Some((score, best, n)) = extremes(points()) else {
         return Vec::new();
     };
-    // the extreme points in the directions 0°, 45°, …, 315°: corners of the
-    // hull in counter-clockwise order (two may be the same point)
-    let along = |p: DVec2| {
-        [
-            p.x,
-            p.x + p.y,
-            p.y,
-            p.y - p.x,
-            -p.x,
-            -p.x - p.y,
-            -p.y,
-            p.x - p.y,
-        ]
+    if n < 64 || !score.iter().all(|s| s.is_finite()) {
+        return points().collect();
+    }
+    let Some(octagon) = Octagon::new(&best) else {
+        return points().collect();
     };
+    points().filter(|&p| !octagon.well_inside(p)).collect()
+}
+
+/// A point's coordinate along the directions 0°, 45°, …, 315°.
+fn along(p: DVec2) -> [f64; 8] {
+    [
+        p.x,
+        p.x + p.y,
+        p.y,
+        p.y - p.x,
+        -p.x,
+        -p.x - p.y,
+        -p.y,
+        p.x - p.y,
+    ]
+}
+
+/// The largest coordinate of `points` along each direction of [`along`],
+/// the first point that reaches it (the octagon's corners, counter-clockwise;
+/// two may be the same point), and how many points there are; None for none.
+fn extremes(mut points: impl Iterator<Item = DVec2>) -> Option<([f64; 8], [DVec2; 8], usize)> {
+    let first = points.next()?;
     let mut score = along(first);
     let mut best = [first; 8];
     let mut n = 1;
-    for p in it {
+    for p in points {
         let v = along(p);
         for k in 0..8 {
             if v[k] > score[k] {
@@ -85,55 +98,82 @@ fn near_outline<I: Iterator<Item = DVec2>>(points: impl Fn() -> I) -> Vec<DVec2>
         }
         n += 1;
     }
-    if n < 64 || !score.iter().all(|s| s.is_finite()) {
-        return points().collect();
-    }
-    let mut corners: Vec<DVec2> = Vec::with_capacity(8);
-    for p in best {
-        if corners.last() != Some(&p) {
-            corners.push(p);
+    Some((score, best, n))
+}
+
+/// The octagon of a point set's extreme points (see [`near_outline`]),
+/// shrunk by a margin of 1e-9 × its size.
+struct Octagon {
+    /// Each side as (start, direction, the least cross product of a point
+    /// well inside: its length times the margin).
+    sides: Vec<(DVec2, DVec2, f64)>,
+    /// A box well inside, between the west, east, south and north corners:
+    /// a first, cheaper test.
+    inner: Option<(DVec2, DVec2)>,
+}
+
+impl Octagon {
+    /// The octagon of the extreme points `best` (in the order of [`along`]);
+    /// None when fewer than 3 of them differ.
+    fn new(best: &[DVec2; 8]) -> Option<Octagon> {
+        let mut corners: Vec<DVec2> = Vec::with_capacity(8);
+        for &p in best {
+            if corners.last() != Some(&p) {
+                corners.push(p);
+            }
         }
+        while corners.len() > 1 && corners.first() == corners.last() {
+            corners.pop();
+        }
+        if corners.len() < 3 {
+            return None;
+        }
+        let size = (best[0].x - best[4].x).max(best[2].y - best[6].y);
+        let margin = size * 1e-9;
+        let sides = (0..corners.len())
+            .map(|i| {
+                let (a, b) = (corners[i], corners[(i + 1) % corners.len()]);
+                (a, b - a, (b - a).length() * margin)
+            })
+            .collect();
+        let mut octagon = Octagon { sides, inner: None };
+        // the box is taken only when its corners are well inside (so all
+        // of it is: the octagon less its margin is convex)
+        let (lo, hi) = (
+            DVec2::new(
+                best[3].x.max(best[4].x).max(best[5].x),
+                best[5].y.max(best[6].y).max(best[7].y),
+            ) + margin,
+            DVec2::new(
+                best[7].x.min(best[0].x).min(best[1].x),
+                best[1].y.min(best[2].y).min(best[3].y),
+            ) - margin,
+        );
+        let boxed = lo.cmplt(hi).all()
+            && [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)]
+                .into_iter()
+                .all(|p| octagon.inside(p));
+        if boxed {
+            octagon.inner = Some((lo, hi));
+        }
+        Some(octagon)
     }
-    while corners.len() > 1 && corners.first() == corners.last() {
-        corners.pop();
+
+    /// Whether `p` lies well inside every side: left of it by more than
+    /// the side's least cross product.
+    fn inside(&self, p: DVec2) -> bool {
+        self.sides
+            .iter()
+            .all(|&(a, d, least)| d.perp_dot(p - a) > least)
     }
-    if corners.len() < 3 {
-        return points().collect();
+
+    /// Whether `p` lies well inside: in the inner box, or inside every side.
+    fn well_inside(&self, p: DVec2) -> bool {
+        let in_box = self
+            .inner
+            .is_some_and(|(lo, hi)| p.cmpgt(lo).all() && p.cmplt(hi).all());
+        in_box || self.inside(p)
     }
-    let size = (best[0].x - best[4].x).max(best[2].y - best[6].y);
-    let margin = size * 1e-9;
-    // each side as (start, direction, the least cross product of a point
-    // well inside: its length times the margin)
-    let sides: Vec<(DVec2, DVec2, f64)> = (0..corners.len())
-        .map(|i| {
-            let (a, b) = (corners[i], corners[(i + 1) % corners.len()]);
-            (a, b - a, (b - a).length() * margin)
-        })
-        .collect();
-    let inside = |p: DVec2| sides.iter().all(|&(a, d, least)| d.perp_dot(p - a) > least);
-    // a box between the octagon's west, east, south and north corners,
-    // taken as a first test only when its corners are well inside (so all
-    // of it is: the octagon less its margin is convex)
-    let (lo, hi) = (
-        DVec2::new(
-            best[3].x.max(best[4].x).max(best[5].x),
-            best[5].y.max(best[6].y).max(best[7].y),
-        ) + margin,
-        DVec2::new(
-            best[7].x.min(best[0].x).min(best[1].x),
-            best[1].y.min(best[2].y).min(best[3].y),
-        ) - margin,
-    );
-    let boxed = lo.cmplt(hi).all()
-        && [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)]
-            .into_iter()
-            .all(inside);
-    points()
-        .filter(|&p| {
-            let in_box = boxed && p.cmpgt(lo).all() && p.cmplt(hi).all();
-            !(in_box || inside(p))
-        })
-        .collect()
 }
 
 /// The hull offset outwards by `d`, corners as arcs of at most 10°.

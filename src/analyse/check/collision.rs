@@ -345,8 +345,29 @@ pub fn check(recipe: &Recipe, paths: &[&Toolpath]) -> Vec<Finding> {
 /// [`check`] into `out`.
 fn walk(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) {
     let printer = &recipe.printer;
-    let hd = &printer.head;
-    // the map covers the filament's footprint
+    let Some((lo, hi)) = footprint(paths) else {
+        return; // nothing extrudes
+    };
+    let mut w = Walk::new(recipe, paths, lo, hi);
+    let mut head: Option<DVec3> = None;
+    let mut printed_top = f64::NEG_INFINITY;
+    for (pi, tp) in paths.iter().enumerate() {
+        if let Some(h) = head {
+            w.travel(recipe, h, tp.points[0], printed_top);
+        }
+        w.part(pi, tp, &mut printed_top);
+        head = Some(tp.head());
+        let cone = std::mem::take(&mut w.cone);
+        let boxed = std::mem::take(&mut w.head);
+        let nozzle = printer.nozzle_diameter;
+        report(&w, tp, cone, "nozzle-collision", nozzle, out);
+        report(&w, tp, boxed, "head-collision", nozzle, out);
+    }
+}
+
+/// The corners of the filament's footprint on the bed (the ends of the
+/// extruding strings), or None when nothing extrudes.
+fn footprint(paths: &[&Toolpath]) -> Option<(DVec2, DVec2)> {
     let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
     for tp in paths {
         // each point once: the points at either end of an extruding string
@@ -361,42 +382,53 @@ fn walk(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) {
             }
         }
     }
-    if !(lo.x <= hi.x && lo.y <= hi.y) {
-        return; // nothing extrudes
-    }
-    let mut w = Walk {
-        paths,
-        hd,
-        map: HeightMap::new(lo, hi),
-        tan: hd.tan(),
-        r_tip: hd.tip_diameter / 2.0,
-        r_top: hd.top_radius(),
-        h_cone: hd.cone_height,
-        head_box: hd.head_box,
-        delta: printer.checks.support_tolerance * printer.nozzle_diameter,
-        cone: Tally::default(),
-        head: Tally::default(),
-        elig: (0, 0),
-        mapped: (0, 0),
-        elig_top: f64::NEG_INFINITY,
-    };
-    let mut head: Option<DVec3> = None;
-    let mut printed_top = f64::NEG_INFINITY;
-    for (pi, tp) in paths.iter().enumerate() {
-        // the travel to the part, as the G-code makes it
-        let start = tp.points[0];
-        if let Some(h) = head {
-            match crate::machine::travel::safe_travel_z(printer, h, start, printed_top) {
-                Some(z) => {
-                    let up = DVec3::new(h.x, h.y, z);
-                    let over = DVec3::new(start.x, start.y, z);
-                    w.segment(h, up, None, true, false);
-                    w.segment(up, over, None, true, false);
-                    w.segment(over, start, None, true, false);
-                }
-                None => w.segment(h, start, None, true, false),
-            }
+    (lo.x <= hi.x && lo.y <= hi.y).then_some((lo, hi))
+}
+
+impl<'a> Walk<'a> {
+    /// A walk over `paths` with the recipe's head, its height map covering
+    /// `lo`–`hi`, nothing met yet.
+    fn new(recipe: &'a Recipe, paths: &'a [&'a Toolpath], lo: DVec2, hi: DVec2) -> Walk<'a> {
+        let printer = &recipe.printer;
+        let hd = &printer.head;
+        Walk {
+            paths,
+            hd,
+            map: HeightMap::new(lo, hi),
+            tan: hd.tan(),
+            r_tip: hd.tip_diameter / 2.0,
+            r_top: hd.top_radius(),
+            h_cone: hd.cone_height,
+            head_box: hd.head_box,
+            delta: printer.checks.support_tolerance * printer.nozzle_diameter,
+            cone: Tally::default(),
+            head: Tally::default(),
+            elig: (0, 0),
+            mapped: (0, 0),
+            elig_top: f64::NEG_INFINITY,
         }
+    }
+
+    /// The travel from `h` to the next part's `start`, as the G-code makes
+    /// it: up to the safe height over `printed_top`, across, down (or
+    /// straight when no rise is needed).
+    fn travel(&mut self, recipe: &Recipe, h: DVec3, start: DVec3, printed_top: f64) {
+        match crate::machine::travel::safe_travel_z(&recipe.printer, h, start, printed_top) {
+            Some(z) => {
+                let up = DVec3::new(h.x, h.y, z);
+                let over = DVec3::new(start.x, start.y, z);
+                self.segment(h, up, None, true, false);
+                self.segment(up, over, None, true, false);
+                self.segment(over, start, None, true, false);
+            }
+            None => self.segment(h, start, None, true, false),
+        }
+    }
+
+    /// Walks the strings of part `pi`, each becoming old enough to be met
+    /// once the path is [`LAG`] past its end (all of them at the part's
+    /// end); raises `printed_top` to the highest extruding string.
+    fn part(&mut self, pi: usize, tp: &Toolpath, printed_top: &mut f64) {
         // string j becomes old enough once the path is LAG past its end
         let (mut arc, mut ek, mut earc) = (0.0, 0, 0.0);
         // the length of string ek, kept while it waits (not measured again
@@ -421,21 +453,15 @@ fn walk(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) {
         for k in 0..tp.len() {
             let s = tp.strings[k];
             let (a, b) = tp.ends(k);
-            w.segment(a, b, Some(k), s.travel, s.hair);
+            self.segment(a, b, Some(k), s.travel, s.hair);
             arc += a.distance(b);
             if !s.travel {
-                printed_top = printed_top.max(a.z).max(b.z);
+                *printed_top = printed_top.max(a.z).max(b.z);
             }
-            old_enough(&mut w, k + 1, arc, false);
+            old_enough(self, k + 1, arc, false);
         }
-        old_enough(&mut w, tp.len(), arc, true);
-        w.elig = (pi + 1, 0);
-        head = Some(tp.head());
-        let cone = std::mem::take(&mut w.cone);
-        let boxed = std::mem::take(&mut w.head);
-        let nozzle = printer.nozzle_diameter;
-        report(&w, tp, cone, "nozzle-collision", nozzle, out);
-        report(&w, tp, boxed, "head-collision", nozzle, out);
+        old_enough(self, tp.len(), arc, true);
+        self.elig = (pi + 1, 0);
     }
 }
 

@@ -321,40 +321,26 @@ fn scan_part(
     budget: &mut usize,
 ) -> PartTally {
     let p = &recipe.printer;
-    let nozzle = p.nozzle_diameter;
     let tol = p.checks.support_tolerance;
     let arc = &dep.arc[pi];
-    let mut unsup = Tally::default();
-    let mut bridges = Tally::default();
-    let mut bridge_max = 0usize; // bridges longer than max_bridge
-    let mut run: Option<Run> = None;
-    let mut run_pts: Vec<DVec3> = Vec::new();
+    let mut runs = Runs {
+        max_bridge: p.checks.max_bridge,
+        tally: PartTally {
+            unsup: Tally::default(),
+            bridges: Tally::default(),
+            bridge_max: 0,
+        },
+        run: None,
+        pts: Vec::new(),
+    };
     let mut last_ok: Option<DVec3> = None;
     let mut hint: Option<u32> = None;
-    let mut widths = Widths::new(nozzle);
-    let mut close = |run: &mut Option<Run>, pts: &mut Vec<DVec3>, after: Option<DVec3>| {
-        let Some(r) = run.take() else { return };
-        let middle = pts[pts.len() / 2];
-        pts.clear();
-        if r.len <= r.width {
-            return; // a string may hang out by its own width
-        }
-        match (r.before, after) {
-            (Some(a), Some(b)) => {
-                let span = a.distance(b);
-                if span > p.checks.max_bridge {
-                    bridge_max += 1;
-                }
-                bridges.add(&r, span, middle);
-            }
-            _ => unsup.add(&r, r.len, r.first),
-        }
-    };
+    let mut widths = Widths::new(p.nozzle_diameter);
     for (k, s) in tp.strings.iter().enumerate() {
         let (a, b) = tp.ends(k);
         let l = a.distance(b);
         if s.travel {
-            close(&mut run, &mut run_pts, None);
+            runs.close(None);
             last_ok = None;
             hint = None;
             continue;
@@ -366,7 +352,7 @@ fn scan_part(
             // a declared hair hangs in the air on purpose: not sampled, and
             // not a deposit (so `g` does not count it); the run before it
             // ends unsupported, as before a travel
-            close(&mut run, &mut run_pts, None);
+            runs.close(None);
             last_ok = None;
             hint = None;
             continue;
@@ -384,8 +370,8 @@ fn scan_part(
                 hint.is_some()
             };
             if ok {
-                if run.is_some() {
-                    close(&mut run, &mut run_pts, Some(q));
+                if runs.run.is_some() {
+                    runs.close(Some(q));
                 }
                 last_ok = Some(q);
                 continue;
@@ -398,44 +384,110 @@ fn scan_part(
             } else {
                 None
             };
-            let r = run.get_or_insert(Run {
-                first: q,
-                first_k: k,
-                last_k: k,
-                len: 0.0,
-                vol: 0.0,
-                before: last_ok,
-                width: w,
-                worst: 0.0,
-                worst_at: q,
-                drop: 0.0,
-                floating: None,
-            });
-            r.last_k = k;
-            r.len += l / n as f64;
-            r.vol += s.c * l / n as f64;
-            match reach {
-                Some((x, drop)) => {
-                    if x > r.worst || r.worst_at == q {
-                        r.worst = x;
-                        r.worst_at = q;
-                    }
-                    r.drop = r.drop.max(drop);
-                }
-                None if *budget > 0 && r.floating.is_none_or(|(h, _)| q.z > h) => {
-                    r.floating = Some((q.z, q));
-                }
-                _ => {}
-            }
-            run_pts.push(q);
+            let piece = Piece { k, l, n, c: s.c, w };
+            runs.extend(piece, q, last_ok, reach, *budget > 0);
         }
         *g += 1;
     }
-    close(&mut run, &mut run_pts, None);
-    PartTally {
-        unsup,
-        bridges,
-        bridge_max,
+    runs.close(None);
+    runs.tally
+}
+
+/// An extruding string as its samples see it.
+#[derive(Clone, Copy)]
+struct Piece {
+    /// Its index in the part.
+    k: usize,
+    /// Its length, mm.
+    l: f64,
+    /// How many samples it takes (about one per width).
+    n: usize,
+    /// Its cross-section, mm².
+    c: f64,
+    /// Its width (see [`width`]).
+    w: f64,
+}
+
+/// The runs of unsupported samples of one part: the open one and its
+/// samples, and the tallies of those closed.
+struct Runs {
+    /// `checks.max_bridge`, mm.
+    max_bridge: f64,
+    /// The closed runs.
+    tally: PartTally,
+    /// The open run, if the last sample was unsupported.
+    run: Option<Run>,
+    /// The samples of the open run.
+    pts: Vec<DVec3>,
+}
+
+impl Runs {
+    /// Adds unsupported sample `q`, one of the `n` of string `s`, to the
+    /// open run (opening one after `before`, the last supported sample):
+    /// l / n of path, c·l / n of filament, and its `reach` past the
+    /// filament below (see `overhang`); with no reach while the overhang
+    /// budget is not spent (`spare`), the run floats at the sample's height.
+    fn extend(
+        &mut self,
+        s: Piece,
+        q: DVec3,
+        before: Option<DVec3>,
+        reach: Option<(f64, f64)>,
+        spare: bool,
+    ) {
+        let r = self.run.get_or_insert(Run {
+            first: q,
+            first_k: s.k,
+            last_k: s.k,
+            len: 0.0,
+            vol: 0.0,
+            before,
+            width: s.w,
+            worst: 0.0,
+            worst_at: q,
+            drop: 0.0,
+            floating: None,
+        });
+        r.last_k = s.k;
+        r.len += s.l / s.n as f64;
+        r.vol += s.c * s.l / s.n as f64;
+        match reach {
+            Some((x, drop)) => {
+                if x > r.worst || r.worst_at == q {
+                    r.worst = x;
+                    r.worst_at = q;
+                }
+                r.drop = r.drop.max(drop);
+            }
+            None if spare && r.floating.is_none_or(|(h, _)| q.z > h) => {
+                r.floating = Some((q.z, q));
+            }
+            _ => {}
+        }
+        self.pts.push(q);
+    }
+
+    /// Closes the open run, if any, before `after` (the supported sample
+    /// that ends it; None at a travel, a hair or the part's end): a run no
+    /// longer than its string's width is nothing, one held at both ends a
+    /// bridge (its span end to end), any other unsupported.
+    fn close(&mut self, after: Option<DVec3>) {
+        let Some(r) = self.run.take() else { return };
+        let middle = self.pts[self.pts.len() / 2];
+        self.pts.clear();
+        if r.len <= r.width {
+            return; // a string may hang out by its own width
+        }
+        match (r.before, after) {
+            (Some(a), Some(b)) => {
+                let span = a.distance(b);
+                if span > self.max_bridge {
+                    self.tally.bridge_max += 1;
+                }
+                self.tally.bridges.add(&r, span, middle);
+            }
+            _ => self.tally.unsup.add(&r, r.len, r.first),
+        }
     }
 }
 

@@ -214,6 +214,43 @@ pub fn overlay(candidates: &[Piece], eps: f64, classify: impl Fn(&Piece) -> Keep
 /// keeps each loop around one wedge of the region, so loops never cross.
 /// Loops thinner than 10·eps (area / length) are slivers and go.
 pub fn chain(pieces: Vec<Piece>, eps: f64) -> Region {
+    let (items, nverts) = snap_ends(pieces, eps);
+    let alive = survivors(&items, eps);
+    let mut out: Vec<usize> = Vec::new();
+    let mut outgoing: Vec<Vec<usize>> = vec![Vec::new(); nverts];
+    let mut loops = Vec::new();
+    for (k, (p, s, _)) in items.iter().enumerate() {
+        if !alive[k] {
+            continue;
+        }
+        if p.is_full() {
+            loops.push(Loop { pieces: vec![*p] });
+        } else {
+            outgoing[*s].push(k);
+            out.push(k);
+        }
+    }
+    let mut used = vec![false; items.len()];
+    for &first in &out {
+        if used[first] {
+            continue;
+        }
+        used[first] = true;
+        if let Some(pieces) = walk_loop(&items, &outgoing, &mut used, first) {
+            loops.push(Loop { pieces });
+        }
+    }
+    loops.retain(|l| l.area().abs() > 10.0 * eps * l.length());
+    Region { loops }
+}
+
+/// A piece of [`chain`] and the vertices it starts and ends at.
+type Edge = (Piece, usize, usize);
+
+/// The pieces with their end points merged into vertices (an end within
+/// `eps` of a vertex met before is that vertex) and moved onto them
+/// exactly, less the pieces of zero length; and how many vertices there are.
+fn snap_ends(pieces: Vec<Piece>, eps: f64) -> (Vec<Edge>, usize) {
     let mut verts: Vec<DVec2> = Vec::new();
     let mut vid = |p: DVec2| -> usize {
         if let Some(k) = verts.iter().position(|v| v.distance(p) <= eps) {
@@ -223,7 +260,7 @@ pub fn chain(pieces: Vec<Piece>, eps: f64) -> Region {
             verts.len() - 1
         }
     };
-    let mut items: Vec<(Piece, usize, usize)> = Vec::with_capacity(pieces.len());
+    let mut items: Vec<Edge> = Vec::with_capacity(pieces.len());
     for p in pieces {
         let (s, e) = (vid(p.start()), vid(p.end()));
         if s == e && !p.is_full() {
@@ -234,11 +271,17 @@ pub fn chain(pieces: Vec<Piece>, eps: f64) -> Region {
         }
         items.push((p, s, e));
     }
-    let items: Vec<(Piece, usize, usize)> = items
+    let items = items
         .into_iter()
         .map(|(p, s, e)| (p.with_ends(verts[s], verts[e]), s, e))
         .collect();
-    // duplicates and cancelling pairs
+    (items, verts.len())
+}
+
+/// Which of `items` stay: of two pieces between the same vertices whose
+/// midpoints lie within 10·eps, the second goes when both run the same way
+/// (a duplicate), and both go when they run opposite ways (a sliver).
+fn survivors(items: &[Edge], eps: f64) -> Vec<bool> {
     let mut alive = vec![true; items.len()];
     for i in 0..items.len() {
         if !alive[i] {
@@ -263,74 +306,62 @@ pub fn chain(pieces: Vec<Piece>, eps: f64) -> Region {
             }
         }
     }
-    let mut out: Vec<usize> = Vec::new();
-    let mut outgoing: Vec<Vec<usize>> = vec![Vec::new(); verts.len()];
-    let mut loops = Vec::new();
-    for (k, (p, s, _)) in items.iter().enumerate() {
-        if !alive[k] {
-            continue;
-        }
-        if p.is_full() {
-            loops.push(Loop { pieces: vec![*p] });
-        } else {
-            outgoing[*s].push(k);
-            out.push(k);
+    alive
+}
+
+/// Follows the pieces from `first` (the unused ones leaving each vertex,
+/// `outgoing`), taking the sharpest left turn at each, until the walk comes
+/// back to `first`: the loop's pieces, marked `used`; None for a chain that
+/// does not close (numerically inconsistent; dropped).
+fn walk_loop(
+    items: &[Edge],
+    outgoing: &[Vec<usize>],
+    used: &mut [bool],
+    first: usize,
+) -> Option<Vec<Piece>> {
+    let mut chain = vec![first];
+    loop {
+        let cur = *chain.last().unwrap();
+        let v = items[cur].2;
+        let tin = items[cur].0.tangent_end();
+        // candidates: unused pieces leaving v, and closing the loop
+        let leaving = outgoing[v].iter().copied().filter(|&k| !used[k]);
+        let closing = (v == items[first].1).then_some(first);
+        match sharpest_left(items, tin, leaving.chain(closing)) {
+            Some(k) if k == first => return Some(chain.iter().map(|&k| items[k].0).collect()),
+            Some(k) => {
+                used[k] = true;
+                chain.push(k);
+            }
+            None => return None,
         }
     }
-    let mut used = vec![false; items.len()];
-    for &first in &out {
-        if used[first] {
-            continue;
-        }
-        used[first] = true;
-        let mut chain = vec![first];
-        loop {
-            let cur = *chain.last().unwrap();
-            let v = items[cur].2;
-            let tin = items[cur].0.tangent_end();
-            // candidates: unused pieces leaving v, and closing the loop
-            let mut best: Option<(usize, f64, f64)> = None;
-            let closing = v == items[first].1;
-            let consider = |k: usize, best: &mut Option<(usize, f64, f64)>| {
-                let p = &items[k].0;
-                let tout = p.tangent_start();
-                let turn = libm::atan2(cross(tin, tout), tin.dot(tout));
-                let curv = p.curvature();
-                let better = match *best {
-                    None => true,
-                    Some((_, bt, bc)) => {
-                        turn > bt + 1e-9 || ((turn - bt).abs() <= 1e-9 && curv > bc)
-                    }
-                };
-                if better {
-                    *best = Some((k, turn, curv));
-                }
-            };
-            for &k in &outgoing[v] {
-                if !used[k] {
-                    consider(k, &mut best);
-                }
-            }
-            if closing {
-                consider(first, &mut best);
-            }
-            match best {
-                Some((k, _, _)) if k == first => {
-                    loops.push(Loop {
-                        pieces: chain.iter().map(|&k| items[k].0).collect(),
-                    });
-                    break;
-                }
-                Some((k, _, _)) => {
-                    used[k] = true;
-                    chain.push(k);
-                }
-                None => break, // an open chain: numerically inconsistent; dropped
-            }
+}
+
+/// Of the pieces `candidates`, in order, the one that turns most to the
+/// left from the incoming tangent `tin`: the largest turn
+/// atan2(tin × tout, tin · tout) by more than 1e-9, or within 1e-9 of it,
+/// the more curved piece; the first of equals.
+fn sharpest_left(
+    items: &[Edge],
+    tin: DVec2,
+    candidates: impl Iterator<Item = usize>,
+) -> Option<usize> {
+    let mut best: Option<(usize, f64, f64)> = None;
+    for k in candidates {
+        let p = &items[k].0;
+        let tout = p.tangent_start();
+        let turn = libm::atan2(cross(tin, tout), tin.dot(tout));
+        let curv = p.curvature();
+        let better = match best {
+            None => true,
+            Some((_, bt, bc)) => turn > bt + 1e-9 || ((turn - bt).abs() <= 1e-9 && curv > bc),
+        };
+        if better {
+            best = Some((k, turn, curv));
         }
     }
-    loops.retain(|l| l.area().abs() > 10.0 * eps * l.length());
-    Region { loops }
+    best.map(|(k, _, _)| k)
 }
 
 /// A piece along which f(p) = p·n only rises or only falls, with f at its ends.
