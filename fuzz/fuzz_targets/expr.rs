@@ -2,7 +2,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use p3dp::base::expr::{eval_const, var, Expr, Params};
+use p3dp::base::expr::{eval_const, var, Expr, Memo, Params};
 
 fuzz_target!(|data: &[u8]| {
     let Ok(src) = std::str::from_utf8(data) else {
@@ -24,6 +24,6 @@ fuzz_target!(|data: &[u8]| {
     }
     if let Ok(e) = Expr::compile_ext(src, &params, &all, &["len", "depth"]) {
         let ext = vec![0.5; 2 + e.rands()];
-        let _ = e.eval_ext(&[1.0; var::COUNT], &ext);
+        let _ = e.eval_ext(&[1.0; var::COUNT], &ext, &mut Memo::default());
     }
 });

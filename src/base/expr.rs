@@ -120,7 +120,6 @@ pub const MAX_DEPTH: u32 = 256;
 type F1 = fn(f64) -> f64;
 type F2 = fn(f64, f64) -> f64;
 type F3 = fn(f64, f64, f64) -> f64;
-type F4 = fn(f64, f64, f64, f64) -> f64;
 
 #[derive(Clone, Copy, Debug)]
 enum Op {
@@ -136,7 +135,8 @@ enum Op {
     F1(F1),
     F2(F2),
     F3(F3),
-    F4(F4),
+    /// `eca(rule, width, row, col)`, its rows kept in the evaluation's [`Memo`].
+    Eca,
     Min(u8),
     Max(u8),
     /// A value of the extra slots of [`Expr::compile_ext`].
@@ -249,7 +249,8 @@ fn lookup2(name: &str) -> Option<F2> {
 /// steps from a known one.
 const ECA_STRIDE: u64 = 256;
 
-/// The rows of one automaton computed so far on this thread.
+/// The rows of one automaton computed so far.
+#[derive(Clone, Debug)]
 struct EcaCache {
     /// Rule and ring width.
     key: (u8, u32),
@@ -259,9 +260,12 @@ struct EcaCache {
     last: (u64, u64),
 }
 
-thread_local! {
-    /// The automaton [`eca`] last computed on this thread.
-    static ECA: std::cell::RefCell<Option<EcaCache>> = const { std::cell::RefCell::new(None) };
+/// What the evaluations of one pass over many points remember between
+/// points: the rows of the automaton `eca` has computed. Only a shortcut:
+/// every value is the same with a fresh one.
+#[derive(Clone, Debug, Default)]
+pub struct Memo {
+    eca: Option<EcaCache>,
 }
 
 /// One generation of the elementary automaton `rule` on a ring of cells
@@ -287,24 +291,29 @@ fn eca_next(rule: u8, w: u32, mask: u64, cells: u64) -> u64 {
 /// `width` cells (1–64) whose row 0 has one live cell, at column 0; columns
 /// wrap around the ring. NaN for arguments out of range (rows up to 10⁶).
 pub fn eca(rule: f64, width: f64, row: f64, col: f64) -> f64 {
-    let whole = |x: f64, hi: f64| x.fract() == 0.0 && (0.0..=hi).contains(&x);
-    if !whole(rule, 255.0) || !whole(width, 64.0) || width < 1.0 || !whole(row, 1e6) {
-        return f64::NAN;
-    }
-    if !col.is_finite() || col.fract() != 0.0 {
-        return f64::NAN;
-    }
-    let (rule, w, row) = (rule as u8, width as u32, row as u64);
-    let mask = if w == 64 { u64::MAX } else { (1u64 << w) - 1 };
-    // An expression evaluated per point asks for rows in any order (from
-    // row 0 each time, n points of row r would cost n·r generations): keep
-    // every ECA_STRIDE-th row, so a row costs at most ECA_STRIDE generations
-    // once the rows up to it have been computed, and go on from the last
-    // row when it is near.
-    let cells = ECA.with_borrow_mut(|cache| {
-        let cache = match cache {
+    Memo::default().eca(rule, width, row, col)
+}
+
+impl Memo {
+    /// [`eca`], going on from the rows this memo has kept.
+    pub fn eca(&mut self, rule: f64, width: f64, row: f64, col: f64) -> f64 {
+        let whole = |x: f64, hi: f64| x.fract() == 0.0 && (0.0..=hi).contains(&x);
+        if !whole(rule, 255.0) || !whole(width, 64.0) || width < 1.0 || !whole(row, 1e6) {
+            return f64::NAN;
+        }
+        if !col.is_finite() || col.fract() != 0.0 {
+            return f64::NAN;
+        }
+        let (rule, w, row) = (rule as u8, width as u32, row as u64);
+        let mask = if w == 64 { u64::MAX } else { (1u64 << w) - 1 };
+        // An expression evaluated per point asks for rows in any order (from
+        // row 0 each time, n points of row r would cost n·r generations):
+        // keep every ECA_STRIDE-th row, so a row costs at most ECA_STRIDE
+        // generations once the rows up to it have been computed, and go on
+        // from the last row when it is near.
+        let cache = match &mut self.eca {
             Some(c) if c.key == (rule, w) => c,
-            _ => cache.insert(EcaCache {
+            slot => slot.insert(EcaCache {
                 key: (rule, w),
                 kept: vec![1],
                 last: (0, 1),
@@ -322,17 +331,14 @@ pub fn eca(rule: f64, width: f64, row: f64, col: f64) -> f64 {
             }
         }
         cache.last = (row, cells);
-        cells
-    });
-    let c = f_mod(col, width) as u32;
-    (cells >> c & 1) as f64
+        let c = f_mod(col, width) as u32;
+        (cells >> c & 1) as f64
+    }
 }
 
-fn lookup4(name: &str) -> Option<F4> {
-    Some(match name {
-        "eca" => eca,
-        _ => return None,
-    })
+/// The functions of four arguments: `eca` alone (see [`Op::Eca`]).
+fn lookup4(name: &str) -> Option<()> {
+    (name == "eca").then_some(())
 }
 
 fn lookup3(name: &str) -> Option<F3> {
@@ -407,7 +413,7 @@ impl Node {
 
 /// Runs `ops` on a stack; the one evaluator used for folding and at run time.
 #[inline]
-fn run(ops: &[Op], vars: &Vars, ext: &[f64]) -> f64 {
+fn run(ops: &[Op], vars: &Vars, ext: &[f64], memo: &mut Memo) -> f64 {
     let mut st = [0.0f64; STACK];
     let mut sp = 0usize;
     for op in ops {
@@ -444,9 +450,9 @@ fn run(ops: &[Op], vars: &Vars, ext: &[f64]) -> f64 {
                 sp -= 2;
                 st[sp - 1] = f(st[sp - 1], st[sp], st[sp + 1]);
             }
-            Op::F4(f) => {
+            Op::Eca => {
                 sp -= 3;
-                st[sp - 1] = f(st[sp - 1], st[sp], st[sp + 1], st[sp + 2]);
+                st[sp - 1] = memo.eca(st[sp - 1], st[sp], st[sp + 1], st[sp + 2]);
             }
             Op::Min(k) | Op::Max(k) => {
                 let k = k as usize;
@@ -471,14 +477,21 @@ fn run(ops: &[Op], vars: &Vars, ext: &[f64]) -> f64 {
 /// Points one pass of [`Expr::eval_many`] evaluates together.
 pub const LANES: usize = 64;
 
-/// The evaluation stack of [`Expr::eval_many_in`]: one value per point in
-/// each slot.
-pub struct Lanes(Box<[[f64; LANES]; STACK]>);
+/// The working state of [`Expr::eval_many_in`] over many points: its stack
+/// (one value per point in each slot) and what the evaluations remember
+/// between points ([`Memo`]).
+pub struct Lanes {
+    stack: Box<[[f64; LANES]; STACK]>,
+    memo: Memo,
+}
 
 impl Lanes {
     /// A stack for [`Expr::eval_many_in`].
     pub fn new() -> Lanes {
-        Lanes(Box::new([[0.0; LANES]; STACK]))
+        Lanes {
+            stack: Box::new([[0.0; LANES]; STACK]),
+            memo: Memo::default(),
+        }
     }
 }
 
@@ -493,7 +506,8 @@ impl Default for Lanes {
 /// point, and every instruction is applied to all of them before the next.
 // the calls of 3, 4 and k arguments read several slots of one lane at once
 #[allow(clippy::needless_range_loop)]
-fn run_lanes(ops: &[Op], vars: &[Vars], out: &mut [f64], st: &mut [[f64; LANES]; STACK]) {
+fn run_lanes(ops: &[Op], vars: &[Vars], out: &mut [f64], lanes: &mut Lanes) {
+    let (st, memo) = (&mut *lanes.stack, &mut lanes.memo);
     let n = vars.len();
     let mut sp = 0usize;
     for op in ops {
@@ -546,10 +560,11 @@ fn run_lanes(ops: &[Op], vars: &[Vars], out: &mut [f64], st: &mut [[f64; LANES];
                     st[sp - 1][j] = f(st[sp - 1][j], st[sp][j], st[sp + 1][j]);
                 }
             }
-            Op::F4(f) => {
+            Op::Eca => {
                 sp -= 3;
                 for j in 0..n {
-                    st[sp - 1][j] = f(st[sp - 1][j], st[sp][j], st[sp + 1][j], st[sp + 2][j]);
+                    let (a, b, c, d) = (st[sp - 1][j], st[sp][j], st[sp + 1][j], st[sp + 2][j]);
+                    st[sp - 1][j] = memo.eca(a, b, c, d);
                 }
             }
             Op::Min(k) | Op::Max(k) => {
@@ -662,10 +677,17 @@ impl Expr {
         c.finish()
     }
 
-    /// Evaluates with the given variable values.
+    /// Evaluates with the given variable values (for a few points: a pass
+    /// over many keeps one [`Memo`] for all, see [`Expr::eval_in`]).
     #[inline]
     pub fn eval(&self, vars: &Vars) -> f64 {
-        run(&self.ops, vars, &[])
+        run(&self.ops, vars, &[], &mut Memo::default())
+    }
+
+    /// [`Expr::eval`] going on from what `memo` kept of the points before.
+    #[inline]
+    pub fn eval_in(&self, vars: &Vars, memo: &mut Memo) -> f64 {
+        run(&self.ops, vars, &[], memo)
     }
 
     /// Evaluates at many points at once: `out[j] = self.eval(&vars[j])`,
@@ -683,15 +705,15 @@ impl Expr {
     pub fn eval_many_in(&self, vars: &[Vars], out: &mut [f64], lanes: &mut Lanes) {
         assert_eq!(vars.len(), out.len(), "one result per point");
         for (v, o) in vars.chunks(LANES).zip(out.chunks_mut(LANES)) {
-            run_lanes(&self.ops, v, o, &mut lanes.0);
+            run_lanes(&self.ops, v, o, lanes);
         }
     }
 
     /// Evaluates an expression of [`Expr::compile_ext`]: `ext` holds the
     /// named extra values, then [`Expr::rands`] random numbers.
     #[inline]
-    pub fn eval_ext(&self, vars: &Vars, ext: &[f64]) -> f64 {
-        run(&self.ops, vars, ext)
+    pub fn eval_ext(&self, vars: &Vars, ext: &[f64], memo: &mut Memo) -> f64 {
+        run(&self.ops, vars, ext, memo)
     }
 
     /// How many `rand()` calls the expression makes per evaluation.
@@ -976,7 +998,7 @@ fn function_op(name: &str, k: usize, src: &str) -> Result<Op, ExprError> {
         (n, 1) if lookup1(n).is_some() => Op::F1(lookup1(n).unwrap()),
         (n, 2) if lookup2(n).is_some() => Op::F2(lookup2(n).unwrap()),
         (n, 3) if lookup3(n).is_some() => Op::F3(lookup3(n).unwrap()),
-        (n, 4) if lookup4(n).is_some() => Op::F4(lookup4(n).unwrap()),
+        (n, 4) if lookup4(n).is_some() => Op::Eca,
         (n, _) => return Err(arity_error(n, k, src)),
     })
 }
@@ -1019,7 +1041,7 @@ fn fold(node: Node) -> Node {
     }
     let mut ops = Vec::new();
     node.emit(&mut ops);
-    Node::Num(run(&ops, &[0.0; var::COUNT], &[]))
+    Node::Num(run(&ops, &[0.0; var::COUNT], &[], &mut Memo::default()))
 }
 
 fn is_rand_mark(name: &str) -> bool {
@@ -1196,7 +1218,11 @@ mod tests {
         let e = Expr::compile_ext("k*10 + rand() + rand ( )", &p, &[], &["j", "k"]).unwrap();
         assert_eq!(e.rands(), 2);
         assert_eq!(
-            e.eval_ext(&[0.0; var::COUNT], &[1.0, 2.0, 0.25, 0.5]),
+            e.eval_ext(
+                &[0.0; var::COUNT],
+                &[1.0, 2.0, 0.25, 0.5],
+                &mut Memo::default()
+            ),
             20.75
         );
         assert!(Expr::compile("rand()", &p, &[]).is_err());

@@ -7,7 +7,7 @@ use glam::DVec3;
 
 use super::{not_finite, vars_at, Keep};
 use crate::base::error::{Error, Result};
-use crate::base::expr::{var, Expr};
+use crate::base::expr::{var, Expr, Memo};
 use crate::base::toolpath::Toolpath;
 
 /// Cross-section multiplied by an expression of the midpoint.
@@ -124,6 +124,7 @@ impl Modulate {
     /// Scales every extruding string.
     pub fn apply(&self, tp: &mut Toolpath) -> Result<()> {
         let n = tp.len();
+        let mut memo = Memo::default();
         for k in 0..n {
             let s = tp.strings[k];
             if s.travel {
@@ -134,7 +135,7 @@ impl Modulate {
             vars[var::C] = s.c;
             vars[var::V] = s.v;
             vars[var::S] = tp.s_at_string(k);
-            let f = self.factor.eval(&vars);
+            let f = self.factor.eval_in(&vars, &mut memo);
             check_factor(&self.factor, f, k, m)?;
             scale(tp, k, f, self.keep);
         }
@@ -165,6 +166,7 @@ impl ModulateMap {
     /// Looks up each extruding string's midpoint in the image and scales it.
     pub fn apply(&self, tp: &mut Toolpath) -> Result<()> {
         let n = tp.len();
+        let mut memo = Memo::default();
         for k in 0..n {
             if tp.strings[k].travel {
                 continue;
@@ -172,8 +174,8 @@ impl ModulateMap {
             let m = tp.midpoint(k);
             let mut vars = vars_at(m, k, n, true);
             vars[var::S] = tp.s_at_string(k);
-            let u = self.u.eval(&vars);
-            let v = self.v.eval(&vars);
+            let u = self.u.eval_in(&vars, &mut memo);
+            let v = self.v.eval_in(&vars, &mut memo);
             if !u.is_finite() {
                 return Err(not_finite("u", self.u.src(), u, "string", k, m));
             }

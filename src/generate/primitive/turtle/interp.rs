@@ -11,7 +11,7 @@ use super::frame::Frame;
 use super::lsystem::{Lsystem, MAX_ITERATIONS};
 use super::program::{Axis, Cmd, Op, Proc, Setting, Val};
 use crate::base::error::{Error, Result};
-use crate::base::expr::var;
+use crate::base::expr::{var, Memo};
 use crate::base::rng::SplitMix64;
 use crate::base::toolpath::{Event, Toolpath};
 
@@ -59,6 +59,8 @@ struct Run<'a> {
     v: f64,
     area: f64,
     rng: SplitMix64,
+    /// What the run's evaluations remember between them.
+    memo: Memo,
     saved: Vec<Frame>,
     depth: usize,
     strings: u64,
@@ -136,6 +138,7 @@ impl Program {
             v,
             area,
             rng: SplitMix64::new(self.seed),
+            memo: Memo::default(),
             saved: Vec::new(),
             depth: 0,
             strings: 0,
@@ -308,7 +311,7 @@ impl<'a> Run<'a> {
         for _ in 0..val.expr.rands() {
             vals.push(self.rng.uniform());
         }
-        let x = val.expr.eval_ext(&vars, vals);
+        let x = val.expr.eval_ext(&vars, vals, &mut self.memo);
         vals.truncate(n);
         if x.is_finite() {
             return Ok(x);
