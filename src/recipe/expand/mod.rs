@@ -238,70 +238,88 @@ impl<'a> Walker<'a> {
                 here,
                 "expected `primitive` (one or a list), `parts` (a group of parts) or `template`",
             )),
-            (Some(_), None) => {
-                let name = match name {
-                    Some(n) => Some(n),
-                    None => match &p.name {
-                        Some(n) => Some(fill_name(n, &scope.params, &join(&here, key!(p.name)))?),
-                        None => None,
-                    },
-                }
-                .map(|n| n + &scope.suffix);
-                if let Some(n) = &name {
-                    check_name(n, &join(&here, key!(p.name)))?;
-                }
-                if self.out.leaves.len() >= MAX_PARTS {
-                    return Err(Error::input(
-                        here,
-                        format!("the recipe would have more than {MAX_PARTS} parts; expected fewer copies"),
-                    ));
-                }
-                self.out.leaves.push(Leaf {
-                    part: p,
-                    params: scope.params.clone(),
-                    place: here,
-                    name,
-                    dir: scope.dir,
-                });
-                Ok(())
-            }
-            (None, Some(children)) => {
-                for (key, given) in [
-                    (key!(p.cross_section), p.cross_section.is_some()),
-                    (key!(p.speed), p.speed.is_some()),
-                ] {
-                    if given {
-                        return Err(Error::input(
-                            join(&here, key),
-                            format!("a group has no strings of its own; expected `{key}` on its parts (or in `defaults`)"),
-                        ));
-                    }
-                }
-                if children.is_empty() {
-                    return Err(Error::input(
-                        join(&here, key!(p.parts)),
-                        "expected at least one part in a group",
-                    ));
-                }
-                if let Some(n) = &p.name {
-                    check_name(
-                        &fill_name(n, &scope.params, &join(&here, key!(p.name)))?,
-                        &join(&here, key!(p.name)),
-                    )?;
-                }
-                let inner = Scope {
-                    depth: scope.depth + 1,
-                    ..scope.clone()
-                };
-                let first = self.out.leaves.len();
-                for (j, c) in children.iter().enumerate() {
-                    let at = format!("{}[{j}]", join(&here, key!(p.parts)));
-                    self.part(c, &inner, &at, None)?;
-                }
-                self.group(first, &p.steps, scope, here);
-                Ok(())
+            (Some(_), None) => self.leaf(p, scope, here, name),
+            (None, Some(children)) => self.group_part(p, children, scope, here),
+        }
+    }
+
+    /// A leaf part at `here`: its name filled and suffixed, then recorded.
+    fn leaf(
+        &mut self,
+        p: &'a RawPart,
+        scope: &Scope<'a>,
+        here: String,
+        name: Option<String>,
+    ) -> Result<()> {
+        let name = match name {
+            Some(n) => Some(n),
+            None => match &p.name {
+                Some(n) => Some(fill_name(n, &scope.params, &join(&here, key!(p.name)))?),
+                None => None,
+            },
+        }
+        .map(|n| n + &scope.suffix);
+        if let Some(n) = &name {
+            check_name(n, &join(&here, key!(p.name)))?;
+        }
+        if self.out.leaves.len() >= MAX_PARTS {
+            return Err(Error::input(
+                here,
+                format!("the recipe would have more than {MAX_PARTS} parts; expected fewer copies"),
+            ));
+        }
+        self.out.leaves.push(Leaf {
+            part: p,
+            params: scope.params.clone(),
+            place: here,
+            name,
+            dir: scope.dir,
+        });
+        Ok(())
+    }
+
+    /// A group at `here`: its `children` one level deeper, then its steps.
+    fn group_part(
+        &mut self,
+        p: &'a RawPart,
+        children: &'a [RawPart],
+        scope: &Scope<'a>,
+        here: String,
+    ) -> Result<()> {
+        for (key, given) in [
+            (key!(p.cross_section), p.cross_section.is_some()),
+            (key!(p.speed), p.speed.is_some()),
+        ] {
+            if given {
+                return Err(Error::input(
+                    join(&here, key),
+                    format!("a group has no strings of its own; expected `{key}` on its parts (or in `defaults`)"),
+                ));
             }
         }
+        if children.is_empty() {
+            return Err(Error::input(
+                join(&here, key!(p.parts)),
+                "expected at least one part in a group",
+            ));
+        }
+        if let Some(n) = &p.name {
+            check_name(
+                &fill_name(n, &scope.params, &join(&here, key!(p.name)))?,
+                &join(&here, key!(p.name)),
+            )?;
+        }
+        let inner = Scope {
+            depth: scope.depth + 1,
+            ..scope.clone()
+        };
+        let first = self.out.leaves.len();
+        for (j, c) in children.iter().enumerate() {
+            let at = format!("{}[{j}]", join(&here, key!(p.parts)));
+            self.part(c, &inner, &at, None)?;
+        }
+        self.group(first, &p.steps, scope, here);
+        Ok(())
     }
 
     /// `template: t` with `with:` values, at `place` (`here` with its copy).
