@@ -334,33 +334,8 @@ impl<'a> Walker<'a> {
         copy: Option<String>,
         name: Option<String>,
     ) -> Result<()> {
-        for (key, given) in [
-            (key!(p.primitive), p.primitive.is_some()),
-            (key!(p.parts), p.parts.is_some()),
-            (key!(p.cross_section), p.cross_section.is_some()),
-            (key!(p.speed), p.speed.is_some()),
-        ] {
-            if given {
-                return Err(Error::input(
-                    join(here, key),
-                    format!("`{key}` beside `template`; a template use takes only `name`, `with`, `for` and `steps` (steps run after the template's own)"),
-                ));
-            }
-        }
-        let Some(tpl) = self.templates.get(t) else {
-            let known: Vec<&str> = self.templates.keys().map(String::as_str).collect();
-            return Err(Error::input(
-                join(here, key!(p.template)),
-                if known.is_empty() {
-                    format!("unknown template `{t}`; this recipe defines no templates (add them under `templates:` or `include:` a file that has them)")
-                } else {
-                    format!(
-                        "unknown template `{t}`; the templates are {}",
-                        known.join(", ")
-                    )
-                },
-            ));
-        };
+        only_use_fields(p, here)?;
+        let tpl = self.template(p, t, here)?;
         if scope.stack.contains(&t) {
             let mut chain: Vec<&str> = scope.stack.clone();
             chain.push(t);
@@ -372,43 +347,8 @@ impl<'a> Walker<'a> {
                 ),
             ));
         }
-        for key in p.with.keys() {
-            if !tpl.raw.params.contains_key(key) {
-                let known: Vec<&str> = tpl.raw.params.keys().map(String::as_str).collect();
-                return Err(Error::input(
-                    [here, key!(p.with), key].join("."),
-                    if known.is_empty() {
-                        format!("template `{t}` has no params")
-                    } else {
-                        format!(
-                            "template `{t}` has no param `{key}`; its params are {}",
-                            known.join(", ")
-                        )
-                    },
-                ));
-            }
-        }
-        // the template's body sees the recipe's params and its own
-        let mut params = self.global.clone();
-        for (pn, default) in &tpl.raw.params {
-            let def_place =
-                [key!(RawRecipe, templates), t, key!(RawTemplate, params), pn].join(".");
-            let in_def = |e: Error| match &tpl.file {
-                Some(f) => e.in_file(f),
-                None => e,
-            };
-            if !is_identifier(pn) || expr::is_reserved(pn) {
-                return Err(in_def(Error::input(
-                    def_place,
-                    format!("`{pn}` cannot name a template param; expected letters, digits and `_`, not a name expressions already use ({})", reserved_names()),
-                )));
-            }
-            let v = match p.with.get(pn) {
-                Some(n) => eval(n, &scope.params, &[here, key!(p.with), pn].join("."))?,
-                None => eval(default, &params, &def_place).map_err(in_def)?,
-            };
-            params.insert(pn.clone(), v);
-        }
+        with_known(p, t, tpl, here)?;
+        let params = self.template_params(p, t, tpl, scope, here)?;
         // a name given where the template is used wins over the one inside it
         let name = match (name, &p.name) {
             (Some(n), _) => Some(n),
@@ -438,6 +378,60 @@ impl<'a> Walker<'a> {
         Ok(())
     }
 
+    /// The template `t` a use at `here` names, or an error listing the known ones.
+    fn template(&self, p: &RawPart, t: &str, here: &str) -> Result<&'a Template> {
+        let Some(tpl) = self.templates.get(t) else {
+            let known: Vec<&str> = self.templates.keys().map(String::as_str).collect();
+            return Err(Error::input(
+                join(here, key!(p.template)),
+                if known.is_empty() {
+                    format!("unknown template `{t}`; this recipe defines no templates (add them under `templates:` or `include:` a file that has them)")
+                } else {
+                    format!(
+                        "unknown template `{t}`; the templates are {}",
+                        known.join(", ")
+                    )
+                },
+            ));
+        };
+        Ok(tpl)
+    }
+
+    /// The params a use of `tpl` gives its body: the recipe's params, then
+    /// each template param in order, from `with:` (evaluated where the use
+    /// is) or its default (evaluated in the params before it).
+    fn template_params(
+        &self,
+        p: &RawPart,
+        t: &str,
+        tpl: &Template,
+        scope: &Scope<'a>,
+        here: &str,
+    ) -> Result<Params> {
+        // the template's body sees the recipe's params and its own
+        let mut params = self.global.clone();
+        for (pn, default) in &tpl.raw.params {
+            let def_place =
+                [key!(RawRecipe, templates), t, key!(RawTemplate, params), pn].join(".");
+            let in_def = |e: Error| match &tpl.file {
+                Some(f) => e.in_file(f),
+                None => e,
+            };
+            if !is_identifier(pn) || expr::is_reserved(pn) {
+                return Err(in_def(Error::input(
+                    def_place,
+                    format!("`{pn}` cannot name a template param; expected letters, digits and `_`, not a name expressions already use ({})", reserved_names()),
+                )));
+            }
+            let v = match p.with.get(pn) {
+                Some(n) => eval(n, &scope.params, &[here, key!(p.with), pn].join("."))?,
+                None => eval(default, &params, &def_place).map_err(in_def)?,
+            };
+            params.insert(pn.clone(), v);
+        }
+        Ok(params)
+    }
+
     /// Records `steps` (when there are any) to run on the leaves from `first` on.
     fn group(&mut self, first: usize, steps: &'a [RawStep], scope: &Scope<'a>, place: String) {
         if !steps.is_empty() {
@@ -451,6 +445,45 @@ impl<'a> Walker<'a> {
             });
         }
     }
+}
+
+/// Refuses the fields a template use at `here` cannot have beside `template`.
+fn only_use_fields(p: &RawPart, here: &str) -> Result<()> {
+    for (key, given) in [
+        (key!(p.primitive), p.primitive.is_some()),
+        (key!(p.parts), p.parts.is_some()),
+        (key!(p.cross_section), p.cross_section.is_some()),
+        (key!(p.speed), p.speed.is_some()),
+    ] {
+        if given {
+            return Err(Error::input(
+                join(here, key),
+                format!("`{key}` beside `template`; a template use takes only `name`, `with`, `for` and `steps` (steps run after the template's own)"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Refuses a `with:` key at `here` that is not a param of the template `t`.
+fn with_known(p: &RawPart, t: &str, tpl: &Template, here: &str) -> Result<()> {
+    for key in p.with.keys() {
+        if !tpl.raw.params.contains_key(key) {
+            let known: Vec<&str> = tpl.raw.params.keys().map(String::as_str).collect();
+            return Err(Error::input(
+                [here, key!(p.with), key].join("."),
+                if known.is_empty() {
+                    format!("template `{t}` has no params")
+                } else {
+                    format!(
+                        "template `{t}` has no param `{key}`; its params are {}",
+                        known.join(", ")
+                    )
+                },
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The values of each name of `p`'s `for`, evaluated in `params`.
