@@ -128,10 +128,41 @@ impl Settings {
     /// loop from its vertex nearest the head), then the infill spans (nearest
     /// end first).
     fn program(&self, islands: &[IslandPlan], parity: usize, mut head: DVec2) -> Program {
-        let w = self.line_width;
-        let tol = self.chord_tolerance;
-        // the infill directions of this layer: one (lines) or both (grid)
-        let fams: Vec<(usize, DVec2)> = match self.infill.pattern {
+        let fams = self.families(parity);
+        let mut todo = self.todo(islands, &fams);
+        let mut paths: Vec<Vec<DVec2>> = Vec::new();
+        let mut is_infill: Vec<bool> = Vec::new();
+        while !todo.is_empty() {
+            let k = nearest(todo.iter().map(|t| entry(t, head)));
+            let (levels, families, island) = todo.remove(k);
+            if levels.iter().all(Vec::is_empty) && families.iter().all(Vec::is_empty) {
+                continue;
+            }
+            head = perimeter_paths(levels, head, &mut paths);
+            for (spans, &(_, u)) in families.into_iter().zip(&fams) {
+                is_infill.resize(paths.len(), false);
+                let from = paths.len();
+                head = order_spans(spans, u, self.infill.spacing, head, &mut paths);
+                if self.infill.connect {
+                    let region = &islands[island].infill_region;
+                    let longest = JOIN_SPACINGS * self.infill.spacing;
+                    connect(&mut paths, from, region, longest);
+                }
+                is_infill.resize(paths.len(), true);
+            }
+        }
+        Program {
+            strings: count_strings(&paths),
+            paths,
+            infill: is_infill,
+        }
+    }
+
+    /// The infill directions of the layer of this `parity`, each with the
+    /// index of its spans in [`IslandPlan::infill`]: one (lines, turning by
+    /// ±angle from layer to layer) or both (grid).
+    fn families(&self, parity: usize) -> Vec<(usize, DVec2)> {
+        match self.infill.pattern {
             Pattern::Lines => vec![(
                 parity,
                 infill::direction(if parity == 0 {
@@ -144,10 +175,16 @@ impl Settings {
                 (0, infill::direction(self.infill.angle)),
                 (1, infill::direction(-self.infill.angle)),
             ],
-        };
-        // per island: the polylines of each perimeter level, and the spans
-        // of each direction
-        let mut todo: Vec<Todo> = islands
+        }
+    }
+
+    /// Per island: the polylines of each perimeter level (loops shorter than
+    /// line_width left out, arcs within chord_tolerance), and the spans of
+    /// each direction of `fams`.
+    fn todo(&self, islands: &[IslandPlan], fams: &[(usize, DVec2)]) -> Vec<Todo> {
+        let w = self.line_width;
+        let tol = self.chord_tolerance;
+        islands
             .iter()
             .enumerate()
             .map(|(k, isl)| {
@@ -165,74 +202,69 @@ impl Settings {
                 let spans = fams.iter().map(|&(f, _)| isl.infill[f].clone()).collect();
                 (levels, spans, k)
             })
-            .collect();
-        let mut paths: Vec<Vec<DVec2>> = Vec::new();
-        let mut is_infill: Vec<bool> = Vec::new();
-        let entry = |t: &Todo, h: DVec2| -> f64 {
-            let mut best = f64::INFINITY;
-            for level in &t.0 {
-                for poly in level {
-                    for p in poly {
-                        best = best.min(p.distance(h));
-                    }
-                }
-                if best.is_finite() {
-                    return best;
-                }
-            }
-            for (a, b) in t.1.iter().flatten() {
-                best = best.min(a.distance(h)).min(b.distance(h));
-            }
-            best
-        };
-        while !todo.is_empty() {
-            let k = nearest(todo.iter().map(|t| entry(t, head)));
-            let (levels, families, island) = todo.remove(k);
-            if levels.iter().all(Vec::is_empty) && families.iter().all(Vec::is_empty) {
-                continue;
-            }
-            for mut level in levels {
-                while !level.is_empty() {
-                    let k = nearest(level.iter().map(|poly| {
-                        poly.iter()
-                            .map(|p| p.distance(head))
-                            .fold(f64::INFINITY, f64::min)
-                    }));
-                    let poly = level.remove(k);
-                    let n = poly.len() - 1; // distinct points; poly[n] == poly[0]
-                    let i = nearest(poly[..n].iter().map(|p| p.distance(head)));
-                    let mut path = Vec::with_capacity(n + 1);
-                    path.extend_from_slice(&poly[i..n]);
-                    path.extend_from_slice(&poly[..=i]);
-                    head = path[n];
-                    paths.push(path);
-                }
-            }
-            for (spans, &(_, u)) in families.into_iter().zip(&fams) {
-                is_infill.resize(paths.len(), false);
-                let from = paths.len();
-                head = order_spans(spans, u, self.infill.spacing, head, &mut paths);
-                if self.infill.connect {
-                    let region = &islands[island].infill_region;
-                    let longest = JOIN_SPACINGS * self.infill.spacing;
-                    connect(&mut paths, from, region, longest);
-                }
-                is_infill.resize(paths.len(), true);
+            .collect()
+    }
+}
+
+/// How far an island is from the head `h`: to its nearest point on the
+/// outermost perimeter level that has one, else to its nearest span end.
+fn entry(t: &Todo, h: DVec2) -> f64 {
+    let mut best = f64::INFINITY;
+    for level in &t.0 {
+        for poly in level {
+            for p in poly {
+                best = best.min(p.distance(h));
             }
         }
-        let mut strings = 0;
-        for (i, p) in paths.iter().enumerate() {
-            strings += p.len() as u64 - 1;
-            if i > 0 && paths[i - 1].last() != p.first() {
-                strings += 1;
-            }
-        }
-        Program {
-            paths,
-            infill: is_infill,
-            strings,
+        if best.is_finite() {
+            return best;
         }
     }
+    for (a, b) in t.1.iter().flatten() {
+        best = best.min(a.distance(h)).min(b.distance(h));
+    }
+    best
+}
+
+/// Appends an island's perimeter loops to `paths`, level by level outside
+/// in, each level's loops nearest first, each loop turned to start (and
+/// close) at its vertex nearest the head; returns where the head ends.
+fn perimeter_paths(
+    levels: Vec<Vec<Vec<DVec2>>>,
+    mut head: DVec2,
+    paths: &mut Vec<Vec<DVec2>>,
+) -> DVec2 {
+    for mut level in levels {
+        while !level.is_empty() {
+            let k = nearest(level.iter().map(|poly| {
+                poly.iter()
+                    .map(|p| p.distance(head))
+                    .fold(f64::INFINITY, f64::min)
+            }));
+            let poly = level.remove(k);
+            let n = poly.len() - 1; // distinct points; poly[n] == poly[0]
+            let i = nearest(poly[..n].iter().map(|p| p.distance(head)));
+            let mut path = Vec::with_capacity(n + 1);
+            path.extend_from_slice(&poly[i..n]);
+            path.extend_from_slice(&poly[..=i]);
+            head = path[n];
+            paths.push(path);
+        }
+    }
+    head
+}
+
+/// The strings of a layer's `paths`: each path's segments, plus one travel
+/// before each path that does not start where the one before it ends.
+fn count_strings(paths: &[Vec<DVec2>]) -> u64 {
+    let mut strings = 0;
+    for (i, p) in paths.iter().enumerate() {
+        strings += p.len() as u64 - 1;
+        if i > 0 && paths[i - 1].last() != p.first() {
+            strings += 1;
+        }
+    }
+    strings
 }
 
 impl Solid {
