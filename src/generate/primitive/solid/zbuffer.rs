@@ -130,39 +130,29 @@ impl ZBuffer {
             .chain(insert.iter().copied())
             .collect();
         let layers = check(&self.settings, &features)?;
-        let h = self.settings.layer_height;
-        let zm = |j: u64| (j as f64 - 0.5) * h;
-        // the layers (1-based) the changed features reach
-        let mut dirty = vec![false; layers as usize];
-        for f in &changed {
-            if f.op == Op::Intersect {
-                dirty.iter_mut().for_each(|d| *d = true);
-                break;
-            }
-            let (z0, z1) = f.z_range();
-            // j with z0 ≤ (j − ½)·h < z1, found by the same test as the
-            // sections' after a guess widened by one on each side
-            let lo = (libm::floor(z0 / h + 0.5) - 1.0).max(1.0);
-            let hi = (libm::ceil(z1 / h + 0.5) + 1.0).min(layers as f64);
-            if lo.is_nan() || hi.is_nan() || lo > hi {
-                continue;
-            }
-            for j in lo as u64..=hi as u64 {
-                if z0 <= zm(j) && zm(j) < z1 {
-                    dirty[j as usize - 1] = true;
-                }
-            }
-        }
+        let mut dirty = reached(&changed, self.settings.layer_height, layers);
         let ids: Vec<u64> = (0..insert.len() as u64).map(|k| self.next_id + k).collect();
         self.next_id += insert.len() as u64;
         self.ids.splice(at..end, ids.iter().copied());
         self.features = features;
         let old = self.layers.len();
         self.layers.resize(layers as usize, None);
-        // a layer above the old top that no changed feature reaches: no
-        // union held it before, none holds it now (a guard against rounding)
-        for j in old + 1..=layers as usize {
-            let z = zm(j as u64);
+        self.mark_new_layers(old, &mut dirty);
+        let mut update = Update {
+            added: ids,
+            ..Update::default()
+        };
+        self.recompute(&dirty, &mut update);
+        Ok(update)
+    }
+
+    /// Marks dirty each layer above the `old` top that a union holds though
+    /// no changed feature reaches it (no union held it before; a guard
+    /// against rounding).
+    fn mark_new_layers(&self, old: usize, dirty: &mut [bool]) {
+        let h = self.settings.layer_height;
+        for j in old + 1..=self.layers.len() {
+            let z = mid(j as u64, h);
             if !dirty[j - 1]
                 && self
                     .features
@@ -172,18 +162,22 @@ impl ZBuffer {
                 dirty[j - 1] = true;
             }
         }
-        let mut update = Update {
-            added: ids,
-            ..Update::default()
-        };
+    }
+
+    /// Recomputes the slab of each `dirty` layer, bottom up, recording them
+    /// in `update`; consecutive dirty layers held by the same features share
+    /// the first one's slab, and a layer no union holds is empty without a
+    /// boolean.
+    fn recompute(&mut self, dirty: &[bool], update: &mut Update) {
+        let h = self.settings.layer_height;
         let mut last: Option<(Vec<bool>, Option<Arc<Slab>>)> = None;
-        for j in 1..=layers {
+        for j in 1..=self.layers.len() as u64 {
             if !dirty[j as usize - 1] {
                 last = None;
                 continue;
             }
             update.layers.push(j);
-            let z = zm(j);
+            let z = mid(j, h);
             let held: Vec<bool> = self
                 .features
                 .iter()
@@ -209,8 +203,39 @@ impl ZBuffer {
             };
             self.layers[j as usize - 1] = slab;
         }
-        Ok(update)
     }
+}
+
+/// The middle plane of layer `j` (1 for the first) of height `h`: (j − ½)·h.
+fn mid(j: u64, h: f64) -> f64 {
+    (j as f64 - 0.5) * h
+}
+
+/// Per layer (index j − 1 for layer j of `layers`): whether one of the
+/// `changed` features reaches it, i.e. holds its middle plane, or is an
+/// intersect (which reaches every layer).
+fn reached(changed: &[Feature], h: f64, layers: u64) -> Vec<bool> {
+    let mut dirty = vec![false; layers as usize];
+    for f in changed {
+        if f.op == Op::Intersect {
+            dirty.iter_mut().for_each(|d| *d = true);
+            break;
+        }
+        let (z0, z1) = f.z_range();
+        // j with z0 ≤ (j − ½)·h < z1, found by the same test as the
+        // sections' after a guess widened by one on each side
+        let lo = (libm::floor(z0 / h + 0.5) - 1.0).max(1.0);
+        let hi = (libm::ceil(z1 / h + 0.5) + 1.0).min(layers as f64);
+        if lo.is_nan() || hi.is_nan() || lo > hi {
+            continue;
+        }
+        for j in lo as u64..=hi as u64 {
+            if z0 <= mid(j, h) && mid(j, h) < z1 {
+                dirty[j as usize - 1] = true;
+            }
+        }
+    }
+    dirty
 }
 
 /// The number of layers of `features` (those whose middle lies below the
