@@ -195,90 +195,129 @@ fn path_data(l: &Loop, out: &mut String) {
 /// blue and holes in red, the perimeters' centre lines dashed and the
 /// infill region's boundary dotted. `None` when no solid has that layer.
 pub fn layer_svg(solids: &[(&str, &Solid)], index: u64) -> Option<String> {
-    let mut lo = DVec2::splat(f64::INFINITY);
-    let mut hi = DVec2::splat(f64::NEG_INFINITY);
-    let mut body = String::new();
+    let mut drawing = LayerDrawing {
+        lo: DVec2::splat(f64::INFINITY),
+        hi: DVec2::splat(f64::NEG_INFINITY),
+        body: String::new(),
+    };
     let mut any = false;
     for (name, s) in solids {
         let Some(layer) = s.layers().find(|l| l.index == index) else {
             continue;
         };
         any = true;
-        let _ = write!(
-            body,
-            "<g id=\"{}\"><title>{} layer {} at z {} mm</title>",
-            xml(name),
-            xml(name),
-            index,
-            layer.z
-        );
-        if let Some(slab) = layer.slab {
-            for l in &slab.region.loops {
-                for p in &l.pieces {
-                    let [a, b] = p.bbox(0.0);
-                    lo = lo.min(a);
-                    hi = hi.max(b);
-                }
-            }
-            let mut d = String::new();
-            for l in &slab.region.loops {
-                path_data(l, &mut d);
-            }
-            let _ = write!(
-                body,
-                "<path d=\"{d}\" fill=\"#dde6f0\" fill-rule=\"evenodd\" stroke=\"none\"/>"
-            );
-            for l in &slab.region.loops {
-                let mut d = String::new();
-                path_data(l, &mut d);
-                let colour = if l.area() >= 0.0 {
-                    "#1f5fa8"
-                } else {
-                    "#b3261e"
-                };
-                let _ = write!(
-                    body,
-                    "<path d=\"{d}\" fill=\"none\" stroke=\"{colour}\" stroke-width=\"0.08\"/>"
-                );
-            }
-            for isl in &slab.islands {
-                for r in &isl.perimeters {
-                    for l in &r.loops {
-                        let mut d = String::new();
-                        path_data(l, &mut d);
-                        let _ = write!(body, "<path d=\"{d}\" fill=\"none\" stroke=\"#555\" stroke-width=\"0.04\" stroke-dasharray=\"0.3 0.2\"/>");
-                    }
-                }
-                for l in &isl.infill_region.loops {
-                    let mut d = String::new();
-                    path_data(l, &mut d);
-                    let _ = write!(body, "<path d=\"{d}\" fill=\"none\" stroke=\"#888\" stroke-width=\"0.03\" stroke-dasharray=\"0.05 0.15\"/>");
-                }
-            }
-        }
-        body.push_str("</g>");
+        drawing.solid(name, &layer);
     }
     if !any {
         return None;
     }
-    if lo.x > hi.x {
-        lo = DVec2::ZERO;
-        hi = DVec2::splat(1.0);
+    Some(drawing.svg())
+}
+
+/// The drawing of one layer so far: the body of its SVG and the bounding
+/// box (`lo`, `hi`) of the sections drawn in it.
+struct LayerDrawing {
+    lo: DVec2,
+    hi: DVec2,
+    body: String,
+}
+
+impl LayerDrawing {
+    /// One solid's group: a title naming the solid, the layer and its
+    /// height, then its section when the layer has one.
+    fn solid(&mut self, name: &str, layer: &Layer) {
+        let _ = write!(
+            self.body,
+            "<g id=\"{}\"><title>{} layer {} at z {} mm</title>",
+            xml(name),
+            xml(name),
+            layer.index,
+            layer.z
+        );
+        if let Some(slab) = layer.slab {
+            self.slab(slab);
+        }
+        self.body.push_str("</g>");
     }
-    let m = 0.05 * (hi - lo).max_element().max(1.0);
-    let (lo, hi) = (lo - DVec2::splat(m), hi + DVec2::splat(m));
-    let size = hi - lo;
-    // y up: the drawing is flipped about y = (lo.y + hi.y) / 2
-    Some(format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"{} {} {} {}\" width=\"{}mm\" height=\"{}mm\">\n<g transform=\"matrix(1 0 0 -1 0 {})\">{body}</g>\n</svg>\n",
-        lo.x,
-        lo.y,
-        size.x,
-        size.y,
-        size.x,
-        size.y,
-        lo.y + hi.y
-    ))
+
+    /// A section: its box added to the drawing's, its loops filled (holes
+    /// even-odd) and outlined (outer loops blue, holes red), then its
+    /// islands' perimeters and infill boundaries.
+    fn slab(&mut self, slab: &Slab) {
+        for l in &slab.region.loops {
+            for p in &l.pieces {
+                let [a, b] = p.bbox(0.0);
+                self.lo = self.lo.min(a);
+                self.hi = self.hi.max(b);
+            }
+        }
+        let mut d = String::new();
+        for l in &slab.region.loops {
+            path_data(l, &mut d);
+        }
+        let _ = write!(
+            self.body,
+            "<path d=\"{d}\" fill=\"#dde6f0\" fill-rule=\"evenodd\" stroke=\"none\"/>"
+        );
+        for l in &slab.region.loops {
+            let mut d = String::new();
+            path_data(l, &mut d);
+            let colour = if l.area() >= 0.0 {
+                "#1f5fa8"
+            } else {
+                "#b3261e"
+            };
+            let _ = write!(
+                self.body,
+                "<path d=\"{d}\" fill=\"none\" stroke=\"{colour}\" stroke-width=\"0.08\"/>"
+            );
+        }
+        for isl in &slab.islands {
+            self.island(isl);
+        }
+    }
+
+    /// An island's perimeters' centre lines (dashed) and its infill
+    /// region's boundary (dotted).
+    fn island(&mut self, isl: &IslandPlan) {
+        for r in &isl.perimeters {
+            for l in &r.loops {
+                let mut d = String::new();
+                path_data(l, &mut d);
+                let _ = write!(self.body, "<path d=\"{d}\" fill=\"none\" stroke=\"#555\" stroke-width=\"0.04\" stroke-dasharray=\"0.3 0.2\"/>");
+            }
+        }
+        for l in &isl.infill_region.loops {
+            let mut d = String::new();
+            path_data(l, &mut d);
+            let _ = write!(self.body, "<path d=\"{d}\" fill=\"none\" stroke=\"#888\" stroke-width=\"0.03\" stroke-dasharray=\"0.05 0.15\"/>");
+        }
+    }
+
+    /// The SVG document in mm: the box (the unit square when nothing was
+    /// drawn) grown on each side by m = 0.05 · max(larger side, 1 mm), with
+    /// y up: the body flipped about y = (lo.y + hi.y) / 2.
+    fn svg(self) -> String {
+        let (mut lo, mut hi) = (self.lo, self.hi);
+        if lo.x > hi.x {
+            lo = DVec2::ZERO;
+            hi = DVec2::splat(1.0);
+        }
+        let m = 0.05 * (hi - lo).max_element().max(1.0);
+        let (lo, hi) = (lo - DVec2::splat(m), hi + DVec2::splat(m));
+        let size = hi - lo;
+        format!(
+            "<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"{} {} {} {}\" width=\"{}mm\" height=\"{}mm\">\n<g transform=\"matrix(1 0 0 -1 0 {})\">{}</g>\n</svg>\n",
+            lo.x,
+            lo.y,
+            size.x,
+            size.y,
+            size.x,
+            size.y,
+            lo.y + hi.y,
+            self.body
+        )
+    }
 }
 
 /// Text escaped for XML.
