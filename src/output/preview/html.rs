@@ -23,11 +23,12 @@ use base64::Engine;
 use glam::DVec3;
 use serde_json::json;
 
-use super::{Grid, Options, Render, Scene};
+use super::{Options, Render, Scene};
 use crate::analyse::plan::Plan;
 use crate::analyse::stats::Stats;
 use crate::base::error::Result;
 use crate::base::format::hms;
+use crate::base::geom::passes::Grid;
 use crate::base::threads::Threads;
 
 /// Bytes of G-code per chunk passed from the thread writing it to the one

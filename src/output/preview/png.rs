@@ -15,14 +15,13 @@ use std::sync::Mutex;
 use glam::DVec3;
 use tiny_skia::{LineCap, Paint, PathBuilder, Pixmap, Rect, Stroke, Transform};
 
-use super::{
-    colormap, fmt_value, round_diameter, text, Basis, ColorMode, Grid, Options, Render, Scene, Size,
-};
+use super::{colormap, fmt_value, text, Basis, ColorMode, Options, Render, Scene, Size};
 use crate::analyse::check::Severity;
 use crate::analyse::plan::Plan;
 use crate::analyse::stats::Stats;
 use crate::base::error::Result;
 use crate::base::format::hms;
+use crate::base::geom::passes::{round_diameter, Grid};
 use crate::base::threads::Threads;
 
 /// Where recipe space lands in the image.
