@@ -477,7 +477,7 @@ pub fn page(plan: &Plan, gcode: &str, stats: &Stats, opts: &Options) -> Page {
 /// back on another (passed in chunks, in order) while the scene is read
 /// (the pass spacing of each path) on the caller's.
 pub fn read(plan: &Plan, opts: &Options, render: Render) -> Result<(Data, Stats)> {
-    let flags = super::flags(plan);
+    let flags = super::scene::flags(plan);
     let ends = flagged_ends(plan, &flags);
     let mut reader = Reader::new(origin(plan), &ends, filament_area(plan));
     let (scene, stats) = if opts.threads.get() == 1 {
