@@ -616,10 +616,7 @@ fn build_job(
         let (bytes, line) = crate::output::preview::bytes(
             &p,
             pv,
-            &crate::output::preview::Options {
-                threads,
-                ..Default::default()
-            },
+            &crate::output::preview::Options::default(),
             &|w| p.render_unhashed(w),
         )?;
         files.push(stage(pv, &bytes)?);
@@ -1267,7 +1264,6 @@ pub fn preview(a: &PreviewArgs) -> Vec<Error> {
             .jobs
             .map_or_else(Threads::available, |n| Threads::new(usize::from(n)));
         let opts = PreviewOptions {
-            threads,
             view: a
                 .view
                 .as_deref()

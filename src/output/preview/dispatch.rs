@@ -1,7 +1,7 @@
 //! The previews' files: the format told by the extension, and the bytes of
 //! either written atomically, with the line that reports them.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 
@@ -39,38 +39,183 @@ impl Format {
 
 /// Writes a plan's G-code to a writer and returns its stats (the build's
 /// renderer, passed down so that previews need not know how G-code is made).
-/// `Sync`, so that it may run on a thread of its own beside the drawing.
+/// `Sync`, so that a caller may run it on another thread of the pool beside
+/// [`Job::draw`].
 pub type Render<'a> = &'a (dyn Fn(&mut dyn std::io::Write) -> Result<Stats> + Sync);
 
 /// Writes a preview of `plan` to `out` (PNG or HTML by extension, atomically);
-/// returns a line for the report. `render` writes the plan's G-code.
+/// returns a line for the report. `render` writes the plan's G-code; the
+/// steps run one after the other ([`Job::run`]).
 pub fn write(plan: &Plan, out: &Path, opts: &Options, render: Render) -> Result<String> {
-    let shown = out.display().to_string();
-    let io =
-        |e: std::io::Error| Error::io_from(&shown, format!("cannot write the preview: {e}"), &e);
-    if Format::of(out)? == Format::Html {
-        // streamed into the file as it is encoded
-        let (data, stats) = html::read(plan, opts, render)?;
+    Job::new(plan, out, opts)?.run(render)?.write()
+}
+
+/// The bytes of the preview [`write`] writes to `out` (its format by the
+/// extension), and the line reporting it; writes nothing, so a build can
+/// commit the preview with its other outputs.
+pub fn bytes(plan: &Plan, out: &Path, opts: &Options, render: Render) -> Result<(Vec<u8>, String)> {
+    Ok(Job::new(plan, out, opts)?.run(render)?.bytes())
+}
+
+/// A preview of a plan to make, in steps a caller may schedule: the G-code
+/// is written into [`Job::reader`] (for its stats, and for an HTML viewer
+/// its moves) while [`Job::draw`] does all that needs neither, the two side
+/// by side when there is a thread to spare; then [`Job::finish`]. The
+/// result is the same in any order.
+pub struct Job<'p> {
+    plan: &'p Plan,
+    out: PathBuf,
+    format: Format,
+    opts: Options,
+}
+
+/// What a preview reads of the G-code as it is written: nothing for a PNG
+/// (its header needs the stats alone), the moves for an HTML viewer.
+pub struct Reader(Option<html::Reader>);
+
+impl std::io::Write for Reader {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        match &mut self.0 {
+            Some(r) => r.write(buf),
+            None => Ok(buf.len()),
+        }
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+/// A preview drawn, waiting for the G-code's stats ([`Job::draw`]).
+pub enum Drawing<'p> {
+    /// The image, but its header and legend.
+    Png(png::Drawing<'p>),
+    /// The viewer's reading of the plan.
+    Html(html::Drawing<'p>),
+}
+
+/// A preview made, to be written or taken as bytes ([`Job::finish`]).
+pub struct Finished {
+    out: PathBuf,
+    made: Made,
+}
+
+/// The preview of a [`Finished`].
+enum Made {
+    Png(png::Rendered, Options),
+    Html(html::Data, String),
+}
+
+impl<'p> Job<'p> {
+    /// A preview of `plan` to write to `out` (its format by the extension).
+    pub fn new(plan: &'p Plan, out: &Path, opts: &Options) -> Result<Job<'p>> {
+        Ok(Job {
+            plan,
+            out: out.to_path_buf(),
+            format: Format::of(out)?,
+            opts: *opts,
+        })
+    }
+
+    /// The writer the plan's G-code is to be written into.
+    pub fn reader(&self) -> Reader {
+        Reader(match self.format {
+            Format::Png => None,
+            Format::Html => Some(html::reader(self.plan)),
+        })
+    }
+
+    /// All of the preview that needs neither the G-code nor its stats.
+    pub fn draw(&self) -> Drawing<'p> {
+        match self.format {
+            Format::Png => Drawing::Png(png::draw(self.plan, &self.opts)),
+            Format::Html => Drawing::Html(html::draw(self.plan, &self.opts)),
+        }
+    }
+
+    /// The preview, from this job's `drawing`, its `reader` once the G-code
+    /// is written into it, and the `stats` the writing returned.
+    pub fn finish(&self, drawing: Drawing<'p>, reader: Reader, stats: &Stats) -> Finished {
+        let made = match drawing {
+            Drawing::Png(d) => Made::Png(png::finish(d, stats), self.opts),
+            Drawing::Html(d) => {
+                let r = reader.0.expect("an HTML job's reader reads the moves");
+                Made::Html(html::finish(d, r, stats), stats.name.clone())
+            }
+        };
+        Finished {
+            out: self.out.clone(),
+            made,
+        }
+    }
+
+    /// The steps one after the other: the G-code written by `render` (so
+    /// that its memory is let go before the drawing takes its own), the
+    /// drawing, the finish.
+    pub fn run(&self, render: Render) -> Result<Finished> {
+        let mut reader = self.reader();
+        let stats = render(&mut reader)?;
+        let drawing = self.draw();
+        Ok(self.finish(drawing, reader, &stats))
+    }
+}
+
+impl Finished {
+    /// Writes the preview to its file, atomically (an HTML page streamed
+    /// into it as it is encoded); returns the line reporting it.
+    pub fn write(self) -> Result<String> {
+        let shown = self.out.display().to_string();
+        let io = |e: std::io::Error| {
+            Error::io_from(&shown, format!("cannot write the preview: {e}"), &e)
+        };
+        let Made::Html(data, title) = &self.made else {
+            let out = self.out.clone();
+            let (bytes, line) = self.bytes();
+            write_atomic(&out, |f| {
+                use std::io::Write;
+                f.write_all(&bytes).map_err(io)
+            })?;
+            return Ok(line);
+        };
         let mut len = 0;
-        write_atomic(out, |f| {
+        write_atomic(&self.out, |f| {
             use std::io::Write;
             let mut w = Counted {
                 inner: std::io::BufWriter::with_capacity(1 << 16, f),
                 n: 0,
             };
-            html::write_page(&stats.name, &data, &mut w).map_err(io)?;
+            html::write_page(title, data, &mut w).map_err(io)?;
             w.inner.flush().map_err(io)?;
             len = w.n;
             Ok(())
         })?;
-        return Ok(html_line(&shown, data.points(), len));
+        Ok(html_line(&shown, data.points(), len))
     }
-    let (bytes, line) = bytes(plan, out, opts, render)?;
-    write_atomic(out, |f| {
-        use std::io::Write;
-        f.write_all(&bytes).map_err(io)
-    })?;
-    Ok(line)
+
+    /// The preview's bytes, and the line reporting them.
+    pub fn bytes(self) -> (Vec<u8>, String) {
+        let shown = self.out.display().to_string();
+        match self.made {
+            Made::Png(r, opts) => {
+                let bytes = png::encode_fast(&r.pixmap, false);
+                let (x, y) = r.frame.pixel(DVec3::ZERO);
+                (bytes, format!(
+                    "preview → {shown}: {} × {} px, {} view, colour {}, scale {:.4} px/mm, recipe (0, 0, 0) at pixel ({x:.2}, {y:.2})",
+                    opts.size.width,
+                    opts.size.height,
+                    opts.view.name(),
+                    opts.color.name(),
+                    r.frame.scale
+                ))
+            }
+            Made::Html(data, title) => {
+                let mut page = Vec::new();
+                html::write_page(&title, &data, &mut page).expect("writing to memory");
+                let line = html_line(&shown, data.points(), page.len());
+                (page, line)
+            }
+        }
+    }
 }
 
 /// A writer that counts the bytes through it.
@@ -97,36 +242,6 @@ fn html_line(shown: &str, points: usize, len: usize) -> String {
         "preview → {shown}: HTML viewer, {points} points, {} kB",
         (len + 512) / 1024
     )
-}
-
-/// The bytes of the preview [`write`] writes to `out` (its format by the
-/// extension), and the line reporting it; writes nothing, so a build can
-/// commit the preview with its other outputs.
-pub fn bytes(plan: &Plan, out: &Path, opts: &Options, render: Render) -> Result<(Vec<u8>, String)> {
-    let format = Format::of(out)?;
-    let shown = out.display().to_string();
-    match format {
-        Format::Png => {
-            let (r, _) = png::preview(plan, opts, render)?;
-            let bytes = png::encode_fast(&r.pixmap, false);
-            let (x, y) = r.frame.pixel(DVec3::ZERO);
-            Ok((bytes, format!(
-                "preview → {shown}: {} × {} px, {} view, colour {}, scale {:.4} px/mm, recipe (0, 0, 0) at pixel ({x:.2}, {y:.2})",
-                opts.size.width,
-                opts.size.height,
-                opts.view.name(),
-                opts.color.name(),
-                r.frame.scale
-            )))
-        }
-        Format::Html => {
-            let (data, stats) = html::read(plan, opts, render)?;
-            let mut page = Vec::new();
-            html::write_page(&stats.name, &data, &mut page).expect("writing to memory");
-            let line = html_line(&shown, data.points(), page.len());
-            Ok((page, line))
-        }
-    }
 }
 
 #[cfg(test)]

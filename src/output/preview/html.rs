@@ -16,8 +16,6 @@
 
 use std::collections::HashSet;
 use std::io::Write;
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
 
 use base64::Engine;
 use glam::DVec3;
@@ -29,44 +27,7 @@ use crate::analyse::stats::Stats;
 use crate::base::error::Result;
 use crate::base::format::hms;
 use crate::base::geom::passes::Grid;
-use crate::base::threads::Threads;
-
-/// Bytes of G-code per chunk passed from the thread writing it to the one
-/// reading it back, and how many chunks may wait between them.
-const PIPE_CHUNK: usize = 1 << 18;
-const PIPE_DEPTH: usize = 4;
-
-/// The writing end of the G-code's way to its reader on another thread
-/// ([`read`]): chunks of [`PIPE_CHUNK`] bytes, in order.
-struct Pipe {
-    tx: std::sync::mpsc::SyncSender<Vec<u8>>,
-    buf: Vec<u8>,
-}
-
-impl Pipe {
-    /// Passes on what is gathered.
-    fn send(&mut self) {
-        if !self.buf.is_empty() {
-            let chunk = std::mem::replace(&mut self.buf, Vec::with_capacity(PIPE_CHUNK));
-            // the reader only stops when the pipe is dropped
-            let _ = self.tx.send(chunk);
-        }
-    }
-}
-
-impl Write for Pipe {
-    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        self.buf.extend_from_slice(buf);
-        if self.buf.len() >= PIPE_CHUNK {
-            self.send();
-        }
-        Ok(buf.len())
-    }
-
-    fn flush(&mut self) -> std::io::Result<()> {
-        Ok(())
-    }
-}
+use crate::base::par;
 
 /// The viewer page; `__P3DP_TITLE__`, `__P3DP_LIVE__` and `__P3DP_DATA__` are filled in.
 const TEMPLATE: &str = include_str!("viewer.html");
@@ -260,12 +221,16 @@ impl Parser {
 }
 
 /// G-code read as it is written (a writer): per move only what the viewer
-/// draws, neither the text nor the [`Move`]s kept.
-struct Reader<'f> {
+/// draws, neither the text nor the [`Move`]s kept ([`reader`] makes one).
+pub struct Reader {
     parser: Parser,
     /// The end of the last line, not yet read.
     partial: Vec<u8>,
-    flagged_ends: &'f HashSet<[i64; 3]>,
+    /// Per path, the strings the checks flagged (as [`Scene::flagged`]),
+    /// kept for the scene.
+    flags: Vec<Vec<bool>>,
+    /// The machine end points (µm) of the flagged strings.
+    flagged_ends: HashSet<[i64; 3]>,
     /// Filament cross-section, mm².
     area: f64,
     to: Vec<DVec3>,
@@ -280,8 +245,8 @@ struct Reader<'f> {
     bmax: DVec3,
 }
 
-impl<'f> Reader<'f> {
-    fn new(origin: DVec3, flagged_ends: &'f HashSet<[i64; 3]>, area: f64) -> Reader<'f> {
+impl Reader {
+    fn new(origin: DVec3, flagged_ends: HashSet<[i64; 3]>, area: f64) -> Reader {
         Reader {
             parser: Parser {
                 // the machine position is only looked up among the flagged ends
@@ -289,6 +254,7 @@ impl<'f> Reader<'f> {
                 ..Parser::new(origin)
             },
             partial: Vec::new(),
+            flags: Vec::new(),
             flagged_ends,
             area,
             to: Vec::new(),
@@ -340,11 +306,11 @@ impl<'f> Reader<'f> {
     fn read_all(&mut self, bytes: &[u8]) {
         // a reader takes every byte it is given
         let _ = self.write(bytes);
-        self.finish();
+        self.end();
     }
 
     /// Reads what is left of the last line (G-code ending without a newline).
-    fn finish(&mut self) {
+    fn end(&mut self) {
         let rest = std::mem::take(&mut self.partial);
         if !rest.is_empty() {
             self.read_line(&rest);
@@ -352,7 +318,7 @@ impl<'f> Reader<'f> {
     }
 }
 
-impl std::io::Write for Reader<'_> {
+impl std::io::Write for Reader {
     fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
         let mut rest = buf;
         while let Some(at) = rest.iter().position(|&b| b == b'\n') {
@@ -393,9 +359,9 @@ fn escape_html(s: &str) -> String {
         .replace('"', "&quot;")
 }
 
-/// Moves per piece of work when the surfaces are found on several threads;
-/// a multiple of [`REFRESH`], and fixed, so that the answer does not depend
-/// on the thread count.
+/// Moves per piece of work when the surfaces are found; a multiple of
+/// [`REFRESH`], and fixed, so that the answer does not depend on the
+/// thread count.
 const PIECE: usize = 1 << 14;
 /// Every this many moves, the neighbouring pass is searched in full rather
 /// than followed from the last move's ([`Grid::follow_other`]).
@@ -403,8 +369,8 @@ const REFRESH: usize = 32;
 
 /// Per extruding move, the spacing to the neighbouring pass (`h`, mm) and the
 /// surface normal (i8 × 127), from the moves of the same part; in pieces of
-/// [`PIECE`] moves on up to `threads` threads.
-fn surfaces(r: &Reader, scene: &Scene, threads: Threads) -> (Vec<f64>, Vec<i8>) {
+/// [`PIECE`] moves taken by the pool's threads ([`par::each`]).
+fn surfaces(r: &Reader, scene: &Scene) -> (Vec<f64>, Vec<i8>) {
     let n = r.to.len();
     let (mut h, mut normal) = (vec![0.0; n], vec![0i8; 3 * n]);
     for (i, &(part, start)) in r.parts.iter().enumerate() {
@@ -413,52 +379,58 @@ fn surfaces(r: &Reader, scene: &Scene, threads: Threads) -> (Vec<f64>, Vec<i8>) 
             continue;
         };
         let pts = &r.to[start..end];
-        let grid = Grid::for_surface_on(pts, typ, threads.get());
-        let next = AtomicUsize::new(0);
-        let pieces = pts.len().div_ceil(PIECE);
-        let hs = Mutex::new(
-            h[start..end]
-                .chunks_mut(PIECE)
-                .zip(normal[3 * start..3 * end].chunks_mut(3 * PIECE))
-                .collect::<Vec<_>>(),
-        );
-        let work = || loop {
-            let p = next.fetch_add(1, Ordering::Relaxed);
-            if p >= pieces {
-                return;
-            }
-            let (hp, np) = {
-                let mut all = hs.lock().unwrap_or_else(|e| e.into_inner());
-                std::mem::take(&mut all[p])
-            };
-            let mut hint: Option<usize> = None;
-            for (o, hk) in hp.iter_mut().enumerate() {
-                let j = p * PIECE + o;
-                let k = start + j;
-                if j == 0 || (r.kind[k] != 1 && r.kind[k] != 2) {
-                    hint = None;
-                    continue;
-                }
-                let sm = (grid.arc(j - 1) + grid.arc(j)) / 2.0;
-                let follow = !j.is_multiple_of(REFRESH);
-                let found = grid.local_near(pts[j - 1], pts[j], sm, hint.map(|x| x + 1), follow);
-                hint = found.map(|(_, x)| x);
-                if let Some((l, _)) = found {
-                    *hk = l.spacing.clamp(0.5 * typ, 2.0 * typ);
-                    for (x, q) in l.normal.to_array().iter().zip(&mut np[3 * o..3 * o + 3]) {
-                        *q = libm::round(x * 127.0) as i8;
-                    }
-                }
-            }
-        };
-        std::thread::scope(|s| {
-            for _ in 1..threads.get() {
-                s.spawn(work);
-            }
-            work();
+        let grid = Grid::for_surface_on(pts, typ, par::width());
+        let mut pieces: Vec<(usize, &mut [f64], &mut [i8])> = h[start..end]
+            .chunks_mut(PIECE)
+            .zip(normal[3 * start..3 * end].chunks_mut(3 * PIECE))
+            .enumerate()
+            .map(|(p, (hp, np))| (p * PIECE, hp, np))
+            .collect();
+        par::each(&mut pieces, |(from, hp, np)| {
+            let kinds = &r.kind[start..end];
+            surface_piece(&grid, pts, kinds, typ, *from, hp, np);
         });
     }
     (h, normal)
+}
+
+/// [`surfaces`] of the moves `pts[from..]` of one part (`kinds` theirs,
+/// `typ` the part's typical pass spacing) into `h` and `normal`, as many
+/// as they hold. A move's neighbour is looked for near the last one's, and
+/// followed from it ([`Grid::follow_other`]) but every [`REFRESH`] moves of
+/// the part; the first move of a piece looks without a hint.
+fn surface_piece(
+    grid: &Grid,
+    pts: &[DVec3],
+    kinds: &[u8],
+    typ: f64,
+    from: usize,
+    h: &mut [f64],
+    normal: &mut [i8],
+) {
+    let mut hint: Option<usize> = None;
+    for (o, hk) in h.iter_mut().enumerate() {
+        let j = from + o;
+        if j == 0 || (kinds[j] != 1 && kinds[j] != 2) {
+            hint = None;
+            continue;
+        }
+        let sm = (grid.arc(j - 1) + grid.arc(j)) / 2.0;
+        let follow = !j.is_multiple_of(REFRESH);
+        let found = grid.local_near(pts[j - 1], pts[j], sm, hint.map(|x| x + 1), follow);
+        hint = found.map(|(_, x)| x);
+        if let Some((l, _)) = found {
+            *hk = l.spacing.clamp(0.5 * typ, 2.0 * typ);
+            for (x, q) in l
+                .normal
+                .to_array()
+                .iter()
+                .zip(&mut normal[3 * o..3 * o + 3])
+            {
+                *q = libm::round(x * 127.0) as i8;
+            }
+        }
+    }
 }
 
 /// The viewer page for `plan`, whose G-code is `gcode` and stats `stats`.
@@ -470,49 +442,54 @@ pub fn page(plan: &Plan, gcode: &str, stats: &Stats, opts: &Options) -> Page {
     }
 }
 
+/// The G-code reader of `plan`'s viewer: the first step of [`read`], the
+/// writer the G-code goes to as it is written (it keeps per move only what
+/// the viewer draws, and which strings the checks flagged).
+pub fn reader(plan: &Plan) -> Reader {
+    let flags = super::scene::flags(plan);
+    let ends = flagged_ends(plan, &flags);
+    let mut r = Reader::new(origin(plan), ends, filament_area(plan));
+    r.flags = flags;
+    r
+}
+
+/// A viewer before the G-code is read: the plan read for drawing (but for
+/// its flags, which the [`Reader`] holds) and what it shows.
+pub struct Drawing<'p> {
+    scene: Scene<'p>,
+    opts: Options,
+}
+
+/// The second step of [`read`], which needs neither the G-code nor its
+/// stats (a caller with a thread to spare runs it while the G-code is
+/// written): the spacing of every path's passes.
+pub fn draw<'p>(plan: &'p Plan, opts: &Options) -> Drawing<'p> {
+    Drawing {
+        scene: Scene::unflagged(plan),
+        opts: *opts,
+    }
+}
+
+/// The last step of [`read`]: what the viewer shows, from `drawing`, the
+/// G-code `reader` read and the `stats` its writing returned.
+pub fn finish(drawing: Drawing, mut reader: Reader, stats: &Stats) -> Data {
+    reader.end();
+    let mut scene = drawing.scene;
+    scene.flagged = std::mem::take(&mut reader.flags);
+    Data::new(scene.plan, &scene, reader, stats, &drawing.opts)
+}
+
 /// Reads `plan`'s G-code as `render` writes it (neither its text nor its
 /// moves kept) into what the viewer shows; with the stats `render` returned.
 ///
-/// With more than one thread the G-code is written on one thread and read
-/// back on another (passed in chunks, in order) while the scene is read
-/// (the pass spacing of each path) on the caller's.
+/// One step after the other: [`reader`], `render` into it, [`draw`],
+/// [`finish`]. A caller with a thread to spare runs `render` and [`draw`]
+/// side by side instead (`par::join`); the data are the same.
 pub fn read(plan: &Plan, opts: &Options, render: Render) -> Result<(Data, Stats)> {
-    let flags = super::scene::flags(plan);
-    let ends = flagged_ends(plan, &flags);
-    let mut reader = Reader::new(origin(plan), &ends, filament_area(plan));
-    let (scene, stats) = if opts.threads.get() == 1 {
-        let stats = render(&mut reader);
-        (Scene::with_flags(plan, flags), stats)
-    } else {
-        std::thread::scope(|s| {
-            let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<u8>>(PIPE_DEPTH);
-            let reading = &mut reader;
-            let read = s.spawn(move || {
-                for chunk in rx {
-                    // a reader takes every byte it is given
-                    let _ = reading.write(&chunk);
-                }
-            });
-            let stats = s.spawn(move || {
-                let mut pipe = Pipe {
-                    tx,
-                    buf: Vec::with_capacity(PIPE_CHUNK),
-                };
-                let stats = render(&mut pipe);
-                pipe.send();
-                stats
-            });
-            let scene = Scene::with_flags(plan, flags);
-            let stats = stats
-                .join()
-                .unwrap_or_else(|e| std::panic::resume_unwind(e));
-            read.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
-            (scene, stats)
-        })
-    };
-    let stats = stats?;
-    reader.finish();
-    Ok((Data::new(plan, &scene, reader, &stats, opts), stats))
+    let mut r = reader(plan);
+    let stats = render(&mut r)?;
+    let drawing = draw(plan, opts);
+    Ok((finish(drawing, r, &stats), stats))
 }
 
 /// Writes the viewer page of `data` under `title` to `w`, the path data
@@ -598,11 +575,9 @@ fn fill(template: &str, values: &[(&str, String)]) -> String {
 /// `stats`): its moves, stats and findings, as the JSON the page reads; and
 /// how many points it carries.
 pub fn data(plan: &Plan, gcode: &str, stats: &Stats, opts: &Options) -> (serde_json::Value, usize) {
-    let scene = Scene::new(plan);
-    let flagged = flagged_ends(plan, &scene.flagged);
-    let mut reader = Reader::new(origin(plan), &flagged, filament_area(plan));
-    reader.read_all(gcode.as_bytes());
-    let data = Data::new(plan, &scene, reader, stats, opts);
+    let mut r = reader(plan);
+    r.read_all(gcode.as_bytes());
+    let data = finish(draw(plan, opts), r, stats);
     (data.to_value(), data.points())
 }
 
@@ -627,7 +602,7 @@ const BLOBS: [&str; 6] = ["pos", "feed", "cq", "hq", "nq", "kind"];
 impl Data {
     fn new(plan: &Plan, scene: &Scene, r: Reader, stats: &Stats, opts: &Options) -> Data {
         let n = r.to.len();
-        let (h, normal) = surfaces(&r, scene, opts.threads);
+        let (h, normal) = surfaces(&r, scene);
         let (bmin, bmax) = if r.bmin.x > r.bmax.x {
             (DVec3::ZERO, DVec3::ZERO)
         } else {
@@ -842,13 +817,12 @@ mod tests {
         let g = "G28\nG0 X110.000 Y110.000 Z0.200 F7200\n; part: a (2 strings)\nG1 X111.000 E0.05000 F1800\nG1 E-0.8 ; retract\nG1 E0.05 ; unretract\nG1 Y111.000 E0.10000\nM83\nG1 X110.000 E0.02\nG0 Z5";
         let origin = DVec3::new(110.0, 110.0, 0.0);
         let m = moves(g, origin);
-        let none = HashSet::new();
         for cut in [1, 2, 7, 1000] {
-            let mut r = Reader::new(origin, &none, 2.0);
+            let mut r = Reader::new(origin, HashSet::new(), 2.0);
             for chunk in g.as_bytes().chunks(cut) {
                 r.write_all(chunk).unwrap();
             }
-            r.finish();
+            r.end();
             assert_eq!(r.to, m.iter().map(|x| x.to).collect::<Vec<_>>(), "{cut}");
             assert_eq!(r.kind, [0, 1, 1, 1, 0], "{cut}");
             assert_eq!(r.parts, [(0, 0), (1, 1)], "{cut}");

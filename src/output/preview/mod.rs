@@ -36,6 +36,6 @@ mod text;
 mod view;
 
 pub use crate::machine::Size;
-pub use dispatch::{bytes, write, Format, Render};
+pub use dispatch::{bytes, write, Drawing, Finished, Format, Job, Reader, Render};
 pub use scene::Scene;
 pub use view::{colormap, fmt_value, Basis, ColorMode, Options, View, STOPS};

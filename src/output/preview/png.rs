@@ -9,9 +9,6 @@
 //! illuminated lines). A depth cue darkens far strings, so walls read as
 //! surfaces and the near side of a helix stands out from the far side.
 
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
-
 use glam::DVec3;
 use tiny_skia::{LineCap, Paint, PathBuilder, Pixmap, Rect, Stroke, Transform};
 
@@ -22,7 +19,7 @@ use crate::analyse::stats::Stats;
 use crate::base::error::Result;
 use crate::base::format::hms;
 use crate::base::geom::passes::{round_diameter, Grid};
-use crate::base::threads::Threads;
+use crate::base::par;
 
 /// Where recipe space lands in the image.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -102,12 +99,15 @@ const GREY: [f32; 3] = [0.66, 0.68, 0.71];
 const FILAMENT: [f32; 3] = [0.98, 0.56, 0.16];
 /// Strings shorter than this on screen are merged with their neighbours, px.
 const MERGE_PX: f64 = 2.0;
-/// Strings per piece of work when the strokes are collected on several
-/// threads. Merged runs end at a piece's end, so the pieces are a fixed size
-/// (not a share of the threads): the strokes are the same on any number.
+/// Strings per piece of work when the strokes are collected. Merged runs
+/// end at a piece's end, so the pieces are a fixed size (not a share of the
+/// threads): the strokes are the same on any number.
 const PIECE: usize = 1 << 14;
-/// Rows of pixels per band when the strokes are painted on several threads.
+/// Rows of pixels per band when the strokes are painted (a band is one
+/// piece of work).
 const BAND: usize = 32;
+/// The thinnest the preview draws a string, px.
+const MIN_PX: f32 = 0.75;
 /// When following the neighbouring pass from stroke to stroke
 /// ([`Grid::follow_other`]), every this many strokes search it in full.
 const REFRESH: usize = 32;
@@ -141,59 +141,59 @@ struct Px {
     seq: u32,
 }
 
+/// A PNG preview drawn but not finished: the background, the model and its
+/// marks painted; the header and legend, which need the G-code's stats, not
+/// yet ([`finish`]).
+pub struct Drawing<'p> {
+    pixmap: Pixmap,
+    frame: Frame,
+    scene: Scene<'p>,
+    opts: Options,
+}
+
 /// The full preview of `plan`: background, model, and unless `opts.bare`
 /// (or the image is too small for text) the name, stats and legend; with the
 /// stats `render` returned.
 ///
-/// The G-code is written into nothing for the stats of the header (its
-/// planner on a thread of its own), beside the drawing when `opts.threads`
-/// allows more than one, before it otherwise. The drawing goes in phases,
-/// each over `opts.threads`, each one's memory let go before the next: the
-/// strokes are collected in pieces of [`PIECE`] strings (each piece by
-/// whichever thread is free, coloured as it is collected, kept in its own
-/// slot so that their order is the print order); then painted in bands of
-/// [`BAND`] rows, each band by one thread. Every pixel sees the same strokes
-/// in the same order on any number of threads, so the image is the same.
+/// One step after the other: the G-code is written into nothing for the
+/// stats (so that its planner's memory is let go before the strokes take
+/// theirs), then [`draw`], then [`finish`]. A caller with a thread to spare
+/// runs `render` and [`draw`] side by side instead (`par::join`); the image
+/// is the same.
 pub fn preview(plan: &Plan, opts: &Options, render: Render) -> Result<(Rendered, Stats)> {
-    if opts.threads.get() == 1 {
-        // one thread: the planner's memory is let go before the strokes take theirs
-        let stats = render(&mut std::io::sink())?;
-        let (pm, frame, scene) = draw(plan, opts);
-        return Ok(finish(pm, frame, &scene, stats, opts));
-    }
-    // more: the G-code is written into nothing (for the header's stats) on
-    // a thread of its own while the model is drawn, filling the cores where
-    // the drawing runs on one thread (the pass spacing, the grids, the sort)
-    let (stats, (pm, frame, scene)) = std::thread::scope(|s| {
-        let stats = s.spawn(|| render(&mut std::io::sink()));
-        let drawn = draw(plan, opts);
-        let stats = stats
-            .join()
-            .unwrap_or_else(|e| std::panic::resume_unwind(e));
-        (stats, drawn)
-    });
-    Ok(finish(pm, frame, &scene, stats?, opts))
+    let stats = render(&mut std::io::sink())?;
+    let drawing = draw(plan, opts);
+    Ok((finish(drawing, &stats), stats))
 }
 
-/// The header and legend drawn over the model (unless bare or too small).
-fn finish(
-    mut pm: Pixmap,
-    frame: Frame,
-    scene: &Scene,
-    stats: Stats,
-    opts: &Options,
-) -> (Rendered, Stats) {
-    let (_, decorate, ts) = layout(scene, opts);
+/// The header and legend drawn over the model (unless bare or too small):
+/// the last step of [`preview`], the only one that needs the stats.
+pub fn finish(drawing: Drawing, stats: &Stats) -> Rendered {
+    let Drawing {
+        mut pixmap,
+        frame,
+        scene,
+        opts,
+    } = drawing;
+    let (_, decorate, ts) = layout(&scene, &opts);
     if decorate {
-        header(&mut pm, &stats, scene, ts);
-        legend(&mut pm, scene, opts.color, ts);
+        header(&mut pixmap, stats, &scene, ts);
+        legend(&mut pixmap, &scene, opts.color, ts);
     }
-    (Rendered { pixmap: pm, frame }, stats)
+    Rendered { pixmap, frame }
 }
 
-/// The background and the model (with its marks), as [`preview`] paints them.
-fn draw<'p>(plan: &'p Plan, opts: &Options) -> (Pixmap, Frame, Scene<'p>) {
-    let threads = opts.threads;
+/// The background and the model with its marks: all of the preview of
+/// `plan` but what needs the stats.
+///
+/// In phases over the pool ([`crate::base::par`]), each one's memory let go
+/// before the next: the strokes are collected in pieces of [`PIECE`]
+/// strings, coloured as they are collected, the pieces' strokes kept in
+/// print order ([`Model::pieces`]); sorted far to near ([`sort_far_first`]);
+/// then painted in bands of [`BAND`] rows ([`paint_bands`]). Every pixel
+/// sees the same strokes in the same order however the work is split, so
+/// the image is the same on any number of threads.
+pub fn draw<'p>(plan: &'p Plan, opts: &Options) -> Drawing<'p> {
     let scene = Scene::new(plan);
     let (rect, _, _) = layout(&scene, opts);
     let model = Model::new(
@@ -203,89 +203,57 @@ fn draw<'p>(plan: &'p Plan, opts: &Options) -> (Pixmap, Frame, Scene<'p>) {
         rect,
         PIECE,
         true,
-        threads.get(),
+        par::width(),
     );
     let (frame, bbox) = (model.frame, model.bbox);
-    let pal = Palette {
-        mode: opts.color,
-        lo: scene.range(opts.color).0,
-        hi: scene.range(opts.color).1,
-        dmin: model.depths.0,
-        dspan: if model.depths.1 > model.depths.0 {
-            model.depths.1 - model.depths.0
-        } else {
-            1.0
-        },
-    };
-    let min_px = 0.75f32;
-    let slots = Mutex::new(Vec::new());
-    std::thread::scope(|s| {
-        let work = || {
-            model.work(&slots, |items| {
-                items
-                    .iter()
-                    .map(|it| {
-                        let (r, rgb, alpha) = if it.kind == 1 {
-                            (min_px.max(1.0) * 0.5, [150, 155, 165], 90)
-                        } else {
-                            (it.width.max(min_px) * 0.5, pal.rgb(it), 255)
-                        };
-                        Px {
-                            a: it.a,
-                            b: it.b,
-                            depth: it.depth as f32,
-                            r,
-                            rgb,
-                            alpha,
-                            seq: 0,
-                        }
-                    })
-                    .collect()
-            })
-        };
-        for _ in 1..threads.get() {
-            s.spawn(work);
-        }
-        work();
-    });
+    let pal = Palette::of_model(&model, opts.color);
+    let pieces = model.pieces(|items| items.iter().map(|it| pal.px(it)).collect());
     drop(model);
-    let mut strokes = gather(slots);
-    // far first, print order among equals: the order of a stable sort, by an
-    // unstable one that needs no room beside the strokes
-    for (i, px) in strokes.iter_mut().enumerate() {
-        px.seq = i as u32;
-    }
-    // (depth, seq) is a total order with no ties: one sorted order, on
-    // the pool's threads or not
-    let order = |a: &Px, b: &Px| a.depth.total_cmp(&b.depth).then(a.seq.cmp(&b.seq));
-    if threads.parallel() {
-        use rayon::slice::ParallelSliceMut;
-        strokes.par_sort_unstable_by(order);
-    } else {
-        strokes.sort_unstable_by(order);
-    }
-    let mut pm = Pixmap::new(opts.size.width, opts.size.height).expect("sizes are 1..=8192");
-    pm.fill(tiny_skia::Color::from_rgba8(
+    let mut strokes = concat(pieces);
+    sort_far_first(&mut strokes);
+    let mut pixmap = Pixmap::new(opts.size.width, opts.size.height).expect("sizes are 1..=8192");
+    pixmap.fill(tiny_skia::Color::from_rgba8(
         BACKGROUND[0],
         BACKGROUND[1],
         BACKGROUND[2],
         255,
     ));
-    paint_bands(&mut pm, &strokes, threads);
+    paint_bands(&mut pixmap, &strokes);
     drop(strokes);
-    marks(&mut pm, &scene, &frame, bbox, opts.color, rect);
-    (pm, frame, scene)
+    marks(&mut pixmap, &scene, &frame, bbox, opts.color, rect);
+    Drawing {
+        pixmap,
+        frame,
+        scene,
+        opts: *opts,
+    }
 }
 
 /// The pieces' results in order, as one list.
-fn gather<T>(slots: Mutex<Vec<Option<Vec<T>>>>) -> Vec<T> {
-    let done = slots.into_inner().unwrap_or_else(|e| e.into_inner());
-    let n = done.iter().map(|d| d.as_ref().map_or(0, Vec::len)).sum();
-    let mut out = Vec::with_capacity(n);
-    for d in done {
-        out.extend(d.expect("every piece is collected"));
+fn concat<T>(pieces: Vec<Vec<T>>) -> Vec<T> {
+    let mut out = Vec::with_capacity(pieces.iter().map(Vec::len).sum());
+    for piece in pieces {
+        out.extend(piece);
     }
     out
+}
+
+/// Painter's algorithm for the preview's strokes: far (small depth) first,
+/// print order among equals. That is a stable sort's order; it is made by
+/// an unstable one (which needs no room beside the strokes) on the key
+/// (depth, place in print order), a total order with no ties, so the one
+/// sorted order whether the pool sorts it or this thread does.
+fn sort_far_first(strokes: &mut [Px]) {
+    for (i, px) in strokes.iter_mut().enumerate() {
+        px.seq = i as u32;
+    }
+    let order = |a: &Px, b: &Px| a.depth.total_cmp(&b.depth).then(a.seq.cmp(&b.seq));
+    if par::width() > 1 {
+        use rayon::slice::ParallelSliceMut;
+        strokes.par_sort_unstable_by(order);
+    } else {
+        strokes.sort_unstable_by(order);
+    }
 }
 
 /// Where the model goes in the image, whether the text goes round it, and
@@ -314,8 +282,8 @@ pub fn thumbnail(scene: &Scene, size: Size) -> Pixmap {
     let (w, h) = (size.width as f64, size.height as f64);
     let pad = (w.min(h) * 0.04).max(0.5);
     let rect = [pad, pad, w - pad, h - pad];
-    // one piece per path, on the caller's thread: the bytes are part of the
-    // G-code and its hash
+    // one piece per path (merged runs end at a piece's end): the bytes are
+    // part of the G-code and its hash, the same for any `-j`
     let model = Model::new(
         scene,
         super::View::Iso,
@@ -325,10 +293,8 @@ pub fn thumbnail(scene: &Scene, size: Size) -> Pixmap {
         false,
         1,
     );
-    let slots = Mutex::new(Vec::new());
-    model.work(&slots, |items| items);
     let (frame, bbox) = (model.frame, model.bbox);
-    let mut items = gather(slots);
+    let mut items = concat(model.pieces(|items| items));
     sort(&mut items);
     paint_strokes(&mut pm, &items, scene, ColorMode::Plain, 1.0);
     marks(&mut pm, scene, &frame, bbox, ColorMode::Plain, rect);
@@ -344,8 +310,7 @@ fn sort(items: &mut [Item]) {
 
 /// The strings of a scene made ready to paint into a rectangle of an image:
 /// the projection, each path's grid of strings, and the pieces of work that
-/// collect the strokes (taken by whichever thread is free; each piece's
-/// strokes are kept in its own slot, so their order is the print order).
+/// collect the strokes ([`Model::pieces`]).
 struct Model<'s, 'p> {
     scene: &'s Scene<'p>,
     frame: Frame,
@@ -362,13 +327,33 @@ struct Model<'s, 'p> {
     /// Whether a stroke's neighbouring pass is followed from the last
     /// stroke's ([`Grid::follow_other`]) rather than searched in full.
     follow: bool,
-    next: AtomicUsize,
+}
+
+/// A run of strings of one path drawn as one stroke: strings `first..end`,
+/// alike (travel or not, flagged or not), with their cross-section and
+/// colour value weighted by length.
+struct Run {
+    first: usize,
+    end: usize,
+    c: f64,
+    v: f64,
+    travel: bool,
+    flagged: bool,
+}
+
+/// Where a piece's search for the neighbouring pass stands: the neighbour
+/// found for the last stroke (its first string, the neighbour's string),
+/// near which the next one's lies; and how many lit strokes were searched.
+#[derive(Default)]
+struct Follow {
+    hint: Option<(usize, usize)>,
+    lit: usize,
 }
 
 impl<'s, 'p> Model<'s, 'p> {
     /// Fits `scene` into `rect` seen from `view`; pieces of `piece` strings;
     /// neighbouring passes followed or not (`follow`); each path's grid
-    /// built in `parts` on as many threads ([`Grid::for_surface_on`]).
+    /// built in `parts` ([`Grid::for_surface_on`]).
     fn new(
         scene: &'s Scene<'p>,
         view: super::View,
@@ -420,126 +405,144 @@ impl<'s, 'p> Model<'s, 'p> {
             grids,
             pieces,
             follow,
-            next: AtomicUsize::new(0),
         }
     }
 
-    /// Collects pieces until none is left, each made into `f` of its strokes
-    /// and kept in its slot (the piece's number) of `slots`.
-    fn work<T>(&self, slots: &Mutex<Vec<Option<Vec<T>>>>, f: impl Fn(Vec<Item>) -> Vec<T>) {
-        loop {
-            let i = self.next.fetch_add(1, Ordering::Relaxed);
-            let Some(&(pi, k0, k1)) = self.pieces.get(i) else {
-                return;
-            };
-            let out = f(self.collect(pi, k0, k1));
-            let mut slots = slots.lock().unwrap_or_else(|e| e.into_inner());
-            if slots.len() <= i {
-                slots.resize_with(i + 1, || None);
-            }
-            slots[i] = Some(out);
-        }
+    /// `f` of the strokes of every piece, in print order, the pieces taken
+    /// by the pool's threads ([`par::map`]). A piece's strokes follow from
+    /// its strings alone (merged runs end at its end), so they are the same
+    /// however the pieces are shared out.
+    fn pieces<T: Send>(&self, f: impl Fn(Vec<Item>) -> Vec<T> + Sync + Send) -> Vec<Vec<T>> {
+        par::map(&self.pieces, |&(pi, k0, k1)| f(self.collect(pi, k0, k1)))
     }
 
     /// The strokes of strings `k0..k1` of path `pi`: runs shorter than
-    /// [`MERGE_PX`] on screen become one stroke (length-weighted
-    /// cross-section and value), so a 2-million-string vase paints as fast as
-    /// its pixels allow.
+    /// [`MERGE_PX`] on screen become one stroke ([`Model::run`]), so a
+    /// 2-million-string vase paints as fast as its pixels allow.
     fn collect(&self, pi: usize, k0: usize, k1: usize) -> Vec<Item> {
-        let (scene, frame, mode) = (self.scene, &self.frame, self.mode);
-        let tp = &scene.plan.paths[pi];
-        let grid = &self.grids[pi];
-        // neighbouring passes lie about `spacing` apart: look a little further
-        let h_typ = scene.spacing[pi];
+        let tp = &self.scene.plan.paths[pi];
         let mut items = Vec::new();
-        // the neighbour found for the last stroke: the next one's is near it
-        let mut hint: Option<(usize, usize)> = None;
-        let mut lit = 0usize;
+        let mut follow = Follow::default();
         let mut k = k0;
         while k < k1 {
-            let first = k;
-            let start = tp.points[k];
-            let s0 = tp.strings[k];
-            let flag0 = scene.flagged[pi][k];
-            let (mut len, mut csum, mut vsum) = (0.0, 0.0, 0.0);
-            let mut end = k;
-            // take strings while the run is shorter than MERGE_PX and alike
-            while end < k1 && tp.strings[end].travel == s0.travel && scene.flagged[pi][end] == flag0
-            {
-                let l = tp.length(end);
-                len += l;
-                csum += tp.strings[end].c * l;
-                vsum += scene.value(mode, pi, end) * l;
-                end += 1;
-                if start.distance(tp.points[end]) * frame.scale >= MERGE_PX {
-                    break;
-                }
+            let run = self.run(pi, k, k1);
+            k = run.end;
+            let (a, b) = (tp.points[run.first], tp.points[run.end]);
+            if a.is_finite() && b.is_finite() {
+                items.push(self.stroke(pi, &run, a, b, &mut follow));
             }
-            let b = tp.points[end];
-            let (c, v) = if len > 0.0 {
-                (csum / len, vsum / len)
-            } else {
-                (s0.c, scene.value(mode, pi, k))
-            };
-            k = end;
-            if !start.is_finite() || !b.is_finite() {
-                continue;
-            }
-            let tangent = (b - start).normalize_or_zero();
-            let local = if s0.travel {
-                None
-            } else {
-                let guess = hint.map(|(at, j)| j + (first - at));
-                let sm = (grid.arc(first) + grid.arc(end)) / 2.0;
-                let follow = self.follow && !lit.is_multiple_of(REFRESH);
-                lit += 1;
-                let found = grid.local_near(start, b, sm, guess, follow);
-                hint = found.map(|(_, j)| (first, j));
-                found.map(|(l, _)| l)
-            };
-            let (width, normal) = match local {
-                _ if s0.travel => (0.0, None),
-                Some(l) => {
-                    let h = l.spacing.clamp(0.5 * h_typ, 2.0 * h_typ);
-                    let (w, face) = flat_tube(&frame.basis, tangent, l.normal, c / h, h);
-                    // the sides facing the viewer
-                    let facing = |n: DVec3| {
-                        if n.dot(frame.basis.toward) < 0.0 {
-                            -n
-                        } else {
-                            n
-                        }
-                    };
-                    let edge = l.normal.cross(tangent).normalize_or_zero();
-                    (w, Some((facing(l.normal), facing(edge), face)))
-                }
-                None => (round_diameter(c), None),
-            };
-            let (diffuse, spec) = if s0.travel {
-                (0.0, 0.0)
-            } else {
-                shade(tangent, normal, self.light, frame.basis)
-            };
-            let pa = frame.pixel(start);
-            let pb = frame.pixel(b);
-            items.push(Item {
-                a: (pa.0 as f32, pa.1 as f32),
-                b: (pb.0 as f32, pb.1 as f32),
-                depth: frame.basis.project((start + b) * 0.5).2,
-                width: (width * frame.scale) as f32,
-                value: v,
-                diffuse,
-                spec,
-                kind: if s0.travel {
-                    1
-                } else if flag0 {
-                    2
-                } else {
-                    0
-                },
-            });
         }
         items
+    }
+
+    /// The run of path `pi`'s strings from `k` (before `k1`) drawn as one
+    /// stroke: strings alike to the first, taken while the run is shorter
+    /// than [`MERGE_PX`] on screen.
+    fn run(&self, pi: usize, k: usize, k1: usize) -> Run {
+        let (scene, mode) = (self.scene, self.mode);
+        let tp = &scene.plan.paths[pi];
+        let start = tp.points[k];
+        let s0 = tp.strings[k];
+        let flag0 = scene.flagged[pi][k];
+        let (mut len, mut csum, mut vsum) = (0.0, 0.0, 0.0);
+        let mut end = k;
+        while end < k1 && tp.strings[end].travel == s0.travel && scene.flagged[pi][end] == flag0 {
+            let l = tp.length(end);
+            len += l;
+            csum += tp.strings[end].c * l;
+            vsum += scene.value(mode, pi, end) * l;
+            end += 1;
+            if start.distance(tp.points[end]) * self.frame.scale >= MERGE_PX {
+                break;
+            }
+        }
+        let (c, v) = if len > 0.0 {
+            (csum / len, vsum / len)
+        } else {
+            (s0.c, scene.value(mode, pi, k))
+        };
+        Run {
+            first: k,
+            end,
+            c,
+            v,
+            travel: s0.travel,
+            flagged: flag0,
+        }
+    }
+
+    /// The stroke of `run` (of path `pi`) from `a` to `b`, its width and
+    /// shading told by the surface it lies in.
+    fn stroke(&self, pi: usize, run: &Run, a: DVec3, b: DVec3, follow: &mut Follow) -> Item {
+        let frame = &self.frame;
+        let tangent = (b - a).normalize_or_zero();
+        let (width, (diffuse, spec)) = if run.travel {
+            (0.0, (0.0, 0.0))
+        } else {
+            let (width, normal) = self.width(pi, run, a, b, tangent, follow);
+            (width, shade(tangent, normal, self.light, frame.basis))
+        };
+        let pa = frame.pixel(a);
+        let pb = frame.pixel(b);
+        Item {
+            a: (pa.0 as f32, pa.1 as f32),
+            b: (pb.0 as f32, pb.1 as f32),
+            depth: frame.basis.project((a + b) * 0.5).2,
+            width: (width * frame.scale) as f32,
+            value: run.v,
+            diffuse,
+            spec,
+            kind: if run.travel {
+                1
+            } else if run.flagged {
+                2
+            } else {
+                0
+            },
+        }
+    }
+
+    /// The width of a lit stroke, mm, and with a neighbouring pass the
+    /// normals of its face and edge turned to the viewer and the share of
+    /// its width that is face ([`flat_tube`]); without one it is round.
+    ///
+    /// The neighbour is looked for near the last stroke's, and followed from
+    /// it ([`Grid::follow_other`]) but every [`REFRESH`] strokes, when the
+    /// grid is searched in full.
+    fn width(
+        &self,
+        pi: usize,
+        run: &Run,
+        a: DVec3,
+        b: DVec3,
+        tangent: DVec3,
+        follow: &mut Follow,
+    ) -> (f64, Option<(DVec3, DVec3, f64)>) {
+        let grid = &self.grids[pi];
+        let guess = follow.hint.map(|(at, j)| j + (run.first - at));
+        let sm = (grid.arc(run.first) + grid.arc(run.end)) / 2.0;
+        let followed = self.follow && !follow.lit.is_multiple_of(REFRESH);
+        follow.lit += 1;
+        let found = grid.local_near(a, b, sm, guess, followed);
+        follow.hint = found.map(|(_, j)| (run.first, j));
+        let Some((l, _)) = found else {
+            return (round_diameter(run.c), None);
+        };
+        // the pass spacing kept within half and twice the path's typical one
+        let h_typ = self.scene.spacing[pi];
+        let h = l.spacing.clamp(0.5 * h_typ, 2.0 * h_typ);
+        let basis = self.frame.basis;
+        let (w, face) = flat_tube(&basis, tangent, l.normal, run.c / h, h);
+        // the sides facing the viewer
+        let facing = |n: DVec3| {
+            if n.dot(basis.toward) < 0.0 {
+                -n
+            } else {
+                n
+            }
+        };
+        let edge = l.normal.cross(tangent).normalize_or_zero();
+        (w, Some((facing(l.normal), facing(edge), face)))
     }
 }
 
@@ -569,6 +572,40 @@ impl Palette {
             hi,
             dmin,
             dspan,
+        }
+    }
+
+    /// The palette of the preview's strokes: the value range of `mode`, the
+    /// depth range of the model's extruding points.
+    fn of_model(model: &Model, mode: ColorMode) -> Palette {
+        let (lo, hi) = model.scene.range(mode);
+        let (dmin, dmax) = model.depths;
+        Palette {
+            mode,
+            lo,
+            hi,
+            dmin,
+            dspan: if dmax > dmin { dmax - dmin } else { 1.0 },
+        }
+    }
+
+    /// Stroke `it` coloured for the bands to paint ([`Px`]): a lit string
+    /// at least [`MIN_PX`] wide; a travel faint, grey and [`MIN_PX`] or 1 px
+    /// wide, whichever is more.
+    fn px(&self, it: &Item) -> Px {
+        let (r, rgb, alpha) = if it.kind == 1 {
+            (MIN_PX.max(1.0) * 0.5, [150, 155, 165], 90)
+        } else {
+            (it.width.max(MIN_PX) * 0.5, self.rgb(it), 255)
+        };
+        Px {
+            a: it.a,
+            b: it.b,
+            depth: it.depth as f32,
+            r,
+            rgb,
+            alpha,
+            seq: 0,
         }
     }
 
@@ -626,7 +663,8 @@ fn paint_strokes(pm: &mut Pixmap, items: &[Item], scene: &Scene, mode: ColorMode
 }
 
 /// Paints the (sorted) strokes into an opaque image in bands of [`BAND`]
-/// rows on up to `threads` threads.
+/// rows, each band taken by whichever thread of the pool is free
+/// ([`par::each`]).
 ///
 /// A stroke is a capsule: the points within r (half its width) of segment
 /// a–b. A pixel is covered by the overlap of its width with the capsule
@@ -636,9 +674,32 @@ fn paint_strokes(pm: &mut Pixmap, items: &[Item], scene: &Scene, mode: ColorMode
 /// (over: dst + (src − dst)·α, in integers rounded the same way everywhere).
 /// Each band paints every stroke that reaches it, in order, so a pixel's
 /// result does not depend on how the image is cut into bands.
-fn paint_bands(pm: &mut Pixmap, strokes: &[Px], threads: Threads) {
+fn paint_bands(pm: &mut Pixmap, strokes: &[Px]) {
     let (width, height) = (pm.width() as usize, pm.height() as usize);
-    // each band's strokes, in painting order
+    let bins = bins(strokes, height);
+    let mut bands: Vec<(&[u32], usize, &mut [u8])> = pm
+        .data_mut()
+        .chunks_mut(width * 4 * BAND)
+        .zip(&bins)
+        .enumerate()
+        .map(|(i, (band, bin))| (bin.as_slice(), i * BAND, band))
+        .collect();
+    par::each(&mut bands, |(bin, y0, band)| {
+        let y1 = *y0 + band.len() / (4 * width);
+        for (j, &i) in bin.iter().enumerate() {
+            // a band's strokes lie scattered in the depth order: each was a
+            // cache miss when fetched only as it was painted
+            if let Some(&ahead) = bin.get(j + PREFETCH) {
+                prefetch(&strokes[ahead as usize]);
+            }
+            capsule(band, width, *y0, y1, &strokes[i as usize]);
+        }
+    });
+}
+
+/// Per band of [`BAND`] rows of an image `height` rows tall, the strokes
+/// that reach it, in painting order.
+fn bins(strokes: &[Px], height: usize) -> Vec<Vec<u32>> {
     let mut bins: Vec<Vec<u32>> = vec![Vec::new(); height.div_ceil(BAND)];
     for (i, px) in strokes.iter().enumerate() {
         let ext = px.r + 0.5;
@@ -653,34 +714,7 @@ fn paint_bands(pm: &mut Pixmap, strokes: &[Px], threads: Threads) {
             bin.push(i as u32);
         }
     }
-    let bands: Vec<(&[u32], usize, &mut [u8])> = pm
-        .data_mut()
-        .chunks_mut(width * 4 * BAND)
-        .zip(&bins)
-        .enumerate()
-        .map(|(i, (band, bin))| (bin.as_slice(), i * BAND, band))
-        .collect();
-    let queue = Mutex::new(bands);
-    let work = || loop {
-        let Some((bin, y0, band)) = queue.lock().unwrap_or_else(|e| e.into_inner()).pop() else {
-            return;
-        };
-        let y1 = y0 + band.len() / (4 * width);
-        for (j, &i) in bin.iter().enumerate() {
-            // a band's strokes lie scattered in the depth order: each was a
-            // cache miss when fetched only as it was painted
-            if let Some(&ahead) = bin.get(j + PREFETCH) {
-                prefetch(&strokes[ahead as usize]);
-            }
-            capsule(band, width, y0, y1, &strokes[i as usize]);
-        }
-    };
-    std::thread::scope(|s| {
-        for _ in 1..threads.get() {
-            s.spawn(work);
-        }
-        work();
-    });
+    bins
 }
 
 /// Strokes a band's painting fetches ahead of the one it paints.

@@ -37,9 +37,15 @@ impl<'a> Scene<'a> {
         Scene::with_flags(plan, flags(plan))
     }
 
+    /// [`Scene::new`] but for the flags, `flagged` left empty: the HTML
+    /// preview finds them first, for its G-code reader, and puts them in.
+    pub(super) fn unflagged(plan: &'a Plan) -> Scene<'a> {
+        Scene::with_flags(plan, Vec::new())
+    }
+
     /// [`Scene::new`] given which strings the findings concern (as [`flags`]
-    /// finds them), so that they may be known before the rest.
-    pub(super) fn with_flags(plan: &'a Plan, flagged: Vec<Vec<bool>>) -> Scene<'a> {
+    /// finds them).
+    fn with_flags(plan: &'a Plan, flagged: Vec<Vec<bool>>) -> Scene<'a> {
         let fallback = plan.recipe.printer.nozzle_diameter / 2.0;
         let spacing: Vec<f64> = plan
             .paths

@@ -186,8 +186,6 @@ pub struct Options {
     pub size: Size,
     /// Only the model: no title, stats or legend (PNG only).
     pub bare: bool,
-    /// How many threads drawing it may use (`-j`); the output is the same on any number.
-    pub threads: crate::base::threads::Threads,
 }
 
 /// Colour stops of the scalar modes: blue, cyan, green, yellow, red.
