@@ -602,6 +602,9 @@ const BLOBS: [&str; 6] = ["pos", "feed", "cq", "hq", "nq", "kind"];
 impl Data {
     fn new(plan: &Plan, scene: &Scene, r: Reader, stats: &Stats, opts: &Options) -> Data {
         let n = r.to.len();
+        // the scales' values are held for a moment: before the surfaces'
+        // grids, not beside them
+        let ranges = color_ranges(&r.feed, &r.kind, &r.c);
         let (h, normal) = surfaces(&r, scene);
         let (bmin, bmax) = if r.bmin.x > r.bmax.x {
             (DVec3::ZERO, DVec3::ZERO)
@@ -610,7 +613,6 @@ impl Data {
         };
         let cmax = r.c.iter().fold(0.0f64, |a, &b| a.max(b));
         let hmax = h.iter().fold(0.0f64, |a, &b| a.max(b));
-        let ranges = color_ranges(&r.feed, &r.kind, &r.c);
         let size = [0, 1, 2].map(|k| stats.bbox.max[k] - stats.bbox.min[k]);
         let findings: Vec<_> = plan
             .findings
@@ -766,8 +768,8 @@ fn quantize(x: f64, max: f64) -> u16 {
 
 /// The 0.2 % and 99.8 % quantiles of the finite values ([0, 0] for none):
 /// the values of those ranks, found by selection rather than a full sort.
-fn spread(vals: Vec<f64>) -> [f64; 2] {
-    let mut v: Vec<f64> = vals.into_iter().filter(|x| x.is_finite()).collect();
+fn spread(vals: impl Iterator<Item = f64>) -> [f64; 2] {
+    let mut v: Vec<f64> = vals.filter(|x| x.is_finite()).collect();
     if v.is_empty() {
         return [0.0, 0.0];
     }
@@ -782,14 +784,12 @@ fn spread(vals: Vec<f64>) -> [f64; 2] {
 fn color_ranges(feed: &[f64], kind: &[u8], c: &[f64]) -> [[f64; 2]; 3] {
     // the scales span the middle 99.6 % of the extruding moves, so that a few
     // merged moves near a pole (their chord shorter than their path) do not
-    // squeeze the colours of all the others
-    let ext: Vec<usize> = (0..kind.len())
-        .filter(|&k| kind[k] == 1 || kind[k] == 2)
-        .collect();
+    // squeeze the colours of all the others; one scale's values held at a time
+    let ext = || (0..kind.len()).filter(|&k| kind[k] == 1 || kind[k] == 2);
     [
-        spread(ext.iter().map(|&k| feed[k] / 60.0).collect()),
-        spread(ext.iter().map(|&k| c[k]).collect()),
-        spread(ext.iter().map(|&k| c[k] * feed[k] / 60.0).collect()),
+        spread(ext().map(|k| feed[k] / 60.0)),
+        spread(ext().map(|k| c[k])),
+        spread(ext().map(|k| c[k] * feed[k] / 60.0)),
     ]
 }
 
@@ -910,8 +910,8 @@ mod tests {
     #[test]
     fn quantiles_by_selection_are_the_sorted_ranks() {
         let v: Vec<f64> = (0..1001).map(|i| ((i * 7919) % 1001) as f64).collect();
-        assert_eq!(spread(v), [2.0, 998.0]);
-        assert_eq!(spread(vec![f64::NAN]), [0.0, 0.0]);
+        assert_eq!(spread(v.into_iter()), [2.0, 998.0]);
+        assert_eq!(spread([f64::NAN].into_iter()), [0.0, 0.0]);
     }
 
     #[test]

@@ -113,6 +113,7 @@ const MIN_PX: f32 = 0.75;
 const REFRESH: usize = 32;
 
 /// One stroke to paint.
+#[derive(Clone, Copy, Default)]
 struct Item {
     a: (f32, f32),
     b: (f32, f32),
@@ -128,6 +129,7 @@ struct Item {
 }
 
 /// One stroke of the PNG preview, coloured, as the bands paint it.
+#[derive(Clone, Copy, Default)]
 struct Px {
     a: (f32, f32),
     b: (f32, f32),
@@ -189,7 +191,7 @@ pub fn finish(drawing: Drawing, stats: &Stats) -> Rendered {
 /// In phases over the pool ([`crate::base::par`]), each one's memory let go
 /// before the next: the strokes are collected in pieces of [`PIECE`]
 /// strings, coloured as they are collected, the pieces' strokes kept in
-/// print order ([`Model::pieces`]); sorted far to near ([`sort_far_first`]);
+/// print order ([`Model::strokes`]); sorted far to near ([`sort_far_first`]);
 /// then painted in bands of [`BAND`] rows ([`paint_bands`]). Every pixel
 /// sees the same strokes in the same order however the work is split, so
 /// the image is the same on any number of threads.
@@ -207,9 +209,8 @@ pub fn draw<'p>(plan: &'p Plan, opts: &Options) -> Drawing<'p> {
     );
     let (frame, bbox) = (model.frame, model.bbox);
     let pal = Palette::of_model(&model, opts.color);
-    let pieces = model.pieces(|items| items.iter().map(|it| pal.px(it)).collect());
+    let mut strokes = model.strokes(|it| pal.px(it));
     drop(model);
-    let mut strokes = concat(pieces);
     sort_far_first(&mut strokes);
     let mut pixmap = Pixmap::new(opts.size.width, opts.size.height).expect("sizes are 1..=8192");
     pixmap.fill(tiny_skia::Color::from_rgba8(
@@ -227,15 +228,6 @@ pub fn draw<'p>(plan: &'p Plan, opts: &Options) -> Drawing<'p> {
         scene,
         opts: *opts,
     }
-}
-
-/// The pieces' results in order, as one list.
-fn concat<T>(pieces: Vec<Vec<T>>) -> Vec<T> {
-    let mut out = Vec::with_capacity(pieces.iter().map(Vec::len).sum());
-    for piece in pieces {
-        out.extend(piece);
-    }
-    out
 }
 
 /// Painter's algorithm for the preview's strokes: far (small depth) first,
@@ -294,7 +286,7 @@ pub fn thumbnail(scene: &Scene, size: Size) -> Pixmap {
         1,
     );
     let (frame, bbox) = (model.frame, model.bbox);
-    let mut items = concat(model.pieces(|items| items));
+    let mut items = model.strokes(|it| *it);
     sort(&mut items);
     paint_strokes(&mut pm, &items, scene, ColorMode::Plain, 1.0);
     marks(&mut pm, scene, &frame, bbox, ColorMode::Plain, rect);
@@ -310,7 +302,7 @@ fn sort(items: &mut [Item]) {
 
 /// The strings of a scene made ready to paint into a rectangle of an image:
 /// the projection, each path's grid of strings, and the pieces of work that
-/// collect the strokes ([`Model::pieces`]).
+/// collect the strokes ([`Model::strokes`]).
 struct Model<'s, 'p> {
     scene: &'s Scene<'p>,
     frame: Frame,
@@ -408,20 +400,54 @@ impl<'s, 'p> Model<'s, 'p> {
         }
     }
 
-    /// `f` of the strokes of every piece, in print order, the pieces taken
-    /// by the pool's threads ([`par::map`]). A piece's strokes follow from
-    /// its strings alone (merged runs end at its end), so they are the same
-    /// however the pieces are shared out.
-    fn pieces<T: Send>(&self, f: impl Fn(Vec<Item>) -> Vec<T> + Sync + Send) -> Vec<Vec<T>> {
-        par::map(&self.pieces, |&(pi, k0, k1)| f(self.collect(pi, k0, k1)))
+    /// `f` of every stroke, in print order, in one vector. The pieces'
+    /// strokes are counted first ([`Model::count`]: no neighbour searched),
+    /// so that each piece writes its own into its share of the vector, the
+    /// pieces taken by the pool's threads ([`par::each`]). A piece's strokes
+    /// follow from its strings alone (merged runs end at its end), so they
+    /// are the same however the pieces are shared out.
+    fn strokes<T>(&self, f: impl Fn(&Item) -> T + Sync + Send) -> Vec<T>
+    where
+        T: Copy + Default + Send,
+    {
+        let counts = par::map(&self.pieces, |&(pi, k0, k1)| self.count(pi, k0, k1));
+        let mut out = vec![T::default(); counts.iter().sum()];
+        let mut shares = Vec::with_capacity(self.pieces.len());
+        let mut rest = out.as_mut_slice();
+        for (&piece, &n) in self.pieces.iter().zip(&counts) {
+            let (share, tail) = rest.split_at_mut(n);
+            shares.push((piece, share));
+            rest = tail;
+        }
+        par::each(&mut shares, |((pi, k0, k1), share)| {
+            let mut n = 0;
+            self.collect(*pi, *k0, *k1, |item| {
+                share[n] = f(&item);
+                n += 1;
+            });
+        });
+        out
     }
 
-    /// The strokes of strings `k0..k1` of path `pi`: runs shorter than
-    /// [`MERGE_PX`] on screen become one stroke ([`Model::run`]), so a
-    /// 2-million-string vase paints as fast as its pixels allow.
-    fn collect(&self, pi: usize, k0: usize, k1: usize) -> Vec<Item> {
+    /// How many strokes [`Model::collect`] makes of strings `k0..k1` of
+    /// path `pi`.
+    fn count(&self, pi: usize, k0: usize, k1: usize) -> usize {
         let tp = &self.scene.plan.paths[pi];
-        let mut items = Vec::new();
+        let (mut k, mut n) = (k0, 0);
+        while k < k1 {
+            let (first, end) = (k, self.run_end(pi, k, k1));
+            k = end;
+            n += usize::from(tp.points[first].is_finite() && tp.points[end].is_finite());
+        }
+        n
+    }
+
+    /// The strokes of strings `k0..k1` of path `pi`, in order, passed to
+    /// `emit`: runs shorter than [`MERGE_PX`] on screen become one stroke
+    /// ([`Model::run`]), so a 2-million-string vase paints as fast as its
+    /// pixels allow; a run with an end that is not finite is left out.
+    fn collect(&self, pi: usize, k0: usize, k1: usize, mut emit: impl FnMut(Item)) {
+        let tp = &self.scene.plan.paths[pi];
         let mut follow = Follow::default();
         let mut k = k0;
         while k < k1 {
@@ -429,45 +455,55 @@ impl<'s, 'p> Model<'s, 'p> {
             k = run.end;
             let (a, b) = (tp.points[run.first], tp.points[run.end]);
             if a.is_finite() && b.is_finite() {
-                items.push(self.stroke(pi, &run, a, b, &mut follow));
+                emit(self.stroke(pi, &run, a, b, &mut follow));
             }
         }
-        items
     }
 
-    /// The run of path `pi`'s strings from `k` (before `k1`) drawn as one
-    /// stroke: strings alike to the first, taken while the run is shorter
-    /// than [`MERGE_PX`] on screen.
-    fn run(&self, pi: usize, k: usize, k1: usize) -> Run {
-        let (scene, mode) = (self.scene, self.mode);
+    /// The end of the run of path `pi`'s strings from `k` (before `k1`)
+    /// drawn as one stroke: strings alike to the first (travel or not,
+    /// flagged or not), taken while the run is shorter than [`MERGE_PX`] on
+    /// screen; at least one.
+    fn run_end(&self, pi: usize, k: usize, k1: usize) -> usize {
+        let scene = self.scene;
         let tp = &scene.plan.paths[pi];
         let start = tp.points[k];
-        let s0 = tp.strings[k];
-        let flag0 = scene.flagged[pi][k];
-        let (mut len, mut csum, mut vsum) = (0.0, 0.0, 0.0);
+        let (travel, flag) = (tp.strings[k].travel, scene.flagged[pi][k]);
         let mut end = k;
-        while end < k1 && tp.strings[end].travel == s0.travel && scene.flagged[pi][end] == flag0 {
-            let l = tp.length(end);
-            len += l;
-            csum += tp.strings[end].c * l;
-            vsum += scene.value(mode, pi, end) * l;
+        while end < k1 && tp.strings[end].travel == travel && scene.flagged[pi][end] == flag {
             end += 1;
             if start.distance(tp.points[end]) * self.frame.scale >= MERGE_PX {
                 break;
             }
         }
+        end
+    }
+
+    /// The run of strings from `k` ([`Model::run_end`]), its cross-section
+    /// and value weighted by length.
+    fn run(&self, pi: usize, k: usize, k1: usize) -> Run {
+        let (scene, mode) = (self.scene, self.mode);
+        let tp = &scene.plan.paths[pi];
+        let end = self.run_end(pi, k, k1);
+        let (mut len, mut csum, mut vsum) = (0.0, 0.0, 0.0);
+        for j in k..end {
+            let l = tp.length(j);
+            len += l;
+            csum += tp.strings[j].c * l;
+            vsum += scene.value(mode, pi, j) * l;
+        }
         let (c, v) = if len > 0.0 {
             (csum / len, vsum / len)
         } else {
-            (s0.c, scene.value(mode, pi, k))
+            (tp.strings[k].c, scene.value(mode, pi, k))
         };
         Run {
             first: k,
             end,
             c,
             v,
-            travel: s0.travel,
-            flagged: flag0,
+            travel: tp.strings[k].travel,
+            flagged: scene.flagged[pi][k],
         }
     }
 
