@@ -214,6 +214,20 @@ pub fn overlay(candidates: &[Piece], eps: f64, classify: impl Fn(&Piece) -> Keep
 /// keeps each loop around one wedge of the region, so loops never cross.
 /// Loops thinner than 10·eps (area / length) are slivers and go.
 pub fn chain(pieces: Vec<Piece>, eps: f64) -> Region {
+    let (items, verts) = snap(pieces, eps);
+    let alive = distinct(&items, eps);
+    let mut loops = walk(&items, &alive, verts);
+    loops.retain(|l| l.area().abs() > 10.0 * eps * l.length());
+    Region { loops }
+}
+
+/// A piece of [`chain`] with its start and end vertex.
+type Item = (Piece, usize, usize);
+
+/// The pieces with their end vertices, end points within `eps` taken as
+/// one vertex and every piece given its vertices' exact coordinates; pieces
+/// of zero length left out. And how many vertices there are.
+fn snap(pieces: Vec<Piece>, eps: f64) -> (Vec<Item>, usize) {
     let mut verts: Vec<DVec2> = Vec::new();
     let mut vid = |p: DVec2| -> usize {
         if let Some(k) = verts.iter().position(|v| v.distance(p) <= eps) {
@@ -223,7 +237,7 @@ pub fn chain(pieces: Vec<Piece>, eps: f64) -> Region {
             verts.len() - 1
         }
     };
-    let mut items: Vec<(Piece, usize, usize)> = Vec::with_capacity(pieces.len());
+    let mut items: Vec<Item> = Vec::with_capacity(pieces.len());
     for p in pieces {
         let (s, e) = (vid(p.start()), vid(p.end()));
         if s == e && !p.is_full() {
@@ -234,11 +248,17 @@ pub fn chain(pieces: Vec<Piece>, eps: f64) -> Region {
         }
         items.push((p, s, e));
     }
-    let items: Vec<(Piece, usize, usize)> = items
+    let items = items
         .into_iter()
         .map(|(p, s, e)| (p.with_ends(verts[s], verts[e]), s, e))
         .collect();
-    // duplicates and cancelling pairs
+    (items, verts.len())
+}
+
+/// Which pieces stay: of two with the same ends and middles within 10·eps,
+/// the first when they run the same way (a piece given twice), neither when
+/// they run opposite ways (a zero-width sliver).
+fn distinct(items: &[Item], eps: f64) -> Vec<bool> {
     let mut alive = vec![true; items.len()];
     for i in 0..items.len() {
         if !alive[i] {
@@ -263,8 +283,16 @@ pub fn chain(pieces: Vec<Piece>, eps: f64) -> Region {
             }
         }
     }
+    alive
+}
+
+/// The loops of the living pieces (`alive`) over `verts` vertices: a full
+/// circle is one; the others are walked from vertex to vertex, each step
+/// the sharpest left turn ([`next_piece`]), until the walk closes (an open
+/// chain, numerically inconsistent, is dropped).
+fn walk(items: &[Item], alive: &[bool], verts: usize) -> Vec<Loop> {
     let mut out: Vec<usize> = Vec::new();
-    let mut outgoing: Vec<Vec<usize>> = vec![Vec::new(); verts.len()];
+    let mut outgoing: Vec<Vec<usize>> = vec![Vec::new(); verts];
     let mut loops = Vec::new();
     for (k, (p, s, _)) in items.iter().enumerate() {
         if !alive[k] {
@@ -285,43 +313,15 @@ pub fn chain(pieces: Vec<Piece>, eps: f64) -> Region {
         used[first] = true;
         let mut chain = vec![first];
         loop {
-            let cur = *chain.last().unwrap();
-            let v = items[cur].2;
-            let tin = items[cur].0.tangent_end();
-            // candidates: unused pieces leaving v, and closing the loop
-            let mut best: Option<(usize, f64, f64)> = None;
-            let closing = v == items[first].1;
-            let consider = |k: usize, best: &mut Option<(usize, f64, f64)>| {
-                let p = &items[k].0;
-                let tout = p.tangent_start();
-                let turn = libm::atan2(cross(tin, tout), tin.dot(tout));
-                let curv = p.curvature();
-                let better = match *best {
-                    None => true,
-                    Some((_, bt, bc)) => {
-                        turn > bt + 1e-9 || ((turn - bt).abs() <= 1e-9 && curv > bc)
-                    }
-                };
-                if better {
-                    *best = Some((k, turn, curv));
-                }
-            };
-            for &k in &outgoing[v] {
-                if !used[k] {
-                    consider(k, &mut best);
-                }
-            }
-            if closing {
-                consider(first, &mut best);
-            }
-            match best {
-                Some((k, _, _)) if k == first => {
+            let cur = *chain.last().expect("a chain starts with its first piece");
+            match next_piece(items, &outgoing[items[cur].2], &used, cur, first) {
+                Some(k) if k == first => {
                     loops.push(Loop {
                         pieces: chain.iter().map(|&k| items[k].0).collect(),
                     });
                     break;
                 }
-                Some((k, _, _)) => {
+                Some(k) => {
                     used[k] = true;
                     chain.push(k);
                 }
@@ -329,8 +329,44 @@ pub fn chain(pieces: Vec<Piece>, eps: f64) -> Region {
             }
         }
     }
-    loops.retain(|l| l.area().abs() > 10.0 * eps * l.length());
-    Region { loops }
+    loops
+}
+
+/// The piece the walk takes after `cur`: of the unused pieces leaving its
+/// end (`leaving`), and `first` when that closes the loop, the one of the
+/// sharpest left turn, atan2(tin × tout, tin · tout) (within 1e-9 rad, the
+/// one curving most to the left).
+fn next_piece(
+    items: &[Item],
+    leaving: &[usize],
+    used: &[bool],
+    cur: usize,
+    first: usize,
+) -> Option<usize> {
+    let tin = items[cur].0.tangent_end();
+    let mut best: Option<(usize, f64, f64)> = None;
+    let mut consider = |k: usize| {
+        let p = &items[k].0;
+        let tout = p.tangent_start();
+        let turn = libm::atan2(cross(tin, tout), tin.dot(tout));
+        let curv = p.curvature();
+        let better = match best {
+            None => true,
+            Some((_, bt, bc)) => turn > bt + 1e-9 || ((turn - bt).abs() <= 1e-9 && curv > bc),
+        };
+        if better {
+            best = Some((k, turn, curv));
+        }
+    };
+    for &k in leaving {
+        if !used[k] {
+            consider(k);
+        }
+    }
+    if items[cur].2 == items[first].1 {
+        consider(first);
+    }
+    best.map(|b| b.0)
 }
 
 /// A piece along which f(p) = p·n only rises or only falls, with f at its ends.
