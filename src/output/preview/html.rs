@@ -596,6 +596,42 @@ pub struct Data {
     hmax: f64,
 }
 
+/// The stats the viewer shows, as JSON.
+fn stats_json(stats: &Stats, scene: &Scene) -> serde_json::Value {
+    let size = [0, 1, 2].map(|k| stats.bbox.max[k] - stats.bbox.min[k]);
+    json!({
+        "size_mm": size,
+        "filament_m": stats.filament_length_mm / 1000.0,
+        "filament_g": stats.filament_mass_g,
+        "material": stats.material,
+        "printer": stats.printer,
+        "time": hms(stats.print_time_s),
+        "time_s": stats.print_time_s,
+        "strings": stats.strings,
+        "extrude_moves": stats.extrude_moves,
+        "travel_moves": stats.travel_moves,
+        "max_flow": stats.max_flow_mm3_s,
+        "spacing_mm": scene.typical_spacing(),
+    })
+}
+
+/// The checks' findings the viewer lists, as JSON.
+fn findings_json(plan: &Plan) -> Vec<serde_json::Value> {
+    plan.findings
+        .iter()
+        .map(|f| {
+            json!({
+                "code": f.code,
+                "severity": f.severity.word(),
+                "message": f.message,
+                "part": f.part,
+                "string": f.string,
+                "at": f.at,
+            })
+        })
+        .collect()
+}
+
 /// The per-move fields of the page, each written as base64 of binary.
 const BLOBS: [&str; 6] = ["pos", "feed", "cq", "hq", "nq", "kind"];
 
@@ -613,21 +649,6 @@ impl Data {
         };
         let cmax = r.c.iter().fold(0.0f64, |a, &b| a.max(b));
         let hmax = h.iter().fold(0.0f64, |a, &b| a.max(b));
-        let size = [0, 1, 2].map(|k| stats.bbox.max[k] - stats.bbox.min[k]);
-        let findings: Vec<_> = plan
-            .findings
-            .iter()
-            .map(|f| {
-                json!({
-                    "code": f.code,
-                    "severity": f.severity.word(),
-                    "message": f.message,
-                    "part": f.part,
-                    "string": f.string,
-                    "at": f.at,
-                })
-            })
-            .collect();
         let small = json!({
             "format": "p3dp-preview 1",
             "name": stats.name,
@@ -638,21 +659,8 @@ impl Data {
             "hmax": hmax,
             "bbox": {"min": bmin.to_array(), "max": bmax.to_array()},
             "ranges": {"speed": ranges[0], "cross-section": ranges[1], "flow": ranges[2]},
-            "stats": {
-                "size_mm": size,
-                "filament_m": stats.filament_length_mm / 1000.0,
-                "filament_g": stats.filament_mass_g,
-                "material": stats.material,
-                "printer": stats.printer,
-                "time": hms(stats.print_time_s),
-                "time_s": stats.print_time_s,
-                "strings": stats.strings,
-                "extrude_moves": stats.extrude_moves,
-                "travel_moves": stats.travel_moves,
-                "max_flow": stats.max_flow_mm3_s,
-                "spacing_mm": scene.typical_spacing(),
-            },
-            "findings": findings,
+            "stats": stats_json(stats, scene),
+            "findings": findings_json(plan),
             // draw_turtle markers: position, heading, up (recipe coordinates)
             "turtles": scene
                 .turtles

@@ -1,6 +1,14 @@
-//! The PNG preview: the strings as anti-aliased strokes (tiny-skia), painted
-//! far to near so that the front of a sphere hides its back, shaded, with the
+//! The PNG preview: the strings as anti-aliased strokes, painted far to
+//! near so that the front of a sphere hides its back, shaded, with the
 //! recipe's name, its key stats and a colour legend in the corners.
+//!
+//! Rasterising. The preview's strokes are painted by this module's own
+//! rasteriser ([`paint_bands`]): a stroke is a capsule of its width, a pixel
+//! takes the share of it a box filter gives, blended in integers rounded the
+//! same way everywhere, in bands of rows that the pool shares out with the
+//! same bytes on any number of threads. tiny-skia draws the rest: the
+//! G-code thumbnails' strokes, the turtles' markers, the findings' rings
+//! and the legend's colour bar; the text is the previews' own 8 × 8 font.
 //!
 //! Shading. A string is a thin tube: lit from a light L fixed to the view, the
 //! brightest normal of a tube with unit tangent T gives the diffuse term
@@ -444,8 +452,9 @@ impl<'s, 'p> Model<'s, 'p> {
 
     /// The strokes of strings `k0..k1` of path `pi`, in order, passed to
     /// `emit`: runs shorter than [`MERGE_PX`] on screen become one stroke
-    /// ([`Model::run`]), so a 2-million-string vase paints as fast as its
-    /// pixels allow; a run with an end that is not finite is left out.
+    /// ([`Model::run`]), so that the strokes number about the path's length
+    /// on screen over [`MERGE_PX`] at most, however many strings it has; a
+    /// run with an end that is not finite is left out.
     fn collect(&self, pi: usize, k0: usize, k1: usize, mut emit: impl FnMut(Item)) {
         let tp = &self.scene.plan.paths[pi];
         let mut follow = Follow::default();
