@@ -244,26 +244,62 @@ pub struct Local {
     pub spacing: f64,
 }
 
+/// The farthest [`pass_spacing`] looks for another pass, mm.
+const REACH: f64 = 2.0;
+
+/// Strings per piece of [`pass_spacing`]'s work.
+const SPACING_PIECE: usize = 1 << 15;
+
 /// The distance between neighbouring passes of a polyline (a helix's layer
 /// height, a spiral's pitch), mm, or `None` when it has no such neighbours:
 /// the median, over up to 1024 sampled points, of the distance to the nearest
-/// point of another pass within 2 mm (as [`Grid::nearest_other`] finds it).
+/// point of another pass within [`REACH`] (as [`Grid::nearest_other`] finds
+/// it), when at least 8 of them have one.
 ///
 /// With so few points asked about, no grid of all the strings is built: the
 /// cubes of 2 mm within 2.5 mm of a sampled point list it, and each string
 /// is measured once against the points listed in the cubes of its pieces (at
 /// most 1 mm long, so a string within 2 mm of a point has a piece whose
-/// middle lies within 2.5 mm of it).
+/// middle lies within 2.5 mm of it). The strings are measured in pieces of
+/// [`SPACING_PIECE`] on the pool ([`par::map`]), each point's nearest of
+/// every piece (distance, then string) the least of them all, so the same
+/// however they are shared out.
 pub fn pass_spacing(points: &[DVec3]) -> Option<f64> {
-    const REACH: f64 = 2.0;
     let n = points.len();
     if n < 3 {
         return None;
     }
     let step = (n / 1024).max(1);
     let inv = 1.0 / REACH;
-    // the sampled points with their arc lengths
+    let (samples, arcs) = spacing_samples(points, step);
+    let near = Near::new(&samples, DVec3::splat(1.25 * REACH), inv);
+    let firsts: Vec<usize> = (0..n - 1).step_by(SPACING_PIECE).collect();
+    let pieces = par::map(&firsts, |&k0| {
+        let k1 = (k0 + SPACING_PIECE).min(n - 1);
+        nearest_of_piece(points, k0..k1, arcs[k0 / SPACING_PIECE], &samples, &near)
+    });
+    let mut best: Vec<Option<(f64, usize)>> = vec![None; samples.len()];
+    for piece in pieces {
+        for (slot, found) in best.iter_mut().zip(piece) {
+            if let Some(x) = found.filter(|x| slot.is_none_or(|o| *x < o)) {
+                *slot = Some(x);
+            }
+        }
+    }
+    let mut found: Vec<f64> = best.iter().flatten().map(|b| b.0).collect();
+    if found.len() < 8 {
+        return None;
+    }
+    found.sort_by(f64::total_cmp);
+    Some(found[found.len() / 2])
+}
+
+/// Every `step`-th finite point of `points` with its arc length, and the
+/// arc length at every [`SPACING_PIECE`]-th point (Σ of the finite string
+/// lengths before it, summed in order).
+fn spacing_samples(points: &[DVec3], step: usize) -> (Vec<(DVec3, f64)>, Vec<f64>) {
     let mut samples: Vec<(DVec3, f64)> = Vec::new();
+    let mut arcs = Vec::new();
     let mut acc = 0.0;
     for (k, p) in points.iter().enumerate() {
         if k > 0 {
@@ -275,12 +311,30 @@ pub fn pass_spacing(points: &[DVec3]) -> Option<f64> {
         if k.is_multiple_of(step) && p.is_finite() {
             samples.push((*p, acc));
         }
+        if k.is_multiple_of(SPACING_PIECE) {
+            arcs.push(acc);
+        }
     }
-    let near = Near::new(&samples, DVec3::splat(1.25 * REACH), inv);
+    (samples, arcs)
+}
+
+/// Per sample, the nearest point of another pass among `strings` of
+/// `points` (the first at arc length `sa`): (distance, string), the least
+/// such pair, or `None`. A sample p at arc length s_p takes the closest point
+/// q of a string within [`REACH`] when |s_q − s_p| > 3·|p − q| (as
+/// [`Grid::nearest_other`] does) and |p − q| > 1 µm.
+fn nearest_of_piece(
+    points: &[DVec3],
+    strings: std::ops::Range<usize>,
+    mut sa: f64,
+    samples: &[(DVec3, f64)],
+    near: &Near,
+) -> Vec<Option<(f64, usize)>> {
+    let inv = 1.0 / REACH;
     let mut best: Vec<Option<(f64, usize)>> = vec![None; samples.len()];
-    let mut sa = 0.0;
-    for k in 0..n - 1 {
+    for k in strings {
         let (a, b) = (points[k], points[k + 1]);
+        // the same sum as the samples' arc lengths: |b − a| = |a − b|, bit for bit
         let l = a.distance(b);
         let sb = if l.is_finite() { sa + l } else { sa };
         let pieces = (l * 2.0 * inv).clamp(0.0, 1e6) as usize + 1;
@@ -309,12 +363,7 @@ pub fn pass_spacing(points: &[DVec3]) -> Option<f64> {
         }
         sa = sb;
     }
-    let mut found: Vec<f64> = best.iter().flatten().map(|b| b.0).collect();
-    if found.len() < 8 {
-        return None;
-    }
-    found.sort_by(f64::total_cmp);
-    Some(found[found.len() / 2])
+    best
 }
 
 /// The sampled points of [`pass_spacing`] listed (ascending) under every cube
@@ -527,6 +576,28 @@ mod tests {
         for parts in [1, 3] {
             let g = Grid::new_on(&tp.points, 2.0, parts);
             assert_eq!(h, median_nearest(&g, &tp.points, step));
+        }
+    }
+
+    #[test]
+    fn spacing_in_pieces_is_the_spacing_of_one_grid_on_any_pool() {
+        // a helix of pitch 0.25 long enough for several pieces of strings
+        let mut tp = Toolpath::new(DVec3::new(8.0, 0.0, 0.0));
+        let n = 2 * SPACING_PIECE + 1234;
+        for i in 1..=n {
+            let a = std::f64::consts::TAU * i as f64 / 150.0;
+            let z = 0.25 * i as f64 / 150.0;
+            tp.draw(DVec3::new(8.0 * a.cos(), 8.0 * a.sin(), z), 0.1, 30.0);
+        }
+        let step = (tp.points.len() / 1024).max(1);
+        let want = median_nearest(&Grid::new(&tp.points, 2.0), &tp.points, step);
+        assert!((want - 0.25).abs() < 0.01, "{want}");
+        for t in [1, 3] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(t)
+                .build()
+                .unwrap();
+            assert_eq!(pool.install(|| pass_spacing(&tp.points)), Some(want), "{t}");
         }
     }
 
