@@ -1,5 +1,6 @@
-//! The previews' files: the format told by the extension, and the bytes of
-//! either written atomically, with the line that reports them.
+//! The previews' files: the format told by the extension, the steps that
+//! make either ([`Job`]), and its bytes written atomically, with the line
+//! that reports them.
 
 use std::path::{Path, PathBuf};
 
@@ -61,7 +62,14 @@ pub fn bytes(plan: &Plan, out: &Path, opts: &Options, render: Render) -> Result<
 /// is written into [`Job::reader`] (for its stats, and for an HTML viewer
 /// its moves) while [`Job::draw`] does all that needs neither, the two side
 /// by side when there is a thread to spare; then [`Job::finish`]. The
-/// result is the same in any order.
+/// result is the same in any order:
+///
+/// ```text
+/// let job = Job::new(plan, out, opts)?;
+/// let mut reader = job.reader();
+/// let (stats, drawing) = par::join(|| render(&mut reader), || job.draw());
+/// let line = job.finish(drawing, reader, &stats?).write()?;
+/// ```
 pub struct Job<'p> {
     plan: &'p Plan,
     out: PathBuf,

@@ -282,8 +282,9 @@ pub fn thumbnail(scene: &Scene, size: Size) -> Pixmap {
     let (w, h) = (size.width as f64, size.height as f64);
     let pad = (w.min(h) * 0.04).max(0.5);
     let rect = [pad, pad, w - pad, h - pad];
-    // one piece per path (merged runs end at a piece's end): the bytes are
-    // part of the G-code and its hash, the same for any `-j`
+    // one piece per path, every neighbour searched in full: the thumbnails
+    // as they were first drawn (their bytes are part of the G-code, and so
+    // of its hash)
     let model = Model::new(
         scene,
         super::View::Iso,
