@@ -50,16 +50,26 @@ fn space(b: u8) -> bool {
 /// `parse` gives (the "fast path" of Clinger's algorithm). Anything else
 /// goes to `parse`.
 fn number(s: &[u8]) -> Option<f64> {
+    match plain(s) {
+        Some((v, len)) if len == s.len() => Some(v),
+        _ => std::str::from_utf8(s).ok()?.parse().ok(),
+    }
+}
+
+/// The plain decimal that starts `s` (an optional sign, 1 to 15 digits,
+/// at most one point) and its length, when it is all of `s` or a space
+/// ends it: its value m / 10^f, correctly rounded (see [`number`]).
+fn plain(s: &[u8]) -> Option<(f64, usize)> {
     const POW10: [f64; 16] = [
         1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
     ];
-    let (neg, digits) = match s.first() {
-        Some(b'-') => (true, &s[1..]),
-        Some(b'+') => (false, &s[1..]),
-        _ => (false, s),
+    let (neg, mut i) = match s.first() {
+        Some(b'-') => (true, 1),
+        Some(b'+') => (false, 1),
+        _ => (false, 0),
     };
     let (mut m, mut n, mut frac, mut point) = (0u64, 0usize, 0usize, false);
-    for &b in digits {
+    while let Some(&b) = s.get(i) {
         match b {
             b'0'..=b'9' if n < 15 => {
                 m = m * 10 + u64::from(b - b'0');
@@ -67,14 +77,16 @@ fn number(s: &[u8]) -> Option<f64> {
                 frac += usize::from(point);
             }
             b'.' if !point => point = true,
-            _ => return std::str::from_utf8(s).ok()?.parse().ok(),
+            b' ' => break,
+            _ => return None,
         }
+        i += 1;
     }
     if n == 0 {
-        return std::str::from_utf8(s).ok()?.parse().ok();
+        return None;
     }
     let v = m as f64 / POW10[frac];
-    Some(if neg { -v } else { v })
+    Some((if neg { -v } else { v }, i))
 }
 
 /// The state of reading G-code line by line (see [`moves`]).
@@ -102,11 +114,48 @@ impl Parser {
         }
     }
 
-    /// The move `line` makes, if it moves the head.
-    ///
-    /// Read as bytes; a line whose code (before any `;`) is not all ASCII is
-    /// read as text, as `str::split_whitespace` and `str::parse` read it.
+    /// The move `line` makes, if it moves the head: [`Parser::short`] for
+    /// the lines p3dp writes nearly all of, [`Parser::general`] for the rest.
     fn line(&mut self, line: &[u8]) -> Option<Move> {
+        match self.short(line) {
+            Some(m) => m,
+            None => self.general(line),
+        }
+    }
+
+    /// The move of a line of the short form, `G0` or `G1` and then words of
+    /// an ASCII capital and a plain decimal ([`plain`]), a single space
+    /// before each, read in one pass; `None` when the line is not of that
+    /// form. The same move [`Parser::general`] reads from such a line.
+    fn short(&mut self, line: &[u8]) -> Option<Option<Move>> {
+        let g0 = match line.get(..3)? {
+            b"G0 " => true,
+            b"G1 " => false,
+            _ => return None,
+        };
+        let mut words = [(0u8, 0.0f64); 8];
+        let mut n = 0;
+        let mut rest = &line[3..];
+        loop {
+            let (&letter, tail) = rest.split_first()?;
+            if !letter.is_ascii_uppercase() || n == words.len() {
+                return None;
+            }
+            let (v, len) = plain(tail)?;
+            words[n] = (letter, v);
+            n += 1;
+            if len == tail.len() {
+                break;
+            }
+            rest = &tail[len + 1..];
+        }
+        Some(self.go(g0, words[..n].iter().copied()))
+    }
+
+    /// The move `line` makes, if it moves the head, read the general way:
+    /// as bytes, or, when its code (before any `;`) is not all ASCII, as
+    /// text, as `str::split_whitespace` and `str::parse` read it.
+    fn general(&mut self, line: &[u8]) -> Option<Move> {
         if line.starts_with(b"; part: ") {
             self.part += 1;
         }
@@ -133,6 +182,42 @@ impl Parser {
         self.words(&words[..n])
     }
 
+    /// The move a `G0` (`g0`) or `G1` of these words (each its first byte
+    /// and its value, those with no value left out) makes, if it moves the
+    /// head.
+    fn go(&mut self, g0: bool, words: impl Iterator<Item = (u8, f64)>) -> Option<Move> {
+        let mut moved = false;
+        let mut has_e = false;
+        let mut de = 0.0;
+        for (letter, v) in words {
+            match letter {
+                b'X' => (self.pos[0], moved) = (v, true),
+                b'Y' => (self.pos[1], moved) = (v, true),
+                b'Z' => (self.pos[2], moved) = (v, true),
+                b'E' => {
+                    has_e = true;
+                    de = if self.relative { v } else { v - self.e };
+                    self.e = if self.relative { self.e + v } else { v };
+                }
+                b'F' => self.feed = v,
+                _ => {}
+            }
+        }
+        moved.then(|| Move {
+            to: DVec3::from_array(self.pos) - self.origin,
+            feed: self.feed,
+            de,
+            g0,
+            extrudes: !g0 && has_e,
+            part: self.part,
+            machine_um: if self.um {
+                self.pos.map(|x| libm::round(x * 1e3) as i64)
+            } else {
+                [0; 3]
+            },
+        })
+    }
+
     /// The move a line of these words makes, if it moves the head.
     fn words(&mut self, words: &[&[u8]]) -> Option<Move> {
         let (&cmd, words) = words.split_first()?;
@@ -155,39 +240,8 @@ impl Parser {
                 }
             }
             b"G0" | b"G1" => {
-                let mut moved = false;
-                let mut has_e = false;
-                let mut de = 0.0;
-                for &w in words {
-                    let Some(v) = value(w) else { continue };
-                    match w[0] {
-                        b'X' => (self.pos[0], moved) = (v, true),
-                        b'Y' => (self.pos[1], moved) = (v, true),
-                        b'Z' => (self.pos[2], moved) = (v, true),
-                        b'E' => {
-                            has_e = true;
-                            de = if self.relative { v } else { v - self.e };
-                            self.e = if self.relative { self.e + v } else { v };
-                        }
-                        b'F' => self.feed = v,
-                        _ => {}
-                    }
-                }
-                if moved {
-                    return Some(Move {
-                        to: DVec3::from_array(self.pos) - self.origin,
-                        feed: self.feed,
-                        de,
-                        g0: cmd == b"G0",
-                        extrudes: cmd == b"G1" && has_e,
-                        part: self.part,
-                        machine_um: if self.um {
-                            self.pos.map(|x| libm::round(x * 1e3) as i64)
-                        } else {
-                            [0; 3]
-                        },
-                    });
-                }
+                let words = words.iter().filter_map(|&w| Some((w[0], value(w)?)));
+                return self.go(cmd == b"G0", words);
             }
             _ => {}
         }
@@ -407,6 +461,49 @@ mod tests {
             let got = number(w.as_bytes());
             assert_eq!(got.map(f64::to_bits), want.map(f64::to_bits), "{w:?}");
         }
+    }
+
+    #[test]
+    fn short_lines_read_as_the_general_way_reads_them() {
+        let mut lines: Vec<Vec<u8>> = [
+            "G1 X1 Y2 Z3 E4 F5",
+            "G0 X150.051 Y110.000 Z0.200 F7200",
+            "G1 X150.126 Y110.252 E0.01049 F2400",
+            "M83",
+            "G1 E-0.8",
+            "G1 X-0.5 E+0.25",
+            "G92 E0",
+            "M82",
+            "G1 X1 Y2 ",
+            "G1  X1",
+            "G1 X1\r",
+            "G1 X1 ; a",
+            "G1 X1\tY2",
+            "G1 x1 Y2",
+            "G1 X1e3 Y2",
+            "G1 X1234567890123456 Y2",
+            "G1 X1..2",
+            "G1 X. Y2",
+            "G1 X",
+            "G1 ",
+            "G1",
+            "G1 A1 B2 C3 D4 I5 J6 K7 X8",
+            "G1 A1 B2 C3 D4 I5 J6 K7 L8 X10",
+            "G1 XÉ Y2",
+            "G2 X1 Y2",
+        ]
+        .iter()
+        .map(|l| l.as_bytes().to_vec())
+        .collect();
+        lines.push(b"G1 X1 \xff Y2".to_vec());
+        let (mut both, mut general) = (Parser::new(DVec3::ZERO), Parser::new(DVec3::ZERO));
+        for l in &lines {
+            let got = both.line(l);
+            assert_eq!(got, general.general(l), "{:?}", String::from_utf8_lossy(l));
+            assert_eq!((both.e, both.feed), (general.e, general.feed));
+        }
+        assert!(Parser::new(DVec3::ZERO).short(&lines[1]).is_some());
+        assert!(Parser::new(DVec3::ZERO).short(&lines[9]).is_none());
     }
 
     #[test]
