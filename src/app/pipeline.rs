@@ -20,6 +20,7 @@
 
 use std::collections::VecDeque;
 use std::io::{self, Write};
+use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Condvar, Mutex, MutexGuard, OnceLock};
 
@@ -30,6 +31,7 @@ use crate::analyse::stats::{MoveStats, Stats};
 use crate::base::error::{Error, Result};
 use crate::base::toolpath::Toolpath;
 use crate::output::file::HashWriter;
+use crate::output::preview;
 
 /// How many threads a command may use; at least 1.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -125,6 +127,23 @@ pub fn render<W: Write>(plan: &Plan, out: W) -> Result<Stats> {
 pub fn render_unhashed<W: Write>(plan: &Plan, out: W) -> Result<Stats> {
     let (counted, moves) = write(plan, Counted { out, bytes: 0 })?;
     Ok(Stats::of(plan, &moves, String::new(), counted.bytes))
+}
+
+/// A preview of `plan` for `out` (PNG or HTML by its extension): the
+/// G-code written for its stats (and, for a viewer, its moves) beside the
+/// drawing when the pool allows; the same preview either way.
+pub fn preview(plan: &Plan, out: &Path, opts: &preview::Options) -> Result<preview::Finished> {
+    let job = preview::Job::new(plan, out, opts)?;
+    let mut reader = job.reader();
+    let (stats, drawing) = if parallel() {
+        rayon::join(|| render_unhashed(plan, &mut reader), || job.draw())
+    } else {
+        // in turn, the G-code first, so that its memory is let go before
+        // the drawing takes its own
+        let stats = render_unhashed(plan, &mut reader);
+        (stats, job.draw())
+    };
+    Ok(job.finish(drawing, reader, &stats?))
 }
 
 /// Checks `plan` (as [`check`]) and writes its G-code to `out` (as

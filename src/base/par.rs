@@ -109,6 +109,17 @@ pub(crate) fn map<T: Sync, U: Send>(items: &[T], f: impl Fn(&T) -> U + Sync + Se
     items.par_iter().map(f).collect()
 }
 
+/// Calls `f` on every item, each taken by whichever thread of the pool is
+/// free (for items of uneven cost); `f` sees its item alone, so the result
+/// is the same whatever the threads.
+pub(crate) fn each<T: Send>(items: &mut [T], f: impl Fn(&mut T) + Sync + Send) {
+    use rayon::prelude::*;
+    if items.len() < 2 || width() == 1 {
+        return items.iter_mut().for_each(f);
+    }
+    items.par_iter_mut().with_max_len(1).for_each(f);
+}
+
 /// `a()` and `b()`, side by side when the pool has a second thread.
 #[allow(dead_code)] // the previews' two halves will use it
 pub(crate) fn join<A: Send, B: Send>(
@@ -178,11 +189,14 @@ mod tests {
     }
 
     #[test]
-    fn map_keeps_the_order_and_join_gives_both() {
+    fn map_keeps_the_order_each_sees_every_item_and_join_gives_both() {
         let items: Vec<u32> = (0..500).collect();
         for t in [1, 3] {
             let (m, (a, b)) = pool(t).install(|| (map(&items, |x| x * 2), join(|| 1, || "b")));
             assert_eq!(m, items.iter().map(|x| x * 2).collect::<Vec<_>>());
+            let mut e = items.clone();
+            pool(t).install(|| each(&mut e, |x| *x += 1));
+            assert_eq!(e, items.iter().map(|x| x + 1).collect::<Vec<_>>());
             assert_eq!((a, b), (1, "b"));
         }
     }

@@ -278,15 +278,8 @@ fn build_job(a: &Options, job: &Job, target: Result<Target>, single: bool) -> Re
         }
     }?;
     if let Some(pv) = &a.preview {
-        let (bytes, line) = crate::output::preview::bytes(
-            &p,
-            pv,
-            &crate::output::preview::Options {
-                threads: Default::default(),
-                ..Default::default()
-            },
-            &|w| pipeline::render_unhashed(&p, w),
-        )?;
+        let (bytes, line) =
+            pipeline::preview(&p, pv, &crate::output::preview::Options::default())?.bytes();
         files.push(stage(pv, &bytes)?);
         lines.push(line);
     }

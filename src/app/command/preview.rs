@@ -37,7 +37,6 @@ pub fn run(a: &Options) -> Vec<Error> {
 
 fn draw(a: &Options) -> Result<()> {
     let opts = crate::output::preview::Options {
-        threads: Default::default(),
         view: a.view,
         color: a.color,
         size: a.size,
@@ -53,9 +52,6 @@ fn draw(a: &Options) -> Result<()> {
     crate::output::file::check_distinct(&[("-o".to_string(), out.clone())], &a.builds.inputs())?;
     let p = a.builds.plan_one()?;
     make_parent(&out)?;
-    crate::sayln!(
-        "{}",
-        crate::output::preview::write(&p, &out, &opts, &|w| pipeline::render_unhashed(&p, w))?
-    );
+    crate::sayln!("{}", pipeline::preview(&p, &out, &opts)?.write()?);
     Ok(())
 }

@@ -2,7 +2,7 @@
 //! OBJ; the writers are in [`write`]).
 //!
 //! Cross-section. A string of cross-section c laid h from the next pass (the
-//! previews' reading, [`crate::output::preview::Grid::local`]: h along the surface,
+//! previews' reading, [`crate::base::geom::passes::Grid::local`]: h along the surface,
 //! the surface normal n across it) becomes the bead a slicer assumes: h tall
 //! along the surface, w wide along n, its two sides rounded. The rounded sides
 //! are cut as chamfers of the same area, so the section is an octagon: the
@@ -40,8 +40,8 @@ pub mod write;
 use glam::DVec3;
 
 use crate::analyse::plan::Plan;
+use crate::base::geom::passes::{pass_spacing, round_diameter, Grid};
 use crate::base::toolpath::Toolpath;
-use crate::output::preview::{Grid, Scene};
 
 /// The vertices a section ring has (an octagon).
 pub const RING: usize = 8;
@@ -112,7 +112,7 @@ impl Section {
     /// The section of a string with no neighbouring pass: as wide as tall,
     /// the round string's diameter 2·sqrt(c/π).
     pub fn round(c: f64) -> Section {
-        let d = crate::output::preview::round_diameter(c).max(MIN_SIZE);
+        let d = round_diameter(c).max(MIN_SIZE);
         Section { w: d, h: d }
     }
 
@@ -157,18 +157,20 @@ struct Seg {
     dev: f64,
 }
 
-/// The mesh of every extruding string of a plan (skirt and parts).
+/// The mesh of every extruding string of a plan (skirt and parts), each
+/// path's passes taken as lying [`pass_spacing`] apart (half the nozzle when
+/// it has none, as the previews take it).
 pub fn of_plan(plan: &Plan) -> Mesh {
-    let scene = Scene::new(plan);
+    let fallback = plan.recipe.printer.nozzle_diameter / 2.0;
     let mut mesh = Mesh::default();
-    for (tp, &h) in plan.paths.iter().zip(&scene.spacing) {
-        add_path(&mut mesh, tp, h);
+    for tp in &plan.paths {
+        add_path(&mut mesh, tp, pass_spacing(&tp.points).unwrap_or(fallback));
     }
     mesh
 }
 
 /// Adds the beads of one part whose passes lie about `h_typ` apart (the
-/// previews' [`crate::output::preview::pass_spacing`]).
+/// [`pass_spacing`]).
 pub fn add_path(mesh: &mut Mesh, tp: &Toolpath, h_typ: f64) {
     let grid = Grid::for_surface(&tp.points, h_typ);
     let mut bead: Vec<Seg> = Vec::new();
@@ -628,7 +630,7 @@ mod tests {
             let z = pitch * i as f64 / per_turn as f64;
             tp.draw(DVec3::new(r * libm::cos(a), r * libm::sin(a), z), c, 30.0);
         }
-        let h = crate::output::preview::pass_spacing(&tp.points).unwrap();
+        let h = pass_spacing(&tp.points).unwrap();
         assert!((h - pitch).abs() < 0.01);
         let mut m = Mesh::default();
         add_path(&mut m, &tp, h);

@@ -1,0 +1,346 @@
+//! The PNG preview: the strings as anti-aliased strokes, painted far to
+//! near so that the front of a sphere hides its back, shaded, with the
+//! recipe's name, its key stats and a colour legend in the corners.
+//!
+//! Rasterising. The preview's strokes are painted by this module's own
+//! rasteriser (`raster`): a stroke is a capsule of its width, a pixel
+//! takes the share of it a box filter gives, blended in integers rounded the
+//! same way everywhere, in bands of rows that the pool shares out with the
+//! same bytes on any number of threads. tiny-skia draws the rest: the
+//! G-code thumbnails' strokes, the turtles' markers, the findings' rings
+//! and the legend's colour bar; the text is the previews' own 8 × 8 font.
+//!
+//! Shading. A string is a thin tube: lit from a light L fixed to the view, the
+//! brightest normal of a tube with unit tangent T gives the diffuse term
+//! sqrt(1 − (L·T)²), and the highlight is (sqrt(1 − (L·T)²)·sqrt(1 − (V·T)²)
+//! − (L·T)(V·T))^n with V the direction to the viewer (Stalling et al.'s
+//! illuminated lines). A depth cue darkens far strings, so walls read as
+//! surfaces and the near side of a helix stands out from the far side.
+//!
+//! The work is split along its seams: this module fits the model into the
+//! image and runs the phases ([`draw`], [`finish`]); `model` makes the
+//! strokes of the strings (their width from the passes, their shading and
+//! colour), `raster` paints them, `decor` the marks, header and legend.
+
+mod decor;
+mod model;
+mod raster;
+
+pub use model::flat_tube;
+
+use glam::DVec3;
+use tiny_skia::Pixmap;
+
+use self::decor::{header, legend, legend_width, marks};
+use self::model::{Item, Model, Palette};
+use self::raster::{paint_bands, paint_strokes, Px};
+use super::{Basis, ColorMode, Options, Render, Scene, Size};
+use crate::analyse::plan::Plan;
+use crate::analyse::stats::Stats;
+use crate::base::error::Result;
+use crate::base::par;
+
+/// Where recipe space lands in the image.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Frame {
+    /// The view.
+    pub basis: Basis,
+    /// Pixels per mm.
+    pub scale: f64,
+    /// The screen-plane point (u, w) drawn at `pixel_centre`.
+    pub centre: (f64, f64),
+    /// Pixel where `centre` lands.
+    pub pixel_centre: (f64, f64),
+}
+
+impl Frame {
+    /// The largest scale that fits `points` (grown by `pad` mm on each side)
+    /// into the pixel rectangle `rect` = [x0, y0, x1, y1], centred in it.
+    pub fn fit(basis: Basis, points: &[DVec3], rect: [f64; 4], pad: f64) -> Frame {
+        let mut lo = (f64::INFINITY, f64::INFINITY);
+        let mut hi = (f64::NEG_INFINITY, f64::NEG_INFINITY);
+        for p in points {
+            let (u, w, _) = basis.project(*p);
+            lo = (lo.0.min(u), lo.1.min(w));
+            hi = (hi.0.max(u), hi.1.max(w));
+        }
+        Frame::fit_box(basis, lo, hi, rect, pad)
+    }
+
+    /// [`Frame::fit`] given the lowest and highest screen-plane coordinates
+    /// (u, w) of the points (lo > hi: none).
+    pub fn fit_box(
+        basis: Basis,
+        mut lo: (f64, f64),
+        mut hi: (f64, f64),
+        rect: [f64; 4],
+        pad: f64,
+    ) -> Frame {
+        if lo.0 > hi.0 {
+            (lo, hi) = ((0.0, 0.0), (0.0, 0.0));
+        }
+        // extent on the screen plane, at least 1 mm either way
+        let du = (hi.0 - lo.0 + 2.0 * pad).max(1.0);
+        let dw = (hi.1 - lo.1 + 2.0 * pad).max(1.0);
+        let scale = ((rect[2] - rect[0]) / du).min((rect[3] - rect[1]) / dw);
+        Frame {
+            basis,
+            scale,
+            centre: ((lo.0 + hi.0) / 2.0, (lo.1 + hi.1) / 2.0),
+            pixel_centre: ((rect[0] + rect[2]) / 2.0, (rect[1] + rect[3]) / 2.0),
+        }
+    }
+
+    /// The pixel (x right, y down) where recipe point `p` lands.
+    pub fn pixel(&self, p: DVec3) -> (f64, f64) {
+        let (u, w, _) = self.basis.project(p);
+        (
+            self.pixel_centre.0 + self.scale * (u - self.centre.0),
+            self.pixel_centre.1 - self.scale * (w - self.centre.1),
+        )
+    }
+}
+
+/// A rendered preview and where recipe space landed in it.
+pub struct Rendered {
+    /// The image (premultiplied RGBA).
+    pub pixmap: Pixmap,
+    /// The projection used.
+    pub frame: Frame,
+}
+
+const BACKGROUND: [u8; 3] = [30, 33, 39];
+const TEXT: [u8; 3] = [232, 234, 237];
+const DIM: [u8; 3] = [160, 166, 175];
+const RED: [f32; 3] = [0.95, 0.16, 0.13];
+const GREY: [f32; 3] = [0.66, 0.68, 0.71];
+/// PLA orange, the colour of the G-code thumbnails.
+const FILAMENT: [f32; 3] = [0.98, 0.56, 0.16];
+/// Strings per piece of work when the strokes are collected. Merged runs
+/// end at a piece's end, so the pieces are a fixed size (not a share of the
+/// threads): the strokes are the same on any number.
+const PIECE: usize = 1 << 14;
+
+/// A PNG preview drawn but not finished: the background, the model and its
+/// marks painted; the header and legend, which need the G-code's stats, not
+/// yet ([`finish`]).
+pub struct Drawing<'p> {
+    pixmap: Pixmap,
+    frame: Frame,
+    scene: Scene<'p>,
+    opts: Options,
+}
+
+/// The full preview of `plan`: background, model, and unless `opts.bare`
+/// (or the image is too small for text) the name, stats and legend; with the
+/// stats `render` returned.
+///
+/// One step after the other: the G-code is written into nothing for the
+/// stats (so that its planner's memory is let go before the strokes take
+/// theirs), then [`draw`], then [`finish`]. A caller with a thread to spare
+/// runs `render` and [`draw`] side by side instead (`par::join`); the image
+/// is the same.
+pub fn preview(plan: &Plan, opts: &Options, render: Render) -> Result<(Rendered, Stats)> {
+    let stats = render(&mut std::io::sink())?;
+    let drawing = draw(plan, opts);
+    Ok((finish(drawing, &stats), stats))
+}
+
+/// The header and legend drawn over the model (unless bare or too small):
+/// the last step of [`preview`], the only one that needs the stats.
+pub fn finish(drawing: Drawing, stats: &Stats) -> Rendered {
+    let Drawing {
+        mut pixmap,
+        frame,
+        scene,
+        opts,
+    } = drawing;
+    let (_, decorate, ts) = layout(&scene, &opts);
+    if decorate {
+        header(&mut pixmap, stats, &scene, ts);
+        legend(&mut pixmap, &scene, opts.color, ts);
+    }
+    Rendered { pixmap, frame }
+}
+
+/// The background and the model with its marks: all of the preview of
+/// `plan` but what needs the stats.
+///
+/// In phases over the pool ([`crate::base::par`]), each one's memory let go
+/// before the next: the strokes are collected in pieces of [`PIECE`]
+/// strings, coloured as they are collected, the pieces' strokes kept in
+/// print order ([`Model::strokes`]); sorted far to near ([`sort_far_first`]);
+/// then painted in bands of [`BAND`] rows ([`paint_bands`]). Every pixel
+/// sees the same strokes in the same order however the work is split, so
+/// the image is the same on any number of threads.
+pub fn draw<'p>(plan: &'p Plan, opts: &Options) -> Drawing<'p> {
+    let scene = Scene::new(plan);
+    let (rect, _, _) = layout(&scene, opts);
+    let model = Model::new(
+        &scene,
+        opts.view,
+        opts.color,
+        rect,
+        PIECE,
+        true,
+        par::width(),
+    );
+    let (frame, bbox) = (model.frame, model.bbox);
+    let pal = Palette::of_model(&model, opts.color);
+    let mut strokes = model.strokes(|it| pal.px(it));
+    drop(model);
+    sort_far_first(&mut strokes);
+    let mut pixmap = Pixmap::new(opts.size.width, opts.size.height).expect("sizes are 1..=8192");
+    pixmap.fill(tiny_skia::Color::from_rgba8(
+        BACKGROUND[0],
+        BACKGROUND[1],
+        BACKGROUND[2],
+        255,
+    ));
+    paint_bands(&mut pixmap, &strokes);
+    drop(strokes);
+    marks(&mut pixmap, &scene, &frame, bbox, opts.color, rect);
+    Drawing {
+        pixmap,
+        frame,
+        scene,
+        opts: *opts,
+    }
+}
+
+/// Painter's algorithm for the preview's strokes: far (small depth) first,
+/// print order among equals. That is a stable sort's order; it is made by
+/// an unstable one (which needs no room beside the strokes) on the key
+/// (depth, place in print order), a total order with no ties, so the one
+/// sorted order whether the pool sorts it or this thread does.
+fn sort_far_first(strokes: &mut [Px]) {
+    for (i, px) in strokes.iter_mut().enumerate() {
+        px.seq = i as u32;
+    }
+    let order = |a: &Px, b: &Px| a.depth.total_cmp(&b.depth).then(a.seq.cmp(&b.seq));
+    if par::width() > 1 {
+        use rayon::slice::ParallelSliceMut;
+        strokes.par_sort_unstable_by(order);
+    } else {
+        strokes.sort_unstable_by(order);
+    }
+}
+
+/// Where the model goes in the image, whether the text goes round it, and
+/// the text's scale.
+fn layout(scene: &Scene, opts: &Options) -> ([f64; 4], bool, u32) {
+    let Size { width, height } = opts.size;
+    let (w, h) = (width as f64, height as f64);
+    let decorate = !opts.bare && width >= 320 && height >= 240;
+    let ts = (height / 450).clamp(1, 4);
+    let m = 12.0 * ts as f64;
+    let rect = if decorate {
+        let header = m + 8.0 * (ts + 1) as f64 + 4.0 * 11.0 * ts as f64 + 6.0 * ts as f64;
+        let legend = legend_width(scene, opts.color, ts) as f64 + m;
+        [m, header, w - legend - m, h - m]
+    } else {
+        let pad = (w.min(h) * 0.03).max(1.0);
+        [pad, pad, w - pad, h - pad]
+    };
+    (rect, decorate, ts)
+}
+
+/// A G-code thumbnail: the model alone in filament colour, iso view, on a
+/// transparent background.
+pub fn thumbnail(scene: &Scene, size: Size) -> Pixmap {
+    let mut pm = Pixmap::new(size.width, size.height).expect("sizes are 1..=8192");
+    let (w, h) = (size.width as f64, size.height as f64);
+    let pad = (w.min(h) * 0.04).max(0.5);
+    let rect = [pad, pad, w - pad, h - pad];
+    // one piece per path, every neighbour searched in full: the thumbnails
+    // as they were first drawn (their bytes are part of the G-code, and so
+    // of its hash)
+    let model = Model::new(
+        scene,
+        super::View::Iso,
+        ColorMode::Plain,
+        rect,
+        usize::MAX,
+        false,
+        1,
+    );
+    let (frame, bbox) = (model.frame, model.bbox);
+    let mut items = model.strokes(|it| *it);
+    sort(&mut items);
+    paint_strokes(&mut pm, &items, scene, ColorMode::Plain, 1.0);
+    marks(&mut pm, scene, &frame, bbox, ColorMode::Plain, rect);
+    pm
+}
+
+/// Painter's algorithm: far (small depth) first; the sort is stable, so
+/// strings at equal depth keep print order and the result is deterministic
+/// (the PNG preview's strokes are sorted the same way).
+fn sort(items: &mut [Item]) {
+    items.sort_by(|a, b| a.depth.total_cmp(&b.depth));
+}
+
+/// PNG bytes of `pm`: RGB, or RGBA with `alpha` (colours un-premultiplied),
+/// compressed as hard as the encoder can (the G-code thumbnails).
+pub fn encode(pm: &Pixmap, alpha: bool) -> Vec<u8> {
+    encode_with(pm, alpha, image::codecs::png::CompressionType::Best)
+}
+
+/// [`encode`] with a quicker compression: the PNG previews (a flat
+/// background and smooth shading compress well even so).
+pub fn encode_fast(pm: &Pixmap, alpha: bool) -> Vec<u8> {
+    encode_with(pm, alpha, image::codecs::png::CompressionType::Fast)
+}
+
+fn encode_with(pm: &Pixmap, alpha: bool, level: image::codecs::png::CompressionType) -> Vec<u8> {
+    use image::ImageEncoder;
+    let n = if alpha { 4 } else { 3 };
+    let mut data = Vec::with_capacity(pm.pixels().len() * n);
+    for px in pm.pixels() {
+        let c = px.demultiply();
+        data.extend_from_slice(&[c.red(), c.green(), c.blue()]);
+        if alpha {
+            data.push(c.alpha());
+        }
+    }
+    let mut out = Vec::new();
+    let kind = if alpha {
+        image::ExtendedColorType::Rgba8
+    } else {
+        image::ExtendedColorType::Rgb8
+    };
+    use image::codecs::png::{FilterType, PngEncoder};
+    PngEncoder::new_with_quality(&mut out, level, FilterType::Adaptive)
+        .write_image(&data, pm.width(), pm.height(), kind)
+        .expect("PNG encoding into memory does not fail");
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::output::preview::View;
+
+    #[test]
+    fn fit_centres_and_scales() {
+        let pts = [DVec3::new(-10.0, -5.0, 0.0), DVec3::new(10.0, 5.0, 3.0)];
+        let f = Frame::fit(View::Top.basis(), &pts, [0.0, 0.0, 200.0, 100.0], 0.0);
+        assert_eq!(f.scale, 10.0);
+        assert_eq!(f.pixel(DVec3::ZERO), (100.0, 50.0));
+        // +y is up the image, +x to the right
+        assert_eq!(f.pixel(DVec3::new(10.0, 5.0, 0.0)), (200.0, 0.0));
+        let f = Frame::fit(View::Front.basis(), &pts, [0.0, 0.0, 200.0, 100.0], 0.0);
+        assert_eq!(f.pixel(DVec3::new(0.0, 0.0, 3.0)).1, 50.0 - 1.5 * f.scale);
+    }
+
+    #[test]
+    fn encode_round_trips() {
+        let mut pm = Pixmap::new(5, 4).unwrap();
+        pm.fill(tiny_skia::Color::from_rgba8(10, 20, 30, 255));
+        let bytes = encode(&pm, false);
+        let img = image::load_from_memory(&bytes).unwrap().to_rgb8();
+        assert_eq!(img.dimensions(), (5, 4));
+        assert_eq!(img.get_pixel(4, 3).0, [10, 20, 30]);
+        let img = image::load_from_memory(&encode(&Pixmap::new(3, 3).unwrap(), true)).unwrap();
+        assert_eq!(img.to_rgba8().get_pixel(1, 1).0[3], 0);
+    }
+}

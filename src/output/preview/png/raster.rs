@@ -1,0 +1,195 @@
+//! Painting the strokes: the preview's own rasteriser of capsules in bands
+//! of rows ([`paint_bands`]), and tiny-skia's strokes for the thumbnails
+//! ([`paint_strokes`]).
+
+use tiny_skia::{LineCap, Paint, PathBuilder, Pixmap, Stroke, Transform};
+
+use super::model::{Item, Palette};
+use crate::base::par;
+use crate::output::preview::{ColorMode, Scene};
+
+/// Rows of pixels per band when the strokes are painted (a band is one
+/// piece of work).
+const BAND: usize = 32;
+
+/// One stroke of the PNG preview, coloured, as the bands paint it.
+#[derive(Clone, Copy, Default)]
+pub(super) struct Px {
+    pub(super) a: (f32, f32),
+    pub(super) b: (f32, f32),
+    pub(super) depth: f32,
+    /// Half its width, px.
+    pub(super) r: f32,
+    pub(super) rgb: [u8; 3],
+    /// Opacity, 0..=255.
+    pub(super) alpha: u8,
+    /// Its place in print order (ties of depth keep it).
+    pub(super) seq: u32,
+}
+
+/// Paints the (sorted) strokes as tiny-skia's anti-aliased round-capped
+/// strokes, at least `min_px` wide: the G-code thumbnails.
+pub(super) fn paint_strokes(
+    pm: &mut Pixmap,
+    items: &[Item],
+    scene: &Scene,
+    mode: ColorMode,
+    min_px: f32,
+) {
+    let pal = Palette::new(items, scene, mode);
+    let mut paint = Paint {
+        anti_alias: true,
+        ..Paint::default()
+    };
+    let mut stroke = Stroke {
+        line_cap: LineCap::Round,
+        ..Stroke::default()
+    };
+    let mut pb = PathBuilder::new();
+    for it in items {
+        if it.kind == 1 {
+            paint.set_color_rgba8(150, 155, 165, 90);
+            stroke.width = min_px.max(1.0);
+        } else {
+            let [r, g, b] = pal.rgb(it);
+            paint.set_color_rgba8(r, g, b, 255);
+            stroke.width = it.width.max(min_px);
+        }
+        pb.move_to(it.a.0, it.a.1);
+        pb.line_to(it.b.0, it.b.1);
+        let Some(path) = pb.finish() else {
+            pb = PathBuilder::new();
+            continue;
+        };
+        pm.stroke_path(&path, &paint, &stroke, Transform::identity(), None);
+        pb = path.clear();
+    }
+}
+
+/// Paints the (sorted) strokes into an opaque image in bands of [`BAND`]
+/// rows, each band taken by whichever thread of the pool is free
+/// ([`par::each`]).
+///
+/// A stroke is a capsule: the points within r (half its width) of segment
+/// a–b. A pixel is covered by the overlap of its width with the capsule
+/// across the line through its centre at distance d: min(d + ½, r) −
+/// max(d − ½, −r), clamped to [0, 1] (a box filter; 1 inside, 0 beyond
+/// r + ½), and takes the stroke's colour in that share times its opacity
+/// (over: dst + (src − dst)·α, in integers rounded the same way everywhere).
+/// Each band paints every stroke that reaches it, in order, so a pixel's
+/// result does not depend on how the image is cut into bands.
+pub(super) fn paint_bands(pm: &mut Pixmap, strokes: &[Px]) {
+    let (width, height) = (pm.width() as usize, pm.height() as usize);
+    let bins = bins(strokes, height);
+    let mut bands: Vec<(&[u32], usize, &mut [u8])> = pm
+        .data_mut()
+        .chunks_mut(width * 4 * BAND)
+        .zip(&bins)
+        .enumerate()
+        .map(|(i, (band, bin))| (bin.as_slice(), i * BAND, band))
+        .collect();
+    par::each(&mut bands, |(bin, y0, band)| {
+        let y1 = *y0 + band.len() / (4 * width);
+        for (j, &i) in bin.iter().enumerate() {
+            // a band's strokes lie scattered in the depth order: each was a
+            // cache miss when fetched only as it was painted
+            if let Some(&ahead) = bin.get(j + PREFETCH) {
+                prefetch(&strokes[ahead as usize]);
+            }
+            capsule(band, width, *y0, y1, &strokes[i as usize]);
+        }
+    });
+}
+
+/// Per band of [`BAND`] rows of an image `height` rows tall, the strokes
+/// that reach it, in painting order.
+fn bins(strokes: &[Px], height: usize) -> Vec<Vec<u32>> {
+    let mut bins: Vec<Vec<u32>> = vec![Vec::new(); height.div_ceil(BAND)];
+    for (i, px) in strokes.iter().enumerate() {
+        let ext = px.r + 0.5;
+        let top = (px.a.1.min(px.b.1) - ext).floor();
+        let bottom = (px.a.1.max(px.b.1) + ext).ceil().min(height as f32);
+        if !(top < bottom && bottom > 0.0) {
+            continue; // off the image, or not a number
+        }
+        let first = top.max(0.0) as usize / BAND;
+        let last = (bottom as usize - 1) / BAND;
+        for bin in &mut bins[first..=last] {
+            bin.push(i as u32);
+        }
+    }
+    bins
+}
+
+/// Strokes a band's painting fetches ahead of the one it paints.
+const PREFETCH: usize = 16;
+
+/// Asks the processor to fetch `x` into its caches (a hint: nothing else).
+#[inline]
+fn prefetch<T>(x: &T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a prefetch of a valid reference's address reads nothing the
+    // program sees and cannot fault (SSE, on every x86_64)
+    unsafe {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        _mm_prefetch::<_MM_HINT_T0>((x as *const T).cast());
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = x;
+}
+
+/// Blends stroke `px` into rows `y0..y1` of an opaque premultiplied RGBA
+/// image `width` pixels wide, held in `band` (see [`paint_bands`]).
+fn capsule(band: &mut [u8], width: usize, y0: usize, y1: usize, px: &Px) {
+    let (a, b, r) = (px.a, px.b, px.r);
+    if !(r.is_finite() && a.0.is_finite() && a.1.is_finite() && b.0.is_finite() && b.1.is_finite())
+    {
+        return;
+    }
+    let alpha = f32::from(px.alpha);
+    let ext = r + 0.5;
+    let top = (a.1.min(b.1) - ext).floor().max(y0 as f32);
+    let bottom = (a.1.max(b.1) + ext).ceil().min(y1 as f32);
+    let left = (a.0.min(b.0) - ext).floor().max(0.0);
+    let right = (a.0.max(b.0) + ext).ceil().min(width as f32);
+    if top >= bottom || left >= right {
+        return;
+    }
+    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+    let l2 = dx * dx + dy * dy;
+    let inv = if l2 > 0.0 { 1.0 / l2 } else { 0.0 };
+    let src = px.rgb.map(u32::from);
+    let px_rgb = px.rgb;
+    // beyond r + ½ a pixel has no share (min(d + ½, r) ≤ r ≤ max(d − ½, −r));
+    // tested on the square distance, a little beyond (the square rounded
+    // in f32 stays below it), to skip the square root there
+    let far = (ext * 1.001 + 1e-3) * (ext * 1.001 + 1e-3);
+    for y in top as usize..bottom as usize {
+        let py = y as f32 + 0.5 - a.1;
+        let row = &mut band[(y - y0) * width * 4..(y - y0 + 1) * width * 4];
+        for x in left as usize..right as usize {
+            let px = x as f32 + 0.5 - a.0;
+            let t = ((px * dx + py * dy) * inv).clamp(0.0, 1.0);
+            let (ex, ey) = (px - t * dx, py - t * dy);
+            let d2 = ex * ex + ey * ey;
+            if d2 > far {
+                continue; // d > r + ½: no share
+            }
+            let d = d2.sqrt();
+            let cov = ((d + 0.5).min(r) - (d - 0.5).max(-r)).clamp(0.0, 1.0);
+            let k = (cov * alpha + 0.5) as u32;
+            if k == 0 {
+                continue;
+            }
+            let p = &mut row[4 * x..4 * x + 3];
+            if k == 255 {
+                // (s·255 + 127) / 255 = s
+                p.copy_from_slice(&px_rgb);
+                continue;
+            }
+            for (c, s) in p.iter_mut().zip(src) {
+                *c = ((s * k + u32::from(*c) * (255 - k) + 127) / 255) as u8;
+            }
+        }
+    }
+}
