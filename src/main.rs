@@ -4,15 +4,15 @@
 use std::process::ExitCode;
 
 use clap::Parser;
-use p3dp::app::cli::{self, Cli};
+use p3dp::cli::{self, Cli};
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
-    p3dp::output::file::remove_temp_files_on_signals();
-    let errors = cli::run(cli);
+    let args = Cli::parse();
+    cli::remove_temp_files_on_signals();
+    let errors = cli::run(args);
     let mut code = 0;
     for e in &errors {
-        p3dp::tell!("{}", cli::render_error(e));
+        cli::print_error(e);
         code = code.max(e.exit_code());
     }
     ExitCode::from(code as u8)

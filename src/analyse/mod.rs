@@ -2,7 +2,10 @@
 //! byte is written: the printability and safety checks, the print-time
 //! planner, the stats report.
 
-pub mod check;
-pub mod plan;
-pub mod planner;
-pub mod stats;
+pub(crate) mod check;
+pub(crate) mod plan;
+pub(crate) mod planner;
+pub(crate) mod stats;
+
+#[cfg(test)]
+mod tests;

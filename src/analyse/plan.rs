@@ -22,7 +22,7 @@ pub struct Plan {
 
 /// What the checks of a plan found: its findings (those `allow`ed already
 /// marked) and the parts' footprints.
-pub type Checked = (Vec<Finding>, Vec<check::first_layer::Footprint>);
+pub(crate) type Checked = (Vec<Finding>, Vec<check::first_layer::Footprint>);
 
 impl Plan {
     /// A plan of `paths` (skirt first) of `recipe`, read from `path`, not yet

@@ -291,7 +291,7 @@ impl Stats {
 }
 
 /// The z-buffers of a recipe's solid parts (before any steps).
-pub fn solid_stats(recipe: &Recipe) -> Vec<SolidStats> {
+pub(crate) fn solid_stats(recipe: &Recipe) -> Vec<SolidStats> {
     recipe
         .parts
         .iter()
@@ -327,7 +327,9 @@ fn solids(recipe: &Recipe) -> Vec<(&str, &crate::generate::primitive::solid::Sol
 }
 
 /// The z-buffers of a recipe's solid parts as curves (`--zbuffer`).
-pub fn zbuffer_curves(recipe: &Recipe) -> Vec<crate::generate::primitive::solid::SolidCurves> {
+pub(crate) fn zbuffer_curves(
+    recipe: &Recipe,
+) -> Vec<crate::generate::primitive::solid::SolidCurves> {
     solids(recipe)
         .into_iter()
         .map(|(name, s)| s.curves(name))
@@ -336,6 +338,6 @@ pub fn zbuffer_curves(recipe: &Recipe) -> Vec<crate::generate::primitive::solid:
 
 /// An SVG of layer `index` of a recipe's solid parts (`--zbuffer-svg`);
 /// `None` when none has that layer.
-pub fn zbuffer_svg(recipe: &Recipe, index: u64) -> Option<String> {
+pub(crate) fn zbuffer_svg(recipe: &Recipe, index: u64) -> Option<String> {
     crate::generate::primitive::solid::layer_svg(&solids(recipe), index)
 }

@@ -9,7 +9,7 @@ use crate::base::error::{Error, Result};
 
 /// One build: a recipe, its `--set` values, and the sweep values that name it.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Job {
+pub(crate) struct Job {
     /// The recipe file.
     pub recipe: PathBuf,
     /// `--set` overrides, sweep values last.
@@ -22,7 +22,7 @@ pub struct Job {
 }
 
 /// A number as short as it can be written: `3`, `1.5`, `0.1`.
-pub fn format_value(v: f64) -> String {
+pub(crate) fn format_value(v: f64) -> String {
     let r = libm::round(v * 1e9) / 1e9; // 0.30000000000000004 → 0.3
     let s = format!("{r}");
     if s == "-0" {
@@ -33,10 +33,10 @@ pub fn format_value(v: f64) -> String {
 }
 
 /// Most builds one command may make: recipes × the product of the sweeps.
-pub const MAX_VARIANTS: u64 = 10_000;
+pub(crate) const MAX_VARIANTS: u64 = 10_000;
 
 /// Refuses a batch of more than [`MAX_VARIANTS`] builds, before any is made.
-pub fn check_count(recipes: usize, sweeps: &[(String, Vec<String>)]) -> Result<()> {
+pub(crate) fn check_count(recipes: usize, sweeps: &[(String, Vec<String>)]) -> Result<()> {
     let n = sweeps
         .iter()
         .fold(recipes as u64, |n, (_, v)| n.saturating_mul(v.len() as u64));
@@ -54,7 +54,7 @@ pub fn check_count(recipes: usize, sweeps: &[(String, Vec<String>)]) -> Result<(
 }
 
 /// Parses `NAME=v1,v2,…` or `NAME=a..b:step` (b included when reached).
-pub fn parse_sweep(s: &str) -> Result<(String, Vec<String>)> {
+pub(crate) fn parse_sweep(s: &str) -> Result<(String, Vec<String>)> {
     let place = format!("--sweep {s}");
     let (name, spec) = s
         .split_once('=')
@@ -134,7 +134,7 @@ pub fn parse_sweep(s: &str) -> Result<(String, Vec<String>)> {
 }
 
 /// Every recipe × the cartesian product of the sweeps (first sweep outermost).
-pub fn expand(
+pub(crate) fn expand(
     recipes: &[PathBuf],
     sets: &[(String, String)],
     sweeps: &[(String, Vec<String>)],
@@ -167,7 +167,7 @@ pub fn expand(
 
 /// Runs `f(0..n)` side by side on the pool; results in index order.
 /// `tick` is called after each job finishes (for a progress bar).
-pub fn run_parallel<T: Send>(
+pub(crate) fn run_parallel<T: Send>(
     n: usize,
     f: impl Fn(usize) -> T + Sync + Send,
     tick: impl Fn() + Sync + Send,

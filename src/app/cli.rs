@@ -433,6 +433,6 @@ fn watch(a: &WatchArgs) -> Result<()> {
 /// then (see [`crate::app::diagnostic`]) the source line underlined at the place
 /// and a `help:` line when one is known; coloured only on a terminal without
 /// `NO_COLOR`.
-pub fn render_error(e: &Error) -> String {
+pub(crate) fn render_error(e: &Error) -> String {
     crate::app::diagnostic::render(e, crate::app::diagnostic::stderr_color())
 }

@@ -15,7 +15,7 @@ use crate::base::error::{Error, Kind};
 
 /// A span on one line: 1-based line, 0-based byte columns `start..end`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Span {
+pub(crate) struct Span {
     /// Line, 1-based.
     pub line: usize,
     /// First byte of the span in the line.
@@ -25,7 +25,7 @@ pub struct Span {
 }
 
 /// Whether standard error takes colour: a terminal, and `NO_COLOR` unset.
-pub fn stderr_color() -> bool {
+pub(crate) fn stderr_color() -> bool {
     std::env::var_os("NO_COLOR").is_none_or(|v| v.is_empty()) && std::io::stderr().is_terminal()
 }
 
@@ -34,7 +34,7 @@ pub fn stderr_color() -> bool {
 /// The file is read as every input is (bounded: `/dev/zero` is no text), and
 /// shown only where it was read as YAML: a file that is no recipe at all (a
 /// system file given by mistake) is named, never printed.
-pub fn render(e: &Error, color: bool) -> String {
+pub(crate) fn render(e: &Error, color: bool) -> String {
     let not_yaml = e.message.starts_with("invalid type: text");
     let text = e
         .file
@@ -46,7 +46,7 @@ pub fn render(e: &Error, color: bool) -> String {
 }
 
 /// Renders `e` given the text of its file.
-pub fn render_with(e: &Error, text: Option<&str>, color: bool) -> String {
+pub(crate) fn render_with(e: &Error, text: Option<&str>, color: bool) -> String {
     let title = format!("{e}");
     let span = text.and_then(|t| place(e, t).map(|s| (t, s)));
     let help = e
@@ -293,7 +293,7 @@ fn is_blank(line: &str) -> bool {
 
 /// Looks a key path up in the text: the span of the deepest node found (the
 /// value of the last key, or the key itself when its value is a block).
-pub fn locate(text: &str, path: &str) -> Option<Span> {
+pub(crate) fn locate(text: &str, path: &str) -> Option<Span> {
     let segs = segments(path)?;
     let lines: Vec<&str> = text.lines().collect();
     let mut node = Node::Block {

@@ -1,10 +1,13 @@
 //! Layer 7, the application: the commands, the plan of each build, batches
 //! and sweeps, the watch server, errors as the terminal shows them.
 
-pub mod batch;
-pub mod cli;
-pub mod command;
-pub mod diagnostic;
+pub(crate) mod batch;
+pub(crate) mod cli;
+pub(crate) mod command;
+pub(crate) mod diagnostic;
 pub mod pipeline;
-pub mod prepare;
-pub mod watch;
+pub(crate) mod prepare;
+pub(crate) mod watch;
+
+#[cfg(test)]
+pub(crate) mod testing;

@@ -36,11 +36,11 @@ use crate::output::file::identity;
 use crate::recipe::context::Context;
 
 /// The port `p3dp watch` serves on unless `--port` says otherwise.
-pub const DEFAULT_PORT: u16 = 8430;
+pub(crate) const DEFAULT_PORT: u16 = 8430;
 
 /// How long the files must stay unchanged after a change before a build
 /// starts (an editor's save may be several writes and a rename).
-pub const SETTLE: Duration = Duration::from_millis(100);
+pub(crate) const SETTLE: Duration = Duration::from_millis(100);
 
 /// The longest a stream of changes delays a build.
 const SETTLE_AT_MOST: Duration = Duration::from_secs(1);
@@ -53,7 +53,7 @@ const MAX_STREAMS: usize = 32;
 
 /// What `p3dp watch` is asked to do.
 #[derive(Clone, Debug)]
-pub struct Options {
+pub(crate) struct Options {
     /// The recipe file.
     pub recipe: PathBuf,
     /// `--set`, `--printer`, `--allow` of each build.
@@ -136,7 +136,7 @@ struct Built {
 
 /// Runs `p3dp watch` until a signal stops it: the URL served is printed
 /// first, then a line for each build (errors on standard error).
-pub fn run(opts: &Options) -> Result<()> {
+pub(crate) fn run(opts: &Options) -> Result<()> {
     let shown = opts.recipe.display().to_string();
     // a recipe that is not there now is a mistake of the command line; one
     // that goes later is shown in the page until it comes back

@@ -61,61 +61,61 @@ impl std::fmt::Display for ExprError {
 impl std::error::Error for ExprError {}
 
 /// Named params of a recipe, in the order they were defined.
-pub type Params = IndexMap<String, f64>;
+pub(crate) type Params = IndexMap<String, f64>;
 
 /// Slot of each per-point / per-string variable in the value array.
-pub mod var {
+pub(crate) mod var {
     /// x coordinate (mm).
-    pub const X: usize = 0;
+    pub(crate) const X: usize = 0;
     /// y coordinate (mm).
-    pub const Y: usize = 1;
+    pub(crate) const Y: usize = 1;
     /// z coordinate (mm).
-    pub const Z: usize = 2;
+    pub(crate) const Z: usize = 2;
     /// distance from the z axis (mm).
-    pub const R: usize = 3;
+    pub(crate) const R: usize = 3;
     /// angle around the z axis, in [0, 2·pi).
-    pub const THETA: usize = 4;
+    pub(crate) const THETA: usize = 4;
     /// cross-section of the string (mm²).
-    pub const C: usize = 5;
+    pub(crate) const C: usize = 5;
     /// head speed of the string (mm/s).
-    pub const V: usize = 6;
+    pub(crate) const V: usize = 6;
     /// index of the point or string in the part.
-    pub const I: usize = 7;
+    pub(crate) const I: usize = 7;
     /// number of points or strings in the part.
-    pub const N: usize = 8;
+    pub(crate) const N: usize = 8;
     /// i / (n - 1), 0 to 1 along the part.
-    pub const T: usize = 9;
+    pub(crate) const T: usize = 9;
     /// arc-length fraction 0..1 along an `outline:` (the `s` of issue 20).
-    pub const S: usize = 10;
+    pub(crate) const S: usize = 10;
     /// how many slots there are.
-    pub const COUNT: usize = 11;
+    pub(crate) const COUNT: usize = 11;
 }
 
 /// Names of the variable slots, indexed by [`var`].
-pub const VAR_NAMES: [&str; var::COUNT] =
+pub(crate) const VAR_NAMES: [&str; var::COUNT] =
     ["x", "y", "z", "r", "theta", "c", "v", "i", "n", "t", "s"];
 
 /// Variables added after recipe v1, whose names a param, template param or
 /// loop variable may still take: such a param shadows the variable.
-pub const SHADOWABLE: [&str; 1] = ["s"];
+pub(crate) const SHADOWABLE: [&str; 1] = ["s"];
 
 /// The values an expression sees for one point or string.
-pub type Vars = [f64; var::COUNT];
+pub(crate) type Vars = [f64; var::COUNT];
 
 /// Names that params may not take: the variables (less [`SHADOWABLE`]) and
 /// the constants.
-pub fn is_reserved(name: &str) -> bool {
+pub(crate) fn is_reserved(name: &str) -> bool {
     (VAR_NAMES.contains(&name) && !SHADOWABLE.contains(&name)) || name == "pi" || name == "e"
 }
 
 const STACK: usize = 32;
 
 /// Longest expression text, in bytes: a bound on the work of compiling one.
-pub const MAX_LEN: usize = 4096;
+pub(crate) const MAX_LEN: usize = 4096;
 
 /// Deepest expression tree (operations and calls inside one another):
 /// compiling and evaluating recurse this deep.
-pub const MAX_DEPTH: u32 = 256;
+pub(crate) const MAX_DEPTH: u32 = 256;
 
 type F1 = fn(f64) -> f64;
 type F2 = fn(f64, f64) -> f64;
@@ -286,11 +286,12 @@ fn eca_next(rule: u8, w: u32, mask: u64, cells: u64) -> u64 {
     next & mask
 }
 
+#[cfg(test)]
 /// `eca(rule, width, row, col)`: the cell (0 or 1) at `row` and `col` of
 /// Wolfram's elementary cellular automaton `rule` (0–255) on a ring of
 /// `width` cells (1–64) whose row 0 has one live cell, at column 0; columns
 /// wrap around the ring. NaN for arguments out of range (rows up to 10⁶).
-pub fn eca(rule: f64, width: f64, row: f64, col: f64) -> f64 {
+pub(crate) fn eca(rule: f64, width: f64, row: f64, col: f64) -> f64 {
     Memo::default().eca(rule, width, row, col)
 }
 
@@ -351,7 +352,7 @@ fn lookup3(name: &str) -> Option<F3> {
 }
 
 /// Every function name an expression may call, for error messages.
-pub const FUNCTIONS: &str =
+pub(crate) const FUNCTIONS: &str =
     "sin cos tan asin acos atan atan2(y,x) sinh cosh tanh asinh acosh atanh \
 sqrt cbrt exp ln log log10 log2 pow(a,b) abs sign floor ceil round trunc fract \
 mod(a,b) min(a,b,…) max(a,b,…) clamp(x,lo,hi) step(edge,x) smoothstep(e0,e1,x) \
@@ -475,7 +476,7 @@ fn run(ops: &[Op], vars: &Vars, ext: &[f64], memo: &mut Memo) -> f64 {
 }
 
 /// Points one pass of [`Expr::eval_many`] evaluates together.
-pub const LANES: usize = 64;
+pub(crate) const LANES: usize = 64;
 
 /// The working state of [`Expr::eval_many_in`] over many points: its stack
 /// (one value per point in each slot) and what the evaluations remember
@@ -1096,7 +1097,7 @@ fn mark_call(text: &str, base: &str) -> String {
 }
 
 /// Evaluates an expression over params only (a number written as text).
-pub fn eval_const(src: &str, params: &Params) -> Result<f64, ExprError> {
+pub(crate) fn eval_const(src: &str, params: &Params) -> Result<f64, ExprError> {
     let e = Expr::compile(src, params, &[])?;
     let v = e.eval(&[0.0; var::COUNT]);
     if v.is_finite() {

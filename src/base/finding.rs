@@ -29,7 +29,7 @@ impl Severity {
 }
 
 /// Every code a finding may carry, with what it means (for `allow:` and docs).
-pub const CODES: &[(&str, &str)] = &[
+pub(crate) const CODES: &[(&str, &str)] = &[
     ("non-finite", "a point is not a finite number (error)"),
     ("out-of-bed", "a point lies outside the bed (error)"),
     ("below-bed", "a point lies below z = 0 (error)"),
@@ -66,12 +66,12 @@ pub const SAFETY: &[&str] = &[
 ];
 
 /// Whether `code` is one of [`CODES`].
-pub fn is_code(code: &str) -> bool {
+pub(crate) fn is_code(code: &str) -> bool {
     CODES.iter().any(|(c, _)| *c == code)
 }
 
 /// Checks the codes of an allow list; `place(i)` names entry i in errors.
-pub fn validate_allow(codes: &[String], place: impl Fn(usize) -> String) -> Result<()> {
+pub(crate) fn validate_allow(codes: &[String], place: impl Fn(usize) -> String) -> Result<()> {
     for (i, c) in codes.iter().enumerate() {
         if !is_code(c) {
             let known: Vec<&str> = CODES.iter().map(|(c, _)| *c).collect();
@@ -98,14 +98,14 @@ pub fn validate_allow(codes: &[String], place: impl Fn(usize) -> String) -> Resu
 }
 
 /// Removes the findings whose code is in `allow` (silenced for this build).
-pub fn apply_allow(findings: &mut Vec<Finding>, allow: &[String]) {
+pub(crate) fn apply_allow(findings: &mut Vec<Finding>, allow: &[String]) {
     if !allow.is_empty() {
         findings.retain(|f| !allow.iter().any(|a| a == f.code));
     }
 }
 
 /// `3 warnings, 0 errors` (and `, 2 notes` when there are infos).
-pub fn summary(findings: &[Finding]) -> String {
+pub(crate) fn summary(findings: &[Finding]) -> String {
     let count = |s: Severity| findings.iter().filter(|f| f.severity == s).count();
     let (e, w, i) = (
         count(Severity::Error),
@@ -145,7 +145,7 @@ pub struct Finding {
 }
 
 /// Errors, and warnings when `strict`: the findings that fail a build (infos never do).
-pub fn failing(findings: &[Finding], strict: bool) -> Vec<&Finding> {
+pub(crate) fn failing(findings: &[Finding], strict: bool) -> Vec<&Finding> {
     findings
         .iter()
         .filter(|f| f.severity == Severity::Error || (strict && f.severity == Severity::Warning))

@@ -3,7 +3,7 @@
 
 /// Rounds `x` to integer units of 10^-`decimals` (`scale` = 10^`decimals`).
 #[inline]
-pub fn units(x: f64, scale: f64) -> i64 {
+pub(crate) fn units(x: f64, scale: f64) -> i64 {
     round_i64(x * scale)
 }
 
@@ -17,7 +17,7 @@ pub fn units(x: f64, scale: f64) -> i64 {
 /// and for trunc(s): the one sum, then the cast. A test compares both on
 /// many millions of values, halves and their neighbours included.
 #[inline]
-pub fn round_i64(y: f64) -> i64 {
+pub(crate) fn round_i64(y: f64) -> i64 {
     (y + (0.5 - 0.25 * f64::EPSILON).copysign(y)) as i64
 }
 
@@ -57,7 +57,7 @@ fn digits_before(out: &mut [u8], mut end: usize, mut x: u64) {
 /// copied once on its way out. Writes never fail nor run out of room (the
 /// buffer grows for a long text); the number writers print from integers
 /// without allocating.
-pub struct Chunk {
+pub(crate) struct Chunk {
     /// Zero-filled room; the text is `buf[..len]`.
     buf: Vec<u8>,
     len: usize,
@@ -72,10 +72,10 @@ impl Default for Chunk {
 impl Chunk {
     /// Handed on when this long (the hashing writer's buffer size, so that
     /// its chunks pass it by without a copy).
-    pub const SIZE: usize = 1 << 16;
+    pub(crate) const SIZE: usize = 1 << 16;
 
     /// An empty chunk with room for [`Chunk::SIZE`] bytes and a line more.
-    pub fn new() -> Chunk {
+    pub(crate) fn new() -> Chunk {
         Chunk {
             buf: vec![0; Chunk::SIZE + 1024],
             len: 0,
@@ -84,37 +84,38 @@ impl Chunk {
 
     /// Whether it is long enough to hand on.
     #[inline]
-    pub fn full(&self) -> bool {
+    pub(crate) fn full(&self) -> bool {
         self.len >= Chunk::SIZE
     }
 
     /// Its length in bytes.
     #[inline]
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.len
     }
 
+    #[cfg(test)]
     /// Whether it holds nothing.
     #[inline]
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.len == 0
     }
 
     /// The text so far.
     #[inline]
-    pub fn bytes(&self) -> &[u8] {
+    pub(crate) fn bytes(&self) -> &[u8] {
         &self.buf[..self.len]
     }
 
     /// Empties it (its room is kept).
     #[inline]
-    pub fn clear(&mut self) {
+    pub(crate) fn clear(&mut self) {
         self.len = 0;
     }
 
     /// Drops what was written after the first `len` bytes.
     #[inline]
-    pub fn truncate(&mut self, len: usize) {
+    pub(crate) fn truncate(&mut self, len: usize) {
         self.len = self.len.min(len);
     }
 
@@ -128,7 +129,7 @@ impl Chunk {
 
     /// Appends one byte.
     #[inline]
-    pub fn push(&mut self, b: u8) {
+    pub(crate) fn push(&mut self, b: u8) {
         self.room(1);
         self.buf[self.len] = b;
         self.len += 1;
@@ -136,7 +137,7 @@ impl Chunk {
 
     /// Appends bytes.
     #[inline]
-    pub fn put(&mut self, s: &[u8]) {
+    pub(crate) fn put(&mut self, s: &[u8]) {
         self.room(s.len());
         self.buf[self.len..self.len + s.len()].copy_from_slice(s);
         self.len += s.len();
@@ -144,7 +145,7 @@ impl Chunk {
 
     /// Appends `v` in decimal.
     #[inline]
-    pub fn put_int(&mut self, v: i64) {
+    pub(crate) fn put_int(&mut self, v: i64) {
         self.room(20);
         if v < 0 {
             self.buf[self.len] = b'-';
@@ -160,7 +161,7 @@ impl Chunk {
     /// e.g. `-12.345`, as `format!` would print the exact quotient: no
     /// exponent, a `-` only when `v` < 0.
     #[inline(always)]
-    pub fn put_fixed<const D: u32>(&mut self, v: i64) {
+    pub(crate) fn put_fixed<const D: u32>(&mut self, v: i64) {
         const { assert!(D >= 1 && D <= 7) };
         let d = D as usize;
         self.room(48);
@@ -224,7 +225,7 @@ fn eight_digits(x: u32) -> u64 {
 }
 
 /// A temperature or size for a comment or template: integers without decimals.
-pub fn fmt_num(v: f64) -> String {
+pub(crate) fn fmt_num(v: f64) -> String {
     if v.fract() == 0.0 && v.abs() < 1e15 {
         format!("{}", v as i64)
     } else {
@@ -240,7 +241,7 @@ pub fn fmt_num(v: f64) -> String {
 }
 
 /// Seconds as `1h 2m 3s` (the form slicers write).
-pub fn hms(t: f64) -> String {
+pub(crate) fn hms(t: f64) -> String {
     let s = libm::round(t) as u64;
     let (h, m, s) = (s / 3600, s / 60 % 60, s % 60);
     if h > 0 {

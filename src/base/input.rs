@@ -18,23 +18,23 @@ use std::path::{Path, PathBuf};
 use crate::base::error::{Error, Result};
 
 /// Largest recipe, profile or lock file, bytes.
-pub const MAX_TEXT_BYTES: u64 = 16 << 20;
+pub(crate) const MAX_TEXT_BYTES: u64 = 16 << 20;
 
 /// Deepest nesting of YAML flow collections (`[…]`, `{…}`).
-pub const MAX_NESTING: usize = 64;
+pub(crate) const MAX_NESTING: usize = 64;
 
 /// Most pixels of an image a `modulate_map` may read (decoded to 4 bytes each).
-pub const MAX_IMAGE_PIXELS: u64 = 16 << 20;
+pub(crate) const MAX_IMAGE_PIXELS: u64 = 16 << 20;
 
 /// Longest side of such an image, pixels.
-pub const MAX_IMAGE_SIDE: u32 = 16384;
+pub(crate) const MAX_IMAGE_SIDE: u32 = 16384;
 
 /// Most characters of a `modulate_map` text (9 × 10 pixels each).
-pub const MAX_MAP_TEXT_CHARS: usize = 10_000;
+pub(crate) const MAX_MAP_TEXT_CHARS: usize = 10_000;
 
 /// Refuses image dimensions (as its header declares them, before decoding)
 /// over [`MAX_IMAGE_SIDE`] or [`MAX_IMAGE_PIXELS`].
-pub fn check_image_size(width: u32, height: u32) -> std::result::Result<(), String> {
+pub(crate) fn check_image_size(width: u32, height: u32) -> std::result::Result<(), String> {
     if width > MAX_IMAGE_SIDE
         || height > MAX_IMAGE_SIDE
         || width as u64 * height as u64 > MAX_IMAGE_PIXELS
@@ -75,7 +75,7 @@ impl Reads {
 }
 
 /// Reads `path` (a `what`, e.g. "recipe", for messages) as text, bounded.
-pub fn read_text(path: &Path, what: &str) -> Result<String> {
+pub(crate) fn read_text(path: &Path, what: &str) -> Result<String> {
     let shown = path.display().to_string();
     let file = std::fs::File::open(path)
         .map_err(|e| Error::io_from(&shown, format!("cannot read the {what}: {e}"), &e))?;
@@ -98,7 +98,7 @@ pub fn read_text(path: &Path, what: &str) -> Result<String> {
 
 /// The bytes of `file`, or `None` when it holds more than `limit` (no more
 /// than `limit + 1` bytes are read).
-pub fn read_bounded(file: std::fs::File, limit: u64) -> std::io::Result<Option<Vec<u8>>> {
+pub(crate) fn read_bounded(file: std::fs::File, limit: u64) -> std::io::Result<Option<Vec<u8>>> {
     let mut bytes = Vec::new();
     file.take(limit + 1).read_to_end(&mut bytes)?;
     Ok((bytes.len() as u64 <= limit).then_some(bytes))
@@ -106,7 +106,7 @@ pub fn read_bounded(file: std::fs::File, limit: u64) -> std::io::Result<Option<V
 
 /// UTF-8 text without a leading byte-order mark; an error at the line and
 /// column of the first byte that is not UTF-8.
-pub fn decode(bytes: Vec<u8>) -> Result<String> {
+pub(crate) fn decode(bytes: Vec<u8>) -> Result<String> {
     let mut text = match String::from_utf8(bytes) {
         Ok(t) => t,
         Err(e) => {
@@ -138,7 +138,7 @@ fn line_col(before: &[u8]) -> (usize, usize) {
 /// Refuses YAML whose flow collections (`[`, `{`) nest deeper than
 /// [`MAX_NESTING`], naming the line and column, before a parser sees it.
 /// Brackets inside quoted scalars and comments do not count.
-pub fn check_nesting(text: &str) -> Result<()> {
+pub(crate) fn check_nesting(text: &str) -> Result<()> {
     let mut depth = 0usize;
     let mut quote: Option<char> = None;
     let mut prev = '\n';

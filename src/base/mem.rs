@@ -11,7 +11,7 @@ const AHEAD_MIN: usize = 1 << 20;
 
 /// A vector with room for `n` items, its memory faulted in ahead when it is
 /// big: for a vector about to be filled.
-pub fn with_capacity<T>(n: usize) -> Vec<T> {
+pub(crate) fn with_capacity<T>(n: usize) -> Vec<T> {
     let mut v = Vec::with_capacity(n);
     fault_in(v.spare_capacity_mut());
     v
@@ -19,7 +19,7 @@ pub fn with_capacity<T>(n: usize) -> Vec<T> {
 
 /// Faults in the pages of `items` ahead when they span at least
 /// [`AHEAD_MIN`] bytes (memory about to be written).
-pub fn fault_in<T>(items: &mut [T]) {
+pub(crate) fn fault_in<T>(items: &mut [T]) {
     populate(items.as_mut_ptr() as usize, std::mem::size_of_val(items));
 }
 

@@ -2,15 +2,18 @@
 //! layer above uses, with no knowledge of printers, recipes or files of the
 //! project's own formats.
 
-pub mod error;
-pub mod expr;
-pub mod finding;
-pub mod format;
-pub mod geom;
-pub mod input;
-pub mod mem;
-pub mod par;
-pub mod rng;
-pub mod safe_text;
-pub mod svg;
-pub mod toolpath;
+pub(crate) mod error;
+pub(crate) mod expr;
+pub(crate) mod finding;
+pub(crate) mod format;
+pub(crate) mod geom;
+pub(crate) mod input;
+pub(crate) mod mem;
+pub(crate) mod par;
+pub(crate) mod rng;
+pub(crate) mod safe_text;
+pub(crate) mod svg;
+pub(crate) mod toolpath;
+
+#[cfg(test)]
+pub(crate) mod testing;

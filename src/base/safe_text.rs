@@ -11,7 +11,7 @@ use crate::base::error::{Error, Result};
 /// Whether `c` may not appear in text written into the G-code: a control
 /// character (line feed, carriage return, tab, NUL, escape, DEL, C1 codes)
 /// or a Unicode line or paragraph separator.
-pub fn is_unsafe(c: char) -> bool {
+pub(crate) fn is_unsafe(c: char) -> bool {
     c.is_control() || c == '\u{2028}' || c == '\u{2029}'
 }
 
@@ -29,7 +29,7 @@ fn describe(c: char) -> String {
 
 /// Refuses text with a character of [`is_unsafe`], naming `place`, the
 /// character and where it is.
-pub fn check(place: &str, s: &str) -> Result<()> {
+pub(crate) fn check(place: &str, s: &str) -> Result<()> {
     match s.chars().enumerate().find(|(_, c)| is_unsafe(*c)) {
         None => Ok(()),
         Some((k, c)) => Err(Error::input(
@@ -45,7 +45,7 @@ pub fn check(place: &str, s: &str) -> Result<()> {
 
 /// `s` made safe for one comment line: each character of [`is_unsafe`]
 /// written as `\u{…}`. Text that passed [`check`] comes back unchanged.
-pub fn one_line(s: &str) -> Cow<'_, str> {
+pub(crate) fn one_line(s: &str) -> Cow<'_, str> {
     if !s.chars().any(is_unsafe) {
         return Cow::Borrowed(s);
     }

@@ -22,25 +22,25 @@ use glam::DVec2;
 use crate::base::error::{Error, Result};
 
 /// Largest SVG file read, bytes.
-pub const MAX_SVG_BYTES: u64 = 4 << 20;
+pub(crate) const MAX_SVG_BYTES: u64 = 4 << 20;
 
 /// Most XML nodes parsed from one SVG file.
-pub const MAX_NODES: u32 = 200_000;
+pub(crate) const MAX_NODES: u32 = 200_000;
 
 /// Most elements a drawing may have once every `<use>` is expanded.
-pub const MAX_EXPANDED: u64 = 100_000;
+pub(crate) const MAX_EXPANDED: u64 = 100_000;
 
 /// Deepest nesting of elements (counting each `<use>` as one more level).
-pub const MAX_DEPTH: usize = 256;
+pub(crate) const MAX_DEPTH: usize = 256;
 
 /// Millimetres per CSS px (user unit of the root viewport).
-pub const MM_PER_PX: f64 = 25.4 / 96.0;
+pub(crate) const MM_PER_PX: f64 = 25.4 / 96.0;
 
 /// Farthest a drawing's point may lie from its origin, mm.
-pub const MAX_MM: f64 = 1e6;
+pub(crate) const MAX_MM: f64 = 1e6;
 
 /// The default chord tolerance of flattened curves, mm.
-pub const DEFAULT_TOLERANCE: f64 = 0.01;
+pub(crate) const DEFAULT_TOLERANCE: f64 = 0.01;
 
 /// One subpath of a drawing: mm, y up, scaled.
 #[derive(Clone, Debug, PartialEq)]
@@ -56,7 +56,7 @@ pub struct Subpath {
 
 /// What to take from a drawing and how.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Options<'a> {
+pub(crate) struct Options<'a> {
     /// Only the element with this id (and what it contains).
     pub id: Option<&'a str>,
     /// Factor on the drawn size.
@@ -70,7 +70,7 @@ pub struct Options<'a> {
 /// Reads and flattens the SVG file at `path`; errors name the file as
 /// `shown` and, where there is one, the element and its line. The file is
 /// noted in `reads` for `p3dp watch`.
-pub fn load(
+pub(crate) fn load(
     path: &Path,
     shown: &str,
     opt: &Options,
@@ -111,7 +111,7 @@ pub fn load(
 }
 
 /// Parses and flattens SVG text; the error is a sentence naming the element.
-pub fn parse(text: &str, opt: &Options) -> std::result::Result<Vec<Subpath>, String> {
+pub(crate) fn parse(text: &str, opt: &Options) -> std::result::Result<Vec<Subpath>, String> {
     let doc = roxmltree::Document::parse_with_options(
         text,
         roxmltree::ParsingOptions {
@@ -227,7 +227,7 @@ fn drawn(mut out: Vec<Subpath>, opt: &Options) -> std::result::Result<Vec<Subpat
 
 /// Most style-sheet rules × elements that usvg's CSS matching may try (each
 /// element is matched against every rule, so the work is their product).
-pub const MAX_STYLE_WORK: u64 = 10_000_000;
+pub(crate) const MAX_STYLE_WORK: u64 = 10_000_000;
 
 /// Refuses a style sheet whose rules, matched against every element, would
 /// cost more than [`MAX_STYLE_WORK`]: 60,000 rules over 60,000 elements fit
@@ -503,7 +503,7 @@ const MAX_PIECES: f64 = 100_000.0;
 /// Its second derivative is the constant 2·(p0 − 2·p1 + p2), and a chord of a
 /// curve over a parameter step h lies within h²/8·max|B''| of it, so
 /// n = ⌈sqrt(2·|p0 − 2·p1 + p2| / (8·tol))⌉ keeps every chord within `tol`.
-pub fn quad(p0: DVec2, p1: DVec2, p2: DVec2, tol: f64) -> Vec<DVec2> {
+pub(crate) fn quad(p0: DVec2, p1: DVec2, p2: DVec2, tol: f64) -> Vec<DVec2> {
     let m = (p0 - 2.0 * p1 + p2).length();
     let n = libm::ceil(libm::sqrt(m / (4.0 * tol))).clamp(1.0, MAX_PIECES) as usize;
     (1..=n)
@@ -521,7 +521,7 @@ pub fn quad(p0: DVec2, p1: DVec2, p2: DVec2, tol: f64) -> Vec<DVec2> {
 /// A cubic Bézier cut into n equal parameter steps, its points after p0.
 /// |B''| ≤ 6·max(|p0 − 2·p1 + p2|, |p1 − 2·p2 + p3|) (B'' is linear between
 /// those two ends), so n = ⌈sqrt(6·M / (8·tol))⌉ keeps every chord within `tol`.
-pub fn cubic(p0: DVec2, p1: DVec2, p2: DVec2, p3: DVec2, tol: f64) -> Vec<DVec2> {
+pub(crate) fn cubic(p0: DVec2, p1: DVec2, p2: DVec2, p3: DVec2, tol: f64) -> Vec<DVec2> {
     let m = (p0 - 2.0 * p1 + p2)
         .length()
         .max((p1 - 2.0 * p2 + p3).length());
@@ -554,7 +554,7 @@ pub struct Outline {
 }
 
 /// A vertex turning by more than this many degrees is a corner.
-pub const CORNER_DEGREES: f64 = 20.0;
+pub(crate) const CORNER_DEGREES: f64 = 20.0;
 
 impl Outline {
     /// The one closed subpath of `subpaths` as an outline; an error sentence

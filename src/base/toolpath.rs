@@ -317,25 +317,25 @@ impl Toolpath {
 
 /// x − floor(x): the fractional part, in [0, 1).
 #[inline]
-pub fn frac(x: f64) -> f64 {
+pub(crate) fn frac(x: f64) -> f64 {
     x - libm::floor(x)
 }
 
 /// Cylinder coordinates (r, theta) of a point, theta in [0, 2·pi).
 #[inline]
-pub fn polar(p: DVec3) -> (f64, f64) {
+pub(crate) fn polar(p: DVec3) -> (f64, f64) {
     (radius(p), angle(p))
 }
 
 /// Distance of a point from the z axis (the r of [`polar`]).
 #[inline]
-pub fn radius(p: DVec3) -> f64 {
+pub(crate) fn radius(p: DVec3) -> f64 {
     (p.x * p.x + p.y * p.y).sqrt()
 }
 
 /// Angle of a point about the z axis in [0, 2·pi) (the theta of [`polar`]).
 #[inline]
-pub fn angle(p: DVec3) -> f64 {
+pub(crate) fn angle(p: DVec3) -> f64 {
     let mut theta = libm::atan2(p.y, p.x);
     if theta < 0.0 {
         theta += std::f64::consts::TAU;

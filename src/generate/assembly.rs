@@ -21,7 +21,7 @@ use crate::generate::step::Step;
 
 /// Most strings all parts of a recipe may have together, before and after
 /// their steps: the recipe's `max_strings` (50 million unless it says).
-pub fn total_limit(recipe: &Recipe) -> u64 {
+pub(crate) fn total_limit(recipe: &Recipe) -> u64 {
     recipe.max_strings
 }
 

@@ -1,8 +1,11 @@
 //! Layer 3, generation: a resolved recipe made into strings (Kanada's
 //! S_i = (start, end, c, v)): primitives, steps, parts and groups, the skirt.
 
-pub mod assembly;
-pub mod model;
-pub mod primitive;
-pub mod skirt;
-pub mod step;
+pub(crate) mod assembly;
+pub(crate) mod model;
+pub(crate) mod primitive;
+pub(crate) mod skirt;
+pub(crate) mod step;
+
+#[cfg(test)]
+mod tests;

@@ -10,7 +10,7 @@ use crate::generate::step::Step;
 use crate::machine::{Material, Printer};
 
 /// The default limit on strings in one part (a recipe may change it).
-pub const DEFAULT_MAX_STRINGS: u64 = 50_000_000;
+pub(crate) const DEFAULT_MAX_STRINGS: u64 = 50_000_000;
 
 /// `skirt:` resolved.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -377,9 +377,9 @@ pub struct Recipe {
 }
 
 /// Default cross-section when a recipe gives none: Kanada's 0.196 mm² (Fig. 9).
-pub const DEFAULT_CROSS_SECTION: f64 = 0.196;
+pub(crate) const DEFAULT_CROSS_SECTION: f64 = 0.196;
 /// Default speed when a recipe gives none: Kanada's 40 mm/s (Fig. 9).
-pub const DEFAULT_SPEED: f64 = 40.0;
+pub(crate) const DEFAULT_SPEED: f64 = 40.0;
 
 /// A primitive after the first of a part, with its cross-section and speed.
 #[derive(Clone, Debug)]
@@ -403,6 +403,16 @@ pub struct Group {
     pub steps: Vec<Step>,
     /// Where the group is written (through templates and loops), for errors.
     pub place: String,
+}
+
+impl Recipe {
+    /// How many strings its parts make, before any is built.
+    pub fn string_count(&self) -> u64 {
+        self.parts
+            .iter()
+            .map(Part::string_count)
+            .fold(0, u64::saturating_add)
+    }
 }
 
 impl Part {
@@ -440,7 +450,7 @@ pub fn make_part(recipe: &Recipe, k: usize) -> Result<Toolpath> {
 
 /// Makes a part as [`make_part`] does, its steps refused past `budget`
 /// strings (what the recipe's limits leave after the parts before it).
-pub fn make_part_within(recipe: &Recipe, k: usize, budget: u64) -> Result<Toolpath> {
+pub(crate) fn make_part_within(recipe: &Recipe, k: usize, budget: u64) -> Result<Toolpath> {
     let part = &recipe.parts[k];
     let mut tp = part.build_primitives();
     tp.name = part.name.clone();
@@ -452,7 +462,7 @@ pub fn make_part_within(recipe: &Recipe, k: usize, budget: u64) -> Result<Toolpa
 }
 
 /// The PNG of `--pattern`: the cell array of the recipe's one `ca_helix` part.
-pub fn pattern_png(recipe: &Recipe) -> Result<Vec<u8>> {
+pub(crate) fn pattern_png(recipe: &Recipe) -> Result<Vec<u8>> {
     let models: Vec<&CaHelix> = recipe
         .parts
         .iter()

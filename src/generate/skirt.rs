@@ -11,8 +11,9 @@ use crate::base::error::{Error, Result};
 use crate::base::toolpath::Toolpath;
 use crate::generate::model::Skirt;
 
+#[cfg(test)]
 /// Convex hull of `pts`, counter-clockwise, by Andrew's monotone chain.
-pub fn convex_hull(pts: Vec<DVec2>) -> Vec<DVec2> {
+pub(crate) fn convex_hull(pts: Vec<DVec2>) -> Vec<DVec2> {
     hull_of(near_outline(|| pts.iter().copied()))
 }
 
@@ -214,7 +215,7 @@ fn offset(hull: &[DVec2], d: f64) -> Vec<DVec2> {
 /// The skirt around `parts`, or `None` when they extrude nothing; an error
 /// (with no place: the caller names the key) when it would have more than
 /// `max_strings` strings.
-pub fn make(
+pub(crate) fn make(
     skirt: &Skirt,
     parts: &[Toolpath],
     spacing: f64,

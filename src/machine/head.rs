@@ -96,7 +96,7 @@ impl Default for CheckLimits {
 }
 
 /// `Ok` for a finite number > 0, else an input error naming `key`.
-pub fn positive(key: &str, v: f64) -> Result<()> {
+pub(crate) fn positive(key: &str, v: f64) -> Result<()> {
     if v.is_finite() && v > 0.0 {
         Ok(())
     } else {

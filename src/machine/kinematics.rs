@@ -6,18 +6,18 @@ use serde::Serialize;
 use crate::base::error::{Error, Result};
 
 /// Marlin's default junction deviation, mm (`JUNCTION_DEVIATION_MM`).
-pub const MARLIN_JUNCTION_DEVIATION: f64 = 0.013;
+pub(crate) const MARLIN_JUNCTION_DEVIATION: f64 = 0.013;
 /// Marlin's default minimum segment time, s (`DEFAULT_MINSEGMENTTIME` 20000 µs).
-pub const MARLIN_MIN_SEGMENT_TIME: f64 = 0.02;
+pub(crate) const MARLIN_MIN_SEGMENT_TIME: f64 = 0.02;
 /// Klipper's default `minimum_cruise_ratio`.
-pub const KLIPPER_MINIMUM_CRUISE_RATIO: f64 = 0.5;
+pub(crate) const KLIPPER_MINIMUM_CRUISE_RATIO: f64 = 0.5;
 /// Klipper's default `instantaneous_corner_velocity` of `[extruder]`, mm/s.
-pub const KLIPPER_INSTANTANEOUS_CORNER_VELOCITY: f64 = 1.0;
+pub(crate) const KLIPPER_INSTANTANEOUS_CORNER_VELOCITY: f64 = 1.0;
 /// Marlin's default `BLOCK_BUFFER_SIZE` (moves).
-pub const MARLIN_BLOCK_BUFFER_SIZE: u32 = 16;
+pub(crate) const MARLIN_BLOCK_BUFFER_SIZE: u32 = 16;
 /// Assumed rate at which Marlin reads, parses and plans G-code lines from SD
 /// (lines/s): about 2 ms a line on an 8-bit board; an assumption, not a measurement.
-pub const MARLIN_COMMAND_RATE: f64 = 500.0;
+pub(crate) const MARLIN_COMMAND_RATE: f64 = 500.0;
 
 /// A printer profile's `kinematics:` block: the limits the firmware's planner
 /// works with. Give `junction_deviation` (Marlin) or `square_corner_velocity`
@@ -209,7 +209,7 @@ impl Kinematics {
 
 /// Klipper's default extrude-only ratio: a cross-section of 4·nozzle² over the
 /// filament's area (`[extruder] max_extrude_cross_section`).
-pub fn extrude_ratio(nozzle_diameter: f64, filament_diameter: f64) -> f64 {
+pub(crate) fn extrude_ratio(nozzle_diameter: f64, filament_diameter: f64) -> f64 {
     let area = std::f64::consts::PI * 0.25 * filament_diameter * filament_diameter;
     4.0 * nozzle_diameter * nozzle_diameter / area
 }

@@ -8,28 +8,28 @@
 use crate::base::error::{Error, Result};
 
 /// Filament diameter, mm (1.75 and 2.85 mm are the common sizes).
-pub const FILAMENT_DIAMETER: (f64, f64) = (1.0, 3.5);
+pub(crate) const FILAMENT_DIAMETER: (f64, f64) = (1.0, 3.5);
 /// Nozzle diameter, mm.
-pub const NOZZLE_DIAMETER: (f64, f64) = (0.1, 2.0);
+pub(crate) const NOZZLE_DIAMETER: (f64, f64) = (0.1, 2.0);
 /// Hottest nozzle temperature anything may ask for, °C.
-pub const NOZZLE_TEMP_MAX: f64 = 500.0;
+pub(crate) const NOZZLE_TEMP_MAX: f64 = 500.0;
 /// Hottest bed temperature anything may ask for, °C.
-pub const BED_TEMP_MAX: f64 = 150.0;
+pub(crate) const BED_TEMP_MAX: f64 = 150.0;
 /// Fastest speed of the head or the filament, mm/s.
-pub const SPEED_MAX: f64 = 2000.0;
+pub(crate) const SPEED_MAX: f64 = 2000.0;
 /// Largest acceleration, mm/s².
-pub const ACCELERATION_MAX: f64 = 100_000.0;
+pub(crate) const ACCELERATION_MAX: f64 = 100_000.0;
 /// Longest retraction, mm of filament.
-pub const RETRACTION_MAX: f64 = 20.0;
+pub(crate) const RETRACTION_MAX: f64 = 20.0;
 /// Largest volumetric flow limit, mm³/s.
-pub const FLOW_MAX: f64 = 1000.0;
+pub(crate) const FLOW_MAX: f64 = 1000.0;
 /// Largest bed side, height, origin offset or other length of a machine, mm.
-pub const MACHINE_LENGTH_MAX: f64 = 10_000.0;
+pub(crate) const MACHINE_LENGTH_MAX: f64 = 10_000.0;
 /// Filament density, g/cm³.
-pub const DENSITY: (f64, f64) = (0.1, 25.0);
+pub(crate) const DENSITY: (f64, f64) = (0.1, 25.0);
 
 /// Refuses `v` outside `[min, max]` (or not finite), naming `key` and the range.
-pub fn range(key: &str, v: f64, (min, max): (f64, f64), unit: &str) -> Result<()> {
+pub(crate) fn range(key: &str, v: f64, (min, max): (f64, f64), unit: &str) -> Result<()> {
     if v.is_finite() && v >= min && v <= max {
         return Ok(());
     }
@@ -41,7 +41,7 @@ pub fn range(key: &str, v: f64, (min, max): (f64, f64), unit: &str) -> Result<()
 
 /// Refuses `v` above `max` (or not finite), naming `key`; the lower bound is
 /// checked where the value is read.
-pub fn at_most(key: &str, v: f64, max: f64, unit: &str) -> Result<()> {
+pub(crate) fn at_most(key: &str, v: f64, max: f64, unit: &str) -> Result<()> {
     if v.is_finite() && v <= max {
         return Ok(());
     }

@@ -26,11 +26,11 @@ pub struct Material {
 
 /// The colour of a material that names none: the orange the previews draw
 /// filament in (`#FA8F29`).
-pub const DEFAULT_COLOR: [u8; 3] = [0xFA, 0x8F, 0x29];
+pub(crate) const DEFAULT_COLOR: [u8; 3] = [0xFA, 0x8F, 0x29];
 
 /// Height above which the fan of a built-in material turns on, mm: past the
 /// first layer or two.
-pub const FAN_START_Z: f64 = 0.5;
+pub(crate) const FAN_START_Z: f64 = 0.5;
 
 impl Material {
     /// A built-in material: `pla`, `abs` or `petg`.
@@ -58,7 +58,7 @@ impl Material {
 }
 
 /// Parses a colour written `#rrggbb` (hex digits, either case).
-pub fn parse_color(s: &str) -> Option<[u8; 3]> {
+pub(crate) fn parse_color(s: &str) -> Option<[u8; 3]> {
     let hex = s.strip_prefix('#')?;
     if hex.len() != 6 || !hex.bytes().all(|b| b.is_ascii_hexdigit()) {
         return None;

@@ -2,16 +2,16 @@
 //! limits, check thresholds, thumbnail sizes) and a material. Data only:
 //! [`crate::recipe::profile`] reads profiles from YAML.
 
-pub mod head;
-pub mod kinematics;
-pub mod limits;
-pub mod material;
-pub mod printer;
-pub mod size;
-pub mod travel;
+pub(crate) mod head;
+pub(crate) mod kinematics;
+pub(crate) mod limits;
+pub(crate) mod material;
+pub(crate) mod printer;
+pub(crate) mod size;
+pub(crate) mod travel;
 
-pub use head::{CheckLimits, Head};
-pub use kinematics::{Kinematics, Limits};
-pub use material::{Material, FAN_START_Z};
-pub use printer::{Bed, Extrusion, Flavor, Printer, Retraction, PLACEHOLDERS};
-pub use size::Size;
+pub(crate) use head::{CheckLimits, Head};
+pub(crate) use kinematics::{Kinematics, Limits};
+pub(crate) use material::{Material, FAN_START_Z};
+pub(crate) use printer::{Bed, Extrusion, Flavor, Printer, Retraction, PLACEHOLDERS};
+pub(crate) use size::Size;

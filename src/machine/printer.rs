@@ -339,7 +339,7 @@ impl Printer {
 }
 
 /// Placeholders a start or end G-code template may use.
-pub const PLACEHOLDERS: [&str; 8] = [
+pub(crate) const PLACEHOLDERS: [&str; 8] = [
     "nozzle_temp",
     "bed_temp",
     "filament_diameter",

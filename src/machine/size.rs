@@ -49,7 +49,7 @@ impl Size {
 }
 
 /// The sizes a profile's `thumbnails` list asks for; errors name `thumbnails[k]`.
-pub fn sizes(list: &[String]) -> Result<Vec<Size>> {
+pub(crate) fn sizes(list: &[String]) -> Result<Vec<Size>> {
     list.iter()
         .enumerate()
         .map(|(k, s)| Size::parse(s, &format!("thumbnails[{k}]")))

@@ -8,7 +8,12 @@ use crate::machine::printer::Printer;
 /// filament printed so far by the head's clearance, within the printer's
 /// reach, and at least the heights of both ends. A move with no sideways
 /// part is a plain vertical move (`None`).
-pub fn safe_travel_z(printer: &Printer, from: DVec3, to: DVec3, printed_top: f64) -> Option<f64> {
+pub(crate) fn safe_travel_z(
+    printer: &Printer,
+    from: DVec3,
+    to: DVec3,
+    printed_top: f64,
+) -> Option<f64> {
     if from.x == to.x && from.y == to.y {
         return None;
     }

@@ -17,7 +17,7 @@ use crate::base::error::{Error, Result};
 /// The lock file.
 #[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
-pub struct Lock {
+pub(crate) struct Lock {
     /// Format version: 1.
     pub p3dp_lock: u32,
     /// One entry per recipe and parameter set.
@@ -27,7 +27,7 @@ pub struct Lock {
 /// One locked build.
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
-pub struct Entry {
+pub(crate) struct Entry {
     /// Recipe path, relative to the lock file, `/`-separated.
     pub recipe: String,
     /// `--set` values, `NAME=VALUE`, in order.
@@ -49,13 +49,13 @@ pub struct Entry {
 
 /// Most lines a locked G-code may have: far more than any build writes,
 /// few enough that no block arithmetic overflows.
-pub const MAX_LINES: u64 = 1 << 40;
+pub(crate) const MAX_LINES: u64 = 1 << 40;
 
 impl Lock {
     /// Refuses what `hash --check` cannot use, naming the key: another
     /// version, no entries, a hash that is not 64 hex digits, blocks that do
     /// not fit the line count.
-    pub fn validate(&self) -> Result<()> {
+    pub(crate) fn validate(&self) -> Result<()> {
         if self.p3dp_lock != 1 {
             return Err(Error::input(
                 "p3dp_lock",
@@ -115,11 +115,11 @@ impl Lock {
 }
 
 /// Most blocks one fingerprint has.
-pub const MAX_BLOCKS: u64 = 512;
+pub(crate) const MAX_BLOCKS: u64 = 512;
 
 /// A writer that keeps a 64-bit FNV-1a hash of every line passing through.
 #[derive(Default)]
-pub struct LineHashes {
+pub(crate) struct LineHashes {
     /// Hash of each complete line.
     pub lines: Vec<u64>,
     current: u64,
@@ -151,12 +151,12 @@ impl Write for LineHashes {
 
 impl LineHashes {
     /// Lines per block for `n` lines so that there are at most [`MAX_BLOCKS`].
-    pub fn block_lines(n: u64) -> u64 {
+    pub(crate) fn block_lines(n: u64) -> u64 {
         n.div_ceil(MAX_BLOCKS).max(1)
     }
 
     /// Block hashes for blocks of `b` lines (a last partial line counts as a line).
-    pub fn blocks(&self, b: u64) -> Vec<String> {
+    pub(crate) fn blocks(&self, b: u64) -> Vec<String> {
         let mut lines = self.lines.clone();
         if self.open {
             lines.push(self.current);
@@ -176,13 +176,13 @@ impl LineHashes {
     }
 
     /// Number of lines, a last partial line included.
-    pub fn count(&self) -> u64 {
+    pub(crate) fn count(&self) -> u64 {
         self.lines.len() as u64 + self.open as u64
     }
 }
 
 /// Index of the first block that differs, or `None` when all shared blocks agree.
-pub fn first_difference(old: &str, new: &[String]) -> Option<usize> {
+pub(crate) fn first_difference(old: &str, new: &[String]) -> Option<usize> {
     let old: Vec<&str> = old.split_whitespace().collect();
     let shared = old.len().min(new.len());
     (0..shared)

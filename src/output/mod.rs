@@ -1,8 +1,8 @@
 //! Layer 5, output: what a plan becomes on disk: G-code, previews, meshes,
 //! lock files, all written whole or not at all.
 
-pub mod file;
-pub mod gcode;
-pub mod lock;
-pub mod mesh;
-pub mod preview;
+pub(crate) mod file;
+pub(crate) mod gcode;
+pub(crate) mod lock;
+pub(crate) mod mesh;
+pub(crate) mod preview;

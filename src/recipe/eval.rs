@@ -15,7 +15,7 @@ use crate::recipe::schema::{Num, Num3};
 
 /// A value as written and its key: what `at!` makes of a field.
 #[derive(Debug)]
-pub struct At<'v, T> {
+pub(crate) struct At<'v, T> {
     /// The value.
     pub value: &'v T,
     /// Its key in the map that holds it.
@@ -32,14 +32,14 @@ impl<T> Copy for At<'_, T> {}
 
 impl<'v, T> At<'v, T> {
     /// `value` at `key`, for a key that is no field's name.
-    pub fn new(value: &'v T, key: &'static str) -> At<'v, T> {
+    pub(crate) fn new(value: &'v T, key: &'static str) -> At<'v, T> {
         At { value, key }
     }
 }
 
 impl<'v, T> At<'v, Option<T>> {
     /// The value, when given, at the same key.
-    pub fn some(self) -> Option<At<'v, T>> {
+    pub(crate) fn some(self) -> Option<At<'v, T>> {
         self.value.as_ref().map(|value| At {
             value,
             key: self.key,
@@ -84,7 +84,7 @@ pub(crate) use {at, key};
 
 /// `key` under the key path `prefix`: `prefix.key`, or `prefix[k]` for an
 /// index (as [`Error::under`] joins them).
-pub fn join(prefix: &str, key: &str) -> String {
+pub(crate) fn join(prefix: &str, key: &str) -> String {
     if prefix.is_empty() {
         key.to_string()
     } else if key.is_empty() {
@@ -99,7 +99,7 @@ pub fn join(prefix: &str, key: &str) -> String {
 /// Evaluates a recipe's numbers against its params; every error names the
 /// key path: the scope's own path joined with the value's key.
 #[derive(Clone, Debug)]
-pub struct Scope<'a> {
+pub(crate) struct Scope<'a> {
     /// The params (and template or loop values) expressions may use.
     pub params: &'a Params,
     /// The key path the keys it is given are under; empty at the top.
@@ -108,7 +108,7 @@ pub struct Scope<'a> {
 
 impl<'a> Scope<'a> {
     /// A scope over `params`, at the top.
-    pub fn new(params: &'a Params) -> Scope<'a> {
+    pub(crate) fn new(params: &'a Params) -> Scope<'a> {
         Scope {
             params,
             path: String::new(),
@@ -116,7 +116,7 @@ impl<'a> Scope<'a> {
     }
 
     /// The same params under `key` (`helix`, `features[1]`).
-    pub fn under(&self, key: &str) -> Scope<'a> {
+    pub(crate) fn under(&self, key: &str) -> Scope<'a> {
         Scope {
             params: self.params,
             path: join(&self.path, key),
@@ -124,27 +124,32 @@ impl<'a> Scope<'a> {
     }
 
     /// The key path of `key` in this scope.
-    pub fn place(&self, key: &str) -> String {
+    pub(crate) fn place(&self, key: &str) -> String {
         join(&self.path, key)
     }
 
     /// This scope's own key path.
-    pub fn here(&self) -> &str {
+    pub(crate) fn here(&self) -> &str {
         &self.path
     }
 
     /// An input error at `key`.
-    pub fn error(&self, key: &str, message: impl Into<String>) -> Error {
+    pub(crate) fn error(&self, key: &str, message: impl Into<String>) -> Error {
         Error::input(self.place(key), message)
     }
 
     /// A number: a literal, or an expression over the params.
-    pub fn num(&self, at: At<Num>) -> Result<f64> {
+    pub(crate) fn num(&self, at: At<Num>) -> Result<f64> {
         eval(at.value, self.params, &self.place(at.key))
     }
 
     /// A number for which `ok` holds, else an error saying it `expected`.
-    pub fn checked(&self, at: At<Num>, ok: impl Fn(f64) -> bool, expected: &str) -> Result<f64> {
+    pub(crate) fn checked(
+        &self,
+        at: At<Num>,
+        ok: impl Fn(f64) -> bool,
+        expected: &str,
+    ) -> Result<f64> {
         let v = self.num(at)?;
         if ok(v) {
             Ok(v)
@@ -154,7 +159,7 @@ impl<'a> Scope<'a> {
     }
 
     /// A number checked as [`Scope::checked`] does, or `default` when absent.
-    pub fn checked_or(
+    pub(crate) fn checked_or(
         &self,
         at: At<Option<Num>>,
         default: f64,
@@ -168,34 +173,34 @@ impl<'a> Scope<'a> {
     }
 
     /// A number > 0.
-    pub fn positive(&self, at: At<Num>) -> Result<f64> {
+    pub(crate) fn positive(&self, at: At<Num>) -> Result<f64> {
         self.checked(at, |v| v > 0.0, "a number > 0")
     }
 
     /// A number > 0, or `default` when absent.
-    pub fn positive_or(&self, at: At<Option<Num>>, default: f64) -> Result<f64> {
+    pub(crate) fn positive_or(&self, at: At<Option<Num>>, default: f64) -> Result<f64> {
         self.checked_or(at, default, |v| v > 0.0, "a number > 0")
     }
 
     /// A number ≥ 0.
-    pub fn non_negative(&self, at: At<Num>) -> Result<f64> {
+    pub(crate) fn non_negative(&self, at: At<Num>) -> Result<f64> {
         self.checked(at, |v| v >= 0.0, "a number ≥ 0")
     }
 
     /// A whole number from `min` to 10,000,000.
-    pub fn whole(&self, at: At<Num>, min: u32) -> Result<u32> {
+    pub(crate) fn whole(&self, at: At<Num>, min: u32) -> Result<u32> {
         self.whole_max(at, min, 10_000_000)
     }
 
     /// A whole number from `min` to `max`.
-    pub fn whole_max(&self, at: At<Num>, min: u32, max: u32) -> Result<u32> {
+    pub(crate) fn whole_max(&self, at: At<Num>, min: u32, max: u32) -> Result<u32> {
         let ok = |v: f64| v.fract() == 0.0 && v >= min as f64 && v <= max as f64;
         let expected = format!("a whole number from {min} to {max}");
         Ok(self.checked(at, ok, &expected)? as u32)
     }
 
     /// `segments:` (a whole number ≥ 3), 72 when absent.
-    pub fn segments(&self, at: At<Option<Num>>) -> Result<u32> {
+    pub(crate) fn segments(&self, at: At<Option<Num>>) -> Result<u32> {
         match at.some() {
             Some(n) => self.whole(n, 3),
             None => Ok(72),
@@ -203,7 +208,7 @@ impl<'a> Scope<'a> {
     }
 
     /// Three numbers, a point or vector; errors name `KEY[i]`.
-    pub fn point(&self, at: At<Num3>) -> Result<DVec3> {
+    pub(crate) fn point(&self, at: At<Num3>) -> Result<DVec3> {
         let s = self.under(at.key);
         let n = at.value;
         Ok(DVec3::new(
@@ -214,7 +219,7 @@ impl<'a> Scope<'a> {
     }
 
     /// A point, or `default` when absent.
-    pub fn point_or(&self, at: At<Option<Num3>>, default: DVec3) -> Result<DVec3> {
+    pub(crate) fn point_or(&self, at: At<Option<Num3>>, default: DVec3) -> Result<DVec3> {
         match at.some() {
             Some(n) => self.point(n),
             None => Ok(default),
@@ -222,19 +227,19 @@ impl<'a> Scope<'a> {
     }
 
     /// `center:`, the origin when absent.
-    pub fn center(&self, at: At<Option<Num3>>) -> Result<DVec3> {
+    pub(crate) fn center(&self, at: At<Option<Num3>>) -> Result<DVec3> {
         self.point_or(at, DVec3::ZERO)
     }
 
     /// An expression compiled over the params, with only the `allowed` variables.
-    pub fn expr(&self, at: At<Num>, allowed: &[usize]) -> Result<Expr> {
+    pub(crate) fn expr(&self, at: At<Num>, allowed: &[usize]) -> Result<Expr> {
         Expr::compile(&at.value.src(), self.params, allowed).map_err(|e| e.at(self.place(at.key)))
     }
 }
 
 /// A number written at `place` (a key that is no field's, such as a
 /// param's name): a literal, or an expression over `params`.
-pub fn eval(n: &Num, params: &Params, place: &str) -> Result<f64> {
+pub(crate) fn eval(n: &Num, params: &Params, place: &str) -> Result<f64> {
     match n {
         Num::Value(v) => finite(*v, place),
         Num::Expr(s) => expr::eval_const(s, params).map_err(|e| e.at(place)),
@@ -242,7 +247,7 @@ pub fn eval(n: &Num, params: &Params, place: &str) -> Result<f64> {
 }
 
 /// `v` when it is a finite number; otherwise an error naming `place`.
-pub fn finite(v: f64, place: &str) -> Result<f64> {
+pub(crate) fn finite(v: f64, place: &str) -> Result<f64> {
     if v.is_finite() {
         Ok(v)
     } else {

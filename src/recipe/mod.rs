@@ -17,18 +17,21 @@
 //! profiles loaded into [`crate::machine::Printer`]) and [`resolve`] (the raw
 //! forms into generation's types; a turtle's program compiled and run).
 
-pub mod context;
-pub mod eval;
-pub mod expand;
-pub mod params;
-pub mod profile;
-pub mod resolve;
-pub mod schema;
-pub mod yaml;
+pub(crate) mod context;
+pub(crate) mod eval;
+pub(crate) mod expand;
+pub(crate) mod params;
+pub(crate) mod profile;
+pub(crate) mod resolve;
+pub(crate) mod schema;
+pub(crate) mod yaml;
 
-pub use crate::generate::model::{Part, Recipe, Skirt};
-pub use params::{eval_params, parse_set};
-pub use resolve::load_bitmap;
-pub use schema::RawRecipe;
-pub use schema::{Num, Num3};
-pub use yaml::parse_yaml;
+pub(crate) use crate::generate::model::{Part, Recipe, Skirt};
+pub(crate) use params::{eval_params, parse_set};
+pub(crate) use resolve::load_bitmap;
+pub(crate) use schema::RawRecipe;
+pub(crate) use schema::{Num, Num3};
+pub(crate) use yaml::parse_yaml;
+
+#[cfg(test)]
+mod tests;

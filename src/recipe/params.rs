@@ -16,7 +16,10 @@ pub(crate) fn is_identifier(s: &str) -> bool {
 
 /// Evaluates params in order, each over the ones before it; `sets` replaces
 /// a param's expression (`--set NAME=VALUE`).
-pub fn eval_params(raw: &IndexMap<String, Num>, sets: &[(String, String)]) -> Result<Params> {
+pub(crate) fn eval_params(
+    raw: &IndexMap<String, Num>,
+    sets: &[(String, String)],
+) -> Result<Params> {
     let mut params = Params::new();
     for (name, value) in raw {
         let place = join(key!(RawRecipe, params), name);
@@ -63,7 +66,7 @@ pub fn eval_params(raw: &IndexMap<String, Num>, sets: &[(String, String)]) -> Re
 }
 
 /// Parses a `NAME=VALUE` of `--set`.
-pub fn parse_set(s: &str) -> Result<(String, String)> {
+pub(crate) fn parse_set(s: &str) -> Result<(String, String)> {
     match s.split_once('=') {
         Some((n, v)) if !n.trim().is_empty() && !v.trim().is_empty() => {
             Ok((n.trim().to_string(), v.trim().to_string()))

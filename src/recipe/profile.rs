@@ -43,7 +43,7 @@ pub fn built_in_names() -> Vec<&'static str> {
 }
 
 /// A built-in profile by name.
-pub fn built_in(name: &str) -> Option<Printer> {
+pub(crate) fn built_in(name: &str) -> Option<Printer> {
     let (_, text) = BUILT_IN.iter().find(|(n, _)| *n == name)?;
     let p: RawPrinter = parse_yaml(text, name).expect("built-in profiles parse");
     Some(printer(p))

@@ -9,7 +9,7 @@ use crate::base::error::{Error, Result};
 /// Deserializes YAML into `T`, with errors naming `file`, line, column and key path.
 ///
 /// Enums are written as one-key maps (`{helix: {…}}`), as the spec does.
-pub fn parse_yaml<T: de::DeserializeOwned>(text: &str, file: &str) -> Result<T> {
+pub(crate) fn parse_yaml<T: de::DeserializeOwned>(text: &str, file: &str) -> Result<T> {
     let de = serde_yaml::Deserializer::from_str(text);
     let mut track = serde_path_to_error::Track::new();
     let tracked = serde_path_to_error::Deserializer::new(de, &mut track);
@@ -65,31 +65,31 @@ pub fn parse_yaml<T: de::DeserializeOwned>(text: &str, file: &str) -> Result<T> 
 /// A YAML document held as a tree, to be merged with another (a printer
 /// profile's `inherits:`) before it is read into a type.
 #[derive(Clone, Debug)]
-pub struct Tree(serde_yaml::Value);
+pub(crate) struct Tree(serde_yaml::Value);
 
 impl Tree {
     /// Parses `text`, errors as [`parse_yaml`]'s (naming `file`).
-    pub fn parse(text: &str, file: &str) -> Result<Tree> {
+    pub(crate) fn parse(text: &str, file: &str) -> Result<Tree> {
         parse_yaml(text, file).map(Tree)
     }
 
     /// Whether the top-level map has `key`.
-    pub fn has(&self, key: &str) -> bool {
+    pub(crate) fn has(&self, key: &str) -> bool {
         self.0.get(key).is_some()
     }
 
     /// Takes `key` out of the top-level map.
-    pub fn remove(&mut self, key: &str) -> Option<Tree> {
+    pub(crate) fn remove(&mut self, key: &str) -> Option<Tree> {
         self.0.as_mapping_mut()?.remove(key).map(Tree)
     }
 
     /// The text, when the tree is a string.
-    pub fn as_str(&self) -> Option<&str> {
+    pub(crate) fn as_str(&self) -> Option<&str> {
         self.0.as_str()
     }
 
     /// Sets `key` of the top-level map (when it is a map) to `value`.
-    pub fn set_str(&mut self, key: &str, value: String) {
+    pub(crate) fn set_str(&mut self, key: &str, value: String) {
         if let Some(m) = self.0.as_mapping_mut() {
             m.insert(key.into(), value.into());
         }
@@ -98,13 +98,13 @@ impl Tree {
     /// Deep merge: keys of `over` replace those of `base`, maps are merged
     /// key by key, except two maps whose `tag` key differs (a round bed
     /// replacing a rectangle: `shape`), where `over` replaces `base` whole.
-    pub fn merge(base: Tree, over: Tree, tag: &str) -> Tree {
+    pub(crate) fn merge(base: Tree, over: Tree, tag: &str) -> Tree {
         Tree(merge(base.0, over.0, tag))
     }
 
     /// Reads the tree into `T`, naming the key path of any error (and
     /// `file`; a merged tree has no lines).
-    pub fn read<T: de::DeserializeOwned>(self, file: &str) -> Result<T> {
+    pub(crate) fn read<T: de::DeserializeOwned>(self, file: &str) -> Result<T> {
         let mut track = serde_path_to_error::Track::new();
         let tracked = serde_path_to_error::Deserializer::new(self.0, &mut track);
         T::deserialize(tracked).map_err(|e| {
@@ -346,6 +346,6 @@ fn shorten_quoted(msg: &str) -> String {
     out
 }
 /// `value` as YAML text (for the files p3dp writes in YAML: lock files).
-pub fn to_yaml<T: serde::Serialize>(value: &T) -> String {
+pub(crate) fn to_yaml<T: serde::Serialize>(value: &T) -> String {
     serde_yaml::to_string(value).expect("p3dp's own values serialise")
 }

@@ -5,7 +5,7 @@ use crate::common::*;
 
 #[test]
 fn dome_is_a_half_sphere_on_the_bed_and_the_stand_sits_on_it() {
-    let plan = p3dp::app::prepare::plan(&recipe("bowl.yaml"), &Default::default()).unwrap();
+    let plan = p3dp::plan(&recipe("bowl.yaml"), &Default::default()).unwrap();
     assert!(plan.failing(false).is_empty(), "{:?}", plan.findings);
     let dome = plan.paths.iter().find(|t| t.name == "dome").unwrap();
     for p in &dome.points {

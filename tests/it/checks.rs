@@ -261,7 +261,7 @@ fn safety_limits_cannot_be_allowed_only_forced() {
     // on the command line, for every safety code
     let edge = root().join("tests/checks/out-of-bed.yaml");
     let e = edge.to_str().unwrap();
-    for code in p3dp::analyse::check::SAFETY {
+    for code in p3dp::SAFETY {
         let out = p3dp(&dir, &["build", e, "--allow", code, "-o", "s.gcode"]);
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(2), "{code}: {stderr}");

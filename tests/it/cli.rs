@@ -115,7 +115,7 @@ fn stats_json_has_every_field_of_the_spec() {
     assert!((len - stated).abs() < 1e-3 * stated, "{len} vs {stated}");
     // the globe's 0.2 mm-long polar strings were merged, filament untouched
     assert!(s["merged_strings"].as_u64().unwrap() > 1000);
-    let plan = p3dp::app::prepare::plan(&recipe("globe.yaml"), &Default::default()).unwrap();
+    let plan = p3dp::plan(&recipe("globe.yaml"), &Default::default()).unwrap();
     let exact: f64 = plan.paths.iter().map(|t| t.volume()).sum::<f64>() / area;
     assert!(
         ((fed - exact) / exact).abs() < 1e-6,

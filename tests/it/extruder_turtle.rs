@@ -7,9 +7,9 @@
 use std::path::PathBuf;
 
 use glam::DVec3;
-use p3dp::base::toolpath::Toolpath;
-use p3dp::generate::assembly::make_parts;
-use p3dp::recipe::Recipe;
+use p3dp::make_parts;
+use p3dp::Recipe;
+use p3dp::Toolpath;
 
 pub(crate) fn load(name: &str) -> Recipe {
     load_with(name, &[])

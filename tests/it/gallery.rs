@@ -6,9 +6,9 @@
 use std::path::PathBuf;
 
 use glam::DVec3;
-use p3dp::analyse::check::Severity;
-use p3dp::app::prepare::plan;
-use p3dp::base::toolpath::Toolpath;
+use p3dp::plan;
+use p3dp::Severity;
+use p3dp::Toolpath;
 
 /// Every recipe of the gallery.
 const GALLERY: [&str; 8] = [

@@ -25,8 +25,8 @@ fn a_broken_pipe_is_recognisable() {
         .filter(|p| p.extension().is_some_and(|x| x == "yaml"))
         .min()
         .unwrap();
-    let p = p3dp::app::prepare::plan(&first, &Default::default()).unwrap();
-    let e = p3dp::app::pipeline::render(&p, ClosedPipe).unwrap_err();
+    let p = p3dp::plan(&first, &Default::default()).unwrap();
+    let e = p3dp::pipeline::render(&p, ClosedPipe).unwrap_err();
     assert_eq!(e.io_kind, Some(io::ErrorKind::BrokenPipe), "{e}");
     assert_eq!(e.exit_code(), 2);
 }

@@ -9,10 +9,10 @@ use std::path::PathBuf;
 
 use crate::common::{p3dp, recipe, root, tmp, Move};
 use glam::DVec3;
-use p3dp::app::prepare::{plan, Options};
-use p3dp::base::toolpath::{Event, Toolpath};
-use p3dp::machine::{Bed, Printer};
-use p3dp::recipe::profile::built_in_names;
+use p3dp::printers as built_in_names;
+use p3dp::{plan, Options};
+use p3dp::{Bed, Printer};
+use p3dp::{Event, Toolpath};
 
 const PROFILES: [&str; 6] = [
     "generic-220",
@@ -475,7 +475,7 @@ fn events_and_firmware_retraction_in_each_dialect() {
         tp.event(Event::Fan { speed: 0.0 });
         tp.name = "events".into();
         pl.paths = vec![tp];
-        let (bytes, _) = p3dp::app::pipeline::write(&pl, Vec::new()).unwrap();
+        let (bytes, _) = p3dp::pipeline::write(&pl, Vec::new()).unwrap();
         let text = String::from_utf8(bytes).unwrap();
         check_dialect(&text, pl.recipe.printer.flavor.name());
         for want in [pause, heat, fan] {
@@ -550,8 +550,8 @@ fn arcs_follow_the_strings(recipe_name: &str, profile: &str) -> (usize, usize) {
     };
     let mut plain = arcs.clone();
     plain.recipe.printer = plain_printer;
-    let (a_bytes, a_stats) = p3dp::app::pipeline::write(&arcs, Vec::new()).unwrap();
-    let (p_bytes, p_stats) = p3dp::app::pipeline::write(&plain, Vec::new()).unwrap();
+    let (a_bytes, a_stats) = p3dp::pipeline::write(&arcs, Vec::new()).unwrap();
+    let (p_bytes, p_stats) = p3dp::pipeline::write(&plain, Vec::new()).unwrap();
     let (a_text, p_text) = (
         String::from_utf8(a_bytes).unwrap(),
         String::from_utf8(p_bytes).unwrap(),

@@ -13,8 +13,8 @@ use std::f64::consts::PI;
 
 use crate::common::*;
 use glam::{DVec2, DVec3};
-use p3dp::analyse::check::Severity;
-use p3dp::analyse::plan::Plan;
+use p3dp::Plan;
+use p3dp::Severity;
 
 /// Nozzle width of generic-220, mm.
 const NOZZLE: f64 = 0.4;
@@ -199,15 +199,14 @@ struct Pieces {
 }
 
 fn load(sets: &[(&str, &str)]) -> Pieces {
-    let opts = p3dp::app::prepare::Options {
+    let opts = p3dp::Options {
         sets: sets
             .iter()
             .map(|(k, v)| (k.to_string(), v.to_string()))
             .collect(),
         ..Default::default()
     };
-    let plan = p3dp::app::prepare::plan(&recipe("olympic-rings.yaml"), &opts)
-        .unwrap_or_else(|e| panic!("{e}"));
+    let plan = p3dp::plan(&recipe("olympic-rings.yaml"), &opts).unwrap_or_else(|e| panic!("{e}"));
     let layer = plan.recipe.params["layer"];
     let mut parts = Vec::new();
     for (k, tp) in plan.paths.iter().enumerate() {

@@ -5,17 +5,14 @@
 use crate::common::*;
 use glam::DVec3;
 
-pub(crate) fn build(
-    recipe_name: &str,
-    printer: Option<&str>,
-) -> (String, p3dp::analyse::stats::Stats) {
-    let opts = p3dp::app::prepare::Options {
+pub(crate) fn build(recipe_name: &str, printer: Option<&str>) -> (String, p3dp::Stats) {
+    let opts = p3dp::Options {
         printer: printer.map(str::to_string),
         ..Default::default()
     };
-    let plan = p3dp::app::prepare::plan(&recipe(recipe_name), &opts).unwrap();
+    let plan = p3dp::plan(&recipe(recipe_name), &opts).unwrap();
     let mut out = Vec::new();
-    let stats = p3dp::app::pipeline::render(&plan, &mut out).unwrap();
+    let stats = p3dp::pipeline::render(&plan, &mut out).unwrap();
     (String::from_utf8(out).unwrap(), stats)
 }
 

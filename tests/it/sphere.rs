@@ -63,7 +63,7 @@ fn every_extruding_point_lies_on_the_sphere() {
 #[test]
 fn summed_e_equals_c_times_l_over_filament_area() {
     // Σ c·L / (pi (d/2)²) over the strings, from the library, against the E the G-code feeds
-    let plan = p3dp::app::prepare::plan(&recipe("sphere.yaml"), &Default::default()).unwrap();
+    let plan = p3dp::plan(&recipe("sphere.yaml"), &Default::default()).unwrap();
     let area = std::f64::consts::PI * (1.75f64 / 2.0).powi(2);
     let expected: f64 = plan.paths.iter().map(|t| t.volume()).sum::<f64>() / area;
     let dir = tmp("sphere-e");

@@ -3,8 +3,8 @@
 //! split among threads.
 
 use crate::common::*;
-use p3dp::app::pipeline::{self, Threads};
-use p3dp::app::prepare::{plan, prepare};
+use p3dp::pipeline::{self, Threads};
+use p3dp::{plan, prepare};
 
 /// A scaled-down `benches/vase-2m.yaml`: 60 turns of 1000 strings, so the
 /// deform step (60,000 points and strings) is well above `PAR_MIN` (8,192).

@@ -49,10 +49,10 @@ const TILE: usize = 16;
 /// Most squares in the map.
 const MAX_CELLS: f64 = 2.0e6;
 /// Path the nozzle travels before the filament it laid is mapped, mm.
-pub const LAG: f64 = 2.0;
+pub(crate) const LAG: f64 = 2.0;
 
 /// Highest filament centre line over each square of the print.
-pub struct HeightMap {
+pub(crate) struct HeightMap {
     origin: DVec2,
     cell: f64,
     nx: usize,
@@ -70,7 +70,7 @@ pub struct HeightMap {
 
 /// A square of the map holding filament above a threshold.
 #[derive(Clone, Copy, Debug)]
-pub struct Hit {
+pub(crate) struct Hit {
     /// The highest filament over the square.
     pub at: DVec3,
     /// Distance from the query point to it, sideways, mm.
@@ -81,7 +81,7 @@ pub struct Hit {
 
 impl HeightMap {
     /// An empty map over `lo`..`hi` (XY).
-    pub fn new(lo: DVec2, hi: DVec2) -> HeightMap {
+    pub(crate) fn new(lo: DVec2, hi: DVec2) -> HeightMap {
         let size = (hi - lo).max(DVec2::ZERO);
         let mut cell = CELL;
         while (size.x / cell + 3.0) * (size.y / cell + 3.0) > MAX_CELLS {
@@ -106,7 +106,7 @@ impl HeightMap {
     }
 
     /// Side of the squares, mm.
-    pub fn cell(&self) -> f64 {
+    pub(crate) fn cell(&self) -> f64 {
         self.cell
     }
 
@@ -120,7 +120,7 @@ impl HeightMap {
     }
 
     /// Maps string a–b (its centre line, sampled every half square).
-    pub fn deposit(&mut self, a: DVec3, b: DVec3, src: (u32, u32)) {
+    pub(crate) fn deposit(&mut self, a: DVec3, b: DVec3, src: (u32, u32)) {
         let n = libm::ceil(2.0 * a.truncate().distance(b.truncate()) / self.cell).clamp(1.0, 1e7)
             as usize;
         for i in 0..=n {
@@ -142,7 +142,7 @@ impl HeightMap {
 
     /// The first square (in a fixed order) over the rectangle `lo`..`hi`
     /// holding filament higher than `above` for which `hits` says yes.
-    pub fn find(
+    pub(crate) fn find(
         &self,
         lo: DVec2,
         hi: DVec2,
@@ -336,7 +336,7 @@ impl Walk<'_> {
 }
 
 /// The `nozzle-collision` and `head-collision` findings.
-pub fn check(recipe: &Recipe, paths: &[&Toolpath]) -> Vec<Finding> {
+pub(crate) fn check(recipe: &Recipe, paths: &[&Toolpath]) -> Vec<Finding> {
     let mut out = Vec::new();
     walk(recipe, paths, &mut out);
     out

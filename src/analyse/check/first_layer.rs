@@ -65,7 +65,7 @@ fn band(c: f64, h: f64, nozzle: f64) -> f64 {
 }
 
 /// Side of the squares the contact area is measured on, mm.
-pub const CELL: f64 = 0.025;
+pub(crate) const CELL: f64 = 0.025;
 
 /// Squares per side of a tile of the [`Cover`].
 const TILE: i64 = 64;
@@ -246,7 +246,7 @@ struct Candidate {
 /// The strings of some paths low enough to touch the bed, in print order
 /// (the work both halves of the check share: [`Bed::areas`] and
 /// [`Bed::contacts`], which may run on two threads).
-pub struct Bed {
+pub(crate) struct Bed {
     cands: Vec<Candidate>,
     /// Path j's candidates are `cands[starts[j]..starts[j + 1]]`.
     starts: Vec<usize>,
@@ -254,7 +254,7 @@ pub struct Bed {
 
 /// A path's contact with the bed, less its area (see [`Bed::contacts`]).
 #[derive(Clone, Debug)]
-pub struct Contact {
+pub(crate) struct Contact {
     /// Length of the strings lying on the bed, mm.
     length: f64,
     /// Their bounding rectangle, seen from above.
@@ -284,7 +284,7 @@ impl Contact {
 impl Bed {
     /// Every string of `paths` low enough to touch the bed, for a nozzle of
     /// this diameter.
-    pub fn of(paths: &[&Toolpath], nozzle: f64) -> Bed {
+    pub(crate) fn of(paths: &[&Toolpath], nozzle: f64) -> Bed {
         let mut cands: Vec<Candidate> = Vec::new();
         let mut starts = Vec::with_capacity(paths.len() + 1);
         for (j, tp) in paths.iter().enumerate() {
@@ -343,7 +343,7 @@ impl Bed {
     /// Per path, the bed squares its bands cover that no earlier path's do
     /// (the union of the capsules of width c / h round its strings; see the
     /// module's comment).
-    pub fn areas(&self, paths: &[&Toolpath], nozzle: f64) -> Vec<u64> {
+    pub(crate) fn areas(&self, paths: &[&Toolpath], nozzle: f64) -> Vec<u64> {
         let mut painted = crate::base::geom::grid::CellSet::default();
         let mut cover = Cover::default();
         (0..paths.len())
@@ -374,7 +374,7 @@ impl Bed {
     /// w / 2, seen from above (so a second layer at 0.4 mm, on the first,
     /// does not count, nor a helix's second turn, nor a pass over the same
     /// line at the same height: that bed is covered already).
-    pub fn contacts(&self, paths: &[&Toolpath], min_h: f64) -> Vec<Option<Contact>> {
+    pub(crate) fn contacts(&self, paths: &[&Toolpath], min_h: f64) -> Vec<Option<Contact>> {
         // seen from above (z = 0): only the strings kept (not covered
         // themselves) cover later ones, so only they are listed, as they are
         // kept; a grid of every candidate made a path retracing one line a
@@ -426,7 +426,7 @@ impl Bed {
 /// The `first-layer` findings (a warning per part where the nozzle runs too
 /// close to the bed, and small contacts), and the footprints of the paths
 /// that touch the bed, in print order, for the stats.
-pub fn check(recipe: &Recipe, paths: &[&Toolpath]) -> (Vec<Finding>, Vec<Footprint>) {
+pub(crate) fn check(recipe: &Recipe, paths: &[&Toolpath]) -> (Vec<Finding>, Vec<Footprint>) {
     let nozzle = recipe.printer.nozzle_diameter;
     let bed = Bed::of(paths, nozzle);
     let contacts = bed.contacts(paths, min_height(recipe));
@@ -435,13 +435,13 @@ pub fn check(recipe: &Recipe, paths: &[&Toolpath]) -> (Vec<Finding>, Vec<Footpri
 }
 
 /// The nozzle height under which a bed string scrapes the bed, mm.
-pub fn min_height(recipe: &Recipe) -> f64 {
+pub(crate) fn min_height(recipe: &Recipe) -> f64 {
     recipe.printer.checks.first_layer_min * recipe.printer.nozzle_diameter
 }
 
 /// [`check`] from the two halves of its work, [`Bed::contacts`] and
 /// [`Bed::areas`] of `paths`: the same findings and footprints.
-pub fn findings(
+pub(crate) fn findings(
     recipe: &Recipe,
     paths: &[&Toolpath],
     contacts: &[Option<Contact>],

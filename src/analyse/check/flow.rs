@@ -63,7 +63,7 @@ impl Tally {
 }
 
 /// The `over-extrusion` and `thin-string` findings of one path.
-pub fn cross_sections(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) {
+pub(crate) fn cross_sections(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) {
     let p = &recipe.printer;
     let n2 = p.nozzle_diameter * p.nozzle_diameter;
     let lim = &p.checks;

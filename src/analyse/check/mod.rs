@@ -9,23 +9,23 @@
 //! filament: [`collision`]), the flow a hot end can melt and lay ([`flow`]),
 //! and runs of moves too short for the firmware's planner ([`starvation`]).
 
-pub mod collision;
-pub mod first_layer;
-pub mod flow;
-pub mod pattern;
-pub mod starvation;
-pub mod support;
+pub(crate) mod collision;
+pub(crate) mod first_layer;
+pub(crate) mod flow;
+pub(crate) mod pattern;
+pub(crate) mod starvation;
+pub(crate) mod support;
 
 use glam::DVec3;
 
-pub use crate::base::finding::{
+pub(crate) use crate::base::finding::{
     apply_allow, failing, is_code, summary, validate_allow, Finding, Severity, CODES, SAFETY,
 };
 
 use crate::base::toolpath::Toolpath;
 use crate::generate::model::Recipe;
 
-pub use crate::machine::{CheckLimits, Head};
+pub(crate) use crate::machine::{CheckLimits, Head};
 
 pub(crate) fn fmt_p(p: DVec3) -> String {
     format!("({:.3}, {:.3}, {:.3})", p.x, p.y, p.z)
@@ -41,7 +41,7 @@ pub(crate) fn fmt_p(p: DVec3) -> String {
 /// of the parts, independent of each other ([`Costly`] lists them), so the
 /// application may run them side by side; [`merge`] puts their findings in
 /// one fixed order.
-pub fn run(
+pub(crate) fn run(
     recipe: &Recipe,
     paths: &[&Toolpath],
     allowed: &[String],
@@ -54,7 +54,7 @@ pub fn run(
 /// What the cheap checks found (one pass over each part's points and
 /// strings): the machine's limits, speeds and flows, cross-sections, events;
 /// the pattern helix's parameters.
-pub struct Cheap {
+pub(crate) struct Cheap {
     /// Their findings, in order.
     pub findings: Vec<Finding>,
     /// The pattern helix's, put last when merged.
@@ -66,7 +66,7 @@ pub struct Cheap {
 
 /// The cheap checks of `paths`; `allowed` are the codes silenced (an error
 /// of theirs does not stop the costly checks).
-pub fn cheap(recipe: &Recipe, paths: &[&Toolpath], allowed: &[String]) -> Cheap {
+pub(crate) fn cheap(recipe: &Recipe, paths: &[&Toolpath], allowed: &[String]) -> Cheap {
     let mut out = Vec::new();
     temperatures(recipe, &mut out);
     // the geometric checks need finite points within reach (others are
@@ -96,7 +96,7 @@ pub fn cheap(recipe: &Recipe, paths: &[&Toolpath], allowed: &[String]) -> Cheap 
 /// first layer's two halves ([`first_layer::Bed::contacts`] and
 /// [`first_layer::Bed::areas`], put together by [`first_layer::findings`]).
 #[derive(Default)]
-pub struct Costly {
+pub(crate) struct Costly {
     /// Runs of moves too short for the firmware's planner.
     pub starvation: Vec<Finding>,
     /// The first layer's hold on the bed.
@@ -112,7 +112,7 @@ pub struct Costly {
 impl Costly {
     /// Every costly check, one after the other; the geometric ones only when
     /// `geometric` (see [`Cheap::geometric`]).
-    pub fn run(recipe: &Recipe, paths: &[&Toolpath], geometric: bool) -> Costly {
+    pub(crate) fn run(recipe: &Recipe, paths: &[&Toolpath], geometric: bool) -> Costly {
         let mut c = Costly {
             starvation: starvation::check(recipe, paths),
             ..Costly::default()
@@ -129,7 +129,7 @@ impl Costly {
 /// Every finding in the one fixed order (the cheap checks', starvation,
 /// first layer, support, collision, the pattern helix's) and the parts'
 /// footprints.
-pub fn merge(cheap: Cheap, costly: Costly) -> (Vec<Finding>, Vec<first_layer::Footprint>) {
+pub(crate) fn merge(cheap: Cheap, costly: Costly) -> (Vec<Finding>, Vec<first_layer::Footprint>) {
     let mut out = cheap.findings;
     for v in [
         costly.starvation,
@@ -146,7 +146,7 @@ pub fn merge(cheap: Cheap, costly: Costly) -> (Vec<Finding>, Vec<first_layer::Fo
 /// Temperature events (a turtle's `nozzle_temp`, `bed_temp`) above the limits: a nozzle temperature above the
 /// material's or printer's limit (`nozzle-temp`), a bed temperature above the
 /// printer's (`bed-temp`); one finding per part and kind, naming the first.
-pub fn events(recipe: &Recipe, tp: &Toolpath) -> Vec<Finding> {
+pub(crate) fn events(recipe: &Recipe, tp: &Toolpath) -> Vec<Finding> {
     let (m, p) = (&recipe.material, &recipe.printer);
     let nozzle_max = m.max_nozzle_temp.min(p.max_nozzle_temp);
     let mut out = Vec::new();

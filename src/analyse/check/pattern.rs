@@ -14,7 +14,7 @@ fn outside(v: f64, lo: f64, hi: f64) -> bool {
 
 /// The `pattern-range` and `pattern-modulated` warnings of every
 /// `pattern_helix` part; `paths` are the skirt (if any) then the parts.
-pub fn findings(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) {
+pub(crate) fn findings(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) {
     let offset = paths.len().saturating_sub(recipe.parts.len());
     for (k, part) in recipe.parts.iter().enumerate() {
         let Some(p) = part.primitives().find_map(|p| match p {

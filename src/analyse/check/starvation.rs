@@ -21,7 +21,7 @@ use crate::base::toolpath::Toolpath;
 use crate::generate::model::Recipe;
 
 /// Losses below this (s) are not reported.
-pub const MIN_LOSS: f64 = 1.0;
+pub(crate) const MIN_LOSS: f64 = 1.0;
 
 /// Runs of starving moves of one part.
 #[derive(Default)]
@@ -65,7 +65,7 @@ impl Runs {
 }
 
 /// The `starvation` warnings.
-pub fn check(recipe: &Recipe, paths: &[&Toolpath]) -> Vec<Finding> {
+pub(crate) fn check(recipe: &Recipe, paths: &[&Toolpath]) -> Vec<Finding> {
     let mut out = Vec::new();
     scan(recipe, paths, &mut out);
     out

@@ -39,14 +39,14 @@ use crate::generate::model::Recipe;
 
 /// Width of a string of cross-section `c`: a round bead's diameter, at least the nozzle's.
 #[inline]
-pub fn width(c: f64, nozzle: f64) -> f64 {
+pub(crate) fn width(c: f64, nozzle: f64) -> f64 {
     (2.0 * (c.max(0.0) / std::f64::consts::PI).sqrt()).max(nozzle)
 }
 
 /// [`width`] of strings taken in turn, worked out again only when the
 /// cross-section changes (strings in a row mostly share one: a square root
 /// and a division saved on each); the same bits in, the same width out.
-pub struct Widths {
+pub(crate) struct Widths {
     nozzle: f64,
     /// The last cross-section and its width.
     last: (f64, f64),
@@ -54,7 +54,7 @@ pub struct Widths {
 
 impl Widths {
     /// Widths for a nozzle of this diameter.
-    pub fn new(nozzle: f64) -> Widths {
+    pub(crate) fn new(nozzle: f64) -> Widths {
         Widths {
             nozzle,
             last: (f64::NAN, width(f64::NAN, nozzle)),
@@ -63,7 +63,7 @@ impl Widths {
 
     /// [`width`] of a string of cross-section `c`.
     #[inline]
-    pub fn of(&mut self, c: f64) -> f64 {
+    pub(crate) fn of(&mut self, c: f64) -> f64 {
         if c.to_bits() != self.last.0.to_bits() {
             self.last = (c, width(c, self.nozzle));
         }
@@ -85,7 +85,7 @@ const MAX_NEAR: usize = 32768;
 const GAP_BUDGET: usize = 20_000;
 
 /// The extruding strings of all paths in print order, and the grid over them.
-pub struct Deposits<'a> {
+pub(crate) struct Deposits<'a> {
     /// The paths, in print order.
     pub paths: &'a [&'a Toolpath],
     /// (path, string) of each extruding string of nonzero length, in print
@@ -109,7 +109,7 @@ pub struct Deposits<'a> {
 
 impl<'a> Deposits<'a> {
     /// Lists and grids the extruding strings of `paths`.
-    pub fn new(paths: &'a [&'a Toolpath], nozzle: f64, tolerance: f64) -> Deposits<'a> {
+    pub(crate) fn new(paths: &'a [&'a Toolpath], nozzle: f64, tolerance: f64) -> Deposits<'a> {
         let total: usize = paths.iter().map(|tp| tp.len()).sum();
         let mut ids: Vec<(u32, u32)> = Vec::new();
         let (mut count, mut listed) = (0usize, false);
@@ -166,7 +166,7 @@ impl<'a> Deposits<'a> {
 
     /// Calls `f` on the deposits before `g` within `r` of `p` (see
     /// [`SegGrid::search`]), until it says stop; whether it did.
-    pub fn search(&self, p: DVec3, r: f64, g: u32, f: impl FnMut(u32) -> bool) -> bool {
+    pub(crate) fn search(&self, p: DVec3, r: f64, g: u32, f: impl FnMut(u32) -> bool) -> bool {
         let mut grid = self.grid.borrow_mut();
         if (g as usize) > grid.1 {
             // a helix mostly finds its support by coherence: grids are made
@@ -179,14 +179,14 @@ impl<'a> Deposits<'a> {
 
     /// Ends of deposit i.
     #[inline]
-    pub fn ends(&self, i: u32) -> (DVec3, DVec3) {
+    pub(crate) fn ends(&self, i: u32) -> (DVec3, DVec3) {
         let (p, k) = self.id(i);
         self.paths[p as usize].ends(k as usize)
     }
 
     /// (path, string) of deposit `j`.
     #[inline]
-    pub fn id(&self, j: u32) -> (u32, u32) {
+    pub(crate) fn id(&self, j: u32) -> (u32, u32) {
         if self.ids.is_empty() {
             (0, j)
         } else {
@@ -194,14 +194,10 @@ impl<'a> Deposits<'a> {
         }
     }
 
+    #[cfg(test)]
     /// How many deposits there are.
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.count
-    }
-
-    /// Whether there are none.
-    pub fn is_empty(&self) -> bool {
-        self.count == 0
     }
 }
 
@@ -272,7 +268,7 @@ impl Tally {
 
 /// The support check: `unsupported` and `bridge` findings, one per part and
 /// kind.
-pub fn check(recipe: &Recipe, paths: &[&Toolpath]) -> Vec<Finding> {
+pub(crate) fn check(recipe: &Recipe, paths: &[&Toolpath]) -> Vec<Finding> {
     let mut out = Vec::new();
     let p = &recipe.printer;
     let dep = Deposits::new(paths, p.nozzle_diameter, p.checks.support_tolerance);
@@ -294,7 +290,7 @@ pub fn check(recipe: &Recipe, paths: &[&Toolpath]) -> Vec<Finding> {
 }
 
 /// The filament's cross-section, mm² (the material's diameter, else the printer's).
-pub fn filament_area(recipe: &Recipe) -> f64 {
+pub(crate) fn filament_area(recipe: &Recipe) -> f64 {
     let d = recipe
         .material
         .filament_diameter

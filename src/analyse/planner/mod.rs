@@ -53,14 +53,14 @@ use junction::Turn;
 use klipper::{klipper_passes, Mcr};
 use marlin::{Queue, SETTLE};
 
-pub use crate::machine::kinematics::{
+pub(crate) use crate::machine::kinematics::{
     Kinematics, Limits, KLIPPER_MINIMUM_CRUISE_RATIO, MARLIN_JUNCTION_DEVIATION,
     MARLIN_MIN_SEGMENT_TIME,
 };
 
 /// What a move is, which chooses its acceleration.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum MoveKind {
+pub(crate) enum MoveKind {
     /// An extruding move (G1 with E): `max_acceleration`.
     Extrude,
     /// A travel move (G0): `travel_acceleration`.
@@ -180,7 +180,7 @@ struct Part {
 }
 
 /// Collects the moves of a print and plans them (see the module comment).
-pub struct Planner {
+pub(crate) struct Planner {
     limits: Limits,
     blocks: Vec<Block>,
     /// Under Klipper's model, each block's [`Mcr`]; empty under Marlin's.
@@ -213,7 +213,7 @@ pub struct Planner {
 
 impl Planner {
     /// A planner with these limits, the head at an unknown place.
-    pub fn new(limits: Limits) -> Planner {
+    pub(crate) fn new(limits: Limits) -> Planner {
         Planner {
             blocks: Vec::new(),
             mcr: Vec::new(),
@@ -235,12 +235,12 @@ impl Planner {
     }
 
     /// The limits in use.
-    pub fn limits(&self) -> &Limits {
+    pub(crate) fn limits(&self) -> &Limits {
         &self.limits
     }
 
     /// Moves from now on belong to part `name` (parts are consecutive).
-    pub fn begin_part(&mut self, name: &str) {
+    pub(crate) fn begin_part(&mut self, name: &str) {
         self.parts.push(Part {
             name: name.to_string(),
             first: self.done + self.blocks.len(),
@@ -279,13 +279,13 @@ impl Planner {
 
     /// The head comes to rest here (a pause, a wait, a dwell): the next move
     /// starts from rest.
-    pub fn stop(&mut self) {
+    pub(crate) fn stop(&mut self) {
         self.last = None;
         self.drain(0.0);
     }
 
     /// The head stands still for `seconds` (e.g. `G4`): counted in every time.
-    pub fn dwell(&mut self, seconds: f64) {
+    pub(crate) fn dwell(&mut self, seconds: f64) {
         self.last = None;
         self.drain(seconds.max(0.0));
         if seconds > 0.0 {
@@ -313,7 +313,7 @@ impl Planner {
     /// position; a move of E alone (`to` where the head is, `e` > 0) is an
     /// E-only block at `feed` with `retract_acceleration`, from rest to rest;
     /// a move of nothing is skipped.
-    pub fn move_to(&mut self, to: DVec3, e: f64, feed: f64, kind: MoveKind) {
+    pub(crate) fn move_to(&mut self, to: DVec3, e: f64, feed: f64, kind: MoveKind) {
         let step = self.step(to, kind);
         self.take(step, e, feed, kind);
     }
@@ -444,7 +444,7 @@ impl Planner {
     /// whose moves do not wait on each other, so the processor overlaps
     /// their square roots and divisions), then is taken. The same
     /// operations on the same values, so the same estimate.
-    pub fn replay(&mut self, calls: &[Call]) {
+    pub(crate) fn replay(&mut self, calls: &[Call]) {
         let mut steps = std::mem::take(&mut self.steps);
         for run in calls.chunks(STEPS) {
             steps.clear();
@@ -469,7 +469,7 @@ impl Planner {
 
     /// A move of E alone (retraction, unretraction), `length` mm of filament
     /// at `feed` mm/s: from rest to rest, as Klipper plans extrude-only moves.
-    pub fn extrude_only(&mut self, length: f64, feed: f64) {
+    pub(crate) fn extrude_only(&mut self, length: f64, feed: f64) {
         let length = length.abs();
         if length <= 0.0 || !length.is_finite() {
             return;
@@ -517,7 +517,7 @@ impl Planner {
     }
 
     /// Plans every move (the passes of the module comment) and sums the times.
-    pub fn finish(mut self) -> Estimate {
+    pub(crate) fn finish(mut self) -> Estimate {
         if self.limits.square_corner_velocity.is_some() {
             let mut ends: Vec<usize> = self.parts.iter().map(|p| p.first).collect();
             ends.push(self.blocks.len());
@@ -570,7 +570,7 @@ impl Planner {
 /// otherwise a trapezoid: (vc − v0)/a + (vc − v1)/a plus the cruise
 /// L − (2vc² − v0² − v1²)/(2a) = (vp² − vc²)/a long at vc. Differences of
 /// speeds are written as differences of squares over sums, exact when close.
-pub fn trapezoid_time(len: f64, a: f64, v0_2: f64, v1_2: f64, vc_2: f64) -> f64 {
+pub(crate) fn trapezoid_time(len: f64, a: f64, v0_2: f64, v1_2: f64, vc_2: f64) -> f64 {
     if len <= 0.0 {
         return 0.0;
     }
@@ -589,7 +589,7 @@ pub fn trapezoid_time(len: f64, a: f64, v0_2: f64, v1_2: f64, vc_2: f64) -> f64 
 
 /// Where the G-code writer's moves go, in the order it writes them: a
 /// [`Planner`], or a [`Call`] list that one replays later (elsewhere).
-pub trait Moves {
+pub(crate) trait Moves {
     /// See [`Planner::begin_part`].
     fn begin_part(&mut self, name: &str);
     /// See [`Planner::stop`].
@@ -623,7 +623,7 @@ impl Moves for Planner {
 /// One call on a [`Planner`], recorded to [`Planner::replay`] later: the
 /// same calls in the same order give the same estimate.
 #[derive(Clone, Debug)]
-pub enum Call {
+pub(crate) enum Call {
     /// [`Planner::begin_part`].
     BeginPart(String),
     /// [`Planner::stop`].

@@ -16,7 +16,7 @@ use crate::output::file::{write_atomic, AtomicFile};
 
 /// What `build` takes from the command line.
 #[derive(Clone, Debug, Default)]
-pub struct Options {
+pub(crate) struct Options {
     /// The recipes and how each is built.
     pub builds: Builds,
     /// `-o`: a file; a folder with several recipes; `-` for standard output.
@@ -405,7 +405,7 @@ fn report_builds(jobs: &[Job], results: &[Built], preview_lines: &[String]) {
 }
 
 /// `p3dp build`: writes G-code and prints a report per job.
-pub fn run(a: &Options) -> Vec<Error> {
+pub(crate) fn run(a: &Options) -> Vec<Error> {
     let Prepared {
         jobs,
         targets,

@@ -5,7 +5,7 @@ use crate::app::batch;
 use crate::base::error::Error;
 
 /// `p3dp check`: runs every check and prints the findings; writes nothing.
-pub fn run(c: &Builds) -> Vec<Error> {
+pub(crate) fn run(c: &Builds) -> Vec<Error> {
     let jobs = match c.jobs() {
         Ok(j) => j,
         Err(e) => return vec![e],

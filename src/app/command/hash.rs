@@ -14,7 +14,7 @@ use crate::recipe::{parse_set, parse_yaml};
 
 /// What `hash` takes from the command line.
 #[derive(Clone, Debug, Default)]
-pub struct Options {
+pub(crate) struct Options {
     /// The recipes and how each is built.
     pub builds: Builds,
     /// `--lock FILE`: write the hashes there.
@@ -47,7 +47,7 @@ fn fingerprint(c: &Builds, job: &Job) -> Result<(String, LineHashes)> {
 
 /// `p3dp hash`: prints `SHA256  RECIPE`, the hash of exactly what `build` writes;
 /// with `--lock` writes a lock file, with `--check` verifies one.
-pub fn run(a: &Options) -> Vec<Error> {
+pub(crate) fn run(a: &Options) -> Vec<Error> {
     if let Some(lockfile) = &a.check {
         return check_lock(a, lockfile);
     }

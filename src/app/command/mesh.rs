@@ -8,7 +8,7 @@ use crate::base::error::{Error, Result};
 
 /// What `mesh` takes from the command line.
 #[derive(Clone, Debug, Default)]
-pub struct Options {
+pub(crate) struct Options {
     /// The one recipe and how it is built.
     pub builds: Builds,
     /// `-o FILE.stl|FILE.3mf|FILE.obj` (default ./NAME.stl).
@@ -16,7 +16,7 @@ pub struct Options {
 }
 
 /// Writes the mesh; the errors met.
-pub fn run(a: &Options) -> Vec<Error> {
+pub(crate) fn run(a: &Options) -> Vec<Error> {
     match write(a) {
         Ok(()) => Vec::new(),
         Err(e) => vec![e],

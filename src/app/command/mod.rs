@@ -2,13 +2,13 @@
 //! makes them: [`crate::app::cli`]) to what they print and write; each
 //! returns the errors it met, one per failed job.
 
-pub mod build;
-pub mod check;
-pub mod hash;
-pub mod mesh;
-pub mod new;
-pub mod preview;
-pub mod printers;
+pub(crate) mod build;
+pub(crate) mod check;
+pub(crate) mod hash;
+pub(crate) mod mesh;
+pub(crate) mod new;
+pub(crate) mod preview;
+pub(crate) mod printers;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -24,7 +24,7 @@ use crate::recipe::{parse_yaml, RawRecipe};
 /// What the builds of a command take from the command line: the recipes,
 /// each built once per combination of the sweeps' values.
 #[derive(Clone, Debug, Default)]
-pub struct Builds {
+pub(crate) struct Builds {
     /// Recipe files.
     pub recipes: Vec<PathBuf>,
     /// `--set NAME=VALUE`, in order.
@@ -113,7 +113,7 @@ pub(crate) fn plural(n: usize) -> &'static str {
 }
 
 /// A file name made of the recipe name: letters, digits, `.`, `_` and `-`.
-pub fn file_stem(name: &str) -> String {
+pub(crate) fn file_stem(name: &str) -> String {
     name.chars()
         .map(|c| {
             if c.is_ascii_alphanumeric() || "._-".contains(c) {
@@ -126,7 +126,7 @@ pub fn file_stem(name: &str) -> String {
 }
 
 /// `name_param-value_…`: the file stem of a sweep variant.
-pub fn variant_stem(name: &str, sweep: &[(String, String)]) -> String {
+pub(crate) fn variant_stem(name: &str, sweep: &[(String, String)]) -> String {
     let mut s = file_stem(name);
     for (n, v) in sweep {
         s.push_str(&format!("_{}-{}", file_stem(n), file_stem(v)));
@@ -201,12 +201,12 @@ pub(crate) fn stage(file: &Path, bytes: &[u8]) -> Result<AtomicFile> {
 }
 
 /// Bytes to standard output, as they are (a closed pipe ends quietly).
-pub fn print(bytes: &[u8]) {
+pub(crate) fn print(bytes: &[u8]) {
     let _ = crate::output::file::Stdout.write_all(bytes);
 }
 
 /// `p3dp schema`: the JSON Schema of the recipe format.
-pub fn schema() {
+pub(crate) fn schema() {
     let s = crate::recipe::schema::json_schema();
     crate::sayln!(
         "{}",

@@ -8,7 +8,7 @@ use crate::base::error::{Error, Result};
 
 /// The starter recipes of `p3dp new --from KIND`: each kind and its text,
 /// with `__NAME__` where the recipe's name goes.
-pub const STARTERS: &[(&str, &str)] = &[
+pub(crate) const STARTERS: &[(&str, &str)] = &[
     ("sphere", include_str!("../starters/sphere.yaml")),
     ("globe", include_str!("../starters/globe.yaml")),
     ("plate", include_str!("../starters/plate.yaml")),
@@ -17,7 +17,7 @@ pub const STARTERS: &[(&str, &str)] = &[
 ];
 
 /// The text of starter `from` for a recipe called `name`, built from `file`.
-pub fn starter_text(name: &str, from: &str, file: &str) -> Result<String> {
+pub(crate) fn starter_text(name: &str, from: &str, file: &str) -> Result<String> {
     let text = STARTERS
         .iter()
         .find(|(k, _)| *k == from)
@@ -48,7 +48,7 @@ pub fn starter_text(name: &str, from: &str, file: &str) -> Result<String> {
 /// `p3dp new NAME [--from KIND]`: writes the starter recipe `NAME.yaml` (or
 /// NAME itself when it ends in `.yaml`/`.yml`), never over an existing file;
 /// returns the line to print.
-pub fn write(name: &str, from: &str) -> Result<String> {
+pub(crate) fn write(name: &str, from: &str) -> Result<String> {
     let path = if name.ends_with(".yaml") || name.ends_with(".yml") {
         PathBuf::from(name)
     } else {

@@ -12,7 +12,7 @@ use crate::output::preview::{ColorMode, View};
 
 /// What `preview` takes from the command line.
 #[derive(Clone, Debug, Default)]
-pub struct Options {
+pub(crate) struct Options {
     /// The one recipe and how it is built.
     pub builds: Builds,
     /// `-o FILE.png|FILE.html` (default ./NAME.png).
@@ -28,7 +28,7 @@ pub struct Options {
 }
 
 /// Draws the preview; the errors met.
-pub fn run(a: &Options) -> Vec<Error> {
+pub(crate) fn run(a: &Options) -> Vec<Error> {
     match draw(a) {
         Ok(()) => Vec::new(),
         Err(e) => vec![e],

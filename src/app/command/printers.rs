@@ -2,7 +2,7 @@
 
 /// `p3dp printers`: one line per built-in profile (name, flavour, bed,
 /// origin of recipe (0, 0, 0), nozzle and filament), under a header line.
-pub fn list() -> String {
+pub(crate) fn list() -> String {
     use crate::base::format::fmt_num;
     use crate::machine::Printer;
     use crate::recipe::profile::built_in_names;

@@ -31,17 +31,17 @@ use glam::{DVec2, DVec3};
 use crate::base::toolpath::Toolpath;
 
 /// Fewest strings an arc replaces.
-pub const MIN_STRINGS: usize = 3;
+pub(crate) const MIN_STRINGS: usize = 3;
 /// Largest angle of one string on an arc, radians.
-pub const MAX_STEP: f64 = std::f64::consts::PI / 8.0;
+pub(crate) const MAX_STEP: f64 = std::f64::consts::PI / 8.0;
 /// Largest angle one arc sweeps, radians (three quarters of a turn).
-pub const MAX_SWEEP: f64 = 1.5 * std::f64::consts::PI;
+pub(crate) const MAX_SWEEP: f64 = 1.5 * std::f64::consts::PI;
 /// Smallest arc radius at any tolerance, mm.
-pub const MIN_RADIUS: f64 = 0.3;
+pub(crate) const MIN_RADIUS: f64 = 0.3;
 
 /// How a firmware cuts a `G2`/`G3` into straight moves.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Firmware {
+pub(crate) struct Firmware {
     /// Longest chord, mm (Marlin's MAX_ARC_SEGMENT_MM, Klipper's
     /// `[gcode_arcs] resolution`).
     pub max_chord: f64,
@@ -55,7 +55,7 @@ impl Firmware {
     /// sagitta `r·(1 − cos(α/2))` of the chord angle α, the smaller of
     /// `2·asin(max_chord / 2r)` and a turn over `min_circle_segments`
     /// (about max_chord²/(8r) for large r).
-    pub fn sagitta(&self, r: f64) -> f64 {
+    pub(crate) fn sagitta(&self, r: f64) -> f64 {
         use std::f64::consts::PI;
         let mut alpha = 2.0 * libm::asin((self.max_chord / (2.0 * r)).min(1.0));
         if self.min_circle_segments > 0 {
@@ -65,14 +65,14 @@ impl Firmware {
     }
 }
 /// Largest arc radius, mm.
-pub const MAX_RADIUS: f64 = 1000.0;
+pub(crate) const MAX_RADIUS: f64 = 1000.0;
 /// Strings on one arc differ in cross-section and in speed by at most this
 /// factor from the run's first string (a larger change starts a new move).
-pub const RATE_TOLERANCE: f64 = 1.01;
+pub(crate) const RATE_TOLERANCE: f64 = 1.01;
 
 /// An arc (or helix turn) through points `start..=end` of a polyline.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Arc {
+pub(crate) struct Arc {
     /// Index of the first point.
     pub start: usize,
     /// Index of the last point (the arc replaces strings `start..end`).
@@ -96,7 +96,7 @@ pub struct Arc {
 impl Arc {
     /// The point at angle `phi` (0 to `sweep`) from the start: z is linear in
     /// the angle, as the firmware interpolates a helical `G2`/`G3`.
-    pub fn point_at(&self, phi: f64) -> DVec3 {
+    pub(crate) fn point_at(&self, phi: f64) -> DVec3 {
         let a = if self.ccw {
             self.theta0 + phi
         } else {
@@ -110,7 +110,7 @@ impl Arc {
     }
 
     /// Length of the helix, mm: sqrt((R·sweep)² + Δz²).
-    pub fn length(&self) -> f64 {
+    pub(crate) fn length(&self) -> f64 {
         let xy = self.radius * self.sweep;
         let dz = self.z1 - self.z0;
         (xy * xy + dz * dz).sqrt()
@@ -121,7 +121,7 @@ impl Arc {
 /// (nearly) on a line. The centre is where the perpendicular bisectors of
 /// a→b and a→c meet: with u = centre − a, `2 u·ab = |ab|²` and `2 u·ac = |ac|²`,
 /// solved by Cramer's rule.
-pub fn circle(a: DVec2, b: DVec2, c: DVec2) -> Option<(DVec2, f64)> {
+pub(crate) fn circle(a: DVec2, b: DVec2, c: DVec2) -> Option<(DVec2, f64)> {
     let ab = b - a;
     let ac = c - a;
     let d = 2.0 * (ab.x * ac.y - ab.y * ac.x);
@@ -149,7 +149,7 @@ fn wrap(x: f64) -> f64 {
 
 /// The arc through points `i..=j` of `pts` when it passes the tests of the
 /// module comment.
-pub fn try_arc(pts: &[DVec3], i: usize, j: usize, tol: f64, fw: Firmware) -> Option<Arc> {
+pub(crate) fn try_arc(pts: &[DVec3], i: usize, j: usize, tol: f64, fw: Firmware) -> Option<Arc> {
     if j < i + MIN_STRINGS || j >= pts.len() {
         return None;
     }
@@ -220,7 +220,7 @@ pub fn try_arc(pts: &[DVec3], i: usize, j: usize, tol: f64, fw: Firmware) -> Opt
 
 /// Fits arcs to the polyline `pts` (see the module comment): the arcs found,
 /// in order, not overlapping; the points between them stay lines.
-pub fn fit(pts: &[DVec3], tol: f64, fw: Firmware) -> Vec<Arc> {
+pub(crate) fn fit(pts: &[DVec3], tol: f64, fw: Firmware) -> Vec<Arc> {
     let mut arcs = Vec::new();
     if pts.len() <= MIN_STRINGS {
         return arcs;
@@ -262,7 +262,7 @@ pub fn fit(pts: &[DVec3], tol: f64, fw: Firmware) -> Vec<Arc> {
 /// The arcs of a part, with indices into `tp.points`: fitted to each run of
 /// extruding strings with no event inside and with cross-section and speed
 /// within [`RATE_TOLERANCE`] of the run's first string.
-pub fn fit_part(tp: &Toolpath, tol: f64, fw: Firmware) -> Vec<Arc> {
+pub(crate) fn fit_part(tp: &Toolpath, tol: f64, fw: Firmware) -> Vec<Arc> {
     let n = tp.len();
     let mut arcs = Vec::new();
     let mut k = 0;

@@ -13,7 +13,7 @@ use glam::DVec3;
 
 /// Segments in a hashed uniform grid.
 #[derive(Clone, Debug)]
-pub struct SegGrid {
+pub(crate) struct SegGrid {
     cell: f64,
     inv: f64,
     mask: u64,
@@ -26,7 +26,7 @@ pub struct SegGrid {
 /// when that rounded up (a negative fraction). The same for every f64: NaN
 /// is 0, and values past i64's range saturate as the cast does.
 #[inline]
-pub fn floor_i64(v: f64) -> i64 {
+pub(crate) fn floor_i64(v: f64) -> i64 {
     let t = v as i64;
     if (t as f64) > v {
         t.saturating_sub(1)
@@ -37,7 +37,7 @@ pub fn floor_i64(v: f64) -> i64 {
 
 /// `libm::ceil(v) as i64`, without the call (see [`floor_i64`]).
 #[inline]
-pub fn ceil_i64(v: f64) -> i64 {
+pub(crate) fn ceil_i64(v: f64) -> i64 {
     let t = v as i64;
     if (t as f64) < v {
         t.saturating_add(1)
@@ -48,7 +48,7 @@ pub fn ceil_i64(v: f64) -> i64 {
 
 /// Integer cube coordinates of `p` for cubes of side 1 / `inv`.
 #[inline]
-pub fn cube(p: DVec3, inv: f64) -> [i64; 3] {
+pub(crate) fn cube(p: DVec3, inv: f64) -> [i64; 3] {
     // clamped so that far-away points stay in range
     let f = |v: f64| floor_i64((v * inv).clamp(-1e15, 1e15));
     [f(p.x), f(p.y), f(p.z)]
@@ -68,7 +68,7 @@ impl SegGrid {
     /// `cell` (> 0). A segment is cut into pieces at most `cell / 2` long and
     /// listed in the cube of each piece's middle, so a segment lies within
     /// [`SegGrid::slack`] of a cube it is listed in.
-    pub fn build(n: usize, cell: f64, seg: impl Fn(usize) -> (DVec3, DVec3)) -> SegGrid {
+    pub(crate) fn build(n: usize, cell: f64, seg: impl Fn(usize) -> (DVec3, DVec3)) -> SegGrid {
         // at most 2^30 buckets: a key keeps its top bit for a mark (below)
         let buckets = n.next_power_of_two().clamp(1024, 1 << 30);
         let mut g = SegGrid {
@@ -112,24 +112,9 @@ impl SegGrid {
         g
     }
 
-    /// Side of the cubes, mm.
-    pub fn cell(&self) -> f64 {
-        self.cell
-    }
-
     /// How far a listed segment may lie outside its cube, mm.
-    pub fn slack(&self) -> f64 {
+    pub(crate) fn slack(&self) -> f64 {
         self.cell / 4.0
-    }
-
-    /// Number of listings.
-    pub fn len(&self) -> usize {
-        self.items.len()
-    }
-
-    /// Whether nothing is listed.
-    pub fn is_empty(&self) -> bool {
-        self.items.is_empty()
     }
 
     /// Calls `f` with the bucket of each piece of segment a–b (repeats skipped).
@@ -150,7 +135,7 @@ impl SegGrid {
 
     /// Ids listed in cube `c`'s bucket (ascending; may include other cubes').
     #[inline]
-    pub fn bucket(&self, c: [i64; 3]) -> &[u32] {
+    pub(crate) fn bucket(&self, c: [i64; 3]) -> &[u32] {
         let b = hash(c, self.mask);
         let start = if b == 0 { 0 } else { self.ends[b - 1] };
         &self.items[start as usize..self.ends[b] as usize]
@@ -158,7 +143,7 @@ impl SegGrid {
 
     /// The cube of `p`, and the ranges of cubes within `r` (plus the slack) of it.
     #[inline]
-    pub fn around(&self, p: DVec3, r: f64) -> ([i64; 3], [i64; 3], [i64; 3]) {
+    pub(crate) fn around(&self, p: DVec3, r: f64) -> ([i64; 3], [i64; 3], [i64; 3]) {
         let r = r + self.slack();
         (
             cube(p, self.inv),
@@ -170,7 +155,7 @@ impl SegGrid {
     /// Calls `f` on the ids listed near `p` (within `r`) below `g`, newest
     /// first, `p`'s own cube first, until it says stop; whether it did.
     #[inline]
-    pub fn search(&self, p: DVec3, r: f64, g: u32, mut f: impl FnMut(u32) -> bool) -> bool {
+    pub(crate) fn search(&self, p: DVec3, r: f64, g: u32, mut f: impl FnMut(u32) -> bool) -> bool {
         let (own, lo, hi) = self.around(p, r);
         let mut visit = |c: [i64; 3]| {
             let bucket = self.bucket(c);
@@ -199,7 +184,7 @@ impl SegGrid {
 /// checks make. Not proof against chosen keys; fine for cells of a grid.
 /// Nothing iterates these maps, so their order never reaches an output.
 #[derive(Clone, Copy, Debug, Default)]
-pub struct CellHasher(u64);
+pub(crate) struct CellHasher(u64);
 
 impl std::hash::Hasher for CellHasher {
     #[inline]
@@ -229,16 +214,18 @@ impl std::hash::Hasher for CellHasher {
 }
 
 /// A `HashMap` keyed by grid cells, hashed by [`CellHasher`].
-pub type CellMap<K, V> = std::collections::HashMap<K, V, std::hash::BuildHasherDefault<CellHasher>>;
+pub(crate) type CellMap<K, V> =
+    std::collections::HashMap<K, V, std::hash::BuildHasherDefault<CellHasher>>;
 
 /// A `HashSet` of grid cells, hashed by [`CellHasher`].
-pub type CellSet<K> = std::collections::HashSet<K, std::hash::BuildHasherDefault<CellHasher>>;
+pub(crate) type CellSet<K> =
+    std::collections::HashSet<K, std::hash::BuildHasherDefault<CellHasher>>;
 
 /// Segments added one at a time, listed as [`SegGrid`] lists them (pieces
 /// at most `cell / 2` long, in the cube of each piece's middle), for a scan
 /// that only ever searches what it has kept so far.
 #[derive(Clone, Debug)]
-pub struct GrowGrid {
+pub(crate) struct GrowGrid {
     inv: f64,
     cell: f64,
     cubes: CellMap<[i64; 3], Vec<u32>>,
@@ -246,7 +233,7 @@ pub struct GrowGrid {
 
 impl GrowGrid {
     /// An empty grid of cubes of side `cell` (> 0).
-    pub fn new(cell: f64) -> GrowGrid {
+    pub(crate) fn new(cell: f64) -> GrowGrid {
         GrowGrid {
             inv: 1.0 / cell,
             cell,
@@ -255,7 +242,7 @@ impl GrowGrid {
     }
 
     /// Lists segment `id` from `a` to `b`.
-    pub fn insert(&mut self, id: u32, a: DVec3, b: DVec3) {
+    pub(crate) fn insert(&mut self, id: u32, a: DVec3, b: DVec3) {
         let pieces = (a.distance(b) * 2.0 * self.inv).clamp(0.0, 1e6) as usize + 1;
         let mut last = None;
         for j in 0..pieces {
@@ -272,7 +259,7 @@ impl GrowGrid {
 
     /// Calls `f` on the ids listed within `r` of `p`, oldest first cube by
     /// cube, until it says stop; whether it did.
-    pub fn search(&self, p: DVec3, r: f64, mut f: impl FnMut(u32) -> bool) -> bool {
+    pub(crate) fn search(&self, p: DVec3, r: f64, mut f: impl FnMut(u32) -> bool) -> bool {
         let r = r + self.cell / 4.0;
         let (lo, hi) = (
             cube(p - DVec3::splat(r), self.inv),
@@ -295,7 +282,7 @@ impl GrowGrid {
 
 /// Closest point of segment a–b to `p`: the parameter u in [0, 1].
 #[inline]
-pub fn closest(p: DVec3, a: DVec3, b: DVec3) -> f64 {
+pub(crate) fn closest(p: DVec3, a: DVec3, b: DVec3) -> f64 {
     let d = b - a;
     let l2 = d.length_squared();
     if l2 <= 0.0 {

@@ -4,9 +4,9 @@
 //! previews, and the index of a path's passes that gives a string its width
 //! (the previews and the mesh).
 
-pub mod arc;
-pub mod grid;
-pub mod offset;
-pub mod passes;
-pub mod piece;
-pub mod region;
+pub(crate) mod arc;
+pub(crate) mod grid;
+pub(crate) mod offset;
+pub(crate) mod passes;
+pub(crate) mod piece;
+pub(crate) mod region;

@@ -23,7 +23,7 @@ use super::region::{overlay, Keep, Region};
 
 /// `region` eroded by `d` ≥ 0 (see the module comment); empty when nothing
 /// of it is at least `d` from its boundary.
-pub fn offset(region: &Region, d: f64) -> Region {
+pub(crate) fn offset(region: &Region, d: f64) -> Region {
     if d <= 0.0 || region.is_empty() {
         return region.clone();
     }

@@ -25,7 +25,7 @@ use crate::base::par;
 /// pass: one much farther along the path than in space (path distance over
 /// 3 × straight distance), so that a point's own neighbours on its string do
 /// not count.
-pub struct Grid<'t> {
+pub(crate) struct Grid<'t> {
     points: &'t [DVec3],
     /// Arc length along the path at each point, mm.
     s: Vec<f64>,
@@ -36,8 +36,9 @@ pub struct Grid<'t> {
 }
 
 impl<'t> Grid<'t> {
+    #[cfg(test)]
     /// Files the strings of the polyline `points` in cubes of `cell` mm.
-    pub fn new(points: &'t [DVec3], cell: f64) -> Grid<'t> {
+    pub(crate) fn new(points: &'t [DVec3], cell: f64) -> Grid<'t> {
         Grid::new_on(points, cell, 1)
     }
 
@@ -45,7 +46,7 @@ impl<'t> Grid<'t> {
     /// by side on the pool ([`par::map`]). A search looks in each; the
     /// nearest point (ties going to the lower string) is the same however
     /// they are cut.
-    pub fn new_on(points: &'t [DVec3], cell: f64, parts: usize) -> Grid<'t> {
+    pub(crate) fn new_on(points: &'t [DVec3], cell: f64, parts: usize) -> Grid<'t> {
         let mut s = Vec::with_capacity(points.len());
         let mut acc = 0.0;
         for (k, p) in points.iter().enumerate() {
@@ -84,12 +85,12 @@ impl<'t> Grid<'t> {
     /// A grid to find the passes next to a surface whose passes lie about
     /// `h` apart: cells big enough to reach the ends of the strings nearby
     /// (longer than `h` on a coarse helix).
-    pub fn for_surface(points: &'t [DVec3], h: f64) -> Grid<'t> {
+    pub(crate) fn for_surface(points: &'t [DVec3], h: f64) -> Grid<'t> {
         Grid::for_surface_on(points, h, 1)
     }
 
     /// [`Grid::for_surface`] in `parts` grids built at once ([`Grid::new_on`]).
-    pub fn for_surface_on(points: &'t [DVec3], h: f64, parts: usize) -> Grid<'t> {
+    pub(crate) fn for_surface_on(points: &'t [DVec3], h: f64, parts: usize) -> Grid<'t> {
         let step = (points.len() / 4096).max(1);
         let mut lens: Vec<f64> = (step..points.len())
             .step_by(step)
@@ -106,14 +107,14 @@ impl<'t> Grid<'t> {
     }
 
     /// Arc length at point k, mm.
-    pub fn arc(&self, k: usize) -> f64 {
+    pub(crate) fn arc(&self, k: usize) -> f64 {
         self.s[k]
     }
 
     /// The nearest point of another pass to `p` (at arc length `sp`): the
     /// closest point of the strings within one cell of `p`, or `None` when
     /// none lies that near.
-    pub fn nearest_other(&self, p: DVec3, sp: f64) -> Option<DVec3> {
+    pub(crate) fn nearest_other(&self, p: DVec3, sp: f64) -> Option<DVec3> {
         self.nearest_other_near(p, sp, None).map(|(q, _)| q)
     }
 
@@ -125,7 +126,7 @@ impl<'t> Grid<'t> {
     /// narrows the search: a qualifying point d away from `p` bounds the
     /// answer's distance by d, so only the cubes within d of `p` (not within
     /// a whole cell) can hold it.
-    pub fn nearest_other_near(
+    pub(crate) fn nearest_other_near(
         &self,
         p: DVec3,
         sp: f64,
@@ -134,11 +135,12 @@ impl<'t> Grid<'t> {
         self.nearest(p, sp, hint, false)
     }
 
+    #[cfg(test)]
     /// The point [`Grid::nearest_other_near`] finds, or, when a string
     /// within [`HINT_REACH`] of `hint` qualifies, the nearest point of those
     /// alone: a pass followed along (the next pass of a helix stays the next
     /// pass), the whole grid searched only when it is lost.
-    pub fn follow_other(&self, p: DVec3, sp: f64, hint: usize) -> Option<(DVec3, usize)> {
+    pub(crate) fn follow_other(&self, p: DVec3, sp: f64, hint: usize) -> Option<(DVec3, usize)> {
         self.nearest(p, sp, Some(hint), true)
     }
 
@@ -197,14 +199,14 @@ impl<'t> Grid<'t> {
 
     /// The surface a string from `a` to `b` lies in, told by the nearest
     /// other pass to its middle (arc length `sm`): see [`Local`].
-    pub fn local(&self, a: DVec3, b: DVec3, sm: f64) -> Option<Local> {
+    pub(crate) fn local(&self, a: DVec3, b: DVec3, sm: f64) -> Option<Local> {
         self.local_near(a, b, sm, None, false).map(|(l, _)| l)
     }
 
     /// [`Grid::local`] with a hint (see [`Grid::nearest_other_near`]), and
     /// the neighbouring string it found; with `follow`, the neighbour
     /// [`Grid::follow_other`] finds.
-    pub fn local_near(
+    pub(crate) fn local_near(
         &self,
         a: DVec3,
         b: DVec3,
@@ -232,12 +234,12 @@ impl<'t> Grid<'t> {
 }
 
 /// How many strings either side of a hint [`Grid::nearest_other_near`] tries.
-pub const HINT_REACH: usize = 2;
+pub(crate) const HINT_REACH: usize = 2;
 
 /// The wall around one string: it fills the `spacing` across to the next
 /// pass along the surface, and is c / spacing thick along `normal`.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Local {
+pub(crate) struct Local {
     /// Unit normal of the surface (either side).
     pub normal: DVec3,
     /// Distance across to the neighbouring pass, mm.
@@ -264,7 +266,7 @@ const SPACING_PIECE: usize = 1 << 15;
 /// [`SPACING_PIECE`] on the pool ([`par::map`]), each point's nearest of
 /// every piece (distance, then string) the least of them all, so the same
 /// however they are shared out.
-pub fn pass_spacing(points: &[DVec3]) -> Option<f64> {
+pub(crate) fn pass_spacing(points: &[DVec3]) -> Option<f64> {
     let n = points.len();
     if n < 3 {
         return None;
@@ -476,7 +478,7 @@ impl Near {
 
 /// The diameter of a round string of cross-section `c`, mm: how a string with
 /// no neighbouring pass is drawn.
-pub fn round_diameter(c: f64) -> f64 {
+pub(crate) fn round_diameter(c: f64) -> f64 {
     2.0 * (c.max(0.0) / std::f64::consts::PI).sqrt()
 }
 

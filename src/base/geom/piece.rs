@@ -13,19 +13,19 @@ use glam::DVec2;
 
 /// z-component of the cross product `a × b`.
 #[inline]
-pub fn cross(a: DVec2, b: DVec2) -> f64 {
+pub(crate) fn cross(a: DVec2, b: DVec2) -> f64 {
     a.x * b.y - a.y * b.x
 }
 
 /// `v` turned a quarter turn counter-clockwise.
 #[inline]
-pub fn perp(v: DVec2) -> DVec2 {
+pub(crate) fn perp(v: DVec2) -> DVec2 {
     DVec2::new(-v.y, v.x)
 }
 
 /// The point at angle `phi` on the circle (`c`, `r`).
 #[inline]
-pub fn on_circle(c: DVec2, r: f64, phi: f64) -> DVec2 {
+pub(crate) fn on_circle(c: DVec2, r: f64, phi: f64) -> DVec2 {
     c + r * DVec2::new(libm::cos(phi), libm::sin(phi))
 }
 
@@ -429,7 +429,7 @@ fn circle_circle(k: &Arc, m: &Arc, eps: f64) -> Vec<DVec2> {
 /// The points where pieces `p` and `q` meet, each with its parameter on `p`
 /// and on `q` (see [`Piece::locate`]). A point within `eps` of an end point of
 /// either piece is snapped to that end point.
-pub fn intersect(p: &Piece, q: &Piece, eps: f64) -> Vec<(DVec2, f64, f64)> {
+pub(crate) fn intersect(p: &Piece, q: &Piece, eps: f64) -> Vec<(DVec2, f64, f64)> {
     let raw = match (p, q) {
         (Piece::Line(a, b), Piece::Line(c, d)) => line_line(*a, *b, *c, *d, eps),
         (Piece::Line(a, b), Piece::Arc(k)) | (Piece::Arc(k), Piece::Line(a, b)) => {
@@ -455,7 +455,7 @@ pub fn intersect(p: &Piece, q: &Piece, eps: f64) -> Vec<(DVec2, f64, f64)> {
 /// Splits `piece` at the points `hits` (parameter, point) lying on it.
 /// Points within `eps` of an end or of each other count once; a whole circle
 /// is cut into arcs between consecutive points (none: it stays whole).
-pub fn split(piece: &Piece, hits: &mut [(f64, DVec2)], eps: f64) -> Vec<Piece> {
+pub(crate) fn split(piece: &Piece, hits: &mut [(f64, DVec2)], eps: f64) -> Vec<Piece> {
     hits.sort_by(|a, b| a.0.total_cmp(&b.0));
     let tol = piece.param_tol(eps);
     let end = piece.end_param();
@@ -512,7 +512,7 @@ pub fn split(piece: &Piece, hits: &mut [(f64, DVec2)], eps: f64) -> Vec<Piece> {
 /// none strays more than `tol` from it: the sagitta of a chord spanning angle
 /// θ is r·(1 − cos(θ/2)), so θ ≤ 2·acos(1 − tol/r) (at most a quarter turn
 /// per chord, so a small circle still looks like one).
-pub fn chords(r: f64, sweep: f64, tol: f64) -> u64 {
+pub(crate) fn chords(r: f64, sweep: f64, tol: f64) -> u64 {
     let max = if tol < r {
         2.0 * libm::acos(1.0 - tol / r)
     } else {

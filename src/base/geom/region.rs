@@ -151,7 +151,7 @@ impl Region {
 /// which two computed points are the same point. Rounding in the closed-form
 /// intersections is about 1e-15 of the size, far below it; features are
 /// never meant to be closer than it.
-pub fn eps_for<'a>(pieces: impl Iterator<Item = &'a Piece>) -> f64 {
+pub(crate) fn eps_for<'a>(pieces: impl Iterator<Item = &'a Piece>) -> f64 {
     let mut s: f64 = 1.0;
     for p in pieces {
         let [lo, hi] = p.bbox(0.0);
@@ -162,7 +162,7 @@ pub fn eps_for<'a>(pieces: impl Iterator<Item = &'a Piece>) -> f64 {
 
 /// What to do with a split piece: keep it as it runs, keep it reversed, or drop it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Keep {
+pub(crate) enum Keep {
     /// The result lies on its left.
     Forward,
     /// The result lies on its right.
@@ -174,7 +174,7 @@ pub enum Keep {
 /// The overlay (see the module comment): splits `candidates` at their mutual
 /// intersections, keeps each split piece as `classify` says, and chains the
 /// kept pieces into loops.
-pub fn overlay(candidates: &[Piece], eps: f64, classify: impl Fn(&Piece) -> Keep) -> Region {
+pub(crate) fn overlay(candidates: &[Piece], eps: f64, classify: impl Fn(&Piece) -> Keep) -> Region {
     let n = candidates.len();
     let boxes: Vec<[DVec2; 2]> = candidates.iter().map(|p| p.bbox(eps)).collect();
     let mut hits: Vec<Vec<(f64, DVec2)>> = vec![Vec::new(); n];
@@ -213,7 +213,7 @@ pub fn overlay(candidates: &[Piece], eps: f64, classify: impl Fn(&Piece) -> Keep
 /// loops touching at a point), the walk takes the sharpest left turn, which
 /// keeps each loop around one wedge of the region, so loops never cross.
 /// Loops thinner than 10·eps (area / length) are slivers and go.
-pub fn chain(pieces: Vec<Piece>, eps: f64) -> Region {
+pub(crate) fn chain(pieces: Vec<Piece>, eps: f64) -> Region {
     let (items, nverts) = snap_ends(pieces, eps);
     let alive = survivors(&items, eps);
     let mut out: Vec<usize> = Vec::new();
@@ -366,7 +366,7 @@ fn sharpest_left(
 
 /// A piece along which f(p) = p·n only rises or only falls, with f at its ends.
 #[derive(Clone, Copy, Debug)]
-pub struct Mono {
+pub(crate) struct Mono {
     /// The piece.
     pub piece: Piece,
     /// f at the start.
@@ -379,7 +379,7 @@ pub struct Mono {
 /// that every piece is monotone in f: segments already are; an arc is cut at
 /// c + r·n and c − r·n, the points where its tangent is parallel to the
 /// scanlines f = const.
-pub fn monotone(loops: &[Loop], n: DVec2) -> Vec<Mono> {
+pub(crate) fn monotone(loops: &[Loop], n: DVec2) -> Vec<Mono> {
     let mut out = Vec::new();
     let alpha = libm::atan2(n.y, n.x);
     for l in loops {
@@ -434,7 +434,7 @@ pub fn monotone(loops: &[Loop], n: DVec2) -> Vec<Mono> {
 /// crossings at the same point (a zero-length span, dropped by the caller) or
 /// none. Neighbouring pieces share their end points bit for bit, so the two
 /// sides of a corner always agree.
-pub fn crossings(monos: &[Mono], n: DVec2, s: f64) -> Vec<(f64, DVec2)> {
+pub(crate) fn crossings(monos: &[Mono], n: DVec2, s: f64) -> Vec<(f64, DVec2)> {
     let u = DVec2::new(n.y, -n.x);
     let mut out = Vec::new();
     for m in monos {
@@ -569,7 +569,7 @@ impl Shape {
 /// Evaluates the features' boolean: in order, union adds, subtract removes,
 /// intersect keeps the common part; `inside(k)` says whether feature k holds
 /// the point.
-pub fn evaluate(ops: &[Op], inside: impl Fn(usize) -> bool) -> bool {
+pub(crate) fn evaluate(ops: &[Op], inside: impl Fn(usize) -> bool) -> bool {
     let mut r = false;
     for (k, op) in ops.iter().enumerate() {
         r = match op {
@@ -589,7 +589,7 @@ pub fn evaluate(ops: &[Op], inside: impl Fn(usize) -> bool) -> bool {
 /// [`Shape::sides`]); the boolean on each side; the piece bounds the result
 /// when the two differ. Pieces of two features that coincide (boxes sharing
 /// an edge) are classified alike and kept once.
-pub fn boolean(shapes: &[(Option<Shape>, Op)]) -> Region {
+pub(crate) fn boolean(shapes: &[(Option<Shape>, Op)]) -> Region {
     let mut cands = Vec::new();
     for (s, _) in shapes {
         if let Some(s) = s {

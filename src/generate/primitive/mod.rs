@@ -7,31 +7,31 @@
 
 mod arc;
 /// Kanada's cellular-automaton model of self-organised printing: `ca_helix`.
-pub mod ca;
+pub(crate) mod ca;
 mod circle;
 mod cylinder;
 mod helix;
 /// Primitives over SVG sources: `path: {svg: …}` and the `outline:` of helix, spiral, cylinder.
-pub mod outline;
+pub(crate) mod outline;
 mod path;
 /// The constant-flow helix of self-organised patterns: `pattern_helix`.
-pub mod pattern;
+pub(crate) mod pattern;
 /// Feature-based solids printed from a z-buffer of loops: `solid`.
-pub mod solid;
+pub(crate) mod solid;
 mod spiral;
 /// A 3D turtle that prints as it walks (turtle.py, ExtruderTurtle): `turtle`.
-pub mod turtle;
+pub(crate) mod turtle;
 
-pub use arc::Arc;
-pub use ca::CaHelix;
-pub use circle::Circle;
-pub use cylinder::Cylinder;
-pub use helix::Helix;
-pub use path::PathCmd;
-pub use pattern::PatternHelix;
-pub use solid::Solid;
-pub use spiral::{Direction, Spiral};
-pub use turtle::Turtle;
+pub(crate) use arc::Arc;
+pub(crate) use ca::CaHelix;
+pub(crate) use circle::Circle;
+pub(crate) use cylinder::Cylinder;
+pub(crate) use helix::Helix;
+pub(crate) use path::PathCmd;
+pub(crate) use pattern::PatternHelix;
+pub(crate) use solid::Solid;
+pub(crate) use spiral::{Direction, Spiral};
+pub(crate) use turtle::Turtle;
 
 use crate::base::toolpath::Toolpath;
 

@@ -11,7 +11,7 @@ use crate::base::svg::{Outline, Subpath};
 use crate::base::toolpath::Toolpath;
 
 /// The points of one turn along `o`, at the arc fractions `f`.
-pub fn turn_points(o: &Outline, f: &[f64]) -> Vec<DVec2> {
+pub(crate) fn turn_points(o: &Outline, f: &[f64]) -> Vec<DVec2> {
     f.iter().map(|&s| o.point_at(s)).collect()
 }
 
@@ -19,7 +19,7 @@ pub fn turn_points(o: &Outline, f: &[f64]) -> Vec<DVec2> {
 /// g = first + j, on turn k = g div m at arc fraction f[g mod m] (m =
 /// f.len(), Euclidean division), so at turns u = k + f[g mod m], placed by
 /// `at(u, pts[g mod m])`. The path carries u in [`Toolpath::turns`].
-pub fn along(
+pub(crate) fn along(
     f: &[f64],
     pts: &[DVec2],
     first: i64,
@@ -52,7 +52,7 @@ pub fn along(
 /// and a `draw` to each further point (back to the start when it is
 /// closed), the centre of the drawing's bounding box at `center`, all at
 /// `center.z`.
-pub fn drawing_commands(sub: &[Subpath], center: DVec3) -> Vec<PathCmd> {
+pub(crate) fn drawing_commands(sub: &[Subpath], center: DVec3) -> Vec<PathCmd> {
     let all = sub.iter().flat_map(|p| &p.points);
     let (lo, hi) = all.fold(
         (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),

@@ -18,7 +18,7 @@ pub enum PathCmd {
 }
 
 /// Number of strings: one per `move` or `draw`, less a leading `move`.
-pub fn string_count(cmds: &[PathCmd]) -> u64 {
+pub(super) fn string_count(cmds: &[PathCmd]) -> u64 {
     let moves = cmds
         .iter()
         .filter(|c| matches!(c, PathCmd::Move(_) | PathCmd::Draw(_)))
@@ -34,7 +34,7 @@ fn starts_with_move(cmds: &[PathCmd]) -> bool {
 
 /// Runs the commands. The first point is the first `move` when one comes
 /// before any `draw`, else the origin.
-pub fn build(cmds: &[PathCmd], c0: f64, v0: f64) -> Toolpath {
+pub(super) fn build(cmds: &[PathCmd], c0: f64, v0: f64) -> Toolpath {
     let (mut c, mut v) = (c0, v0);
     let mut rest = cmds;
     let mut start = DVec3::ZERO;

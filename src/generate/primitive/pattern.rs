@@ -23,7 +23,7 @@ use super::TurnTable;
 use crate::base::toolpath::Toolpath;
 
 /// The filled, slow first turn when a recipe names none: a normal string, slowly.
-pub const FIRST_LAYER: FirstLayer = FirstLayer {
+pub(crate) const FIRST_LAYER: FirstLayer = FirstLayer {
     cross_section: 0.2,
     speed: 15.0,
 };

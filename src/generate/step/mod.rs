@@ -10,8 +10,8 @@ mod deform;
 mod modulate;
 mod subdivide;
 
-pub use deform::Deform;
-pub use modulate::{Bitmap, Modulate, ModulateMap};
+pub(crate) use deform::Deform;
+pub(crate) use modulate::{Bitmap, Modulate, ModulateMap};
 
 use glam::DVec3;
 

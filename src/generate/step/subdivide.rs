@@ -5,7 +5,7 @@ use crate::base::toolpath::Toolpath;
 
 /// Splits every string longer than `max` into `ceil(L / max)` equal pieces,
 /// refusing when the part would exceed `max_strings`.
-pub fn apply(tp: &mut Toolpath, max: f64, max_strings: u64) -> Result<()> {
+pub(super) fn apply(tp: &mut Toolpath, max: f64, max_strings: u64) -> Result<()> {
     let pieces = |k: usize| -> u64 {
         let l = tp.length(k);
         if l > max {

@@ -17,7 +17,7 @@ pub(super) enum Inner {
 /// A file being written: a temp file beside its target, renamed into place by
 /// [`AtomicFile::commit`]; dropped uncommitted, it leaves nothing behind. A
 /// character device or FIFO is written directly instead.
-pub struct AtomicFile {
+pub(crate) struct AtomicFile {
     inner: Option<Inner>,
     /// The file renamed over: the target with its symlinks followed.
     target: PathBuf,
@@ -27,7 +27,7 @@ pub struct AtomicFile {
 impl AtomicFile {
     /// Opens a temp file in `target`'s folder (which must exist), or the
     /// target itself when it is a character device or a FIFO.
-    pub fn create(target: &Path) -> Result<AtomicFile> {
+    pub(crate) fn create(target: &Path) -> Result<AtomicFile> {
         let shown = target.display().to_string();
         if target.as_os_str().is_empty() {
             return Err(Error::input(
@@ -91,7 +91,7 @@ impl AtomicFile {
     }
 
     /// The file to write to.
-    pub fn file(&mut self) -> &mut std::fs::File {
+    pub(crate) fn file(&mut self) -> &mut std::fs::File {
         match self.inner.as_mut().expect("not committed") {
             Inner::Temp(t) => t.as_file_mut(),
             Inner::Direct(f) => f,
@@ -100,7 +100,7 @@ impl AtomicFile {
 
     /// The file to write a big output to: as [`AtomicFile::file`], with the
     /// kernel asked to start writing each 2 MB to disk as it is written.
-    pub fn streaming(&mut self) -> Streaming<'_> {
+    pub(crate) fn streaming(&mut self) -> Streaming<'_> {
         let kick = matches!(self.inner, Some(Inner::Temp(_)));
         let file = match self.inner.as_mut().expect("not committed") {
             Inner::Temp(t) => t.as_file_mut(),
@@ -115,7 +115,7 @@ impl AtomicFile {
     }
 
     /// Flushes to disk and renames the temp file to the target.
-    pub fn commit(mut self) -> Result<()> {
+    pub(crate) fn commit(mut self) -> Result<()> {
         let shown = self.shown.clone();
         let io = |e: io::Error| Error::io_from(&shown, format!("cannot write: {e}"), &e);
         match self.inner.take().expect("committed once") {
@@ -139,7 +139,7 @@ impl AtomicFile {
 /// `sync_file_range(SYNC_FILE_RANGE_WRITE)` on the bytes before (Linux; it
 /// starts the write-out and does not wait), so the commit's fsync has little
 /// left to do. Elsewhere, and on a FIFO or device, a plain file.
-pub struct Streaming<'a> {
+pub(crate) struct Streaming<'a> {
     file: &'a mut std::fs::File,
     kick: bool,
     written: u64,
@@ -148,7 +148,7 @@ pub struct Streaming<'a> {
 
 impl Streaming<'_> {
     /// How many bytes are written between two kicks.
-    pub const KICK: u64 = 2 << 20;
+    pub(crate) const KICK: u64 = 2 << 20;
 
     #[cfg(target_os = "linux")]
     fn start_write_out(&self) {
@@ -201,7 +201,10 @@ impl Drop for AtomicFile {
 }
 
 /// Writes `target` atomically: a temp file beside it, renamed on success.
-pub fn write_atomic(target: &Path, f: impl FnOnce(&mut std::fs::File) -> Result<()>) -> Result<()> {
+pub(crate) fn write_atomic(
+    target: &Path,
+    f: impl FnOnce(&mut std::fs::File) -> Result<()>,
+) -> Result<()> {
     let mut a = AtomicFile::create(target)?;
     f(a.file())?;
     a.commit()

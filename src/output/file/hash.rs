@@ -8,7 +8,7 @@ use sha2::{Digest, Sha256};
 /// taken of the buffer's chunks as they go out (64 KiB at a time), not of
 /// each small write: the same bytes in the same order, so the same SHA-256,
 /// without copying every G-code line into the hasher's block buffer.
-pub struct HashWriter<W: Write> {
+pub(crate) struct HashWriter<W: Write> {
     inner: io::BufWriter<Hashed<W>>,
 }
 
@@ -33,7 +33,7 @@ impl<W: Write> Write for Hashed<W> {
 
 impl<W: Write> HashWriter<W> {
     /// Wraps `inner` (buffered).
-    pub fn new(inner: W) -> HashWriter<W> {
+    pub(crate) fn new(inner: W) -> HashWriter<W> {
         let hashed = Hashed {
             out: inner,
             hasher: Sha256::new(),
@@ -45,14 +45,14 @@ impl<W: Write> HashWriter<W> {
     }
 
     /// The SHA-256 in hex and the byte count.
-    pub fn finish(self) -> (String, u64) {
+    pub(crate) fn finish(self) -> (String, u64) {
         let (hex, bytes, _) = self.finish_into();
         (hex, bytes)
     }
 
     /// The SHA-256 in hex, the byte count and the inner writer (flushed
     /// before: the writer of the G-code flushes at its end).
-    pub fn finish_into(self) -> (String, u64, W) {
+    pub(crate) fn finish_into(self) -> (String, u64, W) {
         let hashed = self
             .inner
             .into_inner()

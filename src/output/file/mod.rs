@@ -9,24 +9,24 @@
 //! when a signal stops the process and swept when a killed one left them
 //! ([`temp`]).
 
-pub mod atomic;
-pub mod hash;
-pub mod stdout;
-pub mod temp;
+pub(crate) mod atomic;
+pub(crate) mod hash;
+pub(crate) mod stdout;
+pub(crate) mod temp;
 
 use std::io;
 use std::path::{Component, Path, PathBuf};
 
-pub use atomic::{write_atomic, AtomicFile, Streaming};
-pub use hash::HashWriter;
-pub use stdout::{say_fmt, stdout_closed, tell_fmt, Stdout};
-pub use temp::{remove_temp_files_on_signals, stop_on_signals, StopHook};
+pub(crate) use atomic::{write_atomic, AtomicFile, Streaming};
+pub(crate) use hash::HashWriter;
+pub(crate) use stdout::{say_fmt, stdout_closed, tell_fmt, Stdout};
+pub(crate) use temp::{remove_temp_files_on_signals, stop_on_signals, StopHook};
 
 use crate::base::error::{Error, Result};
 
 /// The extension of `path` in lower case ("" without one): what an output's
 /// format is told by.
-pub fn extension(path: &Path) -> String {
+pub(crate) fn extension(path: &Path) -> String {
     path.extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default()
@@ -71,7 +71,7 @@ pub(crate) fn is_stream(m: &std::fs::Metadata) -> bool {
 
 /// What `path` names once symlinks, `.` and `..` are resolved, whether or
 /// not it exists: two paths with the same identity are the same file.
-pub fn identity(path: &Path) -> PathBuf {
+pub(crate) fn identity(path: &Path) -> PathBuf {
     let followed = follow(path)
         .map(|(p, _)| p)
         .unwrap_or_else(|_| path.to_path_buf());
@@ -112,7 +112,10 @@ fn is_shared_stream(path: &Path) -> bool {
 /// Refuses outputs that resolve to the same file as another output or as
 /// one of the command's `inputs`; each is `(option, path)`, e.g.
 /// `("--stats-json", "s.json")`. Called before anything is written.
-pub fn check_distinct(outputs: &[(String, PathBuf)], inputs: &[(String, PathBuf)]) -> Result<()> {
+pub(crate) fn check_distinct(
+    outputs: &[(String, PathBuf)],
+    inputs: &[(String, PathBuf)],
+) -> Result<()> {
     let ids: Vec<Option<PathBuf>> = outputs
         .iter()
         .map(|(_, p)| (!is_shared_stream(p)).then(|| identity(p)))

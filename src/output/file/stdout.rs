@@ -9,12 +9,12 @@ static STDOUT_CLOSED: AtomicBool = AtomicBool::new(false);
 
 /// Whether a write to [`Stdout`] found the pipe closed: the reader has all it
 /// wanted, and the command ends quietly with status 0, as `rg` does.
-pub fn stdout_closed() -> bool {
+pub(crate) fn stdout_closed() -> bool {
     STDOUT_CLOSED.load(Ordering::Relaxed)
 }
 
 /// Standard output that notes a closed pipe (see [`stdout_closed`]).
-pub struct Stdout;
+pub(crate) struct Stdout;
 
 impl Write for Stdout {
     fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
@@ -27,7 +27,7 @@ impl Write for Stdout {
 
 /// Writes to standard output through [`Stdout`]: a closed pipe
 /// (`p3dp check … | head -1`) is noted, never a panic as `print!`'s is.
-pub fn say_fmt(args: std::fmt::Arguments) {
+pub(crate) fn say_fmt(args: std::fmt::Arguments) {
     if !stdout_closed() {
         let _ = Stdout.write_fmt(args);
     }
@@ -35,7 +35,7 @@ pub fn say_fmt(args: std::fmt::Arguments) {
 
 /// Writes to standard error; a closed one is ignored, never a panic as
 /// `eprint!`'s is.
-pub fn tell_fmt(args: std::fmt::Arguments) {
+pub(crate) fn tell_fmt(args: std::fmt::Arguments) {
     let _ = io::stderr().lock().write_fmt(args);
 }
 

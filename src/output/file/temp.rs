@@ -8,7 +8,7 @@ use std::sync::Mutex;
 use std::time::{Duration, SystemTime};
 
 /// How old a temp file of our own naming must be before a later run removes it.
-pub const STALE_AFTER: Duration = Duration::from_secs(3600);
+pub(crate) const STALE_AFTER: Duration = Duration::from_secs(3600);
 
 /// Temp files being written now, removed when a signal stops the process.
 static LIVE: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
@@ -23,7 +23,7 @@ pub(super) fn live() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
 /// What a command that stops cleanly by itself does with a signal, instead
 /// of the exit of [`remove_temp_files_on_signals`]: given the signal, it
 /// returns whether it took it.
-pub type StopHook = Box<dyn FnOnce(i32) -> bool + Send>;
+pub(crate) type StopHook = Box<dyn FnOnce(i32) -> bool + Send>;
 
 /// The hook of [`stop_on_signals`], taken by the first signal.
 static ON_SIGNAL: Mutex<Option<StopHook>> = Mutex::new(None);
@@ -31,7 +31,7 @@ static ON_SIGNAL: Mutex<Option<StopHook>> = Mutex::new(None);
 /// Removes every temp file being written and exits (128 + the signal) on
 /// SIGINT, SIGTERM or SIGHUP; the first signal after [`stop_on_signals`]
 /// goes to its hook instead. Called once by the binary.
-pub fn remove_temp_files_on_signals() {
+pub(crate) fn remove_temp_files_on_signals() {
     #[cfg(unix)]
     {
         use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
@@ -60,12 +60,12 @@ pub fn remove_temp_files_on_signals() {
 /// Lets a command that writes no files and stops cleanly by itself (`p3dp
 /// watch`) take the next SIGINT, SIGTERM or SIGHUP: `stop` is called with it
 /// instead of the exit (once: a second signal exits as usual).
-pub fn stop_on_signals(stop: StopHook) {
+pub(crate) fn stop_on_signals(stop: StopHook) {
     *ON_SIGNAL.lock().unwrap_or_else(|e| e.into_inner()) = Some(stop);
 }
 
 /// Whether `name` is one of our temp files: `.p3dp-` + 6 letters or digits + `.tmp`.
-pub fn is_temp_name(name: &str) -> bool {
+pub(crate) fn is_temp_name(name: &str) -> bool {
     name.strip_prefix(".p3dp-")
         .and_then(|r| r.strip_suffix(".tmp"))
         .is_some_and(|mid| mid.len() == 6 && mid.bytes().all(|b| b.is_ascii_alphanumeric()))

@@ -42,7 +42,7 @@ impl Flavor {
 
 /// The G-code line(s) for an event other than `Retract` and `Extrude` (which
 /// are moves), without a trailing newline; `None` for those two.
-pub fn event_line(flavor: Flavor, e: &Event) -> Option<String> {
+pub(crate) fn event_line(flavor: Flavor, e: &Event) -> Option<String> {
     Some(match *e {
         Event::Dwell { ms } => dwell(flavor, ms),
         Event::Pause => pause(flavor),
@@ -54,13 +54,13 @@ pub fn event_line(flavor: Flavor, e: &Event) -> Option<String> {
 }
 
 /// Wait `ms` milliseconds: `G4 P<ms>` in every dialect.
-pub fn dwell(_flavor: Flavor, ms: f64) -> String {
+pub(crate) fn dwell(_flavor: Flavor, ms: f64) -> String {
     format!("G4 P{} ; dwell", libm::round(ms.max(0.0)) as u64)
 }
 
 /// A pause for the operator: Marlin `M0`, Prusa `M601`, Klipper `PAUSE`,
 /// RepRapFirmware `M226`.
-pub fn pause(flavor: Flavor) -> String {
+pub(crate) fn pause(flavor: Flavor) -> String {
     match flavor {
         Flavor::Marlin => "M0 ; pause: press the knob to resume".to_string(),
         Flavor::Prusa => "M601 ; pause: resume from the panel".to_string(),
@@ -132,18 +132,18 @@ fn heat(flavor: Flavor, h: &Heater, celsius: f64, wait: bool) -> String {
 }
 
 /// Set (and with `wait`, wait for) the nozzle temperature.
-pub fn nozzle_temp(flavor: Flavor, celsius: f64, wait: bool) -> String {
+pub(crate) fn nozzle_temp(flavor: Flavor, celsius: f64, wait: bool) -> String {
     heat(flavor, &NOZZLE, celsius, wait)
 }
 
 /// Set (and with `wait`, wait for) the bed temperature.
-pub fn bed_temp(flavor: Flavor, celsius: f64, wait: bool) -> String {
+pub(crate) fn bed_temp(flavor: Flavor, celsius: f64, wait: bool) -> String {
     heat(flavor, &BED, celsius, wait)
 }
 
 /// Part-cooling fan at `speed` (0 to 1): `M106 S<0..255>` or `M107` for off;
 /// RepRapFirmware takes the fraction itself, `M106 S0.50`, and `M106 S0`.
-pub fn fan(flavor: Flavor, speed: f64) -> String {
+pub(crate) fn fan(flavor: Flavor, speed: f64) -> String {
     let speed = if speed.is_nan() {
         0.0
     } else {
@@ -166,18 +166,18 @@ pub fn fan(flavor: Flavor, speed: f64) -> String {
 }
 
 /// Firmware retraction (`firmware_retraction: true`): `G10`, in every dialect.
-pub fn retract(_flavor: Flavor) -> &'static str {
+pub(crate) fn retract(_flavor: Flavor) -> &'static str {
     "G10 ; retract"
 }
 
 /// Firmware unretraction: `G11`, in every dialect.
-pub fn unretract(_flavor: Flavor) -> &'static str {
+pub(crate) fn unretract(_flavor: Flavor) -> &'static str {
     "G11 ; unretract"
 }
 
 /// Whether a stock firmware of this dialect runs `G2`/`G3` arcs: Marlin
 /// (ARC_SUPPORT), Prusa, RepRapFirmware; Klipper with a `[gcode_arcs]` section.
-pub fn arc_note(flavor: Flavor) -> &'static str {
+pub(crate) fn arc_note(flavor: Flavor) -> &'static str {
     match flavor {
         Flavor::Klipper => "arcs need `[gcode_arcs]` in printer.cfg",
         Flavor::Marlin => "arcs need ARC_SUPPORT (on in Marlin 2's default configuration)",
@@ -189,7 +189,7 @@ pub fn arc_note(flavor: Flavor) -> &'static str {
 /// [`crate::base::geom::arc::Firmware`]): Marlin 2 in chords of at most 1 mm and at
 /// least 72 a turn; Klipper's `[gcode_arcs]` in 1 mm chords; Prusa's and
 /// RepRapFirmware are taken as 1 mm chords too (the cautious choice).
-pub fn arc_firmware(flavor: Flavor) -> crate::base::geom::arc::Firmware {
+pub(crate) fn arc_firmware(flavor: Flavor) -> crate::base::geom::arc::Firmware {
     crate::base::geom::arc::Firmware {
         max_chord: 1.0,
         min_circle_segments: if flavor == Flavor::Marlin { 72 } else { 0 },

@@ -13,7 +13,7 @@
 //! reaches that minimum. The move carries the run's filament exactly, and its
 //! speed is set so that it takes the same time as the strings would.
 
-pub mod flavor;
+pub(crate) mod flavor;
 
 use std::collections::BTreeMap;
 use std::io::{self, Write};
@@ -22,7 +22,7 @@ use glam::DVec3;
 
 use crate::analyse::plan::Plan;
 use crate::analyse::planner::{Estimate, MoveKind, Moves};
-pub use crate::analyse::stats::MoveStats;
+pub(crate) use crate::analyse::stats::MoveStats;
 use crate::base::error::Result;
 use crate::base::format::{fmt_num, hms, units, Chunk};
 use crate::base::safe_text::one_line;
@@ -44,7 +44,7 @@ fn feed_units(mm_s: f64) -> i64 {
 /// of comments, see `output::preview::thumbnail`), the start G-code, every
 /// part, the end G-code and the summary. Every move goes to `moves` as it
 /// is written; `estimate` turns them into the print's times for the summary.
-pub fn write<W: Write, M: Moves>(
+pub(crate) fn write<W: Write, M: Moves>(
     plan: &Plan,
     thumbnails: String,
     out: W,
@@ -69,7 +69,7 @@ pub fn write<W: Write, M: Moves>(
 }
 
 /// Writes one print: header, start G-code, parts, end G-code, summary.
-pub struct Emitter<'a, W: Write, M: Moves> {
+pub(crate) struct Emitter<'a, W: Write, M: Moves> {
     out: W,
     printer: &'a Printer,
     /// Filament cross-section area, mm².
@@ -121,7 +121,7 @@ struct Pending {
 impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
     /// An emitter writing to `out` for `recipe`'s printer and material, its
     /// moves (in machine coordinates) handed to `moves` as they are written.
-    pub fn new(out: W, recipe: &'a Recipe, moves: M) -> Emitter<'a, W, M> {
+    pub(crate) fn new(out: W, recipe: &'a Recipe, moves: M) -> Emitter<'a, W, M> {
         let d = recipe
             .material
             .filament_diameter
@@ -153,13 +153,8 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
         }
     }
 
-    /// Filament cross-section area, mm².
-    pub fn filament_area(&self) -> f64 {
-        self.area
-    }
-
     /// The placeholders of start and end G-code.
-    pub fn template_values(recipe: &Recipe, top_z: f64) -> BTreeMap<&'static str, String> {
+    pub(crate) fn template_values(recipe: &Recipe, top_z: f64) -> BTreeMap<&'static str, String> {
         let p = &recipe.printer;
         let m = &recipe.material;
         let (bx, by) = match p.bed {
@@ -209,7 +204,7 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
     }
 
     /// Header comments, start G-code and the extrusion mode.
-    pub fn start(&mut self, recipe: &Recipe, top_z: f64) -> Result<()> {
+    pub(crate) fn start(&mut self, recipe: &Recipe, top_z: f64) -> Result<()> {
         let vals = Self::template_values(recipe, top_z);
         let start = self
             .printer
@@ -426,7 +421,7 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
     /// printed so far by the head's clearance, see
     /// [`travel::safe_travel_z`]), across, then down, so the
     /// head never crosses what is printed; the collision check models the same.
-    pub fn travel_to(&mut self, to: DVec3) -> io::Result<()> {
+    pub(crate) fn travel_to(&mut self, to: DVec3) -> io::Result<()> {
         self.flush()?;
         let Some(h) = self.head else {
             return self.travel_line(to, [true; 3]);
@@ -447,7 +442,7 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
     }
 
     /// The recipe sets the fan itself (a turtle's `fan`): no automatic fan.
-    pub fn manual_fan(&mut self) {
+    pub(crate) fn manual_fan(&mut self) {
         self.fan = None;
     }
 
@@ -634,7 +629,7 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
     }
 
     /// Writes one part: a comment, a travel to its start, then its strings.
-    pub fn part(&mut self, tp: &Toolpath) -> io::Result<()> {
+    pub(crate) fn part(&mut self, tp: &Toolpath) -> io::Result<()> {
         self.moves.begin_part(&tp.name);
         let comment = format!("; part: {} ({} strings)", one_line(&tp.name), tp.len());
         self.flush()?;
@@ -702,7 +697,7 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
     /// End G-code and the summary comments slicers write: `estimate` turns
     /// the moves' sink, every move handed to it, into the print's estimate
     /// (the planner's times are known only once it has them all).
-    pub fn finish(
+    pub(crate) fn finish(
         mut self,
         recipe: &Recipe,
         top_z: f64,

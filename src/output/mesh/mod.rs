@@ -35,7 +35,7 @@
 //! before anything is written; within a bead a vertex is shared by index,
 //! and only plain IEEE arithmetic (+, −, ×, ÷, sqrt) reaches them.
 
-pub mod write;
+pub(crate) mod write;
 
 use glam::DVec3;
 
@@ -44,36 +44,36 @@ use crate::base::geom::passes::{pass_spacing, round_diameter, Grid};
 use crate::base::toolpath::Toolpath;
 
 /// The vertices a section ring has (an octagon).
-pub const RING: usize = 8;
+pub(crate) const RING: usize = 8;
 
 /// β: the chamfer's leg over the section's smaller side (see the module
 /// comment), sqrt((1 − π/4) / 2).
-pub fn beta() -> f64 {
+pub(crate) fn beta() -> f64 {
     ((1.0 - std::f64::consts::FRAC_PI_4) / 2.0).sqrt()
 }
 
 /// The sharpest turn a bead is mitred through, degrees; a sharper one ends
 /// the bead (the next starts in the corner), so a mitre never grows more than
 /// 1/cos(60°) = 2 times.
-pub const MAX_TURN_DEG: f64 = 120.0;
+pub(crate) const MAX_TURN_DEG: f64 = 120.0;
 
 /// The share of a string's length a mitre may take at either end; longer,
 /// the tube would fold, and the bead ends there.
-pub const MITRE_SHARE: f64 = 0.4;
+pub(crate) const MITRE_SHARE: f64 = 0.4;
 
 /// Strings shorter than this (mm) are taken into the next one: the rings at
 /// their ends would meet on the 1 µm grid.
-pub const MIN_LEN: f64 = 0.01;
+pub(crate) const MIN_LEN: f64 = 0.01;
 
 /// The thinnest a section is made, mm (a thinner one is widened to it).
-pub const MIN_SIZE: f64 = 0.02;
+pub(crate) const MIN_SIZE: f64 = 0.02;
 
 /// Vertices in micrometres: the rounding grid.
-pub const UNITS_PER_MM: f64 = 1000.0;
+pub(crate) const UNITS_PER_MM: f64 = 1000.0;
 
 /// Triangles over shared vertices, on the 1 µm grid.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct Mesh {
+pub(crate) struct Mesh {
     /// Vertices, integer micrometres.
     pub vertices: Vec<[i64; 3]>,
     /// Triangles: vertex indices, counter-clockwise seen from outside.
@@ -86,7 +86,7 @@ pub struct Mesh {
 
 /// A section: w along the normal, h along the surface, chamfer legs k.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Section {
+pub(crate) struct Section {
     /// Width across the surface's normal direction n, mm.
     pub w: f64,
     /// Height along the surface (across to the next pass), mm.
@@ -95,7 +95,7 @@ pub struct Section {
 
 impl Section {
     /// The section of cross-section `c` laid `h` from the neighbouring pass.
-    pub fn flat(c: f64, h: f64) -> Section {
+    pub(crate) fn flat(c: f64, h: f64) -> Section {
         let b2 = 2.0 * beta() * beta(); // 1 − π/4
         let (w, h) = if c >= (1.0 - b2) * h * h {
             (c / h + b2 * h, h)
@@ -111,24 +111,24 @@ impl Section {
 
     /// The section of a string with no neighbouring pass: as wide as tall,
     /// the round string's diameter 2·sqrt(c/π).
-    pub fn round(c: f64) -> Section {
+    pub(crate) fn round(c: f64) -> Section {
         let d = round_diameter(c).max(MIN_SIZE);
         Section { w: d, h: d }
     }
 
     /// The chamfer's leg, mm.
-    pub fn k(&self) -> f64 {
+    pub(crate) fn k(&self) -> f64 {
         beta() * self.w.min(self.h)
     }
 
     /// Area, mm².
-    pub fn area(&self) -> f64 {
+    pub(crate) fn area(&self) -> f64 {
         let k = self.k();
         self.w * self.h - 2.0 * k * k
     }
 
     /// The octagon's corners (x along n, y along the surface), counter-clockwise.
-    pub fn corners(&self) -> [(f64, f64); RING] {
+    pub(crate) fn corners(&self) -> [(f64, f64); RING] {
         let (x, y, k) = (self.w / 2.0, self.h / 2.0, self.k());
         [
             (x, -(y - k)),
@@ -160,7 +160,7 @@ struct Seg {
 /// The mesh of every extruding string of a plan (skirt and parts), each
 /// path's passes taken as lying [`pass_spacing`] apart (half the nozzle when
 /// it has none, as the previews take it).
-pub fn of_plan(plan: &Plan) -> Mesh {
+pub(crate) fn of_plan(plan: &Plan) -> Mesh {
     let fallback = plan.recipe.printer.nozzle_diameter / 2.0;
     let mut mesh = Mesh::default();
     for tp in &plan.paths {
@@ -171,7 +171,7 @@ pub fn of_plan(plan: &Plan) -> Mesh {
 
 /// Adds the beads of one part whose passes lie about `h_typ` apart (the
 /// [`pass_spacing`]).
-pub fn add_path(mesh: &mut Mesh, tp: &Toolpath, h_typ: f64) {
+pub(crate) fn add_path(mesh: &mut Mesh, tp: &Toolpath, h_typ: f64) {
     let grid = Grid::for_surface(&tp.points, h_typ);
     let mut bead: Vec<Seg> = Vec::new();
     // where the bead's next string starts (strings too short are skipped
@@ -377,7 +377,7 @@ fn joint(p: &Seg, q: &Seg) -> [DVec3; RING] {
 }
 
 /// Rounds a point to the grid, micrometres.
-pub fn grid(p: DVec3) -> [i64; 3] {
+pub(crate) fn grid(p: DVec3) -> [i64; 3] {
     let q = (p * UNITS_PER_MM).round();
     [q.x as i64, q.y as i64, q.z as i64]
 }
@@ -453,7 +453,7 @@ fn flush(mesh: &mut Mesh, segs: &mut Vec<Seg>) {
 
 impl Mesh {
     /// A vertex in millimetres.
-    pub fn point(&self, i: u32) -> DVec3 {
+    pub(crate) fn point(&self, i: u32) -> DVec3 {
         let v = self.vertices[i as usize];
         DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64) / UNITS_PER_MM
     }
@@ -461,7 +461,7 @@ impl Mesh {
     /// The enclosed volume, mm³: Σ over triangles of the signed tetrahedra
     /// to the origin, a·(b × c) / 6 (the divergence theorem), on the rounded
     /// vertices.
-    pub fn volume(&self) -> f64 {
+    pub(crate) fn volume(&self) -> f64 {
         self.triangles
             .iter()
             .map(|t| {
@@ -472,8 +472,9 @@ impl Mesh {
             / 6.0
     }
 
+    #[cfg(test)]
     /// The bounding box of the vertices, mm (`None` when empty).
-    pub fn bbox(&self) -> Option<(DVec3, DVec3)> {
+    pub(crate) fn bbox(&self) -> Option<(DVec3, DVec3)> {
         let mut it = self.vertices.iter();
         let v = it.next()?;
         let mut lo = *v;

@@ -18,7 +18,7 @@ use crate::output::file::write_atomic;
 
 /// A mesh file's format, by its extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Format {
+pub(crate) enum Format {
     /// Binary STL.
     Stl,
     /// 3D Manufacturing Format (a zip of XML).
@@ -29,7 +29,7 @@ pub enum Format {
 
 impl Format {
     /// The format of `path` by its extension.
-    pub fn of(path: &Path) -> Result<Format> {
+    pub(crate) fn of(path: &Path) -> Result<Format> {
         match crate::output::file::extension(path).as_str() {
             "stl" => Ok(Format::Stl),
             "3mf" => Ok(Format::ThreeMf),
@@ -45,7 +45,7 @@ impl Format {
     }
 
     /// The format's name for reports.
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Format::Stl => "STL",
             Format::ThreeMf => "3MF",
@@ -56,7 +56,7 @@ impl Format {
 
 /// Builds the mesh of `plan` and writes it to `out` (format by extension,
 /// atomically); returns the report line.
-pub fn write(plan: &Plan, out: &Path) -> Result<String> {
+pub(crate) fn write(plan: &Plan, out: &Path) -> Result<String> {
     let format = Format::of(out)?;
     let mesh = super::of_plan(plan);
     let shown = out.display().to_string();
@@ -101,7 +101,7 @@ fn mm(out: &mut Vec<u8>, um: i64) {
 /// the triangle count, then per triangle its unit normal and three corners
 /// as little-endian f32 (exact: a micrometre count under 2^24 is an exact
 /// f32, and only the final division rounds) and two zero bytes.
-pub fn stl(mesh: &Mesh, w: &mut impl Write) -> io::Result<()> {
+pub(crate) fn stl(mesh: &Mesh, w: &mut impl Write) -> io::Result<()> {
     let n = u32::try_from(mesh.triangles.len()).map_err(|_| {
         io::Error::other(format!(
             "{} triangles are more than binary STL can count (2^32 − 1); write .3mf or .obj",
@@ -131,7 +131,7 @@ pub fn stl(mesh: &Mesh, w: &mut impl Write) -> io::Result<()> {
 
 /// Writes a Wavefront OBJ: `v x y z` per vertex (mm), `f a b c` per
 /// triangle (1-based, counter-clockwise seen from outside).
-pub fn obj(mesh: &Mesh, w: &mut impl Write) -> io::Result<()> {
+pub(crate) fn obj(mesh: &Mesh, w: &mut impl Write) -> io::Result<()> {
     w.write_all(b"# p3dp mesh: one shell per bead, mm, recipe coordinates\n")?;
     let mut line = Vec::with_capacity(64);
     for v in &mesh.vertices {
@@ -188,7 +188,7 @@ const RELS: &str = r#"<?xml version="1.0" encoding="UTF-8"?>
 "#;
 
 /// Writes a 3MF package: the model's one object coloured by `material`.
-pub fn three_mf(mesh: &Mesh, material: &Material, w: impl Write + Seek) -> io::Result<()> {
+pub(crate) fn three_mf(mesh: &Mesh, material: &Material, w: impl Write + Seek) -> io::Result<()> {
     let zerr = |e: zip::result::ZipError| match e {
         zip::result::ZipError::Io(e) => e,
         e => io::Error::other(e.to_string()),

@@ -14,7 +14,7 @@ use crate::output::file::write_atomic;
 
 /// The output format, by the file's extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Format {
+pub(crate) enum Format {
     /// A PNG image.
     Png,
     /// A self-contained HTML viewer.
@@ -23,7 +23,7 @@ pub enum Format {
 
 impl Format {
     /// The format of `path` by its extension.
-    pub fn of(path: &Path) -> Result<Format> {
+    pub(crate) fn of(path: &Path) -> Result<Format> {
         match crate::output::file::extension(path).as_str() {
             "png" => Ok(Format::Png),
             "html" | "htm" => Ok(Format::Html),
@@ -38,26 +38,6 @@ impl Format {
     }
 }
 
-/// Writes a plan's G-code to a writer and returns its stats (the build's
-/// renderer, passed down so that previews need not know how G-code is made).
-/// `Sync`, so that a caller may run it on another thread of the pool beside
-/// [`Job::draw`].
-pub type Render<'a> = &'a (dyn Fn(&mut dyn std::io::Write) -> Result<Stats> + Sync);
-
-/// Writes a preview of `plan` to `out` (PNG or HTML by extension, atomically);
-/// returns a line for the report. `render` writes the plan's G-code; the
-/// steps run one after the other ([`Job::run`]).
-pub fn write(plan: &Plan, out: &Path, opts: &Options, render: Render) -> Result<String> {
-    Job::new(plan, out, opts)?.run(render)?.write()
-}
-
-/// The bytes of the preview [`write`] writes to `out` (its format by the
-/// extension), and the line reporting it; writes nothing, so a build can
-/// commit the preview with its other outputs.
-pub fn bytes(plan: &Plan, out: &Path, opts: &Options, render: Render) -> Result<(Vec<u8>, String)> {
-    Ok(Job::new(plan, out, opts)?.run(render)?.bytes())
-}
-
 /// A preview of a plan to make, in steps a caller may schedule: the G-code
 /// is written into [`Job::reader`] (for its stats, and for an HTML viewer
 /// its moves) while [`Job::draw`] does all that needs neither, the two side
@@ -70,7 +50,7 @@ pub fn bytes(plan: &Plan, out: &Path, opts: &Options, render: Render) -> Result<
 /// let (stats, drawing) = par::join(|| render(&mut reader), || job.draw());
 /// let line = job.finish(drawing, reader, &stats?).write()?;
 /// ```
-pub struct Job<'p> {
+pub(crate) struct Job<'p> {
     plan: &'p Plan,
     out: PathBuf,
     format: Format,
@@ -79,7 +59,7 @@ pub struct Job<'p> {
 
 /// What a preview reads of the G-code as it is written: nothing for a PNG
 /// (its header needs the stats alone), the moves for an HTML viewer.
-pub struct Reader(Option<html::Reader>);
+pub(crate) struct Reader(Option<html::Reader>);
 
 impl std::io::Write for Reader {
     fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
@@ -95,7 +75,7 @@ impl std::io::Write for Reader {
 }
 
 /// A preview drawn, waiting for the G-code's stats ([`Job::draw`]).
-pub enum Drawing<'p> {
+pub(crate) enum Drawing<'p> {
     /// The image, but its header and legend.
     Png(png::Drawing<'p>),
     /// The viewer's reading of the plan.
@@ -116,7 +96,7 @@ enum Made {
 
 impl<'p> Job<'p> {
     /// A preview of `plan` to write to `out` (its format by the extension).
-    pub fn new(plan: &'p Plan, out: &Path, opts: &Options) -> Result<Job<'p>> {
+    pub(crate) fn new(plan: &'p Plan, out: &Path, opts: &Options) -> Result<Job<'p>> {
         Ok(Job {
             plan,
             out: out.to_path_buf(),
@@ -126,7 +106,7 @@ impl<'p> Job<'p> {
     }
 
     /// The writer the plan's G-code is to be written into.
-    pub fn reader(&self) -> Reader {
+    pub(crate) fn reader(&self) -> Reader {
         Reader(match self.format {
             Format::Png => None,
             Format::Html => Some(html::reader(self.plan)),
@@ -134,7 +114,7 @@ impl<'p> Job<'p> {
     }
 
     /// All of the preview that needs neither the G-code nor its stats.
-    pub fn draw(&self) -> Drawing<'p> {
+    pub(crate) fn draw(&self) -> Drawing<'p> {
         match self.format {
             Format::Png => Drawing::Png(png::draw(self.plan, &self.opts)),
             Format::Html => Drawing::Html(html::draw(self.plan, &self.opts)),
@@ -143,7 +123,7 @@ impl<'p> Job<'p> {
 
     /// The preview, from this job's `drawing`, its `reader` once the G-code
     /// is written into it, and the `stats` the writing returned.
-    pub fn finish(&self, drawing: Drawing<'p>, reader: Reader, stats: &Stats) -> Finished {
+    pub(crate) fn finish(&self, drawing: Drawing<'p>, reader: Reader, stats: &Stats) -> Finished {
         let made = match drawing {
             Drawing::Png(d) => Made::Png(png::finish(d, stats), self.opts),
             Drawing::Html(d) => {
@@ -155,16 +135,6 @@ impl<'p> Job<'p> {
             out: self.out.clone(),
             made,
         }
-    }
-
-    /// The steps one after the other: the G-code written by `render` (so
-    /// that its memory is let go before the drawing takes its own), the
-    /// drawing, the finish.
-    pub fn run(&self, render: Render) -> Result<Finished> {
-        let mut reader = self.reader();
-        let stats = render(&mut reader)?;
-        let drawing = self.draw();
-        Ok(self.finish(drawing, reader, &stats))
     }
 }
 

@@ -26,16 +26,16 @@
 //! face on is closed, as printed, and its rim shows the real thickness; a
 //! string with no neighbouring pass is drawn round, of diameter 2·sqrt(c/pi).
 
-pub mod html;
-pub mod png;
-pub mod thumbnail;
+pub(crate) mod html;
+pub(crate) mod png;
+pub(crate) mod thumbnail;
 
 mod dispatch;
 mod scene;
 mod text;
 mod view;
 
-pub use crate::machine::Size;
-pub use dispatch::{bytes, write, Drawing, Finished, Format, Job, Reader, Render};
-pub use scene::Scene;
-pub use view::{colormap, fmt_value, Basis, ColorMode, Options, View, STOPS};
+pub(crate) use crate::machine::Size;
+pub(crate) use dispatch::{Drawing, Finished, Format, Job, Reader};
+pub(crate) use scene::Scene;
+pub(crate) use view::{colormap, fmt_value, Basis, ColorMode, Options, View, STOPS};

@@ -13,7 +13,7 @@ use crate::base::geom::passes::{pass_spacing, round_diameter};
 
 /// The plan read for drawing: per path the spacing of its passes, per string
 /// the print time at its end and whether a check found a problem in it.
-pub struct Scene<'a> {
+pub(crate) struct Scene<'a> {
     /// The plan drawn.
     pub plan: &'a Plan,
     /// Per path: print time at the end of each string, s (Σ length / speed);
@@ -33,7 +33,7 @@ pub struct Scene<'a> {
 
 impl<'a> Scene<'a> {
     /// Reads `plan` for drawing.
-    pub fn new(plan: &'a Plan) -> Scene<'a> {
+    pub(crate) fn new(plan: &'a Plan) -> Scene<'a> {
         Scene::with_flags(plan, flags(plan))
     }
 
@@ -76,7 +76,7 @@ impl<'a> Scene<'a> {
     /// The triangle of a turtle marker (ExtruderTurtle's draw_Turtle(), Fig.
     /// 2c): its sharpest corner `size` mm ahead along the heading, the other
     /// two behind it on either side, in the turtle's plane (normal `up`).
-    pub fn turtle_triangle(m: &crate::base::toolpath::Marker, size: f64) -> [DVec3; 3] {
+    pub(crate) fn turtle_triangle(m: &crate::base::toolpath::Marker, size: f64) -> [DVec3; 3] {
         let left = m.up.cross(m.heading);
         [
             m.pos + m.heading * size,
@@ -86,7 +86,7 @@ impl<'a> Scene<'a> {
     }
 
     /// Per path: print time at the end of each string, s (Σ length / speed).
-    pub fn time(&self) -> &Vec<Vec<f64>> {
+    pub(crate) fn time(&self) -> &Vec<Vec<f64>> {
         self.time.get_or_init(|| {
             let mut t = 0.0;
             self.plan
@@ -108,7 +108,7 @@ impl<'a> Scene<'a> {
     }
 
     /// The number string k of path `pi` shows in colour mode `mode`.
-    pub fn value(&self, mode: ColorMode, pi: usize, k: usize) -> f64 {
+    pub(crate) fn value(&self, mode: ColorMode, pi: usize, k: usize) -> f64 {
         let s = self.plan.paths[pi].strings[k];
         match mode {
             ColorMode::Speed => s.v,
@@ -120,7 +120,7 @@ impl<'a> Scene<'a> {
     }
 
     /// Lowest and highest value over the extruding strings (0, 0 when none).
-    pub fn range(&self, mode: ColorMode) -> (f64, f64) {
+    pub(crate) fn range(&self, mode: ColorMode) -> (f64, f64) {
         let slot = ColorMode::NAMES
             .iter()
             .position(|n| *n == mode.name())
@@ -153,22 +153,11 @@ impl<'a> Scene<'a> {
         }
     }
 
-    /// The extruding points (all points when nothing extrudes).
-    pub fn extruding_points(&self) -> Vec<DVec3> {
-        let mut out = Vec::new();
-        self.each_extruding_point(|p| {
-            if out.last() != Some(&p) {
-                out.push(p)
-            }
-        });
-        out
-    }
-
     /// Calls `f` on the finite ends of every extruding string, in print order
     /// (on every finite point when nothing extrudes), a point the same bits
     /// as the one just passed not again (the end two strings in a row
     /// share): [`Scene::extruding_points`] without holding them.
-    pub fn each_extruding_point(&self, mut f: impl FnMut(DVec3)) {
+    pub(crate) fn each_extruding_point(&self, mut f: impl FnMut(DVec3)) {
         let mut any = false;
         let bits = |p: DVec3| p.to_array().map(f64::to_bits);
         for tp in &self.plan.paths {
@@ -198,7 +187,7 @@ impl<'a> Scene<'a> {
     }
 
     /// Half the widest a string is drawn, mm: room to leave round the model.
-    pub fn pad(&self) -> f64 {
+    pub(crate) fn pad(&self) -> f64 {
         let mut w: f64 = 0.0;
         for (tp, h) in self.plan.paths.iter().zip(&self.spacing) {
             let c = tp
@@ -212,7 +201,7 @@ impl<'a> Scene<'a> {
     }
 
     /// The typical spacing between passes, weighted by string count, mm.
-    pub fn typical_spacing(&self) -> f64 {
+    pub(crate) fn typical_spacing(&self) -> f64 {
         let mut v: Vec<(f64, usize)> = self
             .spacing
             .iter()

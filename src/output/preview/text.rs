@@ -6,7 +6,7 @@ use font8x8::UnicodeFonts;
 use tiny_skia::{Pixmap, PremultipliedColorU8};
 
 /// Advance of one glyph at scale 1, px.
-pub const ADVANCE: u32 = 8;
+pub(super) const ADVANCE: u32 = 8;
 
 /// The glyph of `ch`, or a box for characters the font lacks.
 fn glyph(ch: char) -> [u8; 8] {
@@ -24,12 +24,12 @@ fn glyph(ch: char) -> [u8; 8] {
 }
 
 /// Width of `s` drawn at `scale`, px.
-pub fn width(s: &str, scale: u32) -> u32 {
+pub(super) fn width(s: &str, scale: u32) -> u32 {
     s.chars().count() as u32 * ADVANCE * scale
 }
 
 /// Draws `s` with its top-left corner at (x, y), opaque `rgb`; clipped to the image.
-pub fn draw(pm: &mut Pixmap, x: i32, y: i32, scale: u32, s: &str, rgb: [u8; 3]) {
+pub(super) fn draw(pm: &mut Pixmap, x: i32, y: i32, scale: u32, s: &str, rgb: [u8; 3]) {
     let (w, h) = (pm.width() as i32, pm.height() as i32);
     let colour = PremultipliedColorU8::from_rgba(rgb[0], rgb[1], rgb[2], 255)
         .expect("opaque colours are valid");

@@ -22,10 +22,10 @@ use crate::base::error::Result;
 use crate::machine::size::sizes;
 
 /// Characters of base64 per comment line (PrusaSlicer's).
-pub const LINE: usize = 78;
+pub(crate) const LINE: usize = 78;
 
 /// One thumbnail block for a PNG of `size`.
-pub fn block(size: Size, png: &[u8]) -> String {
+pub(crate) fn block(size: Size, png: &[u8]) -> String {
     let b64 = base64::engine::general_purpose::STANDARD.encode(png);
     let mut s = format!(
         "; thumbnail begin {}x{} {}\n",
@@ -43,7 +43,7 @@ pub fn block(size: Size, png: &[u8]) -> String {
 }
 
 /// The thumbnail blocks `plan`'s printer asks for (empty when none).
-pub fn blocks(plan: &Plan) -> Result<String> {
+pub(crate) fn blocks(plan: &Plan) -> Result<String> {
     let list = &plan.recipe.printer.thumbnails;
     if list.is_empty() {
         return Ok(String::new());
@@ -58,9 +58,10 @@ pub fn blocks(plan: &Plan) -> Result<String> {
     Ok(out)
 }
 
+#[cfg(test)]
 /// A thumbnail read back from G-code.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Thumbnail {
+pub(crate) struct Thumbnail {
     /// Width named in the block header, pixels.
     pub width: u32,
     /// Height named in the block header, pixels.
@@ -69,15 +70,17 @@ pub struct Thumbnail {
     pub png: Vec<u8>,
 }
 
+#[cfg(test)]
 /// Why thumbnail blocks could not be read back: `line N: message`.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub struct ThumbnailError {
+pub(crate) struct ThumbnailError {
     /// The 1-based line at fault (`None`: the end of the G-code).
     pub line: Option<usize>,
     /// What is wrong there.
     pub message: String,
 }
 
+#[cfg(test)]
 impl std::fmt::Display for ThumbnailError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         if let Some(l) = self.line {
@@ -87,12 +90,14 @@ impl std::fmt::Display for ThumbnailError {
     }
 }
 
+#[cfg(test)]
 impl std::error::Error for ThumbnailError {}
 
+#[cfg(test)]
 /// Reads every thumbnail block of `gcode` back, checking what printers rely
 /// on: LEN is the length of the base64 text, data lines are `; ` comments of
 /// at most [`LINE`] characters, and every block is closed.
-pub fn parse(gcode: &str) -> std::result::Result<Vec<Thumbnail>, ThumbnailError> {
+pub(crate) fn parse(gcode: &str) -> std::result::Result<Vec<Thumbnail>, ThumbnailError> {
     let bad = |line: usize, message: String| ThumbnailError {
         line: Some(line),
         message,

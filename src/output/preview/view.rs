@@ -189,7 +189,7 @@ pub struct Options {
 }
 
 /// Colour stops of the scalar modes: blue, cyan, green, yellow, red.
-pub const STOPS: [[f32; 3]; 5] = [
+pub(crate) const STOPS: [[f32; 3]; 5] = [
     [0.23, 0.30, 0.85],
     [0.10, 0.65, 0.95],
     [0.25, 0.85, 0.45],
@@ -198,7 +198,7 @@ pub const STOPS: [[f32; 3]; 5] = [
 ];
 
 /// The colour of `t` in [0, 1] on the scale of [`STOPS`].
-pub fn colormap(t: f64) -> [f32; 3] {
+pub(crate) fn colormap(t: f64) -> [f32; 3] {
     let t = if t.is_finite() {
         t.clamp(0.0, 1.0)
     } else {
@@ -212,7 +212,7 @@ pub fn colormap(t: f64) -> [f32; 3] {
 }
 
 /// A number for a legend: three significant figures or so, no exponent.
-pub fn fmt_value(v: f64) -> String {
+pub(crate) fn fmt_value(v: f64) -> String {
     let a = v.abs();
     let s = if a >= 100.0 || a == 0.0 {
         format!("{v:.0}")

@@ -20,13 +20,13 @@ use crate::recipe::schema::{RawLibrary, RawRecipe, RawTemplate};
 use crate::recipe::yaml::parse_yaml;
 
 /// Largest file `include:` reads, bytes.
-pub const MAX_INCLUDE_BYTES: u64 = 1 << 20;
+pub(super) const MAX_INCLUDE_BYTES: u64 = 1 << 20;
 /// Most files one recipe may include, directly or not.
-pub const MAX_INCLUDES: usize = 64;
+pub(super) const MAX_INCLUDES: usize = 64;
 
 /// A template and where it was written.
 #[derive(Clone, Debug)]
-pub struct Template {
+pub(crate) struct Template {
     /// As written.
     pub raw: RawTemplate,
     /// The included file that defines it, as shown in messages; `None` for
@@ -38,7 +38,7 @@ pub struct Template {
 
 /// The params and templates of a recipe and the files it includes.
 #[derive(Clone, Debug, Default)]
-pub struct Library {
+pub(crate) struct Library {
     /// Every param in evaluation order (included files first), with the
     /// included file that defines it (`None`: the recipe).
     pub params: IndexMap<String, (Num, Option<String>)>,
@@ -48,7 +48,7 @@ pub struct Library {
 
 /// Reads the includes of `raw` (the recipe at `file`, when known, in `dir`)
 /// and gathers its params and templates after theirs.
-pub fn load_library(
+pub(crate) fn load_library(
     raw: &RawRecipe,
     file: Option<&Path>,
     dir: &Path,
@@ -73,7 +73,7 @@ impl Library {
     /// Evaluates every param in order, with `--set` overrides (see
     /// [`crate::recipe::eval_params`]); an error in an included param names
     /// that file.
-    pub fn eval_params(&self, sets: &[(String, String)]) -> Result<Params> {
+    pub(crate) fn eval_params(&self, sets: &[(String, String)]) -> Result<Params> {
         let raw: IndexMap<String, Num> = self
             .params
             .iter()

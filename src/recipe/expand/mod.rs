@@ -34,7 +34,7 @@ use std::path::Path;
 
 use indexmap::IndexMap;
 
-pub use include::{load_library, Library, Template};
+pub(crate) use include::{load_library, Library, Template};
 
 use crate::base::error::{Error, Result};
 use crate::base::expr::{self, Params};
@@ -44,13 +44,13 @@ use crate::recipe::schema::Num;
 use crate::recipe::schema::{RawLoop, RawPart, RawRecipe, RawStep, RawTemplate};
 
 /// Most leaf parts a recipe may expand to.
-pub const MAX_PARTS: usize = 10_000;
+pub(crate) const MAX_PARTS: usize = 10_000;
 /// Deepest nesting of groups and template uses.
-pub const MAX_DEPTH: usize = 32;
+pub(crate) const MAX_DEPTH: usize = 32;
 
 /// A leaf part of the expanded recipe, to be resolved as a v1 part.
 #[derive(Clone, Debug)]
-pub struct Leaf<'a> {
+pub(crate) struct Leaf<'a> {
     /// The part as written (it has a `primitive`).
     pub part: &'a RawPart,
     /// The recipe's params plus the template params and loop variables in scope.
@@ -66,7 +66,7 @@ pub struct Leaf<'a> {
 
 /// The steps of a group (or of a template use), to run on leaves `first..end`.
 #[derive(Clone, Debug)]
-pub struct GroupSpec<'a> {
+pub(crate) struct GroupSpec<'a> {
     /// First leaf of the group.
     pub first: usize,
     /// One past its last leaf.
@@ -84,7 +84,7 @@ pub struct GroupSpec<'a> {
 /// A recipe's parts expanded: leaves in print order, and group steps in the
 /// order they run (inner groups before the groups around them).
 #[derive(Clone, Debug, Default)]
-pub struct Expansion<'a> {
+pub(crate) struct Expansion<'a> {
     /// The leaf parts, in print order.
     pub leaves: Vec<Leaf<'a>>,
     /// The group steps, innermost first.
@@ -93,7 +93,7 @@ pub struct Expansion<'a> {
 
 /// Expands `parts` (written in the folder `dir`) with the recipe's evaluated
 /// `params` and the `templates` of the recipe and its includes.
-pub fn expand<'a>(
+pub(crate) fn expand<'a>(
     parts: &'a [RawPart],
     templates: &'a IndexMap<String, Template>,
     params: &'a Params,
@@ -582,7 +582,7 @@ fn eval(n: &Num, params: &Params, place: &str) -> Result<f64> {
 
 /// `name` with each `{EXPR}` replaced by the expression's value in `params`
 /// (integers without decimals, others with up to 6).
-pub fn fill_name(name: &str, params: &Params, place: &str) -> Result<String> {
+pub(crate) fn fill_name(name: &str, params: &Params, place: &str) -> Result<String> {
     let mut out = String::with_capacity(name.len());
     let mut rest = name;
     while let Some(open) = rest.find('{') {
@@ -607,13 +607,13 @@ pub fn fill_name(name: &str, params: &Params, place: &str) -> Result<String> {
 }
 
 /// Refuses names that would break the G-code comment they are written into.
-pub fn check_name(name: &str, place: &str) -> Result<()> {
+pub(crate) fn check_name(name: &str, place: &str) -> Result<()> {
     crate::base::safe_text::check(place, name)
 }
 
 /// A value in a name or a place: integers without decimals, others with up
 /// to 6, never `-0`.
-pub fn fmt_value(v: f64) -> String {
+pub(crate) fn fmt_value(v: f64) -> String {
     if v.fract() == 0.0 && v.abs() < 1e15 {
         format!("{}", v as i64)
     } else {

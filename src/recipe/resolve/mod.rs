@@ -28,7 +28,7 @@ use crate::generate::model::{
 };
 use crate::machine::Printer;
 
-pub use step::load_bitmap;
+pub(crate) use step::load_bitmap;
 
 /// Evaluates numbers of one recipe: its params, and where images and a
 /// turtle's limits come from.

@@ -10,7 +10,7 @@ use crate::recipe::eval::{at, key, Scope};
 use crate::recipe::schema::{RawCaHelix, RawInitial, RawLayout, RawPatternHelix, RawRule};
 
 /// `pattern_helix:` every number resolved; `s` is under `pattern_helix`.
-pub fn pattern_helix(raw: &RawPatternHelix, s: &Scope) -> Result<PatternHelix> {
+pub(super) fn pattern_helix(raw: &RawPatternHelix, s: &Scope) -> Result<PatternHelix> {
     let layer_height = s.positive(at!(raw.layer_height))?;
     // the fields in the order they were always read (the first error wins)
     Ok(PatternHelix {
@@ -41,7 +41,7 @@ pub fn pattern_helix(raw: &RawPatternHelix, s: &Scope) -> Result<PatternHelix> {
 const PROBABILITY: &str = "a probability from 0 to 1";
 
 /// `ca_helix:` every number resolved; `s` is under `ca_helix`.
-pub fn ca_helix(raw: &RawCaHelix, s: &Scope) -> Result<CaHelix> {
+pub(super) fn ca_helix(raw: &RawCaHelix, s: &Scope) -> Result<CaHelix> {
     let radius = s.positive(at!(raw.radius))?;
     let layers = s.whole(at!(raw.layers), 1)?;
     let layer_height = s.positive(at!(raw.layer_height))?;

@@ -25,7 +25,7 @@ use crate::recipe::schema::{
 /// `env` (the part's cross-section and speed). Errors name `KIND.KEY`.
 /// SVG files are read relative to `dir`, noted in `cx`, whose lent
 /// z-buffers a solid starts from.
-pub fn resolve(
+pub(super) fn resolve(
     raw: &RawPrimitive,
     scope: &Scope,
     env: &Env,
@@ -58,7 +58,7 @@ pub fn resolve(
 
 /// Where a primitive reads files and how many points it may make.
 #[derive(Clone, Copy, Debug)]
-pub struct Files<'a> {
+pub(super) struct Files<'a> {
     /// The folder file names are relative to (the recipe's).
     pub dir: &'a Path,
     /// The recipe's `max_strings`: most points a drawing may flatten to.

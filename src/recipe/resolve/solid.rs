@@ -8,7 +8,7 @@ use crate::recipe::schema::{RawFeature, RawInfill, RawOp, RawPattern, RawSolid};
 
 /// Resolves `solid:`; `s` is under `solid`, so places read
 /// `solid.features[1].cylinder.radius`.
-pub fn resolve(raw: &RawSolid, s: &Scope, reuse: Option<&Reusing>) -> Result<Solid> {
+pub(super) fn resolve(raw: &RawSolid, s: &Scope, reuse: Option<&Reusing>) -> Result<Solid> {
     let layer_height = s.positive_or(at!(raw.layer_height), 0.2)?;
     let line_width = s.positive_or(at!(raw.line_width), 0.45)?;
     let chord_tolerance = s.positive_or(at!(raw.chord_tolerance), 0.01)?;

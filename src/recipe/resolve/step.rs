@@ -148,7 +148,7 @@ fn modulate_map(ctx: &Ctx, s: &Scope, step: &RawStep) -> Result<ModulateMap> {
 /// Loads an image as grey levels 0..1; the error names the image as written
 /// (an input error with no place: the caller names the key; an I/O failure
 /// keeps its [`std::io::ErrorKind`]).
-pub fn load_bitmap(
+pub(crate) fn load_bitmap(
     path: &PathBuf,
     shown: &str,
     reads: &crate::base::input::Reads,

@@ -20,7 +20,7 @@ use crate::recipe::schema::{RawCommand, RawLsystem, RawProcedure, RawTurtle};
 
 /// Compiles and runs a turtle; `s` is under `turtle`, the key paths of its
 /// errors too.
-pub fn resolve(raw: &RawTurtle, s: &Scope, env: &Env) -> Result<Turtle> {
+pub(super) fn resolve(raw: &RawTurtle, s: &Scope, env: &Env) -> Result<Turtle> {
     // the program's places are relative to `turtle` (the interpreter's too)
     compile(raw, &Scope::new(s.params))
         .and_then(|prog| turtle::run(&prog, env))
@@ -54,7 +54,7 @@ fn compile(raw: &RawTurtle, s: &Scope) -> Result<Program> {
 }
 
 /// Compiles the commands of one turtle.
-pub struct Compiler<'a> {
+pub(super) struct Compiler<'a> {
     params: &'a Params,
     procs: IndexMap<String, RawProcedure>,
 }
@@ -84,7 +84,7 @@ fn check_name(name: &str, params: &Params, scope: &[String], place: &str) -> Res
 
 impl<'a> Compiler<'a> {
     /// A compiler for one turtle's procedures over the recipe's params.
-    pub fn new(params: &'a Params, procs: &IndexMap<String, RawProcedure>) -> Compiler<'a> {
+    pub(super) fn new(params: &'a Params, procs: &IndexMap<String, RawProcedure>) -> Compiler<'a> {
         Compiler {
             params,
             procs: procs.clone(),
@@ -93,7 +93,7 @@ impl<'a> Compiler<'a> {
 
     /// Compiles every procedure (in the order written; calls may refer
     /// forward), written under `key`.
-    pub fn procedures(&self, key: &str) -> Result<Vec<Proc>> {
+    pub(super) fn procedures(&self, key: &str) -> Result<Vec<Proc>> {
         let mut out = Vec::with_capacity(self.procs.len());
         for (name, p) in &self.procs {
             let place = join(key, name);
@@ -105,7 +105,6 @@ impl<'a> Compiler<'a> {
             }
             out.push(Proc {
                 name: name.clone(),
-                arity: p.params.len(),
                 // `body` is read as `do`
                 body: self.block(&p.body, &join(&place, "do"), &Arc::new(scope))?,
             });
@@ -114,7 +113,7 @@ impl<'a> Compiler<'a> {
     }
 
     /// Compiles `src` in `scope` (turtle position x, y, z; counters; `rand()`).
-    pub fn val(&self, n: &Num, scope: &Arc<Vec<String>>, place: &str) -> Result<Val> {
+    pub(super) fn val(&self, n: &Num, scope: &Arc<Vec<String>>, place: &str) -> Result<Val> {
         let mut names: Vec<&str> = scope.iter().map(String::as_str).collect();
         names.extend(STATE);
         let expr = Expr::compile_ext(&n.src(), self.params, &[var::X, var::Y, var::Z], &names)
@@ -159,7 +158,7 @@ impl<'a> Compiler<'a> {
     }
 
     /// Compiles a list of commands written at key path `place`.
-    pub fn block(
+    pub(super) fn block(
         &self,
         cmds: &[RawCommand],
         place: &str,
@@ -301,7 +300,7 @@ impl<'a> Compiler<'a> {
 
     /// Compiles the L-system `raw` written at `place`, its commands seeing
     /// `scope`: symbols numbered in order of first appearance.
-    pub fn lsystem(
+    pub(super) fn lsystem(
         &self,
         raw: &RawLsystem,
         scope: &Arc<Vec<String>>,

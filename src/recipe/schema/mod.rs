@@ -21,19 +21,19 @@ use indexmap::IndexMap;
 use serde::de::{self, Deserializer, IgnoredAny, MapAccess, Visitor};
 use serde::Deserialize;
 
-pub use num::{Num, Num3};
-pub use part::{RawBrim, RawLoop, RawPart, RawPrimitiveItem, RawPrimitives, RawStand};
-pub use primitive::{
+pub(crate) use num::{Num, Num3};
+pub(crate) use part::{RawBrim, RawLoop, RawPart, RawPrimitiveItem, RawPrimitives, RawStand};
+pub(crate) use primitive::{
     RawArc, RawCaHelix, RawCircle, RawCmd, RawCylinder, RawDirection, RawFirstLayer, RawHelix,
     RawInitial, RawLayout, RawOutline, RawPath, RawPatternHelix, RawPrimitive, RawRule, RawSpiral,
 };
-pub use profile::{
+pub(crate) use profile::{
     RawBed, RawCheckLimits, RawExtrusion, RawFlavor, RawHead, RawKinematics, RawPrinter,
     RawRetraction,
 };
-pub use solid::{RawBox, RawFeature, RawInfill, RawOp, RawPattern, RawSolid};
-pub use step::{RawDeform, RawKeep, RawStep};
-pub use turtle::{RawCommand, RawLsystem, RawProcedure, RawStart, RawTurtle};
+pub(crate) use solid::{RawBox, RawFeature, RawInfill, RawOp, RawPattern, RawSolid};
+pub(crate) use step::{RawDeform, RawKeep, RawStep};
+pub(crate) use turtle::{RawCommand, RawLsystem, RawProcedure, RawStart, RawTurtle};
 
 /// `material:` a built-in name or an inline map.
 #[derive(Clone, Debug, PartialEq)]
@@ -179,7 +179,7 @@ pub struct RawTemplate {
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 #[allow(missing_docs)]
-pub struct RawLibrary {
+pub(crate) struct RawLibrary {
     /// Format version; must be 1.
     pub p3dp: u32,
     #[serde(default)]
@@ -214,7 +214,7 @@ pub struct RawLibrary {
 /// The JSON Schema (draft 2020-12) of a recipe, made from the same `Raw*`
 /// types the loader reads (so it cannot drift from them), for editors:
 /// `# yaml-language-server: $schema=…` at the top of a recipe.
-pub fn json_schema() -> serde_json::Value {
+pub(crate) fn json_schema() -> serde_json::Value {
     let mut s = serde_json::to_value(schemars::schema_for!(RawRecipe)).unwrap_or_default();
     if let Some(o) = s.as_object_mut() {
         o.insert("title".into(), "p3dp recipe (format version 1)".into());

@@ -51,7 +51,7 @@ impl<'de> Deserialize<'de> for Num {
 }
 
 /// A point or vector of three numbers.
-pub type Num3 = [Num; 3];
+pub(crate) type Num3 = [Num; 3];
 
 impl schemars::JsonSchema for Num {
     fn schema_name() -> std::borrow::Cow<'static, str> {

@@ -17,7 +17,7 @@ use crate::machine::{CheckLimits, Head, Kinematics, Retraction};
 #[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "lowercase", expecting = "enum Flavor")]
 #[allow(missing_docs)]
-pub enum RawFlavor {
+pub(crate) enum RawFlavor {
     #[default]
     Marlin,
     Klipper,
@@ -29,7 +29,7 @@ pub enum RawFlavor {
 #[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "lowercase", expecting = "enum Extrusion")]
 #[allow(missing_docs)]
-pub enum RawExtrusion {
+pub(crate) enum RawExtrusion {
     #[default]
     Absolute,
     Relative,
@@ -43,7 +43,7 @@ pub enum RawExtrusion {
     deny_unknown_fields,
     expecting = "internally tagged enum Bed"
 )]
-pub enum RawBed {
+pub(crate) enum RawBed {
     /// A rectangular bed.
     Rectangle {
         /// Width and depth, mm.
@@ -63,7 +63,7 @@ pub enum RawBed {
 /// `retraction:` before long travel moves.
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, expecting = "struct Retraction")]
-pub struct RawRetraction {
+pub(crate) struct RawRetraction {
     /// Filament pulled back, mm (0 for none).
     pub length: f64,
     /// Retraction speed, mm/s of filament.
@@ -91,7 +91,7 @@ impl Default for RawRetraction {
 /// A printer profile: the spec's keys plus the limits p3dp checks against.
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, expecting = "struct Printer")]
-pub struct RawPrinter {
+pub(crate) struct RawPrinter {
     /// Profile name.
     pub name: String,
     /// Firmware dialect.
@@ -185,7 +185,7 @@ fn d_arc_tolerance() -> f64 {
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, expecting = "struct Kinematics")]
 #[allow(missing_docs)]
-pub struct RawKinematics {
+pub(crate) struct RawKinematics {
     #[serde(default)]
     pub max_velocity: Option<f64>,
     #[serde(default = "d_accel")]
@@ -253,7 +253,7 @@ impl Default for RawKinematics {
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default, expecting = "struct Head")]
 #[allow(missing_docs)]
-pub struct RawHead {
+pub(crate) struct RawHead {
     pub cone_angle: f64,
     pub cone_height: f64,
     pub tip_diameter: f64,
@@ -280,7 +280,7 @@ impl Default for RawHead {
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default, expecting = "struct CheckLimits")]
 #[allow(missing_docs)]
-pub struct RawCheckLimits {
+pub(crate) struct RawCheckLimits {
     pub cross_section_max: f64,
     pub cross_section_hard_max: f64,
     pub cross_section_min: f64,

@@ -117,9 +117,9 @@ pub enum RawCommand {
 }
 
 /// Commands written as bare words.
-pub const BARE: &[&str] = &["pen_up", "pen_down", "pause", "push", "pop", "draw_turtle"];
+pub(super) const BARE: &[&str] = &["pen_up", "pen_down", "pause", "push", "pop", "draw_turtle"];
 /// Commands taking one number.
-pub const SCALAR: &[&str] = &[
+pub(super) const SCALAR: &[&str] = &[
     "forward",
     "backward",
     "lift",
@@ -135,7 +135,7 @@ pub const SCALAR: &[&str] = &[
     "fan",
 ];
 /// Every command, for error messages.
-pub const COMMANDS: &str = "forward, backward, lift, goto, yaw, pitch, roll, left, right, \
+pub(super) const COMMANDS: &str = "forward, backward, lift, goto, yaw, pitch, roll, left, right, \
 set_heading, pen_up, pen_down, extrude_rate, cross_section, speed, extrude, dwell, pause, \
 nozzle_temp, bed_temp, fan, push, pop, draw_turtle, repeat, if, call, lsystem, hair";
 

@@ -92,7 +92,7 @@ fn xy(p: DVec2) -> [f64; 2] {
 }
 
 /// A loop as curves.
-pub fn curve_loop(l: &Loop) -> CurveLoop {
+pub(crate) fn curve_loop(l: &Loop) -> CurveLoop {
     let area = l.area();
     CurveLoop {
         orientation: if area >= 0.0 { "ccw" } else { "cw" },
@@ -194,7 +194,7 @@ fn path_data(l: &Loop, out: &mut String) {
 /// section's exact loops filled (holes even-odd), outer loops drawn in
 /// blue and holes in red, the perimeters' centre lines dashed and the
 /// infill region's boundary dotted. `None` when no solid has that layer.
-pub fn layer_svg(solids: &[(&str, &Solid)], index: u64) -> Option<String> {
+pub(crate) fn layer_svg(solids: &[(&str, &Solid)], index: u64) -> Option<String> {
     let mut drawing = LayerDrawing {
         lo: DVec2::splat(f64::INFINITY),
         hi: DVec2::splat(f64::NEG_INFINITY),

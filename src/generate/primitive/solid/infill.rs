@@ -20,7 +20,7 @@ use crate::base::geom::region::{crossings, monotone, Region};
 /// +x. Multiples of 45° are exact (±1/√2 with the same bits in both
 /// coordinates), so a 45° line through a square's corner meets its opposite
 /// corner exactly.
-pub fn direction(deg: f64) -> DVec2 {
+pub(crate) fn direction(deg: f64) -> DVec2 {
     let k = deg / 45.0;
     if k.fract() == 0.0 && k.abs() < 1e15 {
         let h = std::f64::consts::FRAC_1_SQRT_2;
@@ -40,7 +40,7 @@ pub fn direction(deg: f64) -> DVec2 {
 }
 
 /// Range of scanline numbers k that may cross `region` for direction `u`.
-pub fn scanline_range(region: &Region, u: DVec2, spacing: f64) -> Option<(i64, i64)> {
+pub(crate) fn scanline_range(region: &Region, u: DVec2, spacing: f64) -> Option<(i64, i64)> {
     let n = DVec2::new(-u.y, u.x);
     let monos = monotone(&region.loops, n);
     let lo = monos
@@ -62,7 +62,7 @@ pub fn scanline_range(region: &Region, u: DVec2, spacing: f64) -> Option<(i64, i
 
 /// The infill spans of `region` along direction `u` (unit), `spacing` apart,
 /// in scanline order, each running along +u. See the module comment.
-pub fn spans(region: &Region, u: DVec2, spacing: f64, min_span: f64) -> Vec<(DVec2, DVec2)> {
+pub(crate) fn spans(region: &Region, u: DVec2, spacing: f64, min_span: f64) -> Vec<(DVec2, DVec2)> {
     let n = DVec2::new(-u.y, u.x);
     let monos = monotone(&region.loops, n);
     let Some((k0, k1)) = scanline_range(region, u, spacing) else {

@@ -41,8 +41,8 @@
 //! recipe is resolved (it would be ignored). All this is computed when the recipe is resolved, so the number of
 //! strings is exact before any is made.
 
-pub mod infill;
-pub use crate::base::geom::{offset, piece, region};
+pub(crate) mod infill;
+pub(crate) use crate::base::geom::{offset, piece, region};
 
 use std::sync::Arc;
 
@@ -52,12 +52,12 @@ use serde::Serialize;
 use crate::base::error::{Error, Result};
 use crate::base::toolpath::Toolpath;
 
-pub use region::{Loop, Op, Region, Shape};
+pub(crate) use region::{Loop, Op, Region, Shape};
 
 /// Most layers a solid may have.
-pub const MAX_LAYERS: u64 = 1_000_000;
+pub(crate) const MAX_LAYERS: u64 = 1_000_000;
 /// Most scanlines (or chords of one circle) a layer may need.
-pub const MAX_LINES: f64 = 1e5;
+pub(crate) const MAX_LINES: f64 = 1e5;
 
 mod export;
 mod model;
@@ -65,12 +65,12 @@ mod plan;
 mod stats;
 mod zbuffer;
 
-pub use export::*;
-pub use model::*;
-pub use plan::join_inside as plan_join_inside;
-pub use plan::JOIN_SPACINGS;
-pub use stats::*;
-pub use zbuffer::{Cache, Reuse, Reusing, Update, ZBuffer};
+pub(crate) use export::*;
+pub(crate) use model::*;
+pub(crate) use plan::join_inside as plan_join_inside;
+pub(crate) use plan::JOIN_SPACINGS;
+pub(crate) use stats::*;
+pub(crate) use zbuffer::{Cache, Reuse, Reusing, Update, ZBuffer};
 
 #[cfg(test)]
 mod tests {

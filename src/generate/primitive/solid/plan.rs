@@ -390,7 +390,7 @@ type Todo = (Vec<Vec<Vec<DVec2>>>, Vec<Vec<(DVec2, DVec2)>>, usize);
 /// The longest join of connected infill, in spacings: lines at 45° to an
 /// edge end √2 spacings apart along it; at 3 spacings, edges down to 19.5°
 /// (1/sin θ ≤ 3) are joined, longer joins would lay thick seams.
-pub const JOIN_SPACINGS: f64 = 3.0;
+pub(crate) const JOIN_SPACINGS: f64 = 3.0;
 
 /// Connected infill: each infill path from `from` on is appended to the one
 /// before it when the straight join from the one's end to the other's start
@@ -418,7 +418,7 @@ fn connect(paths: &mut Vec<Vec<DVec2>>, from: usize, region: &Region, longest: f
 /// lies in the closed region: it meets no boundary piece but at its ends,
 /// and its midpoint is inside or on the boundary. A segment touching the
 /// boundary between its ends counts as leaving (a join is only skipped).
-pub fn join_inside(region: &Region, a: DVec2, b: DVec2) -> bool {
+pub(crate) fn join_inside(region: &Region, a: DVec2, b: DVec2) -> bool {
     let eps = region.eps();
     if a.distance(b) <= eps {
         return true;

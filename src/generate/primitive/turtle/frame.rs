@@ -22,7 +22,7 @@ use glam::DVec3;
 
 /// Why a frame cannot face the way asked.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum FrameError {
+pub(crate) enum FrameError {
     /// The heading is the zero vector.
     ZeroHeading,
     /// `up` is zero or parallel to the heading.
@@ -42,7 +42,7 @@ impl std::error::Error for FrameError {}
 
 /// Where the turtle is and which way it faces.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Frame {
+pub(crate) struct Frame {
     /// Position, recipe coordinates, mm.
     pub pos: DVec3,
     /// Unit heading: where `forward` goes.
@@ -54,7 +54,7 @@ pub struct Frame {
 }
 
 /// sin and cos of `deg` degrees, exact at multiples of 90°.
-pub fn sin_cos_deg(deg: f64) -> (f64, f64) {
+pub(crate) fn sin_cos_deg(deg: f64) -> (f64, f64) {
     let a = deg - 360.0 * libm::floor(deg / 360.0); // [0, 360]
     let q = libm::round(a / 90.0); // quarter turns, 0..=4
     let r = (a - 90.0 * q) * (std::f64::consts::PI / 180.0); // [-pi/4, pi/4]
@@ -79,7 +79,7 @@ fn turn(a: DVec3, b: DVec3, deg: f64) -> (DVec3, DVec3) {
 
 impl Frame {
     /// A frame at `pos` facing `heading`, with `up` made perpendicular to it.
-    pub fn new(pos: DVec3, heading: DVec3, up: DVec3) -> Result<Frame, FrameError> {
+    pub(crate) fn new(pos: DVec3, heading: DVec3, up: DVec3) -> Result<Frame, FrameError> {
         let h = heading.try_normalize().ok_or(FrameError::ZeroHeading)?;
         // the part of `up` across the heading; none when they are parallel
         let across = h.cross(up).length() > 1e-9 * up.length();
@@ -111,7 +111,7 @@ impl Frame {
     /// +x, up +z) in that order give back `[a, b, c]` for |b| < 90°.
     /// yaw = atan2(h_y, h_x), pitch = asin(h_z), roll = atan2(l_z, u_z)
     /// (the left axis rises by sin c · cos b, up keeps cos c · cos b).
-    pub fn angles(&self) -> [f64; 3] {
+    pub(crate) fn angles(&self) -> [f64; 3] {
         let h = self.heading;
         [
             libm::atan2(h.y, h.x).to_degrees(),
@@ -121,20 +121,20 @@ impl Frame {
     }
 
     /// Turns about the up axis; positive turns left.
-    pub fn yaw(&mut self, deg: f64) {
+    pub(crate) fn yaw(&mut self, deg: f64) {
         (self.heading, self.left) = turn(self.heading, self.left, deg);
         self.orthonormalize();
     }
 
     /// Turns about the left axis; positive raises the nose.
-    pub fn pitch(&mut self, deg: f64) {
+    pub(crate) fn pitch(&mut self, deg: f64) {
         (self.heading, self.up) = turn(self.heading, self.up, deg);
         self.left = self.up.cross(self.heading);
         self.orthonormalize();
     }
 
     /// Turns about the heading; positive lifts the left side.
-    pub fn roll(&mut self, deg: f64) {
+    pub(crate) fn roll(&mut self, deg: f64) {
         (self.left, self.up) = turn(self.left, self.up, deg);
         self.orthonormalize();
     }
@@ -142,7 +142,11 @@ impl Frame {
     /// Faces `heading`; with `up`, the up axis is `up` made perpendicular to
     /// it, else the frame turns by the smallest rotation taking the old
     /// heading to the new one (about up when they are opposite).
-    pub fn set_heading(&mut self, heading: DVec3, up: Option<DVec3>) -> Result<(), FrameError> {
+    pub(crate) fn set_heading(
+        &mut self,
+        heading: DVec3,
+        up: Option<DVec3>,
+    ) -> Result<(), FrameError> {
         if let Some(up) = up {
             *self = Frame::new(self.pos, heading, up)?;
             return Ok(());

@@ -17,19 +17,19 @@ use crate::base::toolpath::{Event, Toolpath};
 
 /// Deepest nesting of procedure calls (a procedure calling itself with no
 /// `if` to stop it reaches this at once).
-pub const MAX_CALL_DEPTH: usize = 200;
+pub(crate) const MAX_CALL_DEPTH: usize = 200;
 /// Filament speed of `extrude` in place without `feed:`, mm/s.
-pub const DEFAULT_FEED: f64 = 1.0;
+pub(crate) const DEFAULT_FEED: f64 = 1.0;
 /// Filament of a hair's blob without `blob:`, mm (about 0.1 mm³ of 1.75 mm
 /// filament: a bead a nozzle wide and high).
-pub const DEFAULT_HAIR_BLOB: f64 = 0.05;
+pub(crate) const DEFAULT_HAIR_BLOB: f64 = 0.05;
 /// Extrude rate of a hair's pull without `rate:`, mm of filament per mm: a
 /// third of ExtruderTurtle's 0.03 for a 0.2 mm layer, "extruding little".
-pub const DEFAULT_HAIR_RATE: f64 = 0.01;
+pub(crate) const DEFAULT_HAIR_RATE: f64 = 0.01;
 
 /// What a run may produce and how it starts.
 #[derive(Clone, Copy, Debug)]
-pub struct Limits {
+pub(crate) struct Limits {
     /// Most strings plus events (the recipe's `max_strings`).
     pub max_strings: u64,
     /// Most steps (commands run and L-system symbols visited).
@@ -38,7 +38,7 @@ pub struct Limits {
 
 /// A compiled program ready to run.
 #[derive(Clone, Debug)]
-pub struct Program {
+pub(crate) struct Program {
     /// The start frame.
     pub start: Frame,
     /// Seed of `rand()`.
@@ -97,7 +97,7 @@ enum Task<'a> {
 
 /// Counts of a run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Counts {
+pub(crate) struct Counts {
     /// Strings made.
     pub strings: u64,
     /// Events made.
@@ -107,17 +107,12 @@ pub struct Counts {
 impl Program {
     /// Runs the program: strings start with cross-section `c` and speed `v`;
     /// `area` (mm²) turns `extrude_rate` into a cross-section.
-    pub fn run(&self, c: f64, v: f64, area: f64, limits: Limits) -> Result<Toolpath> {
+    pub(crate) fn run(&self, c: f64, v: f64, area: f64, limits: Limits) -> Result<Toolpath> {
         let (counts, _) = self.execute(c, v, area, limits, None)?;
         let mut tp = Toolpath::with_capacity(self.start.pos, counts.strings as usize);
         tp.events.reserve(counts.events as usize);
         let (_, tp) = self.execute(c, v, area, limits, Some(tp))?;
         Ok(tp.expect("a building run returns its toolpath"))
-    }
-
-    /// Counts what the program makes, storing nothing.
-    pub fn count(&self, c: f64, v: f64, area: f64, limits: Limits) -> Result<Counts> {
-        Ok(self.execute(c, v, area, limits, None)?.0)
     }
 
     fn execute(
@@ -157,16 +152,16 @@ impl Program {
 }
 
 /// Steps a program may run before it has made anything (about 0.4 s).
-pub const IDLE_STEPS: u64 = 4_000_000;
+pub(crate) const IDLE_STEPS: u64 = 4_000_000;
 /// Steps allowed for each string or event made, on top of [`IDLE_STEPS`]:
 /// the gallery's L-systems and recursive procedures need fewer than 8.
-pub const STEPS_PER_STRING: u64 = 16;
+pub(crate) const STEPS_PER_STRING: u64 = 16;
 
 /// Most `draw_turtle` markers a part keeps (the rest are not drawn).
-pub const MAX_MARKERS: usize = 10_000;
+pub(crate) const MAX_MARKERS: usize = 10_000;
 
 /// Most frames `push` may save before a `pop`.
-pub const MAX_SAVED: usize = 100_000;
+pub(crate) const MAX_SAVED: usize = 100_000;
 
 /// A lower bound of the steps `cmds` run, known without running them: every
 /// command is a step, a `repeat` of a constant count runs its body that many

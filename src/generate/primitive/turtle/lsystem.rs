@@ -15,11 +15,12 @@ use super::program::{Cmd, Val};
 
 /// Most iterations an L-system may ask for (a word of one symbol doubling
 /// every iteration is already 2^40 symbols long there).
-pub const MAX_ITERATIONS: u32 = 40;
+pub(crate) const MAX_ITERATIONS: u32 = 40;
 
 /// A compiled L-system: symbols numbered in order of first appearance.
 #[derive(Clone, Debug)]
-pub struct Lsystem {
+pub(crate) struct Lsystem {
+    #[cfg_attr(not(test), allow(dead_code))]
     /// The symbols, by number.
     pub symbols: Vec<char>,
     /// The axiom, as symbol numbers.
@@ -33,9 +34,10 @@ pub struct Lsystem {
 }
 
 impl Lsystem {
+    #[cfg(test)]
     /// The word after `n` iterations, if it has at most `max` symbols (for tests
     /// and reports; the interpreter never builds it).
-    pub fn word(&self, n: u32, max: usize) -> Option<String> {
+    pub(crate) fn word(&self, n: u32, max: usize) -> Option<String> {
         let mut w = self.axiom.clone();
         for _ in 0..n {
             let mut next = Vec::new();

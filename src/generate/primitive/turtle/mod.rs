@@ -15,19 +15,19 @@
 //! not finite, recursion without end, a program over the `max_strings`
 //! limit), is an input error naming its key path.
 
-pub mod frame;
-pub mod interp;
-pub mod lsystem;
-pub mod program;
+pub(crate) mod frame;
+pub(crate) mod interp;
+pub(crate) mod lsystem;
+pub(crate) mod program;
 
-pub use frame::Frame;
+pub(crate) use frame::Frame;
 
 use crate::base::error::{Error, Result};
 use crate::base::toolpath::Toolpath;
 
 /// What a turtle needs from its part and recipe.
 #[derive(Clone, Copy, Debug)]
-pub struct Env {
+pub(crate) struct Env {
     /// The part's cross-section, mm² (until the program sets one).
     pub cross_section: f64,
     /// The part's speed, mm/s (until the program sets one).
@@ -59,7 +59,7 @@ impl Turtle {
 
 /// Runs a compiled program from `env` (the part's cross-section and speed,
 /// the recipe's limits); errors name key paths relative to `turtle`.
-pub fn run(prog: &interp::Program, env: &Env) -> Result<Turtle> {
+pub(crate) fn run(prog: &interp::Program, env: &Env) -> Result<Turtle> {
     let limits = interp::Limits {
         max_strings: env.max_strings,
         max_steps: env.max_strings.saturating_mul(8).saturating_add(1_000_000),

@@ -10,7 +10,7 @@ use crate::base::expr::Expr;
 
 /// A compiled value: an expression and the names its extra slots hold.
 #[derive(Clone, Debug)]
-pub struct Val {
+pub(crate) struct Val {
     /// The expression.
     pub expr: Expr,
     /// Names of the loop counters and procedure parameters in scope, in slot order.
@@ -25,11 +25,11 @@ pub struct Val {
 /// from +x, counter-clockwise seen from above) and `pitch()` (degrees above
 /// the bed's plane), the `roll()` about it (degrees, the left side lifted),
 /// and `pen()` (1 down, 0 up). The position is `x`, `y`, `z`.
-pub const STATE: [&str; 4] = ["yaw()", "pitch()", "roll()", "pen()"];
+pub(crate) const STATE: [&str; 4] = ["yaw()", "pitch()", "roll()", "pen()"];
 
 /// Which axis a turn is about.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Axis {
+pub(crate) enum Axis {
     /// About up: `yaw`, `left`, `right`.
     Yaw,
     /// About left: `pitch`.
@@ -40,7 +40,7 @@ pub enum Axis {
 
 /// A setting of the deposition state.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Setting {
+pub(crate) enum Setting {
     /// mm of filament per mm of travel.
     ExtrudeRate,
     /// mm².
@@ -52,7 +52,7 @@ pub enum Setting {
 /// What a command does, with values compiled.
 #[derive(Clone, Debug)]
 #[allow(missing_docs)]
-pub enum Op {
+pub(crate) enum Op {
     /// `forward` (sign 1), `backward` (−1).
     Forward(Val, f64),
     Lift(Val),
@@ -104,7 +104,7 @@ pub enum Op {
 
 /// A compiled command and its key path (relative to `turtle`).
 #[derive(Clone, Debug)]
-pub struct Cmd {
+pub(crate) struct Cmd {
     /// Key path, e.g. `program[3].do[1].forward`.
     pub place: String,
     /// What it does.
@@ -113,11 +113,9 @@ pub struct Cmd {
 
 /// A compiled procedure.
 #[derive(Clone, Debug)]
-pub struct Proc {
+pub(crate) struct Proc {
     /// Its name.
     pub name: String,
-    /// How many parameters it takes.
-    pub arity: usize,
-    /// Its body (parameters are slots 0..arity).
+    /// Its body (its parameters are the first slots).
     pub body: Vec<Cmd>,
 }

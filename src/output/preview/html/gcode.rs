@@ -9,7 +9,7 @@ use glam::DVec3;
 
 /// One G0/G1 move read back from G-code, in recipe coordinates.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Move {
+pub(crate) struct Move {
     /// Where the move ends.
     pub to: DVec3,
     /// Feed rate in force, mm/min.
@@ -26,9 +26,10 @@ pub struct Move {
     pub machine_um: [i64; 3],
 }
 
+#[cfg(test)]
 /// Reads the moves of p3dp's G-code (G90; M82 or M83; G92 E), machine
 /// coordinates turned back into recipe coordinates by subtracting `origin`.
-pub fn moves(gcode: &str, origin: DVec3) -> Vec<Move> {
+pub(crate) fn moves(gcode: &str, origin: DVec3) -> Vec<Move> {
     let mut parser = Parser::new(origin);
     gcode
         .lines()
@@ -251,7 +252,7 @@ impl Parser {
 
 /// G-code read as it is written (a writer): per move only what the viewer
 /// draws, neither the text nor the [`Move`]s kept ([`reader`] makes one).
-pub struct Reader {
+pub(crate) struct Reader {
     parser: Parser,
     /// The end of the last line, not yet read.
     partial: Vec<u8>,

@@ -21,8 +21,10 @@
 mod gcode;
 mod page;
 
-pub use gcode::{moves, Move, Reader};
-pub use page::{page_with, write_page, Page};
+#[cfg(test)]
+pub(crate) use gcode::moves;
+pub(crate) use gcode::Reader;
+pub(crate) use page::{page_with, write_page};
 
 use std::collections::HashSet;
 use std::io::Write;
@@ -32,10 +34,9 @@ use glam::DVec3;
 use serde_json::json;
 
 use self::page::script_json;
-use super::{Options, Render, Scene};
+use super::{Options, Scene};
 use crate::analyse::plan::Plan;
 use crate::analyse::stats::Stats;
-use crate::base::error::Result;
 use crate::base::format::hms;
 use crate::base::geom::passes::Grid;
 use crate::base::par;
@@ -119,19 +120,10 @@ fn surface_piece(
     }
 }
 
-/// The viewer page for `plan`, whose G-code is `gcode` and stats `stats`.
-pub fn page(plan: &Plan, gcode: &str, stats: &Stats, opts: &Options) -> Page {
-    let (data, points) = data(plan, gcode, stats, opts);
-    Page {
-        html: page_with(&stats.name, &data, &serde_json::Value::Null),
-        points,
-    }
-}
-
 /// The G-code reader of `plan`'s viewer: the first step of [`read`], the
 /// writer the G-code goes to as it is written (it keeps per move only what
 /// the viewer draws, and which strings the checks flagged).
-pub fn reader(plan: &Plan) -> Reader {
+pub(crate) fn reader(plan: &Plan) -> Reader {
     let flags = super::scene::flags(plan);
     let ends = flagged_ends(plan, &flags);
     let mut r = Reader::new(origin(plan), ends, filament_area(plan));
@@ -141,7 +133,7 @@ pub fn reader(plan: &Plan) -> Reader {
 
 /// A viewer before the G-code is read: the plan read for drawing (but for
 /// its flags, which the [`Reader`] holds) and what it shows.
-pub struct Drawing<'p> {
+pub(crate) struct Drawing<'p> {
     scene: Scene<'p>,
     opts: Options,
 }
@@ -149,7 +141,7 @@ pub struct Drawing<'p> {
 /// The second step of [`read`], which needs neither the G-code nor its
 /// stats (a caller with a thread to spare runs it while the G-code is
 /// written): the spacing of every path's passes.
-pub fn draw<'p>(plan: &'p Plan, opts: &Options) -> Drawing<'p> {
+pub(crate) fn draw<'p>(plan: &'p Plan, opts: &Options) -> Drawing<'p> {
     Drawing {
         scene: Scene::unflagged(plan),
         opts: *opts,
@@ -158,24 +150,11 @@ pub fn draw<'p>(plan: &'p Plan, opts: &Options) -> Drawing<'p> {
 
 /// The last step of [`read`]: what the viewer shows, from `drawing`, the
 /// G-code `reader` read and the `stats` its writing returned.
-pub fn finish(drawing: Drawing, mut reader: Reader, stats: &Stats) -> Data {
+pub(crate) fn finish(drawing: Drawing, mut reader: Reader, stats: &Stats) -> Data {
     reader.end();
     let mut scene = drawing.scene;
     scene.flagged = std::mem::take(&mut reader.flags);
     Data::new(scene.plan, &scene, reader, stats, &drawing.opts)
-}
-
-/// Reads `plan`'s G-code as `render` writes it (neither its text nor its
-/// moves kept) into what the viewer shows; with the stats `render` returned.
-///
-/// One step after the other: [`reader`], `render` into it, [`draw`],
-/// [`finish`]. A caller with a thread to spare runs `render` and [`draw`]
-/// side by side instead (`par::join`); the data are the same.
-pub fn read(plan: &Plan, opts: &Options, render: Render) -> Result<(Data, Stats)> {
-    let mut r = reader(plan);
-    let stats = render(&mut r)?;
-    let drawing = draw(plan, opts);
-    Ok((finish(drawing, r, &stats), stats))
 }
 
 fn origin(plan: &Plan) -> DVec3 {
@@ -195,7 +174,12 @@ fn filament_area(plan: &Plan) -> f64 {
 /// What the viewer shows of `plan` (whose G-code is `gcode` and stats
 /// `stats`): its moves, stats and findings, as the JSON the page reads; and
 /// how many points it carries.
-pub fn data(plan: &Plan, gcode: &str, stats: &Stats, opts: &Options) -> (serde_json::Value, usize) {
+pub(crate) fn data(
+    plan: &Plan,
+    gcode: &str,
+    stats: &Stats,
+    opts: &Options,
+) -> (serde_json::Value, usize) {
     let mut r = reader(plan);
     r.read_all(gcode.as_bytes());
     let data = finish(draw(plan, opts), r, stats);
@@ -205,7 +189,7 @@ pub fn data(plan: &Plan, gcode: &str, stats: &Stats, opts: &Options) -> (serde_j
 /// What the viewer shows of a plan: per move its point, feed rate, kind,
 /// cross-section, spacing and normal (written as base64 of little-endian
 /// binary), and the small fields (stats, findings, colour ranges…).
-pub struct Data {
+pub(crate) struct Data {
     small: serde_json::Value,
     to: Vec<DVec3>,
     feed: Vec<f64>,
@@ -310,7 +294,7 @@ impl Data {
     }
 
     /// Points of the path (= the G-code's moves that change X, Y or Z).
-    pub fn points(&self) -> usize {
+    pub(crate) fn points(&self) -> usize {
         self.to.len()
     }
 
@@ -372,7 +356,7 @@ impl Data {
     }
 
     /// The JSON the page reads, written to `w` (base64 streamed).
-    pub fn write_json(&self, w: &mut dyn Write) -> std::io::Result<()> {
+    pub(crate) fn write_json(&self, w: &mut dyn Write) -> std::io::Result<()> {
         // the small fields' object with the blobs put in front of its fields
         let small = script_json(&self.small);
         w.write_all(b"{")?;
@@ -385,7 +369,7 @@ impl Data {
     }
 
     /// The JSON the page reads, as a value.
-    pub fn to_value(&self) -> serde_json::Value {
+    pub(crate) fn to_value(&self) -> serde_json::Value {
         let mut v = self.small.clone();
         for key in BLOBS {
             let mut bytes = Vec::new();

@@ -8,14 +8,6 @@ use super::Data;
 /// The viewer page; `__P3DP_TITLE__`, `__P3DP_LIVE__` and `__P3DP_DATA__` are filled in.
 const TEMPLATE: &str = include_str!("viewer.html");
 
-/// A viewer page and how many points it carries.
-pub struct Page {
-    /// The HTML text.
-    pub html: String,
-    /// Points of the path (= the G-code's moves that change X, Y or Z).
-    pub points: usize,
-}
-
 fn escape_html(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
@@ -25,7 +17,7 @@ fn escape_html(s: &str) -> String {
 
 /// Writes the viewer page of `data` under `title` to `w`, the path data
 /// streamed as it is encoded (the same bytes as [`page`]).
-pub fn write_page(title: &str, data: &Data, w: &mut dyn Write) -> std::io::Result<()> {
+pub(crate) fn write_page(title: &str, data: &Data, w: &mut dyn Write) -> std::io::Result<()> {
     let mut rest = TEMPLATE;
     let keys = ["__P3DP_TITLE__", "__P3DP_LIVE__", "__P3DP_DATA__"];
     loop {
@@ -49,7 +41,7 @@ pub fn write_page(title: &str, data: &Data, w: &mut dyn Write) -> std::io::Resul
 /// A viewer page showing `data` (as [`data`] makes it; `null`: no model
 /// yet) under `title`. `live` is `null` for a file; `p3dp watch` gives the
 /// state the page starts from and follows its server-sent events.
-pub fn page_with(title: &str, data: &serde_json::Value, live: &serde_json::Value) -> String {
+pub(crate) fn page_with(title: &str, data: &serde_json::Value, live: &serde_json::Value) -> String {
     fill(
         TEMPLATE,
         &[

@@ -26,23 +26,20 @@ mod decor;
 mod model;
 mod raster;
 
-pub use model::flat_tube;
-
 use glam::DVec3;
 use tiny_skia::Pixmap;
 
 use self::decor::{header, legend, legend_width, marks};
 use self::model::{Item, Model, Palette};
 use self::raster::{paint_bands, paint_strokes, Px};
-use super::{Basis, ColorMode, Options, Render, Scene, Size};
+use super::{Basis, ColorMode, Options, Scene, Size};
 use crate::analyse::plan::Plan;
 use crate::analyse::stats::Stats;
-use crate::base::error::Result;
 use crate::base::par;
 
 /// Where recipe space lands in the image.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Frame {
+pub(crate) struct Frame {
     /// The view.
     pub basis: Basis,
     /// Pixels per mm.
@@ -54,9 +51,10 @@ pub struct Frame {
 }
 
 impl Frame {
+    #[cfg(test)]
     /// The largest scale that fits `points` (grown by `pad` mm on each side)
     /// into the pixel rectangle `rect` = [x0, y0, x1, y1], centred in it.
-    pub fn fit(basis: Basis, points: &[DVec3], rect: [f64; 4], pad: f64) -> Frame {
+    pub(crate) fn fit(basis: Basis, points: &[DVec3], rect: [f64; 4], pad: f64) -> Frame {
         let mut lo = (f64::INFINITY, f64::INFINITY);
         let mut hi = (f64::NEG_INFINITY, f64::NEG_INFINITY);
         for p in points {
@@ -69,7 +67,7 @@ impl Frame {
 
     /// [`Frame::fit`] given the lowest and highest screen-plane coordinates
     /// (u, w) of the points (lo > hi: none).
-    pub fn fit_box(
+    pub(crate) fn fit_box(
         basis: Basis,
         mut lo: (f64, f64),
         mut hi: (f64, f64),
@@ -92,7 +90,7 @@ impl Frame {
     }
 
     /// The pixel (x right, y down) where recipe point `p` lands.
-    pub fn pixel(&self, p: DVec3) -> (f64, f64) {
+    pub(crate) fn pixel(&self, p: DVec3) -> (f64, f64) {
         let (u, w, _) = self.basis.project(p);
         (
             self.pixel_centre.0 + self.scale * (u - self.centre.0),
@@ -102,7 +100,7 @@ impl Frame {
 }
 
 /// A rendered preview and where recipe space landed in it.
-pub struct Rendered {
+pub(crate) struct Rendered {
     /// The image (premultiplied RGBA).
     pub pixmap: Pixmap,
     /// The projection used.
@@ -124,31 +122,16 @@ const PIECE: usize = 1 << 14;
 /// A PNG preview drawn but not finished: the background, the model and its
 /// marks painted; the header and legend, which need the G-code's stats, not
 /// yet ([`finish`]).
-pub struct Drawing<'p> {
+pub(crate) struct Drawing<'p> {
     pixmap: Pixmap,
     frame: Frame,
     scene: Scene<'p>,
     opts: Options,
 }
 
-/// The full preview of `plan`: background, model, and unless `opts.bare`
-/// (or the image is too small for text) the name, stats and legend; with the
-/// stats `render` returned.
-///
-/// One step after the other: the G-code is written into nothing for the
-/// stats (so that its planner's memory is let go before the strokes take
-/// theirs), then [`draw`], then [`finish`]. A caller with a thread to spare
-/// runs `render` and [`draw`] side by side instead (`par::join`); the image
-/// is the same.
-pub fn preview(plan: &Plan, opts: &Options, render: Render) -> Result<(Rendered, Stats)> {
-    let stats = render(&mut std::io::sink())?;
-    let drawing = draw(plan, opts);
-    Ok((finish(drawing, &stats), stats))
-}
-
 /// The header and legend drawn over the model (unless bare or too small):
 /// the last step of [`preview`], the only one that needs the stats.
-pub fn finish(drawing: Drawing, stats: &Stats) -> Rendered {
+pub(crate) fn finish(drawing: Drawing, stats: &Stats) -> Rendered {
     let Drawing {
         mut pixmap,
         frame,
@@ -173,7 +156,7 @@ pub fn finish(drawing: Drawing, stats: &Stats) -> Rendered {
 /// then painted in bands of [`BAND`] rows ([`paint_bands`]). Every pixel
 /// sees the same strokes in the same order however the work is split, so
 /// the image is the same on any number of threads.
-pub fn draw<'p>(plan: &'p Plan, opts: &Options) -> Drawing<'p> {
+pub(crate) fn draw<'p>(plan: &'p Plan, opts: &Options) -> Drawing<'p> {
     let scene = Scene::new(plan);
     let (rect, _, _) = layout(&scene, opts);
     let model = Model::new(
@@ -247,7 +230,7 @@ fn layout(scene: &Scene, opts: &Options) -> ([f64; 4], bool, u32) {
 
 /// A G-code thumbnail: the model alone in filament colour, iso view, on a
 /// transparent background.
-pub fn thumbnail(scene: &Scene, size: Size) -> Pixmap {
+pub(crate) fn thumbnail(scene: &Scene, size: Size) -> Pixmap {
     let mut pm = Pixmap::new(size.width, size.height).expect("sizes are 1..=8192");
     let (w, h) = (size.width as f64, size.height as f64);
     let pad = (w.min(h) * 0.04).max(0.5);
@@ -281,13 +264,13 @@ fn sort(items: &mut [Item]) {
 
 /// PNG bytes of `pm`: RGB, or RGBA with `alpha` (colours un-premultiplied),
 /// compressed as hard as the encoder can (the G-code thumbnails).
-pub fn encode(pm: &Pixmap, alpha: bool) -> Vec<u8> {
+pub(crate) fn encode(pm: &Pixmap, alpha: bool) -> Vec<u8> {
     encode_with(pm, alpha, image::codecs::png::CompressionType::Best)
 }
 
 /// [`encode`] with a quicker compression: the PNG previews (a flat
 /// background and smooth shading compress well even so).
-pub fn encode_fast(pm: &Pixmap, alpha: bool) -> Vec<u8> {
+pub(crate) fn encode_fast(pm: &Pixmap, alpha: bool) -> Vec<u8> {
     encode_with(pm, alpha, image::codecs::png::CompressionType::Fast)
 }
 
@@ -319,6 +302,7 @@ fn encode_with(pm: &Pixmap, alpha: bool, level: image::codecs::png::CompressionT
 mod tests {
     use super::*;
     use crate::output::preview::View;
+    pub(crate) use model::flat_tube;
 
     #[test]
     fn fit_centres_and_scales() {

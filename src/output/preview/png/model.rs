@@ -407,7 +407,7 @@ impl Palette {
 /// across the surface along b; seen across the string's image (screen
 /// direction e) it spans sqrt((thick·n·e)² + (along·b·e)²), of which the face
 /// makes |along·b·e| and the edge |thick·n·e|.
-pub fn flat_tube(basis: &Basis, t: DVec3, n: DVec3, thick: f64, along: f64) -> (f64, f64) {
+pub(crate) fn flat_tube(basis: &Basis, t: DVec3, n: DVec3, thick: f64, along: f64) -> (f64, f64) {
     let (du, dw) = (t.dot(basis.right), t.dot(basis.up));
     let l = (du * du + dw * dw).sqrt();
     if l < 1e-6 {

@@ -2,22 +2,45 @@
 //! block: PNGs of the sizes asked for, where PrusaSlicer looks for them, the
 //! same bytes on every build.
 //!
-//! Past the public face: the blocks are read back with the writer's own
-//! reader, `output::preview::thumbnail::parse`. It runs the binary too:
-//! home beside `output::preview::thumbnail` for the reader's half, here for
-//! the rest.
+//! The blocks are read back here, independently of the writer: each
+//! `; thumbnail begin WxH LEN` block's base64 lines (at most 78 characters),
+//! LEN the count of base64 characters, closed by `; thumbnail end`.
+
+use base64::Engine;
 
 use crate::common::*;
-use crate::preview::{ok, s};
 
-/// Thumbnail blocks read back: (width, height, PNG bytes). `parse` checks
-/// LEN, the line length of 78 and that every block is closed.
+/// Thumbnail blocks read back: (width, height, PNG bytes); every block
+/// closed, its LEN the base64 it holds, at most 78 of them a line.
 fn thumbnails(gcode: &str) -> Vec<(u32, u32, Vec<u8>)> {
-    p3dp::output::preview::thumbnail::parse(gcode)
-        .expect("thumbnail blocks as PrusaSlicer writes them")
-        .into_iter()
-        .map(|t| (t.width, t.height, t.png))
-        .collect()
+    let mut blocks = Vec::new();
+    let mut lines = gcode.lines();
+    while let Some(l) = lines.next() {
+        let Some(head) = l.strip_prefix("; thumbnail begin ") else {
+            continue;
+        };
+        let (size, len) = head.split_once(' ').expect("WxH LEN");
+        let (w, h) = size.split_once('x').expect("WxH");
+        let mut text = String::new();
+        for l in lines.by_ref() {
+            if l == "; thumbnail end" {
+                break;
+            }
+            let data = l.strip_prefix("; ").expect("a comment line");
+            assert!(data.len() <= 78, "{} characters on a line", data.len());
+            text.push_str(data);
+        }
+        assert_eq!(text.len(), len.parse::<usize>().unwrap(), "LEN");
+        let png = base64::engine::general_purpose::STANDARD
+            .decode(&text)
+            .unwrap();
+        blocks.push((w.parse().unwrap(), h.parse().unwrap(), png));
+    }
+    blocks
+}
+
+fn s(p: &std::path::Path) -> &str {
+    p.to_str().unwrap()
 }
 
 #[test]
@@ -78,4 +101,14 @@ fn gcode_thumbnails_parse_back_as_pngs_of_the_sizes_asked_for() {
     ok(&p3dp(&dir, &["build", s(&sphere), "-o", "plain.gcode"]));
     let plain = std::fs::read_to_string(dir.join("plain.gcode")).unwrap();
     assert!(!plain.contains("thumbnail"));
+}
+
+fn ok(out: &std::process::Output) -> String {
+    assert!(
+        out.status.success(),
+        "exit {:?}\n{}",
+        out.status.code(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).to_string()
 }

@@ -10,24 +10,22 @@
 //! region, offset and piece tests beside `base::geom`); the tests that also
 //! run the binary keep that half here.
 
-use crate::common;
-
 use std::f64::consts::{FRAC_PI_4, PI};
 use std::path::{Path, PathBuf};
 
+use crate::app::prepare::plan;
+use crate::base::toolpath::Toolpath;
+use crate::generate::model::make_part;
+use crate::generate::primitive::solid::piece::Piece;
+use crate::generate::primitive::solid::{Loop, Region, Solid};
+use crate::generate::primitive::Primitive;
+use crate::recipe::Recipe;
 use glam::{DVec2, DVec3};
-use p3dp::app::prepare::plan;
-use p3dp::base::toolpath::Toolpath;
-use p3dp::generate::model::make_part;
-use p3dp::generate::primitive::solid::piece::Piece;
-use p3dp::generate::primitive::solid::{Loop, Region, Solid};
-use p3dp::generate::primitive::Primitive;
-use p3dp::recipe::Recipe;
 
 /// Writes a one-part recipe whose primitive is `solid: {SOLID}` (YAML flow
 /// text) into a fresh folder and returns its path.
 fn recipe_file(tag: &str, solid: &str) -> PathBuf {
-    let dir = common::tmp(&format!("solid-{tag}"));
+    let dir = crate::base::testing::tmp(&format!("solid-{tag}"));
     let path = dir.join(format!("{tag}.yaml"));
     let text = format!(
         "p3dp: 1\nname: {tag}\nprinter: generic-220\nmaterial: pla\nparts:\n  - name: solid\n    speed: 40\n    primitive:\n      solid: {solid}\n"
@@ -152,15 +150,18 @@ fn each_layer_of_a_box_with_a_hole_has_the_exact_area() {
     assert_eq!(n, 80, "layers 0.2 … 16.0");
     // the same z-buffer in the stats JSON of a real build
     let dir = path.parent().unwrap();
-    let out = common::p3dp(
+    let out = crate::app::testing::p3dp(
         dir,
-        &["build", "box-hole.yaml", "--stats-json", "stats.json"],
+        &[
+            "build",
+            "box-hole.yaml",
+            "-o",
+            "box-hole.gcode",
+            "--stats-json",
+            "stats.json",
+        ],
     );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.success(), "{}", out.stderr);
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("stats.json")).unwrap()).unwrap();
     let layers = json["solids"][0]["layers"].as_array().unwrap();
@@ -346,7 +347,7 @@ fn a_line_tangent_to_a_circle_prints_no_stray_string() {
 
 #[test]
 fn the_bracket_is_its_features_exactly() {
-    let r = load(&common::recipe("bracket.yaml"));
+    let r = load(&crate::base::testing::recipe("bracket.yaml"));
     let p = |name: &str| r.params[name];
     let s = solid_of(&r, 0);
     let slot = 2.0 * p("slot_radius") * p("slot_length") + PI * p("slot_radius").powi(2);
@@ -389,7 +390,7 @@ fn the_bracket_is_its_features_exactly() {
 #[test]
 fn string_counts_are_exact_before_building() {
     for name in ["bracket.yaml", "cup-solid-base.yaml"] {
-        let r = load(&common::recipe(name));
+        let r = load(&crate::base::testing::recipe(name));
         for k in 0..r.parts.len() {
             let t = make_part(&r, k).unwrap();
             assert_eq!(
@@ -412,23 +413,23 @@ fn string_counts_are_exact_before_building() {
 
 #[test]
 fn the_solid_recipes_build_and_print() {
-    let dir = common::tmp("solid-recipes");
+    let dir = crate::base::testing::tmp("solid-recipes");
     for name in ["bracket", "cup-solid-base"] {
-        let recipe = common::recipe(&format!("{name}.yaml"));
+        let recipe = crate::base::testing::recipe(&format!("{name}.yaml"));
         let recipe = recipe.to_str().unwrap();
-        let out = common::p3dp(&dir, &["check", recipe]);
-        let text = String::from_utf8_lossy(&out.stdout).to_string()
-            + &String::from_utf8_lossy(&out.stderr);
-        assert!(out.status.success(), "{text}");
+        let checked = plan(Path::new(recipe), &Default::default()).unwrap();
+        let text = crate::base::finding::summary(&checked.findings);
         assert!(text.contains("0 warnings, 0 errors"), "{text}");
         let json = format!("{name}.json");
-        let out = common::p3dp(&dir, &["build", recipe, "--stats-json", &json]);
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
+        let gcode = format!("{name}.gcode");
+        let out = crate::app::testing::p3dp(
+            &dir,
+            &["build", recipe, "-o", &gcode, "--stats-json", &json],
         );
-        let g = common::parse(&std::fs::read_to_string(dir.join(format!("{name}.gcode"))).unwrap());
+        assert!(out.success(), "{}", out.stderr);
+        let g = crate::base::testing::parse(
+            &std::fs::read_to_string(dir.join(format!("{name}.gcode"))).unwrap(),
+        );
         assert!(g.moves.iter().filter(|m| m.g == 1 && m.de > 0.0).count() > 1000);
         let stats: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(dir.join(&json)).unwrap()).unwrap();
@@ -436,7 +437,7 @@ fn the_solid_recipes_build_and_print() {
         assert!(!stats["solids"][0]["layers"].as_array().unwrap().is_empty());
     }
     // the cup's wall starts on the base's top layer, over its outer perimeter
-    let r = load(&common::recipe("cup-solid-base.yaml"));
+    let r = load(&crate::base::testing::recipe("cup-solid-base.yaml"));
     let s = solid_of(&r, 0);
     let top = s.layers().last().unwrap();
     let outer = &top.slab.unwrap().islands[0].perimeters[0];
@@ -451,7 +452,11 @@ fn the_solid_recipes_build_and_print() {
     // the base is printed bottom up from the bed
     let base = make_part(&r, 0).unwrap();
     assert!((base.points[0].z - r.params["layer"]).abs() < 1e-12);
-    let plan = plan(&common::recipe("cup-solid-base.yaml"), &Default::default()).unwrap();
+    let plan = plan(
+        &crate::base::testing::recipe("cup-solid-base.yaml"),
+        &Default::default(),
+    )
+    .unwrap();
     assert!(plan.failing(true).is_empty());
 }
 
@@ -507,9 +512,9 @@ impl Lcg {
 
 #[test]
 fn random_features_on_a_grid_agree_with_point_tests() {
-    use p3dp::generate::primitive::solid::infill::{direction, spans};
-    use p3dp::generate::primitive::solid::offset::offset;
-    use p3dp::generate::primitive::solid::region::{boolean, evaluate, Op, Shape};
+    use crate::generate::primitive::solid::infill::{direction, spans};
+    use crate::generate::primitive::solid::offset::offset;
+    use crate::generate::primitive::solid::region::{boolean, evaluate, Op, Shape};
 
     fn holds(s: &Shape, p: DVec2) -> bool {
         match *s {
@@ -645,8 +650,8 @@ fn solid_infill_fills_each_layer_with_its_area_times_height() {
 }
 
 /// Layer settings of the z-buffer tests.
-fn zb_settings() -> p3dp::generate::primitive::solid::Settings {
-    use p3dp::generate::primitive::solid::{Infill, Pattern, Settings};
+fn zb_settings() -> crate::generate::primitive::solid::Settings {
+    use crate::generate::primitive::solid::{Infill, Pattern, Settings};
     Settings {
         layer_height: 0.5,
         perimeters: 1,
@@ -664,8 +669,8 @@ fn zb_settings() -> p3dp::generate::primitive::solid::Settings {
 
 #[test]
 fn the_incremental_z_buffer_equals_a_full_rebuild_and_touches_only_its_range() {
-    use p3dp::generate::primitive::solid::region::Op;
-    use p3dp::generate::primitive::solid::{Body, Feature, ZBuffer};
+    use crate::generate::primitive::solid::region::Op;
+    use crate::generate::primitive::solid::{Body, Feature, ZBuffer};
     let st = zb_settings();
     let h = st.layer_height;
     for seed in 1..=6u64 {
@@ -853,7 +858,7 @@ fn grid_infill_lays_both_directions_in_every_layer_inside_the_perimeters() {
 
 #[test]
 fn connected_infill_travels_less_and_its_joins_stay_inside() {
-    use p3dp::generate::primitive::solid::plan_join_inside as join_inside;
+    use crate::generate::primitive::solid::plan_join_inside as join_inside;
     for pattern in ["lines", "grid"] {
         let base = BOX_WITH_HOLE.replace(
             "infill: {angle: 45, spacing: 0.8, alternate: true}",
@@ -931,10 +936,10 @@ fn connected_infill_travels_less_and_its_joins_stay_inside() {
 
 #[test]
 fn the_zbuffer_json_is_the_exact_loops_and_the_svg_draws_a_layer() {
-    use p3dp::generate::primitive::solid::piece::Arc;
+    use crate::generate::primitive::solid::piece::Arc;
     let path = recipe_file("zbuf", BOX_WITH_HOLE);
     let dir = path.parent().unwrap();
-    let out = common::p3dp(
+    let out = crate::app::testing::p3dp(
         dir,
         &[
             "build",
@@ -951,11 +956,7 @@ fn the_zbuffer_json_is_the_exact_loops_and_the_svg_draws_a_layer() {
             "60",
         ],
     );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.success(), "{}", out.stderr);
     let read = |f: &str| -> serde_json::Value {
         serde_json::from_str(&std::fs::read_to_string(dir.join(f)).unwrap()).unwrap()
     };
@@ -1040,7 +1041,7 @@ fn the_zbuffer_json_is_the_exact_loops_and_the_svg_draws_a_layer() {
     for f in ["z.gcode", "z.json", "l.svg"] {
         std::fs::remove_file(dir.join(f)).unwrap();
     }
-    let out = common::p3dp(
+    let out = crate::app::testing::p3dp(
         dir,
         &[
             "build",
@@ -1055,13 +1056,13 @@ fn the_zbuffer_json_is_the_exact_loops_and_the_svg_draws_a_layer() {
             "81",
         ],
     );
-    assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("--zbuffer-layer"));
+    assert_eq!(out.code, 2);
+    assert!(out.stderr.contains("--zbuffer-layer"));
     for f in ["z.gcode", "z.json", "l.svg"] {
         assert!(!dir.join(f).exists(), "{f} written by a failed build");
     }
     // never over an input
-    let out = common::p3dp(
+    let out = crate::app::testing::p3dp(
         dir,
         &[
             "build",
@@ -1072,14 +1073,14 @@ fn the_zbuffer_json_is_the_exact_loops_and_the_svg_draws_a_layer() {
             "zbuf.yaml",
         ],
     );
-    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(out.code, 2);
     assert!(std::fs::read_to_string(&path).unwrap().contains("solid:"));
 }
 
 #[test]
 fn a_kept_z_buffer_re_slices_only_the_edited_feature() {
-    use p3dp::generate::primitive::solid::{Cache, Reusing};
-    use p3dp::recipe::context::Context;
+    use crate::generate::primitive::solid::{Cache, Reusing};
+    use crate::recipe::context::Context;
     // as `p3dp watch` builds: the z-buffers of one build kept for the next
     let reusing = |cache: Cache, path: &std::path::Path| {
         let cx = Context {

@@ -4,10 +4,9 @@
 //! Past the public face: the steps are taken off `Recipe::parts[1].steps`.
 //! Home: beside `generate::primitive::outline`.
 
-use crate::common::*;
-use crate::svg::to_polygon;
+use crate::base::testing::*;
+use crate::recipe::Recipe;
 use glam::DVec2;
-use p3dp::recipe::Recipe;
 
 #[test]
 fn the_star_vase_follows_its_outline_in_every_turn() {
@@ -15,7 +14,7 @@ fn the_star_vase_follows_its_outline_in_every_turn() {
     // without its steps the wall is the outline, turn after turn
     let mut bare = r.clone();
     bare.parts[1].steps.clear();
-    let tp = p3dp::generate::model::make_part(&bare, 1).unwrap();
+    let tp = crate::generate::model::make_part(&bare, 1).unwrap();
     let star: Vec<DVec2> = (0..10)
         .map(|k| {
             let rr = if k % 2 == 0 { 28.0 } else { 15.0 };
@@ -31,7 +30,7 @@ fn the_star_vase_follows_its_outline_in_every_turn() {
     }
     // the finished wall: its steps see s, so at the rim the ripple is
     // ripple·sin(2·pi·ripples·s) in r, on top of the twisted star
-    let fin = p3dp::generate::model::make_part(&r, 1).unwrap();
+    let fin = crate::generate::model::make_part(&r, 1).unwrap();
     assert_eq!(fin.points.len(), tp.points.len());
     let p = |k: &str| r.params[k];
     for (j, ((a, b), s)) in fin.points.iter().zip(&tp.points).zip(u).enumerate() {
@@ -43,4 +42,18 @@ fn the_star_vase_follows_its_outline_in_every_turn() {
         assert!((a.truncate().length() - want).abs() < 1e-9, "point {j}");
         assert!((a.z - z - p("bottom_top")).abs() < 1e-9);
     }
+}
+
+/// Distance from `p` to the closed polygon `poly`.
+fn to_polygon(p: DVec2, poly: &[DVec2]) -> f64 {
+    (0..poly.len())
+        .map(|j| to_segment(p, poly[j], poly[(j + 1) % poly.len()]))
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Distance from `p` to the segment a–b.
+fn to_segment(p: DVec2, a: DVec2, b: DVec2) -> f64 {
+    let d = b - a;
+    let t = ((p - a).dot(d) / d.length_squared()).clamp(0.0, 1.0);
+    p.distance(a + d * t)
 }

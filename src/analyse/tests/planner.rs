@@ -6,15 +6,14 @@
 //! MoveKind, Estimate}`), `Printer::limits`, and `base::format::hms` for the
 //! times the report prints. Home: beside `analyse::planner`.
 
-use crate::common::*;
-use crate::planner::build;
+use crate::analyse::planner::{MoveKind, Planner};
+use crate::base::testing::*;
+use crate::machine::Printer;
 use glam::DVec3;
-use p3dp::analyse::planner::{MoveKind, Planner};
-use p3dp::machine::Printer;
 
 /// Plans the moves of written G-code again, read back as a firmware reads
 /// them (up to the end G-code, which the estimate leaves out).
-fn replan(gcode: &str, printer: &Printer) -> p3dp::analyse::planner::Estimate {
+fn replan(gcode: &str, printer: &Printer) -> crate::analyse::planner::Estimate {
     let first_end_line = printer.end_gcode.lines().next().unwrap();
     let body = &gcode[..gcode.find(first_end_line).unwrap()];
     let g = parse(body);
@@ -66,7 +65,7 @@ fn globe_estimate_is_the_written_moves_planned() {
         1e-12,
     );
     // the summary comments carry the estimate, per part too
-    let hms = p3dp::base::format::hms;
+    let hms = crate::base::format::hms;
     assert!(gcode.contains(&format!(
         "; estimated printing time = {}\n",
         hms(s.print_time_s)
@@ -123,4 +122,15 @@ fn klipper_profile_uses_square_corner_velocity() {
     .unwrap();
     let e = Printer::from_file(&path).unwrap_err().to_string();
     assert!(e.contains("kinematics.max_acceleration"), "{e}");
+}
+
+fn build(recipe_name: &str, printer: Option<&str>) -> (String, crate::analyse::stats::Stats) {
+    let opts = crate::app::prepare::Options {
+        printer: printer.map(str::to_string),
+        ..Default::default()
+    };
+    let plan = crate::app::prepare::plan(&recipe(recipe_name), &opts).unwrap();
+    let mut out = Vec::new();
+    let stats = crate::app::pipeline::render(&plan, &mut out).unwrap();
+    (String::from_utf8(out).unwrap(), stats)
 }

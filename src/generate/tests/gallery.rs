@@ -8,12 +8,12 @@
 //! `generate::assembly`.
 
 use std::f64::consts::{PI, TAU};
+use std::path::PathBuf;
 
-use crate::gallery::{extruding_points, path};
+use crate::base::toolpath::{polar, Toolpath};
+use crate::generate::assembly::make_parts;
+use crate::recipe::Recipe;
 use glam::DVec3;
-use p3dp::base::toolpath::{polar, Toolpath};
-use p3dp::generate::assembly::make_parts;
-use p3dp::recipe::Recipe;
 
 /// The recipes made of a filled bottom and a wall standing on it.
 const ON_A_BOTTOM: [&str; 5] = [
@@ -737,4 +737,17 @@ fn textured_lamp_shade_modulates_thickness_at_constant_flow() {
         let circle = (radius * radius - (q.z - c) * (q.z - c)).max(0.0).sqrt();
         assert!((r_of(*q) - circle).abs() < 1e-6);
     }
+}
+
+/// Points of extruding strings (both ends).
+fn extruding_points(tp: &Toolpath) -> impl Iterator<Item = DVec3> + '_ {
+    (0..tp.len())
+        .filter(|&k| !tp.strings[k].travel)
+        .flat_map(|k| [tp.points[k], tp.points[k + 1]])
+}
+
+fn path(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("recipes")
+        .join(name)
 }

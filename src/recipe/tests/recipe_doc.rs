@@ -7,7 +7,7 @@
 //! `RawRecipe`) and the expression language's names (`base::expr::VAR_NAMES`,
 //! `FUNCTIONS`). Home: beside `recipe::schema` (the keys) and `base::expr`.
 
-use p3dp::recipe::{parse_yaml, RawRecipe};
+use crate::recipe::{parse_yaml, RawRecipe};
 
 /// The names the loader lists for the place where `__probe__` stands in
 /// `yaml`, or none when it takes no map there.
@@ -178,12 +178,12 @@ fn every_key_of_the_loader_is_in_the_reference() {
 fn every_variable_and_function_is_in_the_reference() {
     let doc = doc();
     let mut missing = Vec::new();
-    for v in p3dp::base::expr::VAR_NAMES.iter().chain(&["pi", "e"]) {
+    for v in crate::base::expr::VAR_NAMES.iter().chain(&["pi", "e"]) {
         if !mentioned(&doc, v) {
             missing.push(format!("variable `{v}`"));
         }
     }
-    for f in p3dp::base::expr::FUNCTIONS.split_whitespace() {
+    for f in crate::base::expr::FUNCTIONS.split_whitespace() {
         let name = f.split('(').next().unwrap();
         if !mentioned(&doc, name) {
             missing.push(format!("function `{name}`"));

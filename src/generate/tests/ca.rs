@@ -11,11 +11,12 @@
 
 use std::path::Path;
 
-use crate::common::{p3dp, parse, recipe, tmp};
-use p3dp::generate::model::make_part;
-use p3dp::generate::primitive::ca::{Automaton, CaHelix, Initial, Layout, Pattern, Rule};
-use p3dp::generate::primitive::{PatternHelix, Primitive};
-use p3dp::recipe::Recipe;
+use crate::app::testing::p3dp;
+use crate::base::testing::{parse, recipe, tmp};
+use crate::generate::model::make_part;
+use crate::generate::primitive::ca::{Automaton, CaHelix, Initial, Layout, Pattern, Rule};
+use crate::generate::primitive::{PatternHelix, Primitive};
+use crate::recipe::Recipe;
 use sha2::{Digest, Sha256};
 
 const N: usize = 288;
@@ -423,11 +424,7 @@ fn build_draws_the_pattern_in_gcode_and_png() {
                 "pics/c.png",
             ],
         );
-        assert!(
-            out.status.success(),
-            "{name}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        assert!(out.success(), "{name}: {}", out.stderr);
         let img = png(&dir.join("pics/c.png"));
         assert_eq!(img.dimensions(), (N as u32, layers), "{name}");
         // the cells, first turn first, from the image (first turn at the bottom)

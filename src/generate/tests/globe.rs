@@ -8,9 +8,9 @@
 //! `Recipe::parts[0].steps` (`Step::key`). Home: beside
 //! `generate::step::modulate`.
 
-use crate::common::*;
-use p3dp::base::toolpath::Toolpath;
-use p3dp::recipe::Recipe;
+use crate::base::testing::*;
+use crate::base::toolpath::Toolpath;
+use crate::recipe::Recipe;
 
 const SEA: f64 = 0.65;
 
@@ -25,10 +25,10 @@ struct Globe {
 
 fn globe() -> Globe {
     let mut recipe = Recipe::load(&recipe("globe.yaml"), &[], None).unwrap();
-    let fin = p3dp::generate::model::make_part(&recipe, 0).unwrap();
+    let fin = crate::generate::model::make_part(&recipe, 0).unwrap();
     let last = recipe.parts[0].steps.pop().unwrap();
     assert_eq!(last.key(), "modulate_map");
-    let base = p3dp::generate::model::make_part(&recipe, 0).unwrap();
+    let base = crate::generate::model::make_part(&recipe, 0).unwrap();
     assert_eq!(fin.points, base.points, "modulation must not move points");
     let factor = fin
         .strings

@@ -21,8 +21,8 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 
 use crate::common::*;
-use p3dp::app::prepare::{plan, Options};
-use p3dp::recipe::Recipe;
+use p3dp::{plan, Options};
+use p3dp::Recipe;
 
 /// xorshift64*: a small seeded generator, so a failure can be replayed.
 struct Rng(u64);
@@ -210,7 +210,7 @@ fn try_mutant(path: &Path, build: bool) -> Result<Option<p3dp::Error>, String> {
             } else {
                 let built = catch_unwind(AssertUnwindSafe(|| {
                     plan(path, &Options::default())
-                        .and_then(|p| p3dp::app::pipeline::render(&p, std::io::sink()).map(|_| ()))
+                        .and_then(|p| p3dp::pipeline::render(&p, std::io::sink()).map(|_| ()))
                 }))
                 .map_err(|_| "panicked while building".to_string())?;
                 built.err()
@@ -218,7 +218,7 @@ fn try_mutant(path: &Path, build: bool) -> Result<Option<p3dp::Error>, String> {
         }
     };
     if let Some(e) = &err {
-        if e.kind != p3dp::base::error::Kind::Check {
+        if e.kind != p3dp::Kind::Check {
             if e.file.is_none() {
                 return Err(format!("the error names no file: {e}"));
             }
@@ -295,7 +295,7 @@ fn mutated_gallery_recipes_never_panic_and_errors_have_places() {
                 }
                 Ok(Some(e)) => {
                     errors += 1;
-                    if e.kind != p3dp::base::error::Kind::Check
+                    if e.kind != p3dp::Kind::Check
                         && refused.len() < 2 * gallery.len()
                         && k % 50 == 0
                     {

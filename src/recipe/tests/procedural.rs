@@ -9,14 +9,16 @@
 //! `Primitive::string_count` off `Recipe::parts`. Home: beside
 //! `recipe::expand` and `recipe::resolve`.
 
+use std::path::PathBuf;
+
+use crate::base::testing::root;
 use std::f64::consts::PI;
 
-use crate::common::recipe;
-use crate::procedural::fixture;
+use crate::base::testing::recipe;
+use crate::base::toolpath::{polar, Toolpath};
+use crate::generate::assembly::make_parts;
+use crate::recipe::{parse_yaml, RawRecipe, Recipe};
 use glam::DVec3;
-use p3dp::base::toolpath::{polar, Toolpath};
-use p3dp::generate::assembly::make_parts;
-use p3dp::recipe::{parse_yaml, RawRecipe, Recipe};
 
 /// Resolves recipe `text` as if it were a file in `tests/fixtures/procedural`.
 fn resolve(text: &str) -> Recipe {
@@ -168,7 +170,7 @@ parts:
     );
     // a default over an earlier template param, with its `with` value
     let helix = |k: usize| match &recipe.parts[k].primitive {
-        p3dp::generate::primitive::Primitive::Helix(h) => (h.radius, h.height),
+        crate::generate::primitive::Primitive::Helix(h) => (h.radius, h.height),
         other => panic!("{other:?}"),
     };
     assert_eq!(helix(0), (1.0, 2.0));
@@ -368,7 +370,7 @@ fn lamp_shade_tiers_follow_their_templates_profile() {
     let parts = make_parts(&recipe).unwrap();
     for (t, tp) in parts.iter().enumerate().skip(1) {
         let with = |k: &str| match &uses[t].with[k] {
-            p3dp::recipe::Num::Value(v) => *v,
+            crate::recipe::Num::Value(v) => *v,
             other => panic!("{other:?}"),
         };
         let (r0, r1, h, z0, lobes) = (with("r0"), with("r1"), with("h"), with("z0"), with("lobes"));
@@ -401,4 +403,8 @@ fn lamp_shade_tiers_follow_their_templates_profile() {
         .points
         .iter()
         .all(|p| (polar(*p).0 - 45.0).abs() < 1e-9));
+}
+
+fn fixture(name: &str) -> PathBuf {
+    root().join("tests/fixtures/procedural").join(name)
 }

@@ -11,18 +11,18 @@
 //! `Recipe::parts[0].steps` (`Step::key`), and the font's rendering is
 //! `generate::step::Bitmap::from_text`. Home: beside `generate::step::modulate`.
 
-use crate::common::*;
-use p3dp::generate::step::Bitmap;
-use p3dp::recipe::Recipe;
+use crate::base::testing::*;
+use crate::generate::step::Bitmap;
+use crate::recipe::Recipe;
 
 const TEXT: &str = "PROCEDURAL 3D PRINTING  ";
 
-fn letter_strings() -> (p3dp::base::toolpath::Toolpath, Vec<bool>, f64) {
+fn letter_strings() -> (crate::base::toolpath::Toolpath, Vec<bool>, f64) {
     let mut recipe = Recipe::load(&recipe("bowl.yaml"), &[], None).unwrap();
     let repeat = recipe.params["repeat"];
-    let fin = p3dp::generate::model::make_part(&recipe, 0).unwrap();
+    let fin = crate::generate::model::make_part(&recipe, 0).unwrap();
     assert_eq!(recipe.parts[0].steps.pop().unwrap().key(), "modulate_map");
-    let base = p3dp::generate::model::make_part(&recipe, 0).unwrap();
+    let base = crate::generate::model::make_part(&recipe, 0).unwrap();
     let letter = fin
         .strings
         .iter()

@@ -6,13 +6,13 @@
 //! Past the public face: the checks run on strings changed by hand
 //! (`analyse::check::run`). Home: beside `analyse::check`.
 
-use crate::common::linking_by_gauss;
-use crate::extruder_turtle::{at_height, load, load_with, param};
+use crate::analyse::check::{self, Severity};
+use crate::base::testing::linking_by_gauss;
+use crate::base::toolpath::Toolpath;
+use crate::generate::assembly::make_parts;
+use crate::recipe::Recipe;
 use glam::DVec3;
-use p3dp::analyse::check::{self, Severity};
-use p3dp::base::toolpath::Toolpath;
-use p3dp::generate::assembly::make_parts;
-use p3dp::recipe::Recipe;
+use std::path::PathBuf;
 
 /// The recipe's only part, with its steps.
 fn only_part(recipe: &Recipe) -> Toolpath {
@@ -65,11 +65,11 @@ fn hairs_are_rows_of_declared_hairs_of_the_recipes_length_that_pass_check() {
     // each hair: a blob pushed in place just before it, a retraction after it
     for k in (0..tp.len()).filter(|&k| tp.strings[k].hair) {
         assert!(tp.events.iter().any(|&(i, e)| i == k
-            && matches!(e, p3dp::base::toolpath::Event::Extrude { filament, .. } if filament > 0.0)));
+            && matches!(e, crate::base::toolpath::Event::Extrude { filament, .. } if filament > 0.0)));
         assert!(tp
             .events
             .iter()
-            .any(|&(i, e)| i == k + 1 && e == p3dp::base::toolpath::Event::Retract));
+            .any(|&(i, e)| i == k + 1 && e == crate::base::toolpath::Event::Retract));
     }
     // declared, they pass every check; the same strings undeclared are what
     // the three checks exist to find
@@ -318,4 +318,35 @@ fn chain_mail_links_interlock_with_their_neighbours_only_and_never_touch() {
         }
     }
     assert!(codes(&r, &tp).is_empty(), "{:?}", codes(&r, &tp));
+}
+
+/// Extruding strings of `tp` at height `z` (within 1 µm), as segments.
+fn at_height(tp: &Toolpath, z: f64) -> Vec<(DVec3, DVec3)> {
+    (0..tp.len())
+        .filter(|&k| !tp.strings[k].travel)
+        .map(|k| tp.ends(k))
+        .filter(|(a, b)| (a.z - z).abs() < 1e-6 && (b.z - z).abs() < 1e-6)
+        .collect()
+}
+
+fn load(name: &str) -> Recipe {
+    load_with(name, &[])
+}
+
+fn load_with(name: &str, sets: &[(&str, &str)]) -> Recipe {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("recipes")
+        .join(name);
+    let sets: Vec<(String, String)> = sets
+        .iter()
+        .map(|(k, v)| (k.to_string(), v.to_string()))
+        .collect();
+    Recipe::load(&path, &sets, None).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+fn param(recipe: &Recipe, name: &str) -> f64 {
+    *recipe
+        .params
+        .get(name)
+        .unwrap_or_else(|| panic!("no param `{name}`"))
 }

@@ -1,0 +1,4 @@
+//! The loader checked on real recipes and on its own reference.
+
+mod procedural;
+mod recipe_doc;
