@@ -3,6 +3,7 @@
 //! planner, the stats report.
 
 pub mod check;
+pub mod frame;
 pub mod plan;
 pub mod planner;
 pub mod stats;

@@ -2,6 +2,8 @@
 //! (skirt first) and checked, ready to write.
 
 use crate::analyse::check::{self, Finding};
+use crate::analyse::frame::Frame;
+use crate::base::error::Result;
 use crate::base::toolpath::Toolpath;
 use crate::generate::model::Recipe;
 
@@ -18,6 +20,8 @@ pub struct Plan {
     pub findings: Vec<Finding>,
     /// Each part's hold on the bed, as the first-layer check measured it.
     pub footprints: Vec<check::first_layer::Footprint>,
+    /// The start and end G-code, expanded and checked: what the writer writes.
+    pub frame: Frame,
 }
 
 /// What the checks of a plan found: its findings (those `allow`ed already
@@ -25,16 +29,19 @@ pub struct Plan {
 pub type Checked = (Vec<Finding>, Vec<check::first_layer::Footprint>);
 
 impl Plan {
-    /// A plan of `paths` (skirt first) of `recipe`, read from `path`, not yet
-    /// checked.
-    pub fn new(path: String, recipe: Recipe, paths: Vec<Toolpath>) -> Plan {
-        Plan {
+    /// A plan of `paths` (skirt first) of `recipe`, read from `path`, its
+    /// checks not yet run; the profile's start and end G-code expanded and
+    /// checked now (see [`crate::analyse::frame`]), an error if unsafe.
+    pub fn new(path: String, recipe: Recipe, paths: Vec<Toolpath>) -> Result<Plan> {
+        let frame = crate::analyse::frame::frame(&recipe, &paths)?;
+        Ok(Plan {
             path,
             recipe,
             paths,
             findings: Vec::new(),
             footprints: Vec::new(),
-        }
+            frame,
+        })
     }
 
     /// Every check, one after the other (see [`check::run`]), `allow` (the

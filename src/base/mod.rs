@@ -12,5 +12,6 @@ pub mod mem;
 pub mod par;
 pub mod rng;
 pub mod safe_text;
+pub mod slicer_macro;
 pub mod svg;
 pub mod toolpath;

@@ -13,5 +13,5 @@ pub mod travel;
 pub use head::{CheckLimits, Head};
 pub use kinematics::{Kinematics, Limits};
 pub use material::{Material, FAN_START_Z};
-pub use printer::{Bed, Extrusion, Flavor, Printer, Retraction, PLACEHOLDERS};
+pub use printer::{Bed, Envelope, Extrusion, Flavor, Printer, Retraction, PLACEHOLDERS, VARIABLES};
 pub use size::Size;

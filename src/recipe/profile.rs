@@ -7,10 +7,12 @@ use std::path::Path;
 
 use super::schema::{
     RawBed, RawCheckLimits, RawExtrusion, RawFlavor, RawHead, RawKinematics, RawPrinter,
-    RawRetraction,
+    RawRetraction, RawVariable,
 };
 use super::yaml::{parse_yaml, Tree};
 use crate::base::error::{Error, Result};
+use crate::base::slicer_macro::Value;
+use crate::machine::printer::Envelope;
 use crate::machine::{Bed, CheckLimits, Extrusion, Flavor, Head, Kinematics, Printer, Retraction};
 
 const BUILT_IN: &[(&str, &str)] = &[
@@ -82,7 +84,8 @@ impl Printer {
         } else {
             parse_yaml(&text, &shown)?
         };
-        let p = printer(raw);
+        let mut p = printer(raw);
+        p.source = Some(shown.clone());
         p.validate().map_err(|e| e.in_file(&shown))?;
         Ok(p)
     }
@@ -207,9 +210,11 @@ fn inherit(
 fn printer(raw: RawPrinter) -> Printer {
     Printer {
         name: raw.name,
+        model: raw.model,
+        source: None,
         flavor: flavor(raw.flavor),
         bed: match raw.bed {
-            RawBed::Rectangle { size, max_z } => Bed::Rectangle { size, max_z },
+            RawBed::Rectangle { size, max_z, min } => Bed::Rectangle { size, max_z, min },
             RawBed::Circle { diameter, max_z } => Bed::Circle { diameter, max_z },
         },
         origin: raw.origin,
@@ -221,6 +226,15 @@ fn printer(raw: RawPrinter) -> Printer {
         },
         start_gcode: raw.start_gcode,
         end_gcode: raw.end_gcode,
+        gcode_variables: raw
+            .gcode_variables
+            .into_iter()
+            .map(|(k, v)| (k, variable(v)))
+            .collect(),
+        envelope: Envelope {
+            margin: raw.envelope.margin,
+            below_bed: raw.envelope.below_bed,
+        },
         travel_speed: raw.travel_speed,
         retraction: retraction(raw.retraction),
         firmware_retraction: raw.firmware_retraction,
@@ -235,6 +249,16 @@ fn printer(raw: RawPrinter) -> Printer {
         kinematics: kinematics(raw.kinematics),
         head: head(raw.head),
         checks: checks(raw.checks),
+    }
+}
+
+fn variable(v: RawVariable) -> Value {
+    match v {
+        RawVariable::Bool(b) => Value::Bool(b),
+        RawVariable::Int(i) => Value::Int(i),
+        RawVariable::Float(f) => Value::Float(f),
+        RawVariable::Str(s) => Value::Str(s),
+        RawVariable::List(l) => Value::List(l.into_iter().map(variable).collect()),
     }
 }
 
@@ -262,6 +286,7 @@ fn kinematics(k: RawKinematics) -> Kinematics {
         travel_acceleration: k.travel_acceleration,
         retract_acceleration: k.retract_acceleration,
         junction_deviation: k.junction_deviation,
+        jerk: k.jerk,
         square_corner_velocity: k.square_corner_velocity,
         min_segment_time: k.min_segment_time,
         minimum_cruise_ratio: k.minimum_cruise_ratio,

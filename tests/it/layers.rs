@@ -23,6 +23,7 @@ const LAYERS: &[(&str, &[&str])] = &[
             "finding",
             "rng",
             "format",
+            "slicer_macro",
             "geom",
             "svg",
         ],
@@ -43,7 +44,7 @@ const LAYERS: &[(&str, &[&str])] = &[
         "generate",
         &["primitive", "step", "model", "assembly", "skirt"],
     ),
-    ("analyse", &["planner", "check", "plan", "stats"]),
+    ("analyse", &["planner", "check", "frame", "plan", "stats"]),
     ("output", &["file", "gcode", "preview", "mesh", "lock"]),
     (
         "recipe",

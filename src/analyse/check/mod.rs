@@ -12,6 +12,7 @@
 pub mod collision;
 pub mod first_layer;
 pub mod flow;
+pub mod gcode;
 pub mod pattern;
 pub mod starvation;
 pub mod support;

@@ -28,8 +28,8 @@ pub use primitive::{
     RawInitial, RawLayout, RawOutline, RawPath, RawPatternHelix, RawPrimitive, RawRule, RawSpiral,
 };
 pub use profile::{
-    RawBed, RawCheckLimits, RawExtrusion, RawFlavor, RawHead, RawKinematics, RawPrinter,
-    RawRetraction,
+    RawBed, RawCheckLimits, RawEnvelope, RawExtrusion, RawFlavor, RawHead, RawKinematics,
+    RawPrinter, RawRetraction, RawVariable,
 };
 pub use solid::{RawBox, RawFeature, RawInfill, RawOp, RawPattern, RawSolid};
 pub use step::{RawDeform, RawKeep, RawStep};
