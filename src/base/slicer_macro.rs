@@ -428,7 +428,12 @@ fn eval(e: &Expr, vars: &Vars) -> Result<Value, MacroError> {
                 Value::List(items) => items.get(i).cloned().ok_or_else(|| {
                     type_error(
                         *line,
-                        format!("`{name}` has {} elements, no index {i}", items.len()),
+                        if items.len() == 1 {
+                            // the per-extruder lists: p3dp gives tool 0 only
+                            format!("`{name}[{i}]`: `{name}` is a value per extruder and p3dp drives one (index 0 only); a preset for several extruders or a filament changer needs its single-extruder variant")
+                        } else {
+                            format!("`{name}` has {} elements, no index {i}", items.len())
+                        },
                     )
                 }),
                 v if i == 0 => Ok(v.clone()),

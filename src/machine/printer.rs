@@ -101,7 +101,11 @@ impl Bed {
     /// A short description for reports: `220 × 220 × 250 mm`.
     pub fn describe(&self) -> String {
         match *self {
-            Bed::Rectangle { size, max_z, min } if min == [0.0, 0.0] => {
+            Bed::Rectangle {
+                size,
+                max_z,
+                min: [0.0, 0.0],
+            } => {
                 format!("{} × {} × {} mm", size[0], size[1], max_z)
             }
             Bed::Rectangle { size, max_z, min } => format!(
@@ -291,7 +295,7 @@ impl Printer {
             ));
         }
         self.physical_ranges()?;
-        super::size::sizes(&self.thumbnails)?;
+        super::size::thumbs(&self.thumbnails)?;
         self.kinematics.validate()?;
         self.head.validate()?;
         self.checks.validate()?;

@@ -21,6 +21,7 @@ pub mod context;
 pub mod eval;
 pub mod expand;
 pub mod params;
+pub mod preset;
 pub mod profile;
 pub mod resolve;
 pub mod schema;

@@ -90,7 +90,17 @@ impl Printer {
         Ok(p)
     }
 
-    /// A built-in name, or else a path (relative paths from `base`); every
+    /// A slicer's printer preset (see [`crate::recipe::preset`]) as a
+    /// profile: the YAML `p3dp printers import` writes, loaded; errors name
+    /// the preset file.
+    pub fn from_preset(src: &super::preset::Source, reads: &Reads) -> Result<Printer> {
+        let preset = super::preset::load(src, reads)?;
+        let imported = super::preset::map::to_yaml(&preset)?;
+        from_imported(&imported.yaml, &preset.file)
+    }
+
+    /// A built-in name, or else a path (relative paths from `base`): a
+    /// profile's YAML, or a slicer's `.ini` or `.json` printer preset; every
     /// file read noted in `reads`.
     pub fn resolve(spec: &str, base: &Path, reads: &Reads) -> Result<Printer> {
         if let Some(p) = Printer::built_in(spec) {
@@ -120,14 +130,36 @@ impl Printer {
                 ),
             ));
         }
+        if super::preset::is_preset_file(spec) {
+            let src = super::preset::Source {
+                file: path,
+                ..Default::default()
+            };
+            return Printer::from_preset(&src, reads);
+        }
         Printer::from_file_in(&path, reads)
     }
 }
 
+/// The profile of an imported preset's YAML `text` (see
+/// [`crate::recipe::preset::map`]), read from the preset `file`: loaded and
+/// checked as a profile file is, errors naming the preset file.
+pub fn from_imported(text: &str, file: &str) -> Result<Printer> {
+    let raw: RawPrinter = parse_yaml(text, file)?;
+    let mut p = printer(raw);
+    p.source = Some(file.to_string());
+    p.validate().map_err(|e| e.in_file(file))?;
+    Ok(p)
+}
+
 /// Whether a printer name that is not built in is meant as a file: it has a
-/// `/` or ends in `.yaml` / `.yml` (anything else is a misspelt name).
+/// `/` or ends in `.yaml` / `.yml` (or `.ini` / `.json`, a slicer's preset;
+/// anything else is a misspelt name).
 fn names_a_file(spec: &str) -> bool {
-    spec.contains('/') || spec.ends_with(".yaml") || spec.ends_with(".yml")
+    spec.contains('/')
+        || spec.ends_with(".yaml")
+        || spec.ends_with(".yml")
+        || super::preset::is_preset_file(spec)
 }
 
 /// The error for `spec` at key `key`: neither a built-in printer nor a file.

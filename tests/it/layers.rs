@@ -49,7 +49,7 @@ const LAYERS: &[(&str, &[&str])] = &[
     (
         "recipe",
         &[
-            "yaml", "context", "schema", "eval", "params", "expand", "profile", "resolve",
+            "yaml", "context", "schema", "eval", "params", "expand", "preset", "profile", "resolve",
         ],
     ),
     (
