@@ -409,7 +409,14 @@ fn limits(p: &Preset, flavor: &str, y: &mut String, notes: &mut Vec<String>) -> 
         notes.push("machine_limits_usage is `ignore`: p3dp's default limits".into());
         return Ok(());
     }
-    let pos = |key: &str| -> Result<Option<f64>> { Ok(p.number(key)?.filter(|v| *v > 0.0)) };
+    // OrcaSlicer and Bambu Studio call the feed rates machine_max_speed_*
+    let pos = |key: &str| -> Result<Option<f64>> {
+        let alias = match key.strip_prefix("machine_max_feedrate_") {
+            Some(axis) => p.number(&format!("machine_max_speed_{axis}"))?,
+            None => None,
+        };
+        Ok(p.number(key)?.or(alias).filter(|v| *v > 0.0))
+    };
     let min2 = |a: Option<f64>, b: Option<f64>| match (a, b) {
         (Some(a), Some(b)) => Some(a.min(b)),
         (a, b) => a.or(b),
