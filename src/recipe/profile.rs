@@ -37,6 +37,42 @@ const BUILT_IN: &[(&str, &str)] = &[
         "rostock-max",
         include_str!("../machine/printers/rostock-max.yaml"),
     ),
+    (
+        "bambu-x1c",
+        include_str!("../machine/printers/bambu-x1c.yaml"),
+    ),
+    (
+        "bambu-p1s",
+        include_str!("../machine/printers/bambu-p1s.yaml"),
+    ),
+    (
+        "bambu-a1",
+        include_str!("../machine/printers/bambu-a1.yaml"),
+    ),
+    (
+        "bambu-a1-mini",
+        include_str!("../machine/printers/bambu-a1-mini.yaml"),
+    ),
+    (
+        "prusa-mk4s",
+        include_str!("../machine/printers/prusa-mk4s.yaml"),
+    ),
+    (
+        "prusa-core-one",
+        include_str!("../machine/printers/prusa-core-one.yaml"),
+    ),
+    (
+        "prusa-mini",
+        include_str!("../machine/printers/prusa-mini.yaml"),
+    ),
+    (
+        "creality-k1",
+        include_str!("../machine/printers/creality-k1.yaml"),
+    ),
+    (
+        "ender3-v3",
+        include_str!("../machine/printers/ender3-v3.yaml"),
+    ),
 ];
 
 /// Names of the built-in printer profiles.

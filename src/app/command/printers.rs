@@ -14,14 +14,14 @@ pub fn list() -> String {
     use crate::machine::Printer;
     use crate::recipe::profile::built_in_names;
     let mut out = format!(
-        "{:<13} {:<8} {:<26} {:<14} {:<7} {}\n",
+        "{:<14} {:<8} {:<26} {:<14} {:<7} {}\n",
         "NAME", "FLAVOUR", "BED", "ORIGIN", "NOZZLE", "FILAMENT"
     );
     for name in built_in_names() {
         let p = Printer::built_in(name).expect("built-in profiles parse");
         let origin = p.origin.map(fmt_num).join(", ");
         out.push_str(&format!(
-            "{:<13} {:<8} {:<26} {:<14} {:<7} {}\n",
+            "{:<14} {:<8} {:<26} {:<14} {:<7} {}\n",
             name,
             p.flavor.name(),
             p.bed.describe(),
