@@ -22,6 +22,12 @@ pub struct Plan {
     pub footprints: Vec<check::first_layer::Footprint>,
     /// The start and end G-code, expanded and checked: what the writer writes.
     pub frame: Frame,
+    /// Why the start or end G-code is unsafe or cannot be expanded, if it
+    /// is: raised by [`Plan::frame_ok`] when the G-code is written or the
+    /// checks pass, so that the recipe's own findings come first (a
+    /// material hotter than the printer allows is its check's finding
+    /// before it is the start G-code's `M104`).
+    pub frame_error: Option<crate::base::error::Error>,
 }
 
 /// What the checks of a plan found: its findings (those `allow`ed already
@@ -31,9 +37,13 @@ pub type Checked = (Vec<Finding>, Vec<check::first_layer::Footprint>);
 impl Plan {
     /// A plan of `paths` (skirt first) of `recipe`, read from `path`, its
     /// checks not yet run; the profile's start and end G-code expanded and
-    /// checked now (see [`crate::analyse::frame`]), an error if unsafe.
+    /// checked now (see [`crate::analyse::frame`]): an error if unsafe,
+    /// kept in `frame_error` (see [`Plan::frame_ok`]).
     pub fn new(path: String, recipe: Recipe, paths: Vec<Toolpath>) -> Result<Plan> {
-        let frame = crate::analyse::frame::frame(&recipe, &paths)?;
+        let (frame, frame_error) = match crate::analyse::frame::frame(&recipe, &paths) {
+            Ok(f) => (f, None),
+            Err(e) => (Frame::default(), Some(e)),
+        };
         Ok(Plan {
             path,
             recipe,
@@ -41,7 +51,17 @@ impl Plan {
             findings: Vec::new(),
             footprints: Vec::new(),
             frame,
+            frame_error,
         })
+    }
+
+    /// The start and end G-code's error, if any: nothing may be written
+    /// from a plan whose frame failed.
+    pub fn frame_ok(&self) -> Result<()> {
+        match &self.frame_error {
+            Some(e) => Err(e.clone()),
+            None => Ok(()),
+        }
     }
 
     /// Every check, one after the other (see [`check::run`]), `allow` (the

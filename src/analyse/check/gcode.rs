@@ -64,9 +64,20 @@ pub fn check(key: &str, text: &str, recipe: &Recipe, start: Start) -> Result<()>
             "the printer's max_nozzle_temp".to_string(),
         )
     };
+    // the recipe's own temperatures are its checks' business (nozzle-temp
+    // and bed-temp: errors only --force passes); the profile's G-code may
+    // set them, and nothing hotter
+    let nozzle = if m.nozzle_temp > nozzle.0 {
+        (
+            m.nozzle_temp,
+            format!("the material {}'s nozzle_temp", m.name),
+        )
+    } else {
+        nozzle
+    };
     let lim = Limits {
         nozzle,
-        bed: p.max_bed_temp,
+        bed: p.max_bed_temp.max(m.bed_temp),
         feed: p.max_speed,
         bed_shape: p.bed,
         margin: p.envelope.margin,
@@ -519,7 +530,7 @@ fn nozzle_temp(t: f64, lim: &Limits) -> std::result::Result<(), String> {
 fn bed_temp(t: f64, lim: &Limits) -> std::result::Result<(), String> {
     if !(t.is_finite() && t >= 0.0 && t <= lim.bed) {
         return Err(format!(
-            "a bed temperature of {t} °C, outside 0 to {} °C (the printer's max_bed_temp)",
+            "a bed temperature of {t} °C, outside 0 to {} °C (the printer's max_bed_temp, or the material's bed_temp if higher)",
             lim.bed
         ));
     }

@@ -53,6 +53,7 @@ pub fn write<W: Write, M: Moves>(
     let io = |e: io::Error| {
         crate::base::error::Error::io_from(&plan.path, format!("cannot write the G-code: {e}"), &e)
     };
+    plan.frame_ok()?;
     let mut em = Emitter::new(out, &plan.recipe, moves);
     em.thumbnails = thumbnails;
     let fan_events = |t: &Toolpath| t.events.iter().any(|(_, e)| matches!(e, Event::Fan { .. }));

@@ -130,7 +130,7 @@ impl Ini {
                 return Err(Error::input(
                     "",
                     format!(
-                        "holds {} printer presets; pick one with --preset NAME (`p3dp printers list {file}` lists them)",
+                        "holds {} printer presets; pick one: `p3dp printers import {file} --preset NAME -o OUT.yaml` (`p3dp printers list {file}` lists them)",
                         names.len()
                     ),
                 )

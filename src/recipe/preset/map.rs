@@ -130,6 +130,27 @@ fn refuse(p: &Preset, key: &str, what: String) -> Error {
 
 /// The bed: the profile's `bed:` text, the origin (the bed's centre) and
 /// the XY extent.
+/// The corners of the bed setting `key`, `XxY` each.
+fn corners(p: &Preset, key: &str) -> Result<Vec<(f64, f64)>> {
+    let mut pts = Vec::new();
+    for s in p.list(key).unwrap_or_default() {
+        let parsed = s
+            .split_once(['x', 'X'])
+            .and_then(|(x, y)| Some((x.trim().parse::<f64>().ok()?, y.trim().parse::<f64>().ok()?)))
+            .filter(|(x, y)| x.is_finite() && y.is_finite());
+        match parsed {
+            Some(xy) => pts.push(xy),
+            None => {
+                return Err(
+                    Error::input(key, format!("`{s}` is not a corner; expected XxY"))
+                        .in_file(&p.file),
+                )
+            }
+        }
+    }
+    Ok(pts)
+}
+
 fn bed(p: &Preset, max_z: f64) -> Result<(String, [f64; 2])> {
     let Some((key, _)) = p.first_text(&["bed_shape", "printable_area"]) else {
         return Err(refuse(
@@ -138,23 +159,7 @@ fn bed(p: &Preset, max_z: f64) -> Result<(String, [f64; 2])> {
             "a preset without a bed (no bed_shape or printable_area)".into(),
         ));
     };
-    let mut pts = Vec::new();
-    for s in p.list(&key).unwrap_or_default() {
-        let parsed = s
-            .split_once(['x', 'X'])
-            .and_then(|(x, y)| Some((x.trim().parse::<f64>().ok()?, y.trim().parse::<f64>().ok()?)))
-            .filter(|(x, y)| x.is_finite() && y.is_finite());
-        match parsed {
-            Some(xy) => pts.push(xy),
-            None => {
-                return Err(Error::input(
-                    key.as_str(),
-                    format!("`{s}` is not a corner; expected XxY"),
-                )
-                .in_file(&p.file))
-            }
-        }
-    }
+    let pts = corners(p, &key)?;
     let (xs, ys): (Vec<f64>, Vec<f64>) = pts.iter().copied().unzip();
     let (x0, x1) = (
         xs.iter().copied().fold(f64::INFINITY, f64::min),
@@ -408,6 +413,9 @@ fn limits(p: &Preset, flavor: &str, y: &mut String, notes: &mut Vec<String>) -> 
     if usage.as_deref() == Some("ignore") {
         notes.push("machine_limits_usage is `ignore`: p3dp's default limits".into());
         return Ok(());
+    }
+    if usage.as_deref() == Some("emit_to_gcode") {
+        notes.push("machine_limits_usage is `emit_to_gcode`: the limits are p3dp's for its checks and estimate, but p3dp writes no M201–M205; the firmware keeps its own".into());
     }
     // OrcaSlicer and Bambu Studio call the feed rates machine_max_speed_*
     let pos = |key: &str| -> Result<Option<f64>> {
