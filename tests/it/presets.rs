@@ -616,3 +616,50 @@ fn printers_list_names_a_bundles_presets() {
         .any(|l| l == "Voron_v2_350_afterburner 0.4 nozzle"));
     assert!(!text.contains('*'), "abstract presets listed:\n{text}");
 }
+
+/// `--printer FILE.ini` takes an exported config (one preset, no sections)
+/// directly: its bed, its offset origin and its start G-code, resolved.
+#[test]
+fn an_exported_config_is_a_printer_directly() {
+    let dir = tmp("exported-config");
+    std::fs::write(dir.join("vase.yaml"), VASE).unwrap();
+    std::fs::write(
+        dir.join("mine.ini"),
+        "# written for p3dp's tests\nbed_shape = 10x0,210x0,210x180,10x180\nmax_print_height = 150\nnozzle_diameter = 0.6\ngcode_flavor = marlin2\nprinter_model = M1\nstart_gcode = G28\\nM190 S[first_layer_bed_temperature]\\nM109 S{first_layer_temperature[0] + 5}\\nG1 X{print_bed_min[0] + 5} Y2 Z0.3 F3000 ; [printer_model]\nend_gcode = M104 S0\\nG1 Z{max_layer_z + 10} F600\nprinter_settings_id = Mine\n",
+    )
+    .unwrap();
+    let out = p3dp(&dir, &["printers", "list", "mine.ini"]);
+    assert_eq!(String::from_utf8_lossy(&out.stdout), "Mine\n");
+    let out = p3dp(
+        &dir,
+        &[
+            "build",
+            "vase.yaml",
+            "--printer",
+            "mine.ini",
+            "-o",
+            "v.gcode",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let g = std::fs::read_to_string(dir.join("v.gcode")).unwrap();
+    assert!(g.contains("; printer: Mine (Marlin)"), "{g}");
+    let code: Vec<&str> = g.lines().filter(|l| !l.starts_with(';')).collect();
+    assert_eq!(
+        code[..5],
+        [
+            "G28",
+            "M190 S60",
+            "M109 S220",
+            "G1 X15 Y2 Z0.3 F3000 ; M1",
+            "G21 ; millimetres"
+        ]
+    );
+    // the vase about the bed's centre (110, 90), 3 mm high from 0.2
+    assert!(g.contains("G0 X118.000 Y90.000 Z0.200"), "{g}");
+    assert!(g.contains("G1 Z13.2 F600"), "{g}");
+}
