@@ -37,12 +37,20 @@ pub use app::pipeline;
 pub use app::prepare::{plan, prepare, prepare_in, Options};
 pub use base::error::{Error, Kind, Result};
 pub use base::finding::{Finding, Severity, SAFETY};
+pub use base::input::Reads;
 pub use base::toolpath::{Event, Toolpath};
 pub use generate::assembly::make_parts;
 pub use generate::model::{make_part, Recipe};
-pub use machine::printer::{Bed, Printer};
+pub use machine::printer::{Bed, Flavor, Printer};
 pub use recipe::context::Context;
 pub use recipe::profile::built_in_names as printers;
+
+/// Slicer presets (PrusaSlicer-family `.ini`, OrcaSlicer/Bambu Studio
+/// `.json`) read as p3dp printer profiles.
+pub mod presets {
+    pub use crate::recipe::preset::map::{to_yaml, Imported};
+    pub use crate::recipe::preset::{list, load, Preset, Setting, Source};
+}
 
 /// The command line, for the `p3dp` binary: parse [`cli::Cli`], [`cli::run`]
 /// it, print each error with [`cli::print_error`].

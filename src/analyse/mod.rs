@@ -3,6 +3,7 @@
 //! planner, the stats report.
 
 pub(crate) mod check;
+pub(crate) mod frame;
 pub(crate) mod plan;
 pub(crate) mod planner;
 pub(crate) mod stats;

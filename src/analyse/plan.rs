@@ -2,6 +2,8 @@
 //! (skirt first) and checked, ready to write.
 
 use crate::analyse::check::{self, Finding};
+use crate::analyse::frame::Frame;
+use crate::base::error::Result;
 use crate::base::toolpath::Toolpath;
 use crate::generate::model::Recipe;
 
@@ -18,6 +20,14 @@ pub struct Plan {
     pub findings: Vec<Finding>,
     /// Each part's hold on the bed, as the first-layer check measured it.
     pub footprints: Vec<check::first_layer::Footprint>,
+    /// The start and end G-code, expanded and checked: what the writer writes.
+    pub frame: Frame,
+    /// Why the start or end G-code is unsafe or cannot be expanded, if it
+    /// is: raised by [`Plan::frame_ok`] when the G-code is written or the
+    /// checks pass, so that the recipe's own findings come first (a
+    /// material hotter than the printer allows is its check's finding
+    /// before it is the start G-code's `M104`).
+    pub frame_error: Option<crate::base::error::Error>,
 }
 
 /// What the checks of a plan found: its findings (those `allow`ed already
@@ -25,15 +35,32 @@ pub struct Plan {
 pub(crate) type Checked = (Vec<Finding>, Vec<check::first_layer::Footprint>);
 
 impl Plan {
-    /// A plan of `paths` (skirt first) of `recipe`, read from `path`, not yet
-    /// checked.
-    pub fn new(path: String, recipe: Recipe, paths: Vec<Toolpath>) -> Plan {
-        Plan {
+    /// A plan of `paths` (skirt first) of `recipe`, read from `path`, its
+    /// checks not yet run; the profile's start and end G-code expanded and
+    /// checked now (see [`crate::analyse::frame`]): an error if unsafe,
+    /// kept in `frame_error` (see [`Plan::frame_ok`]).
+    pub fn new(path: String, recipe: Recipe, paths: Vec<Toolpath>) -> Result<Plan> {
+        let (frame, frame_error) = match crate::analyse::frame::frame(&recipe, &paths) {
+            Ok(f) => (f, None),
+            Err(e) => (Frame::default(), Some(e)),
+        };
+        Ok(Plan {
             path,
             recipe,
             paths,
             findings: Vec::new(),
             footprints: Vec::new(),
+            frame,
+            frame_error,
+        })
+    }
+
+    /// The start and end G-code's error, if any: nothing may be written
+    /// from a plan whose frame failed.
+    pub fn frame_ok(&self) -> Result<()> {
+        match &self.frame_error {
+            Some(e) => Err(e.clone()),
+            None => Ok(()),
         }
     }
 

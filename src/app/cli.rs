@@ -40,8 +40,8 @@ pub enum Command {
         #[command(flatten)]
         batch: BatchFlags,
     },
-    /// List the built-in printer profiles: flavour, bed, origin, nozzle and filament.
-    Printers,
+    /// List the built-in printer profiles (flavour, bed, origin, nozzle, filament), or list and import a slicer's printer presets.
+    Printers(PrintersArgs),
     /// Print `SHA256  RECIPE`: the hash of exactly the bytes `build` would write.
     Hash(HashArgs),
     /// Write a commented starter recipe, NAME.yaml, that builds as it is.
@@ -66,13 +66,47 @@ pub enum Command {
     Schema,
 }
 
+/// `p3dp printers [list FILE | import FILE …]`.
+#[derive(Args, Clone, Debug, Default)]
+pub struct PrintersArgs {
+    /// What to do; without it, list the built-in profiles.
+    #[command(subcommand)]
+    pub action: Option<PrintersAction>,
+}
+
+/// The actions of `p3dp printers`.
+#[derive(Subcommand, Clone, Debug)]
+pub enum PrintersAction {
+    /// List the printer presets of a slicer's file: a PrusaSlicer/SuperSlicer .ini (bundle or exported config) or an OrcaSlicer/Bambu Studio .json.
+    List {
+        /// The preset file.
+        #[arg(value_name = "FILE")]
+        file: PathBuf,
+    },
+    /// Write a slicer's printer preset as a p3dp printer profile (YAML, to standard output or -o): bed, height, nozzle, flavour, limits, retraction, thumbnails and the maker's start/end G-code.
+    Import {
+        /// The preset file (.ini or .json).
+        #[arg(value_name = "FILE")]
+        file: PathBuf,
+        /// The preset to import, when the file holds several (`p3dp printers list FILE`).
+        #[arg(long, value_name = "NAME")]
+        preset: Option<String>,
+        /// A folder of the slicer's presets where a .json preset's `inherits` parents are found (e.g. OrcaSlicer's resources/profiles/VENDOR); the file's own folder is searched first.
+        #[arg(long, value_name = "DIR")]
+        profiles: Option<PathBuf>,
+        /// Write the profile here instead of standard output.
+        #[arg(short = 'o', long, value_name = "OUT.yaml")]
+        output: Option<PathBuf>,
+    },
+}
+
 /// What every build takes: params, the printer, the checks silenced.
 #[derive(Args, Clone, Debug, Default)]
 pub struct RecipeFlags {
     /// Override a param: NAME=VALUE (VALUE may be an expression); repeatable.
     #[arg(long = "set", value_name = "NAME=VALUE")]
     pub sets: Vec<String>,
-    /// Use this printer (built-in name or YAML file) instead of the recipe's.
+    /// Use this printer (built-in name, YAML file, or a slicer's single-preset FILE.ini|FILE.json) instead of the recipe's.
     #[arg(long, value_name = "NAME|FILE")]
     pub printer: Option<String>,
     /// Silence a check for this build: its code, e.g. `bridge`; repeatable.
@@ -319,10 +353,10 @@ pub fn run(cli: Cli) -> Vec<Error> {
                 .map(|b| pipeline::run(batch.jobs.threads(), || command::check::run(&b))),
         ),
         Command::Hash(a) => errors(hash(&a)),
-        Command::Printers => {
-            crate::say!("{}", command::printers::list());
+        Command::Printers(a) => errors(printers(a.action).map(|text| {
+            crate::say!("{text}");
             Vec::new()
-        }
+        })),
         Command::New { name, from } => errors(command::new::write(&name, &from).map(|line| {
             crate::sayln!("{line}");
             Vec::new()
@@ -365,6 +399,30 @@ fn build(a: &BuildArgs) -> Result<Vec<Error>> {
     Ok(pipeline::run(a.batch.jobs.threads(), || {
         command::build::run(&opts)
     }))
+}
+
+/// `p3dp printers …`: the text for standard output.
+fn printers(action: Option<PrintersAction>) -> Result<String> {
+    match action {
+        None => Ok(command::printers::list()),
+        Some(PrintersAction::List { file }) => command::printers::presets(&file),
+        Some(PrintersAction::Import {
+            file,
+            preset,
+            profiles,
+            output,
+        }) => {
+            let opts = command::printers::Import {
+                source: crate::recipe::preset::Source {
+                    file,
+                    preset,
+                    profiles,
+                },
+                output,
+            };
+            Ok(command::printers::import(&opts)?.unwrap_or_default())
+        }
+    }
 }
 
 fn hash(a: &HashArgs) -> Result<Vec<Error>> {

@@ -101,6 +101,7 @@ pub fn check(plan: &mut Plan, allow: &[String]) {
 /// what its moves add up to; the print-time planner runs beside the writer
 /// when the pool allows.
 pub fn write<W: Write>(plan: &Plan, out: W) -> Result<(W, MoveStats)> {
+    plan.frame_ok()?;
     let thumbnails = crate::output::preview::thumbnail::blocks(plan)?;
     let limits = plan.recipe.printer.limits();
     if !parallel() {

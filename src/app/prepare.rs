@@ -69,5 +69,5 @@ pub fn prepare_in(path: &Path, opts: &Options, cx: &Context) -> Result<Plan> {
         }
     }
     paths.extend(parts);
-    Ok(Plan::new(shown, recipe, paths))
+    Plan::new(shown, recipe, paths)
 }

@@ -68,6 +68,12 @@ impl Reads {
         read_text(path, what)
     }
 
+    /// [`read_plain`], noted.
+    pub fn read_plain(&self, path: &Path, what: &str) -> Result<String> {
+        self.note(path);
+        read_plain(path, what)
+    }
+
     /// The files noted, in order.
     pub fn files(&self) -> Vec<PathBuf> {
         self.0.lock().unwrap_or_else(|e| e.into_inner()).clone()
@@ -76,6 +82,16 @@ impl Reads {
 
 /// Reads `path` (a `what`, e.g. "recipe", for messages) as text, bounded.
 pub(crate) fn read_text(path: &Path, what: &str) -> Result<String> {
+    let shown = path.display().to_string();
+    let text = read_plain(path, what)?;
+    check_nesting(&text).map_err(|e| e.in_file(&shown))?;
+    Ok(text)
+}
+
+/// [`read_text`] without the YAML nesting check: a file of another format
+/// (a slicer's `.ini` or `.json` preset, whose parsers bound their own
+/// nesting), bounded and UTF-8.
+pub(crate) fn read_plain(path: &Path, what: &str) -> Result<String> {
     let shown = path.display().to_string();
     let file = std::fs::File::open(path)
         .map_err(|e| Error::io_from(&shown, format!("cannot read the {what}: {e}"), &e))?;
@@ -91,9 +107,7 @@ pub(crate) fn read_text(path: &Path, what: &str) -> Result<String> {
         )
         .in_file(&shown));
     };
-    let text = decode(bytes).map_err(|e| e.in_file(&shown))?;
-    check_nesting(&text).map_err(|e| e.in_file(&shown))?;
-    Ok(text)
+    decode(bytes).map_err(|e| e.in_file(&shown))
 }
 
 /// The bytes of `file`, or `None` when it holds more than `limit` (no more

@@ -12,6 +12,7 @@ pub(crate) mod mem;
 pub(crate) mod par;
 pub(crate) mod rng;
 pub(crate) mod safe_text;
+pub(crate) mod slicer_macro;
 pub(crate) mod svg;
 pub(crate) mod toolpath;
 

@@ -43,6 +43,27 @@ pub(crate) fn check(place: &str, s: &str) -> Result<()> {
     }
 }
 
+/// Refuses a line of G-code (a profile's start or end G-code, one line of
+/// it) with a character of [`is_unsafe`] other than a tab (which G-code
+/// allows between words), naming `place`, the character and where it is.
+pub(crate) fn check_gcode_line(place: &str, line: &str) -> Result<()> {
+    match line
+        .chars()
+        .enumerate()
+        .find(|&(_, c)| c != '\t' && is_unsafe(c))
+    {
+        None => Ok(()),
+        Some((k, c)) => Err(Error::input(
+            place,
+            format!(
+                "contains {} at character {}; expected G-code lines broken only by line feeds (U+000A)",
+                describe(c),
+                k + 1
+            ),
+        )),
+    }
+}
+
 /// `s` made safe for one comment line: each character of [`is_unsafe`]
 /// written as `\u{…}`. Text that passed [`check`] comes back unchanged.
 pub(crate) fn one_line(s: &str) -> Cow<'_, str> {

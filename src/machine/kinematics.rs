@@ -35,6 +35,11 @@ pub struct Kinematics {
     pub retract_acceleration: Option<f64>,
     /// Marlin's junction deviation, mm (`M205 J`).
     pub junction_deviation: Option<f64>,
+    /// Marlin's classic jerk of X and Y, mm/s (`M205 X`, a slicer's
+    /// `machine_max_jerk_x`): without `junction_deviation`, the planner
+    /// works with Marlin's own conversion of it, 0.4·jerk²/max_acceleration
+    /// (Marlin's `JUNCTION_DEVIATION` notes in Configuration_adv.h).
+    pub jerk: Option<f64>,
     /// Klipper's square-corner velocity: the speed of a 90° corner, mm/s.
     pub square_corner_velocity: Option<f64>,
     /// Shortest time a move may take, s (Marlin's `M205 B`, in s here); 0.02
@@ -77,6 +82,7 @@ impl Default for Kinematics {
             travel_acceleration: None,
             retract_acceleration: None,
             junction_deviation: None,
+            jerk: None,
             square_corner_velocity: None,
             min_segment_time: None,
             minimum_cruise_ratio: None,
@@ -114,6 +120,7 @@ impl Kinematics {
         check("travel_acceleration", self.travel_acceleration, false)?;
         check("retract_acceleration", self.retract_acceleration, false)?;
         check("junction_deviation", self.junction_deviation, true)?;
+        check("jerk", self.jerk, true)?;
         check("square_corner_velocity", self.square_corner_velocity, true)?;
         check("min_segment_time", self.min_segment_time, true)?;
         check("minimum_cruise_ratio", self.minimum_cruise_ratio, true)?;
@@ -143,10 +150,15 @@ impl Kinematics {
                 "expected a ratio in [0, 1)",
             ));
         }
-        if self.junction_deviation.is_some() && self.square_corner_velocity.is_some() {
+        let junctions = [
+            self.junction_deviation.is_some(),
+            self.jerk.is_some(),
+            self.square_corner_velocity.is_some(),
+        ];
+        if junctions.iter().filter(|&&b| b).count() > 1 {
             return Err(Error::input(
                 "kinematics",
-                "give `junction_deviation` (Marlin) or `square_corner_velocity` (Klipper), not both",
+                "give one of `junction_deviation` or `jerk` (Marlin) and `square_corner_velocity` (Klipper)",
             ));
         }
         Ok(())
@@ -173,7 +185,11 @@ impl Kinematics {
             junction_deviation: if klipper {
                 None
             } else {
-                Some(self.junction_deviation.unwrap_or(MARLIN_JUNCTION_DEVIATION))
+                Some(
+                    self.junction_deviation
+                        .or(self.jerk.map(|j| 0.4 * j * j / accel))
+                        .unwrap_or(MARLIN_JUNCTION_DEVIATION),
+                )
             },
             square_corner_velocity: self.square_corner_velocity,
             min_segment_time: self.min_segment_time.unwrap_or(if klipper {

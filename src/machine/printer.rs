@@ -6,6 +6,7 @@ use std::collections::BTreeMap;
 use glam::DVec3;
 
 use crate::base::error::{Error, Result};
+use crate::base::slicer_macro::{Template, Value};
 
 /// G-code dialect of the firmware.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -32,8 +33,10 @@ pub enum Extrusion {
     Relative,
 }
 
-/// The printable area. Rectangle beds span machine X in [0, width] and Y in
-/// [0, depth]; round (delta) beds are centred on machine (0, 0).
+/// The printable area. Rectangle beds span machine X in [min x, min x +
+/// width] and Y in [min y, min y + depth] (`min` is [0, 0] unless the
+/// printable area is offset, as a slicer's `bed_shape` may be); round
+/// (delta) beds are centred on machine (0, 0).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Bed {
     /// A rectangular bed.
@@ -42,6 +45,8 @@ pub enum Bed {
         size: [f64; 2],
         /// Highest reachable nozzle height, mm.
         max_z: f64,
+        /// The front-left corner, machine coordinates, mm.
+        min: [f64; 2],
     },
     /// A round bed.
     Circle {
@@ -62,19 +67,51 @@ impl Bed {
 
     /// Whether machine point `p` is over the bed (XY only).
     pub fn contains_xy(&self, p: DVec3) -> bool {
+        self.contains_xy_within(p, 0.0)
+    }
+
+    /// Whether machine point `p` is over the bed grown by `margin` mm on
+    /// every side (XY only).
+    pub fn contains_xy_within(&self, p: DVec3, margin: f64) -> bool {
         const EPS: f64 = 1e-9;
+        let m = margin + EPS;
         match *self {
-            Bed::Rectangle { size, .. } => {
-                p.x >= -EPS && p.y >= -EPS && p.x <= size[0] + EPS && p.y <= size[1] + EPS
+            Bed::Rectangle { size, min, .. } => {
+                p.x >= min[0] - m
+                    && p.y >= min[1] - m
+                    && p.x <= min[0] + size[0] + m
+                    && p.y <= min[1] + size[1] + m
             }
-            Bed::Circle { diameter, .. } => p.truncate().length() <= diameter / 2.0 + EPS,
+            Bed::Circle { diameter, .. } => p.truncate().length() <= diameter / 2.0 + m,
+        }
+    }
+
+    /// The bed's XY extent, machine coordinates: (min, max) corners (a
+    /// round bed's bounding square).
+    pub fn extent(&self) -> ([f64; 2], [f64; 2]) {
+        match *self {
+            Bed::Rectangle { size, min, .. } => (min, [min[0] + size[0], min[1] + size[1]]),
+            Bed::Circle { diameter, .. } => {
+                let r = diameter / 2.0;
+                ([-r, -r], [r, r])
+            }
         }
     }
 
     /// A short description for reports: `220 × 220 × 250 mm`.
     pub fn describe(&self) -> String {
         match *self {
-            Bed::Rectangle { size, max_z } => format!("{} × {} × {} mm", size[0], size[1], max_z),
+            Bed::Rectangle {
+                size,
+                max_z,
+                min: [0.0, 0.0],
+            } => {
+                format!("{} × {} × {} mm", size[0], size[1], max_z)
+            }
+            Bed::Rectangle { size, max_z, min } => format!(
+                "{} × {} × {} mm from ({}, {})",
+                size[0], size[1], max_z, min[0], min[1]
+            ),
             Bed::Circle { diameter, max_z } => format!("round Ø {diameter} × {max_z} mm"),
         }
     }
@@ -101,11 +138,47 @@ impl Default for Retraction {
     }
 }
 
+/// Where a profile's own start and end G-code may move the head: the bed
+/// grown by `margin` in X and Y (makers purge just outside the bed, Prusa's
+/// MK3S at Y −3) and up to `max_z + margin`, down to `-below_bed` (a probe's
+/// declared offset; 0: never below the bed). p3dp's own moves stay on the
+/// bed whatever this says.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Envelope {
+    /// Reach beyond the bed's edges and above its height, mm.
+    pub margin: f64,
+    /// Reach below z = 0, mm.
+    pub below_bed: f64,
+}
+
+impl Envelope {
+    /// Largest `margin` a profile may declare, mm: a purge line beside the
+    /// bed, never a move metres away.
+    pub const MAX_MARGIN: f64 = 50.0;
+    /// Largest `below_bed` a profile may declare, mm.
+    pub const MAX_BELOW_BED: f64 = 5.0;
+}
+
+impl Default for Envelope {
+    fn default() -> Self {
+        Envelope {
+            margin: 5.0,
+            below_bed: 0.0,
+        }
+    }
+}
+
 /// A printer profile: the spec's keys plus the limits p3dp checks against.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Printer {
     /// Profile name.
     pub name: String,
+    /// The model as its maker's slicer names it (`printer_model`: `MK3S`),
+    /// for start G-code that checks it; empty when unknown.
+    pub model: String,
+    /// The file the profile was read from, as the user named it (`None`
+    /// for a built-in one): errors in its G-code name it.
+    pub source: Option<String>,
     /// Firmware dialect.
     pub flavor: Flavor,
     /// Printable area.
@@ -118,11 +191,17 @@ pub struct Printer {
     pub filament_diameter: f64,
     /// Absolute or relative E.
     pub extrusion: Extrusion,
-    /// G-code before the print; `{nozzle_temp}`, `{bed_temp}` and the other
-    /// placeholders of [`Printer::fill`] are filled in.
+    /// G-code before the print: a template of the slicers' macro language
+    /// ([`crate::base::slicer_macro`]) over the variables of [`VARIABLES`]
+    /// and `gcode_variables`.
     pub start_gcode: String,
-    /// G-code after the print, with the same placeholders.
+    /// G-code after the print, a template over the same variables.
     pub end_gcode: String,
+    /// Values of template variables only a slicer knows (a print preset's
+    /// name, a Bambu bed type), by name.
+    pub gcode_variables: BTreeMap<String, Value>,
+    /// Where the start and end G-code may move the head.
+    pub envelope: Envelope,
     /// Head speed of travel moves, mm/s.
     pub travel_speed: f64,
     /// Retraction before long travel moves.
@@ -146,8 +225,9 @@ pub struct Printer {
     pub arcs: bool,
     /// Largest distance between an arc and the strings it replaces, mm.
     pub arc_tolerance: f64,
-    /// PNG thumbnails to embed in the G-code, as `WxH` sizes (PrusaSlicer's
-    /// `; thumbnail begin` blocks); none by default.
+    /// Thumbnails to embed in the G-code, as `WxH` sizes, each optionally
+    /// with its format, `WxH/PNG`, `/QOI` or `/JPG` (PrusaSlicer's
+    /// `thumbnails`; PNG when none is named); none by default.
     pub thumbnails: Vec<String>,
     /// The firmware planner's limits, for the print-time estimate (see
     /// [`super::Kinematics`]).
@@ -215,13 +295,69 @@ impl Printer {
             ));
         }
         self.physical_ranges()?;
-        super::size::sizes(&self.thumbnails)?;
+        super::size::thumbs(&self.thumbnails)?;
         self.kinematics.validate()?;
         self.head.validate()?;
         self.checks.validate()?;
-        self.fill("start_gcode", &self.start_gcode, &BTreeMap::new())?;
-        self.fill("end_gcode", &self.end_gcode, &BTreeMap::new())?;
+        crate::base::safe_text::check("model", &self.model)?;
+        self.envelope_ranges()?;
+        for (name, v) in &self.gcode_variables {
+            check_variable(name, v)?;
+        }
+        self.template("start_gcode", &self.start_gcode)?;
+        self.template("end_gcode", &self.end_gcode)?;
         Ok(())
+    }
+
+    fn envelope_ranges(&self) -> Result<()> {
+        let e = &self.envelope;
+        let within = |key: &str, v: f64, max: f64| {
+            if v.is_finite() && (0.0..=max).contains(&v) {
+                Ok(())
+            } else {
+                Err(Error::input(
+                    format!("envelope.{key}"),
+                    format!("{v} mm is not allowed; expected 0 to {max} mm"),
+                ))
+            }
+        };
+        within("margin", e.margin, Envelope::MAX_MARGIN)?;
+        within("below_bed", e.below_bed, Envelope::MAX_BELOW_BED)
+    }
+
+    /// The start or end G-code template under `key`, parsed: no character
+    /// that breaks a line but `\n`, no syntax error, and no variable
+    /// neither p3dp ([`VARIABLES`]) nor `gcode_variables` gives; errors
+    /// name the key and the template's line.
+    pub fn template(&self, key: &str, text: &str) -> Result<Template> {
+        let at = |line: usize, message: String| Error::input(format!("{key} line {line}"), message);
+        for (k, l) in text.split('\n').enumerate() {
+            crate::base::safe_text::check_gcode_line("", l).map_err(|e| at(k + 1, e.message))?;
+        }
+        let t = Template::parse(text).map_err(|e| at(e.line, e.message))?;
+        for (name, line) in t.variables() {
+            if !self.knows(&name) {
+                return Err(at(
+                    line,
+                    format!(
+                        "unknown variable `{name}`: p3dp does not know it (give it a value under `gcode_variables:` if it is a slicer's setting)"
+                    ),
+                ));
+            }
+        }
+        Ok(t)
+    }
+
+    /// Whether a template may name variable `name` (as itself or, for a
+    /// legacy `[name_N]`, as a list `name` indexed).
+    fn knows(&self, name: &str) -> bool {
+        let known = |n: &str| {
+            VARIABLES.iter().any(|(v, _)| *v == n) || self.gcode_variables.contains_key(n)
+        };
+        known(name)
+            || name
+                .rsplit_once('_')
+                .is_some_and(|(n, i)| i.parse::<usize>().is_ok() && known(n))
     }
 
     /// Refuses values outside what a machine can be (see [`crate::machine::limits`]).
@@ -260,9 +396,11 @@ impl Printer {
         long("retraction.min_travel", self.retraction.min_travel)?;
         long("bed.max_z", self.bed.max_z())?;
         match self.bed {
-            Bed::Rectangle { size, .. } => {
+            Bed::Rectangle { size, min, .. } => {
                 long("bed.size[0]", size[0])?;
                 long("bed.size[1]", size[1])?;
+                long("bed.min[0]", min[0])?;
+                long("bed.min[1]", min[1])?;
             }
             Bed::Circle { diameter, .. } => long("bed.diameter", diameter)?,
         }
@@ -287,6 +425,9 @@ impl Printer {
         if let Some(v) = k.square_corner_velocity {
             at_most("kinematics.square_corner_velocity", v, SPEED_MAX, "mm/s")?;
         }
+        if let Some(v) = k.jerk {
+            at_most("kinematics.jerk", v, SPEED_MAX, "mm/s")?;
+        }
         if let Some(v) = k.junction_deviation {
             long("kinematics.junction_deviation", v)?;
         }
@@ -297,58 +438,92 @@ impl Printer {
     pub fn to_machine(&self, p: DVec3) -> DVec3 {
         p + DVec3::from_array(self.origin)
     }
-
-    /// Fills `{name}` placeholders of a G-code template with `values`; an
-    /// unknown placeholder is an error naming `key`.
-    pub fn fill(
-        &self,
-        key: &str,
-        template: &str,
-        values: &BTreeMap<&str, String>,
-    ) -> Result<String> {
-        let mut out = String::with_capacity(template.len());
-        let mut rest = template;
-        while let Some(open) = rest.find('{') {
-            out.push_str(&rest[..open]);
-            let after = &rest[open + 1..];
-            let Some(close) = after.find('}') else {
-                return Err(Error::input(
-                    key,
-                    "a `{` is never closed; expected `{placeholder}`",
-                ));
-            };
-            let name = &after[..close];
-            match values.get(name) {
-                Some(v) => out.push_str(v),
-                None if values.is_empty() && PLACEHOLDERS.contains(&name) => {}
-                None => {
-                    return Err(Error::input(
-                        key,
-                        format!(
-                            "unknown placeholder `{{{name}}}`; expected one of {}",
-                            PLACEHOLDERS.map(|p| format!("{{{p}}}")).join(", ")
-                        ),
-                    ))
-                }
-            }
-            rest = &after[close + 1..];
-        }
-        out.push_str(rest);
-        Ok(out)
-    }
 }
 
-/// Placeholders a start or end G-code template may use.
-pub(crate) const PLACEHOLDERS: [&str; 8] = [
-    "nozzle_temp",
-    "bed_temp",
-    "filament_diameter",
-    "nozzle_diameter",
-    "bed_x",
-    "bed_y",
-    "max_z",
-    "park_z",
+/// Every variable p3dp gives a start or end G-code template, with what it
+/// holds (`crate::analyse::frame` computes them from the recipe, the
+/// profile and the strings built). Lists, as the slicers hold per-extruder
+/// values, have one element: p3dp drives one extruder. p3dp prints strings,
+/// not layers: the "layer" values describe the strings honestly (the
+/// lowest extruding point's height for `layer_height`, the highest for
+/// `max_layer_z`).
+pub(crate) const VARIABLES: &[(&str, &str)] = &[
+    ("nozzle_temp", "the material's nozzle temperature, °C"),
+    ("bed_temp", "the material's bed temperature, °C"),
+    ("filament_diameter", "[the filament's diameter], mm"),
+    ("nozzle_diameter", "[the nozzle's diameter], mm"),
+    ("bed_x", "the bed's width, mm, 3 decimals (0 for a round bed)"),
+    ("bed_y", "the bed's depth, mm, 3 decimals (0 for a round bed)"),
+    ("max_z", "the highest reachable nozzle height, mm, 3 decimals"),
+    ("park_z", "10 mm above the print, at most max_z, mm, 3 decimals"),
+    ("first_layer_temperature", "[nozzle temperature], °C"),
+    ("temperature", "[nozzle temperature], °C"),
+    ("nozzle_temperature_initial_layer", "[nozzle temperature], °C"),
+    ("nozzle_temperature", "[nozzle temperature], °C"),
+    ("first_layer_bed_temperature", "[bed temperature], °C"),
+    ("bed_temperature", "[bed temperature], °C"),
+    ("bed_temperature_initial_layer", "[bed temperature], °C"),
+    ("bed_temperature_initial_layer_single", "the bed temperature, °C"),
+    ("hot_plate_temp", "[bed temperature], °C (every plate type)"),
+    ("hot_plate_temp_initial_layer", "[bed temperature], °C"),
+    ("cool_plate_temp", "[bed temperature], °C"),
+    ("cool_plate_temp_initial_layer", "[bed temperature], °C"),
+    ("eng_plate_temp", "[bed temperature], °C"),
+    ("eng_plate_temp_initial_layer", "[bed temperature], °C"),
+    ("textured_plate_temp", "[bed temperature], °C"),
+    ("textured_plate_temp_initial_layer", "[bed temperature], °C"),
+    ("filament_type", "[the material's name in capitals]: PLA, ABS, PETG, …"),
+    ("filament_settings_id", "[the material's name]"),
+    ("printer_settings_id", "the profile's name"),
+    ("printer_model", "the profile's `model`"),
+    ("initial_tool", "0: p3dp drives one extruder"),
+    ("initial_extruder", "0"),
+    ("current_extruder", "0"),
+    ("has_wipe_tower", "false"),
+    ("has_single_extruder_multi_material_priming", "false"),
+    ("total_toolchanges", "0"),
+    ("first_layer_height", "the lowest extruding point's height above the bed, mm"),
+    ("layer_height", "the same: the one layer height every print has, mm"),
+    ("layer_z", "start: first_layer_height; end: the last extruding point's height, mm"),
+    ("max_layer_z", "the highest extruding point's height, mm"),
+    ("first_layer_print_min", "[x, y]: the least corner of the extruding strings below twice first_layer_height, machine mm"),
+    ("first_layer_print_max", "[x, y]: their greatest corner, machine mm"),
+    ("first_layer_print_size", "[width, depth] of that extent, mm"),
+    ("print_bed_min", "[x, y]: the bed's least corner, machine mm"),
+    ("print_bed_max", "[x, y]: the bed's greatest corner, machine mm"),
+    ("print_bed_size", "[width, depth] of the bed, mm"),
+    ("max_print_height", "the highest reachable nozzle height, mm"),
+    ("printable_height", "the same, mm"),
+    ("z_offset", "origin z: where recipe z = 0 lands, mm"),
+    ("travel_speed", "the profile's travel speed, mm/s"),
+    ("retract_length", "[retraction length], mm"),
+    ("retraction_length", "[retraction length], mm"),
+    ("retract_speed", "[retraction speed], mm/s"),
+    ("retraction_speed", "[retraction speed], mm/s"),
+    ("retract_lift", "[0]: p3dp lifts for travel between parts, not on retraction"),
+    ("z_hop", "[0]"),
+    ("extrusion_width", "the first extruding string's cross-section over layer_height, mm"),
+    ("machine_max_acceleration_extruding", "[acceleration of printing moves], mm/s²"),
+    ("machine_max_acceleration_travel", "[acceleration of travel moves], mm/s²"),
+    ("machine_max_acceleration_retracting", "[acceleration of retractions], mm/s²"),
+    ("machine_max_feedrate_x", "[highest head speed], mm/s"),
+    ("machine_max_feedrate_y", "[highest head speed], mm/s"),
+    ("machine_max_feedrate_z", "[highest Z speed, or the head's], mm/s"),
+    ("input_filename_base", "the recipe's name"),
+    ("input_filename", "the recipe's name"),
 ];
+
+/// Refuses a `gcode_variables` value that could break a G-code line or is
+/// no finite number.
+fn check_variable(name: &str, v: &Value) -> Result<()> {
+    let key = format!("gcode_variables.{name}");
+    match v {
+        Value::Str(s) | Value::Shown(_, s) => crate::base::safe_text::check(&key, s),
+        Value::Float(f) if !f.is_finite() => Err(Error::input(key, "expected a finite number")),
+        Value::List(items) => items.iter().try_for_each(|i| check_variable(name, i)),
+        _ => Ok(()),
+    }
+}
 
 #[cfg(test)]
 mod tests {
@@ -364,12 +539,19 @@ mod tests {
     }
 
     #[test]
-    fn templates_fill_and_refuse_unknown_placeholders() {
-        let p = crate::recipe::profile::built_in("generic-220").unwrap();
-        let mut v = BTreeMap::new();
-        v.insert("nozzle_temp", "210".to_string());
-        assert_eq!(p.fill("k", "M104 S{nozzle_temp}", &v).unwrap(), "M104 S210");
-        let e = p.fill("start_gcode", "M104 S{hot}", &v).unwrap_err();
-        assert!(e.to_string().contains("unknown placeholder `{hot}`"), "{e}");
+    fn templates_refuse_unknown_variables_and_line_breaks() {
+        let mut p = crate::recipe::profile::built_in("generic-220").unwrap();
+        assert!(p
+            .template("k", "M104 S{nozzle_temp}\nM140 S[bed_temp]")
+            .is_ok());
+        let e = p.template("start_gcode", "G28\nM104 S{hot}").unwrap_err();
+        assert_eq!(e.place.as_deref(), Some("start_gcode line 2"));
+        assert!(e.message.contains("unknown variable `hot`"), "{e}");
+        p.gcode_variables.insert("hot".into(), Value::Int(200));
+        assert!(p.template("start_gcode", "G28\nM104 S{hot}").is_ok());
+        for bad in ["G28\u{2028}M104 S999", "G28\r\nG1", "G28\u{85}"] {
+            let e = p.template("end_gcode", bad).unwrap_err();
+            assert!(e.message.contains("line break"), "{e}");
+        }
     }
 }

@@ -48,10 +48,50 @@ impl Size {
     }
 }
 
-/// The sizes a profile's `thumbnails` list asks for; errors name `thumbnails[k]`.
-pub(crate) fn sizes(list: &[String]) -> Result<Vec<Size>> {
+/// The image format of a G-code thumbnail (PrusaSlicer's `thumbnails`
+/// entries `WxH/PNG`, `WxH/JPG`, `WxH/QOI`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum ThumbFormat {
+    /// PNG: `; thumbnail begin` blocks.
+    Png,
+    /// JPEG: `; thumbnail_JPG begin` blocks.
+    Jpg,
+    /// QOI: `; thumbnail_QOI begin` blocks (Prusa MK4, MINI, XL firmware).
+    Qoi,
+}
+
+impl ThumbFormat {
+    /// The format named `s` (any case; `JPEG` too).
+    pub(crate) fn parse(s: &str) -> Option<ThumbFormat> {
+        match s.trim().to_ascii_uppercase().as_str() {
+            "PNG" => Some(ThumbFormat::Png),
+            "JPG" | "JPEG" => Some(ThumbFormat::Jpg),
+            "QOI" => Some(ThumbFormat::Qoi),
+            _ => None,
+        }
+    }
+}
+
+/// The thumbnails a profile's `thumbnails` list asks for, `WxH` or
+/// `WxH/FORMAT` (PNG when none is named); errors name `thumbnails[k]`.
+pub(crate) fn thumbs(list: &[String]) -> Result<Vec<(Size, ThumbFormat)>> {
     list.iter()
         .enumerate()
-        .map(|(k, s)| Size::parse(s, &format!("thumbnails[{k}]")))
+        .map(|(k, s)| {
+            let what = format!("thumbnails[{k}]");
+            let (size, format) = match s.split_once('/') {
+                None => (s.as_str(), ThumbFormat::Png),
+                Some((size, f)) => {
+                    let format = ThumbFormat::parse(f).ok_or_else(|| {
+                        Error::input(
+                            what.as_str(),
+                            format!("`{f}` is not a thumbnail format; expected PNG, JPG or QOI"),
+                        )
+                    })?;
+                    (size, format)
+                }
+            };
+            Ok((Size::parse(size.trim(), &what)?, format))
+        })
         .collect()
 }

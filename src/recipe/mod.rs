@@ -21,6 +21,7 @@ pub(crate) mod context;
 pub(crate) mod eval;
 pub(crate) mod expand;
 pub(crate) mod params;
+pub(crate) mod preset;
 pub(crate) mod profile;
 pub(crate) mod resolve;
 pub(crate) mod schema;

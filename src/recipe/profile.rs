@@ -7,10 +7,12 @@ use std::path::Path;
 
 use super::schema::{
     RawBed, RawCheckLimits, RawExtrusion, RawFlavor, RawHead, RawKinematics, RawPrinter,
-    RawRetraction,
+    RawRetraction, RawVariable,
 };
 use super::yaml::{parse_yaml, Tree};
 use crate::base::error::{Error, Result};
+use crate::base::slicer_macro::Value;
+use crate::machine::printer::Envelope;
 use crate::machine::{Bed, CheckLimits, Extrusion, Flavor, Head, Kinematics, Printer, Retraction};
 
 const BUILT_IN: &[(&str, &str)] = &[
@@ -34,6 +36,42 @@ const BUILT_IN: &[(&str, &str)] = &[
     (
         "rostock-max",
         include_str!("../machine/printers/rostock-max.yaml"),
+    ),
+    (
+        "bambu-x1c",
+        include_str!("../machine/printers/bambu-x1c.yaml"),
+    ),
+    (
+        "bambu-p1s",
+        include_str!("../machine/printers/bambu-p1s.yaml"),
+    ),
+    (
+        "bambu-a1",
+        include_str!("../machine/printers/bambu-a1.yaml"),
+    ),
+    (
+        "bambu-a1-mini",
+        include_str!("../machine/printers/bambu-a1-mini.yaml"),
+    ),
+    (
+        "prusa-mk4s",
+        include_str!("../machine/printers/prusa-mk4s.yaml"),
+    ),
+    (
+        "prusa-core-one",
+        include_str!("../machine/printers/prusa-core-one.yaml"),
+    ),
+    (
+        "prusa-mini",
+        include_str!("../machine/printers/prusa-mini.yaml"),
+    ),
+    (
+        "creality-k1",
+        include_str!("../machine/printers/creality-k1.yaml"),
+    ),
+    (
+        "ender3-v3",
+        include_str!("../machine/printers/ender3-v3.yaml"),
     ),
 ];
 
@@ -82,12 +120,23 @@ impl Printer {
         } else {
             parse_yaml(&text, &shown)?
         };
-        let p = printer(raw);
+        let mut p = printer(raw);
+        p.source = Some(shown.clone());
         p.validate().map_err(|e| e.in_file(&shown))?;
         Ok(p)
     }
 
-    /// A built-in name, or else a path (relative paths from `base`); every
+    /// A slicer's printer preset (see [`crate::recipe::preset`]) as a
+    /// profile: the YAML `p3dp printers import` writes, loaded; errors name
+    /// the preset file.
+    pub fn from_preset(src: &super::preset::Source, reads: &Reads) -> Result<Printer> {
+        let preset = super::preset::load(src, reads)?;
+        let imported = super::preset::map::to_yaml(&preset)?;
+        from_imported(&imported.yaml, &preset.file)
+    }
+
+    /// A built-in name, or else a path (relative paths from `base`): a
+    /// profile's YAML, or a slicer's `.ini` or `.json` printer preset; every
     /// file read noted in `reads`.
     pub fn resolve(spec: &str, base: &Path, reads: &Reads) -> Result<Printer> {
         if let Some(p) = Printer::built_in(spec) {
@@ -117,14 +166,36 @@ impl Printer {
                 ),
             ));
         }
+        if super::preset::is_preset_file(spec) {
+            let src = super::preset::Source {
+                file: path,
+                ..Default::default()
+            };
+            return Printer::from_preset(&src, reads);
+        }
         Printer::from_file_in(&path, reads)
     }
 }
 
+/// The profile of an imported preset's YAML `text` (see
+/// [`crate::recipe::preset::map`]), read from the preset `file`: loaded and
+/// checked as a profile file is, errors naming the preset file.
+pub(crate) fn from_imported(text: &str, file: &str) -> Result<Printer> {
+    let raw: RawPrinter = parse_yaml(text, file)?;
+    let mut p = printer(raw);
+    p.source = Some(file.to_string());
+    p.validate().map_err(|e| e.in_file(file))?;
+    Ok(p)
+}
+
 /// Whether a printer name that is not built in is meant as a file: it has a
-/// `/` or ends in `.yaml` / `.yml` (anything else is a misspelt name).
+/// `/` or ends in `.yaml` / `.yml` (or `.ini` / `.json`, a slicer's preset;
+/// anything else is a misspelt name).
 fn names_a_file(spec: &str) -> bool {
-    spec.contains('/') || spec.ends_with(".yaml") || spec.ends_with(".yml")
+    spec.contains('/')
+        || spec.ends_with(".yaml")
+        || spec.ends_with(".yml")
+        || super::preset::is_preset_file(spec)
 }
 
 /// The error for `spec` at key `key`: neither a built-in printer nor a file.
@@ -207,9 +278,11 @@ fn inherit(
 fn printer(raw: RawPrinter) -> Printer {
     Printer {
         name: raw.name,
+        model: raw.model,
+        source: None,
         flavor: flavor(raw.flavor),
         bed: match raw.bed {
-            RawBed::Rectangle { size, max_z } => Bed::Rectangle { size, max_z },
+            RawBed::Rectangle { size, max_z, min } => Bed::Rectangle { size, max_z, min },
             RawBed::Circle { diameter, max_z } => Bed::Circle { diameter, max_z },
         },
         origin: raw.origin,
@@ -221,6 +294,15 @@ fn printer(raw: RawPrinter) -> Printer {
         },
         start_gcode: raw.start_gcode,
         end_gcode: raw.end_gcode,
+        gcode_variables: raw
+            .gcode_variables
+            .into_iter()
+            .map(|(k, v)| (k, variable(v)))
+            .collect(),
+        envelope: Envelope {
+            margin: raw.envelope.margin,
+            below_bed: raw.envelope.below_bed,
+        },
         travel_speed: raw.travel_speed,
         retraction: retraction(raw.retraction),
         firmware_retraction: raw.firmware_retraction,
@@ -235,6 +317,16 @@ fn printer(raw: RawPrinter) -> Printer {
         kinematics: kinematics(raw.kinematics),
         head: head(raw.head),
         checks: checks(raw.checks),
+    }
+}
+
+fn variable(v: RawVariable) -> Value {
+    match v {
+        RawVariable::Bool(b) => Value::Bool(b),
+        RawVariable::Int(i) => Value::Int(i),
+        RawVariable::Float(f) => Value::Float(f),
+        RawVariable::Str(s) => Value::Str(s),
+        RawVariable::List(l) => Value::List(l.into_iter().map(variable).collect()),
     }
 }
 
@@ -262,6 +354,7 @@ fn kinematics(k: RawKinematics) -> Kinematics {
         travel_acceleration: k.travel_acceleration,
         retract_acceleration: k.retract_acceleration,
         junction_deviation: k.junction_deviation,
+        jerk: k.jerk,
         square_corner_velocity: k.square_corner_velocity,
         min_segment_time: k.min_segment_time,
         minimum_cruise_ratio: k.minimum_cruise_ratio,

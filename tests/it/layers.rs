@@ -24,6 +24,7 @@ const LAYERS: &[(&str, &[&str])] = &[
             "finding",
             "rng",
             "format",
+            "slicer_macro",
             "geom",
             "svg",
         ],
@@ -44,12 +45,12 @@ const LAYERS: &[(&str, &[&str])] = &[
         "generate",
         &["primitive", "step", "model", "assembly", "skirt"],
     ),
-    ("analyse", &["planner", "check", "plan", "stats"]),
+    ("analyse", &["planner", "check", "frame", "plan", "stats"]),
     ("output", &["file", "gcode", "preview", "mesh", "lock"]),
     (
         "recipe",
         &[
-            "yaml", "context", "schema", "eval", "params", "expand", "profile", "resolve",
+            "yaml", "context", "schema", "eval", "params", "expand", "preset", "profile", "resolve",
         ],
     ),
     (

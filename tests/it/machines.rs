@@ -14,13 +14,22 @@ use p3dp::{plan, Options};
 use p3dp::{Bed, Printer};
 use p3dp::{Event, Toolpath};
 
-const PROFILES: [&str; 6] = [
+const PROFILES: [&str; 15] = [
     "generic-220",
     "ender3",
     "prusa-mk3s",
     "prusa-mk4",
     "voron-350",
     "rostock-max",
+    "bambu-x1c",
+    "bambu-p1s",
+    "bambu-a1",
+    "bambu-a1-mini",
+    "prusa-mk4s",
+    "prusa-core-one",
+    "prusa-mini",
+    "creality-k1",
+    "ender3-v3",
 ];
 
 fn fixture(name: &str) -> PathBuf {
@@ -54,6 +63,8 @@ const MARLIN: &[(&str, &str)] = &[
     ("M190", "S"),
     ("M106", "S"),
     ("M107", ""),
+    // Marlin's bed levelling (AUTO_BED_LEVELING_*; the Bambu firmwares too)
+    ("G29", ""),
 ];
 const PRUSA_EXTRA: &[(&str, &str)] = &[("M601", ""), ("G28", "W"), ("G29", ""), ("G80", "")];
 /// Klipper: its extended commands take `KEY=VALUE` (keys listed by spaces).

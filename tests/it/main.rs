@@ -28,6 +28,7 @@ mod machines;
 mod mesh;
 mod olympic;
 mod planner;
+mod presets;
 mod preview;
 mod procedural;
 mod schema;

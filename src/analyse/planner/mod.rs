@@ -1241,7 +1241,7 @@ mod tests {
             .validate()
             .unwrap_err()
             .to_string()
-            .contains("not both"));
+            .contains("give one of"));
         let bad = Kinematics {
             max_acceleration: -1.0,
             ..Kinematics::default()

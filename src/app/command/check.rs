@@ -37,6 +37,9 @@ pub(crate) fn run(c: &Builds) -> Vec<Error> {
                         &p.path,
                         format!("{failing} check{} failed", plural(failing)),
                     ));
+                } else if let Err(e) = p.frame_ok() {
+                    // the profile's start or end G-code: unsafe for this print
+                    errors.push(e);
                 }
             }
             Err(e) => errors.push(e),

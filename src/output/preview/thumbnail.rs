@@ -19,26 +19,38 @@ use base64::Engine;
 use super::{png, Scene, Size};
 use crate::analyse::plan::Plan;
 use crate::base::error::Result;
-use crate::machine::size::sizes;
+use crate::machine::size::{thumbs, ThumbFormat};
 
 /// Characters of base64 per comment line (PrusaSlicer's).
 pub(crate) const LINE: usize = 78;
 
+#[cfg(test)]
 /// One thumbnail block for a PNG of `size`.
 pub(crate) fn block(size: Size, png: &[u8]) -> String {
-    let b64 = base64::engine::general_purpose::STANDARD.encode(png);
-    let mut s = format!(
-        "; thumbnail begin {}x{} {}\n",
-        size.width,
-        size.height,
-        b64.len()
-    );
+    block_of(size, ThumbFormat::Png, png)
+}
+
+/// The word of a block's header and end line: `thumbnail` for PNG,
+/// `thumbnail_JPG`, `thumbnail_QOI` (PrusaSlicer's).
+fn word(format: ThumbFormat) -> &'static str {
+    match format {
+        ThumbFormat::Png => "thumbnail",
+        ThumbFormat::Jpg => "thumbnail_JPG",
+        ThumbFormat::Qoi => "thumbnail_QOI",
+    }
+}
+
+/// One thumbnail block for an image of `size` encoded as `format`.
+pub(crate) fn block_of(size: Size, format: ThumbFormat, bytes: &[u8]) -> String {
+    let b64 = base64::engine::general_purpose::STANDARD.encode(bytes);
+    let w = word(format);
+    let mut s = format!("; {w} begin {}x{} {}\n", size.width, size.height, b64.len());
     for chunk in b64.as_bytes().chunks(LINE) {
         s.push_str("; ");
         s.push_str(std::str::from_utf8(chunk).expect("base64 is ASCII"));
         s.push('\n');
     }
-    s.push_str("; thumbnail end\n;\n");
+    s.push_str(&format!("; {w} end\n;\n"));
     s
 }
 
@@ -48,12 +60,17 @@ pub(crate) fn blocks(plan: &Plan) -> Result<String> {
     if list.is_empty() {
         return Ok(String::new());
     }
-    let sizes = sizes(list).map_err(|e| e.in_file(&plan.recipe.printer.name))?;
+    let thumbs = thumbs(list).map_err(|e| e.in_file(&plan.recipe.printer.name))?;
     let scene = Scene::new(plan);
     let mut out = String::new();
-    for size in sizes {
+    for (size, format) in thumbs {
         let pm = png::thumbnail(&scene, size);
-        out.push_str(&block(size, &png::encode(&pm, true)));
+        let bytes = match format {
+            ThumbFormat::Png => png::encode(&pm, true),
+            ThumbFormat::Jpg => png::encode_jpeg(&pm),
+            ThumbFormat::Qoi => png::encode_qoi(&pm),
+        };
+        out.push_str(&block_of(size, format, &bytes));
     }
     Ok(out)
 }
@@ -66,8 +83,10 @@ pub(crate) struct Thumbnail {
     pub width: u32,
     /// Height named in the block header, pixels.
     pub height: u32,
-    /// The decoded PNG bytes.
+    /// The decoded image bytes (PNG unless `format` says otherwise).
     pub png: Vec<u8>,
+    /// The image's format, from the block's header word.
+    pub format: ThumbFormat,
 }
 
 #[cfg(test)]
@@ -103,10 +122,16 @@ pub(crate) fn parse(gcode: &str) -> std::result::Result<Vec<Thumbnail>, Thumbnai
         message,
     };
     let mut out = Vec::new();
-    let mut cur: Option<(u32, u32, usize, String)> = None;
+    let mut cur: Option<(u32, u32, usize, String, ThumbFormat)> = None;
     for (k, line) in gcode.lines().enumerate() {
         let at = k + 1;
-        if let Some(rest) = line.strip_prefix("; thumbnail begin ") {
+        let begin = [ThumbFormat::Png, ThumbFormat::Jpg, ThumbFormat::Qoi]
+            .into_iter()
+            .find_map(|f| Some((f, line.strip_prefix(&format!("; {} begin ", word(f)))?)));
+        let end = cur
+            .as_ref()
+            .is_some_and(|c| line == format!("; {} end", word(c.4)));
+        if let Some((format, rest)) = begin {
             let header = || bad(at, "expected `; thumbnail begin WxH LEN`".into());
             let (wh, len) = rest.split_once(' ').ok_or_else(header)?;
             let (w, h) = wh.split_once('x').ok_or_else(header)?;
@@ -115,9 +140,11 @@ pub(crate) fn parse(gcode: &str) -> std::result::Result<Vec<Thumbnail>, Thumbnai
             if cur.is_some() {
                 return Err(bad(at, "a block begins inside another".into()));
             }
-            cur = Some((num(w)?, num(h)?, len, String::new()));
-        } else if line == "; thumbnail end" {
-            let (width, height, len, b64) = cur
+            cur = Some((num(w)?, num(h)?, len, String::new(), format));
+        } else if end
+            || (cur.is_none() && line.starts_with("; thumbnail") && line.ends_with(" end"))
+        {
+            let (width, height, len, b64, format) = cur
                 .take()
                 .ok_or_else(|| bad(at, "an end without a begin".into()))?;
             if b64.len() != len {
@@ -132,8 +159,13 @@ pub(crate) fn parse(gcode: &str) -> std::result::Result<Vec<Thumbnail>, Thumbnai
             let png = base64::engine::general_purpose::STANDARD
                 .decode(b64)
                 .map_err(|e| bad(at, format!("not base64: {e}")))?;
-            out.push(Thumbnail { width, height, png });
-        } else if let Some((.., b64)) = cur.as_mut() {
+            out.push(Thumbnail {
+                width,
+                height,
+                png,
+                format,
+            });
+        } else if let Some((.., b64, _)) = cur.as_mut() {
             let data = line
                 .strip_prefix("; ")
                 .ok_or_else(|| bad(at, "a data line is not a `; ` comment".into()))?;
@@ -211,8 +243,45 @@ mod tests {
 
     #[test]
     fn sizes_name_the_bad_entry() {
-        let e = sizes(&["16x16".into(), "big".into()]).unwrap_err();
+        let e = thumbs(&["16x16".into(), "big".into()]).unwrap_err();
         assert!(e.to_string().contains("thumbnails[1]"), "{e}");
-        assert_eq!(sizes(&["220x124".into()]).unwrap()[0].height, 124);
+        let e = thumbs(&["16x16/GIF".into()]).unwrap_err();
+        assert!(
+            e.to_string().contains("`GIF` is not a thumbnail format"),
+            "{e}"
+        );
+        let t = thumbs(&["220x124".into(), "16x16/qoi".into(), "8x8/JPG".into()]).unwrap();
+        assert_eq!(t[0].0.height, 124);
+        assert_eq!(
+            t.iter().map(|x| x.1).collect::<Vec<_>>(),
+            [ThumbFormat::Png, ThumbFormat::Qoi, ThumbFormat::Jpg]
+        );
+    }
+
+    #[test]
+    fn qoi_and_jpg_blocks_read_back_as_their_images() {
+        let size = Size {
+            width: 12,
+            height: 8,
+        };
+        let mut pm = tiny_skia::Pixmap::new(12, 8).unwrap();
+        pm.fill(tiny_skia::Color::from_rgba8(200, 100, 20, 255));
+        let text = block_of(size, ThumbFormat::Qoi, &png::encode_qoi(&pm))
+            + &block_of(size, ThumbFormat::Jpg, &png::encode_jpeg(&pm));
+        assert!(text.starts_with("; thumbnail_QOI begin 12x8 "), "{text}");
+        assert!(text.contains("; thumbnail_JPG end\n"), "{text}");
+        let got = parse(&text).unwrap();
+        assert_eq!(got.len(), 2);
+        for (t, f) in got
+            .iter()
+            .zip([image::ImageFormat::Qoi, image::ImageFormat::Jpeg])
+        {
+            let img = image::load_from_memory_with_format(&t.png, f)
+                .unwrap()
+                .to_rgb8();
+            assert_eq!((img.width(), img.height()), (12, 8));
+            let px = img.get_pixel(5, 4).0;
+            assert!(px[0].abs_diff(200) < 8 && px[1].abs_diff(100) < 8, "{px:?}");
+        }
     }
 }

@@ -28,8 +28,8 @@ pub(crate) use primitive::{
     RawInitial, RawLayout, RawOutline, RawPath, RawPatternHelix, RawPrimitive, RawRule, RawSpiral,
 };
 pub(crate) use profile::{
-    RawBed, RawCheckLimits, RawExtrusion, RawFlavor, RawHead, RawKinematics, RawPrinter,
-    RawRetraction,
+    RawBed, RawCheckLimits, RawEnvelope, RawExtrusion, RawFlavor, RawHead, RawKinematics,
+    RawPrinter, RawRetraction, RawVariable,
 };
 pub(crate) use solid::{RawBox, RawFeature, RawInfill, RawOp, RawPattern, RawSolid};
 pub(crate) use step::{RawDeform, RawKeep, RawStep};

@@ -50,6 +50,9 @@ pub(crate) enum RawBed {
         size: [f64; 2],
         /// Highest reachable nozzle height, mm.
         max_z: f64,
+        /// The front-left corner, machine coordinates, mm ([0, 0]).
+        #[serde(default)]
+        min: [f64; 2],
     },
     /// A round bed.
     Circle {
@@ -94,6 +97,9 @@ impl Default for RawRetraction {
 pub(crate) struct RawPrinter {
     /// Profile name.
     pub name: String,
+    /// The model as its maker's slicer names it (none).
+    #[serde(default)]
+    pub model: String,
     /// Firmware dialect.
     #[serde(default)]
     pub flavor: RawFlavor,
@@ -114,6 +120,12 @@ pub(crate) struct RawPrinter {
     /// G-code after the print, with the same placeholders.
     #[serde(default)]
     pub end_gcode: String,
+    /// Values of template variables only a slicer knows (none).
+    #[serde(default)]
+    pub gcode_variables: indexmap::IndexMap<String, RawVariable>,
+    /// Where the start and end G-code may move the head.
+    #[serde(default)]
+    pub envelope: RawEnvelope,
     /// Head speed of travel moves, mm/s (120).
     #[serde(default = "d_travel")]
     pub travel_speed: f64,
@@ -158,6 +170,42 @@ pub(crate) struct RawPrinter {
     pub checks: RawCheckLimits,
 }
 
+/// A value under `gcode_variables:`: a boolean, a number, a string or a
+/// list of them (a slicer's per-extruder list).
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(
+    untagged,
+    expecting = "a boolean, a number, a string or a list of them"
+)]
+#[allow(missing_docs)]
+pub(crate) enum RawVariable {
+    Bool(bool),
+    Int(i64),
+    Float(f64),
+    Str(String),
+    List(Vec<RawVariable>),
+}
+
+/// `envelope:` where a profile's start and end G-code may move the head;
+/// each absent key is [`crate::machine::printer::Envelope::default`]'s.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default, expecting = "struct Envelope")]
+#[allow(missing_docs)]
+pub(crate) struct RawEnvelope {
+    pub margin: f64,
+    pub below_bed: f64,
+}
+
+impl Default for RawEnvelope {
+    fn default() -> Self {
+        let e = crate::machine::printer::Envelope::default();
+        RawEnvelope {
+            margin: e.margin,
+            below_bed: e.below_bed,
+        }
+    }
+}
+
 fn d_travel() -> f64 {
     120.0
 }
@@ -197,6 +245,8 @@ pub(crate) struct RawKinematics {
     #[serde(default)]
     pub junction_deviation: Option<f64>,
     #[serde(default)]
+    pub jerk: Option<f64>,
+    #[serde(default)]
     pub square_corner_velocity: Option<f64>,
     #[serde(default)]
     pub min_segment_time: Option<f64>,
@@ -233,6 +283,7 @@ impl Default for RawKinematics {
             travel_acceleration: k.travel_acceleration,
             retract_acceleration: k.retract_acceleration,
             junction_deviation: k.junction_deviation,
+            jerk: k.jerk,
             square_corner_velocity: k.square_corner_velocity,
             min_segment_time: k.min_segment_time,
             minimum_cruise_ratio: k.minimum_cruise_ratio,

@@ -1,0 +1,216 @@
+//! Slicer printer presets imported as p3dp printer profiles: PrusaSlicer's
+//! family of `.ini` files ([`ini`]) and OrcaSlicer's and Bambu Studio's
+//! `.json` ones ([`json`]), read through the project's input rules
+//! (bounded, UTF-8, noted in the load's reads), their `inherits` resolved,
+//! and mapped into a profile's terms and units ([`map`]) as the YAML text
+//! `p3dp printers import` writes and `--printer FILE.ini|FILE.json` loads.
+
+pub(crate) mod ini;
+pub(crate) mod json;
+pub(crate) mod map;
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use crate::base::error::{Error, Result};
+use crate::base::input::Reads;
+
+/// The preset file's family.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// PrusaSlicer, SuperSlicer, Slic3r: `key = value` text.
+    Ini,
+    /// OrcaSlicer, Bambu Studio: JSON strings and lists of strings.
+    Json,
+}
+
+impl Format {
+    /// The family's name in notes.
+    pub(crate) fn describe(self) -> &'static str {
+        match self {
+            Format::Ini => "a PrusaSlicer-family .ini preset",
+            Format::Json => "an OrcaSlicer/Bambu Studio .json preset",
+        }
+    }
+}
+
+/// One setting as the preset file holds it.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Setting {
+    /// An `.ini` value: text, a list comma-separated, a string C-escaped.
+    Ini(String),
+    /// A `.json` value: a string or a list of strings.
+    Json(serde_json::Value),
+}
+
+/// A printer preset, its `inherits` resolved: every key it and its parents set.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Preset {
+    /// The preset's name.
+    pub name: String,
+    /// The file it was read from, as the user named it.
+    pub file: String,
+    /// The file's family.
+    pub format: Format,
+    /// Every setting, by key.
+    pub values: BTreeMap<String, Setting>,
+}
+
+impl Preset {
+    /// Whether `key` is set (and not empty).
+    pub(crate) fn has(&self, key: &str) -> bool {
+        self.text(key).is_some_and(|t| !t.is_empty())
+    }
+
+    /// A string setting (`.ini` escapes undone; a `.json` list's first element).
+    pub(crate) fn text(&self, key: &str) -> Option<String> {
+        match self.values.get(key)? {
+            Setting::Ini(s) => Some(ini::unescape(s)),
+            Setting::Json(serde_json::Value::String(s)) => Some(s.clone()),
+            Setting::Json(serde_json::Value::Array(a)) => a.first().map(json_text),
+            Setting::Json(v) => Some(json_text(v)),
+        }
+    }
+
+    /// A list setting: an `.ini` value split at commas, a `.json` list.
+    pub fn list(&self, key: &str) -> Option<Vec<String>> {
+        match self.values.get(key)? {
+            Setting::Ini(s) => Some(split(s)),
+            Setting::Json(serde_json::Value::Array(a)) => Some(a.iter().map(json_text).collect()),
+            Setting::Json(serde_json::Value::String(s)) => Some(split(s)),
+            Setting::Json(v) => Some(vec![json_text(v)]),
+        }
+    }
+
+    /// The first number of a setting; an error names the key when it is
+    /// set but no number.
+    pub(crate) fn number(&self, key: &str) -> Result<Option<f64>> {
+        let Some(first) = self.list(key).and_then(|l| l.into_iter().next()) else {
+            return Ok(None);
+        };
+        let t = first.trim().trim_end_matches('%');
+        if t.is_empty() {
+            return Ok(None);
+        }
+        match t.parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok(Some(v)),
+            _ => Err(Error::input(key, format!("`{first}` is not a number")).in_file(&self.file)),
+        }
+    }
+
+    /// The first of `keys` that is set, as text.
+    pub(crate) fn first_text(&self, keys: &[&str]) -> Option<(String, String)> {
+        keys.iter().find_map(|k| {
+            self.text(k)
+                .filter(|t| !t.is_empty())
+                .map(|t| (k.to_string(), t))
+        })
+    }
+}
+
+fn json_text(v: &serde_json::Value) -> String {
+    match v {
+        serde_json::Value::String(s) => s.clone(),
+        other => other.to_string(),
+    }
+}
+
+fn split(s: &str) -> Vec<String> {
+    s.split(',').map(|x| x.trim().to_string()).collect()
+}
+
+/// Where a preset comes from: its file, the preset picked, the folder its
+/// parents are found in.
+#[derive(Clone, Debug, Default)]
+pub struct Source {
+    /// The preset file.
+    pub file: PathBuf,
+    /// `--preset NAME`: the preset of a bundle.
+    pub preset: Option<String>,
+    /// `--profiles DIR`: where `.json` parents (and nothing else) are found.
+    pub profiles: Option<PathBuf>,
+}
+
+/// Whether `path` names a slicer preset file (`.ini` or `.json`).
+pub(crate) fn is_preset_file(path: &str) -> bool {
+    let lower = path.to_ascii_lowercase();
+    lower.ends_with(".ini") || lower.ends_with(".json")
+}
+
+fn format_of(path: &Path, text: &str) -> Format {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    match ext.as_deref() {
+        Some("json") => Format::Json,
+        Some("ini") => Format::Ini,
+        _ if text.trim_start().starts_with('{') => Format::Json,
+        _ => Format::Ini,
+    }
+}
+
+fn stem(path: &Path) -> String {
+    path.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+/// The printer presets `file` holds, in its order.
+pub fn list(file: &Path, reads: &Reads) -> Result<Vec<String>> {
+    let shown = file.display().to_string();
+    let text = reads.read_plain(file, "printer preset")?;
+    match format_of(file, &text) {
+        Format::Ini => Ok(ini::parse(&text, &shown)?.names(&stem(file))),
+        Format::Json => Ok(vec![json::name_of(&text, &shown, &stem(file))?]),
+    }
+}
+
+/// The preset `src` names, its `inherits` resolved.
+pub fn load(src: &Source, reads: &Reads) -> Result<Preset> {
+    let shown = src.file.display().to_string();
+    let text = reads.read_plain(&src.file, "printer preset")?;
+    match format_of(&src.file, &text) {
+        Format::Ini => {
+            ini::parse(&text, &shown)?.preset(src.preset.as_deref(), &shown, &stem(&src.file))
+        }
+        Format::Json => {
+            let p = json::preset(&text, &src.file, src.profiles.as_deref(), reads)?;
+            match &src.preset {
+                Some(n) if *n != p.name => Err(Error::input(
+                    "--preset",
+                    format!("the file holds the preset `{}`, not `{n}`", p.name),
+                )
+                .in_file(&shown)),
+                _ => Ok(p),
+            }
+        }
+    }
+}
+
+/// The message for a preset `name` not in `file`, which holds `names`
+/// (the closest names offered).
+pub(crate) fn no_such(name: &str, names: &[String], file: &str) -> String {
+    let mut close: Vec<(f64, &String)> = names
+        .iter()
+        .map(|n| {
+            (
+                strsim::normalized_levenshtein(&n.to_lowercase(), &name.to_lowercase()),
+                n,
+            )
+        })
+        .filter(|(s, _)| *s > 0.5)
+        .collect();
+    close.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let mut msg = format!("no printer preset `{name}` in {file}");
+    if !close.is_empty() {
+        let shown: Vec<String> = close
+            .iter()
+            .take(3)
+            .map(|(_, n)| format!("`{n}`"))
+            .collect();
+        msg.push_str(&format!("; did you mean {}?", shown.join(", ")));
+    } else {
+        msg.push_str(&format!("; `p3dp printers list {file}` lists its presets"));
+    }
+    msg
+}
