@@ -146,9 +146,23 @@ pub struct Printer {
     pub arcs: bool,
     /// Largest distance between an arc and the strings it replaces, mm.
     pub arc_tolerance: f64,
-    /// PNG thumbnails to embed in the G-code, as `WxH` sizes (PrusaSlicer's
-    /// `; thumbnail begin` blocks); none by default.
+    /// Thumbnails to embed in the G-code, as `WxH` (PNG) or `WxH/FORMAT`
+    /// (`PNG`, `QOI`, `JPG`) entries, PrusaSlicer's `thumbnails` (see
+    /// [`super::size::thumbnails`]); none by default.
     pub thumbnails: Vec<String>,
+    /// The printer's model as its maker's software names it (PrusaSlicer's
+    /// `printer_model`: `MK4`, `MK3S`…; Bambu's `X1C`…), for the hosts and
+    /// firmware that read it from the G-code's metadata; empty when unknown.
+    pub printer_model: String,
+    /// Write `M73` progress (percent done, minutes left) from the planner's
+    /// time: on by default for Marlin and Prusa, whose screens show it.
+    pub progress: bool,
+    /// Label each part for the host's cancel-object (Klipper's
+    /// `EXCLUDE_OBJECT_DEFINE/START/END`); on by default for Klipper.
+    pub object_labels: bool,
+    /// Write Prusa's binary G-code (`.bgcode`) when the output's name does
+    /// not say (PrusaSlicer's `binary_gcode`); off by default.
+    pub binary_gcode: bool,
     /// The firmware planner's limits, for the print-time estimate (see
     /// [`super::Kinematics`]).
     pub kinematics: super::kinematics::Kinematics,
@@ -215,7 +229,8 @@ impl Printer {
             ));
         }
         self.physical_ranges()?;
-        super::size::sizes(&self.thumbnails)?;
+        super::size::thumbnails(&self.thumbnails)?;
+        crate::base::safe_text::check("printer_model", &self.printer_model)?;
         self.kinematics.validate()?;
         self.head.validate()?;
         self.checks.validate()?;

@@ -48,10 +48,95 @@ impl Size {
     }
 }
 
-/// The sizes a profile's `thumbnails` list asks for; errors name `thumbnails[k]`.
-pub fn sizes(list: &[String]) -> Result<Vec<Size>> {
+/// The image format of a G-code thumbnail (PrusaSlicer's `thumbnails`
+/// suffix: `16x16/QOI`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ImageFormat {
+    /// PNG: `; thumbnail begin` blocks (the default).
+    #[default]
+    Png,
+    /// QOI: `; thumbnail_QOI begin` blocks (Prusa's firmware).
+    Qoi,
+    /// JPEG: `; thumbnail_JPG begin` blocks.
+    Jpg,
+}
+
+impl ImageFormat {
+    /// The suffix of a profile's entry and of PrusaSlicer's block names:
+    /// `PNG`, `QOI`, `JPG`.
+    pub fn name(self) -> &'static str {
+        match self {
+            ImageFormat::Png => "PNG",
+            ImageFormat::Qoi => "QOI",
+            ImageFormat::Jpg => "JPG",
+        }
+    }
+}
+
+/// One thumbnail a profile asks for: its size and format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Thumbnail {
+    /// Size in pixels.
+    pub size: Size,
+    /// Image format.
+    pub format: ImageFormat,
+}
+
+/// The thumbnails a profile's `thumbnails` list asks for: each entry
+/// `WxH` (PNG) or `WxH/FORMAT` with FORMAT one of `PNG`, `QOI`, `JPG` (any
+/// case), as PrusaSlicer writes them; errors name `thumbnails[k]`.
+pub fn thumbnails(list: &[String]) -> Result<Vec<Thumbnail>> {
     list.iter()
         .enumerate()
-        .map(|(k, s)| Size::parse(s, &format!("thumbnails[{k}]")))
+        .map(|(k, s)| {
+            let what = format!("thumbnails[{k}]");
+            let (size, format) = match s.split_once('/') {
+                None => (s.as_str(), ImageFormat::Png),
+                Some((size, f)) => {
+                    let format = match f.trim().to_ascii_uppercase().as_str() {
+                        "PNG" => ImageFormat::Png,
+                        "QOI" => ImageFormat::Qoi,
+                        "JPG" | "JPEG" => ImageFormat::Jpg,
+                        _ => {
+                            return Err(Error::input(
+                                what,
+                                format!("`{f}` is not a thumbnail format; expected PNG, QOI or JPG (as in `16x16/QOI`)"),
+                            ))
+                        }
+                    };
+                    (size, format)
+                }
+            };
+            Ok(Thumbnail {
+                size: Size::parse(size, &what)?,
+                format,
+            })
+        })
         .collect()
+}
+
+/// The sizes a profile's `thumbnails` list asks for (see [`thumbnails`]);
+/// errors name `thumbnails[k]`.
+pub fn sizes(list: &[String]) -> Result<Vec<Size>> {
+    Ok(thumbnails(list)?.into_iter().map(|t| t.size).collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn thumbnail_entries_take_a_format() {
+        let list: Vec<String> = ["220x124", "16x16/QOI", "300x300/jpg", "40x40/PNG"]
+            .map(String::from)
+            .to_vec();
+        let t = thumbnails(&list).unwrap();
+        let formats: Vec<ImageFormat> = t.iter().map(|t| t.format).collect();
+        use ImageFormat::*;
+        assert_eq!(formats, [Png, Qoi, Jpg, Png]);
+        assert_eq!((t[1].size.width, t[1].size.height), (16, 16));
+        let e = thumbnails(&["16x16/GIF".to_string()]).unwrap_err();
+        assert!(e.to_string().contains("thumbnails[0]"), "{e}");
+        assert!(e.to_string().contains("expected PNG, QOI or JPG"), "{e}");
+    }
 }

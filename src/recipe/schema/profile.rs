@@ -144,9 +144,23 @@ pub struct RawPrinter {
     /// Largest distance between an arc and the strings it replaces, mm (0.025).
     #[serde(default = "d_arc_tolerance")]
     pub arc_tolerance: f64,
-    /// PNG thumbnails to embed in the G-code, as `WxH` sizes (none).
+    /// Thumbnails to embed in the G-code, as `WxH` (PNG) or `WxH/FORMAT`
+    /// with FORMAT `PNG`, `QOI` or `JPG` (none).
     #[serde(default)]
     pub thumbnails: Vec<String>,
+    /// The printer's model as its maker's software names it (`MK4`, `X1C`),
+    /// written in the G-code's metadata (none).
+    #[serde(default)]
+    pub printer_model: String,
+    /// `M73` progress from the planner's time (on for Marlin and Prusa).
+    #[serde(default)]
+    pub progress: Option<bool>,
+    /// Klipper's object labels, `EXCLUDE_OBJECT_*` (on for Klipper).
+    #[serde(default)]
+    pub object_labels: Option<bool>,
+    /// Binary G-code (`.bgcode`) unless the output's name says otherwise (off).
+    #[serde(default)]
+    pub binary_gcode: bool,
     /// The firmware planner's limits.
     #[serde(default)]
     pub kinematics: RawKinematics,
