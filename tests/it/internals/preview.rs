@@ -16,7 +16,7 @@ fn thumbnails(gcode: &str) -> Vec<(u32, u32, Vec<u8>)> {
     p3dp::output::preview::thumbnail::parse(gcode)
         .expect("thumbnail blocks as PrusaSlicer writes them")
         .into_iter()
-        .map(|t| (t.width, t.height, t.png))
+        .map(|t| (t.width, t.height, t.bytes))
         .collect()
 }
 
