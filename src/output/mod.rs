@@ -3,6 +3,7 @@
 
 pub mod file;
 pub mod gcode;
+pub mod host;
 pub mod lock;
 pub mod mesh;
 pub mod preview;

@@ -44,7 +44,10 @@ const LAYERS: &[(&str, &[&str])] = &[
         &["primitive", "step", "model", "assembly", "skirt"],
     ),
     ("analyse", &["planner", "check", "plan", "stats"]),
-    ("output", &["file", "gcode", "preview", "mesh", "lock"]),
+    (
+        "output",
+        &["file", "gcode", "preview", "mesh", "host", "lock"],
+    ),
     (
         "recipe",
         &[

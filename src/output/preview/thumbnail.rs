@@ -107,6 +107,12 @@ pub fn encode(pm: &tiny_skia::Pixmap, format: ImageFormat) -> Vec<u8> {
     }
 }
 
+/// A PNG thumbnail of `plan`, `width` × `height` pixels.
+pub fn png_of(plan: &Plan, width: u32, height: u32) -> Vec<u8> {
+    let pm = png::thumbnail(&Scene::new(plan), Size { width, height });
+    png::encode(&pm, true)
+}
+
 /// The thumbnail blocks `plan`'s printer asks for (empty when none).
 pub fn blocks(plan: &Plan) -> Result<String> {
     Ok(images(plan)?
