@@ -311,7 +311,7 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
         let top = l.top(n);
         // the band's top, and a millionth of a band over it
         self.layer_above = top - dz + 1e-6 * l.height;
-        let shown = top.min(l.top(l.count));
+        let shown = top.min(l.highest);
         let mut t = format!(
             ";LAYER_CHANGE\n;Z:{shown:.3}\n;HEIGHT:{:.3}\n;BEFORE_LAYER_CHANGE\n;{shown:.3}\n",
             l.height
