@@ -19,22 +19,24 @@ use crate::common::{p3dp, recipe, tmp};
 /// The Python of the hosts' virtual environment, or None (with a note)
 /// when there is none here; a failure under CI, whose `.ci/run` makes it.
 fn python(what: &str) -> Option<PathBuf> {
-    match std::env::var_os("P3DP_HOST_VENV") {
+    venv("P3DP_HOST_VENV", what)
+}
+
+/// The `bin/python` of the virtual environment the variable `var` names,
+/// or None (with a note) when it is not set here; a failure under CI.
+pub(crate) fn venv(var: &str, what: &str) -> Option<PathBuf> {
+    match std::env::var_os(var) {
         Some(v) => {
             let py = PathBuf::from(v).join("bin").join("python");
-            assert!(
-                py.exists(),
-                "P3DP_HOST_VENV has no bin/python: {}",
-                py.display()
-            );
+            assert!(py.exists(), "{var} has no bin/python: {}", py.display());
             Some(py)
         }
         None => {
             assert!(
                 std::env::var_os("CI").is_none(),
-                "P3DP_HOST_VENV is not set, and CI must run {what} (.ci/run makes the venv)"
+                "{var} is not set, and CI must run {what} (.ci/run makes the venv)"
             );
-            eprintln!("note: P3DP_HOST_VENV is not set; {what} is skipped");
+            eprintln!("note: {var} is not set; {what} is skipped");
             None
         }
     }
@@ -54,7 +56,7 @@ fn run_python(py: &Path, args: &[&str]) -> String {
 
 /// A built-in printer with thumbnails in all three formats, as a profile
 /// file in `dir`.
-fn with_thumbnails(dir: &Path, printer: &str) -> PathBuf {
+pub(crate) fn with_thumbnails(dir: &Path, printer: &str) -> PathBuf {
     let f = dir.join(format!("{printer}-thumbs.yaml"));
     let yaml = format!(
         "inherits: {printer}\nname: {printer}\nthumbnails: [\"16x16/QOI\", \"300x300/PNG\", \"64x48/JPG\"]\n"
@@ -65,7 +67,7 @@ fn with_thumbnails(dir: &Path, printer: &str) -> PathBuf {
 
 /// Builds the gallery's vase for `printer` (a profile file) into
 /// `dir/out`; its stats.
-fn build(dir: &Path, printer: &Path, out: &str) -> Value {
+pub(crate) fn build(dir: &Path, printer: &Path, out: &str) -> Value {
     let json = format!("{out}.json");
     let o = p3dp(
         dir,
@@ -84,7 +86,7 @@ fn build(dir: &Path, printer: &Path, out: &str) -> Value {
     serde_json::from_slice(&std::fs::read(dir.join(json)).unwrap()).unwrap()
 }
 
-fn num(v: &Value, key: &str) -> f64 {
+pub(crate) fn num(v: &Value, key: &str) -> f64 {
     v[key]
         .as_f64()
         .unwrap_or_else(|| panic!("no number `{key}` in {v}"))

@@ -33,6 +33,7 @@ mod planner;
 mod preview;
 mod procedural;
 mod schema;
+mod send;
 mod solid;
 mod sphere;
 mod svg;

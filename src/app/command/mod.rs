@@ -9,6 +9,7 @@ pub mod mesh;
 pub mod new;
 pub mod preview;
 pub mod printers;
+pub mod send;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};

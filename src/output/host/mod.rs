@@ -5,6 +5,7 @@
 pub mod bgcode;
 pub mod heatshrink;
 pub mod meatpack;
+pub mod send;
 pub mod threemf;
 
 use std::path::Path;
