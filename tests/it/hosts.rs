@@ -412,3 +412,57 @@ fn gcode_3mf_holds_its_g_code_md5_and_bambu_markers() {
     assert_eq!(v["errors"], serde_json::json!([]), "{v}");
     assert_eq!(v["warnings"], serde_json::json!([]), "{v}");
 }
+
+/// The E values of relative-E G-code after its start G-code (from the
+/// first part on), added up.
+fn net_e_of_parts(text: &str) -> f64 {
+    let from = text.find("\n; part: ").unwrap();
+    text[from..]
+        .lines()
+        .filter(|l| l.starts_with("G1 ") || l.starts_with("G2 ") || l.starts_with("G3 "))
+        .flat_map(|l| l.split(';').next().unwrap().split_whitespace())
+        .filter_map(|w| w.strip_prefix('E'))
+        .map(|v| v.parse::<f64>().unwrap())
+        .sum()
+}
+
+#[test]
+fn no_empty_moves_and_filament_counted_net() {
+    let dir = tmp("hosts-faults");
+    // the oracle's faults: `G1 E0.00000` in cup-solid-base (a line the
+    // firmware ignores but a planner stops for), and hairs' final
+    // retraction counted as filament used
+    for (name, printer) in [("cup-solid-base", "voron-350"), ("hairs", "voron-350")] {
+        let out = format!("{name}.gcode");
+        let p = p3dp(
+            &dir,
+            &[
+                "build",
+                recipe(&format!("{name}.yaml")).to_str().unwrap(),
+                "--printer",
+                printer,
+                "-o",
+                &out,
+                "--stats-json",
+                "s.json",
+            ],
+        );
+        assert!(p.status.success(), "{}", String::from_utf8_lossy(&p.stderr));
+        let text = std::fs::read_to_string(dir.join(&out)).unwrap();
+        for l in text.lines() {
+            let cmd = l.split(';').next().unwrap().trim();
+            assert!(
+                cmd != "G1 E0.00000" && cmd != "G1 E-0.00000",
+                "{name}: an empty move `{l}`"
+            );
+        }
+        let stats: Value =
+            serde_json::from_slice(&std::fs::read(dir.join("s.json")).unwrap()).unwrap();
+        let net = net_e_of_parts(&text);
+        let counted = num(&stats, "filament_length_mm");
+        assert!(
+            (counted - net).abs() < 1e-4,
+            "{name}: {counted} mm counted, {net} mm net in the G-code"
+        );
+    }
+}

@@ -273,6 +273,10 @@ pub fn footer(recipe: &Recipe, st: &MoveStats, layers: Option<&Layers>) -> Strin
     let mut s = String::new();
     for (k, v) in pairs(recipe, st, layers) {
         let _ = writeln!(s, "; {k} = {v}");
+        if k == "estimated printing time (normal mode)" {
+            // the key recipe-v1's output promises name, beside PrusaSlicer's
+            let _ = writeln!(s, "; estimated printing time = {v}");
+        }
     }
     s
 }

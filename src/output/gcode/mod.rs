@@ -610,6 +610,16 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
 
     /// One G1 extruding move to `to` carrying `filament` mm at `v` mm/s.
     fn extrude_line(&mut self, to: DVec3, filament: f64, v: f64) -> io::Result<()> {
+        if self.writes_nothing(to, filament) {
+            // no axis and no E step once rounded (`G1 E0.00000`): firmware
+            // ignores such a line, and a planner would stop the head for
+            // it; its filament joins the exact E total, written next
+            self.e_exact += filament;
+            self.stats.filament += filament;
+            self.stats.volume += filament * self.area;
+            self.head = Some(to);
+            return Ok(());
+        }
         self.layer_at(to)?;
         self.fan_on_above(to)?;
         self.unretract()?;
@@ -631,6 +641,14 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
         self.count_extrusion(len, filament, t, &[from, to]);
         self.head = Some(to);
         Ok(())
+    }
+
+    /// Whether a move to `to` feeding `filament` mm rounds to the written
+    /// position and E value: a line that would say nothing.
+    fn writes_nothing(&self, to: DVec3, filament: f64) -> bool {
+        let m = self.printer.to_machine(to);
+        let u = [units(m.x, XYZ), units(m.y, XYZ), units(m.z, XYZ)];
+        self.written == Some(u) && units(self.e_exact + filament, E) == self.e_units
     }
 
     /// Counts one extruding move in the stats: `len` mm through `points`,
@@ -842,6 +860,13 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
     ) -> Result<(W, MoveStats)> {
         let io = |e: io::Error| crate::base::error::Error::io_from("output", e.to_string(), &e);
         self.flush().map_err(io)?;
+        if self.retracted && !self.printer.firmware_retraction {
+            // a print that ends retracted took that filament back: the
+            // stats count the filament fed, net (what the E values add to)
+            let back = units(self.printer.retraction.length, E) as f64 / E;
+            self.stats.filament -= back;
+            self.stats.volume -= back * self.area;
+        }
         if let Some(p) = self.moves.done() {
             self.progress(p);
         }
