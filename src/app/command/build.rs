@@ -376,7 +376,7 @@ fn extras(
 ) -> Result<Done> {
     if let Some(pv) = &a.preview {
         let (bytes, line) = crate::output::preview::bytes(
-            &p,
+            p,
             pv,
             &crate::output::preview::Options {
                 threads: Default::default(),
