@@ -253,3 +253,111 @@ fn octoprint_takes_the_file_byte_for_byte_and_refuses_a_wrong_key() {
     assert_eq!(f["name"], "vase.gcode");
     assert_eq!(num(&f, "size") as usize, sent.len());
 }
+
+/// What a stand-in PrusaLink saw of one request.
+struct Seen {
+    method: String,
+    url: String,
+    headers: Vec<(String, String)>,
+    body: Vec<u8>,
+}
+
+/// A stand-in for PrusaLink (no real one runs here: its published API):
+/// answers `/api/version` as PrusaLink does, then each upload with
+/// `status`; what it saw comes back when the thread ends.
+fn fake_prusalink(status: u16, uploads: usize) -> (String, std::thread::JoinHandle<Vec<Seen>>) {
+    let server = tiny_http::Server::http("127.0.0.1:0").unwrap();
+    let url = format!("http://{}", server.server_addr().to_ip().unwrap());
+    let thread = std::thread::spawn(move || {
+        let mut seen = Vec::new();
+        let mut left = uploads;
+        while left > 0 {
+            let mut req = server.recv().unwrap();
+            let mut body = Vec::new();
+            req.as_reader().read_to_end(&mut body).unwrap();
+            let path = req.url().to_string();
+            let (code, text) = match path.as_str() {
+                "/server/info" => (404, String::from("not found")),
+                "/api/version" => (
+                    200,
+                    r#"{"api":"2.0.0","server":"2.1.2","text":"PrusaLink"}"#.to_string(),
+                ),
+                _ => {
+                    left -= 1;
+                    (status, String::new())
+                }
+            };
+            seen.push(Seen {
+                method: req.method().to_string(),
+                url: path,
+                headers: req
+                    .headers()
+                    .iter()
+                    .map(|h| (h.field.to_string(), h.value.to_string()))
+                    .collect(),
+                body,
+            });
+            req.respond(tiny_http::Response::from_string(text).with_status_code(code))
+                .unwrap();
+        }
+        seen
+    });
+    (url, thread)
+}
+
+#[test]
+fn prusalink_gets_a_put_of_the_bytes_and_a_conflict_is_named() {
+    let dir = tmp("send-prusalink");
+    std::fs::write(dir.join("a b.bgcode"), b"GCDE\x01\x00\x00\x00 not really").unwrap();
+    let (url, server) = fake_prusalink(201, 1);
+    let ok = send(
+        &dir,
+        Some("link-key"),
+        &["a b.bgcode", "--to", &url, "--print"],
+    );
+    assert!(ok.status.success(), "{}", stderr(&ok));
+    let seen = server.join().unwrap();
+    let put = seen.last().unwrap();
+    assert_eq!(
+        (put.method.as_str(), put.url.as_str()),
+        ("PUT", "/api/v1/files/usb/a%20b.bgcode")
+    );
+    assert_eq!(put.body, std::fs::read(dir.join("a b.bgcode")).unwrap());
+    let header = |k: &str| {
+        put.headers
+            .iter()
+            .find(|(h, _)| h.eq_ignore_ascii_case(k))
+            .map(|(_, v)| v.as_str())
+    };
+    assert_eq!(header("X-Api-Key"), Some("link-key"));
+    assert_eq!(header("Print-After-Upload"), Some("?1"));
+    assert_eq!(header("Overwrite-File"), Some("?0"));
+    assert!(String::from_utf8_lossy(&ok.stdout).contains("sent to prusalink"));
+
+    let (url, server) = fake_prusalink(409, 1);
+    let taken = send(&dir, Some("link-key"), &["a b.bgcode", "--to", &url]);
+    server.join().unwrap();
+    assert_eq!(taken.status.code(), Some(2));
+    assert!(
+        stderr(&taken).contains("409 Conflict"),
+        "{}",
+        stderr(&taken)
+    );
+}
+
+#[test]
+fn a_host_that_never_answers_times_out_by_name() {
+    let dir = tmp("send-timeout");
+    std::fs::write(dir.join("x.gcode"), "G28\n").unwrap();
+    // accepts the connection, never answers
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let url = format!("http://{}", listener.local_addr().unwrap());
+    let out = send(&dir, None, &["x.gcode", "--to", &url, "--timeout", "1"]);
+    drop(listener);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains("did not answer within 1 s"),
+        "{}",
+        stderr(&out)
+    );
+}
