@@ -162,7 +162,7 @@ pub struct BuildArgs {
     /// Shared flags.
     #[command(flatten)]
     pub batch: BatchFlags,
-    /// Output file; a folder with several recipes; `-` for standard output.
+    /// Output file (NAME.bgcode: Prusa's binary G-code; NAME.gcode.3mf: Bambu's package); a folder with several recipes; `-` for standard output.
     #[arg(short, long, value_name = "OUT")]
     pub output: Option<String>,
     /// Also write the stats as JSON to FILE.
