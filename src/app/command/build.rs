@@ -245,7 +245,7 @@ fn build_job(a: &Options, job: &Job, target: Result<Target>, single: bool) -> Re
             target = Target::File(f.with_extension("bgcode"), true);
         }
     }
-    let options = stamp()?;
+    let options = super::stamp()?;
     if let Target::File(f, _) = &target {
         if Package::of(f) != Package::Gcode {
             return build_package(a, p, f, options, single);
@@ -301,22 +301,6 @@ fn build_job(a: &Options, job: &Job, target: Result<Target>, single: bool) -> Re
         }
     }?;
     extras(a, &p, pattern, zbuffer, built, files, lines, single)
-}
-
-/// How this build's G-code is stamped: its date is `SOURCE_DATE_EPOCH`'s
-/// when the environment has one (seconds since 1970, the reproducible-builds
-/// convention), else the epoch's.
-fn stamp() -> Result<Stamp> {
-    let date = match std::env::var("SOURCE_DATE_EPOCH") {
-        Ok(v) => Some(v.trim().parse::<i64>().map_err(|_| {
-            Error::input(
-                "SOURCE_DATE_EPOCH",
-                format!("`{v}` is not a date; expected whole seconds since 1970-01-01 UTC, e.g. $(date +%s)"),
-            )
-        })?),
-        Err(_) => None,
-    };
-    Ok(Stamp { date, bambu: false })
 }
 
 /// Builds one job into a printer's package (`.bgcode`, `.gcode.3mf`): the

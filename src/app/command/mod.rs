@@ -201,6 +201,22 @@ pub(crate) fn stage(file: &Path, bytes: &[u8]) -> Result<AtomicFile> {
     Ok(f)
 }
 
+/// How a build's G-code is stamped (`build` and `hash` alike): its date is `SOURCE_DATE_EPOCH`'s
+/// when the environment has one (seconds since 1970, the reproducible-builds
+/// convention), else the epoch's.
+pub(crate) fn stamp() -> Result<crate::output::gcode::metadata::Options> {
+    let date = match std::env::var("SOURCE_DATE_EPOCH") {
+        Ok(v) => Some(v.trim().parse::<i64>().map_err(|_| {
+            Error::input(
+                "SOURCE_DATE_EPOCH",
+                format!("`{v}` is not a date; expected whole seconds since 1970-01-01 UTC, e.g. $(date +%s)"),
+            )
+        })?),
+        Err(_) => None,
+    };
+    Ok(crate::output::gcode::metadata::Options { date, bambu: false })
+}
+
 /// Bytes to standard output, as they are (a closed pipe ends quietly).
 pub fn print(bytes: &[u8]) {
     let _ = crate::output::file::Stdout.write_all(bytes);
