@@ -13,7 +13,6 @@ use std::process::Command;
 
 use md5::Digest;
 use serde_json::Value;
-use sha2::Digest as _;
 
 use crate::common::{p3dp, recipe, tmp};
 
