@@ -45,6 +45,12 @@ pub use machine::printer::{Bed, Flavor, Printer};
 pub use recipe::context::Context;
 pub use recipe::profile::built_in_names as printers;
 
+/// Prusa's binary G-code read back: the blocks of a `.bgcode` file, each
+/// checksum checked.
+pub mod bgcode {
+    pub use crate::output::host::bgcode::{decode, Block};
+}
+
 /// Slicer presets (PrusaSlicer-family `.ini`, OrcaSlicer/Bambu Studio
 /// `.json`) read as p3dp printer profiles.
 pub mod presets {

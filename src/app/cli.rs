@@ -40,6 +40,8 @@ pub enum Command {
         #[command(flatten)]
         batch: BatchFlags,
     },
+    /// Upload built files to the printer's host (Moonraker, OctoPrint or PrusaLink, found by asking it); the API key comes from the environment variable P3DP_API_KEY.
+    Send(SendArgs),
     /// List the built-in printer profiles (flavour, bed, origin, nozzle, filament), or list and import a slicer's printer presets.
     Printers(PrintersArgs),
     /// Print `SHA256  RECIPE`: the hash of exactly the bytes `build` would write.
@@ -194,7 +196,7 @@ pub struct BuildArgs {
     /// Shared flags.
     #[command(flatten)]
     pub batch: BatchFlags,
-    /// Output file; a folder with several recipes; `-` for standard output.
+    /// Output file (NAME.bgcode: Prusa's binary G-code; NAME.gcode.3mf: Bambu's package); a folder with several recipes; `-` for standard output.
     #[arg(short, long, value_name = "OUT")]
     pub output: Option<String>,
     /// Also write the stats as JSON to FILE.
@@ -215,6 +217,26 @@ pub struct BuildArgs {
     /// The layer --zbuffer-svg draws: 1 for the first on the bed.
     #[arg(long, value_name = "N")]
     pub zbuffer_layer: Option<u64>,
+}
+
+/// Flags of `send`.
+#[derive(Args, Clone, Debug, Default)]
+pub struct SendArgs {
+    /// The files to upload (G-code, .bgcode, .gcode.3mf), in order.
+    #[arg(value_name = "FILE", required = true)]
+    pub files: Vec<PathBuf>,
+    /// The host's base URL: http://HOST[:PORT] (Moonraker's port is usually 7125).
+    #[arg(long, value_name = "URL")]
+    pub to: String,
+    /// Start printing the last file once it is uploaded.
+    #[arg(long)]
+    pub print: bool,
+    /// The host's software, when asking it does not tell.
+    #[arg(long, value_name = "HOST", value_parser = ["moonraker", "octoprint", "prusalink"])]
+    pub host: Option<String>,
+    /// Seconds a request may take, connecting included.
+    #[arg(long, value_name = "S", default_value_t = 60)]
+    pub timeout: u64,
 }
 
 /// Flags of `hash`.
@@ -353,6 +375,13 @@ pub fn run(cli: Cli) -> Vec<Error> {
                 .map(|b| pipeline::run(batch.jobs.threads(), || command::check::run(&b))),
         ),
         Command::Hash(a) => errors(hash(&a)),
+        Command::Send(a) => errors(command::send::run(&command::send::Options {
+            files: a.files,
+            to: a.to,
+            print: a.print,
+            host: a.host,
+            timeout: a.timeout,
+        })),
         Command::Printers(a) => errors(printers(a.action).map(|text| {
             crate::say!("{text}");
             Vec::new()

@@ -26,11 +26,13 @@ use std::sync::{Condvar, Mutex, MutexGuard, OnceLock};
 
 use crate::analyse::check::{self, first_layer, Cheap, Costly, Finding};
 use crate::analyse::plan::Plan;
-use crate::analyse::planner::{Call, Estimate, Limits, MoveKind, Moves, Planner};
+use crate::analyse::planner::{Call, Clock, Estimate, MoveKind, Moves, Planner, Timeline};
 use crate::analyse::stats::{MoveStats, Stats};
 use crate::base::error::{Error, Result};
 use crate::base::toolpath::Toolpath;
 use crate::output::file::HashWriter;
+use crate::output::gcode::metadata::{Ahead, Options};
+use crate::output::gcode::Head;
 use crate::output::preview;
 
 /// How many threads a command may use; at least 1.
@@ -101,19 +103,103 @@ pub fn check(plan: &mut Plan, allow: &[String]) {
 /// what its moves add up to; the print-time planner runs beside the writer
 /// when the pool allows.
 pub fn write<W: Write>(plan: &Plan, out: W) -> Result<(W, MoveStats)> {
-    plan.frame_ok()?;
+    write_with(plan, &Options::default(), out)
+}
+
+/// [`write`], stamped as `options` say (the date, Bambu's package).
+pub fn write_with<W: Write>(plan: &Plan, options: &Options, out: W) -> Result<(W, MoveStats)> {
     let thumbnails = crate::output::preview::thumbnail::blocks(plan)?;
-    let limits = plan.recipe.printer.limits();
-    if !parallel() {
-        let planner = Planner::new(limits);
-        return crate::output::gcode::write(plan, thumbnails, out, planner, finish_planner);
-    }
-    let feed = Feed::new(limits);
-    rayon::in_place_scope(|s| {
-        s.spawn(|_| feed.plan_to_end());
-        let sink = Batches::new(&feed);
-        crate::output::gcode::write(plan, thumbnails, out, sink, |b| b.end())
-    })
+    written(plan, options, thumbnails, out, None)
+}
+
+/// Whether the G-code needs the print's time before it is written: `M73`
+/// progress, Bambu's header block.
+fn ahead(plan: &Plan, options: &Options) -> bool {
+    plan.recipe.printer.progress || options.bambu
+}
+
+/// The G-code of `plan`, in one pass (the planner beside the writer when
+/// the pool allows), or, when it needs the print's time ahead ([`ahead`]),
+/// in two: the moves planned first with their times ([`plan_first`]), then
+/// the G-code written with a [`Clock`] reading them. `failed` (the checks
+/// refused the build) stops the writing.
+fn written<W: Write>(
+    plan: &Plan,
+    options: &Options,
+    thumbnails: String,
+    out: W,
+    failed: Option<&AtomicBool>,
+) -> Result<(W, MoveStats)> {
+    let never = AtomicBool::new(false);
+    let failed = failed.unwrap_or(&never);
+    let out = Until { out, failed };
+    let mut head = Head {
+        options: *options,
+        ahead: None,
+        thumbnails,
+    };
+    let done = if ahead(plan, options) {
+        let (estimate, timeline, stats) = plan_first(plan, options, failed)?;
+        head.ahead = Some(Ahead::of(&stats));
+        let clock = Clock::new(timeline, estimate);
+        crate::output::gcode::write(plan, head, out, clock, |c| c.estimate())
+    } else if !parallel() {
+        let planner = Planner::new(plan.recipe.printer.limits());
+        crate::output::gcode::write(plan, head, out, planner, finish_planner)
+    } else {
+        let feed = Feed::new(Planner::new(plan.recipe.printer.limits()));
+        rayon::in_place_scope(|s| {
+            s.spawn(|_| feed.plan_to_end());
+            let sink = Batches::new(&feed);
+            crate::output::gcode::write(plan, head, out, sink, |b| b.end())
+        })
+    };
+    done.map(|(w, m)| (w.out, m))
+}
+
+/// The first of two passes ([`written`]): the writer's moves alone (its
+/// text thrown away), planned by a recording planner beside it when the
+/// pool allows; the estimate, each block's time and the totals.
+fn plan_first(
+    plan: &Plan,
+    options: &Options,
+    failed: &AtomicBool,
+) -> Result<(Estimate, Timeline, MoveStats)> {
+    let head = Head {
+        options: *options,
+        ..Head::default()
+    };
+    let discard = Until {
+        out: io::sink(),
+        failed,
+    };
+    let planner = Planner::recording(plan.recipe.printer.limits());
+    let mut timeline = Timeline::default();
+    let (_, mut stats) = if !parallel() {
+        crate::output::gcode::write(plan, head, discard, planner, |p| {
+            let (e, t) = take_planner(p).finish_timed();
+            timeline = t;
+            e
+        })?
+    } else {
+        let feed = Feed::new(planner);
+        let r = rayon::in_place_scope(|s| {
+            s.spawn(|_| feed.plan_to_end());
+            let sink = Batches::new(&feed);
+            crate::output::gcode::write(plan, head, discard, sink, |b| b.end())
+        })?;
+        timeline = feed.timeline();
+        r
+    };
+    let estimate = std::mem::take(&mut stats.estimate);
+    Ok((estimate, timeline, stats))
+}
+
+/// [`write_with`] through a hashing writer: the stats.
+pub fn render_with<W: Write>(plan: &Plan, options: &Options, out: W) -> Result<Stats> {
+    let (hw, moves) = write_with(plan, options, HashWriter::new(out))?;
+    let (digest, bytes) = hw.finish();
+    Ok(Stats::of(plan, &moves, digest, bytes))
 }
 
 /// [`write`] through a hashing writer: the stats.
@@ -166,17 +252,34 @@ pub fn check_and_write<W: Write>(
     stop: Option<bool>,
     out: W,
 ) -> Result<(W, MoveStats)> {
+    check_and_write_with(plan, allow, stop, &Options::default(), out)
+}
+
+/// [`check_and_write`], stamped as `options` say.
+pub fn check_and_write_with<W: Write>(
+    plan: &mut Plan,
+    allow: &[String],
+    stop: Option<bool>,
+    options: &Options,
+    out: W,
+) -> Result<(W, MoveStats)> {
     if !parallel() || !plan.recipe.printer.thumbnails.is_empty() {
         check(plan, allow);
         if stop.is_some_and(|strict| !plan.failing(strict).is_empty()) {
             return Err(Error::check(&plan.path, "stopped: the checks failed"));
         }
-        return write(plan, out);
+        return write_with(plan, options, out);
     }
     let this = &*plan;
     let refs: Vec<&Toolpath> = this.paths.iter().collect();
     let all = CheckTasks::new(this, &refs, allow);
-    let feed = Feed::new(this.recipe.printer.limits());
+    let limits = this.recipe.printer.limits();
+    let two_passes = ahead(this, options);
+    let feed = Feed::new(if two_passes {
+        Planner::recording(limits)
+    } else {
+        Planner::new(limits)
+    });
     let failed = AtomicBool::new(false);
     let (tasks, feed, failed) = (&all, &feed, &failed);
     let written = rayon::in_place_scope(|s| {
@@ -192,10 +295,7 @@ pub fn check_and_write<W: Write>(
                 feed.plan_to_end();
             }
         });
-        let out = Until { out, failed };
-        let sink = Batches::new(feed);
-        let written = crate::output::gcode::write(this, String::new(), out, sink, |b| b.end())
-            .map(|(w, m)| (w.out, m));
+        let written = written_beside(this, options, two_passes, feed, failed, out);
         if written.is_ok() {
             // the checks not yet taken (the other side may not have begun)
             while tasks.run_next() {}
@@ -214,15 +314,69 @@ pub fn check_and_render<W: Write>(
     stop: Option<bool>,
     out: W,
 ) -> Result<Stats> {
-    let (hw, moves) = check_and_write(plan, allow, stop, HashWriter::new(out))?;
+    check_and_render_with(plan, allow, stop, &Options::default(), out)
+}
+
+/// [`check_and_render`], stamped as `options` say.
+pub fn check_and_render_with<W: Write>(
+    plan: &mut Plan,
+    allow: &[String],
+    stop: Option<bool>,
+    options: &Options,
+    out: W,
+) -> Result<Stats> {
+    let (hw, moves) = check_and_write_with(plan, allow, stop, options, HashWriter::new(out))?;
     let (digest, bytes) = hw.finish();
     Ok(Stats::of(plan, &moves, digest, bytes))
 }
 
 /// The planner's estimate once every move is in.
 fn finish_planner(p: &mut Planner) -> Estimate {
+    take_planner(p).finish()
+}
+
+/// The planner, a fresh one left in its place.
+fn take_planner(p: &mut Planner) -> Planner {
     let limits = p.limits().clone();
-    std::mem::replace(p, Planner::new(limits)).finish()
+    std::mem::replace(p, Planner::new(limits))
+}
+
+/// The writer's side of [`check_and_write`]: the G-code written with its
+/// moves sent to `feed` (which the checks' thread plans between checks);
+/// with `two_passes`, those moves written first with their text thrown
+/// away, then the G-code with a [`Clock`] over the feed's timeline.
+fn written_beside<W: Write>(
+    plan: &Plan,
+    options: &Options,
+    two_passes: bool,
+    feed: &Feed,
+    failed: &AtomicBool,
+    out: W,
+) -> Result<(W, MoveStats)> {
+    let head = Head {
+        options: *options,
+        ..Head::default()
+    };
+    let sink = Batches::new(feed);
+    if !two_passes {
+        let out = Until { out, failed };
+        return crate::output::gcode::write(plan, head, out, sink, |b| b.end())
+            .map(|(w, m)| (w.out, m));
+    }
+    let discard = Until {
+        out: io::sink(),
+        failed,
+    };
+    let (_, mut stats) = crate::output::gcode::write(plan, head, discard, sink, |b| b.end())?;
+    let estimate = std::mem::take(&mut stats.estimate);
+    let head = Head {
+        options: *options,
+        ahead: Some(Ahead::of(&stats)),
+        thumbnails: String::new(),
+    };
+    let clock = Clock::new(feed.timeline(), estimate);
+    let out = Until { out, failed };
+    crate::output::gcode::write(plan, head, out, clock, |c| c.estimate()).map(|(w, m)| (w.out, m))
 }
 
 /// The checks of one plan as tasks that any thread may take, one at a time,
@@ -405,8 +559,9 @@ const BACKLOG: usize = 8;
 /// free: one lock keeps the calls in order, so the estimate is the one
 /// planner's, whoever replayed what.
 struct Feed {
-    /// The planner, and its estimate once every call is in.
-    planner: Mutex<(Option<Planner>, Option<Estimate>)>,
+    /// The planner, and its estimate (and the blocks' times, when it
+    /// records them) once every call is in.
+    planner: Mutex<Planned>,
     /// Batches recorded and not yet planned, and whether the writer has
     /// ended; `arrived` wakes a thread waiting for them.
     queue: Mutex<(VecDeque<Vec<Call>>, bool)>,
@@ -416,9 +571,9 @@ struct Feed {
 }
 
 impl Feed {
-    fn new(limits: Limits) -> Feed {
+    fn new(planner: Planner) -> Feed {
         Feed {
-            planner: Mutex::new((Some(Planner::new(limits)), None)),
+            planner: Mutex::new((Some(planner), None)),
             queue: Mutex::new((VecDeque::new(), false)),
             arrived: Condvar::new(),
             spare: Mutex::new(Vec::new()),
@@ -480,7 +635,7 @@ impl Feed {
 
     /// Replays queued batches (waiting for the writer's when `to_end`, then
     /// finishing the estimate).
-    fn drain(&self, guard: &mut MutexGuard<'_, (Option<Planner>, Option<Estimate>)>, to_end: bool) {
+    fn drain(&self, guard: &mut MutexGuard<'_, Planned>, to_end: bool) {
         let (planner, estimate) = &mut **guard;
         let Some(p) = planner.as_mut() else {
             return; // finished already
@@ -489,7 +644,7 @@ impl Feed {
             self.replay(p, b);
         }
         if to_end {
-            *estimate = planner.take().map(Planner::finish);
+            *estimate = planner.take().map(Planner::finish_timed);
         }
     }
 
@@ -497,9 +652,23 @@ impl Feed {
     fn estimate(&self) -> Estimate {
         let mut guard = relock(self.planner.lock());
         self.drain(&mut guard, true);
-        guard.1.take().unwrap_or_default()
+        match guard.1.as_mut() {
+            Some((e, _)) => std::mem::take(e),
+            None => Estimate::default(),
+        }
+    }
+
+    /// The blocks' times of a recording planner, once the writer has
+    /// ended and its estimate was taken.
+    fn timeline(&self) -> Timeline {
+        let mut guard = relock(self.planner.lock());
+        self.drain(&mut guard, true);
+        guard.1.take().map(|(_, t)| t).unwrap_or_default()
     }
 }
+
+/// A [`Feed`]'s planner and, once finished, its estimate and timeline.
+type Planned = (Option<Planner>, Option<(Estimate, Timeline)>);
 
 /// The writer's side of a [`Feed`]: moves recorded in batches of
 /// [`BATCH`]; when the backlog passes [`BACKLOG`] batches the writer plans

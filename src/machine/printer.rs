@@ -173,8 +173,10 @@ impl Default for Envelope {
 pub struct Printer {
     /// Profile name.
     pub name: String,
-    /// The model as its maker's slicer names it (`printer_model`: `MK3S`),
-    /// for start G-code that checks it; empty when unknown.
+    /// The model as its maker's software names it (PrusaSlicer's
+    /// `printer_model`: `MK4`, `MK3S`…; Bambu's `X1C`…), for start G-code
+    /// that checks it and the hosts that read the G-code's metadata; empty
+    /// when unknown.
     pub model: String,
     /// The file the profile was read from, as the user named it (`None`
     /// for a built-in one): errors in its G-code name it.
@@ -225,10 +227,19 @@ pub struct Printer {
     pub arcs: bool,
     /// Largest distance between an arc and the strings it replaces, mm.
     pub arc_tolerance: f64,
-    /// Thumbnails to embed in the G-code, as `WxH` sizes, each optionally
-    /// with its format, `WxH/PNG`, `/QOI` or `/JPG` (PrusaSlicer's
-    /// `thumbnails`; PNG when none is named); none by default.
+    /// Thumbnails to embed in the G-code, as `WxH` (PNG) or `WxH/FORMAT`
+    /// (`PNG`, `QOI`, `JPG`) entries, PrusaSlicer's `thumbnails` (see
+    /// [`super::size::thumbnails`]); none by default.
     pub thumbnails: Vec<String>,
+    /// Write `M73` progress (percent done, minutes left) from the planner's
+    /// time: on by default for Marlin and Prusa, whose screens show it.
+    pub progress: bool,
+    /// Label each part for the host's cancel-object (Klipper's
+    /// `EXCLUDE_OBJECT_DEFINE/START/END`); on by default for Klipper.
+    pub object_labels: bool,
+    /// Write Prusa's binary G-code (`.bgcode`) when the output's name does
+    /// not say (PrusaSlicer's `binary_gcode`); off by default.
+    pub binary_gcode: bool,
     /// The firmware planner's limits, for the print-time estimate (see
     /// [`super::Kinematics`]).
     pub kinematics: super::kinematics::Kinematics,
@@ -295,7 +306,7 @@ impl Printer {
             ));
         }
         self.physical_ranges()?;
-        super::size::thumbs(&self.thumbnails)?;
+        super::size::thumbnails(&self.thumbnails)?;
         self.kinematics.validate()?;
         self.head.validate()?;
         self.checks.validate()?;

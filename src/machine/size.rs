@@ -49,49 +49,85 @@ impl Size {
 }
 
 /// The image format of a G-code thumbnail (PrusaSlicer's `thumbnails`
-/// entries `WxH/PNG`, `WxH/JPG`, `WxH/QOI`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum ThumbFormat {
-    /// PNG: `; thumbnail begin` blocks.
+/// suffix: `16x16/QOI`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) enum ImageFormat {
+    /// PNG: `; thumbnail begin` blocks (the default).
+    #[default]
     Png,
+    /// QOI: `; thumbnail_QOI begin` blocks (Prusa's firmware).
+    Qoi,
     /// JPEG: `; thumbnail_JPG begin` blocks.
     Jpg,
-    /// QOI: `; thumbnail_QOI begin` blocks (Prusa MK4, MINI, XL firmware).
-    Qoi,
 }
 
-impl ThumbFormat {
-    /// The format named `s` (any case; `JPEG` too).
-    pub(crate) fn parse(s: &str) -> Option<ThumbFormat> {
-        match s.trim().to_ascii_uppercase().as_str() {
-            "PNG" => Some(ThumbFormat::Png),
-            "JPG" | "JPEG" => Some(ThumbFormat::Jpg),
-            "QOI" => Some(ThumbFormat::Qoi),
-            _ => None,
-        }
-    }
+impl ImageFormat {}
+
+/// One thumbnail a profile asks for: its size and format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Thumbnail {
+    /// Size in pixels.
+    pub size: Size,
+    /// Image format.
+    pub format: ImageFormat,
 }
 
-/// The thumbnails a profile's `thumbnails` list asks for, `WxH` or
-/// `WxH/FORMAT` (PNG when none is named); errors name `thumbnails[k]`.
-pub(crate) fn thumbs(list: &[String]) -> Result<Vec<(Size, ThumbFormat)>> {
+/// The thumbnails a profile's `thumbnails` list asks for: each entry
+/// `WxH` (PNG) or `WxH/FORMAT` with FORMAT one of `PNG`, `QOI`, `JPG` (any
+/// case), as PrusaSlicer writes them; errors name `thumbnails[k]`.
+pub(crate) fn thumbnails(list: &[String]) -> Result<Vec<Thumbnail>> {
     list.iter()
         .enumerate()
         .map(|(k, s)| {
             let what = format!("thumbnails[{k}]");
             let (size, format) = match s.split_once('/') {
-                None => (s.as_str(), ThumbFormat::Png),
+                None => (s.as_str(), ImageFormat::Png),
                 Some((size, f)) => {
-                    let format = ThumbFormat::parse(f).ok_or_else(|| {
-                        Error::input(
-                            what.as_str(),
-                            format!("`{f}` is not a thumbnail format; expected PNG, JPG or QOI"),
-                        )
-                    })?;
+                    let format = match f.trim().to_ascii_uppercase().as_str() {
+                        "PNG" => ImageFormat::Png,
+                        "QOI" => ImageFormat::Qoi,
+                        "JPG" | "JPEG" => ImageFormat::Jpg,
+                        _ => {
+                            return Err(Error::input(
+                                what,
+                                format!("`{f}` is not a thumbnail format; expected PNG, QOI or JPG (as in `16x16/QOI`)"),
+                            ))
+                        }
+                    };
                     (size, format)
                 }
             };
-            Ok((Size::parse(size.trim(), &what)?, format))
+            Ok(Thumbnail {
+                size: Size::parse(size, &what)?,
+                format,
+            })
         })
         .collect()
+}
+
+#[cfg(test)]
+/// The sizes a profile's `thumbnails` list asks for (see [`thumbnails`]);
+/// errors name `thumbnails[k]`.
+pub(crate) fn sizes(list: &[String]) -> Result<Vec<Size>> {
+    Ok(thumbnails(list)?.into_iter().map(|t| t.size).collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn thumbnail_entries_take_a_format() {
+        let list: Vec<String> = ["220x124", "16x16/QOI", "300x300/jpg", "40x40/PNG"]
+            .map(String::from)
+            .to_vec();
+        let t = thumbnails(&list).unwrap();
+        let formats: Vec<ImageFormat> = t.iter().map(|t| t.format).collect();
+        use ImageFormat::*;
+        assert_eq!(formats, [Png, Qoi, Jpg, Png]);
+        assert_eq!((t[1].size.width, t[1].size.height), (16, 16));
+        let e = thumbnails(&["16x16/GIF".to_string()]).unwrap_err();
+        assert!(e.to_string().contains("thumbnails[0]"), "{e}");
+        assert!(e.to_string().contains("expected PNG, QOI or JPG"), "{e}");
+    }
 }

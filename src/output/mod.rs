@@ -3,6 +3,7 @@
 
 pub(crate) mod file;
 pub(crate) mod gcode;
+pub(crate) mod host;
 pub(crate) mod lock;
 pub(crate) mod mesh;
 pub(crate) mod preview;

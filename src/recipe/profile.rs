@@ -276,11 +276,12 @@ fn inherit(
 /// The profile as written, in the machine's types (checked by
 /// [`Printer::validate`], which names the key of a value out of range).
 fn printer(raw: RawPrinter) -> Printer {
+    let flavor = flavor(raw.flavor);
     Printer {
         name: raw.name,
         model: raw.model,
         source: None,
-        flavor: flavor(raw.flavor),
+        flavor,
         bed: match raw.bed {
             RawBed::Rectangle { size, max_z, min } => Bed::Rectangle { size, max_z, min },
             RawBed::Circle { diameter, max_z } => Bed::Circle { diameter, max_z },
@@ -314,6 +315,12 @@ fn printer(raw: RawPrinter) -> Printer {
         arcs: raw.arcs,
         arc_tolerance: raw.arc_tolerance,
         thumbnails: raw.thumbnails,
+        // the screens of Marlin 2 and Prusa's firmware show M73's progress
+        progress: raw
+            .progress
+            .unwrap_or(matches!(flavor, Flavor::Marlin | Flavor::Prusa)),
+        object_labels: raw.object_labels.unwrap_or(flavor == Flavor::Klipper),
+        binary_gcode: raw.binary_gcode,
         kinematics: kinematics(raw.kinematics),
         head: head(raw.head),
         checks: checks(raw.checks),

@@ -46,7 +46,10 @@ const LAYERS: &[(&str, &[&str])] = &[
         &["primitive", "step", "model", "assembly", "skirt"],
     ),
     ("analyse", &["planner", "check", "frame", "plan", "stats"]),
-    ("output", &["file", "gcode", "preview", "mesh", "lock"]),
+    (
+        "output",
+        &["file", "gcode", "preview", "mesh", "host", "lock"],
+    ),
     (
         "recipe",
         &[

@@ -67,7 +67,12 @@ impl Planner {
 /// from rest to rest cruising. A block that can only slow down cruises at
 /// the cruise of the block before it, or its own entry if lower. Then each
 /// block is a trapezoid from min(s_i, c_i) to min(s_{i+1}, c_i) cruising at c_i.
-pub(super) fn klipper_passes(b: &[Block], mcr: &[Mcr], ends: &[usize]) -> Vec<f64> {
+pub(super) fn klipper_passes(
+    b: &[Block],
+    mcr: &[Mcr],
+    ends: &[usize],
+    mut timeline: Option<&mut Vec<f32>>,
+) -> Vec<f64> {
     let n = b.len();
     // (entry v², cruise v² if known, exit v²), filled backward
     let mut plan: Vec<(f64, Option<f64>, f64)> = vec![(0.0, None, 0.0); n];
@@ -99,8 +104,13 @@ pub(super) fn klipper_passes(b: &[Block], mcr: &[Mcr], ends: &[usize]) -> Vec<f6
             slot += 1;
         }
         let c = cruise.unwrap_or(prev_cruise.min(start));
+        let mut t = 0.0;
         if c > 0.0 {
-            planned[slot] += trapezoid_time(b[i].len, b[i].accel, start.min(c), exit.min(c), c);
+            t = trapezoid_time(b[i].len, b[i].accel, start.min(c), exit.min(c), c);
+            planned[slot] += t;
+        }
+        if let Some(tl) = timeline.as_deref_mut() {
+            tl.push(t as f32);
         }
         prev_cruise = c;
     }

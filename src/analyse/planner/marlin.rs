@@ -181,7 +181,11 @@ impl Planner {
                 }
                 None => 0.0,
             };
-            self.planned[slot] += trapezoid_time(b.len, b.accel, b.entry_v2, exit, b.cruise_v2);
+            let t = trapezoid_time(b.len, b.accel, b.entry_v2, exit, b.cruise_v2);
+            self.planned[slot] += t;
+            if let Some(tl) = self.timeline.as_mut() {
+                tl.push(t as f32);
+            }
         }
         self.slot = slot;
     }

@@ -43,9 +43,12 @@
 //! Everything is + − × ÷ and `sqrt` (IEEE-exact), plus `libm::asin`, so the
 //! estimate is the same on every machine.
 
+mod clock;
 mod junction;
 mod klipper;
 mod marlin;
+
+pub(crate) use clock::{Clock, Progress, Timeline};
 
 use glam::DVec3;
 
@@ -209,6 +212,9 @@ pub(crate) struct Planner {
     slot: usize,
     /// The block count at which to look for settled blocks next.
     next_settle: usize,
+    /// Each block's planned time in order, when asked for
+    /// ([`Planner::recording`]): the timeline of `M73` progress.
+    timeline: Option<Vec<f32>>,
 }
 
 impl Planner {
@@ -230,7 +236,17 @@ impl Planner {
             planned: vec![0.0],
             slot: 0,
             next_settle: SETTLE,
+            timeline: None,
             limits,
+        }
+    }
+
+    /// A planner that also keeps each block's planned time
+    /// ([`Planner::finish_timed`]).
+    pub(crate) fn recording(limits: Limits) -> Planner {
+        Planner {
+            timeline: Some(Vec::new()),
+            ..Planner::new(limits)
         }
     }
 
@@ -517,12 +533,19 @@ impl Planner {
     }
 
     /// Plans every move (the passes of the module comment) and sums the times.
-    pub(crate) fn finish(mut self) -> Estimate {
+    pub(crate) fn finish(self) -> Estimate {
+        self.finish_timed().0
+    }
+
+    /// [`Planner::finish`], and each block's planned time when the planner
+    /// was [`Planner::recording`] (empty otherwise).
+    pub(crate) fn finish_timed(mut self) -> (Estimate, Timeline) {
         if self.limits.square_corner_velocity.is_some() {
             let mut ends: Vec<usize> = self.parts.iter().map(|p| p.first).collect();
             ends.push(self.blocks.len());
-            let planned = klipper_passes(&self.blocks, &self.mcr, &ends);
-            return self.estimate(&planned);
+            let mut timeline = self.timeline.take();
+            let planned = klipper_passes(&self.blocks, &self.mcr, &ends, timeline.as_mut());
+            return (self.estimate(&planned), Timeline::new(timeline));
         }
         // the head ends at rest: the backward pass from 0 after the last block
         let n = self.blocks.len();
@@ -530,7 +553,8 @@ impl Planner {
         self.forward(n, true);
         let mut planned = std::mem::take(&mut self.planned);
         planned.resize(self.parts.len() + 1, 0.0);
-        self.estimate(&planned)
+        let timeline = Timeline::new(self.timeline.take());
+        (self.estimate(&planned), timeline)
     }
 
     /// The estimate from the planned time before the parts and of each part.
@@ -600,6 +624,18 @@ pub(crate) trait Moves {
     fn move_to(&mut self, to: DVec3, e: f64, feed: f64, kind: MoveKind);
     /// See [`Planner::extrude_only`].
     fn extrude_only(&mut self, length: f64, feed: f64);
+    /// A progress line due before the writer's next line: only a sink that
+    /// knows the print's time ahead has one (a [`Clock`]).
+    #[inline]
+    fn due(&mut self) -> Option<Progress> {
+        None
+    }
+    /// The last progress line, once every move is written (a [`Clock`]'s
+    /// 100 %).
+    #[inline]
+    fn done(&mut self) -> Option<Progress> {
+        None
+    }
 }
 
 impl Moves for Planner {
@@ -671,7 +707,7 @@ impl Planner {
 mod tests {
     use super::*;
 
-    fn marlin(accel: f64, jd: f64, vmax: f64) -> Limits {
+    pub(super) fn marlin(accel: f64, jd: f64, vmax: f64) -> Limits {
         Limits {
             max_velocity: vmax,
             max_acceleration: accel,
@@ -692,7 +728,7 @@ mod tests {
         }
     }
 
-    fn klipper(accel: f64, scv: f64, vmax: f64, ratio: f64) -> Limits {
+    pub(super) fn klipper(accel: f64, scv: f64, vmax: f64, ratio: f64) -> Limits {
         Limits {
             junction_deviation: None,
             square_corner_velocity: Some(scv),
@@ -733,7 +769,7 @@ mod tests {
     /// Feeds `p` a long varied print: 40,000 moves in four parts along a
     /// wobbling helix (corners of every size, Z, feeds from 5 to 250 mm/s,
     /// travels, retractions, a dwell and a stop, zero-length moves).
-    fn long_print(p: &mut Planner) {
+    pub(super) fn long_print(p: &mut impl Moves) {
         p.move_to(DVec3::ZERO, 0.0, 100.0, MoveKind::Travel);
         for k in 0..40_000usize {
             if k % 13_000 == 0 {

@@ -13,6 +13,8 @@ use crate::base::error::{Error, Result};
 use crate::base::format::hms;
 use crate::generate::model::pattern_png;
 use crate::output::file::{write_atomic, AtomicFile};
+use crate::output::gcode::metadata::Options as Stamp;
+use crate::output::host::Package;
 
 /// What `build` takes from the command line.
 #[derive(Clone, Debug, Default)]
@@ -38,7 +40,9 @@ pub(crate) struct Options {
 #[derive(Clone, Debug)]
 enum Target {
     Stdout,
-    File(PathBuf),
+    /// A file, and whether its name is the default one (`NAME.gcode`, which
+    /// a profile's `binary_gcode` makes `NAME.bgcode`).
+    File(PathBuf, bool),
 }
 
 /// Where each job writes, and the folder of a batch (for summary.csv).
@@ -54,7 +58,10 @@ fn targets(a: &Options, jobs: &[Job]) -> Result<(Vec<Result<Target>>, PathBuf)> 
         Some("-") => return Ok((vec![Ok(Target::Stdout)], PathBuf::from("."))),
         // folders are made only when a build succeeds (see `make_parent`)
         Some(o) if many || Path::new(o).is_dir() || o.ends_with('/') => PathBuf::from(o),
-        Some(o) => return Ok((vec![Ok(Target::File(PathBuf::from(o)))], PathBuf::from("."))),
+        Some(o) => {
+            let t = Target::File(PathBuf::from(o), false);
+            return Ok((vec![Ok(t)], PathBuf::from(".")));
+        }
         None => PathBuf::from("."),
     };
     let mut out: Vec<Result<Target>> = Vec::with_capacity(jobs.len());
@@ -83,7 +90,7 @@ fn targets(a: &Options, jobs: &[Job]) -> Result<(Vec<Result<Target>>, PathBuf)> 
             }
             seen.push((file.clone(), job_label(job)));
         }
-        out.push(t.map(Target::File));
+        out.push(t.map(|f| Target::File(f, true)));
     }
     Ok((out, dir))
 }
@@ -204,7 +211,7 @@ fn outputs(a: &Options, targets: &[Result<Target>], dir: &Path) -> Vec<(String, 
     let mut outs: Vec<(String, PathBuf)> = targets
         .iter()
         .filter_map(|t| match t {
-            Ok(Target::File(f)) => Some(("-o".to_string(), f.clone())),
+            Ok(Target::File(f, _)) => Some(("-o".to_string(), f.clone())),
             _ => None,
         })
         .collect();
@@ -231,19 +238,35 @@ fn outputs(a: &Options, targets: &[Result<Target>], dir: &Path) -> Vec<(String, 
 /// Builds one job to its target (with its preview and pattern, if asked):
 /// the stats, where it went, and whether that was standard output.
 fn build_job(a: &Options, job: &Job, target: Result<Target>, single: bool) -> Result<Done> {
-    let target = target?;
+    let mut target = target?;
     let mut p = a.builds.prepared(job)?;
+    if let Target::File(f, true) = &target {
+        if p.recipe.printer.binary_gcode {
+            target = Target::File(f.with_extension("bgcode"), true);
+        }
+    }
+    let options = super::stamp()?;
+    if let Target::File(f, _) = &target {
+        if Package::of(f) != Package::Gcode {
+            return build_package(a, p, f, options, single);
+        }
+    }
     // a file in a folder that exists is written (to its temp file) while the
     // checks run, and committed below only if they pass; anything else waits
     // for the checks, so a failed check still writes nothing
     let mut early = None;
-    if let Target::File(f) = &target {
+    if let Target::File(f, _) = &target {
         let folder = f.parent().filter(|d| !d.as_os_str().is_empty());
         if folder.is_none_or(|d| d.is_dir()) {
             if let Ok(mut file) = AtomicFile::create(f) {
                 let stop = (!a.builds.force).then_some(a.builds.strict);
-                let stats =
-                    pipeline::check_and_render(&mut p, &a.builds.allow, stop, file.streaming());
+                let stats = pipeline::check_and_render_with(
+                    &mut p,
+                    &a.builds.allow,
+                    stop,
+                    &options,
+                    file.streaming(),
+                );
                 early = Some((file, stats));
             }
         }
@@ -259,17 +282,17 @@ fn build_job(a: &Options, job: &Job, target: Result<Target>, single: bool) -> Re
     };
     let zbuffer = zbuffer_files(a, &p)?;
     let mut files = Vec::new();
-    let mut lines = Vec::new();
+    let lines = Vec::new();
     let built = match &target {
-        Target::Stdout => pipeline::render(&p, crate::output::file::Stdout)
+        Target::Stdout => pipeline::render_with(&p, &options, crate::output::file::Stdout)
             .map(|s| (s, "standard output".to_string(), true)),
-        Target::File(f) => {
+        Target::File(f, _) => {
             let (file, stats) = match early {
                 Some((file, stats)) => (file, stats?),
                 None => {
                     make_parent(f)?;
                     let mut file = AtomicFile::create(f)?;
-                    let stats = pipeline::render(&p, file.streaming())?;
+                    let stats = pipeline::render_with(&p, &options, file.streaming())?;
                     (file, stats)
                 }
             };
@@ -277,15 +300,74 @@ fn build_job(a: &Options, job: &Job, target: Result<Target>, single: bool) -> Re
             Ok((stats, f.display().to_string(), false))
         }
     }?;
+    extras(a, &p, pattern, zbuffer, built, files, lines, single)
+}
+
+/// Builds one job into a printer's package (`.bgcode`, `.gcode.3mf`): the
+/// G-code in memory while the checks run, then packed whole into the file,
+/// whose SHA-256 and size the stats report.
+fn build_package(
+    a: &Options,
+    mut p: Plan,
+    f: &Path,
+    mut options: Stamp,
+    single: bool,
+) -> Result<Done> {
+    let package = Package::of(f);
+    options.bambu = package == Package::Bambu;
+    let stop = (!a.builds.force).then_some(a.builds.strict);
+    let written =
+        pipeline::check_and_write_with(&mut p, &a.builds.allow, stop, &options, Vec::new());
+    a.builds.refuse_failing(&p)?;
+    let (gcode, moves) = written?;
+    let images = crate::output::preview::thumbnail::images(&p)?;
+    let bytes = match package {
+        Package::Bgcode => crate::output::host::bgcode_of(&p, &gcode, &moves, &images)?,
+        Package::Bambu => {
+            let png = |w: u32| crate::output::preview::thumbnail::png_of(&p, w, w);
+            crate::output::host::threemf_of(&p, &gcode, &moves, png(512), png(128))?
+        }
+        Package::Gcode => gcode,
+    };
+    let mut hw = crate::output::file::HashWriter::new(std::io::sink());
+    hw.write_all(&bytes)
+        .map_err(|e| Error::io_from(f.display().to_string(), e.to_string(), &e))?;
+    let (digest, size) = hw.finish();
+    let stats = Stats::of(&p, &moves, digest, size);
+    let pattern = match &a.pattern {
+        Some(pf) => Some((pf, pattern_png(&p.recipe).map_err(|e| e.in_file(&p.path))?)),
+        None => None,
+    };
+    let zbuffer = zbuffer_files(a, &p)?;
+    make_parent(f)?;
+    let files = vec![stage(f, &bytes)?];
+    let built = (stats, f.display().to_string(), false);
+    extras(a, &p, pattern, zbuffer, built, files, Vec::new(), single)
+}
+
+/// The files a build writes beside its G-code (preview, pattern,
+/// z-buffer), staged; committed at once unless the build is `single`.
+#[allow(clippy::too_many_arguments)]
+fn extras(
+    a: &Options,
+    p: &Plan,
+    pattern: Option<(&PathBuf, Vec<u8>)>,
+    zbuffer: Vec<(PathBuf, Vec<u8>)>,
+    built: (Stats, String, bool),
+    mut files: Vec<AtomicFile>,
+    mut lines: Vec<String>,
+    single: bool,
+) -> Result<Done> {
     if let Some(pv) = &a.preview {
         let (bytes, line) =
-            pipeline::preview(&p, pv, &crate::output::preview::Options::default())?.bytes();
+            pipeline::preview(p, pv, &crate::output::preview::Options::default())?.bytes();
         files.push(stage(pv, &bytes)?);
         lines.push(line);
     }
     if let Some((f, png)) = &pattern {
         files.push(stage(f, png)?);
     }
+
     for (f, bytes) in &zbuffer {
         files.push(stage(f, bytes)?);
     }

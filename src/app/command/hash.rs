@@ -33,10 +33,13 @@ fn fingerprint(c: &Builds, job: &Job) -> Result<(String, LineHashes)> {
     // nothing is written: the G-code is hashed while the checks run
     let mut p = c.prepared(job)?;
     let stop = (!c.force).then_some(c.strict);
-    let written = pipeline::check_and_write(
+    // stamped as `build` stamps it (SOURCE_DATE_EPOCH's date)
+    let options = super::stamp()?;
+    let written = pipeline::check_and_write_with(
         &mut p,
         &c.allow,
         stop,
+        &options,
         HashWriter::new(LineHashes::default()),
     );
     c.refuse_failing(&p)?;
@@ -275,10 +278,11 @@ fn entry_job(base: &Path, k: usize, e: &Entry) -> Result<Job> {
 
 /// Lines `k..k + n` (0-based) of the job's G-code, rebuilt.
 fn new_lines(c: &Builds, job: &Job, k: u64, n: u64) -> Vec<String> {
+    let options = super::stamp().unwrap_or_default();
     let Some(text) = c
         .checked_plan(job)
         .ok()
-        .and_then(|p| pipeline::write(&p, Vec::new()).ok())
+        .and_then(|p| pipeline::write_with(&p, &options, Vec::new()).ok())
         .and_then(|(buf, _)| String::from_utf8(buf).ok())
     else {
         return Vec::new();

@@ -9,6 +9,7 @@ pub(crate) mod mesh;
 pub(crate) mod new;
 pub(crate) mod preview;
 pub(crate) mod printers;
+pub(crate) mod send;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -198,6 +199,22 @@ pub(crate) fn stage(file: &Path, bytes: &[u8]) -> Result<AtomicFile> {
         Error::io_from(file.display().to_string(), format!("cannot write: {e}"), &e)
     })?;
     Ok(f)
+}
+
+/// How a build's G-code is stamped (`build` and `hash` alike): its date is `SOURCE_DATE_EPOCH`'s
+/// when the environment has one (seconds since 1970, the reproducible-builds
+/// convention), else the epoch's.
+pub(crate) fn stamp() -> Result<crate::output::gcode::metadata::Options> {
+    let date = match std::env::var("SOURCE_DATE_EPOCH") {
+        Ok(v) => Some(v.trim().parse::<i64>().map_err(|_| {
+            Error::input(
+                "SOURCE_DATE_EPOCH",
+                format!("`{v}` is not a date; expected whole seconds since 1970-01-01 UTC, e.g. $(date +%s)"),
+            )
+        })?),
+        Err(_) => None,
+    };
+    Ok(crate::output::gcode::metadata::Options { date, bambu: false })
 }
 
 /// Bytes to standard output, as they are (a closed pipe ends quietly).

@@ -14,13 +14,15 @@
 //! speed is set so that it takes the same time as the strings would.
 
 pub(crate) mod flavor;
+pub(crate) mod labels;
+pub(crate) mod metadata;
 
 use std::io::{self, Write};
 
 use glam::DVec3;
 
 use crate::analyse::plan::Plan;
-use crate::analyse::planner::{Estimate, MoveKind, Moves};
+use crate::analyse::planner::{Estimate, MoveKind, Moves, Progress};
 pub(crate) use crate::analyse::stats::MoveStats;
 use crate::base::error::Result;
 use crate::base::format::{fmt_num, hms, units, Chunk};
@@ -39,13 +41,25 @@ fn feed_units(mm_s: f64) -> i64 {
     crate::base::format::round_i64(mm_s * 60.0).max(1)
 }
 
-/// Writes the G-code of `plan` to `out`: the header, `thumbnails` (blocks
-/// of comments, see `output::preview::thumbnail`), the start G-code, every
-/// part, the end G-code and the summary. Every move goes to `moves` as it
-/// is written; `estimate` turns them into the print's times for the summary.
+/// What goes at the head of the G-code besides the profile's: how it is
+/// stamped, the print's totals when planned ahead, the thumbnail blocks.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Head {
+    /// The date and the package (see [`metadata::Options`]).
+    pub options: metadata::Options,
+    /// The print's totals, when its moves were planned first.
+    pub ahead: Option<metadata::Ahead>,
+    /// Thumbnail blocks (comments, see `output::preview::thumbnail`).
+    pub thumbnails: String,
+}
+
+/// Writes the G-code of `plan` to `out`: the header (with `head`'s
+/// thumbnails), the start G-code, every part, the end G-code and the
+/// summary. Every move goes to `moves` as it is written; `estimate` turns
+/// them into the print's times for the summary.
 pub(crate) fn write<W: Write, M: Moves>(
     plan: &Plan,
-    thumbnails: String,
+    head: Head,
     out: W,
     moves: M,
     estimate: impl FnOnce(&mut M) -> Estimate,
@@ -54,15 +68,31 @@ pub(crate) fn write<W: Write, M: Moves>(
         crate::base::error::Error::io_from(&plan.path, format!("cannot write the G-code: {e}"), &e)
     };
     plan.frame_ok()?;
+    let extent = metadata::Extent::of(plan);
     let mut em = Emitter::new(out, &plan.recipe, moves);
-    em.thumbnails = thumbnails;
+    em.thumbnails = head.thumbnails;
+    em.options = head.options;
+    em.ahead = head.ahead;
+    em.layers = metadata::Layers::of(&extent, plan.recipe.printer.nozzle_diameter);
+    em.names = labels::names(plan.paths.iter().map(|t| t.name.as_str()));
+    if plan.recipe.printer.object_labels {
+        let p = &plan.recipe.printer;
+        em.defines = plan
+            .paths
+            .iter()
+            .zip(&em.names)
+            .map(|(tp, n)| labels::define(n, &labels::hull(tp, p)))
+            .collect();
+    }
     let fan_events = |t: &Toolpath| t.events.iter().any(|(_, e)| matches!(e, Event::Fan { .. }));
     if plan.paths.iter().any(fan_events) {
         em.manual_fan();
     }
     em.start(&plan.recipe, &plan.frame.start)?;
-    for tp in &plan.paths {
+    for (k, tp) in plan.paths.iter().enumerate() {
+        em.label(k, true).map_err(io)?;
         em.part(tp).map_err(io)?;
+        em.label(k, false).map_err(io)?;
     }
     em.finish(&plan.recipe, &plan.frame.end, estimate)
 }
@@ -105,6 +135,21 @@ pub(crate) struct Emitter<'a, W: Write, M: Moves> {
     /// The material's fan: (speed, start z), until it is switched on or a
     /// `fan` event takes over.
     fan: Option<(f64, f64)>,
+    /// How the G-code is stamped (date, package).
+    options: metadata::Options,
+    /// The print's totals, when planned ahead.
+    ahead: Option<metadata::Ahead>,
+    /// The layers as bands of nozzle height (None: nothing extrudes).
+    layers: Option<metadata::Layers>,
+    /// The layer reached so far (0 before any extrusion).
+    layer: u32,
+    /// Recipe z above which an extruding move begins a new layer.
+    layer_above: f64,
+    /// Each part's label (see [`labels`]).
+    names: Vec<String>,
+    /// Klipper's `EXCLUDE_OBJECT_DEFINE` lines, one per part, until the
+    /// header is written; empty without `object_labels`.
+    defines: Vec<String>,
 }
 
 #[derive(Default)]
@@ -149,6 +194,13 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
             moves,
             fan: (recipe.material.fan_speed > 0.0)
                 .then_some((recipe.material.fan_speed, recipe.material.fan_start_z)),
+            options: metadata::Options::default(),
+            ahead: None,
+            layers: None,
+            layer: 0,
+            layer_above: f64::NEG_INFINITY,
+            names: Vec::new(),
+            defines: Vec::new(),
         }
     }
 
@@ -170,20 +222,90 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
         Ok(())
     }
 
-    /// Starts a line with `head`.
+    /// Starts a line with `head`, after the progress line due, if any.
     #[inline]
     fn begin(&mut self, head: &[u8]) {
+        if let Some(p) = self.moves.due() {
+            self.progress(p);
+        }
         self.line_start = self.buf.len();
         self.buf.put(head);
+    }
+
+    /// `M73 P… R…`: percent done, minutes left.
+    fn progress(&mut self, p: Progress) {
+        self.buf.put(b"M73 P");
+        self.buf.put_int(i64::from(p.percent));
+        self.buf.put(b" R");
+        self.buf.put_int(p.minutes_left as i64);
+        self.buf.push(b'\n');
+    }
+
+    /// The labels that begin (`start`) or end part `k` (see [`labels`]).
+    fn label(&mut self, k: usize, start: bool) -> io::Result<()> {
+        self.flush()?;
+        let Some(name) = self.names.get(k) else {
+            return Ok(());
+        };
+        let line = match (start, self.printer.object_labels) {
+            (true, true) => format!("EXCLUDE_OBJECT_START NAME={name}\n; printing object {name}"),
+            (true, false) => format!("; printing object {name}"),
+            (false, true) => {
+                format!("; stop printing object {name}\nEXCLUDE_OBJECT_END NAME={name}")
+            }
+            (false, false) => format!("; stop printing object {name}"),
+        };
+        self.text(&line)
+    }
+
+    /// Marks a new layer before an extruding move to `to` that rises above
+    /// the layers so far (see [`metadata::Layers`]).
+    #[inline]
+    fn layer_at(&mut self, to: DVec3) -> io::Result<()> {
+        if to.z > self.layer_above {
+            self.new_layer(to.z)?;
+        }
+        Ok(())
+    }
+
+    /// Writes the markers of the layer of recipe height `z`.
+    fn new_layer(&mut self, z: f64) -> io::Result<()> {
+        let Some(l) = self.layers else {
+            self.layer_above = f64::INFINITY;
+            return Ok(());
+        };
+        let dz = self.printer.origin[2];
+        let n = l.of_z(z + dz).max(self.layer + 1);
+        self.layer = n;
+        let top = l.top(n);
+        // the band's top, and a millionth of a band over it
+        self.layer_above = top - dz + 1e-6 * l.height;
+        let shown = top.min(l.highest);
+        let mut t = format!(
+            ";LAYER_CHANGE\n;Z:{shown:.3}\n;HEIGHT:{:.3}\n;BEFORE_LAYER_CHANGE\n;{shown:.3}\n",
+            l.height
+        );
+        if self.options.bambu {
+            t.push_str(&format!(
+                "M73 L{n}\nM991 S0 P{} ;notify layer change\n",
+                n - 1
+            ));
+        }
+        self.text(&t)
     }
 
     /// Header comments, `start` (the profile's start G-code, expanded and
     /// checked: [`crate::analyse::frame`]) and the extrusion mode.
     pub(crate) fn start(&mut self, recipe: &Recipe, start: &str) -> Result<()> {
         let io = |e: io::Error| crate::base::error::Error::io_from("output", e.to_string(), &e);
+        if let (true, Some(a)) = (self.options.bambu, &self.ahead) {
+            let block = metadata::bambu_header(recipe, a, self.layers.as_ref());
+            self.text(&block).map_err(io)?;
+        }
+        self.text(&metadata::generated(self.options.date))
+            .map_err(io)?;
         let head = format!(
-            "; generated by p3dp {}\n; recipe: {}\n; printer: {} ({:?})\n; material: {}, {} °C nozzle, {} °C bed\n",
-            env!("CARGO_PKG_VERSION"),
+            "; recipe: {}\n; printer: {} ({:?})\n; material: {}, {} °C nozzle, {} °C bed\n",
             one_line(&recipe.name),
             one_line(&self.printer.name),
             self.printer.flavor,
@@ -200,6 +322,11 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
             let t = std::mem::take(&mut self.thumbnails);
             self.text(&t).map_err(io)?;
         }
+        self.text(&metadata::layers_note(self.layers.as_ref()))
+            .map_err(io)?;
+        for d in std::mem::take(&mut self.defines) {
+            self.text(&d).map_err(io)?;
+        }
         if self.printer.arcs {
             self.text(&format!(
                 "; arcs: G2/G3 within {} mm of the strings ({})",
@@ -207,6 +334,9 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
                 flavor::arc_note(self.printer.flavor)
             ))
             .map_err(io)?;
+        }
+        if let Some(p) = self.moves.due() {
+            self.progress(p);
         }
         self.text(start).map_err(io)?;
         let mode = match self.printer.extrusion {
@@ -446,6 +576,17 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
 
     /// One G1 extruding move to `to` carrying `filament` mm at `v` mm/s.
     fn extrude_line(&mut self, to: DVec3, filament: f64, v: f64) -> io::Result<()> {
+        if self.writes_nothing(to, filament) {
+            // no axis and no E step once rounded (`G1 E0.00000`): firmware
+            // ignores such a line, and a planner would stop the head for
+            // it; its filament joins the exact E total, written next
+            self.e_exact += filament;
+            self.stats.filament += filament;
+            self.stats.volume += filament * self.area;
+            self.head = Some(to);
+            return Ok(());
+        }
+        self.layer_at(to)?;
         self.fan_on_above(to)?;
         self.unretract()?;
         let from = self.head.expect("extrusion starts after a travel");
@@ -466,6 +607,14 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
         self.count_extrusion(len, filament, t, &[from, to]);
         self.head = Some(to);
         Ok(())
+    }
+
+    /// Whether a move to `to` feeding `filament` mm rounds to the written
+    /// position and E value: a line that would say nothing.
+    fn writes_nothing(&self, to: DVec3, filament: f64) -> bool {
+        let m = self.printer.to_machine(to);
+        let u = [units(m.x, XYZ), units(m.y, XYZ), units(m.z, XYZ)];
+        self.written == Some(u) && units(self.e_exact + filament, E) == self.e_units
     }
 
     /// Counts one extruding move in the stats: `len` mm through `points`,
@@ -491,6 +640,7 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
     /// planner sees the arc as chords of at most 1 mm, as Marlin
     /// (MAX_ARC_SEGMENT_MM) and Klipper (`resolution`) split it.
     fn arc_move(&mut self, tp: &Toolpath, arc: &crate::base::geom::arc::Arc) -> io::Result<()> {
+        self.layer_at(tp.points[arc.end])?;
         self.fan_on_above(tp.points[arc.end])?;
         self.unretract()?;
         let (mut filament, mut time) = (0.0, 0.0);
@@ -677,19 +827,21 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
     ) -> Result<(W, MoveStats)> {
         let io = |e: io::Error| crate::base::error::Error::io_from("output", e.to_string(), &e);
         self.flush().map_err(io)?;
+        if self.retracted && !self.printer.firmware_retraction {
+            // a print that ends retracted took that filament back: the
+            // stats count the filament fed, net (what the E values add to)
+            let back = units(self.printer.retraction.length, E) as f64 / E;
+            self.stats.filament -= back;
+            self.stats.volume -= back * self.area;
+        }
+        if let Some(p) = self.moves.done() {
+            self.progress(p);
+        }
         self.text(end).map_err(io)?;
         let limits = self.printer.limits();
         let est = estimate(&mut self.moves);
         self.stats.time = est.total.planned;
-        let st = &self.stats;
-        let grams = st.volume / 1000.0 * recipe.material.density;
-        let mut summary = format!(
-            "; filament used [mm] = {:.2}\n; filament used [cm3] = {:.2}\n; filament used [g] = {:.2}\n; estimated printing time = {}\n",
-            st.filament,
-            st.volume / 1000.0,
-            grams,
-            hms(st.time)
-        );
+        let mut summary = metadata::footer(recipe, &self.stats, self.layers.as_ref());
         for p in &est.parts {
             summary.push_str(&format!(
                 "; estimated time part {} = {}\n",

@@ -19,7 +19,7 @@ use base64::Engine;
 use super::{png, Scene, Size};
 use crate::analyse::plan::Plan;
 use crate::base::error::Result;
-use crate::machine::size::{thumbs, ThumbFormat};
+use crate::machine::size::{thumbnails, ImageFormat, Thumbnail as ThumbSpec};
 
 /// Characters of base64 per comment line (PrusaSlicer's).
 pub(crate) const LINE: usize = 78;
@@ -27,52 +27,99 @@ pub(crate) const LINE: usize = 78;
 #[cfg(test)]
 /// One thumbnail block for a PNG of `size`.
 pub(crate) fn block(size: Size, png: &[u8]) -> String {
-    block_of(size, ThumbFormat::Png, png)
+    block_of(ImageFormat::Png, size, png)
 }
 
-/// The word of a block's header and end line: `thumbnail` for PNG,
-/// `thumbnail_JPG`, `thumbnail_QOI` (PrusaSlicer's).
-fn word(format: ThumbFormat) -> &'static str {
-    match format {
-        ThumbFormat::Png => "thumbnail",
-        ThumbFormat::Jpg => "thumbnail_JPG",
-        ThumbFormat::Qoi => "thumbnail_QOI",
-    }
-}
-
-/// One thumbnail block for an image of `size` encoded as `format`.
-pub(crate) fn block_of(size: Size, format: ThumbFormat, bytes: &[u8]) -> String {
+/// One thumbnail block for an image of `size` in `format`: PrusaSlicer's
+/// `; thumbnail begin` (PNG), `; thumbnail_QOI begin`, `; thumbnail_JPG begin`.
+pub(crate) fn block_of(format: ImageFormat, size: Size, bytes: &[u8]) -> String {
     let b64 = base64::engine::general_purpose::STANDARD.encode(bytes);
-    let w = word(format);
-    let mut s = format!("; {w} begin {}x{} {}\n", size.width, size.height, b64.len());
+    let tag = match format {
+        ImageFormat::Png => "thumbnail",
+        ImageFormat::Qoi => "thumbnail_QOI",
+        ImageFormat::Jpg => "thumbnail_JPG",
+    };
+    let mut s = format!(
+        "; {tag} begin {}x{} {}\n",
+        size.width,
+        size.height,
+        b64.len()
+    );
     for chunk in b64.as_bytes().chunks(LINE) {
         s.push_str("; ");
         s.push_str(std::str::from_utf8(chunk).expect("base64 is ASCII"));
         s.push('\n');
     }
-    s.push_str(&format!("; {w} end\n;\n"));
+    s.push_str(&format!("; {tag} end\n;\n"));
     s
+}
+
+/// The thumbnails `plan`'s printer asks for, each its image's bytes in its
+/// format (empty when none).
+pub(crate) fn images(plan: &Plan) -> Result<Vec<(ThumbSpec, Vec<u8>)>> {
+    let list = &plan.recipe.printer.thumbnails;
+    if list.is_empty() {
+        return Ok(Vec::new());
+    }
+    let specs = thumbnails(list).map_err(|e| e.in_file(&plan.recipe.printer.name))?;
+    let scene = Scene::new(plan);
+    Ok(specs
+        .into_iter()
+        .map(|t| {
+            let pm = png::thumbnail(&scene, t.size);
+            (t, encode(&pm, t.format))
+        })
+        .collect())
+}
+
+/// The bytes of `pm` in `format`: PNG and QOI keep the transparent
+/// background (QOI's colours un-premultiplied, sRGB); JPEG, which has no
+/// alpha, lays the image on white (quality 90).
+pub(crate) fn encode(pm: &tiny_skia::Pixmap, format: ImageFormat) -> Vec<u8> {
+    match format {
+        ImageFormat::Png => png::encode(pm, true),
+        ImageFormat::Qoi => {
+            let mut rgba = Vec::with_capacity(pm.pixels().len() * 4);
+            for px in pm.pixels() {
+                let c = px.demultiply();
+                rgba.extend_from_slice(&[c.red(), c.green(), c.blue(), c.alpha()]);
+            }
+            qoi::encode_to_vec(&rgba, pm.width(), pm.height())
+                .expect("a thumbnail's size is within QOI's")
+        }
+        ImageFormat::Jpg => {
+            let mut rgb = Vec::with_capacity(pm.pixels().len() * 3);
+            for px in pm.pixels() {
+                // premultiplied colour over white: c + (255 − a)
+                let white = 255 - px.alpha();
+                rgb.extend_from_slice(&[px.red() + white, px.green() + white, px.blue() + white]);
+            }
+            let mut out = Vec::new();
+            image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, 90)
+                .encode(
+                    &rgb,
+                    pm.width(),
+                    pm.height(),
+                    image::ExtendedColorType::Rgb8,
+                )
+                .expect("JPEG encoding into memory does not fail");
+            out
+        }
+    }
+}
+
+/// A PNG thumbnail of `plan`, `width` × `height` pixels.
+pub(crate) fn png_of(plan: &Plan, width: u32, height: u32) -> Vec<u8> {
+    let pm = png::thumbnail(&Scene::new(plan), Size { width, height });
+    png::encode(&pm, true)
 }
 
 /// The thumbnail blocks `plan`'s printer asks for (empty when none).
 pub(crate) fn blocks(plan: &Plan) -> Result<String> {
-    let list = &plan.recipe.printer.thumbnails;
-    if list.is_empty() {
-        return Ok(String::new());
-    }
-    let thumbs = thumbs(list).map_err(|e| e.in_file(&plan.recipe.printer.name))?;
-    let scene = Scene::new(plan);
-    let mut out = String::new();
-    for (size, format) in thumbs {
-        let pm = png::thumbnail(&scene, size);
-        let bytes = match format {
-            ThumbFormat::Png => png::encode(&pm, true),
-            ThumbFormat::Jpg => png::encode_jpeg(&pm),
-            ThumbFormat::Qoi => png::encode_qoi(&pm),
-        };
-        out.push_str(&block_of(size, format, &bytes));
-    }
-    Ok(out)
+    Ok(images(plan)?
+        .iter()
+        .map(|(t, bytes)| block_of(t.format, t.size, bytes))
+        .collect())
 }
 
 #[cfg(test)]
@@ -83,10 +130,10 @@ pub(crate) struct Thumbnail {
     pub width: u32,
     /// Height named in the block header, pixels.
     pub height: u32,
-    /// The decoded image bytes (PNG unless `format` says otherwise).
-    pub png: Vec<u8>,
-    /// The image's format, from the block's header word.
-    pub format: ThumbFormat,
+    /// The image's format (the block's tag).
+    pub format: ImageFormat,
+    /// The decoded image bytes.
+    pub bytes: Vec<u8>,
 }
 
 #[cfg(test)]
@@ -122,16 +169,21 @@ pub(crate) fn parse(gcode: &str) -> std::result::Result<Vec<Thumbnail>, Thumbnai
         message,
     };
     let mut out = Vec::new();
-    let mut cur: Option<(u32, u32, usize, String, ThumbFormat)> = None;
+    let mut cur: Option<(u32, u32, usize, String, ImageFormat)> = None;
     for (k, line) in gcode.lines().enumerate() {
         let at = k + 1;
-        let begin = [ThumbFormat::Png, ThumbFormat::Jpg, ThumbFormat::Qoi]
-            .into_iter()
-            .find_map(|f| Some((f, line.strip_prefix(&format!("; {} begin ", word(f)))?)));
-        let end = cur
-            .as_ref()
-            .is_some_and(|c| line == format!("; {} end", word(c.4)));
-        if let Some((format, rest)) = begin {
+        let tagged = [
+            ("; thumbnail begin ", ImageFormat::Png),
+            ("; thumbnail_QOI begin ", ImageFormat::Qoi),
+            ("; thumbnail_JPG begin ", ImageFormat::Jpg),
+        ]
+        .into_iter()
+        .find_map(|(tag, f)| line.strip_prefix(tag).map(|r| (r, f)));
+        let is_end = matches!(
+            line,
+            "; thumbnail end" | "; thumbnail_QOI end" | "; thumbnail_JPG end"
+        );
+        if let Some((rest, format)) = tagged {
             let header = || bad(at, "expected `; thumbnail begin WxH LEN`".into());
             let (wh, len) = rest.split_once(' ').ok_or_else(header)?;
             let (w, h) = wh.split_once('x').ok_or_else(header)?;
@@ -141,9 +193,7 @@ pub(crate) fn parse(gcode: &str) -> std::result::Result<Vec<Thumbnail>, Thumbnai
                 return Err(bad(at, "a block begins inside another".into()));
             }
             cur = Some((num(w)?, num(h)?, len, String::new(), format));
-        } else if end
-            || (cur.is_none() && line.starts_with("; thumbnail") && line.ends_with(" end"))
-        {
+        } else if is_end {
             let (width, height, len, b64, format) = cur
                 .take()
                 .ok_or_else(|| bad(at, "an end without a begin".into()))?;
@@ -156,16 +206,16 @@ pub(crate) fn parse(gcode: &str) -> std::result::Result<Vec<Thumbnail>, Thumbnai
                     ),
                 ));
             }
-            let png = base64::engine::general_purpose::STANDARD
+            let bytes = base64::engine::general_purpose::STANDARD
                 .decode(b64)
                 .map_err(|e| bad(at, format!("not base64: {e}")))?;
             out.push(Thumbnail {
                 width,
                 height,
-                png,
                 format,
+                bytes,
             });
-        } else if let Some((.., b64, _)) = cur.as_mut() {
+        } else if let Some((_, _, _, b64, _)) = cur.as_mut() {
             let data = line
                 .strip_prefix("; ")
                 .ok_or_else(|| bad(at, "a data line is not a `; ` comment".into()))?;
@@ -204,7 +254,7 @@ mod tests {
         let got = parse(&text).unwrap();
         assert_eq!(got.len(), 1);
         assert_eq!((got[0].width, got[0].height), (40, 30));
-        let img = image::load_from_memory(&got[0].png).unwrap();
+        let img = image::load_from_memory(&got[0].bytes).unwrap();
         assert_eq!((img.width(), img.height()), (40, 30));
     }
 
@@ -242,46 +292,43 @@ mod tests {
     }
 
     #[test]
-    fn sizes_name_the_bad_entry() {
-        let e = thumbs(&["16x16".into(), "big".into()]).unwrap_err();
-        assert!(e.to_string().contains("thumbnails[1]"), "{e}");
-        let e = thumbs(&["16x16/GIF".into()]).unwrap_err();
-        assert!(
-            e.to_string().contains("`GIF` is not a thumbnail format"),
-            "{e}"
-        );
-        let t = thumbs(&["220x124".into(), "16x16/qoi".into(), "8x8/JPG".into()]).unwrap();
-        assert_eq!(t[0].0.height, 124);
+    fn qoi_and_jpg_blocks_read_back_as_their_images() {
+        let mut pm = tiny_skia::Pixmap::new(16, 12).unwrap();
+        pm.fill(tiny_skia::Color::from_rgba8(250, 143, 41, 255));
+        let size = Size {
+            width: 16,
+            height: 12,
+        };
+        let text = [ImageFormat::Qoi, ImageFormat::Jpg]
+            .map(|f| block_of(f, size, &encode(&pm, f)))
+            .concat();
+        assert!(text.starts_with("; thumbnail_QOI begin 16x12 "));
+        assert!(text.contains("; thumbnail_JPG end\n"));
+        let got = parse(&text).unwrap();
+        let (qh, qpx) = qoi::decode_to_vec(&got[0].bytes).unwrap();
         assert_eq!(
-            t.iter().map(|x| x.1).collect::<Vec<_>>(),
-            [ThumbFormat::Png, ThumbFormat::Qoi, ThumbFormat::Jpg]
+            (qh.width, qh.height, got[0].format),
+            (16, 12, ImageFormat::Qoi)
         );
+        assert_eq!(&qpx[..4], &[250, 143, 41, 255]);
+        assert_eq!(got[1].format, ImageFormat::Jpg);
+        let jpg = image::load_from_memory(&got[1].bytes).unwrap().to_rgb8();
+        let px = jpg.get_pixel(8, 6).0;
+        assert!(
+            px.iter()
+                .zip([250u8, 143, 41])
+                .all(|(a, b)| a.abs_diff(b) < 8),
+            "{px:?}"
+        );
+        // the same bytes every time
+        assert_eq!(encode(&pm, ImageFormat::Jpg), encode(&pm, ImageFormat::Jpg));
     }
 
     #[test]
-    fn qoi_and_jpg_blocks_read_back_as_their_images() {
-        let size = Size {
-            width: 12,
-            height: 8,
-        };
-        let mut pm = tiny_skia::Pixmap::new(12, 8).unwrap();
-        pm.fill(tiny_skia::Color::from_rgba8(200, 100, 20, 255));
-        let text = block_of(size, ThumbFormat::Qoi, &png::encode_qoi(&pm))
-            + &block_of(size, ThumbFormat::Jpg, &png::encode_jpeg(&pm));
-        assert!(text.starts_with("; thumbnail_QOI begin 12x8 "), "{text}");
-        assert!(text.contains("; thumbnail_JPG end\n"), "{text}");
-        let got = parse(&text).unwrap();
-        assert_eq!(got.len(), 2);
-        for (t, f) in got
-            .iter()
-            .zip([image::ImageFormat::Qoi, image::ImageFormat::Jpeg])
-        {
-            let img = image::load_from_memory_with_format(&t.png, f)
-                .unwrap()
-                .to_rgb8();
-            assert_eq!((img.width(), img.height()), (12, 8));
-            let px = img.get_pixel(5, 4).0;
-            assert!(px[0].abs_diff(200) < 8 && px[1].abs_diff(100) < 8, "{px:?}");
-        }
+    fn sizes_name_the_bad_entry() {
+        use crate::machine::size::sizes;
+        let e = sizes(&["16x16".into(), "big".into()]).unwrap_err();
+        assert!(e.to_string().contains("thumbnails[1]"), "{e}");
+        assert_eq!(sizes(&["220x124".into()]).unwrap()[0].height, 124);
     }
 }

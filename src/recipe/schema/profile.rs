@@ -97,8 +97,10 @@ impl Default for RawRetraction {
 pub(crate) struct RawPrinter {
     /// Profile name.
     pub name: String,
-    /// The model as its maker's slicer names it (none).
-    #[serde(default)]
+    /// The model as its maker's software names it (`MK4`, `X1C`; PrusaSlicer's
+    /// `printer_model`, also accepted under that name): `[printer_model]` in
+    /// start G-code, the G-code's metadata, Bambu's package (none).
+    #[serde(default, alias = "printer_model")]
     pub model: String,
     /// Firmware dialect.
     #[serde(default)]
@@ -156,9 +158,19 @@ pub(crate) struct RawPrinter {
     /// Largest distance between an arc and the strings it replaces, mm (0.025).
     #[serde(default = "d_arc_tolerance")]
     pub arc_tolerance: f64,
-    /// PNG thumbnails to embed in the G-code, as `WxH` sizes (none).
+    /// Thumbnails to embed in the G-code, as `WxH` (PNG) or `WxH/FORMAT`
+    /// with FORMAT `PNG`, `QOI` or `JPG` (none).
     #[serde(default)]
     pub thumbnails: Vec<String>,
+    /// `M73` progress from the planner's time (on for Marlin and Prusa).
+    #[serde(default)]
+    pub progress: Option<bool>,
+    /// Klipper's object labels, `EXCLUDE_OBJECT_*` (on for Klipper).
+    #[serde(default)]
+    pub object_labels: Option<bool>,
+    /// Binary G-code (`.bgcode`) unless the output's name says otherwise (off).
+    #[serde(default)]
+    pub binary_gcode: bool,
     /// The firmware planner's limits.
     #[serde(default)]
     pub kinematics: RawKinematics,

@@ -268,47 +268,6 @@ pub(crate) fn encode(pm: &Pixmap, alpha: bool) -> Vec<u8> {
     encode_with(pm, alpha, image::codecs::png::CompressionType::Best)
 }
 
-/// `pm` as a JPEG (quality 90) over white: the `/JPG` G-code thumbnails.
-pub(crate) fn encode_jpeg(pm: &Pixmap) -> Vec<u8> {
-    let mut data = Vec::with_capacity(pm.pixels().len() * 3);
-    for px in pm.pixels() {
-        // premultiplied colour over white: c + (255 − a)
-        let a = 255 - px.alpha();
-        data.extend([px.red(), px.green(), px.blue()].map(|c| c.saturating_add(a)));
-    }
-    let mut out = Vec::new();
-    image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, 90)
-        .encode(
-            &data,
-            pm.width(),
-            pm.height(),
-            image::ExtendedColorType::Rgb8,
-        )
-        .expect("JPEG encoding into memory does not fail");
-    out
-}
-
-/// `pm` as a QOI image with alpha: the `/QOI` G-code thumbnails (Prusa's
-/// MK4, MINI and XL firmware read them).
-pub(crate) fn encode_qoi(pm: &Pixmap) -> Vec<u8> {
-    use image::ImageEncoder;
-    let mut data = Vec::with_capacity(pm.pixels().len() * 4);
-    for px in pm.pixels() {
-        let c = px.demultiply();
-        data.extend([c.red(), c.green(), c.blue(), c.alpha()]);
-    }
-    let mut out = Vec::new();
-    image::codecs::qoi::QoiEncoder::new(&mut out)
-        .write_image(
-            &data,
-            pm.width(),
-            pm.height(),
-            image::ExtendedColorType::Rgba8,
-        )
-        .expect("QOI encoding into memory does not fail");
-    out
-}
-
 /// [`encode`] with a quicker compression: the PNG previews (a flat
 /// background and smooth shading compress well even so).
 pub(crate) fn encode_fast(pm: &Pixmap, alpha: bool) -> Vec<u8> {
