@@ -226,10 +226,7 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
             fmt_num(recipe.material.bed_temp),
         );
         self.text(&head).map_err(io)?;
-        for (k, v) in &recipe.params {
-            self.text(&format!("; param {} = {}", one_line(k), fmt_num(*v)))
-                .map_err(io)?;
-        }
+        self.params(&recipe.params).map_err(io)?;
         if !self.thumbnails.is_empty() {
             let t = std::mem::take(&mut self.thumbnails);
             self.text(&t).map_err(io)?;
@@ -463,6 +460,20 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
             }
             _ => Ok(()),
         }
+    }
+
+    /// `; param NAME = VALUE` for each param: a number, or a choice's
+    /// string, a boolean, a list as the recipe reads them.
+    fn params(&mut self, params: &crate::base::expr::Params) -> io::Result<()> {
+        for (k, v) in params.iter() {
+            let v = params.text(k).unwrap_or_else(|| fmt_num(*v));
+            self.text(&format!("; param {} = {}", one_line(k), one_line(&v)))?;
+        }
+        for k in params.list_names() {
+            let v = params.text(k).unwrap_or_default();
+            self.text(&format!("; param {} = {}", one_line(k), v))?;
+        }
+        Ok(())
     }
 
     /// Adds `filament` mm to the exact E total and writes the E value after
