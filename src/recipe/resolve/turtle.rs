@@ -69,7 +69,7 @@ fn check_name(name: &str, params: &Params, scope: &[String], place: &str) -> Res
         "a name must be letters, digits and `_`, not starting with a digit"
     } else if matches!(name, "x" | "y" | "z" | "pi" | "e" | "rand") {
         "turtle expressions already use it (x y z are the turtle's position; pi, e, rand())"
-    } else if params.contains_key(name) {
+    } else if params.has(name) {
         "it is a param of the recipe"
     } else if scope.iter().any(|s| s == name) {
         "it is already a loop counter or parameter here"

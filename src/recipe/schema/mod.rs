@@ -8,6 +8,7 @@
 //! `turtle.rs`), the steps in `step.rs`; a printer profile in `profile.rs`.
 
 mod num;
+mod param;
 mod part;
 mod primitive;
 mod profile;
@@ -22,6 +23,7 @@ use serde::de::{self, Deserializer, IgnoredAny, MapAccess, Visitor};
 use serde::Deserialize;
 
 pub use num::{Num, Num3};
+pub use param::{RawChoice, RawParam};
 pub use part::{RawBrim, RawLoop, RawPart, RawPrimitiveItem, RawPrimitives, RawStand};
 pub use primitive::{
     RawArc, RawCaHelix, RawCircle, RawCmd, RawCylinder, RawDirection, RawFirstLayer, RawHelix,
@@ -138,7 +140,7 @@ pub struct RawRecipe {
     pub material: Option<RawMaterial>,
     /// Named params in order.
     #[serde(default, deserialize_with = "unique_map")]
-    pub params: IndexMap<String, Num>,
+    pub params: IndexMap<String, RawParam>,
     /// Default cross-section and speed.
     #[serde(default)]
     pub defaults: RawDefaults,
@@ -201,8 +203,8 @@ pub struct RawLibrary {
     #[serde(default)]
     pub allow: Option<IgnoredAny>,
     /// Params, in order.
-    #[serde(default)]
-    pub params: IndexMap<String, Num>,
+    #[serde(default, deserialize_with = "unique_map")]
+    pub params: IndexMap<String, RawParam>,
     /// Templates.
     #[serde(default)]
     pub templates: IndexMap<String, RawTemplate>,
@@ -314,12 +316,12 @@ impl RawAllow {
 /// silently keep the last), as struct fields are refused.
 fn unique_map<'de, D: Deserializer<'de>>(
     d: D,
-) -> std::result::Result<IndexMap<String, Num>, D::Error> {
+) -> std::result::Result<IndexMap<String, RawParam>, D::Error> {
     struct V;
     impl<'de> Visitor<'de> for V {
-        type Value = IndexMap<String, Num>;
+        type Value = IndexMap<String, RawParam>;
         fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-            f.write_str("a map of param names to numbers or expressions")
+            f.write_str("a map of param names to numbers, expressions, booleans, lists or choices")
         }
         fn visit_map<A: MapAccess<'de>>(
             self,
@@ -332,7 +334,7 @@ fn unique_map<'de, D: Deserializer<'de>>(
                         "duplicate param `{k}`; expected each param once"
                     )));
                 }
-                let v: Num = m.next_value()?;
+                let v: RawParam = m.next_value()?;
                 out.insert(k, v);
             }
             Ok(out)
