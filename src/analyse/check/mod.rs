@@ -172,14 +172,14 @@ pub fn events(recipe: &Recipe, tp: &Toolpath) -> Vec<Finding> {
     let pick = |bed: bool, limit: f64| -> Vec<(usize, f64)> {
         tp.events
             .iter()
-            .filter_map(|&(k, e)| match e {
+            .filter_map(|(k, e)| match *e {
                 crate::base::toolpath::Event::NozzleTemp { celsius, .. }
                     if !bed && celsius > limit =>
                 {
-                    Some((k, celsius))
+                    Some((*k, celsius))
                 }
                 crate::base::toolpath::Event::BedTemp { celsius, .. } if bed && celsius > limit => {
-                    Some((k, celsius))
+                    Some((*k, celsius))
                 }
                 _ => None,
             })

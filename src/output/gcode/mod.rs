@@ -14,6 +14,7 @@
 //! speed is set so that it takes the same time as the strings would.
 
 pub mod flavor;
+pub mod raw;
 
 use std::collections::BTreeMap;
 use std::io::{self, Write};
@@ -613,7 +614,9 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
                 // the head stops for these; a dwell also takes its time
                 match *e {
                     Event::Dwell { ms } => self.moves.dwell(ms.max(0.0) / 1000.0),
+                    // a recipe's own command (M600) may stop the head too
                     Event::Pause
+                    | Event::Gcode(_)
                     | Event::NozzleTemp { wait: true, .. }
                     | Event::BedTemp { wait: true, .. } => self.moves.stop(),
                     _ => {}

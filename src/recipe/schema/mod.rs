@@ -7,6 +7,7 @@
 //! primitives in `primitive.rs` (`solid:` and `turtle:` in `solid.rs` and
 //! `turtle.rs`), the steps in `step.rs`; a printer profile in `profile.rs`.
 
+mod curve;
 mod num;
 mod param;
 mod part;
@@ -22,11 +23,12 @@ use indexmap::IndexMap;
 use serde::de::{self, Deserializer, IgnoredAny, MapAccess, Visitor};
 use serde::Deserialize;
 
-pub use num::{Num, Num3};
+pub use curve::{RawArcCmd, RawBezier, RawLine, RawRectangle};
+pub use num::{Num, Num3, RawPoint};
 pub use param::{RawChoice, RawParam};
 pub use part::{RawBrim, RawLoop, RawPart, RawPrimitiveItem, RawPrimitives, RawStand};
 pub use primitive::{
-    RawArc, RawCaHelix, RawCircle, RawCmd, RawCylinder, RawDirection, RawFirstLayer, RawHelix,
+    PathMap, RawArc, RawCaHelix, RawCircle, RawCylinder, RawDirection, RawFirstLayer, RawHelix,
     RawInitial, RawLayout, RawOutline, RawPath, RawPatternHelix, RawPrimitive, RawRule, RawSpiral,
 };
 pub use profile::{

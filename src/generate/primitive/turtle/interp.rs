@@ -9,7 +9,7 @@ use glam::DVec3;
 
 use super::frame::Frame;
 use super::lsystem::{Lsystem, MAX_ITERATIONS};
-use super::program::{Axis, Cmd, Op, Proc, Setting, Val};
+use super::program::{Axis, Cmd, Curve, Op, Proc, Setting, Val, Values};
 use crate::base::error::{Error, Result};
 use crate::base::expr::{var, Memo};
 use crate::base::rng::SplitMix64;
@@ -47,6 +47,12 @@ pub struct Program {
     pub main: Vec<Cmd>,
     /// The procedures, by number.
     pub procs: Vec<Proc>,
+    /// A `path`'s commands rather than a turtle's: the path starts where
+    /// its first movement goes when that travels (a `move`, a movement
+    /// with the pen up) or is a curve's first point, instead of drawing or
+    /// travelling there from `start`; a `pen_up` before anything is drawn
+    /// retracts nothing.
+    pub path: bool,
 }
 
 /// The state of one run.
@@ -66,13 +72,24 @@ struct Run<'a> {
     strings: u64,
     events: u64,
     steps: u64,
+    /// Whether the head has moved (a path's first movement may place it).
+    moved: bool,
     out: Option<Toolpath>,
 }
 
 /// Work a run has left, innermost last: the interpreter's own stack.
 enum Task<'a> {
-    /// The commands of a block still to run.
-    Block(std::slice::Iter<'a, Cmd>),
+    /// The commands of a block still to run, and how many values the scope
+    /// held when it began (its `let`s come off when it ends).
+    Block(std::slice::Iter<'a, Cmd>, usize),
+    /// A `for` over `n` values, `next` the one to start (the value of the
+    /// one just run is the last of the values when this is on top again).
+    For {
+        body: &'a [Cmd],
+        next: u64,
+        n: u64,
+        values: ForValues,
+    },
     /// A `repeat` of `n` iterations, `next` the one to start (iteration
     /// next − 1 has run when this is on top again; its counter, with
     /// `counter`, is the last of the values).
@@ -93,6 +110,23 @@ enum Task<'a> {
         n: u32,
         place: &'a str,
     },
+}
+
+/// The values of a running `for`.
+enum ForValues {
+    /// a + k·step.
+    Range(f64, f64),
+    /// The list, evaluated when the loop began.
+    List(Vec<f64>),
+}
+
+impl ForValues {
+    fn at(&self, k: u64) -> f64 {
+        match self {
+            ForValues::Range(a, step) => a + k as f64 * step,
+            ForValues::List(v) => v[k as usize],
+        }
+    }
 }
 
 /// Counts of a run.
@@ -144,6 +178,7 @@ impl Program {
             strings: 0,
             events: 0,
             steps: 0,
+            moved: false,
             out,
         };
         let mut vals = Vec::new();
@@ -396,13 +431,27 @@ impl<'a> Run<'a> {
 
     /// Moves the head to `to`: an extruding string with the pen down, else travel.
     fn go(&mut self, to: DVec3, place: &str) -> Result<()> {
-        if to == self.frame.pos {
+        self.go_as(to, self.pen_down, false, place)
+    }
+
+    /// Moves the head to `to`: an extruding string when `draw`, else a
+    /// travel; one of length 0 only when `keep` (a path's `move` and
+    /// `draw`). A path's first movement, when it travels, is where the path
+    /// starts instead.
+    fn go_as(&mut self, to: DVec3, draw: bool, keep: bool, place: &str) -> Result<()> {
+        let first = !self.moved;
+        self.moved = true;
+        if self.prog.path && first && !draw {
+            self.start_at(to);
+            return Ok(());
+        }
+        if to == self.frame.pos && !keep {
             return Ok(());
         }
         self.strings += 1;
         self.made(place)?;
         if let Some(tp) = &mut self.out {
-            if self.pen_down {
+            if draw {
                 tp.draw(to, self.c, self.v);
             } else {
                 tp.travel(to, self.v);
@@ -410,6 +459,14 @@ impl<'a> Run<'a> {
         }
         self.frame.pos = to;
         Ok(())
+    }
+
+    /// The path starts at `to` (nothing drawn or travelled yet).
+    fn start_at(&mut self, to: DVec3) {
+        if let Some(tp) = &mut self.out {
+            tp.points[0] = to;
+        }
+        self.frame.pos = to;
     }
 
     fn event(&mut self, e: Event, place: &str) -> Result<()> {
@@ -427,15 +484,34 @@ impl<'a> Run<'a> {
     /// thread. Commands, counters, calls and symbols come in exactly the
     /// order of a depth-first walk of the program.
     fn block(&mut self, cmds: &'a [Cmd], vals: &mut Vec<f64>) -> Result<()> {
-        let mut tasks = vec![Task::Block(cmds.iter())];
+        let mut tasks = vec![Task::Block(cmds.iter(), vals.len())];
         while let Some(task) = tasks.last_mut() {
             match task {
-                Task::Block(cmds) => match cmds.next() {
+                Task::Block(cmds, base) => match cmds.next() {
                     Some(cmd) => self.command(cmd, vals, &mut tasks)?,
                     None => {
+                        vals.truncate(*base);
                         tasks.pop();
                     }
                 },
+                Task::For {
+                    body,
+                    next,
+                    n,
+                    values,
+                } => {
+                    if *next > 0 {
+                        vals.pop();
+                    }
+                    if *next < *n {
+                        vals.push(values.at(*next));
+                        *next += 1;
+                        let body = *body;
+                        tasks.push(Task::Block(body.iter(), vals.len()));
+                    } else {
+                        tasks.pop();
+                    }
+                }
                 Task::Repeat {
                     body,
                     next,
@@ -452,7 +528,7 @@ impl<'a> Run<'a> {
                         }
                         *next += 1;
                         let body = *body;
-                        tasks.push(Task::Block(body.iter()));
+                        tasks.push(Task::Block(body.iter(), vals.len()));
                     } else {
                         tasks.pop();
                     }
@@ -471,7 +547,10 @@ impl<'a> Run<'a> {
                 } => {
                     let (ls, d, n, place) = (*ls, *d, *n, *place);
                     match symbols.next() {
-                        Some(&s) => self.symbol(ls, s, d, n, place, &mut tasks)?,
+                        Some(&s) => {
+                            let base = vals.len();
+                            self.symbol(ls, (s, d, n), base, place, &mut tasks)?
+                        }
                         None => {
                             tasks.pop();
                         }
@@ -487,9 +566,8 @@ impl<'a> Run<'a> {
     fn symbol(
         &mut self,
         ls: &'a Lsystem,
-        s: u16,
-        d: u32,
-        n: u32,
+        (s, d, n): (u16, u32, u32),
+        base: usize,
         place: &'a str,
         tasks: &mut Vec<Task<'a>>,
     ) -> Result<()> {
@@ -506,7 +584,7 @@ impl<'a> Run<'a> {
                 return Ok(());
             }
         }
-        tasks.push(Task::Block(ls.commands[s as usize].iter()));
+        tasks.push(Task::Block(ls.commands[s as usize].iter(), base));
         Ok(())
     }
 
@@ -531,6 +609,12 @@ impl<'a> Run<'a> {
                 self.setting(&cmd.op, vals, place)
             }
             Op::Hair { length, blob, rate } => self.hair(length, blob, rate, vals, place),
+            Op::To(..)
+            | Op::For { .. }
+            | Op::Let(_)
+            | Op::Curve(_)
+            | Op::ExtrudeVolume(..)
+            | Op::Gcode(_) => self.program(&cmd.op, vals, place, tasks),
             Op::Repeat {
                 count,
                 counter,
@@ -551,7 +635,8 @@ impl<'a> Run<'a> {
                 otherwise,
             } => {
                 let x = self.eval(cond, vals, place)?;
-                tasks.push(Task::Block(if x != 0.0 { then } else { otherwise }.iter()));
+                let branch = if x != 0.0 { then } else { otherwise };
+                tasks.push(Task::Block(branch.iter(), vals.len()));
                 Ok(())
             }
             Op::Call { proc, args } => self.call(*proc, args, vals, place, tasks),
@@ -616,7 +701,10 @@ impl<'a> Run<'a> {
         match op {
             // a pen already up stays up without a second retraction
             Op::PenUp if self.pen_down => {
-                self.event(Event::Retract, place)?;
+                // a path has nothing to retract before its first string
+                if !(self.prog.path && self.strings == 0) {
+                    self.event(Event::Retract, place)?;
+                }
                 self.pen_down = false;
             }
             Op::PenDown => self.pen_down = true,
@@ -752,7 +840,7 @@ impl<'a> Run<'a> {
         }
         self.depth += 1;
         tasks.push(Task::Return(std::mem::replace(vals, inner)));
-        tasks.push(Task::Block(p.body.iter()));
+        tasks.push(Task::Block(p.body.iter(), vals.len()));
         Ok(())
     }
 
@@ -802,5 +890,198 @@ impl<'a> Run<'a> {
         self.event(Event::Retract, place)?;
         self.pen_down = false;
         Ok(())
+    }
+}
+
+/// Most strings one curve command may make (each a step of its own beside).
+pub const MAX_CURVE_SEGMENTS: f64 = 1e7;
+
+impl<'a> Run<'a> {
+    /// The commands the turtle shares with a path: `move`/`draw`, `for`,
+    /// `let`, the curves, `extrude_volume` and `gcode`.
+    fn program(
+        &mut self,
+        op: &'a Op,
+        vals: &mut Vec<f64>,
+        place: &str,
+        tasks: &mut Vec<Task<'a>>,
+    ) -> Result<()> {
+        match op {
+            Op::To(p, draw) => {
+                let to = self.eval3(p, vals, place)?;
+                self.go_as(to, *draw, true, place)
+            }
+            Op::For { values, body } => {
+                let (n, values) = self.for_values(values, vals, place)?;
+                tasks.push(Task::For {
+                    body,
+                    next: 0,
+                    n,
+                    values,
+                });
+                Ok(())
+            }
+            Op::Let(vs) => {
+                for (k, v) in vs.iter().enumerate() {
+                    let x = self.eval(v, vals, &format!("{place}[{k}]"))?;
+                    vals.push(x);
+                }
+                Ok(())
+            }
+            Op::Curve(c) => {
+                let points = self.curve(c, vals, place)?;
+                for (k, p) in points.into_iter().enumerate() {
+                    if k == 0 && self.prog.path && !self.moved {
+                        // a curve that begins a path places it at its first point
+                        self.moved = true;
+                        self.start_at(p);
+                        continue;
+                    }
+                    self.go(p, place)?;
+                }
+                Ok(())
+            }
+            Op::ExtrudeVolume(v, feed) => {
+                let volume = self.within(v, vals, place, 0.0, 1e5)?;
+                let speed = match feed {
+                    Some(f) => {
+                        let p = place.replace(".extrude_volume", ".feed");
+                        self.positive(f, vals, &p)?
+                    }
+                    None => DEFAULT_FEED,
+                };
+                let filament = volume / self.filament_area();
+                self.event(Event::Extrude { filament, speed }, place)
+            }
+            Op::Gcode(text) => self.event(Event::Gcode(text.clone()), place),
+            _ => Ok(()),
+        }
+    }
+
+    /// The filament's cross-section, mm² (`extrude_rate` and volumes use it).
+    fn filament_area(&self) -> f64 {
+        self.area
+    }
+
+    /// How many values a `for` runs over, and how to get each.
+    fn for_values(
+        &mut self,
+        values: &Values,
+        vals: &mut Vec<f64>,
+        place: &str,
+    ) -> Result<(u64, ForValues)> {
+        match values {
+            Values::List(list) => {
+                let mut v = Vec::with_capacity(list.len());
+                for (k, x) in list.iter().enumerate() {
+                    v.push(self.eval(x, vals, &format!("{place}[{k}]"))?);
+                }
+                Ok((v.len() as u64, ForValues::List(v)))
+            }
+            Values::Range(a, b, step) => {
+                let a = self.eval(a, vals, place)?;
+                let b = self.eval(b, vals, place)?;
+                let step = match step {
+                    Some(s) => self.eval(s, vals, place)?,
+                    None => 1.0,
+                };
+                if step == 0.0 {
+                    return Err(Error::input(
+                        place,
+                        "the step of the range is 0; expected a step that moves from a to b",
+                    ));
+                }
+                // b included within 1e-9 of a step (0..1:0.1 ends at 1), as
+                // a part's `for`; a step away from b makes no values
+                let span = (b - a) / step;
+                let n = if span < -1e-9 {
+                    0.0
+                } else {
+                    libm::floor(span + 1e-9 * span.abs().max(1.0)) + 1.0
+                };
+                if !n.is_finite() || n > 1e12 {
+                    return Err(Error::input(
+                        place,
+                        format!("the range has {n} values; expected at most 10^12"),
+                    ));
+                }
+                Ok((n as u64, ForValues::Range(a, step)))
+            }
+        }
+    }
+
+    /// The points of a curve, first to last.
+    fn curve(&mut self, c: &Curve, vals: &mut Vec<f64>, place: &str) -> Result<Vec<DVec3>> {
+        let segments = |run: &mut Self, v: &Val, vals: &mut Vec<f64>| -> Result<usize> {
+            let p = format!("{place}.segments");
+            let n = run.whole(v, vals, &p, MAX_CURVE_SEGMENTS)?;
+            if n == 0 {
+                return Err(Error::input(p, "0 segments; expected at least 1"));
+            }
+            Ok(n as usize)
+        };
+        let key = |k: &str| format!("{place}.{k}");
+        Ok(match c {
+            Curve::Arc {
+                center,
+                radius,
+                start,
+                sweep,
+                segments: n,
+                end_radius,
+                rise,
+            } => {
+                let o = self.eval3(center, vals, &key("center"))?;
+                let r0 = self.eval(radius, vals, &key("radius"))?;
+                let a0 = self.eval(start, vals, &key("start"))?;
+                let da = self.eval(sweep, vals, &key("sweep"))?;
+                let n = segments(self, n, vals)?;
+                let r1 = match end_radius {
+                    Some(v) => self.eval(v, vals, &key("end_radius"))?,
+                    None => r0,
+                };
+                let dz = match rise {
+                    Some(v) => self.eval(v, vals, &key("rise"))?,
+                    None => 0.0,
+                };
+                super::shapes::arc(o, r0, r1, a0, da, dz, n)
+            }
+            Curve::Bezier {
+                points,
+                segments: n,
+            } => {
+                let mut ctrl = Vec::with_capacity(points.len());
+                for (k, p) in points.iter().enumerate() {
+                    ctrl.push(self.eval3(p, vals, &format!("{place}.points[{k}]"))?);
+                }
+                let n = segments(self, n, vals)?;
+                super::shapes::bezier(&ctrl, n)
+            }
+            Curve::Line {
+                from,
+                to,
+                segments: n,
+            } => {
+                let a = match from {
+                    Some(p) => self.eval3(p, vals, &key("from"))?,
+                    None => self.frame.pos,
+                };
+                let b = self.eval3(to, vals, &key("to"))?;
+                let n = segments(self, n, vals)?;
+                (0..=n)
+                    .map(|k| a + (b - a) * (k as f64 / n as f64))
+                    .collect()
+            }
+            Curve::Rectangle {
+                corner,
+                size,
+                clockwise,
+            } => {
+                let c = self.eval3(corner, vals, &key("corner"))?;
+                let dx = self.eval(&size[0], vals, &key("size[0]"))?;
+                let dy = self.eval(&size[1], vals, &key("size[1]"))?;
+                super::shapes::rectangle(c, dx, dy, *clockwise)
+            }
+        })
     }
 }

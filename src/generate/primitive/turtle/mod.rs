@@ -19,6 +19,7 @@ pub mod frame;
 pub mod interp;
 pub mod lsystem;
 pub mod program;
+pub mod shapes;
 
 pub use frame::Frame;
 
