@@ -20,6 +20,7 @@ mod checks;
 mod cli;
 mod error_snapshots;
 mod extruder_turtle;
+mod fullcontrol;
 mod gallery;
 mod hostile;
 mod internals;

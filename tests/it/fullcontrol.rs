@@ -1,0 +1,259 @@
+//! FullControl's model gallery as recipes (`recipes/fullcontrol/`): each
+//! recipe's extruding moves against the G-code FullControl itself makes of
+//! the notebook, for the same parameters.
+//!
+//! The reference is made at test time by `tests/fullcontrol/fc_gcode.py`
+//! (FullControl's notebook run with the printer `generic`, no primer, the
+//! extruder on from the start): `P3DP_FC_PYTHON` is a Python with the
+//! `fullcontrol` package, `P3DP_FC_MODELS` the folder of the notebooks
+//! (`models/` of github.com/FullControlXYZ/fullcontrol); `.ci/run` sets up
+//! both. Without them the test says so and passes, except under `CI=true`,
+//! where it fails. Nothing of FullControl's code or output is committed.
+//!
+//! What must hold, up to one translation (p3dp's first extruding point onto
+//! FullControl's): every extruding point of either within [`TOL`] of the
+//! other's extruding path (in-place extrusions are points of the path),
+//! every string's cross-section that of the FullControl move under its
+//! middle within 1 %, and the extruded volume within 1 %.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+use crate::common::{p3dp, parse, root, tmp};
+
+/// mm: both write 3 decimals or more, so 5 µm of rounding on each side.
+const TOL: f64 = 0.002;
+
+/// mm² of 1.75 mm filament (FullControl's generic printer and generic-220).
+const AREA: f64 = std::f64::consts::PI * 0.875 * 0.875;
+
+/// An extruding move (from, to, mm³), a point when from == to.
+type Seg = ([f64; 3], [f64; 3], f64);
+
+/// The extruding moves of G-code: lines that move and feed filament, and
+/// filament fed in place beyond what the last retractions took back.
+fn extrusions(text: &str) -> Vec<Seg> {
+    let mut out = Vec::new();
+    let mut debt = 0.0;
+    for m in parse(text).moves {
+        if m.from.iter().any(|v| v.is_nan()) {
+            continue;
+        }
+        let moved = m.from != m.to;
+        if m.de < 0.0 {
+            debt -= m.de;
+        } else if moved && m.de > 1e-9 {
+            out.push((m.from, m.to, m.de * AREA));
+        } else if !moved && m.de > 0.0 {
+            let paid = m.de.min(debt);
+            debt -= paid;
+            if m.de - paid > 1e-9 {
+                out.push((m.to, m.to, (m.de - paid) * AREA));
+            }
+        }
+    }
+    out
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// Distance from `p` to the segment a–b.
+fn to_segment(p: [f64; 3], (a, b, _): &Seg) -> f64 {
+    let ab = sub(*b, *a);
+    let l2 = dot(ab, ab);
+    let t = if l2 > 0.0 {
+        (dot(sub(p, *a), ab) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let q = [a[0] + ab[0] * t, a[1] + ab[1] * t, a[2] + ab[2] * t];
+    dot(sub(p, q), sub(p, q)).sqrt()
+}
+
+/// The segments of a path by the 1 mm cells of the xy plane their boxes touch.
+struct Grid<'a> {
+    segs: &'a [Seg],
+    cells: std::collections::HashMap<(i64, i64), Vec<usize>>,
+}
+
+impl<'a> Grid<'a> {
+    fn new(segs: &'a [Seg]) -> Grid<'a> {
+        let mut cells: std::collections::HashMap<(i64, i64), Vec<usize>> = Default::default();
+        for (k, (a, b, _)) in segs.iter().enumerate() {
+            let lo = |i: usize| (a[i].min(b[i]) - TOL).floor() as i64;
+            let hi = |i: usize| (a[i].max(b[i]) + TOL).floor() as i64;
+            for x in lo(0)..=hi(0) {
+                for y in lo(1)..=hi(1) {
+                    cells.entry((x, y)).or_default().push(k);
+                }
+            }
+        }
+        Grid { segs, cells }
+    }
+
+    /// The nearest segment to `p` among those of its cell, and its distance.
+    fn nearest(&self, p: [f64; 3]) -> Option<(f64, &Seg)> {
+        let cell = (p[0].floor() as i64, p[1].floor() as i64);
+        self.cells
+            .get(&cell)?
+            .iter()
+            .map(|&k| &self.segs[k])
+            .fold(None, |best, s| {
+                let d = to_segment(p, s);
+                match best {
+                    Some((bd, _)) if bd <= d => best,
+                    _ => Some((d, s)),
+                }
+            })
+    }
+
+    /// The largest distance from a point of `segs` to this path.
+    fn worst(&self, segs: &[Seg]) -> f64 {
+        segs.iter()
+            .flat_map(|(a, b, _)| [*a, *b])
+            .map(|p| self.nearest(p).map_or(f64::INFINITY, |(d, _)| d))
+            .fold(0.0, f64::max)
+    }
+}
+
+/// Compares p3dp's G-code with FullControl's; the worst point distance, mm.
+fn compare(what: &str, ours: &str, theirs: &str) -> f64 {
+    let fc = extrusions(theirs);
+    let mut us = extrusions(ours);
+    assert!(!fc.is_empty() && !us.is_empty(), "{what}: nothing extruded");
+    let shift = sub(us[0].0, fc[0].0);
+    for s in &mut us {
+        s.0 = sub(s.0, shift);
+        s.1 = sub(s.1, shift);
+    }
+    let (gf, gu) = (Grid::new(&fc), Grid::new(&us));
+    let worst = gf.worst(&us).max(gu.worst(&fc));
+    assert!(
+        worst <= TOL,
+        "{what}: a point {worst:.4} mm off the other's path"
+    );
+    for s in us.iter().filter(|s| s.0 != s.1) {
+        let len = dot(sub(s.1, s.0), sub(s.1, s.0)).sqrt();
+        if len < 0.05 {
+            continue; // E's last digit is a large part of a short move's
+        }
+        let mid = [
+            (s.0[0] + s.1[0]) / 2.0,
+            (s.0[1] + s.1[1]) / 2.0,
+            (s.0[2] + s.1[2]) / 2.0,
+        ];
+        let (_, f) = gf.nearest(mid).expect("checked above");
+        let flen = dot(sub(f.1, f.0), sub(f.1, f.0)).sqrt();
+        if flen < 0.05 {
+            continue;
+        }
+        let (c, fcs) = (s.2 / len, f.2 / flen);
+        assert!(
+            (c / fcs - 1.0).abs() < 0.01,
+            "{what}: the string {:?}–{:?} has cross-section {c:.4} mm², FullControl's {fcs:.4}",
+            s.0,
+            s.1
+        );
+    }
+    let (vu, vf) = (
+        us.iter().map(|s| s.2).sum::<f64>(),
+        fc.iter().map(|s| s.2).sum::<f64>(),
+    );
+    assert!(
+        (vu / vf - 1.0).abs() < 0.01,
+        "{what}: {vu:.1} mm³ extruded, FullControl {vf:.1}"
+    );
+    worst
+}
+
+/// The Python and the notebooks, or None (a note; a failure under CI).
+fn reference() -> Option<(PathBuf, PathBuf)> {
+    let py = std::env::var_os("P3DP_FC_PYTHON").map(PathBuf::from);
+    let models = std::env::var_os("P3DP_FC_MODELS").map(PathBuf::from);
+    match (py, models) {
+        (Some(p), Some(m)) if m.is_dir() => Some((p, m)),
+        _ => {
+            assert!(
+                std::env::var_os("CI").is_none(),
+                "P3DP_FC_PYTHON and P3DP_FC_MODELS are not set, and CI must compare with FullControl (.ci/run sets them)"
+            );
+            eprintln!("note: FullControl comparison skipped (set P3DP_FC_PYTHON and P3DP_FC_MODELS; see .ci/run)");
+            None
+        }
+    }
+}
+
+/// Builds `recipes/fullcontrol/MODEL.yaml` with `sets` and runs the notebook
+/// with `json` (the same values), and compares them.
+fn check(model: &str, json: &str, sets: &[&str]) {
+    let Some((py, models)) = reference() else {
+        return;
+    };
+    let what = format!("{model} {json}");
+    let out = Command::new(&py)
+        .arg(root().join("tests/fullcontrol/fc_gcode.py"))
+        .arg(models.join(format!("{model}.ipynb")))
+        .arg(json)
+        .output()
+        .expect("run python");
+    assert!(
+        out.status.success(),
+        "{what}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let theirs = String::from_utf8(out.stdout).unwrap();
+    let dir = tmp(model);
+    let recipe = root().join(format!("recipes/fullcontrol/{model}.yaml"));
+    let mut args = vec!["build".to_string(), recipe.display().to_string()];
+    for s in sets {
+        args.extend(["--set".to_string(), s.to_string()]);
+    }
+    args.extend(["-o".into(), "out.gcode".into()]);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let run = p3dp(&dir, &args);
+    assert!(
+        run.status.success(),
+        "{what}: {}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let ours = std::fs::read_to_string(dir.join("out.gcode")).unwrap();
+    let worst = compare(&what, &ours, &theirs);
+    eprintln!("{what}: worst point {worst:.4} mm");
+}
+
+#[test]
+fn design_template_is_fullcontrol_s() {
+    check("design_template", "{}", &[]);
+    check(
+        "design_template",
+        r#"{"EW": 0.5, "EH": 0.2, "layers": 7}"#,
+        &["EW=0.5", "EH=0.2", "layers=7"],
+    );
+}
+
+#[test]
+fn the_comparison_sees_a_moved_point_and_a_thinner_string() {
+    let fc = "M83\nG1 X0 Y0 Z0.2 E0\nG1 X10 E1\nG1 Y10 E1\n";
+    assert_eq!(
+        compare("same", "M83\nG1 X5 Y5 Z0.2\nG1 X15 E1\nG1 Y15 E1\n", fc),
+        0.0
+    );
+    let moved = std::panic::catch_unwind(|| {
+        compare(
+            "moved",
+            "M83\nG1 X0 Y0 Z0.2\nG1 X10 E1\nG1 X10.01 Y10 E1\n",
+            fc,
+        )
+    });
+    assert!(moved.is_err());
+    let thin = std::panic::catch_unwind(|| {
+        compare("thin", "M83\nG1 X0 Y0 Z0.2\nG1 X10 E0.9\nG1 Y10 E1\n", fc)
+    });
+    assert!(thin.is_err());
+}
