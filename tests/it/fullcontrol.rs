@@ -257,3 +257,32 @@ fn the_comparison_sees_a_moved_point_and_a_thinner_string() {
     });
     assert!(thin.is_err());
 }
+
+#[test]
+fn ripple_texture_is_fullcontrol_s() {
+    check("ripple_texture", "{}", &[]);
+    check(
+        "ripple_texture",
+        r#"{"skew_percent": -50, "star_tips": 6, "tip_length": -5, "bulge": 5, "nozzle_dia": 0.6, "ripples_per_layer": 30, "height": 20}"#,
+        &[
+            "skew_percent=-50",
+            "star_tips=6",
+            "tip_length=-5",
+            "bulge=5",
+            "nozzle_dia=0.6",
+            "ripples_per_layer=30",
+            "height=20",
+        ],
+    );
+    check(
+        "ripple_texture",
+        r#"{"inner_rad": 25, "height": 25, "shape_factor": 0.5, "rip_depth": 3, "first_layer_E_factor": 1}"#,
+        &[
+            "inner_rad=25",
+            "height=25",
+            "shape_factor=0.5",
+            "rip_depth=3",
+            "first_layer_E_factor=1",
+        ],
+    );
+}
