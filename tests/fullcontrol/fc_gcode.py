@@ -14,6 +14,7 @@ only a primer turns it on). Nothing of FullControl or of its output is kept:
 this file is p3dp's, the notebook and the package come at test time.
 """
 
+import contextlib
 import json
 import re
 import sys
@@ -47,20 +48,25 @@ def gcode_cell(src):
     )
 
 
-def main():
-    path, values = sys.argv[1], json.loads(sys.argv[2]) if len(sys.argv) > 2 else {}
+def run(path, values):
+    """Runs the notebook's cells; its G-code and the values no cell named."""
     scope = {}
-    out = None
     for src in cells(path):
         if re.search(r"fc\.transform\([^\n]*'plot'", src) and "GcodeControls" not in src:
             continue
         if "GcodeControls" in src:
-            src = gcode_cell(src)
-            exec(compile(src, path, "exec"), scope)
-            out = scope["gcode"]
-            break
+            exec(compile(gcode_cell(src), path, "exec"), scope)
+            return scope["gcode"], values
         src, values = set_params(src, values)
         exec(compile(src, path, "exec"), scope)
+    return None, values
+
+
+def main():
+    path, values = sys.argv[1], json.loads(sys.argv[2]) if len(sys.argv) > 2 else {}
+    # FullControl's tips and the notebooks' prints go to stderr: stdout is the G-code
+    with contextlib.redirect_stdout(sys.stderr):
+        out, values = run(path, values)
     if values:
         sys.exit(f"no design parameter named {', '.join(values)} in {path}")
     if out is None:

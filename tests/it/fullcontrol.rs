@@ -286,3 +286,28 @@ fn ripple_texture_is_fullcontrol_s() {
         ],
     );
 }
+
+#[test]
+fn blob_printing_is_fullcontrol_s() {
+    check("blob_printing", "{}", &[]);
+    check(
+        "blob_printing",
+        r#"{"tube_radius": 15, "blob_size": 2, "bloc_overlap_percent": 20, "layers": 6}"#,
+        &[
+            "tube_radius=15",
+            "blob_size=2",
+            "bloc_overlap_percent=20",
+            "layers=6",
+        ],
+    );
+    check(
+        "blob_printing",
+        r#"{"tube_radius": 7, "layers": 12, "dense_layers": 3, "extrusion_speed": 200}"#,
+        &[
+            "tube_radius=7",
+            "layers=12",
+            "dense_layers=3",
+            "extrusion_speed=200",
+        ],
+    );
+}
