@@ -32,6 +32,10 @@ def set_params(src, values):
     for name, v in values.items():
         pat = re.compile(r"^(\s*)" + re.escape(name) + r"\s*=(?!=).*$", re.M)
         src, n = pat.subn(lambda m: f"{m.group(1)}{name} = {v!r}", src, count=1)
+        if not n:
+            # one of several names of a line (`a, b, c = 1, 2, 3`): set it after the line
+            multi = re.compile(r"^(\s*)([\w, ]*\b" + re.escape(name) + r"\b[\w, ]*=(?!=).*)$", re.M)
+            src, n = multi.subn(lambda m: f"{m.group(1)}{m.group(2)}\n{m.group(1)}{name} = {v!r}", src, count=1)
         if n:
             values = {k: x for k, x in values.items() if k != name}
     return src, values

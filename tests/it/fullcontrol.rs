@@ -336,3 +336,29 @@ fn nonplanar_spacer_is_fullcontrol_s() {
         ],
     );
 }
+
+#[test]
+fn nuts_and_bolts_is_fullcontrol_s() {
+    check("nuts_and_bolts", "{}", &[]);
+    check(
+        "nuts_and_bolts",
+        r#"{"part_type": "wing_nut", "dia_major": 10.0, "dia_minor": 8.5, "pitch": 1.5, "clearance": 0.2}"#,
+        &[
+            "part_type=wing_nut",
+            "dia_major=10",
+            "dia_minor=8.5",
+            "pitch=1.5",
+            "clearance=0.2",
+        ],
+    );
+    check(
+        "nuts_and_bolts",
+        r#"{"part_type": "threaded_tube", "bolt_or_tube_thread_length": 8, "EH": 0.2, "EW": 0.5}"#,
+        &[
+            "part_type=threaded_tube",
+            "bolt_or_tube_thread_length=8",
+            "EH=0.2",
+            "EW=0.5",
+        ],
+    );
+}
