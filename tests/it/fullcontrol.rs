@@ -362,3 +362,30 @@ fn nuts_and_bolts_is_fullcontrol_s() {
         ],
     );
 }
+
+#[test]
+fn hex_adapter_is_fullcontrol_s() {
+    check("hex_adapter", "{}", &[]);
+    check(
+        "hex_adapter",
+        r#"{"inner_size": 8, "outer_size": 20, "height": 3, "quantity": 3, "multipart_offset_y": 35}"#,
+        &[
+            "inner_size=8",
+            "outer_size=20",
+            "height=3",
+            "quantity=3",
+            "multipart_offset_y=35",
+        ],
+    );
+    check(
+        "hex_adapter",
+        r#"{"EW": 0.8, "EH": 0.3, "quantity": 2, "multipart_offset_x": 30, "multipart_offset_y": 0}"#,
+        &[
+            "EW=0.8",
+            "EH=0.3",
+            "quantity=2",
+            "multipart_offset_x=30",
+            "multipart_offset_y=0",
+        ],
+    );
+}
