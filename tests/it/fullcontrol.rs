@@ -389,3 +389,28 @@ fn hex_adapter_is_fullcontrol_s() {
         ],
     );
 }
+
+#[test]
+fn fractional_design_engine_polar_is_fullcontrol_s() {
+    check("fractional_design_engine_polar", "{}", &[]);
+    check(
+        "fractional_design_engine_polar",
+        r#"{"radial_fractions": [1, -0.5, 1, -0.5, 1, -0.5, 1, -0.5, 1, -0.5, 1], "layers": 4, "radius": 30}"#,
+        &[
+            "radial_fractions=[1, -0.5, 1, -0.5, 1, -0.5, 1, -0.5, 1, -0.5, 1]",
+            "layers=4",
+            "radius=30",
+        ],
+    );
+    check(
+        "fractional_design_engine_polar",
+        r#"{"angle_fractions": [0, 0.25, 0.5, 0.75, 1], "radial_fractions": [0.9, 0.925, 0.95, 0.975, 1], "travel_moves": [0, 0, 1, 0, 0], "layers": 3, "EW": 0.8}"#,
+        &[
+            "angle_fractions=[0, 0.25, 0.5, 0.75, 1]",
+            "radial_fractions=[0.9, 0.925, 0.95, 0.975, 1]",
+            "travel_moves=[0, 0, 1, 0, 0]",
+            "layers=3",
+            "EW=0.8",
+        ],
+    );
+}
