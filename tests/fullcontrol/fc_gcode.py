@@ -8,7 +8,7 @@ preview cells (`fc.transform(..., 'plot', ...)`), which draw and write nothing
 the G-code needs. A design parameter named in the JSON is set in its cell
 before the cell runs (its line `name = default` rewritten), so the values
 derived from it below are derived from the new value. The G-code cell runs
-with `printer_name='generic'`, the primer `no_primer`, no file saved, and
+with the generic printer, the primer `no_primer`, no file saved, and
 `fc.Extruder(on=True)` before the design (FullControl's extruder starts off;
 only a primer turns it on). Nothing of FullControl or of its output is kept:
 this file is p3dp's, the notebook and the package come at test time.
@@ -41,28 +41,40 @@ def set_params(src, values):
     return src, values
 
 
-def gcode_cell(src):
-    src = re.sub(r"printer_name\s*=\s*[^,\n)]+", "printer_name='generic'", src)
-    src = re.sub(r"save_as\s*=\s*[^,\n)]+,?", "", src)
-    src = re.sub(r"'primer'\s*:\s*'[^']*'", "'primer': 'no_primer'", src)
-    if "'primer'" not in src:
-        src = src.replace("initialization_data={", "initialization_data={'primer': 'no_primer', ", 1)
-    return src.replace(
-        "fc.transform(steps, 'gcode'", "fc.transform([fc.Extruder(on=True)] + steps, 'gcode'"
-    )
+# the notebooks' preview switches: G-code mode is the reference
+SWITCHES = {"output": "gcode", "target": "gcode"}
+
+
+def capture(fc, made):
+    """Stands in for `fc.transform(steps, 'gcode', controls)`: the generic
+    printer, no primer, no file saved, the extruder on before the design."""
+
+    def transform(steps, kind, controls):
+        controls.printer_name = "generic"
+        controls.save_as = None
+        controls.initialization_data["primer"] = "no_primer"
+        out = fc.transform([fc.Extruder(on=True)] + steps, kind, controls)
+        made.append(out)
+        return out
+
+    return transform
 
 
 def run(path, values):
     """Runs the notebook's cells; its G-code and the values no cell named."""
-    scope = {}
+    scope, made = {}, []
     for src in cells(path):
-        if re.search(r"fc\.transform\([^\n]*'plot'", src) and "GcodeControls" not in src:
+        if "'gcode'" not in src and re.search(r"fc\.transform\([^\n]*'plot'", src):
             continue
-        if "GcodeControls" in src:
-            exec(compile(gcode_cell(src), path, "exec"), scope)
-            return scope["gcode"], values
+        src = src.replace("fc.transform(steps, 'gcode'", "__fc_gcode(steps, 'gcode'")
+        for name, v in SWITCHES.items():
+            src = re.sub(r"^" + name + r"\s*=.*$", f"{name} = {v!r}", src, flags=re.M)
         src, values = set_params(src, values)
+        if "__fc_gcode" in src and "__fc_gcode" not in scope:
+            scope["__fc_gcode"] = capture(scope["fc"], made)
         exec(compile(src, path, "exec"), scope)
+        if made:
+            return made[0], values
     return None, values
 
 

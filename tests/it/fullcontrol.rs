@@ -249,7 +249,7 @@ fn the_comparison_sees_a_moved_point_and_a_thinner_string() {
     let moved = std::panic::catch_unwind(|| {
         compare(
             "moved",
-            "M83\nG1 X0 Y0 Z0.2\nG1 X10 E1\nG1 X10.01 Y10 E1\n",
+            "M83\nG1 X0 Y0 Z0.2\nG1 X10 E1\nG1 X10.05 Y10 E1\n",
             fc,
         )
     });
