@@ -414,3 +414,54 @@ fn fractional_design_engine_polar_is_fullcontrol_s() {
         ],
     );
 }
+
+/// The extruding moves of `steps` applied to a 10 mm line from (0, 0, 0.2)
+/// along x, in recipe coordinates.
+fn placed(steps: &str) -> Vec<([f64; 3], [f64; 3])> {
+    let dir = tmp("placement");
+    let recipe = format!(
+        "p3dp: 1\nname: line\nparts:\n  - primitive:\n      path:\n        - move: [0, 0, 0.2]\n        - draw: [10, 0, 0.2]\n    steps: {steps}\n"
+    );
+    std::fs::write(dir.join("r.yaml"), recipe).unwrap();
+    let out = p3dp(&dir, &["build", "r.yaml", "-o", "r.gcode"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(dir.join("r.gcode")).unwrap();
+    let m = |p: [f64; 3]| crate::common::to_recipe(p);
+    extrusions(&text)
+        .into_iter()
+        .map(|(a, b, _)| (m(a), m(b)))
+        .collect()
+}
+
+#[test]
+fn placement_steps_rotate_scale_and_mirror() {
+    let near = |a: [f64; 3], b: [f64; 3]| sub(a, b).iter().all(|d| d.abs() < 1e-3);
+    // a quarter turn about (5, 0): the line stands across x = 5
+    let s = placed("[{rotate: {angle: \"pi/2\", center: [5, 0, 0]}}]");
+    assert!(
+        near(s[0].0, [5.0, -5.0, 0.2]) && near(s[0].1, [5.0, 5.0, 0.2]),
+        "{s:?}"
+    );
+    // twice as long about its end, then mirrored in x = 0
+    let s = placed("[{scale: {factor: [2, 1, 1], center: [10, 0, 0]}}, {mirror: {axis: x}}]");
+    assert!(
+        near(s[0].0, [10.0, 0.0, 0.2]) && near(s[0].1, [-10.0, 0.0, 0.2]),
+        "{s:?}"
+    );
+    // a flattening scale is refused, naming the key
+    let dir = tmp("placement-bad");
+    let recipe = "p3dp: 1\nname: line\nparts:\n  - primitive:\n      path:\n        - move: [0, 0, 0.2]\n        - draw: [10, 0, 0.2]\n    steps: [{scale: {factor: [1, 0, 1]}}]\n";
+    std::fs::write(dir.join("r.yaml"), recipe).unwrap();
+    let out = p3dp(&dir, &["build", "r.yaml", "-o", "r.gcode"]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("steps[0].scale.factor") && err.contains("non-zero"),
+        "{err}"
+    );
+    assert!(!dir.join("r.gcode").exists());
+}

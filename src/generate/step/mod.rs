@@ -13,7 +13,7 @@ mod subdivide;
 pub use deform::Deform;
 pub use modulate::{Bitmap, Modulate, ModulateMap};
 
-use glam::DVec3;
+use glam::{DAffine3, DVec3};
 
 use crate::base::error::{Error, Result};
 use crate::base::expr::{var, Vars};
@@ -43,6 +43,9 @@ pub enum Step {
     Subdivide(f64),
     /// Every point moved by this.
     Translate(DVec3),
+    /// Every point mapped by this rotation, scaling or reflection; the key
+    /// is the step's (`rotate`, `scale`, `mirror`).
+    Place(&'static str, DAffine3),
 }
 
 impl Step {
@@ -55,6 +58,7 @@ impl Step {
             Step::ModulateMap(_) => "modulate_map",
             Step::Subdivide(_) => "subdivide",
             Step::Translate(_) => "translate",
+            Step::Place(key, _) => key,
         }
     }
 
@@ -70,7 +74,7 @@ impl Step {
                 .any(|e| e.uses(k)),
             Step::ModulateCylinder(m) => m.factor.uses(k),
             Step::ModulateMap(m) => m.u.uses(k) || m.v.uses(k),
-            Step::Subdivide(_) | Step::Translate(_) => false,
+            Step::Subdivide(_) | Step::Translate(_) | Step::Place(..) => false,
         }
     }
 
@@ -94,6 +98,17 @@ impl Step {
                 }
                 for m in &mut tp.markers {
                     m.pos += *d;
+                }
+                Ok(())
+            }
+            Step::Place(_, map) => {
+                for p in &mut tp.points {
+                    *p = map.transform_point3(*p);
+                }
+                for m in &mut tp.markers {
+                    m.pos = map.transform_point3(m.pos);
+                    m.heading = map.transform_vector3(m.heading).normalize_or_zero();
+                    m.up = map.transform_vector3(m.up).normalize_or_zero();
                 }
                 Ok(())
             }

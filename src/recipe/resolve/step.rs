@@ -8,7 +8,8 @@ use crate::base::error::{Error, Result};
 use crate::base::expr::var;
 use crate::generate::step::{Bitmap, Deform, Keep, Modulate, ModulateMap, Step};
 use crate::recipe::eval::{at, At, Scope};
-use crate::recipe::schema::{Num, RawDeform, RawKeep, RawStep};
+use crate::recipe::schema::{Num, RawAxis, RawDeform, RawKeep, RawStep};
+use glam::{DAffine3, DVec3};
 
 /// What a point's expressions may read: its place, index, and the part's
 /// size (`modulate_map`'s u and v, `deform_*`'s position).
@@ -52,7 +53,40 @@ pub(super) fn resolve(ctx: &Ctx, step: &RawStep) -> Result<Step> {
         RawStep::ModulateMap { .. } => Step::ModulateMap(modulate_map(ctx, &s, step)?),
         RawStep::Subdivide { max_length } => Step::Subdivide(s.positive(at!(max_length))?),
         RawStep::Translate(d) => Step::Translate(ctx.point(At::new(d, step.key()))?),
+        RawStep::Rotate { angle, center } => {
+            let o = s.center(at!(center))?;
+            let a = s.num(at!(angle))?;
+            Step::Place("rotate", about(o, DAffine3::from_rotation_z(a)))
+        }
+        RawStep::Scale { factor, center } => {
+            let o = s.center(at!(center))?;
+            let f = s.point(at!(factor))?;
+            if f.x == 0.0 || f.y == 0.0 || f.z == 0.0 || !f.is_finite() {
+                return Err(s.error(
+                    "factor",
+                    format!("[{}, {}, {}] flattens the part; expected three finite non-zero factors (negative ones mirror)", f.x, f.y, f.z),
+                ));
+            }
+            Step::Place("scale", about(o, DAffine3::from_scale(f)))
+        }
+        RawStep::Mirror { axis, at } => {
+            let c = match at {
+                Some(n) => s.num(At::new(n, "at"))?,
+                None => 0.0,
+            };
+            let (flip, o) = match axis {
+                RawAxis::X => (DVec3::new(-1.0, 1.0, 1.0), DVec3::new(c, 0.0, 0.0)),
+                RawAxis::Y => (DVec3::new(1.0, -1.0, 1.0), DVec3::new(0.0, c, 0.0)),
+                RawAxis::Z => (DVec3::new(1.0, 1.0, -1.0), DVec3::new(0.0, 0.0, c)),
+            };
+            Step::Place("mirror", about(o, DAffine3::from_scale(flip)))
+        }
     })
+}
+
+/// `map` applied about `o` instead of the origin.
+fn about(o: DVec3, map: DAffine3) -> DAffine3 {
+    DAffine3::from_translation(o) * map * DAffine3::from_translation(-o)
 }
 
 fn keep(k: &Option<RawKeep>) -> Keep {

@@ -36,7 +36,7 @@ pub use profile::{
     RawRetraction,
 };
 pub use solid::{RawBox, RawFeature, RawInfill, RawOp, RawPattern, RawSolid};
-pub use step::{RawDeform, RawKeep, RawStep};
+pub use step::{RawAxis, RawDeform, RawKeep, RawStep};
 pub use turtle::{RawCommand, RawLsystem, RawProcedure, RawStart, RawTurtle};
 
 /// `material:` a built-in name or an inline map.
