@@ -670,7 +670,14 @@ impl<'a> Run<'a> {
             }
             Op::Goto(p) => {
                 let to = self.eval3(p, vals, place)?;
-                self.go(to, place)?;
+                if self.prog.path && !self.moved {
+                    // a path's first point visit is where it starts (as a
+                    // curve's first point), not a string from the origin
+                    self.moved = true;
+                    self.start_at(to);
+                } else {
+                    self.go(to, place)?;
+                }
             }
             Op::Turn(axis, a, sign) => {
                 let a = sign * self.eval(a, vals, place)?;
