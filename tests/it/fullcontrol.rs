@@ -465,3 +465,31 @@ fn placement_steps_rotate_scale_and_mirror() {
     );
     assert!(!dir.join("r.gcode").exists());
 }
+
+#[test]
+fn star_polygon_lattice_is_fullcontrol_s() {
+    for id in ["M1", "M2", "M3", "M4"] {
+        check(
+            "star_polygon_lattice",
+            &format!(r#"{{"lattice_id": "{id}"}}"#),
+            &[&format!("lattice_id={id}")],
+        );
+    }
+    check(
+        "star_polygon_lattice",
+        r#"{"lattice_id": "M2", "alpha": 60, "seg_length": 3, "units_x": 6, "units_y": 2, "layers": 3}"#,
+        &[
+            "lattice_id=M2",
+            "alpha=60",
+            "seg_length=3",
+            "units_x=6",
+            "units_y=2",
+            "layers=3",
+        ],
+    );
+    check(
+        "star_polygon_lattice",
+        r#"{"lattice_id": "M4", "alpha": 150, "units_y": 3, "EW": 0.8}"#,
+        &["lattice_id=M4", "alpha=150", "units_y=3", "EW=0.8"],
+    );
+}
