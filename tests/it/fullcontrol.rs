@@ -13,8 +13,8 @@
 //! What must hold, up to one translation (p3dp's first extruding point onto
 //! FullControl's): every extruding point of either within [`TOL`] of the
 //! other's extruding path (in-place extrusions are points of the path),
-//! every string's cross-section that of the FullControl move under its
-//! middle within 1 %, and the extruded volume within 1 %.
+//! every string's cross-section and feed rate those of the FullControl move
+//! under its middle within 1 %, and the extruded volume within 1 %.
 
 use std::path::PathBuf;
 use std::process::Command;
@@ -29,8 +29,8 @@ const TOL: f64 = 0.01;
 /// mm² of 1.75 mm filament (FullControl's generic printer and generic-220).
 const AREA: f64 = std::f64::consts::PI * 0.875 * 0.875;
 
-/// An extruding move (from, to, mm³), a point when from == to.
-type Seg = ([f64; 3], [f64; 3], f64);
+/// An extruding move (from, to, mm³, feed mm/min), a point when from == to.
+type Seg = ([f64; 3], [f64; 3], f64, f64);
 
 /// The extruding moves of G-code: lines that move and feed filament, and
 /// filament fed in place beyond what the last retractions took back.
@@ -45,12 +45,12 @@ fn extrusions(text: &str) -> Vec<Seg> {
         if m.de < 0.0 {
             debt -= m.de;
         } else if moved && m.de > 1e-9 {
-            out.push((m.from, m.to, m.de * AREA));
+            out.push((m.from, m.to, m.de * AREA, m.f));
         } else if !moved && m.de > 0.0 {
             let paid = m.de.min(debt);
             debt -= paid;
             if m.de - paid > 1e-9 {
-                out.push((m.to, m.to, (m.de - paid) * AREA));
+                out.push((m.to, m.to, (m.de - paid) * AREA, m.f));
             }
         }
     }
@@ -66,7 +66,7 @@ fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
 }
 
 /// Distance from `p` to the segment a–b.
-fn to_segment(p: [f64; 3], (a, b, _): &Seg) -> f64 {
+fn to_segment(p: [f64; 3], (a, b, _, _): &Seg) -> f64 {
     let ab = sub(*b, *a);
     let l2 = dot(ab, ab);
     let t = if l2 > 0.0 {
@@ -87,7 +87,7 @@ struct Grid<'a> {
 impl<'a> Grid<'a> {
     fn new(segs: &'a [Seg]) -> Grid<'a> {
         let mut cells: std::collections::HashMap<(i64, i64), Vec<usize>> = Default::default();
-        for (k, (a, b, _)) in segs.iter().enumerate() {
+        for (k, (a, b, _, _)) in segs.iter().enumerate() {
             let lo = |i: usize| (a[i].min(b[i]) - TOL).floor() as i64;
             let hi = |i: usize| (a[i].max(b[i]) + TOL).floor() as i64;
             for x in lo(0)..=hi(0) {
@@ -118,7 +118,7 @@ impl<'a> Grid<'a> {
     /// The largest distance from a point of `segs` to this path.
     fn worst(&self, segs: &[Seg]) -> f64 {
         segs.iter()
-            .flat_map(|(a, b, _)| [*a, *b])
+            .flat_map(|(a, b, _, _)| [*a, *b])
             .map(|p| self.nearest(p).map_or(f64::INFINITY, |(d, _)| d))
             .fold(0.0, f64::max)
     }
@@ -155,6 +155,14 @@ fn compare(what: &str, ours: &str, theirs: &str) -> f64 {
         if flen < 0.05 {
             continue;
         }
+        assert!(
+            (s.3 / f.3 - 1.0).abs() < 0.01,
+            "{what}: the string {:?}–{:?} is printed at F{}, FullControl's at F{}",
+            s.0,
+            s.1,
+            s.3,
+            f.3
+        );
         let (c, fcs) = (s.2 / len, f.2 / flen);
         assert!(
             (c / fcs - 1.0).abs() < 0.01,
@@ -240,24 +248,40 @@ fn design_template_is_fullcontrol_s() {
 }
 
 #[test]
-fn the_comparison_sees_a_moved_point_and_a_thinner_string() {
-    let fc = "M83\nG1 X0 Y0 Z0.2 E0\nG1 X10 E1\nG1 Y10 E1\n";
+fn the_comparison_sees_a_moved_point_a_thinner_string_and_a_slower_one() {
+    let fc = "M83\nG1 X0 Y0 Z0.2 E0 F600\nG1 X10 E1\nG1 Y10 E1\n";
     assert_eq!(
-        compare("same", "M83\nG1 X5 Y5 Z0.2\nG1 X15 E1\nG1 Y15 E1\n", fc),
+        compare(
+            "same",
+            "M83\nG1 X5 Y5 Z0.2 F600\nG1 X15 E1\nG1 Y15 E1\n",
+            fc
+        ),
         0.0
     );
     let moved = std::panic::catch_unwind(|| {
         compare(
             "moved",
-            "M83\nG1 X0 Y0 Z0.2\nG1 X10 E1\nG1 X10.05 Y10 E1\n",
+            "M83\nG1 X0 Y0 Z0.2 F600\nG1 X10 E1\nG1 X10.05 Y10 E1\n",
             fc,
         )
     });
     assert!(moved.is_err());
     let thin = std::panic::catch_unwind(|| {
-        compare("thin", "M83\nG1 X0 Y0 Z0.2\nG1 X10 E0.9\nG1 Y10 E1\n", fc)
+        compare(
+            "thin",
+            "M83\nG1 X0 Y0 Z0.2 F600\nG1 X10 E0.9\nG1 Y10 E1\n",
+            fc,
+        )
     });
     assert!(thin.is_err());
+    let slow = std::panic::catch_unwind(|| {
+        compare(
+            "slow",
+            "M83\nG1 X0 Y0 Z0.2 F600\nG1 X10 E1\nG1 Y10 E1 F500\n",
+            fc,
+        )
+    });
+    assert!(slow.is_err());
 }
 
 #[test]
@@ -433,7 +457,7 @@ fn placed(steps: &str) -> Vec<([f64; 3], [f64; 3])> {
     let m = |p: [f64; 3]| crate::common::to_recipe(p);
     extrusions(&text)
         .into_iter()
-        .map(|(a, b, _)| (m(a), m(b)))
+        .map(|(a, b, _, _)| (m(a), m(b)))
         .collect()
 }
 
@@ -491,5 +515,31 @@ fn star_polygon_lattice_is_fullcontrol_s() {
         "star_polygon_lattice",
         r#"{"lattice_id": "M4", "alpha": 150, "units_y": 3, "EW": 0.8}"#,
         &["lattice_id=M4", "alpha=150", "units_y=3", "EW=0.8"],
+    );
+}
+
+#[test]
+fn anyangle_phone_stand_is_fullcontrol_s() {
+    check("anyangle_phone_stand", "{}", &[]);
+    check(
+        "anyangle_phone_stand",
+        r#"{"phone_width": 65, "phone_thickness": 11, "height": 12, "angles": 11, "clamping_tightness_percent": 80}"#,
+        &[
+            "phone_width=65",
+            "phone_thickness=11",
+            "height=12",
+            "angles=11",
+            "clamping_tightness_percent=80",
+        ],
+    );
+    check(
+        "anyangle_phone_stand",
+        r#"{"height": 10, "angles": 15, "wave_size_percent": 60, "angry": true}"#,
+        &[
+            "height=10",
+            "angles=15",
+            "wave_size_percent=60",
+            "angry=true",
+        ],
     );
 }
