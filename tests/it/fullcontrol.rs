@@ -543,3 +543,43 @@ fn anyangle_phone_stand_is_fullcontrol_s() {
         ],
     );
 }
+
+#[test]
+fn a_blob_counts_in_the_filament_and_the_flow_checks() {
+    let dir = tmp("blob-flow");
+    let recipe = |feed: f64| {
+        format!("p3dp: 1\nname: blob\nparts:\n  - primitive:\n      path:\n        - move: [0, 0, 0.2]\n        - draw: [10, 0, 0.2]\n        - extrude_volume: 24\n          feed: {feed}\n")
+    };
+    // 24 mm³ at 1 mm/s of 1.75 mm filament: 2.4 mm³/s, within generic-220's 12
+    std::fs::write(dir.join("slow.yaml"), recipe(1.0)).unwrap();
+    let out = p3dp(
+        &dir,
+        &[
+            "build",
+            "slow.yaml",
+            "-o",
+            "slow.gcode",
+            "--stats-json",
+            "slow.json",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stats: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("slow.json")).unwrap()).unwrap();
+    let line = 10.0 * 0.196;
+    let volume = stats["filament_volume_mm3"].as_f64().unwrap();
+    assert!((volume - (line + 24.0)).abs() < 0.01, "{stats}");
+    // fed at 10 mm/s it needs 24 mm³/s: the flow check says so
+    std::fs::write(dir.join("fast.yaml"), recipe(10.0)).unwrap();
+    let out = p3dp(&dir, &["check", "fast.yaml"]);
+    let text =
+        String::from_utf8_lossy(&out.stderr).to_string() + &String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("[flow]") && text.contains("in-place"),
+        "{text}"
+    );
+}

@@ -334,6 +334,20 @@ fn strings(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) {
             e.2 = e.2.max(q);
         }
     }
+    // filament fed in place (a blob, `extrude_volume`) melts as fast as it
+    // is fed: its flow is the feed times the filament's cross-section
+    let area = support::filament_area(recipe);
+    for (k, e) in &tp.events {
+        if let crate::base::toolpath::Event::Extrude { filament, speed } = *e {
+            let q = speed * area;
+            if filament > 0.0 && q > p.max_flow {
+                let k = (*k).min(tp.len().saturating_sub(1));
+                let e = flow.get_or_insert((k, 0, 0.0));
+                e.1 += 1;
+                e.2 = e.2.max(q);
+            }
+        }
+    }
     if let Some((k, n)) = fast {
         let m = tp.midpoint(k);
         out.push(Finding {
@@ -370,8 +384,9 @@ fn strings(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) {
             code: "flow",
             severity,
             message: format!(
-                "part `{}` has {n} string{} needing more than the hot end's {} mm³/s (up to {worst:.1} mm³/s{beyond}); the first is string {k} at {}",
+                "part `{}` has {n} string{} or in-place extrusion{} needing more than the hot end's {} mm³/s (up to {worst:.1} mm³/s{beyond}); the first is at string {k}, {}",
                 tp.name,
+                if n == 1 { "" } else { "s" },
                 if n == 1 { "" } else { "s" },
                 p.max_flow,
                 fmt_p(m)

@@ -642,6 +642,8 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
         let st = &mut self.stats;
         st.filament += filament;
         st.volume += filament * self.area;
+        // fed in place, it melts as fast as it is fed
+        st.max_flow = st.max_flow.max(speed * self.area);
         let f = self.feed_mm_s();
         self.moves.extrude_only(filament, f);
         Ok(())
