@@ -28,6 +28,7 @@ mod io_errors;
 mod layers;
 mod machines;
 mod mesh;
+mod new_user;
 mod olympic;
 mod planner;
 mod preview;

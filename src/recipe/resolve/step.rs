@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use super::Ctx;
 use crate::base::error::{Error, Result};
-use crate::base::expr::var;
+use crate::base::expr::{var, Expr};
 use crate::generate::step::{Bitmap, Deform, Keep, Modulate, ModulateMap, Step};
 use crate::recipe::eval::{at, At, Scope};
 use crate::recipe::schema::{Num, RawAxis, RawDeform, RawKeep, RawStep};
@@ -96,17 +96,36 @@ fn keep(k: &Option<RawKeep>) -> Keep {
     }
 }
 
+/// A `deform_xyz` position is [x, y, z]: `r` and `theta` there are
+/// `deform_cylinder`'s, and a position written in them (`[r, theta, z]`)
+/// would map every point somewhere else without a word.
+fn cartesian_only(e: &Expr, s: &Scope, key: &str) -> Result<()> {
+    for (k, name) in [(var::R, "r"), (var::THETA, "theta")] {
+        if e.uses(k) {
+            return Err(s.error(
+                key,
+                format!("`{name}` is a cylinder coordinate, which deform_xyz does not use (its position is [x, y, z], mm); expected deform_cylinder: {{position: [r, theta, z]}}, or hypot(x, y) and atan2(y, x) here"),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// `deform_xyz` or `deform_cylinder`; `s` is under its key.
 fn deform(s: &Scope, d: &RawDeform, cylinder: bool) -> Result<Deform> {
     let position = match at!(d.position).some() {
         Some(p) => {
             let ps = s.under(p.key);
             let n = p.value;
-            Some([
-                ps.expr(At::new(&n[0], "[0]"), POINT_VARS)?,
-                ps.expr(At::new(&n[1], "[1]"), POINT_VARS)?,
-                ps.expr(At::new(&n[2], "[2]"), POINT_VARS)?,
-            ])
+            let mut out = Vec::with_capacity(3);
+            for (n, key) in n.iter().zip(["[0]", "[1]", "[2]"]) {
+                let e = ps.expr(At::new(n, key), POINT_VARS)?;
+                if !cylinder {
+                    cartesian_only(&e, &ps, key)?;
+                }
+                out.push(e);
+            }
+            Some(out.try_into().expect("three coordinates"))
         }
         None => None,
     };

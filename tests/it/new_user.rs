@@ -1,0 +1,30 @@
+//! The faults a new user met (issue 32), each mended: a `deform_xyz`
+//! written in cylinder coordinates, `--sweep a..b`, sweep names and
+//! summaries, `hash --lock` with one variant, a lock mismatch naming the
+//! part, the summary of a path over nothing, a runaway L-system.
+
+use crate::common::{p3dp, tmp};
+
+fn run(dir: &std::path::Path, args: &[&str]) -> (Option<i32>, String) {
+    let out = p3dp(dir, args);
+    let text =
+        String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
+    (out.status.code(), text)
+}
+
+#[test]
+fn deform_xyz_refuses_cylinder_coordinates_naming_the_key() {
+    let dir = tmp("deform-xyz-r");
+    std::fs::write(
+        dir.join("r.yaml"),
+        "p3dp: 1\nname: twist\nparts:\n  - primitive: {helix: {radius: 10, height: 5, pitch: 0.25}}\n    steps:\n      - deform_xyz:\n          position: [x, \"y + theta\", z]\n",
+    )
+    .unwrap();
+    let (code, text) = run(&dir, &["build", "r.yaml", "-o", "r.gcode"]);
+    assert_eq!(code, Some(2), "{text}");
+    assert!(
+        text.contains("deform_xyz.position[1]") && text.contains("deform_cylinder"),
+        "{text}"
+    );
+    assert!(!dir.join("r.gcode").exists());
+}
