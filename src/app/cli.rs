@@ -102,7 +102,7 @@ pub struct BatchFlags {
     /// Recipe files (YAML).
     #[arg(value_name = "RECIPE")]
     pub recipes: Vec<PathBuf>,
-    /// Build every combination of values: NAME=v1,v2,… or NAME=a..b:step; repeatable.
+    /// Build every combination of values: NAME=v1,v2,…, NAME=a..b:step or NAME=a..b (step 1); repeatable.
     #[arg(long = "sweep", value_name = "NAME=VALUES")]
     pub sweeps: Vec<String>,
     /// Warnings fail the build too.
