@@ -28,3 +28,37 @@ fn deform_xyz_refuses_cylinder_coordinates_naming_the_key() {
     );
     assert!(!dir.join("r.gcode").exists());
 }
+
+#[test]
+fn a_sweep_names_and_summarises_the_values_it_gives() {
+    let dir = tmp("sweep-values");
+    std::fs::write(
+        dir.join("ring.yaml"),
+        "p3dp: 1\nname: ring\nparams:\n  k: 1\n  size: 5\nparts:\n  - primitive: {circle: {radius: size, center: [0, 0, 0.2]}}\n",
+    )
+    .unwrap();
+    let (code, text) = run(
+        &dir,
+        &[
+            "build",
+            "ring.yaml",
+            "--sweep",
+            "k=1..2",
+            "--sweep",
+            "size=5 + k/2",
+            "-o",
+            "out/",
+        ],
+    );
+    assert_eq!(code, Some(0), "{text}");
+    for f in ["ring_k-1_size-5.5.gcode", "ring_k-2_size-6.gcode"] {
+        assert!(dir.join("out").join(f).exists(), "{f}: {text}");
+    }
+    let csv = std::fs::read_to_string(dir.join("out/summary.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().collect();
+    assert!(rows[0].starts_with("file,recipe,k,size,"), "{csv}");
+    assert!(
+        rows[1].contains(",1,5.5,") && rows[2].contains(",2,6,"),
+        "{csv}"
+    );
+}
