@@ -17,16 +17,24 @@ fn deform_xyz_refuses_cylinder_coordinates_naming_the_key() {
     let dir = tmp("deform-xyz-r");
     std::fs::write(
         dir.join("r.yaml"),
-        "p3dp: 1\nname: twist\nparts:\n  - primitive: {helix: {radius: 10, height: 5, pitch: 0.25}}\n    steps:\n      - deform_xyz:\n          position: [x, \"y + theta\", z]\n",
+        "p3dp: 1\nname: twist\nparts:\n  - primitive: {helix: {radius: 10, height: 5, pitch: 0.25}}\n    steps:\n      - deform_xyz:\n          position: [r, \"theta + z/10\", z]\n",
     )
     .unwrap();
     let (code, text) = run(&dir, &["build", "r.yaml", "-o", "r.gcode"]);
     assert_eq!(code, Some(2), "{text}");
     assert!(
-        text.contains("deform_xyz.position[1]") && text.contains("deform_cylinder"),
+        text.contains("deform_xyz.position") && text.contains("deform_cylinder"),
         "{text}"
     );
     assert!(!dir.join("r.gcode").exists());
+    // the point's angle in a Cartesian position is a wave round the part: fine
+    std::fs::write(
+        dir.join("w.yaml"),
+        "p3dp: 1\nname: wave\nparts:\n  - primitive: {helix: {radius: 10, height: 5, pitch: 0.25}}\n    steps:\n      - deform_xyz:\n          position: [x, y, \"z + 0.2*cos(6*theta)\"]\n",
+    )
+    .unwrap();
+    let (code, text) = run(&dir, &["build", "w.yaml", "-o", "w.gcode"]);
+    assert_eq!(code, Some(0), "{text}");
 }
 
 #[test]

@@ -96,17 +96,18 @@ fn keep(k: &Option<RawKeep>) -> Keep {
     }
 }
 
-/// A `deform_xyz` position is [x, y, z]: `r` and `theta` there are
-/// `deform_cylinder`'s, and a position written in them (`[r, theta, z]`)
-/// would map every point somewhere else without a word.
-fn cartesian_only(e: &Expr, s: &Scope, key: &str) -> Result<()> {
-    for (k, name) in [(var::R, "r"), (var::THETA, "theta")] {
-        if e.uses(k) {
-            return Err(s.error(
-                key,
-                format!("`{name}` is a cylinder coordinate, which deform_xyz does not use (its position is [x, y, z], mm); expected deform_cylinder: {{position: [r, theta, z]}}, or hypot(x, y) and atan2(y, x) here"),
-            ));
-        }
+/// `deform_xyz` reads `r` and `theta` as the point's cylinder coordinates
+/// (`z + cos(6*theta)` is a wave round the part), but a position written
+/// as a cylinder one, `[r, f(theta), …]`, maps x to the radius and y to the
+/// angle: a column off to one side without a word. That one is refused.
+fn cartesian_only(n: &[Num; 3], e: &[Expr], s: &Scope) -> Result<()> {
+    let bare_r = matches!(&n[0], Num::Expr(t) if t.trim() == "r");
+    let angle_y = e[1].uses(var::THETA) && !e[1].uses(var::X) && !e[1].uses(var::Y);
+    if bare_r && angle_y {
+        return Err(s.error(
+            "",
+            "[r, …(theta), …] is a cylinder position, but deform_xyz maps [x, y, z] (it would put x at the radius and y at the angle); expected deform_cylinder: {position: [r, theta, z]} for cylinder coordinates",
+        ));
     }
     Ok(())
 }
@@ -119,11 +120,10 @@ fn deform(s: &Scope, d: &RawDeform, cylinder: bool) -> Result<Deform> {
             let n = p.value;
             let mut out = Vec::with_capacity(3);
             for (n, key) in n.iter().zip(["[0]", "[1]", "[2]"]) {
-                let e = ps.expr(At::new(n, key), POINT_VARS)?;
-                if !cylinder {
-                    cartesian_only(&e, &ps, key)?;
-                }
-                out.push(e);
+                out.push(ps.expr(At::new(n, key), POINT_VARS)?);
+            }
+            if !cylinder {
+                cartesian_only(n, &out, &ps)?;
             }
             Some(out.try_into().expect("three coordinates"))
         }
