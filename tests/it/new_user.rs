@@ -30,7 +30,7 @@ fn deform_xyz_refuses_cylinder_coordinates_naming_the_key() {
     // the point's angle in a Cartesian position is a wave round the part: fine
     std::fs::write(
         dir.join("w.yaml"),
-        "p3dp: 1\nname: wave\nparts:\n  - primitive: {helix: {radius: 10, height: 5, pitch: 0.25}}\n    steps:\n      - deform_xyz:\n          position: [x, y, \"z + 0.2*cos(6*theta)\"]\n",
+        "p3dp: 1\nname: wave\nparts:\n  - primitive: {helix: {radius: 10, height: 5, pitch: 0.25}}\n    steps:\n      - deform_xyz:\n          position: [x, y, \"z + 0.2 + 0.1*cos(6*theta)\"]\n",
     )
     .unwrap();
     let (code, text) = run(&dir, &["build", "w.yaml", "-o", "w.gcode"]);
