@@ -189,7 +189,7 @@ pub struct HashArgs {
     /// Shared flags.
     #[command(flatten)]
     pub batch: BatchFlags,
-    /// Write the hashes (with recipe paths and --set values) to a lock file.
+    /// Write the hashes (with recipe paths and --set values) to a lock file; an existing lock keeps its other entries.
     #[arg(long, value_name = "FILE", conflicts_with = "check")]
     pub lock: Option<PathBuf>,
     /// Rebuild every entry of a lock file; exit 1 naming each that changed.

@@ -70,3 +70,50 @@ fn a_sweep_names_and_summarises_the_values_it_gives() {
         "{csv}"
     );
 }
+
+#[test]
+fn hash_lock_merges_and_a_mismatch_names_the_part() {
+    let dir = tmp("lock-merge");
+    let text = "p3dp: 1\nname: ring\nparams:\n  size: 10\nparts:\n  - name: rim\n    primitive: {circle: {radius: size, center: [0, 0, 0.2], segments: 36}}\n";
+    std::fs::write(dir.join("ring.yaml"), text).unwrap();
+    for set in ["size=10", "size=12", "size=14"] {
+        let (code, out) = run(
+            &dir,
+            &["hash", "--lock", "l.lock", "ring.yaml", "--set", set],
+        );
+        assert_eq!(code, Some(0), "{out}");
+    }
+    // three variants locked one at a time: three entries; size=12 again replaces its own
+    let (code, out) = run(
+        &dir,
+        &["hash", "--lock", "l.lock", "ring.yaml", "--set", "size=12"],
+    );
+    assert_eq!(code, Some(0), "{out}");
+    let lock = std::fs::read_to_string(dir.join("l.lock")).unwrap();
+    assert_eq!(lock.matches("- recipe: ring.yaml").count(), 3, "{lock}");
+    let order: Vec<usize> = ["size=10", "size=12", "size=14"]
+        .iter()
+        .map(|s| lock.find(s).unwrap())
+        .collect();
+    assert!(order.windows(2).all(|w| w[0] < w[1]), "{lock}");
+    let (code, out) = run(&dir, &["hash", "--check", "l.lock"]);
+    assert_eq!(code, Some(0), "{out}");
+    // a changed geometry is named by its part
+    std::fs::write(
+        dir.join("ring.yaml"),
+        text.replace("segments: 36", "segments: 37"),
+    )
+    .unwrap();
+    let (code, out) = run(&dir, &["hash", "--check", "l.lock"]);
+    assert_eq!(code, Some(1), "{out}");
+    assert!(out.contains("in part `rim` at about string"), "{out}");
+    // a file that is not a lock is refused, not overwritten
+    std::fs::write(dir.join("notes.txt"), "my notes\n").unwrap();
+    let (code, out) = run(&dir, &["hash", "--lock", "notes.txt", "ring.yaml"]);
+    assert_eq!(code, Some(2), "{out}");
+    assert!(out.contains("remove it to start a new lock"), "{out}");
+    assert_eq!(
+        std::fs::read_to_string(dir.join("notes.txt")).unwrap(),
+        "my notes\n"
+    );
+}
