@@ -117,3 +117,19 @@ fn hash_lock_merges_and_a_mismatch_names_the_part() {
         "my notes\n"
     );
 }
+
+#[test]
+fn a_part_mostly_over_gaps_is_a_warning_in_the_summary() {
+    let dir = tmp("bridged-share");
+    // two rails 9 mm apart, two layers high, then 21 crossings between them
+    // a layer up, 1 mm apart: each gap short, most of the path over them
+    let recipe = "p3dp: 1\nname: grate\nparts:\n  - primitive:\n      path:\n        - for: {h: \"1..2\"}\n          do:\n            - move: [0, 0, \"0.3*h\"]\n            - draw: [0, 21, \"0.3*h\"]\n            - move: [9, 21, \"0.3*h\"]\n            - draw: [9, 0, \"0.3*h\"]\n        - move: [0, 0, 0.9]\n        - for: {k: \"0..20\"}\n          do:\n            - draw: [\"9*(k % 2 == 0)\", k, 0.9]\n            - draw: [\"9*(k % 2 == 0)\", \"k + 1\", 0.9]\n";
+    std::fs::write(dir.join("g.yaml"), recipe).unwrap();
+    let (code, text) = run(&dir, &["check", "g.yaml"]);
+    assert!(
+        text.contains("warning [bridge]")
+            && text.contains("% of the print's path hanging over gaps"),
+        "{text}"
+    );
+    assert!(text.contains("1 warning, 0 errors"), "{code:?} {text}");
+}
