@@ -133,3 +133,30 @@ fn a_part_mostly_over_gaps_is_a_warning_in_the_summary() {
     );
     assert!(text.contains("1 warning, 0 errors"), "{code:?} {text}");
 }
+
+#[test]
+fn a_runaway_lsystem_is_refused_by_its_size_before_it_runs() {
+    let dir = tmp("lsystem-runaway");
+    // 26 doublings: 2^26 = 67 million strings, past the 50 million of
+    // max_strings (and under the steps limit)
+    let recipe = |n: u32| {
+        format!("p3dp: 1\nname: koch\nparts:\n  - primitive:\n      turtle:\n        start: {{position: [-50, 0, 0.2]}}\n        program:\n          - lsystem:\n              axiom: F\n              rules: {{F: \"F+F\"}}\n              iterations: {n}\n              commands:\n                F: [{{forward: 0.001}}]\n                \"+\": [{{left: 90}}]\n                \"-\": [{{right: 90}}]\n")
+    };
+    std::fs::write(dir.join("k.yaml"), recipe(26)).unwrap();
+    let start = std::time::Instant::now();
+    let (code, text) = run(&dir, &["check", "k.yaml"]);
+    assert_eq!(code, Some(2), "{text}");
+    assert!(
+        text.contains("67108864 strings") && text.contains("lsystem"),
+        "{text}"
+    );
+    // refused before any of them is made, not after running up to the limit
+    assert!(
+        start.elapsed() < std::time::Duration::from_secs(2),
+        "{:?}",
+        start.elapsed()
+    );
+    std::fs::write(dir.join("k.yaml"), recipe(3)).unwrap();
+    let (code, text) = run(&dir, &["check", "k.yaml"]);
+    assert_eq!(code, Some(0), "{text}");
+}

@@ -162,7 +162,8 @@ impl Program {
         limits: Limits,
         out: Option<Toolpath>,
     ) -> Result<(Counts, Option<Toolpath>)> {
-        least_steps(&self.main, limits.max_steps)?;
+        least(&self.main, &Bound::steps(limits.max_steps))?;
+        least(&self.main, &Bound::strings(limits.max_strings))?;
         let mut run = Run {
             prog: self,
             limits,
@@ -203,20 +204,61 @@ pub const MAX_MARKERS: usize = 10_000;
 /// Most frames `push` may save before a `pop`.
 pub const MAX_SAVED: usize = 100_000;
 
-/// A lower bound of the steps `cmds` run, known without running them: every
-/// command is a step, a `repeat` of a constant count runs its body that many
-/// times, an `if` at least its shorter branch, an L-system of constant
-/// iterations visits a known number of symbols (counted per derivation depth,
-/// never expanded); counts that depend on counters, parameters of procedures
-/// or `rand()`, and calls, count as nothing more. The first construct whose
-/// bound passes `max_steps` is refused at once, naming its place, instead of
-/// after seconds of running up to the limit.
-fn least_steps(cmds: &[Cmd], max_steps: u64) -> Result<u64> {
+/// What [`least`] bounds: each command's own count, the limit, and how
+/// the error names them.
+struct Bound {
+    max: u64,
+    unit: fn(&Op) -> u64,
+    what: &'static str,
+    raise: &'static str,
+}
+
+impl Bound {
+    /// Steps: every command and L-system symbol is one.
+    fn steps(max: u64) -> Bound {
+        Bound {
+            max,
+            unit: |_| 1,
+            what: "steps (commands and L-system symbols)",
+            raise: "raise max_strings",
+        }
+    }
+
+    /// Strings: a `forward`, `backward` or `lift` of a constant length other
+    /// than 0 makes one, and so does a `move` or `draw` (but a path's first,
+    /// which places it: hence one string of slack), so a runaway L-system is
+    /// refused by its size before any string is made.
+    fn strings(max: u64) -> Bound {
+        Bound {
+            max: max.saturating_add(1),
+            unit: |op| {
+                u64::from(match op {
+                    Op::Forward(v, _) | Op::Lift(v) => v.expr.constant().is_some_and(|x| x != 0.0),
+                    Op::To(..) => true,
+                    _ => false,
+                })
+            },
+            what: "strings (moves forward, lift, goto, move, draw)",
+            raise: "raise the recipe's max_strings",
+        }
+    }
+}
+
+/// A lower bound of `b`'s count over `cmds`, known without running them:
+/// each command counts its own unit, a `repeat` of a constant count runs
+/// its body that many times, an `if` at least its shorter branch, an
+/// L-system of constant iterations visits a known number of symbols
+/// (counted per derivation depth, never expanded); counts that depend on
+/// counters, parameters of procedures or `rand()`, and calls, count as
+/// nothing more. The first construct whose bound passes the limit is
+/// refused at once, naming its place, instead of after seconds of running
+/// up to it.
+fn least(cmds: &[Cmd], b: &Bound) -> Result<u64> {
     let mut total = 0u64;
     for cmd in cmds {
         let own = match &cmd.op {
             Op::Repeat { count, body, .. } => {
-                let inner = least_steps(body, max_steps)?;
+                let inner = least(body, b)?;
                 match count.expr.constant() {
                     Some(n) if n.fract() == 0.0 && (0.0..=1e12).contains(&n) => {
                         (n as u64).saturating_mul(inner)
@@ -226,60 +268,73 @@ fn least_steps(cmds: &[Cmd], max_steps: u64) -> Result<u64> {
             }
             Op::If {
                 then, otherwise, ..
-            } => least_steps(then, max_steps)?.min(least_steps(otherwise, max_steps)?),
-            Op::Lsystem(ls) => match ls.iterations.expr.constant() {
-                Some(n) if n.fract() == 0.0 && (0.0..=MAX_ITERATIONS as f64).contains(&n) => {
-                    let own: Vec<u64> = ls
-                        .commands
-                        .iter()
-                        .map(|c| least_steps(c, max_steps))
-                        .collect::<Result<_>>()?;
-                    // steps of one symbol at depth d: 1, then its rule's
-                    // symbols at d + 1 (d < n) or its commands
-                    let mut at = own.iter().map(|&k| k.saturating_add(1)).collect::<Vec<_>>();
-                    for _ in 0..n as u32 {
-                        at = ls
-                            .rules
-                            .iter()
-                            .zip(&own)
-                            .map(|(rule, &k)| match rule {
-                                Some(r) => r
-                                    .iter()
-                                    .fold(1u64, |acc, &t| acc.saturating_add(at[t as usize])),
-                                None => k.saturating_add(1),
-                            })
-                            .collect();
-                    }
-                    ls.axiom
-                        .iter()
-                        .fold(0u64, |acc, &s| acc.saturating_add(at[s as usize]))
-                }
-                _ => 0,
-            },
+            } => least(then, b)?.min(least(otherwise, b)?),
+            Op::Lsystem(ls) => lsystem_least(ls, b)?,
             _ => 0,
         };
-        let steps = own.saturating_add(1);
-        if steps > max_steps {
-            return Err(Error::input(
-                &cmd.place,
-                format!(
-                    "this runs at least {} steps (commands and L-system symbols), more than the limit of {max_steps}; expected fewer repeats or iterations (or raise max_strings)",
-                    if steps == u64::MAX { "2^64".to_string() } else { steps.to_string() }
-                ),
-            ));
+        let n = own.saturating_add((b.unit)(&cmd.op));
+        if n > b.max {
+            return Err(too_many(&cmd.place, "this runs", n, b));
         }
-        total = total.saturating_add(steps);
+        total = total.saturating_add(n);
     }
-    if total > max_steps {
+    if total > b.max {
         let place = cmds.first().map_or("program", |c| c.place.as_str());
-        return Err(Error::input(
-            place,
-            format!(
-                "the commands from here run at least {total} steps, more than the limit of {max_steps}; expected fewer repeats or iterations (or raise max_strings)"
-            ),
-        ));
+        return Err(too_many(place, "the commands from here run", total, b));
     }
     Ok(total)
+}
+
+/// [`least`] of an L-system of constant iterations: a symbol at depth d
+/// counts its unit, then its rule's symbols at d + 1 (d < n) or its commands.
+fn lsystem_least(ls: &Lsystem, b: &Bound) -> Result<u64> {
+    let n = match ls.iterations.expr.constant() {
+        Some(n) if n.fract() == 0.0 && (0.0..=MAX_ITERATIONS as f64).contains(&n) => n as u32,
+        _ => return Ok(0),
+    };
+    // a symbol is a step of its own, and makes no string itself
+    let sym = (b.unit)(&Op::PenUp);
+    let own: Vec<u64> = ls
+        .commands
+        .iter()
+        .map(|c| least(c, b))
+        .collect::<Result<_>>()?;
+    let mut at = own
+        .iter()
+        .map(|&k| k.saturating_add(sym))
+        .collect::<Vec<_>>();
+    for _ in 0..n {
+        at = ls
+            .rules
+            .iter()
+            .zip(&own)
+            .map(|(rule, &k)| match rule {
+                Some(r) => r
+                    .iter()
+                    .fold(sym, |acc, &t| acc.saturating_add(at[t as usize])),
+                None => k.saturating_add(sym),
+            })
+            .collect();
+    }
+    Ok(ls
+        .axiom
+        .iter()
+        .fold(0u64, |acc, &s| acc.saturating_add(at[s as usize])))
+}
+
+fn too_many(place: &str, what: &str, n: u64, b: &Bound) -> Error {
+    let n = if n == u64::MAX {
+        "2^64".to_string()
+    } else {
+        n.to_string()
+    };
+    Error::input(
+        place,
+        format!(
+            "{what} at least {n} {}, more than the limit of {}; expected fewer repeats or iterations (or {})",
+            b.what, b.max, b.raise
+        ),
+    )
 }
 
 impl<'a> Run<'a> {
