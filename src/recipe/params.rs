@@ -93,28 +93,38 @@ pub fn eval_params(raw: &IndexMap<String, RawParam>, sets: &[(String, String)]) 
                 params.insert_list(name, values);
             }
             RawParam::Choice(c) => {
-                let s = match &set {
-                    Some((s, at)) => {
-                        let s = s.trim_matches(|c| c == '\'' || c == '"');
-                        if !c.choices.iter().any(|x| x == s) {
-                            return Err(Error::input(
-                                at,
-                                format!(
-                                    "`{s}` is not a choice of `{name}`; expected one of {}",
-                                    c.choices.join(", ")
-                                ),
-                            ));
-                        }
-                        s.to_string()
-                    }
-                    None => c.default.clone(),
-                };
+                let s = choice(c, name, &set)?;
                 let v = params.symbol(&s).expect("the choices were declared");
                 params.insert(name.clone(), v);
                 params.set_kind(name, Kind::Choice(s));
             }
         }
     }
+    unknown_sets(raw, sets)?;
+    Ok(params)
+}
+
+/// The string a choice param is: `set` (its `--set` text and place), which
+/// must be one of its choices, or its default.
+fn choice(c: &RawChoice, name: &str, set: &Option<(&str, String)>) -> Result<String> {
+    let Some((s, at)) = set else {
+        return Ok(c.default.clone());
+    };
+    let s = s.trim_matches(|c| c == '\'' || c == '"');
+    if !c.choices.iter().any(|x| x == s) {
+        return Err(Error::input(
+            at,
+            format!(
+                "`{s}` is not a choice of `{name}`; expected one of {}",
+                c.choices.join(", ")
+            ),
+        ));
+    }
+    Ok(s.to_string())
+}
+
+/// Refuses a `--set` of a name that is none of the recipe's params.
+fn unknown_sets(raw: &IndexMap<String, RawParam>, sets: &[(String, String)]) -> Result<()> {
     for (name, s) in sets {
         if !raw.contains_key(name) {
             let known: Vec<&str> = raw.keys().map(String::as_str).collect();
@@ -131,7 +141,7 @@ pub fn eval_params(raw: &IndexMap<String, RawParam>, sets: &[(String, String)]) 
             ));
         }
     }
-    Ok(params)
+    Ok(())
 }
 
 /// A number or expression as written at `place`, over `params`.

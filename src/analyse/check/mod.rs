@@ -315,6 +315,24 @@ fn machine_limits(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) -> boo
     )
 }
 
+/// Filament fed in place (a blob, `extrude_volume`) melts as fast as it is
+/// fed: its flow, the feed times the filament's cross-section, counts in
+/// `flow` (first string, count, worst) as a string's c·v does.
+fn in_place_flow(recipe: &Recipe, tp: &Toolpath, flow: &mut Option<(usize, usize, f64)>) {
+    let area = support::filament_area(recipe);
+    for (k, e) in &tp.events {
+        if let crate::base::toolpath::Event::Extrude { filament, speed } = *e {
+            let q = speed * area;
+            if filament > 0.0 && q > recipe.printer.max_flow {
+                let k = (*k).min(tp.len().saturating_sub(1));
+                let e = flow.get_or_insert((k, 0, 0.0));
+                e.1 += 1;
+                e.2 = e.2.max(q);
+            }
+        }
+    }
+}
+
 fn strings(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) {
     let p = &recipe.printer;
     let mut fast: Option<(usize, usize)> = None;
@@ -334,20 +352,7 @@ fn strings(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) {
             e.2 = e.2.max(q);
         }
     }
-    // filament fed in place (a blob, `extrude_volume`) melts as fast as it
-    // is fed: its flow is the feed times the filament's cross-section
-    let area = support::filament_area(recipe);
-    for (k, e) in &tp.events {
-        if let crate::base::toolpath::Event::Extrude { filament, speed } = *e {
-            let q = speed * area;
-            if filament > 0.0 && q > p.max_flow {
-                let k = (*k).min(tp.len().saturating_sub(1));
-                let e = flow.get_or_insert((k, 0, 0.0));
-                e.1 += 1;
-                e.2 = e.2.max(q);
-            }
-        }
-    }
+    in_place_flow(recipe, tp, &mut flow);
     if let Some((k, n)) = fast {
         let m = tp.midpoint(k);
         out.push(Finding {

@@ -56,6 +56,27 @@ fn syntax(src: &str, at: usize, what: &str) -> ExprError {
     }
 }
 
+/// The length of the number or arithmetic at byte `k` of `b`: up to the
+/// next byte the pre-pass itself reads, a number's exponent (`1e-3`) with it.
+fn text_len(b: &[u8], k: usize) -> usize {
+    let n = b[k..]
+        .iter()
+        .position(|x| b" \t\n\r()[],'\"<>=!&|".contains(x) || x.is_ascii_alphabetic() || *x == b'_')
+        .unwrap_or(b.len() - k);
+    let mut n = n.max(1);
+    while k + n < b.len()
+        && (b[k + n] == b'e' || b[k + n] == b'E')
+        && b[k..k + n].iter().all(|x| x.is_ascii_digit() || *x == b'.')
+    {
+        let m = b[k + n + 1..]
+            .iter()
+            .position(|x| !(x.is_ascii_digit() || *x == b'+' || *x == b'-'))
+            .unwrap_or(b.len() - k - n - 1);
+        n += 1 + m;
+    }
+    n
+}
+
 fn tokens(src: &str) -> Result<Vec<Token>, ExprError> {
     let b = src.as_bytes();
     let mut out = Vec::new();
@@ -112,31 +133,7 @@ fn tokens(src: &str) -> Result<Vec<Token>, ExprError> {
                 };
                 (tok, n)
             }
-            _ => {
-                // a number or an arithmetic operator: up to the next byte
-                // the pre-pass itself reads
-                let n = b[k..]
-                    .iter()
-                    .position(|x| {
-                        b" \t\n\r()[],'\"<>=!&|".contains(x)
-                            || x.is_ascii_alphabetic()
-                            || *x == b'_'
-                    })
-                    .unwrap_or(b.len() - k);
-                // a number's exponent (`1e-3`) stays with it
-                let mut n = n.max(1);
-                while k + n < b.len()
-                    && (b[k + n] == b'e' || b[k + n] == b'E')
-                    && b[k..k + n].iter().all(|x| x.is_ascii_digit() || *x == b'.')
-                {
-                    let m = b[k + n + 1..]
-                        .iter()
-                        .position(|x| !(x.is_ascii_digit() || *x == b'+' || *x == b'-'))
-                        .unwrap_or(b.len() - k - n - 1);
-                    n += 1 + m;
-                }
-                (Tok::Text, n)
-            }
+            _ => (Tok::Text, text_len(b, k)),
         };
         k += len;
         out.push(Token {

@@ -667,22 +667,24 @@ fn run_lanes(ops: &[Op], data: &[f64], vars: &[Vars], out: &mut [f64], lanes: &m
                 }
             }
             Op::Min(k) | Op::Max(k) => {
-                let k = k as usize;
-                assert!(k > 0, "min and max take at least one argument");
-                let min = matches!(op, Op::Min(_));
-                for j in 0..n {
-                    let mut m = st[sp - k][j];
-                    for r in 1..k {
-                        let a = st[sp - k + r][j];
-                        m = if min { m.min(a) } else { m.max(a) };
-                    }
-                    st[sp - k][j] = m;
-                }
-                sp -= k - 1;
+                sp = lanes_min_max(st, sp, k as usize, n, matches!(op, Op::Min(_)));
             }
         }
     }
     out.copy_from_slice(&st[0][..n]);
+}
+
+/// `min` (or `max`) of the top `k` stack rows of `n` lanes into the lowest
+/// of them; the new stack height.
+fn lanes_min_max(st: &mut [[f64; LANES]], sp: usize, k: usize, n: usize, min: bool) -> usize {
+    assert!(k > 0, "min and max take at least one argument");
+    let (low, rest) = st[sp - k..sp].split_at_mut(1);
+    for row in rest.iter() {
+        for (m, &a) in low[0][..n].iter_mut().zip(&row[..n]) {
+            *m = if min { m.min(a) } else { m.max(a) };
+        }
+    }
+    sp - (k - 1)
 }
 
 /// meval's error for `src`, `from` mapping the bytes of the text it read
