@@ -14,21 +14,6 @@ pub(crate) fn is_identifier(s: &str) -> bool {
         && cs.all(|c| c.is_ascii_alphanumeric() || c == '_')
 }
 
-/// The params of the recipe at `path` (its includes' first) with `sets`
-/// in place of their values: what a build would evaluate them to, without
-/// building (a sweep's names and summary show these values).
-pub fn param_values(path: &std::path::Path, sets: &[(String, String)]) -> Result<Params> {
-    let shown = path.display().to_string();
-    let reads = crate::base::input::Reads::default();
-    let text = reads.read_text(path, "recipe")?;
-    let raw: RawRecipe = crate::recipe::parse_yaml(&text, &shown)?;
-    let dir = path
-        .parent()
-        .map(std::path::Path::to_path_buf)
-        .unwrap_or_default();
-    crate::recipe::expand::load_library(&raw, Some(path), &dir, &reads)?.eval_params(sets)
-}
-
 /// Evaluates params in order, each over the ones before it; `sets` replaces
 /// a param's value (`--set NAME=VALUE`: a number or expression, `true` or
 /// `false`, a list `[a, b]`, or one of a choice param's strings).

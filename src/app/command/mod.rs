@@ -56,7 +56,7 @@ impl Builds {
         // the params, not the text: `amplitude=1 + cycles/2` is 2.5 there;
         // a recipe that cannot be read keeps the text, its build says why
         for job in jobs.iter_mut().filter(|j| !j.sweep.is_empty()) {
-            if let Ok(params) = crate::recipe::params::param_values(&job.recipe, &job.sets) {
+            if let Ok(params) = crate::recipe::expand::param_values(&job.recipe, &job.sets) {
                 for (name, value) in &mut job.sweep {
                     if let Some(shown) = params.show(name) {
                         *value = shown;
