@@ -160,3 +160,48 @@ fn a_runaway_lsystem_is_refused_by_its_size_before_it_runs() {
     let (code, text) = run(&dir, &["check", "k.yaml"]);
     assert_eq!(code, Some(0), "{text}");
 }
+
+#[test]
+fn a_filament_change_at_a_height() {
+    let dir = tmp("gcode-at");
+    let recipe = |cmd: &str| {
+        format!("p3dp: 1\nname: tube\nparts:\n  - primitive: {{helix: {{radius: 10, height: 4, pitch: 0.2, center: [0, 0, 0.2]}}}}\n    steps:\n      - gcode_at: {{z: 2, gcode: \"{cmd}\"}}\n")
+    };
+    std::fs::write(dir.join("t.yaml"), recipe("M600")).unwrap();
+    let (code, text) = run(&dir, &["build", "t.yaml", "-o", "t.gcode"]);
+    assert_eq!(code, Some(0), "{text}");
+    let g = crate::common::parse(&std::fs::read_to_string(dir.join("t.gcode")).unwrap());
+    let at = g
+        .lines
+        .iter()
+        .position(|l| l.trim() == "M600")
+        .expect("M600 written");
+    // the moves before it stay below 2 mm, the first extruding one after reaches it
+    let z_before = g
+        .moves
+        .iter()
+        .filter(|m| m.de > 0.0 && !m.to[2].is_nan())
+        .map(|m| m.to[2]);
+    assert!(z_before.clone().any(|z| z >= 2.0));
+    let lines_before: Vec<&String> = g.lines[..at]
+        .iter()
+        .filter(|l| l.starts_with("G1 X") || l.starts_with("G1 Y"))
+        .collect();
+    let last_z = g.lines[..at].iter().rev().find_map(|l| {
+        l.split_whitespace()
+            .find_map(|w| w.strip_prefix('Z'))
+            .and_then(|v| v.parse::<f64>().ok())
+    });
+    assert!(
+        !lines_before.is_empty() && last_z.unwrap() < 2.0,
+        "{last_z:?}"
+    );
+    // a command that moves the head is refused, naming the key
+    std::fs::write(dir.join("t.yaml"), recipe("G28")).unwrap();
+    let (code, text) = run(&dir, &["build", "t.yaml", "-o", "u.gcode"]);
+    assert_eq!(code, Some(2), "{text}");
+    assert!(
+        text.contains("steps[0].gcode_at.gcode") && text.contains("G28"),
+        "{text}"
+    );
+}

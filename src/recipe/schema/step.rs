@@ -81,6 +81,12 @@ pub enum RawStep {
         #[serde(default)]
         at: Option<Num>,
     },
+    /// `gcode_at: {z, gcode}`: a printer command (a filament change `M600`)
+    /// written before the first extruding string that reaches height `z`.
+    GcodeAt {
+        z: Num,
+        gcode: String,
+    },
 }
 
 /// The coordinate a `mirror` step reflects.
@@ -107,6 +113,7 @@ impl RawStep {
             RawStep::Rotate { .. } => "rotate",
             RawStep::Scale { .. } => "scale",
             RawStep::Mirror { .. } => "mirror",
+            RawStep::GcodeAt { .. } => "gcode_at",
         }
     }
 }
@@ -128,6 +135,7 @@ mod tests {
             ("rotate", "{angle: 1}"),
             ("scale", "{factor: [1, 2, 1]}"),
             ("mirror", "{axis: x}"),
+            ("gcode_at", "{z: 10, gcode: M600}"),
         ] {
             let s: RawStep = parse_yaml(&format!("{{{key}: {map}}}"), "t").unwrap();
             assert_eq!(s.key(), key);
