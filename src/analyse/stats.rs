@@ -76,7 +76,7 @@ pub struct Stats {
     /// Material used.
     pub material: String,
     /// Param values after `--set`, in order.
-    pub params: indexmap::IndexMap<String, f64>,
+    pub params: indexmap::IndexMap<String, serde_json::Value>,
     /// SHA-256 of the G-code bytes.
     pub gcode_sha256: String,
     /// Size of the G-code.
@@ -187,7 +187,7 @@ impl Stats {
             name: recipe.name.clone(),
             printer: recipe.printer.name.clone(),
             material: recipe.material.name.clone(),
-            params: recipe.params.clone(),
+            params: recipe.params.to_json(),
             gcode_sha256: sha256,
             gcode_bytes: bytes,
             strings: parts.iter().map(|p| p.strings as u64).sum(),

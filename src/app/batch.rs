@@ -53,7 +53,8 @@ pub(crate) fn check_count(recipes: usize, sweeps: &[(String, Vec<String>)]) -> R
     Ok(())
 }
 
-/// Parses `NAME=v1,v2,…` or `NAME=a..b:step` (b included when reached).
+/// Parses `NAME=v1,v2,…`, `NAME=a..b:step` (b included when reached) or
+/// `NAME=a..b` (step 1, as `for:`).
 pub(crate) fn parse_sweep(s: &str) -> Result<(String, Vec<String>)> {
     let place = format!("--sweep {s}");
     let (name, spec) = s
@@ -66,20 +67,11 @@ pub(crate) fn parse_sweep(s: &str) -> Result<(String, Vec<String>)> {
             )
         })?;
     let spec = spec.trim();
-    if spec.contains("..") && !spec.contains(':') {
-        return Err(Error::input(
-            &place,
-            format!(
-                "a range needs a step: NAME=a..b:step, e.g. --sweep {}={spec}:1 (or list the values: NAME=v1,v2,…)",
-                name.trim()
-            ),
-        )
-        .with_help("a sweep is NAME=v1,v2,… (a list) or NAME=a..b:step (a range, b included)"));
-    }
-    let range = spec
-        .split_once(':')
-        .filter(|_| spec.contains(".."))
-        .map(|(range, step)| (range.split_once(".."), step));
+    // a..b steps by 1, as a part's `for: "a..b"` does
+    let range = spec.contains("..").then(|| match spec.split_once(':') {
+        Some((range, step)) => (range.split_once(".."), step),
+        None => (spec.split_once(".."), "1"),
+    });
     let values = if let Some((range, step)) = range {
         let (a, b) = range.ok_or_else(|| {
             Error::input(
@@ -97,7 +89,8 @@ pub(crate) fn parse_sweep(s: &str) -> Result<(String, Vec<String>)> {
         };
         let (a, b, step) = (num(a, "start")?, num(b, "end")?, num(step, "step")?);
         if step.is_nan() || step <= 0.0 || b < a || !a.is_finite() || !b.is_finite() {
-            return Err(Error::input(&place, "expected start ≤ end and a step > 0"));
+            return Err(Error::input(&place, "expected start ≤ end and a step > 0")
+                .with_help("a sweep is NAME=v1,v2,… (a list), NAME=a..b:step or NAME=a..b (a range from a up to b, step 1)"));
         }
         // as a float first: a tiny step makes more values than u64 holds
         let steps = libm::floor((b - a) / step + 1e-9);
@@ -199,12 +192,13 @@ mod tests {
     }
 
     #[test]
-    fn a_range_without_a_step_says_it_needs_one() {
-        let e = parse_sweep("ripples=1..3").unwrap_err();
-        assert_eq!(e.place.as_deref(), Some("--sweep ripples=1..3"));
-        assert!(e.message.contains("a range needs a step"), "{e}");
-        assert!(e.message.contains("ripples=1..3:1"), "{e}");
-        assert!(!e.to_string().contains("--set"), "{e}");
+    fn a_range_without_a_step_steps_by_one_as_for_does() {
+        let (_, v) = parse_sweep("cycles=3..7").unwrap();
+        assert_eq!(v, ["3", "4", "5", "6", "7"]);
+        let (_, v) = parse_sweep("a=0.5..2").unwrap();
+        assert_eq!(v, ["0.5", "1.5"]);
+        let e = parse_sweep("a=x..2").unwrap_err();
+        assert!(e.message.contains("not a number"), "{e}");
     }
 
     #[test]

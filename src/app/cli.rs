@@ -138,7 +138,7 @@ pub struct BatchFlags {
     /// Recipe files (YAML).
     #[arg(value_name = "RECIPE")]
     pub recipes: Vec<PathBuf>,
-    /// Build every combination of values: NAME=v1,v2,… or NAME=a..b:step; repeatable.
+    /// Build every combination of values: NAME=v1,v2,…, NAME=a..b:step or NAME=a..b (step 1); repeatable.
     #[arg(long = "sweep", value_name = "NAME=VALUES")]
     pub sweeps: Vec<String>,
     /// Warnings fail the build too.
@@ -245,7 +245,7 @@ pub struct HashArgs {
     /// Shared flags.
     #[command(flatten)]
     pub batch: BatchFlags,
-    /// Write the hashes (with recipe paths and --set values) to a lock file.
+    /// Write the hashes (with recipe paths and --set values) to a lock file; an existing lock keeps its other entries.
     #[arg(long, value_name = "FILE", conflicts_with = "check")]
     pub lock: Option<PathBuf>,
     /// Rebuild every entry of a lock file; exit 1 naming each that changed.

@@ -26,8 +26,8 @@ pub struct Strand {
 
 /// Something the printer does between two strings that is not a move
 /// (ExtruderTurtle's dwell, pause and temperature commands; a turtle's pen-up
-/// retraction and in-place extrusion).
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// retraction and in-place extrusion; a recipe's own printer command).
+#[derive(Clone, Debug, PartialEq)]
 pub enum Event {
     /// Wait this many milliseconds (G4).
     Dwell {
@@ -64,6 +64,10 @@ pub enum Event {
         /// Filament speed, mm/s.
         speed: f64,
     },
+    /// A printer command a recipe asked for, written as it is: one line,
+    /// checked when the recipe was read (no line break, no move the
+    /// writer cannot account for).
+    Gcode(std::sync::Arc<str>),
 }
 
 /// Where a turtle stood when its program said `draw_turtle`
@@ -271,7 +275,7 @@ impl Toolpath {
         }
         let base = self.len();
         self.events
-            .extend(other.events.iter().map(|&(k, e)| (k + base, e)));
+            .extend(other.events.iter().map(|(k, e)| (k + base, e.clone())));
         if self.turns.is_some() || other.turns.is_some() {
             let mine = self.points.len();
             let u = self.turns.get_or_insert_with(|| vec![0.0; mine]);

@@ -143,7 +143,7 @@ fn join(parts: &[Toolpath]) -> Toolpath {
         }
         let base = all.strings.len();
         all.events
-            .extend(t.events.iter().map(|&(i, e)| (base + i, e)));
+            .extend(t.events.iter().map(|(i, e)| (base + i, e.clone())));
         all.points.extend_from_slice(&t.points);
         all.strings.extend_from_slice(&t.strings);
     }
@@ -181,11 +181,11 @@ fn split(all: Toolpath) -> Vec<Toolpath> {
             markers: Vec::new(),
             turns: all.turns.as_ref().map(|u| u[first..=k].to_vec()),
         };
-        while let Some(&&(i, e)) = events.peek() {
-            if i > k {
+        while let Some(&(i, e)) = events.peek() {
+            if *i > k {
                 break;
             }
-            tp.events.push((i - first, e));
+            tp.events.push((i - first, e.clone()));
             events.next();
         }
         parts.push(tp);

@@ -4,9 +4,9 @@
 use indexmap::IndexMap;
 
 use crate::base::error::{Error, Result};
-use crate::base::expr::{self, Params};
+use crate::base::expr::{self, Kind, Params};
 use crate::recipe::eval::{finite, join, key};
-use crate::recipe::schema::{Num, RawRecipe};
+use crate::recipe::schema::{Num, RawChoice, RawParam, RawRecipe};
 
 pub(crate) fn is_identifier(s: &str) -> bool {
     let mut cs = s.chars();
@@ -15,12 +15,22 @@ pub(crate) fn is_identifier(s: &str) -> bool {
 }
 
 /// Evaluates params in order, each over the ones before it; `sets` replaces
-/// a param's expression (`--set NAME=VALUE`).
+/// a param's value (`--set NAME=VALUE`: a number or expression, `true` or
+/// `false`, a list `[a, b]`, or one of a choice param's strings).
 pub(crate) fn eval_params(
-    raw: &IndexMap<String, Num>,
+    raw: &IndexMap<String, RawParam>,
     sets: &[(String, String)],
 ) -> Result<Params> {
     let mut params = Params::new();
+    // every choice's strings first: a quoted string may stand in any expression
+    let mut strings = Vec::new();
+    for (name, value) in raw {
+        if let RawParam::Choice(c) = value {
+            check_choices(c, &join(key!(RawRecipe, params), name))?;
+            strings.extend(c.choices.iter().map(String::as_str));
+        }
+    }
+    params.set_symbols(strings);
     for (name, value) in raw {
         let place = join(key!(RawRecipe, params), name);
         if !is_identifier(name) {
@@ -35,17 +45,74 @@ pub(crate) fn eval_params(
                 format!("`{name}` is a name expressions already use; choose another param name"),
             ));
         }
-        let v = match sets.iter().rev().find(|(n, _)| n == name) {
-            Some((_, s)) => {
-                expr::eval_const(s, &params).map_err(|e| e.at(format!("--set {name}={s}")))?
+        let set = sets
+            .iter()
+            .rev()
+            .find(|(n, _)| n == name)
+            .map(|(_, s)| (s.as_str(), format!("--set {name}={s}")));
+        match value {
+            RawParam::Num(n) => {
+                let v = match &set {
+                    Some((s, at)) => expr::eval_const(s, &params).map_err(|e| e.at(at))?,
+                    None => number(n, &params, &place)?,
+                };
+                params.insert(name.clone(), v);
             }
-            None => match value {
-                Num::Value(v) => finite(*v, &place)?,
-                Num::Expr(s) => expr::eval_const(s, &params).map_err(|e| e.at(&place))?,
-            },
-        };
-        params.insert(name.clone(), v);
+            RawParam::Bool(b) => {
+                let b = match &set {
+                    Some((s, at)) => parse_bool(s, at)?,
+                    None => *b,
+                };
+                params.insert(name.clone(), if b { 1.0 } else { 0.0 });
+                params.set_kind(name, Kind::Bool(b));
+            }
+            RawParam::List(items) => {
+                let values = match &set {
+                    Some((s, at)) => split_list(s, at)?
+                        .iter()
+                        .map(|t| expr::eval_const(t, &params).map_err(|e| e.at(at)))
+                        .collect::<Result<Vec<f64>>>()?,
+                    None => items
+                        .iter()
+                        .enumerate()
+                        .map(|(k, n)| number(n, &params, &format!("{place}[{k}]")))
+                        .collect::<Result<Vec<f64>>>()?,
+                };
+                params.insert_list(name, values);
+            }
+            RawParam::Choice(c) => {
+                let s = choice(c, name, &set)?;
+                let v = params.symbol(&s).expect("the choices were declared");
+                params.insert(name.clone(), v);
+                params.set_kind(name, Kind::Choice(s));
+            }
+        }
     }
+    unknown_sets(raw, sets)?;
+    Ok(params)
+}
+
+/// The string a choice param is: `set` (its `--set` text and place), which
+/// must be one of its choices, or its default.
+fn choice(c: &RawChoice, name: &str, set: &Option<(&str, String)>) -> Result<String> {
+    let Some((s, at)) = set else {
+        return Ok(c.default.clone());
+    };
+    let s = s.trim_matches(|c| c == '\'' || c == '"');
+    if !c.choices.iter().any(|x| x == s) {
+        return Err(Error::input(
+            at,
+            format!(
+                "`{s}` is not a choice of `{name}`; expected one of {}",
+                c.choices.join(", ")
+            ),
+        ));
+    }
+    Ok(s.to_string())
+}
+
+/// Refuses a `--set` of a name that is none of the recipe's params.
+fn unknown_sets(raw: &IndexMap<String, RawParam>, sets: &[(String, String)]) -> Result<()> {
     for (name, s) in sets {
         if !raw.contains_key(name) {
             let known: Vec<&str> = raw.keys().map(String::as_str).collect();
@@ -62,7 +129,94 @@ pub(crate) fn eval_params(
             ));
         }
     }
-    Ok(params)
+    Ok(())
+}
+
+/// A number or expression as written at `place`, over `params`.
+fn number(n: &Num, params: &Params, place: &str) -> Result<f64> {
+    match n {
+        Num::Value(v) => finite(*v, place),
+        Num::Expr(s) => expr::eval_const(s, params).map_err(|e| e.at(place)),
+    }
+}
+
+/// A choice param's strings: at least one, each once, names (letters,
+/// digits and `_`), the default among them.
+fn check_choices(c: &RawChoice, place: &str) -> Result<()> {
+    let choices = join(place, key!(RawChoice, choices));
+    if c.choices.is_empty() {
+        return Err(Error::input(choices, "expected at least one choice"));
+    }
+    for (k, s) in c.choices.iter().enumerate() {
+        if !is_identifier(s) {
+            return Err(Error::input(
+                format!("{choices}[{k}]"),
+                format!("`{s}` is not allowed; a choice is letters, digits and `_`, not starting with a digit"),
+            ));
+        }
+        if c.choices[..k].contains(s) {
+            return Err(Error::input(
+                format!("{choices}[{k}]"),
+                format!("`{s}` is given twice; expected each choice once"),
+            ));
+        }
+    }
+    if !c.choices.contains(&c.default) {
+        return Err(Error::input(
+            join(place, key!(RawChoice, default)),
+            format!(
+                "`{}` is not one of the choices; expected one of {}",
+                c.default,
+                c.choices.join(", ")
+            ),
+        ));
+    }
+    Ok(())
+}
+
+fn parse_bool(s: &str, place: &str) -> Result<bool> {
+    match s {
+        "true" => Ok(true),
+        "false" => Ok(false),
+        _ => Err(Error::input(
+            place,
+            format!("`{s}` is not allowed for a true/false param; expected true or false"),
+        )),
+    }
+}
+
+/// The items of `[a, b, …]` (commas inside parentheses stay with their item).
+fn split_list(s: &str, place: &str) -> Result<Vec<String>> {
+    let inner = s
+        .trim()
+        .strip_prefix('[')
+        .and_then(|t| t.strip_suffix(']'))
+        .ok_or_else(|| {
+            Error::input(
+                place,
+                "a list param takes a list: expected [a, b, …], e.g. --set fractions=[0, 0.5, 1]",
+            )
+        })?;
+    if inner.trim().is_empty() {
+        return Ok(Vec::new());
+    }
+    let (mut items, mut depth, mut start) = (Vec::new(), 0i32, 0);
+    for (k, c) in inner.char_indices() {
+        match c {
+            '(' | '[' => depth += 1,
+            ')' | ']' => depth -= 1,
+            ',' if depth == 0 => {
+                items.push(inner[start..k].trim().to_string());
+                start = k + 1;
+            }
+            _ => {}
+        }
+    }
+    items.push(inner[start..].trim().to_string());
+    if items.iter().any(String::is_empty) {
+        return Err(Error::input(place, "an empty item; expected [a, b, …]"));
+    }
+    Ok(items)
 }
 
 /// Parses a `NAME=VALUE` of `--set`.
@@ -75,5 +229,67 @@ pub(crate) fn parse_set(s: &str) -> Result<(String, String)> {
             format!("--set {s}"),
             "expected NAME=VALUE, e.g. --set radius=30",
         )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::recipe::yaml::parse_yaml;
+
+    fn eval(yaml: &str, sets: &[(&str, &str)]) -> Result<Params> {
+        let raw: IndexMap<String, RawParam> = parse_yaml(yaml, "t").unwrap();
+        let sets: Vec<(String, String)> = sets
+            .iter()
+            .map(|(n, v)| (n.to_string(), v.to_string()))
+            .collect();
+        eval_params(&raw, &sets)
+    }
+
+    const PARAMS: &str = "part_type: {choices: [wing_nut, wing_bolt, threaded_tube], default: wing_bolt}\nangry: false\nfr: [0, 0.5, 1]\nm: \"len(fr) + if(part_type == 'wing_bolt', 10, 20) + angry\"\n";
+
+    #[test]
+    fn choices_booleans_and_lists() {
+        let p = eval(PARAMS, &[]).unwrap();
+        assert_eq!(p["m"], 13.0);
+        assert_eq!(p.show("part_type").as_deref(), Some("wing_bolt"));
+        assert_eq!(p.show("angry").as_deref(), Some("false"));
+        assert_eq!(p.show("fr").as_deref(), Some("[0, 0.5, 1]"));
+        let p = eval(
+            PARAMS,
+            &[
+                ("part_type", "wing_nut"),
+                ("angry", "true"),
+                ("fr", "[1, max(2, 3)]"),
+            ],
+        )
+        .unwrap();
+        assert_eq!(p["m"], 2.0 + 20.0 + 1.0);
+        assert_eq!(p.list("fr"), Some(&[1.0, 3.0][..]));
+    }
+
+    #[test]
+    fn wrong_values_name_what_is_allowed() {
+        let e = eval(PARAMS, &[("part_type", "wing")]).unwrap_err();
+        assert_eq!(e.place.as_deref(), Some("--set part_type=wing"));
+        assert!(
+            e.message
+                .contains("expected one of wing_nut, wing_bolt, threaded_tube"),
+            "{e}"
+        );
+        let e = eval(PARAMS, &[("angry", "yes")]).unwrap_err();
+        assert!(e.message.contains("expected true or false"), "{e}");
+        let e = eval(PARAMS, &[("fr", "3")]).unwrap_err();
+        assert!(e.message.contains("expected [a, b, …]"), "{e}");
+        let e = eval("k: {choices: [a, b], default: c}\n", &[]).unwrap_err();
+        assert_eq!(e.place.as_deref(), Some("params.k.default"));
+        let e = eval("k: {choices: [a, 'b c'], default: a}\n", &[]).unwrap_err();
+        assert_eq!(e.place.as_deref(), Some("params.k.choices[1]"));
+        let e = parse_yaml::<IndexMap<String, RawParam>>(
+            "k: {choices: [a], default: a, other: 1}\n",
+            "t",
+        )
+        .unwrap_err();
+        assert_eq!(e.place.as_deref(), Some("k.other"));
     }
 }

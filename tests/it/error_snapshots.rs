@@ -64,8 +64,8 @@ const CASES: &[(&str, &[&str], bool)] = &[
         true,
     ),
     (
-        "sweep-without-step",
-        &["build", "bad/out-of-bed.yaml", "--sweep", "ripples=1..3"],
+        "sweep-range-backwards",
+        &["build", "bad/out-of-bed.yaml", "--sweep", "ripples=3..1"],
         true,
     ),
     ("missing-image", &["check", "bad/image-missing.yaml"], true),

@@ -173,14 +173,14 @@ pub(crate) fn events(recipe: &Recipe, tp: &Toolpath) -> Vec<Finding> {
     let pick = |bed: bool, limit: f64| -> Vec<(usize, f64)> {
         tp.events
             .iter()
-            .filter_map(|&(k, e)| match e {
+            .filter_map(|(k, e)| match *e {
                 crate::base::toolpath::Event::NozzleTemp { celsius, .. }
                     if !bed && celsius > limit =>
                 {
-                    Some((k, celsius))
+                    Some((*k, celsius))
                 }
                 crate::base::toolpath::Event::BedTemp { celsius, .. } if bed && celsius > limit => {
-                    Some((k, celsius))
+                    Some((*k, celsius))
                 }
                 _ => None,
             })
@@ -316,6 +316,24 @@ fn machine_limits(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) -> boo
     )
 }
 
+/// Filament fed in place (a blob, `extrude_volume`) melts as fast as it is
+/// fed: its flow, the feed times the filament's cross-section, counts in
+/// `flow` (first string, count, worst) as a string's c·v does.
+fn in_place_flow(recipe: &Recipe, tp: &Toolpath, flow: &mut Option<(usize, usize, f64)>) {
+    let area = support::filament_area(recipe);
+    for (k, e) in &tp.events {
+        if let crate::base::toolpath::Event::Extrude { filament, speed } = *e {
+            let q = speed * area;
+            if filament > 0.0 && q > recipe.printer.max_flow {
+                let k = (*k).min(tp.len().saturating_sub(1));
+                let e = flow.get_or_insert((k, 0, 0.0));
+                e.1 += 1;
+                e.2 = e.2.max(q);
+            }
+        }
+    }
+}
+
 fn strings(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) {
     let p = &recipe.printer;
     let mut fast: Option<(usize, usize)> = None;
@@ -335,6 +353,7 @@ fn strings(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) {
             e.2 = e.2.max(q);
         }
     }
+    in_place_flow(recipe, tp, &mut flow);
     if let Some((k, n)) = fast {
         let m = tp.midpoint(k);
         out.push(Finding {
@@ -371,8 +390,9 @@ fn strings(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) {
             code: "flow",
             severity,
             message: format!(
-                "part `{}` has {n} string{} needing more than the hot end's {} mm³/s (up to {worst:.1} mm³/s{beyond}); the first is string {k} at {}",
+                "part `{}` has {n} string{} or in-place extrusion{} needing more than the hot end's {} mm³/s (up to {worst:.1} mm³/s{beyond}); the first is at string {k}, {}",
                 tp.name,
+                if n == 1 { "" } else { "s" },
                 if n == 1 { "" } else { "s" },
                 p.max_flow,
                 fmt_p(m)

@@ -274,6 +274,15 @@ pub(crate) fn check(recipe: &Recipe, paths: &[&Toolpath]) -> Vec<Finding> {
     let dep = Deposits::new(paths, p.nozzle_diameter, p.checks.support_tolerance);
     let mut budget = GAP_BUDGET;
     let mut g = 0u32; // global id of the current string
+                      // the whole print's extruding path, which a part's bridges are weighed against
+    let print: f64 = paths
+        .iter()
+        .flat_map(|tp| {
+            (0..tp.len())
+                .filter(|&i| !tp.strings[i].travel)
+                .map(|i| tp.length(i))
+        })
+        .sum();
     for (pi, tp) in paths.iter().enumerate() {
         let t = scan_part(recipe, &dep, pi, tp, &mut g, &mut budget);
         let area = filament_area(recipe);
@@ -281,8 +290,8 @@ pub(crate) fn check(recipe: &Recipe, paths: &[&Toolpath]) -> Vec<Finding> {
         out.extend(bridge_finding(
             tp,
             &t.bridges,
-            t.bridge_max,
-            p.checks.max_bridge,
+            (t.bridge_max, p.checks.max_bridge),
+            print,
             area,
         ));
     }
@@ -528,20 +537,48 @@ fn unsupported_finding(tp: &Toolpath, unsup: &Tally, area: f64) -> Option<Findin
     })
 }
 
+/// More than this share of the print's extruding path bridging gaps in one
+/// part makes its `bridge` finding a warning, however short the gaps (a vase
+/// whose wall hangs between supports all the way round; a lone span
+/// between two posts stays a note).
+pub(crate) const BRIDGED_SHARE: f64 = 0.5;
+
 /// The `bridge` finding of a part, if it bridges gaps; a warning when
-/// `bridge_max` of them are longer than `max_bridge` mm.
+/// `bridge_max` of them are longer than `max_bridge` mm, or when they are
+/// more than [`BRIDGED_SHARE`] of the `print`'s extruding path (mm).
 fn bridge_finding(
     tp: &Toolpath,
     bridges: &Tally,
-    bridge_max: usize,
-    max_bridge: f64,
+    (bridge_max, max_bridge): (usize, f64),
+    print: f64,
     area: f64,
 ) -> Option<Finding> {
     let (k, _) = bridges.first?;
+    // most of the print laid over gaps is no detail, however short each
+    // gap: the summary must not call it a note
+    let share = if print > 0.0 {
+        bridges.len / print
+    } else {
+        0.0
+    };
+    let mostly = share > BRIDGED_SHARE;
     let long = bridge_max > 0;
+    let also = if mostly {
+        format!(
+            "; that is {:.0} % of the print's path hanging over gaps (more than {:.0} %): print slowly with the fan on, or check the design",
+            100.0 * share,
+            100.0 * BRIDGED_SHARE
+        )
+    } else {
+        String::new()
+    };
     Some(Finding {
         code: "bridge",
-        severity: if long { Severity::Warning } else { Severity::Info },
+        severity: if long || mostly {
+            Severity::Warning
+        } else {
+            Severity::Info
+        },
         message: format!(
             "part `{}` bridges {} gap{} ({:.1} mm of path, {:.1} mm of filament, with nothing under it); the longest spans {:.1} mm, its middle at {}{}",
             tp.name,
@@ -559,7 +596,7 @@ fn bridge_finding(
             } else {
                 String::new()
             }
-        ),
+        ) + &also,
         part: Some(tp.name.clone()),
         string: Some(k),
         at: Some(bridges.longest_at.to_array()),

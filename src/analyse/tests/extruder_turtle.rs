@@ -64,12 +64,12 @@ fn hairs_are_rows_of_declared_hairs_of_the_recipes_length_that_pass_check() {
     assert_eq!(ys.len(), rows);
     // each hair: a blob pushed in place just before it, a retraction after it
     for k in (0..tp.len()).filter(|&k| tp.strings[k].hair) {
-        assert!(tp.events.iter().any(|&(i, e)| i == k
-            && matches!(e, crate::base::toolpath::Event::Extrude { filament, .. } if filament > 0.0)));
+        assert!(tp.events.iter().any(|&(i, ref e)| i == k
+            && matches!(e, crate::base::toolpath::Event::Extrude { filament, .. } if *filament > 0.0)));
         assert!(tp
             .events
             .iter()
-            .any(|&(i, e)| i == k + 1 && e == crate::base::toolpath::Event::Retract));
+            .any(|(i, e)| *i == k + 1 && *e == crate::base::toolpath::Event::Retract));
     }
     // declared, they pass every check; the same strings undeclared are what
     // the three checks exist to find

@@ -96,6 +96,12 @@ pub(crate) fn run(a: &Options) -> Vec<Error> {
             ));
             return errors;
         }
+        // an existing lock keeps its other entries: a build given again
+        // (same recipe, --set values and printer) replaces its own entry
+        let entries = match merge(lockfile, entries) {
+            Ok(e) => e,
+            Err(e) => return vec![e],
+        };
         let lock = Lock {
             p3dp_lock: 1,
             entries,
@@ -113,6 +119,35 @@ pub(crate) fn run(a: &Options) -> Vec<Error> {
         }
     }
     errors
+}
+
+/// The entries of the lock at `lockfile` (none when there is no file) with
+/// `new` merged in: an entry of the same recipe, `--set` values and printer
+/// replaced where it stands, the others appended in order. A file that is
+/// not a lock is refused, not overwritten.
+fn merge(lockfile: &Path, new: Vec<Entry>) -> Result<Vec<Entry>> {
+    if !lockfile.exists() {
+        return Ok(new);
+    }
+    let shown = lockfile.display().to_string();
+    let old = crate::base::input::read_text(lockfile, "lock file")
+        .and_then(|text| parse_yaml::<Lock>(&text, &shown))
+        .and_then(|l| l.validate().map(|_| l))
+        .map_err(|e| {
+            e.in_file(&shown).with_help(
+                "--lock adds to an existing lock file; this one cannot be read as one: give another path, or remove it to start a new lock",
+            )
+        })?;
+    let same =
+        |a: &Entry, b: &Entry| a.recipe == b.recipe && a.set == b.set && a.printer == b.printer;
+    let mut entries = old.entries;
+    for e in new {
+        match entries.iter_mut().find(|o| same(o, &e)) {
+            Some(o) => *o = e,
+            None => entries.push(e),
+        }
+    }
+    Ok(entries)
 }
 
 /// The path of `file` relative to the lock file's folder, `/`-separated
@@ -188,12 +223,19 @@ fn check_lock(a: &Options, lockfile: &Path) -> Vec<Error> {
                 let place = match lock::first_difference(&entry.blocks, &new) {
                     Some(k) => {
                         let first = k as u64 * entry.block_lines;
-                        let block = new_lines(c, job, first, entry.block_lines);
+                        let all = new_lines(c, job, 0, u64::MAX);
+                        let block: Vec<String> = all
+                            .iter()
+                            .skip(first as usize)
+                            .take(entry.block_lines as usize)
+                            .cloned()
+                            .collect();
                         let text = block.first().map_or("(end of file)", String::as_str);
+                        let at = part_at(&all, first as usize);
                         if entry.block_lines == 1 {
-                            format!("first differing line {}: `{text}`", first + 1)
+                            format!("{at}first differing line {}: `{text}`", first + 1)
                         } else {
-                            changed_block(first, entry.block_lines, &block)
+                            format!("{at}{}", changed_block(first, entry.block_lines, &block))
                         }
                     }
                     None => "the lines hash alike block by block (a hash collision?)".into(),
@@ -274,6 +316,34 @@ fn entry_job(base: &Path, k: usize, e: &Entry) -> Result<Job> {
             }
         }),
     })
+}
+
+/// The part line `first` (0-based) of G-code `lines` belongs to (its own
+/// `; part:` line included) and the
+/// string it is at, counted as the part's moves (its travel to the start
+/// is string 0's start): "in part `wall` at about string 1234: ", or
+/// nothing before the first part.
+fn part_at(lines: &[String], first: usize) -> String {
+    let upto = &lines[..(first + 1).min(lines.len())];
+    let Some(k) = upto.iter().rposition(|l| l.starts_with("; part: ")) else {
+        return String::new();
+    };
+    let name = upto[k]["; part: ".len()..]
+        .rsplit_once(" (")
+        .map_or(&upto[k]["; part: ".len()..], |(n, _)| n);
+    let moves = upto[k + 1..]
+        .iter()
+        .filter(|l| {
+            let code = l.split(';').next().unwrap_or("");
+            let mut w = code.split_whitespace();
+            matches!(w.next(), Some("G0" | "G1" | "G2" | "G3"))
+                && w.any(|x| x.starts_with(['X', 'Y', 'Z']))
+        })
+        .count();
+    format!(
+        "in part `{name}` at about string {}: ",
+        moves.saturating_sub(1)
+    )
 }
 
 /// Lines `k..k + n` (0-based) of the job's G-code, rebuilt.

@@ -52,7 +52,20 @@ impl Builds {
             ));
         }
         batch::check_count(self.recipes.len(), &self.sweeps)?;
-        Ok(batch::expand(&self.recipes, &self.sets, &self.sweeps))
+        let mut jobs = batch::expand(&self.recipes, &self.sets, &self.sweeps);
+        // a variant is named (file, summary) by the values its sweep gives
+        // the params, not the text: `amplitude=1 + cycles/2` is 2.5 there;
+        // a recipe that cannot be read keeps the text, its build says why
+        for job in jobs.iter_mut().filter(|j| !j.sweep.is_empty()) {
+            if let Ok(params) = crate::recipe::expand::param_values(&job.recipe, &job.sets) {
+                for (name, value) in &mut job.sweep {
+                    if let Some(shown) = params.show(name) {
+                        *value = shown;
+                    }
+                }
+            }
+        }
+        Ok(jobs)
     }
 
     /// Plans a job and refuses it when its checks fail (unless forced).

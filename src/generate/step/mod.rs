@@ -13,7 +13,7 @@ mod subdivide;
 pub(crate) use deform::Deform;
 pub(crate) use modulate::{Bitmap, Modulate, ModulateMap};
 
-use glam::DVec3;
+use glam::{DAffine3, DVec3};
 
 use crate::base::error::{Error, Result};
 use crate::base::expr::{var, Vars};
@@ -43,6 +43,12 @@ pub enum Step {
     Subdivide(f64),
     /// Every point moved by this.
     Translate(DVec3),
+    /// Every point mapped by this rotation, scaling or reflection; the key
+    /// is the step's (`rotate`, `scale`, `mirror`).
+    Place(&'static str, DAffine3),
+    /// A printer command (checked when read) before the first extruding
+    /// string that reaches this height, mm.
+    GcodeAt(f64, std::sync::Arc<str>),
 }
 
 impl Step {
@@ -55,6 +61,8 @@ impl Step {
             Step::ModulateMap(_) => "modulate_map",
             Step::Subdivide(_) => "subdivide",
             Step::Translate(_) => "translate",
+            Step::Place(key, _) => key,
+            Step::GcodeAt(..) => "gcode_at",
         }
     }
 
@@ -70,7 +78,7 @@ impl Step {
                 .any(|e| e.uses(k)),
             Step::ModulateCylinder(m) => m.factor.uses(k),
             Step::ModulateMap(m) => m.u.uses(k) || m.v.uses(k),
-            Step::Subdivide(_) | Step::Translate(_) => false,
+            Step::Subdivide(_) | Step::Translate(_) | Step::Place(..) | Step::GcodeAt(..) => false,
         }
     }
 
@@ -97,8 +105,34 @@ impl Step {
                 }
                 Ok(())
             }
+            Step::GcodeAt(z, text) => {
+                gcode_at(tp, *z, text);
+                Ok(())
+            }
+            Step::Place(_, map) => {
+                for p in &mut tp.points {
+                    *p = map.transform_point3(*p);
+                }
+                for m in &mut tp.markers {
+                    m.pos = map.transform_point3(m.pos);
+                    m.heading = map.transform_vector3(m.heading).normalize_or_zero();
+                    m.up = map.transform_vector3(m.up).normalize_or_zero();
+                }
+                Ok(())
+            }
         }
     }
+}
+
+/// Puts `text` before the first extruding string of `tp` that ends at or
+/// above `z` (after the events already there); nothing when none does.
+fn gcode_at(tp: &mut Toolpath, z: f64, text: &std::sync::Arc<str>) {
+    let Some(k) = (0..tp.len()).find(|&k| !tp.strings[k].travel && tp.points[k + 1].z >= z) else {
+        return;
+    };
+    let at = tp.events.partition_point(|(i, _)| *i <= k);
+    tp.events
+        .insert(at, (k, crate::base::toolpath::Event::Gcode(text.clone())));
 }
 
 /// Below this many items a step runs in one piece.

@@ -44,6 +44,7 @@ impl Flavor {
 /// are moves), without a trailing newline; `None` for those two.
 pub(crate) fn event_line(flavor: Flavor, e: &Event) -> Option<String> {
     Some(match *e {
+        Event::Gcode(ref text) => text.to_string(),
         Event::Dwell { ms } => dwell(flavor, ms),
         Event::Pause => pause(flavor),
         Event::NozzleTemp { celsius, wait } => nozzle_temp(flavor, celsius, wait),

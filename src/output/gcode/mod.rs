@@ -16,6 +16,7 @@
 pub(crate) mod flavor;
 pub(crate) mod labels;
 pub(crate) mod metadata;
+pub(crate) mod raw;
 
 use std::io::{self, Write};
 
@@ -314,10 +315,7 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
             fmt_num(recipe.material.bed_temp),
         );
         self.text(&head).map_err(io)?;
-        for (k, v) in &recipe.params {
-            self.text(&format!("; param {} = {}", one_line(k), fmt_num(*v)))
-                .map_err(io)?;
-        }
+        self.params(&recipe.params).map_err(io)?;
         if !self.thumbnails.is_empty() {
             let t = std::mem::take(&mut self.thumbnails);
             self.text(&t).map_err(io)?;
@@ -561,6 +559,20 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
         }
     }
 
+    /// `; param NAME = VALUE` for each param: a number, or a choice's
+    /// string, a boolean, a list as the recipe reads them.
+    fn params(&mut self, params: &crate::base::expr::Params) -> io::Result<()> {
+        for (k, v) in params.iter() {
+            let v = params.text(k).unwrap_or_else(|| fmt_num(*v));
+            self.text(&format!("; param {} = {}", one_line(k), one_line(&v)))?;
+        }
+        for k in params.list_names() {
+            let v = params.text(k).unwrap_or_default();
+            self.text(&format!("; param {} = {}", one_line(k), v))?;
+        }
+        Ok(())
+    }
+
     /// Adds `filament` mm to the exact E total and writes the E value after
     /// ` E` in the line: the rounded total (M82) or its step from the last
     /// written one (M83), so the written values add up to the exact total.
@@ -718,7 +730,9 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
                 // the head stops for these; a dwell also takes its time
                 match *e {
                     Event::Dwell { ms } => self.moves.dwell(ms.max(0.0) / 1000.0),
+                    // a recipe's own command (M600) may stop the head too
                     Event::Pause
+                    | Event::Gcode(_)
                     | Event::NozzleTemp { wait: true, .. }
                     | Event::BedTemp { wait: true, .. } => self.moves.stop(),
                     _ => {}
@@ -744,6 +758,8 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
         let st = &mut self.stats;
         st.filament += filament;
         st.volume += filament * self.area;
+        // fed in place, it melts as fast as it is fed
+        st.max_flow = st.max_flow.max(speed * self.area);
         let f = self.feed_mm_s();
         self.moves.extrude_only(filament, f);
         Ok(())

@@ -15,7 +15,7 @@ use crate::base::error::{Error, Result};
 use crate::base::expr::Params;
 use crate::base::input::Reads;
 use crate::recipe::eval::key;
-use crate::recipe::schema::Num;
+use crate::recipe::schema::RawParam;
 use crate::recipe::schema::{RawLibrary, RawRecipe, RawTemplate};
 use crate::recipe::yaml::parse_yaml;
 
@@ -41,7 +41,7 @@ pub(crate) struct Template {
 pub(crate) struct Library {
     /// Every param in evaluation order (included files first), with the
     /// included file that defines it (`None`: the recipe).
-    pub params: IndexMap<String, (Num, Option<String>)>,
+    pub params: IndexMap<String, (RawParam, Option<String>)>,
     /// Every template by name.
     pub templates: IndexMap<String, Template>,
 }
@@ -74,7 +74,7 @@ impl Library {
     /// [`crate::recipe::eval_params`]); an error in an included param names
     /// that file.
     pub(crate) fn eval_params(&self, sets: &[(String, String)]) -> Result<Params> {
-        let raw: IndexMap<String, Num> = self
+        let raw: IndexMap<String, RawParam> = self
             .params
             .iter()
             .map(|(k, (n, _))| (k.clone(), n.clone()))
@@ -92,7 +92,7 @@ impl Library {
     /// Adds one file's params and templates (`file` as shown, `None` for the recipe).
     fn add(
         &mut self,
-        params: &IndexMap<String, Num>,
+        params: &IndexMap<String, RawParam>,
         templates: &IndexMap<String, RawTemplate>,
         file: Option<&str>,
         dir: &Path,

@@ -636,6 +636,24 @@ fn reserved_names() -> String {
     v.join(", ")
 }
 
+/// The params of the recipe at `path` (its includes' first) with `sets`
+/// in place of their values: what a build would evaluate them to, without
+/// building (a sweep's names and summary show these values).
+pub(crate) fn param_values(
+    path: &std::path::Path,
+    sets: &[(String, String)],
+) -> crate::base::error::Result<crate::base::expr::Params> {
+    let shown = path.display().to_string();
+    let reads = crate::base::input::Reads::default();
+    let text = reads.read_text(path, "recipe")?;
+    let raw: crate::recipe::schema::RawRecipe = crate::recipe::yaml::parse_yaml(&text, &shown)?;
+    let dir = path
+        .parent()
+        .map(std::path::Path::to_path_buf)
+        .unwrap_or_default();
+    load_library(&raw, Some(path), &dir, &reads)?.eval_params(sets)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

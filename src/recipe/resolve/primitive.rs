@@ -12,13 +12,13 @@ use crate::base::svg::{self, Outline, Subpath};
 use crate::generate::primitive::outline::drawing_commands;
 use crate::generate::primitive::turtle::Env;
 use crate::generate::primitive::{
-    Arc as ArcPrimitive, Circle, Cylinder, Direction, Helix, PathCmd, Primitive, Spiral,
+    Arc as ArcPrimitive, Circle, Cylinder, Direction, Helix, Primitive, Spiral,
 };
 use crate::recipe::eval::{at, key, At, Scope};
 use crate::recipe::schema::Num;
 use crate::recipe::schema::{
-    RawArc, RawCircle, RawCmd, RawCylinder, RawDirection, RawHelix, RawOutline, RawPath,
-    RawPrimitive, RawSpiral,
+    RawArc, RawCircle, RawCylinder, RawDirection, RawHelix, RawOutline, RawPath, RawPrimitive,
+    RawSpiral,
 };
 
 /// Resolves the primitive in `scope`; a turtle runs now, starting from
@@ -39,7 +39,7 @@ pub(super) fn resolve(
     };
     let s = scope.under(raw.key());
     Ok(match raw {
-        RawPrimitive::Path(p) => Primitive::Path(path(p, &s, files)?),
+        RawPrimitive::Path(p) => path(p, &s, files, env)?,
         RawPrimitive::Circle(p) => Primitive::Circle(circle(p, &s)?),
         RawPrimitive::Arc(p) => Primitive::Arc(arc(p, &s)?),
         RawPrimitive::Spiral(p) => Primitive::Spiral(spiral(p, &s, files)?),
@@ -67,9 +67,8 @@ pub(super) struct Files<'a> {
     pub reads: &'a Reads,
 }
 
-/// `path:` its commands evaluated (or the SVG drawing read); `s` is under
-/// `path`.
-fn path(raw: &RawPath, s: &Scope, files: Files) -> Result<Vec<PathCmd>> {
+/// `path:` its commands run (or the SVG drawing read); `s` is under `path`.
+fn path(raw: &RawPath, s: &Scope, files: Files, env: &Env) -> Result<Primitive> {
     let svg_only = [
         (key!(raw.id), raw.id.is_some()),
         (key!(raw.scale), raw.scale.is_some()),
@@ -97,34 +96,22 @@ fn path(raw: &RawPath, s: &Scope, files: Files) -> Result<Vec<PathCmd>> {
                 at!(raw.scale),
                 at!(raw.tolerance),
             )?;
-            return Ok(drawing_commands(&sub, center));
+            return Ok(Primitive::Path(drawing_commands(&sub, center)));
         }
         _ => return Err(s.error(
             "",
             "expected exactly one of `commands` (move, draw, …) and `svg` (an SVG file to draw)",
         )),
     };
-    let list = s.under(key!(raw.commands));
-    let mut cmds = Vec::with_capacity(commands.len());
-    for (k, c) in commands.iter().enumerate() {
-        let s = list.under(&format!("[{k}]"));
-        // each command is an enum's variant: its key is the variant's name
-        cmds.push(match c {
-            RawCmd::Move(n) => PathCmd::Move(s.point(At::new(n, "move"))?),
-            RawCmd::Draw(n) => PathCmd::Draw(s.point(At::new(n, "draw"))?),
-            RawCmd::CrossSection(n) => {
-                PathCmd::CrossSection(s.positive(At::new(n, "cross_section"))?)
-            }
-            RawCmd::Speed(n) => PathCmd::Speed(s.positive(At::new(n, "speed"))?),
-        });
-    }
-    if !cmds.iter().any(|c| matches!(c, PathCmd::Draw(_))) {
-        return Err(list.error(
-            "",
-            "expected at least one `draw` command (a path that extrudes nothing prints nothing)",
-        ));
-    }
-    Ok(cmds)
+    // the turtle's language, run now: a path starts where its first
+    // travel goes, and its `move` and `draw` make a string each (v1)
+    let key = if raw.is_list() {
+        ""
+    } else {
+        key!(raw.commands)
+    };
+    let t = super::turtle::resolve_path(commands, key, s, env)?;
+    Ok(Primitive::Turtle(Box::new(t)))
 }
 
 fn circle(raw: &RawCircle, s: &Scope) -> Result<Circle> {

@@ -5,10 +5,11 @@ use std::path::PathBuf;
 
 use super::Ctx;
 use crate::base::error::{Error, Result};
-use crate::base::expr::var;
+use crate::base::expr::{var, Expr};
 use crate::generate::step::{Bitmap, Deform, Keep, Modulate, ModulateMap, Step};
 use crate::recipe::eval::{at, At, Scope};
-use crate::recipe::schema::{Num, RawDeform, RawKeep, RawStep};
+use crate::recipe::schema::{Num, RawAxis, RawDeform, RawKeep, RawStep};
+use glam::{DAffine3, DVec3};
 
 /// What a point's expressions may read: its place, index, and the part's
 /// size (`modulate_map`'s u and v, `deform_*`'s position).
@@ -52,7 +53,44 @@ pub(super) fn resolve(ctx: &Ctx, step: &RawStep) -> Result<Step> {
         RawStep::ModulateMap { .. } => Step::ModulateMap(modulate_map(ctx, &s, step)?),
         RawStep::Subdivide { max_length } => Step::Subdivide(s.positive(at!(max_length))?),
         RawStep::Translate(d) => Step::Translate(ctx.point(At::new(d, step.key()))?),
+        RawStep::Rotate { angle, center } => {
+            let o = s.center(at!(center))?;
+            let a = s.num(at!(angle))?;
+            Step::Place("rotate", about(o, DAffine3::from_rotation_z(a)))
+        }
+        RawStep::Scale { factor, center } => {
+            let o = s.center(at!(center))?;
+            let f = s.point(at!(factor))?;
+            if f.x == 0.0 || f.y == 0.0 || f.z == 0.0 || !f.is_finite() {
+                return Err(s.error(
+                    "factor",
+                    format!("[{}, {}, {}] flattens the part; expected three finite non-zero factors (negative ones mirror)", f.x, f.y, f.z),
+                ));
+            }
+            Step::Place("scale", about(o, DAffine3::from_scale(f)))
+        }
+        RawStep::Mirror { axis, at } => {
+            let c = match at {
+                Some(n) => s.num(At::new(n, "at"))?,
+                None => 0.0,
+            };
+            let (flip, o) = match axis {
+                RawAxis::X => (DVec3::new(-1.0, 1.0, 1.0), DVec3::new(c, 0.0, 0.0)),
+                RawAxis::Y => (DVec3::new(1.0, -1.0, 1.0), DVec3::new(0.0, c, 0.0)),
+                RawAxis::Z => (DVec3::new(1.0, 1.0, -1.0), DVec3::new(0.0, 0.0, c)),
+            };
+            Step::Place("mirror", about(o, DAffine3::from_scale(flip)))
+        }
+        RawStep::GcodeAt { z, gcode } => {
+            crate::output::gcode::raw::check(gcode).map_err(|m| s.error("gcode", m))?;
+            Step::GcodeAt(s.num(at!(z))?, gcode.trim().into())
+        }
     })
+}
+
+/// `map` applied about `o` instead of the origin.
+fn about(o: DVec3, map: DAffine3) -> DAffine3 {
+    DAffine3::from_translation(o) * map * DAffine3::from_translation(-o)
 }
 
 fn keep(k: &Option<RawKeep>) -> Keep {
@@ -62,17 +100,36 @@ fn keep(k: &Option<RawKeep>) -> Keep {
     }
 }
 
+/// `deform_xyz` reads `r` and `theta` as the point's cylinder coordinates
+/// (`z + cos(6*theta)` is a wave round the part), but a position written
+/// as a cylinder one, `[r, f(theta), …]`, maps x to the radius and y to the
+/// angle: a column off to one side without a word. That one is refused.
+fn cartesian_only(n: &[Num; 3], e: &[Expr], s: &Scope) -> Result<()> {
+    let bare_r = matches!(&n[0], Num::Expr(t) if t.trim() == "r");
+    let angle_y = e[1].uses(var::THETA) && !e[1].uses(var::X) && !e[1].uses(var::Y);
+    if bare_r && angle_y {
+        return Err(s.error(
+            "",
+            "[r, …(theta), …] is a cylinder position, but deform_xyz maps [x, y, z] (it would put x at the radius and y at the angle); expected deform_cylinder: {position: [r, theta, z]} for cylinder coordinates",
+        ));
+    }
+    Ok(())
+}
+
 /// `deform_xyz` or `deform_cylinder`; `s` is under its key.
 fn deform(s: &Scope, d: &RawDeform, cylinder: bool) -> Result<Deform> {
     let position = match at!(d.position).some() {
         Some(p) => {
             let ps = s.under(p.key);
             let n = p.value;
-            Some([
-                ps.expr(At::new(&n[0], "[0]"), POINT_VARS)?,
-                ps.expr(At::new(&n[1], "[1]"), POINT_VARS)?,
-                ps.expr(At::new(&n[2], "[2]"), POINT_VARS)?,
-            ])
+            let mut out = Vec::with_capacity(3);
+            for (n, key) in n.iter().zip(["[0]", "[1]", "[2]"]) {
+                out.push(ps.expr(At::new(n, key), POINT_VARS)?);
+            }
+            if !cylinder {
+                cartesian_only(n, &out, &ps)?;
+            }
+            Some(out.try_into().expect("three coordinates"))
         }
         None => None,
     };

@@ -12,10 +12,12 @@ use crate::base::error::{Error, Result};
 use crate::base::expr::{var, Expr, ExprErrorKind, Params};
 use crate::generate::primitive::turtle::interp::Program;
 use crate::generate::primitive::turtle::lsystem::Lsystem;
-use crate::generate::primitive::turtle::program::{Axis, Cmd, Op, Proc, Setting, Val, STATE};
+use crate::generate::primitive::turtle::program::{
+    Axis, Cmd, Curve, Op, Proc, Setting, Val, Values, STATE,
+};
 use crate::generate::primitive::turtle::{self, Env, Frame, Turtle};
 use crate::recipe::eval::{at, join, key, Scope};
-use crate::recipe::schema::{Num, Num3};
+use crate::recipe::schema::{Num, Num3, RawLoop, RawPoint};
 use crate::recipe::schema::{RawCommand, RawLsystem, RawProcedure, RawTurtle};
 
 /// Compiles and runs a turtle; `s` is under `turtle`, the key paths of its
@@ -50,7 +52,40 @@ fn compile(raw: &RawTurtle, s: &Scope) -> Result<Program> {
         seed,
         main,
         procs,
+        path: false,
     })
+}
+
+/// Compiles and runs a `path`'s commands (written at `key` under `s`'s
+/// place, `path`): the turtle's language, starting at the origin facing
+/// +x, where a path starts where its first travel goes.
+pub(super) fn resolve_path(cmds: &[RawCommand], key: &str, s: &Scope, env: &Env) -> Result<Turtle> {
+    let compiler = Compiler::new(s.params, &IndexMap::new());
+    compiler
+        .block(cmds, key, &Arc::new(Vec::new()))
+        .and_then(|main| {
+            let prog = Program {
+                start: Frame::new(DVec3::ZERO, DVec3::X, DVec3::Z)
+                    .expect("+x and +z make a frame"),
+                seed: 0,
+                main,
+                procs: Vec::new(),
+                path: true,
+            };
+            turtle::run(&prog, env)
+        })
+        .map_err(|e| {
+            // a path that draws nothing: name its commands, as v1 did
+            let e = if e.place.as_deref() == Some("program") {
+                Error::input(
+                    key,
+                    "expected at least one `draw` (or a movement with the pen down): a path that extrudes nothing prints nothing",
+                )
+            } else {
+                e
+            };
+            e.under(s.here())
+        })
 }
 
 /// Compiles the commands of one turtle.
@@ -69,7 +104,7 @@ fn check_name(name: &str, params: &Params, scope: &[String], place: &str) -> Res
         "a name must be letters, digits and `_`, not starting with a digit"
     } else if matches!(name, "x" | "y" | "z" | "pi" | "e" | "rand") {
         "turtle expressions already use it (x y z are the turtle's position; pi, e, rand())"
-    } else if params.contains_key(name) {
+    } else if params.has(name) {
         "it is a param of the recipe"
     } else if scope.iter().any(|s| s == name) {
         "it is already a loop counter or parameter here"
@@ -165,10 +200,46 @@ impl<'a> Compiler<'a> {
         scope: &Arc<Vec<String>>,
     ) -> Result<Vec<Cmd>> {
         let mut out = Vec::with_capacity(cmds.len());
+        // a `let` adds its names to the scope of the commands after it
+        let mut scope = scope.clone();
         for (k, c) in cmds.iter().enumerate() {
-            out.push(self.command(c, &format!("{place}[{k}]"), scope)?);
+            let item = format!("{place}[{k}]");
+            if let RawCommand::Let(lets) = c {
+                let (cmd, inner) = self.lets(lets, &item, &scope)?;
+                out.push(cmd);
+                scope = inner;
+                continue;
+            }
+            out.push(self.command(c, &item, &scope)?);
         }
         Ok(out)
+    }
+
+    /// `let: {name: value, …}`, list item `item`: each value over the names
+    /// before it, and the scope with all of them.
+    fn lets(
+        &self,
+        lets: &IndexMap<String, Num>,
+        item: &str,
+        scope: &Arc<Vec<String>>,
+    ) -> Result<(Cmd, Arc<Vec<String>>)> {
+        let place = format!("{item}.let");
+        let mut s = (**scope).clone();
+        let mut vals = Vec::with_capacity(lets.len());
+        for (name, n) in lets {
+            let at = join(&place, name);
+            let v = self.val(n, &Arc::new(s.clone()), &at)?;
+            check_name(name, self.params, &s, &at)?;
+            s.push(name.clone());
+            vals.push(v);
+        }
+        Ok((
+            Cmd {
+                place,
+                op: Op::Let(vals),
+            },
+            Arc::new(s),
+        ))
     }
 
     /// One command, list item `item`: its place is `item.KEY`, KEY its command key.
@@ -177,7 +248,20 @@ impl<'a> Compiler<'a> {
         let (place, op) = match c {
             RawCommand::Bare(w) => (at(w), bare(w)),
             RawCommand::Scalar(w, n) => (at(w), scalar(w, self.val(n, scope, &at(w))?)),
-            RawCommand::Goto(p) => (at("goto"), Op::Goto(self.val3(p, scope, &at("goto"))?)),
+            RawCommand::Goto(p) => (at("goto"), Op::Goto(self.point(p, scope, &at("goto"))?)),
+            RawCommand::Move(p) => (
+                at("move"),
+                Op::To(self.point(p, scope, &at("move"))?, false),
+            ),
+            RawCommand::Draw(p) => (at("draw"), Op::To(self.point(p, scope, &at("draw"))?, true)),
+            RawCommand::For { .. }
+            | RawCommand::Let(_)
+            | RawCommand::Arc(_)
+            | RawCommand::Bezier(_)
+            | RawCommand::Line(_)
+            | RawCommand::Rectangle(_)
+            | RawCommand::ExtrudeVolume { .. }
+            | RawCommand::Gcode(_) => return self.more(c, item, scope),
             RawCommand::SetHeading { heading, up } => (
                 at("set_heading"),
                 Op::SetHeading(Box::new((
@@ -231,6 +315,177 @@ impl<'a> Compiler<'a> {
             ),
         };
         Ok(Cmd { place, op })
+    }
+
+    /// A point: `[x, y, z]`, or some of them with the others the head's
+    /// (compiled as `x`, `y`, `z`).
+    fn point(&self, p: &RawPoint, scope: &Arc<Vec<String>>, place: &str) -> Result<[Val; 3]> {
+        let names = ["x", "y", "z"];
+        let c = p.coords();
+        let mut out = Vec::with_capacity(3);
+        for k in 0..3 {
+            let (n, at) = match (c[k], p) {
+                (Some(n), RawPoint::Full(_)) => (n.clone(), format!("{place}[{k}]")),
+                (Some(n), RawPoint::Partial { .. }) => (n.clone(), join(place, names[k])),
+                (None, _) => (Num::Expr(names[k].into()), place.to_string()),
+            };
+            out.push(self.val(&n, scope, &at)?);
+        }
+        Ok(out.try_into().expect("three coordinates"))
+    }
+
+    /// The commands beyond v1's turtle: `for`, the curves,
+    /// `extrude_volume`, `gcode` (`let` is the block's), list item `item`.
+    fn more(&self, c: &RawCommand, item: &str, scope: &Arc<Vec<String>>) -> Result<Cmd> {
+        let at = |key: &str| format!("{item}.{key}");
+        let (place, op) = match c {
+            RawCommand::For { loops, body } => {
+                (at("for"), self.for_loops(loops, body, item, scope)?)
+            }
+            RawCommand::Arc(a) => {
+                let p = at("arc");
+                let v = |n: &Num, k: &str| self.val(n, scope, &join(&p, k));
+                let curve = Curve::Arc {
+                    center: self.point(&a.center, scope, &join(&p, "center"))?,
+                    radius: v(&a.radius, "radius")?,
+                    start: v(&a.start, "start")?,
+                    sweep: v(&a.sweep, "sweep")?,
+                    segments: v(&a.segments, "segments")?,
+                    end_radius: a
+                        .end_radius
+                        .as_ref()
+                        .map(|n| v(n, "end_radius"))
+                        .transpose()?,
+                    rise: a.rise.as_ref().map(|n| v(n, "rise")).transpose()?,
+                };
+                (p, Op::Curve(Box::new(curve)))
+            }
+            RawCommand::Bezier(b) => {
+                let p = at("bezier");
+                if b.points.len() < 2 {
+                    return Err(Error::input(
+                        join(&p, "points"),
+                        format!("{} control point(s); expected at least two", b.points.len()),
+                    ));
+                }
+                let mut points = Vec::with_capacity(b.points.len());
+                for (k, q) in b.points.iter().enumerate() {
+                    points.push(self.point(q, scope, &format!("{p}.points[{k}]"))?);
+                }
+                let segments = self.val(&b.segments, scope, &join(&p, "segments"))?;
+                (p, Op::Curve(Box::new(Curve::Bezier { points, segments })))
+            }
+            RawCommand::Line(l) => {
+                let p = at("line");
+                let from = match &l.from {
+                    Some(f) => Some(self.point(f, scope, &join(&p, "from"))?),
+                    None => None,
+                };
+                let curve = Curve::Line {
+                    from,
+                    to: self.point(&l.to, scope, &join(&p, "to"))?,
+                    segments: self.val(&l.segments, scope, &join(&p, "segments"))?,
+                };
+                (p, Op::Curve(Box::new(curve)))
+            }
+            RawCommand::Rectangle(r) => {
+                let p = at("rectangle");
+                let curve = Curve::Rectangle {
+                    corner: self.point(&r.corner, scope, &join(&p, "corner"))?,
+                    size: [
+                        self.val(&r.size[0], scope, &format!("{p}.size[0]"))?,
+                        self.val(&r.size[1], scope, &format!("{p}.size[1]"))?,
+                    ],
+                    clockwise: r.clockwise.unwrap_or(false),
+                };
+                (p, Op::Curve(Box::new(curve)))
+            }
+            RawCommand::ExtrudeVolume { volume, feed } => (
+                at("extrude_volume"),
+                Op::ExtrudeVolume(
+                    self.val(volume, scope, &at("extrude_volume"))?,
+                    self.opt_val(feed, scope, &at("feed"))?,
+                ),
+            ),
+            RawCommand::Gcode(text) => {
+                let p = at("gcode");
+                crate::output::gcode::raw::check(text).map_err(|m| Error::input(&p, m))?;
+                (p, Op::Gcode(text.trim().into()))
+            }
+            _ => unreachable!("`more` takes the commands it names"),
+        };
+        Ok(Cmd { place, op })
+    }
+
+    /// `for: {name: values, …}` with `do: body`, list item `item`: one
+    /// loop per name, the first outermost.
+    fn for_loops(
+        &self,
+        loops: &IndexMap<String, RawLoop>,
+        body: &[RawCommand],
+        item: &str,
+        scope: &Arc<Vec<String>>,
+    ) -> Result<Op> {
+        let place = format!("{item}.for");
+        if loops.is_empty() {
+            return Err(Error::input(
+                place,
+                "expected a name and its values, e.g. {k: \"0..4\"}",
+            ));
+        }
+        let mut values = Vec::with_capacity(loops.len());
+        let mut inner = (**scope).clone();
+        for (name, l) in loops {
+            let at = join(&place, name);
+            check_name(name, self.params, &inner, &at)?;
+            let sc = Arc::new(inner.clone());
+            values.push(match l {
+                RawLoop::List(v) => {
+                    let mut list = Vec::with_capacity(v.len());
+                    for (k, n) in v.iter().enumerate() {
+                        list.push(self.val(n, &sc, &format!("{at}[{k}]"))?);
+                    }
+                    Values::List(list)
+                }
+                RawLoop::Range(r) => self.range(r, &sc, &at)?,
+            });
+            inner.push(name.clone());
+        }
+        let mut op_body = self.block(body, &format!("{item}.do"), &Arc::new(inner))?;
+        // the innermost loop runs the body; each outer one the loop inside it
+        let mut values = values.into_iter().rev();
+        let mut op = Op::For {
+            values: Box::new(values.next().expect("one loop at least")),
+            body: op_body,
+        };
+        for v in values {
+            op_body = vec![Cmd {
+                place: place.clone(),
+                op,
+            }];
+            op = Op::For {
+                values: Box::new(v),
+                body: op_body,
+            };
+        }
+        Ok(op)
+    }
+
+    /// `"a..b"` or `"a..b:step"` of a `for`, at `place`.
+    fn range(&self, r: &str, scope: &Arc<Vec<String>>, place: &str) -> Result<Values> {
+        let not_range = || {
+            Error::input(place, format!("`{r}` is not a range; expected \"a..b\" or \"a..b:step\" (b included), or a list [v1, v2, …]"))
+        };
+        let (a, rest) = r.split_once("..").ok_or_else(not_range)?;
+        let (b, step) = match rest.split_once(':') {
+            Some((b, st)) => (b, Some(st)),
+            None => (rest, None),
+        };
+        if a.trim().is_empty() || b.trim().is_empty() {
+            return Err(not_range());
+        }
+        let val = |t: &str| self.val(&Num::Expr(t.trim().to_string()), scope, place);
+        Ok(Values::Range(val(a)?, val(b)?, step.map(val).transpose()?))
     }
 
     /// `repeat: count` with `as: var` and `do: body`, list item `item`.
@@ -538,6 +793,49 @@ mod tests {
     }
 
     #[test]
+    fn for_let_curves_volume_and_gcode() {
+        // a for over a range (b included) with a let: three draws along x
+        let t =
+            run("program:\n  - {for: {k: \"1..3\"}, do: [{let: {w: \"2*k\"}}, {draw: {x: w}}]}\n");
+        let xs: Vec<f64> = t.points[1..].iter().map(|p| p.x).collect();
+        assert_eq!(xs, vec![2.0, 4.0, 6.0]);
+        // an arc: a quarter circle of 4 segments, each point on the circle
+        let t = run("program:\n  - {arc: {center: [0, 0, 0], radius: 5, start: 0, sweep: \"tau/4\", segments: 4}}\n");
+        assert_eq!(t.len(), 5);
+        for p in &t.points[1..] {
+            assert!((p.truncate().length() - 5.0).abs() < 1e-12, "{p}");
+        }
+        assert!((t.points[5] - DVec3::new(0.0, 5.0, 0.0)).length() < 1e-12);
+        // a Bezier's middle point and a segmented line's equal pieces
+        let t = run("program:\n  - {bezier: {points: [[0,0,0], [1,2,0], [2,0,0]], segments: 2}}\n  - {line: {to: [8, 1, 0], segments: 3}}\n");
+        // (the first control point is where the turtle stands: no string to it)
+        assert!((t.points[1] - DVec3::new(1.0, 1.0, 0.0)).length() < 1e-12);
+        assert!((t.points[4] - DVec3::new(6.0, 2.0 / 3.0, 0.0)).length() < 1e-12);
+        // a volume in place: filament = volume / filament area (2 mm² here)
+        let t = run(
+            "program:\n  - {forward: 1}\n  - {extrude_volume: 3, feed: 2}\n  - {gcode: M600}\n",
+        );
+        assert_eq!(
+            t.events[0],
+            (
+                1,
+                Event::Extrude {
+                    filament: 1.5,
+                    speed: 2.0
+                }
+            )
+        );
+        assert_eq!(t.events[1], (1, Event::Gcode("M600".into())));
+        // a move it could not account for is refused, naming the place
+        let e = err("program:\n  - {gcode: \"G1 X10\"}\n");
+        assert_eq!(e.place.as_deref(), Some("turtle.program[0].gcode"), "{e}");
+        let e = err("program:\n  - {gcode: \"M600\\nG28\"}\n");
+        assert!(e.message.contains("one line"), "{e}");
+        let e = err("program:\n  - {bezier: {points: [[0,0,0]], segments: 2}}\n");
+        assert!(e.message.contains("at least two"), "{e}");
+    }
+
+    #[test]
     fn settings_and_events() {
         let t = run("program:\n  - {forward: 1}\n  - pen_up\n  - {forward: 2}\n  - pen_down\n  - {extrude_rate: 0.05}\n  - {speed: 12}\n  - {forward: 3}\n  - {cross_section: 0.3}\n  - {extrude: 2, feed: 3}\n  - {dwell: 250}\n  - pause\n  - {nozzle_temp: 200, wait: true}\n  - {fan: 0.5}\n  - {forward: 1}\n");
         assert_eq!(t.len(), 4);
@@ -709,10 +1007,7 @@ mod tests {
     fn errors_name_the_key_path() {
         let e = err("program:\n  - {forward: 1}\n  - {fowrard: 1}\n");
         assert_eq!(e.place.as_deref(), Some("program[1]"));
-        assert!(
-            e.message.contains("unknown turtle command `fowrard`"),
-            "{e}"
-        );
+        assert!(e.message.contains("unknown command `fowrard`"), "{e}");
         let e = err("program:\n  - forward\n");
         assert!(e.message.contains("needs a value"), "{e}");
         let e = err("program:\n  - {goto: [1, 2]}\n");

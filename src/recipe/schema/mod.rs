@@ -7,7 +7,9 @@
 //! primitives in `primitive.rs` (`solid:` and `turtle:` in `solid.rs` and
 //! `turtle.rs`), the steps in `step.rs`; a printer profile in `profile.rs`.
 
+mod curve;
 mod num;
+mod param;
 mod part;
 mod primitive;
 mod profile;
@@ -21,10 +23,12 @@ use indexmap::IndexMap;
 use serde::de::{self, Deserializer, IgnoredAny, MapAccess, Visitor};
 use serde::Deserialize;
 
-pub(crate) use num::{Num, Num3};
+pub(crate) use curve::{RawArcCmd, RawBezier, RawLine, RawRectangle};
+pub(crate) use num::{Num, Num3, RawPoint};
+pub(crate) use param::{RawChoice, RawParam};
 pub(crate) use part::{RawBrim, RawLoop, RawPart, RawPrimitiveItem, RawPrimitives, RawStand};
 pub(crate) use primitive::{
-    RawArc, RawCaHelix, RawCircle, RawCmd, RawCylinder, RawDirection, RawFirstLayer, RawHelix,
+    PathMap, RawArc, RawCaHelix, RawCircle, RawCylinder, RawDirection, RawFirstLayer, RawHelix,
     RawInitial, RawLayout, RawOutline, RawPath, RawPatternHelix, RawPrimitive, RawRule, RawSpiral,
 };
 pub(crate) use profile::{
@@ -32,7 +36,7 @@ pub(crate) use profile::{
     RawPrinter, RawRetraction, RawVariable,
 };
 pub(crate) use solid::{RawBox, RawFeature, RawInfill, RawOp, RawPattern, RawSolid};
-pub(crate) use step::{RawDeform, RawKeep, RawStep};
+pub(crate) use step::{RawAxis, RawDeform, RawKeep, RawStep};
 pub(crate) use turtle::{RawCommand, RawLsystem, RawProcedure, RawStart, RawTurtle};
 
 /// `material:` a built-in name or an inline map.
@@ -138,7 +142,7 @@ pub struct RawRecipe {
     pub material: Option<RawMaterial>,
     /// Named params in order.
     #[serde(default, deserialize_with = "unique_map")]
-    pub params: IndexMap<String, Num>,
+    pub params: IndexMap<String, RawParam>,
     /// Default cross-section and speed.
     #[serde(default)]
     pub defaults: RawDefaults,
@@ -201,8 +205,8 @@ pub(crate) struct RawLibrary {
     #[serde(default)]
     pub allow: Option<IgnoredAny>,
     /// Params, in order.
-    #[serde(default)]
-    pub params: IndexMap<String, Num>,
+    #[serde(default, deserialize_with = "unique_map")]
+    pub params: IndexMap<String, RawParam>,
     /// Templates.
     #[serde(default)]
     pub templates: IndexMap<String, RawTemplate>,
@@ -314,12 +318,12 @@ impl RawAllow {
 /// silently keep the last), as struct fields are refused.
 fn unique_map<'de, D: Deserializer<'de>>(
     d: D,
-) -> std::result::Result<IndexMap<String, Num>, D::Error> {
+) -> std::result::Result<IndexMap<String, RawParam>, D::Error> {
     struct V;
     impl<'de> Visitor<'de> for V {
-        type Value = IndexMap<String, Num>;
+        type Value = IndexMap<String, RawParam>;
         fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-            f.write_str("a map of param names to numbers or expressions")
+            f.write_str("a map of param names to numbers, expressions, booleans, lists or choices")
         }
         fn visit_map<A: MapAccess<'de>>(
             self,
@@ -332,7 +336,7 @@ fn unique_map<'de, D: Deserializer<'de>>(
                         "duplicate param `{k}`; expected each param once"
                     )));
                 }
-                let v: Num = m.next_value()?;
+                let v: RawParam = m.next_value()?;
                 out.insert(k, v);
             }
             Ok(out)

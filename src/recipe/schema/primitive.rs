@@ -5,7 +5,7 @@ use serde::Deserialize;
 
 use super::num::{Num, Num3};
 use super::solid::RawSolid;
-use super::turtle::RawTurtle;
+use super::turtle::{RawCommand, RawTurtle};
 
 /// A primitive as written: one key naming its kind.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
@@ -43,24 +43,41 @@ impl RawPrimitive {
     }
 }
 
-/// A `path` command as written.
-#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
-#[serde(rename_all = "snake_case")]
-#[allow(missing_docs)]
-pub enum RawCmd {
-    Move(Num3),
-    Draw(Num3),
-    CrossSection(Num),
-    Speed(Num),
+/// `path:` as written: commands (the program language of `turtle:`, with
+/// `move` and `draw`), or an SVG drawing. A list in place of the map is
+/// its `commands`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RawPath(PathMap, bool);
+
+impl RawPath {
+    /// Whether it was written as the list of commands itself (its key
+    /// paths are then `path[k]`, not `path.commands[k]`).
+    pub fn is_list(&self) -> bool {
+        self.1
+    }
 }
 
-/// `path:` as written: commands, or an SVG drawing.
-#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
+impl schemars::JsonSchema for RawPath {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "RawPath".into()
+    }
+    fn json_schema(g: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        let map = g.subschema_for::<PathMap>();
+        let cmd = g.subschema_for::<RawCommand>();
+        schemars::json_schema!({
+            "description": "A path: {commands: […]} or {svg: FILE, …}, or the list of commands itself.",
+            "anyOf": [map, {"type": "array", "items": cmd}]
+        })
+    }
+}
+
+/// The map form of `path:`.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct RawPath {
+pub struct PathMap {
     /// The commands, in order.
     #[serde(default)]
-    pub commands: Option<Vec<RawCmd>>,
+    pub commands: Option<Vec<RawCommand>>,
     /// An SVG file whose paths are drawn as strings (instead of `commands`).
     #[serde(default)]
     pub svg: Option<String>,
@@ -76,6 +93,42 @@ pub struct RawPath {
     /// Where the centre of the drawing's bounding box goes.
     #[serde(default)]
     pub center: Option<Num3>,
+}
+
+impl std::ops::Deref for RawPath {
+    type Target = PathMap;
+    fn deref(&self) -> &PathMap {
+        &self.0
+    }
+}
+
+impl<'de> Deserialize<'de> for RawPath {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<RawPath, D::Error> {
+        use serde::de::{self, MapAccess, SeqAccess, Visitor};
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = RawPath;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a map {commands: […]} or {svg: FILE}, or the list of commands itself")
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, s: A) -> Result<RawPath, A::Error> {
+                let cmds =
+                    Vec::<RawCommand>::deserialize(de::value::SeqAccessDeserializer::new(s))?;
+                Ok(RawPath(
+                    PathMap {
+                        commands: Some(cmds),
+                        ..PathMap::default()
+                    },
+                    true,
+                ))
+            }
+            fn visit_map<A: MapAccess<'de>>(self, m: A) -> Result<RawPath, A::Error> {
+                PathMap::deserialize(de::value::MapAccessDeserializer::new(m))
+                    .map(|p| RawPath(p, false))
+            }
+        }
+        d.deserialize_any(V)
+    }
 }
 
 /// `circle:` as written.

@@ -58,6 +58,45 @@ pub enum RawStep {
         max_length: Num,
     },
     Translate(Num3),
+    /// `rotate: {angle, center}`: every point turned by `angle` radians
+    /// (counter-clockwise seen from above) about the vertical line through
+    /// `center` (the origin when absent).
+    Rotate {
+        angle: Num,
+        #[serde(default)]
+        center: Option<Num3>,
+    },
+    /// `scale: {factor: [sx, sy, sz], center}`: every point's offset from
+    /// `center` (the origin when absent) multiplied axis by axis; strings
+    /// keep their cross-section and speed.
+    Scale {
+        factor: Num3,
+        #[serde(default)]
+        center: Option<Num3>,
+    },
+    /// `mirror: {axis, at}`: every point reflected in the plane where the
+    /// coordinate `axis` (x, y or z) is `at` (0 when absent).
+    Mirror {
+        axis: RawAxis,
+        #[serde(default)]
+        at: Option<Num>,
+    },
+    /// `gcode_at: {z, gcode}`: a printer command (a filament change `M600`)
+    /// written before the first extruding string that reaches height `z`.
+    GcodeAt {
+        z: Num,
+        gcode: String,
+    },
+}
+
+/// The coordinate a `mirror` step reflects.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+#[allow(missing_docs)]
+pub enum RawAxis {
+    X,
+    Y,
+    Z,
 }
 
 impl RawStep {
@@ -71,6 +110,10 @@ impl RawStep {
             RawStep::ModulateMap { .. } => "modulate_map",
             RawStep::Subdivide { .. } => "subdivide",
             RawStep::Translate(_) => "translate",
+            RawStep::Rotate { .. } => "rotate",
+            RawStep::Scale { .. } => "scale",
+            RawStep::Mirror { .. } => "mirror",
+            RawStep::GcodeAt { .. } => "gcode_at",
         }
     }
 }
@@ -89,6 +132,10 @@ mod tests {
             ("modulate_map", "{u: x, v: y}"),
             ("subdivide", "{max_length: 1}"),
             ("translate", "[0, 0, 1]"),
+            ("rotate", "{angle: 1}"),
+            ("scale", "{factor: [1, 2, 1]}"),
+            ("mirror", "{axis: x}"),
+            ("gcode_at", "{z: 10, gcode: M600}"),
         ] {
             let s: RawStep = parse_yaml(&format!("{{{key}: {map}}}"), "t").unwrap();
             assert_eq!(s.key(), key);

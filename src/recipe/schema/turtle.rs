@@ -7,7 +7,9 @@ use indexmap::IndexMap;
 use serde::de::{self, Deserializer, MapAccess, Visitor};
 use serde::Deserialize;
 
-use super::num::{Num, Num3};
+use super::curve::{RawArcCmd, RawBezier, RawLine, RawRectangle};
+use super::num::{Num, Num3, RawPoint};
+use super::part::RawLoop;
 
 /// `turtle:` as written.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
@@ -78,7 +80,33 @@ pub enum RawCommand {
     Bare(&'static str),
     /// A command with one number: movement, turns, settings, events.
     Scalar(&'static str, Num),
-    Goto(Num3),
+    /// `goto`: to the point, drawing with the pen down.
+    Goto(RawPoint),
+    /// `move`: a travel to the point, whatever the pen.
+    Move(RawPoint),
+    /// `draw`: an extruding string to the point, whatever the pen.
+    Draw(RawPoint),
+    /// `for: {name: range or list}` with `do:` run once per value (several
+    /// names: nested, the first outermost).
+    For {
+        loops: IndexMap<String, RawLoop>,
+        body: Vec<RawCommand>,
+    },
+    /// `let: {name: value, …}`: named values for the rest of the block.
+    Let(IndexMap<String, Num>),
+    /// A curve drawn in one command.
+    Arc(Box<RawArcCmd>),
+    Bezier(Box<RawBezier>),
+    Line(Box<RawLine>),
+    Rectangle(Box<RawRectangle>),
+    /// `extrude_volume: mm³` in place, with `feed:` (FullControl's
+    /// `StationaryExtrusion`).
+    ExtrudeVolume {
+        volume: Num,
+        feed: Option<Num>,
+    },
+    /// `gcode: "M600"`: a printer command written as it is, here.
+    Gcode(String),
     SetHeading {
         heading: Num3,
         up: Option<Num3>,
@@ -135,9 +163,10 @@ pub(super) const SCALAR: &[&str] = &[
     "fan",
 ];
 /// Every command, for error messages.
-pub(super) const COMMANDS: &str = "forward, backward, lift, goto, yaw, pitch, roll, left, right, \
-set_heading, pen_up, pen_down, extrude_rate, cross_section, speed, extrude, dwell, pause, \
-nozzle_temp, bed_temp, fan, push, pop, draw_turtle, repeat, if, call, lsystem, hair";
+pub(super) const COMMANDS: &str = "forward, backward, lift, goto, move, draw, yaw, pitch, roll, left, right, \
+set_heading, pen_up, pen_down, extrude_rate, cross_section, speed, extrude, extrude_volume, dwell, pause, \
+nozzle_temp, bed_temp, fan, gcode, push, pop, draw_turtle, repeat, for, let, if, call, lsystem, hair, \
+arc, bezier, line, rectangle";
 
 impl schemars::JsonSchema for RawCommand {
     fn schema_name() -> std::borrow::Cow<'static, str> {
@@ -175,6 +204,14 @@ struct Keys {
     cmd: Option<&'static str>,
     num: Option<Num>,
     vec: Option<Num3>,
+    point: Option<RawPoint>,
+    loops: Option<IndexMap<String, RawLoop>>,
+    lets: Option<IndexMap<String, Num>>,
+    arc: Option<RawArcCmd>,
+    bezier: Option<RawBezier>,
+    line: Option<RawLine>,
+    rectangle: Option<RawRectangle>,
+    text: Option<String>,
     name: Option<String>,
     lsystem: Option<RawLsystem>,
     var: Option<String>,
@@ -192,7 +229,7 @@ impl<'de> Visitor<'de> for CommandVisitor {
     type Value = RawCommand;
 
     fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-        f.write_str("a turtle command: a map like {forward: 10} or a bare word like pen_up")
+        f.write_str("a command: a map like {forward: 10} or a bare word like pen_up")
     }
 
     fn visit_str<E: de::Error>(self, v: &str) -> std::result::Result<RawCommand, E> {
@@ -205,7 +242,7 @@ impl<'de> Visitor<'de> for CommandVisitor {
             )));
         }
         Err(E::custom(format!(
-            "unknown turtle command `{v}`; expected one of {COMMANDS}"
+            "unknown command `{v}`; expected one of {COMMANDS}"
         )))
     }
 
@@ -229,10 +266,50 @@ impl<'de> Visitor<'de> for CommandVisitor {
                     set(&mut k.cmd, name)?;
                     k.num = Some(m.next_value()?);
                 }
-                "goto" | "set_heading" => {
-                    let name = if key == "goto" { "goto" } else { "set_heading" };
-                    set(&mut k.cmd, name)?;
+                "set_heading" => {
+                    set(&mut k.cmd, "set_heading")?;
                     k.vec = Some(m.next_value()?);
+                }
+                "goto" | "move" | "draw" => {
+                    let name = match key.as_str() {
+                        "goto" => "goto",
+                        "move" => "move",
+                        _ => "draw",
+                    };
+                    set(&mut k.cmd, name)?;
+                    k.point = Some(m.next_value()?);
+                }
+                "extrude_volume" => {
+                    set(&mut k.cmd, "extrude_volume")?;
+                    k.num = Some(m.next_value()?);
+                }
+                "for" => {
+                    set(&mut k.cmd, "for")?;
+                    k.loops = Some(m.next_value()?);
+                }
+                "let" => {
+                    set(&mut k.cmd, "let")?;
+                    k.lets = Some(m.next_value()?);
+                }
+                "gcode" => {
+                    set(&mut k.cmd, "gcode")?;
+                    k.text = Some(m.next_value()?);
+                }
+                "arc" => {
+                    set(&mut k.cmd, "arc")?;
+                    k.arc = Some(m.next_value()?);
+                }
+                "bezier" => {
+                    set(&mut k.cmd, "bezier")?;
+                    k.bezier = Some(m.next_value()?);
+                }
+                "line" => {
+                    set(&mut k.cmd, "line")?;
+                    k.line = Some(m.next_value()?);
+                }
+                "rectangle" => {
+                    set(&mut k.cmd, "rectangle")?;
+                    k.rectangle = Some(m.next_value()?);
                 }
                 "call" => {
                     set(&mut k.cmd, "call")?;
@@ -258,7 +335,7 @@ impl<'de> Visitor<'de> for CommandVisitor {
                 }
                 other => {
                     return Err(de::Error::custom(format!(
-                        "unknown turtle command `{other}`; expected one of {COMMANDS}"
+                        "unknown command `{other}`; expected one of {COMMANDS}"
                     )))
                 }
             }
@@ -290,7 +367,23 @@ impl Keys {
         };
         self.companions(cmd)?;
         Ok(match cmd {
-            "goto" => RawCommand::Goto(self.vec.unwrap()),
+            "goto" => RawCommand::Goto(self.point.unwrap()),
+            "move" => RawCommand::Move(self.point.unwrap()),
+            "draw" => RawCommand::Draw(self.point.unwrap()),
+            "for" => RawCommand::For {
+                loops: self.loops.unwrap(),
+                body: self.body.unwrap(),
+            },
+            "let" => RawCommand::Let(self.lets.unwrap()),
+            "gcode" => RawCommand::Gcode(self.text.unwrap()),
+            "arc" => RawCommand::Arc(Box::new(self.arc.unwrap())),
+            "bezier" => RawCommand::Bezier(Box::new(self.bezier.unwrap())),
+            "line" => RawCommand::Line(Box::new(self.line.unwrap())),
+            "rectangle" => RawCommand::Rectangle(Box::new(self.rectangle.unwrap())),
+            "extrude_volume" => RawCommand::ExtrudeVolume {
+                volume: self.num.unwrap(),
+                feed: self.feed,
+            },
             "set_heading" => RawCommand::SetHeading {
                 heading: self.vec.unwrap(),
                 up: self.up,
@@ -333,6 +426,8 @@ impl Keys {
     fn companions<E: de::Error>(&self, cmd: &str) -> std::result::Result<(), E> {
         let allowed: &[&str] = match cmd {
             "repeat" => &["as", "do"],
+            "for" => &["do"],
+            "extrude_volume" => &["feed"],
             "if" => &["do", "else"],
             "call" => &["args"],
             "set_heading" => &["up"],
@@ -364,7 +459,7 @@ impl Keys {
                 }));
             }
         }
-        if matches!(cmd, "repeat" | "if") && self.body.is_none() {
+        if matches!(cmd, "repeat" | "if" | "for") && self.body.is_none() {
             return Err(E::custom(format!(
                 "`{cmd}` needs `do: [ … ]`, the commands it runs"
             )));

@@ -9,7 +9,7 @@ use glam::DVec3;
 
 use super::frame::Frame;
 use super::lsystem::{Lsystem, MAX_ITERATIONS};
-use super::program::{Axis, Cmd, Op, Proc, Setting, Val};
+use super::program::{Axis, Cmd, Curve, Op, Proc, Setting, Val, Values};
 use crate::base::error::{Error, Result};
 use crate::base::expr::{var, Memo};
 use crate::base::rng::SplitMix64;
@@ -47,6 +47,12 @@ pub(crate) struct Program {
     pub main: Vec<Cmd>,
     /// The procedures, by number.
     pub procs: Vec<Proc>,
+    /// A `path`'s commands rather than a turtle's: the path starts where
+    /// its first movement goes when that travels (a `move`, a movement
+    /// with the pen up) or is a curve's first point, instead of drawing or
+    /// travelling there from `start`; a `pen_up` before anything is drawn
+    /// retracts nothing.
+    pub path: bool,
 }
 
 /// The state of one run.
@@ -66,13 +72,24 @@ struct Run<'a> {
     strings: u64,
     events: u64,
     steps: u64,
+    /// Whether the head has moved (a path's first movement may place it).
+    moved: bool,
     out: Option<Toolpath>,
 }
 
 /// Work a run has left, innermost last: the interpreter's own stack.
 enum Task<'a> {
-    /// The commands of a block still to run.
-    Block(std::slice::Iter<'a, Cmd>),
+    /// The commands of a block still to run, and how many values the scope
+    /// held when it began (its `let`s come off when it ends).
+    Block(std::slice::Iter<'a, Cmd>, usize),
+    /// A `for` over `n` values, `next` the one to start (the value of the
+    /// one just run is the last of the values when this is on top again).
+    For {
+        body: &'a [Cmd],
+        next: u64,
+        n: u64,
+        values: ForValues,
+    },
     /// A `repeat` of `n` iterations, `next` the one to start (iteration
     /// next − 1 has run when this is on top again; its counter, with
     /// `counter`, is the last of the values).
@@ -93,6 +110,23 @@ enum Task<'a> {
         n: u32,
         place: &'a str,
     },
+}
+
+/// The values of a running `for`.
+enum ForValues {
+    /// a + k·step.
+    Range(f64, f64),
+    /// The list, evaluated when the loop began.
+    List(Vec<f64>),
+}
+
+impl ForValues {
+    fn at(&self, k: u64) -> f64 {
+        match self {
+            ForValues::Range(a, step) => a + k as f64 * step,
+            ForValues::List(v) => v[k as usize],
+        }
+    }
 }
 
 /// Counts of a run.
@@ -123,7 +157,8 @@ impl Program {
         limits: Limits,
         out: Option<Toolpath>,
     ) -> Result<(Counts, Option<Toolpath>)> {
-        least_steps(&self.main, limits.max_steps)?;
+        least(&self.main, &Bound::steps(limits.max_steps))?;
+        least(&self.main, &Bound::strings(limits.max_strings))?;
         let mut run = Run {
             prog: self,
             limits,
@@ -139,6 +174,7 @@ impl Program {
             strings: 0,
             events: 0,
             steps: 0,
+            moved: false,
             out,
         };
         let mut vals = Vec::new();
@@ -163,20 +199,61 @@ pub(crate) const MAX_MARKERS: usize = 10_000;
 /// Most frames `push` may save before a `pop`.
 pub(crate) const MAX_SAVED: usize = 100_000;
 
-/// A lower bound of the steps `cmds` run, known without running them: every
-/// command is a step, a `repeat` of a constant count runs its body that many
-/// times, an `if` at least its shorter branch, an L-system of constant
-/// iterations visits a known number of symbols (counted per derivation depth,
-/// never expanded); counts that depend on counters, parameters of procedures
-/// or `rand()`, and calls, count as nothing more. The first construct whose
-/// bound passes `max_steps` is refused at once, naming its place, instead of
-/// after seconds of running up to the limit.
-fn least_steps(cmds: &[Cmd], max_steps: u64) -> Result<u64> {
+/// What [`least`] bounds: each command's own count, the limit, and how
+/// the error names them.
+struct Bound {
+    max: u64,
+    unit: fn(&Op) -> u64,
+    what: &'static str,
+    raise: &'static str,
+}
+
+impl Bound {
+    /// Steps: every command and L-system symbol is one.
+    fn steps(max: u64) -> Bound {
+        Bound {
+            max,
+            unit: |_| 1,
+            what: "steps (commands and L-system symbols)",
+            raise: "raise max_strings",
+        }
+    }
+
+    /// Strings: a `forward`, `backward` or `lift` of a constant length other
+    /// than 0 makes one, and so does a `move` or `draw` (but a path's first,
+    /// which places it: hence one string of slack), so a runaway L-system is
+    /// refused by its size before any string is made.
+    fn strings(max: u64) -> Bound {
+        Bound {
+            max: max.saturating_add(1),
+            unit: |op| {
+                u64::from(match op {
+                    Op::Forward(v, _) | Op::Lift(v) => v.expr.constant().is_some_and(|x| x != 0.0),
+                    Op::To(..) => true,
+                    _ => false,
+                })
+            },
+            what: "strings (moves forward, lift, goto, move, draw)",
+            raise: "raise the recipe's max_strings",
+        }
+    }
+}
+
+/// A lower bound of `b`'s count over `cmds`, known without running them:
+/// each command counts its own unit, a `repeat` of a constant count runs
+/// its body that many times, an `if` at least its shorter branch, an
+/// L-system of constant iterations visits a known number of symbols
+/// (counted per derivation depth, never expanded); counts that depend on
+/// counters, parameters of procedures or `rand()`, and calls, count as
+/// nothing more. The first construct whose bound passes the limit is
+/// refused at once, naming its place, instead of after seconds of running
+/// up to it.
+fn least(cmds: &[Cmd], b: &Bound) -> Result<u64> {
     let mut total = 0u64;
     for cmd in cmds {
         let own = match &cmd.op {
             Op::Repeat { count, body, .. } => {
-                let inner = least_steps(body, max_steps)?;
+                let inner = least(body, b)?;
                 match count.expr.constant() {
                     Some(n) if n.fract() == 0.0 && (0.0..=1e12).contains(&n) => {
                         (n as u64).saturating_mul(inner)
@@ -186,60 +263,73 @@ fn least_steps(cmds: &[Cmd], max_steps: u64) -> Result<u64> {
             }
             Op::If {
                 then, otherwise, ..
-            } => least_steps(then, max_steps)?.min(least_steps(otherwise, max_steps)?),
-            Op::Lsystem(ls) => match ls.iterations.expr.constant() {
-                Some(n) if n.fract() == 0.0 && (0.0..=MAX_ITERATIONS as f64).contains(&n) => {
-                    let own: Vec<u64> = ls
-                        .commands
-                        .iter()
-                        .map(|c| least_steps(c, max_steps))
-                        .collect::<Result<_>>()?;
-                    // steps of one symbol at depth d: 1, then its rule's
-                    // symbols at d + 1 (d < n) or its commands
-                    let mut at = own.iter().map(|&k| k.saturating_add(1)).collect::<Vec<_>>();
-                    for _ in 0..n as u32 {
-                        at = ls
-                            .rules
-                            .iter()
-                            .zip(&own)
-                            .map(|(rule, &k)| match rule {
-                                Some(r) => r
-                                    .iter()
-                                    .fold(1u64, |acc, &t| acc.saturating_add(at[t as usize])),
-                                None => k.saturating_add(1),
-                            })
-                            .collect();
-                    }
-                    ls.axiom
-                        .iter()
-                        .fold(0u64, |acc, &s| acc.saturating_add(at[s as usize]))
-                }
-                _ => 0,
-            },
+            } => least(then, b)?.min(least(otherwise, b)?),
+            Op::Lsystem(ls) => lsystem_least(ls, b)?,
             _ => 0,
         };
-        let steps = own.saturating_add(1);
-        if steps > max_steps {
-            return Err(Error::input(
-                &cmd.place,
-                format!(
-                    "this runs at least {} steps (commands and L-system symbols), more than the limit of {max_steps}; expected fewer repeats or iterations (or raise max_strings)",
-                    if steps == u64::MAX { "2^64".to_string() } else { steps.to_string() }
-                ),
-            ));
+        let n = own.saturating_add((b.unit)(&cmd.op));
+        if n > b.max {
+            return Err(too_many(&cmd.place, "this runs", n, b));
         }
-        total = total.saturating_add(steps);
+        total = total.saturating_add(n);
     }
-    if total > max_steps {
+    if total > b.max {
         let place = cmds.first().map_or("program", |c| c.place.as_str());
-        return Err(Error::input(
-            place,
-            format!(
-                "the commands from here run at least {total} steps, more than the limit of {max_steps}; expected fewer repeats or iterations (or raise max_strings)"
-            ),
-        ));
+        return Err(too_many(place, "the commands from here run", total, b));
     }
     Ok(total)
+}
+
+/// [`least`] of an L-system of constant iterations: a symbol at depth d
+/// counts its unit, then its rule's symbols at d + 1 (d < n) or its commands.
+fn lsystem_least(ls: &Lsystem, b: &Bound) -> Result<u64> {
+    let n = match ls.iterations.expr.constant() {
+        Some(n) if n.fract() == 0.0 && (0.0..=MAX_ITERATIONS as f64).contains(&n) => n as u32,
+        _ => return Ok(0),
+    };
+    // a symbol is a step of its own, and makes no string itself
+    let sym = (b.unit)(&Op::PenUp);
+    let own: Vec<u64> = ls
+        .commands
+        .iter()
+        .map(|c| least(c, b))
+        .collect::<Result<_>>()?;
+    let mut at = own
+        .iter()
+        .map(|&k| k.saturating_add(sym))
+        .collect::<Vec<_>>();
+    for _ in 0..n {
+        at = ls
+            .rules
+            .iter()
+            .zip(&own)
+            .map(|(rule, &k)| match rule {
+                Some(r) => r
+                    .iter()
+                    .fold(sym, |acc, &t| acc.saturating_add(at[t as usize])),
+                None => k.saturating_add(sym),
+            })
+            .collect();
+    }
+    Ok(ls
+        .axiom
+        .iter()
+        .fold(0u64, |acc, &s| acc.saturating_add(at[s as usize])))
+}
+
+fn too_many(place: &str, what: &str, n: u64, b: &Bound) -> Error {
+    let n = if n == u64::MAX {
+        "2^64".to_string()
+    } else {
+        n.to_string()
+    };
+    Error::input(
+        place,
+        format!(
+            "{what} at least {n} {}, more than the limit of {}; expected fewer repeats or iterations (or {})",
+            b.what, b.max, b.raise
+        ),
+    )
 }
 
 impl<'a> Run<'a> {
@@ -391,13 +481,27 @@ impl<'a> Run<'a> {
 
     /// Moves the head to `to`: an extruding string with the pen down, else travel.
     fn go(&mut self, to: DVec3, place: &str) -> Result<()> {
-        if to == self.frame.pos {
+        self.go_as(to, self.pen_down, false, place)
+    }
+
+    /// Moves the head to `to`: an extruding string when `draw`, else a
+    /// travel; one of length 0 only when `keep` (a path's `move` and
+    /// `draw`). A path's first movement, when it travels, is where the path
+    /// starts instead.
+    fn go_as(&mut self, to: DVec3, draw: bool, keep: bool, place: &str) -> Result<()> {
+        let first = !self.moved;
+        self.moved = true;
+        if self.prog.path && first && !draw {
+            self.start_at(to);
+            return Ok(());
+        }
+        if to == self.frame.pos && !keep {
             return Ok(());
         }
         self.strings += 1;
         self.made(place)?;
         if let Some(tp) = &mut self.out {
-            if self.pen_down {
+            if draw {
                 tp.draw(to, self.c, self.v);
             } else {
                 tp.travel(to, self.v);
@@ -405,6 +509,14 @@ impl<'a> Run<'a> {
         }
         self.frame.pos = to;
         Ok(())
+    }
+
+    /// The path starts at `to` (nothing drawn or travelled yet).
+    fn start_at(&mut self, to: DVec3) {
+        if let Some(tp) = &mut self.out {
+            tp.points[0] = to;
+        }
+        self.frame.pos = to;
     }
 
     fn event(&mut self, e: Event, place: &str) -> Result<()> {
@@ -422,15 +534,34 @@ impl<'a> Run<'a> {
     /// thread. Commands, counters, calls and symbols come in exactly the
     /// order of a depth-first walk of the program.
     fn block(&mut self, cmds: &'a [Cmd], vals: &mut Vec<f64>) -> Result<()> {
-        let mut tasks = vec![Task::Block(cmds.iter())];
+        let mut tasks = vec![Task::Block(cmds.iter(), vals.len())];
         while let Some(task) = tasks.last_mut() {
             match task {
-                Task::Block(cmds) => match cmds.next() {
+                Task::Block(cmds, base) => match cmds.next() {
                     Some(cmd) => self.command(cmd, vals, &mut tasks)?,
                     None => {
+                        vals.truncate(*base);
                         tasks.pop();
                     }
                 },
+                Task::For {
+                    body,
+                    next,
+                    n,
+                    values,
+                } => {
+                    if *next > 0 {
+                        vals.pop();
+                    }
+                    if *next < *n {
+                        vals.push(values.at(*next));
+                        *next += 1;
+                        let body = *body;
+                        tasks.push(Task::Block(body.iter(), vals.len()));
+                    } else {
+                        tasks.pop();
+                    }
+                }
                 Task::Repeat {
                     body,
                     next,
@@ -447,7 +578,7 @@ impl<'a> Run<'a> {
                         }
                         *next += 1;
                         let body = *body;
-                        tasks.push(Task::Block(body.iter()));
+                        tasks.push(Task::Block(body.iter(), vals.len()));
                     } else {
                         tasks.pop();
                     }
@@ -466,7 +597,10 @@ impl<'a> Run<'a> {
                 } => {
                     let (ls, d, n, place) = (*ls, *d, *n, *place);
                     match symbols.next() {
-                        Some(&s) => self.symbol(ls, s, d, n, place, &mut tasks)?,
+                        Some(&s) => {
+                            let base = vals.len();
+                            self.symbol(ls, (s, d, n), base, place, &mut tasks)?
+                        }
                         None => {
                             tasks.pop();
                         }
@@ -482,9 +616,8 @@ impl<'a> Run<'a> {
     fn symbol(
         &mut self,
         ls: &'a Lsystem,
-        s: u16,
-        d: u32,
-        n: u32,
+        (s, d, n): (u16, u32, u32),
+        base: usize,
         place: &'a str,
         tasks: &mut Vec<Task<'a>>,
     ) -> Result<()> {
@@ -501,7 +634,7 @@ impl<'a> Run<'a> {
                 return Ok(());
             }
         }
-        tasks.push(Task::Block(ls.commands[s as usize].iter()));
+        tasks.push(Task::Block(ls.commands[s as usize].iter(), base));
         Ok(())
     }
 
@@ -526,6 +659,12 @@ impl<'a> Run<'a> {
                 self.setting(&cmd.op, vals, place)
             }
             Op::Hair { length, blob, rate } => self.hair(length, blob, rate, vals, place),
+            Op::To(..)
+            | Op::For { .. }
+            | Op::Let(_)
+            | Op::Curve(_)
+            | Op::ExtrudeVolume(..)
+            | Op::Gcode(_) => self.program(&cmd.op, vals, place, tasks),
             Op::Repeat {
                 count,
                 counter,
@@ -546,7 +685,8 @@ impl<'a> Run<'a> {
                 otherwise,
             } => {
                 let x = self.eval(cond, vals, place)?;
-                tasks.push(Task::Block(if x != 0.0 { then } else { otherwise }.iter()));
+                let branch = if x != 0.0 { then } else { otherwise };
+                tasks.push(Task::Block(branch.iter(), vals.len()));
                 Ok(())
             }
             Op::Call { proc, args } => self.call(*proc, args, vals, place, tasks),
@@ -580,7 +720,14 @@ impl<'a> Run<'a> {
             }
             Op::Goto(p) => {
                 let to = self.eval3(p, vals, place)?;
-                self.go(to, place)?;
+                if self.prog.path && !self.moved {
+                    // a path's first point visit is where it starts (as a
+                    // curve's first point), not a string from the origin
+                    self.moved = true;
+                    self.start_at(to);
+                } else {
+                    self.go(to, place)?;
+                }
             }
             Op::Turn(axis, a, sign) => {
                 let a = sign * self.eval(a, vals, place)?;
@@ -611,7 +758,10 @@ impl<'a> Run<'a> {
         match op {
             // a pen already up stays up without a second retraction
             Op::PenUp if self.pen_down => {
-                self.event(Event::Retract, place)?;
+                // a path has nothing to retract before its first string
+                if !(self.prog.path && self.strings == 0) {
+                    self.event(Event::Retract, place)?;
+                }
                 self.pen_down = false;
             }
             Op::PenDown => self.pen_down = true,
@@ -747,7 +897,7 @@ impl<'a> Run<'a> {
         }
         self.depth += 1;
         tasks.push(Task::Return(std::mem::replace(vals, inner)));
-        tasks.push(Task::Block(p.body.iter()));
+        tasks.push(Task::Block(p.body.iter(), vals.len()));
         Ok(())
     }
 
@@ -797,5 +947,198 @@ impl<'a> Run<'a> {
         self.event(Event::Retract, place)?;
         self.pen_down = false;
         Ok(())
+    }
+}
+
+/// Most strings one curve command may make (each a step of its own beside).
+pub(crate) const MAX_CURVE_SEGMENTS: f64 = 1e7;
+
+impl<'a> Run<'a> {
+    /// The commands the turtle shares with a path: `move`/`draw`, `for`,
+    /// `let`, the curves, `extrude_volume` and `gcode`.
+    fn program(
+        &mut self,
+        op: &'a Op,
+        vals: &mut Vec<f64>,
+        place: &str,
+        tasks: &mut Vec<Task<'a>>,
+    ) -> Result<()> {
+        match op {
+            Op::To(p, draw) => {
+                let to = self.eval3(p, vals, place)?;
+                self.go_as(to, *draw, true, place)
+            }
+            Op::For { values, body } => {
+                let (n, values) = self.for_values(values, vals, place)?;
+                tasks.push(Task::For {
+                    body,
+                    next: 0,
+                    n,
+                    values,
+                });
+                Ok(())
+            }
+            Op::Let(vs) => {
+                for (k, v) in vs.iter().enumerate() {
+                    let x = self.eval(v, vals, &format!("{place}[{k}]"))?;
+                    vals.push(x);
+                }
+                Ok(())
+            }
+            Op::Curve(c) => {
+                let points = self.curve(c, vals, place)?;
+                for (k, p) in points.into_iter().enumerate() {
+                    if k == 0 && self.prog.path && !self.moved {
+                        // a curve that begins a path places it at its first point
+                        self.moved = true;
+                        self.start_at(p);
+                        continue;
+                    }
+                    self.go(p, place)?;
+                }
+                Ok(())
+            }
+            Op::ExtrudeVolume(v, feed) => {
+                let volume = self.within(v, vals, place, 0.0, 1e5)?;
+                let speed = match feed {
+                    Some(f) => {
+                        let p = place.replace(".extrude_volume", ".feed");
+                        self.positive(f, vals, &p)?
+                    }
+                    None => DEFAULT_FEED,
+                };
+                let filament = volume / self.filament_area();
+                self.event(Event::Extrude { filament, speed }, place)
+            }
+            Op::Gcode(text) => self.event(Event::Gcode(text.clone()), place),
+            _ => Ok(()),
+        }
+    }
+
+    /// The filament's cross-section, mm² (`extrude_rate` and volumes use it).
+    fn filament_area(&self) -> f64 {
+        self.area
+    }
+
+    /// How many values a `for` runs over, and how to get each.
+    fn for_values(
+        &mut self,
+        values: &Values,
+        vals: &mut Vec<f64>,
+        place: &str,
+    ) -> Result<(u64, ForValues)> {
+        match values {
+            Values::List(list) => {
+                let mut v = Vec::with_capacity(list.len());
+                for (k, x) in list.iter().enumerate() {
+                    v.push(self.eval(x, vals, &format!("{place}[{k}]"))?);
+                }
+                Ok((v.len() as u64, ForValues::List(v)))
+            }
+            Values::Range(a, b, step) => {
+                let a = self.eval(a, vals, place)?;
+                let b = self.eval(b, vals, place)?;
+                let step = match step {
+                    Some(s) => self.eval(s, vals, place)?,
+                    None => 1.0,
+                };
+                if step == 0.0 {
+                    return Err(Error::input(
+                        place,
+                        "the step of the range is 0; expected a step that moves from a to b",
+                    ));
+                }
+                // b included within 1e-9 of a step (0..1:0.1 ends at 1), as
+                // a part's `for`; a step away from b makes no values
+                let span = (b - a) / step;
+                let n = if span < -1e-9 {
+                    0.0
+                } else {
+                    libm::floor(span + 1e-9 * span.abs().max(1.0)) + 1.0
+                };
+                if !n.is_finite() || n > 1e12 {
+                    return Err(Error::input(
+                        place,
+                        format!("the range has {n} values; expected at most 10^12"),
+                    ));
+                }
+                Ok((n as u64, ForValues::Range(a, step)))
+            }
+        }
+    }
+
+    /// The points of a curve, first to last.
+    fn curve(&mut self, c: &Curve, vals: &mut Vec<f64>, place: &str) -> Result<Vec<DVec3>> {
+        let segments = |run: &mut Self, v: &Val, vals: &mut Vec<f64>| -> Result<usize> {
+            let p = format!("{place}.segments");
+            let n = run.whole(v, vals, &p, MAX_CURVE_SEGMENTS)?;
+            if n == 0 {
+                return Err(Error::input(p, "0 segments; expected at least 1"));
+            }
+            Ok(n as usize)
+        };
+        let key = |k: &str| format!("{place}.{k}");
+        Ok(match c {
+            Curve::Arc {
+                center,
+                radius,
+                start,
+                sweep,
+                segments: n,
+                end_radius,
+                rise,
+            } => {
+                let o = self.eval3(center, vals, &key("center"))?;
+                let r0 = self.eval(radius, vals, &key("radius"))?;
+                let a0 = self.eval(start, vals, &key("start"))?;
+                let da = self.eval(sweep, vals, &key("sweep"))?;
+                let n = segments(self, n, vals)?;
+                let r1 = match end_radius {
+                    Some(v) => self.eval(v, vals, &key("end_radius"))?,
+                    None => r0,
+                };
+                let dz = match rise {
+                    Some(v) => self.eval(v, vals, &key("rise"))?,
+                    None => 0.0,
+                };
+                super::shapes::arc(o, r0, r1, a0, da, dz, n)
+            }
+            Curve::Bezier {
+                points,
+                segments: n,
+            } => {
+                let mut ctrl = Vec::with_capacity(points.len());
+                for (k, p) in points.iter().enumerate() {
+                    ctrl.push(self.eval3(p, vals, &format!("{place}.points[{k}]"))?);
+                }
+                let n = segments(self, n, vals)?;
+                super::shapes::bezier(&ctrl, n)
+            }
+            Curve::Line {
+                from,
+                to,
+                segments: n,
+            } => {
+                let a = match from {
+                    Some(p) => self.eval3(p, vals, &key("from"))?,
+                    None => self.frame.pos,
+                };
+                let b = self.eval3(to, vals, &key("to"))?;
+                let n = segments(self, n, vals)?;
+                (0..=n)
+                    .map(|k| a + (b - a) * (k as f64 / n as f64))
+                    .collect()
+            }
+            Curve::Rectangle {
+                corner,
+                size,
+                clockwise,
+            } => {
+                let c = self.eval3(corner, vals, &key("corner"))?;
+                let dx = self.eval(&size[0], vals, &key("size[0]"))?;
+                let dy = self.eval(&size[1], vals, &key("size[1]"))?;
+                super::shapes::rectangle(c, dx, dy, *clockwise)
+            }
+        })
     }
 }

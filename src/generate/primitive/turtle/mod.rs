@@ -19,6 +19,7 @@ pub(crate) mod frame;
 pub(crate) mod interp;
 pub(crate) mod lsystem;
 pub(crate) mod program;
+pub(crate) mod shapes;
 
 pub(crate) use frame::Frame;
 

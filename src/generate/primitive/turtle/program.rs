@@ -57,6 +57,24 @@ pub(crate) enum Op {
     Forward(Val, f64),
     Lift(Val),
     Goto([Val; 3]),
+    /// `move` (a travel) or `draw` (an extruding string) to the point,
+    /// whatever the pen: one string each, even of length 0 (a path's v1
+    /// commands).
+    To([Val; 3], bool),
+    /// `for`: the body once per value of a range or list, the value in
+    /// the scope's next slot.
+    For {
+        values: Box<Values>,
+        body: Vec<Cmd>,
+    },
+    /// `let`: values put in the scope's next slots for the rest of the block.
+    Let(Vec<Val>),
+    /// A curve, its points visited as `goto`s.
+    Curve(Box<Curve>),
+    /// `extrude_volume`: mm³ fed in place, at the `feed` (filament mm/s).
+    ExtrudeVolume(Val, Option<Val>),
+    /// `gcode`: a printer command, checked when compiled.
+    Gcode(std::sync::Arc<str>),
     /// A turn by sign × value degrees (`right` is yaw with sign −1).
     Turn(Axis, Val, f64),
     SetHeading(Box<([Val; 3], Option<[Val; 3]>)>),
@@ -99,6 +117,54 @@ pub(crate) enum Op {
         length: Val,
         blob: Option<Val>,
         rate: Option<Val>,
+    },
+}
+
+/// The values of a `for`: a range `a..b` or `a..b:step` (b included when
+/// reached; empty when the step moves away from b), or a list.
+#[derive(Clone, Debug)]
+// boxed where it is held (`Op::For`), so its size costs nothing
+#[allow(clippy::large_enum_variant)]
+pub(crate) enum Values {
+    /// a, b and the step (1 when absent).
+    Range(Val, Val, Option<Val>),
+    /// The values in order.
+    List(Vec<Val>),
+}
+
+/// A curve of one command: its points are visited in order, the first
+/// included, drawing with the pen down and travelling with it up.
+#[derive(Clone, Debug)]
+#[allow(missing_docs)]
+pub(crate) enum Curve {
+    /// FullControl's `arcXY`/`spiralXY`/`helixZ`: point k of n + 1 at angle
+    /// start + sweep·k/n, radius r0 + (r1 − r0)·k/n, z centre.z + rise·k/n.
+    Arc {
+        center: [Val; 3],
+        radius: Val,
+        start: Val,
+        sweep: Val,
+        segments: Val,
+        end_radius: Option<Val>,
+        rise: Option<Val>,
+    },
+    /// The Bézier curve of the control points at n + 1 evenly spaced values.
+    Bezier {
+        points: Vec<[Val; 3]>,
+        segments: Val,
+    },
+    /// A straight line from `from` (the head when absent) in n equal strings.
+    Line {
+        from: Option<[Val; 3]>,
+        to: [Val; 3],
+        segments: Val,
+    },
+    /// FullControl's `rectangleXY`: corner, along x then y (or y then x
+    /// when clockwise), back to the corner.
+    Rectangle {
+        corner: [Val; 3],
+        size: [Val; 2],
+        clockwise: bool,
     },
 }
 

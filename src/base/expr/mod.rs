@@ -7,10 +7,13 @@
 //! through the `libm` crate, so a recipe gives bit-identical numbers on every
 //! machine (std's `sin` may call the platform's libm, which differs).
 
-use indexmap::IndexMap;
+mod lower;
+mod params;
+
 use meval::tokenizer::{Operation, Token};
 
 use crate::base::error::Error;
+pub(crate) use params::{short, Kind, Params};
 
 /// What is wrong with an expression, for a caller that must tell.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -59,9 +62,6 @@ impl std::fmt::Display for ExprError {
 }
 
 impl std::error::Error for ExprError {}
-
-/// Named params of a recipe, in the order they were defined.
-pub(crate) type Params = IndexMap<String, f64>;
 
 /// Slot of each per-point / per-string variable in the value array.
 pub(crate) mod var {
@@ -141,6 +141,13 @@ enum Op {
     Max(u8),
     /// A value of the extra slots of [`Expr::compile_ext`].
     Ext(u16),
+    /// `name[k]` of a list param: value k (from the end when negative) of
+    /// the `len` values from `off` in the expression's data; NaN for k not
+    /// a whole number in −len..len.
+    At {
+        off: u32,
+        len: u32,
+    },
 }
 
 /// A compiled expression.
@@ -148,6 +155,8 @@ enum Op {
 pub struct Expr {
     src: String,
     ops: Vec<Op>,
+    /// The values of the list params it reads ([`Op::At`]).
+    data: Vec<f64>,
     used: u32,
     /// `rand()` calls, read from the extra slots after the named ones.
     rands: u16,
@@ -200,6 +209,62 @@ fn f_radians(x: f64) -> f64 {
 fn f_degrees(x: f64) -> f64 {
     x * (180.0 / std::f64::consts::PI)
 }
+/// 1 or 0: the values of comparisons and logic (any number but 0 is true,
+/// NaN included, as in Python).
+fn truth(b: bool) -> f64 {
+    if b {
+        1.0
+    } else {
+        0.0
+    }
+}
+fn f_lt(a: f64, b: f64) -> f64 {
+    truth(a < b)
+}
+fn f_le(a: f64, b: f64) -> f64 {
+    truth(a <= b)
+}
+fn f_gt(a: f64, b: f64) -> f64 {
+    truth(a > b)
+}
+fn f_ge(a: f64, b: f64) -> f64 {
+    truth(a >= b)
+}
+fn f_eq(a: f64, b: f64) -> f64 {
+    truth(a == b)
+}
+fn f_ne(a: f64, b: f64) -> f64 {
+    truth(a != b)
+}
+fn f_and(a: f64, b: f64) -> f64 {
+    truth(a != 0.0 && b != 0.0)
+}
+fn f_or(a: f64, b: f64) -> f64 {
+    truth(a != 0.0 || b != 0.0)
+}
+fn f_not(a: f64) -> f64 {
+    truth(a == 0.0)
+}
+/// `if(c, a, b)`: a when c is true (not 0), else b. Both are computed (an
+/// expression has no side effects), only one is kept.
+fn f_if(c: f64, a: f64, b: f64) -> f64 {
+    if c != 0.0 {
+        a
+    } else {
+        b
+    }
+}
+
+/// Value `k` of `list` as `name[k]` reads it: from the end when negative
+/// (Python's), NaN for k not a whole number in −len..len.
+fn list_at(list: &[f64], k: f64) -> f64 {
+    let n = list.len() as f64;
+    if k.fract() != 0.0 || !(-n..n).contains(&k) {
+        return f64::NAN;
+    }
+    let k = if k < 0.0 { k + n } else { k };
+    list[k as usize]
+}
 
 fn lookup1(name: &str) -> Option<F1> {
     Some(match name {
@@ -225,7 +290,8 @@ fn lookup1(name: &str) -> Option<F1> {
         "floor" => libm::floor,
         "ceil" => libm::ceil,
         "round" => libm::round,
-        "trunc" => libm::trunc,
+        "trunc" | "int" => libm::trunc,
+        "__not" => f_not,
         "sign" | "signum" => f_sign,
         "fract" => f_fract,
         "radians" => f_radians,
@@ -241,6 +307,14 @@ fn lookup2(name: &str) -> Option<F2> {
         "pow" => libm::pow,
         "mod" => f_mod,
         "step" => f_step,
+        "__lt" => f_lt,
+        "__le" => f_le,
+        "__gt" => f_gt,
+        "__ge" => f_ge,
+        "__eq" => f_eq,
+        "__ne" => f_ne,
+        "__and" => f_and,
+        "__or" => f_or,
         _ => return None,
     })
 }
@@ -347,6 +421,7 @@ fn lookup3(name: &str) -> Option<F3> {
         "clamp" => f_clamp,
         "smoothstep" => f_smoothstep,
         "mix" | "lerp" => f_mix,
+        "if" => f_if,
         _ => return None,
     })
 }
@@ -355,8 +430,8 @@ fn lookup3(name: &str) -> Option<F3> {
 pub(crate) const FUNCTIONS: &str =
     "sin cos tan asin acos atan atan2(y,x) sinh cosh tanh asinh acosh atanh \
 sqrt cbrt exp ln log log10 log2 pow(a,b) abs sign floor ceil round trunc fract \
-mod(a,b) min(a,b,…) max(a,b,…) clamp(x,lo,hi) step(edge,x) smoothstep(e0,e1,x) \
-mix(a,b,t) hypot(x,y) radians degrees eca(rule,width,row,col)";
+mod(a,b) int min(a,b,…) max(a,b,…) clamp(x,lo,hi) step(edge,x) smoothstep(e0,e1,x) \
+mix(a,b,t) if(c,a,b) hypot(x,y) radians degrees eca(rule,width,row,col) len(list)";
 
 #[derive(Clone, Debug)]
 enum Node {
@@ -412,13 +487,31 @@ impl Node {
     }
 }
 
+/// The value of a constant's name: `pi`, `e`, `tau` (2·pi), `true` (1),
+/// `false` (0). A param of the same name comes first (all but `pi` and `e`
+/// were added after recipe v1).
+fn constant(name: &str) -> Option<f64> {
+    Some(match name {
+        "pi" => std::f64::consts::PI,
+        "e" => std::f64::consts::E,
+        "tau" => std::f64::consts::TAU,
+        "true" => 1.0,
+        "false" => 0.0,
+        _ => return None,
+    })
+}
+
 /// Runs `ops` on a stack; the one evaluator used for folding and at run time.
 #[inline]
-fn run(ops: &[Op], vars: &Vars, ext: &[f64], memo: &mut Memo) -> f64 {
+fn run(ops: &[Op], data: &[f64], vars: &Vars, ext: &[f64], memo: &mut Memo) -> f64 {
     let mut st = [0.0f64; STACK];
     let mut sp = 0usize;
     for op in ops {
         match *op {
+            Op::At { off, len } => {
+                let list = &data[off as usize..(off + len) as usize];
+                st[sp - 1] = list_at(list, st[sp - 1]);
+            }
             Op::Num(v) => {
                 st[sp] = v;
                 sp += 1;
@@ -507,12 +600,18 @@ impl Default for Lanes {
 /// point, and every instruction is applied to all of them before the next.
 // the calls of 3, 4 and k arguments read several slots of one lane at once
 #[allow(clippy::needless_range_loop)]
-fn run_lanes(ops: &[Op], vars: &[Vars], out: &mut [f64], lanes: &mut Lanes) {
+fn run_lanes(ops: &[Op], data: &[f64], vars: &[Vars], out: &mut [f64], lanes: &mut Lanes) {
     let (st, memo) = (&mut *lanes.stack, &mut lanes.memo);
     let n = vars.len();
     let mut sp = 0usize;
     for op in ops {
         match *op {
+            Op::At { off, len } => {
+                let list = &data[off as usize..(off + len) as usize];
+                for a in &mut st[sp - 1][..n] {
+                    *a = list_at(list, *a);
+                }
+            }
             Op::Num(v) => {
                 st[sp][..n].fill(v);
                 sp += 1;
@@ -569,37 +668,35 @@ fn run_lanes(ops: &[Op], vars: &[Vars], out: &mut [f64], lanes: &mut Lanes) {
                 }
             }
             Op::Min(k) | Op::Max(k) => {
-                let k = k as usize;
-                assert!(k > 0, "min and max take at least one argument");
-                let min = matches!(op, Op::Min(_));
-                for j in 0..n {
-                    let mut m = st[sp - k][j];
-                    for r in 1..k {
-                        let a = st[sp - k + r][j];
-                        m = if min { m.min(a) } else { m.max(a) };
-                    }
-                    st[sp - k][j] = m;
-                }
-                sp -= k - 1;
+                sp = lanes_min_max(st, sp, k as usize, n, matches!(op, Op::Min(_)));
             }
         }
     }
     out.copy_from_slice(&st[0][..n]);
 }
 
-fn describe_parse_error(src: &str, e: &meval::ParseError) -> String {
+/// `min` (or `max`) of the top `k` stack rows of `n` lanes into the lowest
+/// of them; the new stack height.
+fn lanes_min_max(st: &mut [[f64; LANES]], sp: usize, k: usize, n: usize, min: bool) -> usize {
+    assert!(k > 0, "min and max take at least one argument");
+    let (low, rest) = st[sp - k..sp].split_at_mut(1);
+    for row in rest.iter() {
+        for (m, &a) in low[0][..n].iter_mut().zip(&row[..n]) {
+            *m = if min { m.min(a) } else { m.max(a) };
+        }
+    }
+    sp - (k - 1)
+}
+
+/// meval's error for `src`, `from` mapping the bytes of the text it read
+/// back to those of `src` (see [`lower`]).
+fn describe_parse_error(src: &str, from: &[usize], e: &meval::ParseError) -> String {
     match e {
         meval::ParseError::UnexpectedToken(at) => {
-            let rest: String = src.get(*at..).unwrap_or("").chars().take(12).collect();
-            // comparisons are not operators here: name the functions that do their work
-            let hint = if rest.starts_with(['<', '>', '=', '!', '&', '|']) {
-                "; comparisons are functions here: `x >= a` is step(a, x) (1 or 0), `x < a` is \
-                 1 - step(a, x), and min and max combine them as `and` and `or`"
-            } else {
-                ""
-            };
+            let at = from.get(*at).copied().unwrap_or(src.len());
+            let rest: String = src.get(at..).unwrap_or("").chars().take(12).collect();
             format!(
-                "cannot read the expression `{src}`: unexpected `{rest}` at character {}{hint}",
+                "cannot read the expression `{src}`: unexpected `{rest}` at character {}",
                 at + 1
             )
         }
@@ -614,7 +711,7 @@ fn describe_parse_error(src: &str, e: &meval::ParseError) -> String {
 
 fn allowed_names(allowed: &[usize], params: &Params) -> String {
     let mut names: Vec<&str> = allowed.iter().map(|&k| VAR_NAMES[k]).collect();
-    names.extend(["pi", "e"]);
+    names.extend(["pi", "e", "tau", "true", "false"]);
     let mut s = names.join(", ");
     if !params.is_empty() {
         let p: Vec<&str> = params.keys().map(String::as_str).collect();
@@ -653,9 +750,10 @@ impl Expr {
         allowed: &[usize],
         names: Option<&[&str]>,
     ) -> Result<Expr, ExprError> {
-        let text = source_text(src, names)?;
-        let tokens = meval::tokenizer::tokenize(&text)
-            .map_err(|e| ExprError::new(ExprErrorKind::Syntax, describe_parse_error(src, &e)))?;
+        let (text, from) = source_text(src, params, names)?;
+        let tokens = meval::tokenizer::tokenize(&text).map_err(|e| {
+            ExprError::new(ExprErrorKind::Syntax, describe_parse_error(src, &from, &e))
+        })?;
         let rpn = meval::shunting_yard::to_rpn(&tokens).map_err(|e| {
             ExprError::new(
                 ExprErrorKind::Syntax,
@@ -671,6 +769,7 @@ impl Expr {
             heights: Vec::new(),
             used: 0,
             rands: 0,
+            data: Vec::new(),
         };
         for tok in rpn {
             c.push(tok)?;
@@ -682,13 +781,13 @@ impl Expr {
     /// over many keeps one [`Memo`] for all, see [`Expr::eval_in`]).
     #[inline]
     pub fn eval(&self, vars: &Vars) -> f64 {
-        run(&self.ops, vars, &[], &mut Memo::default())
+        run(&self.ops, &self.data, vars, &[], &mut Memo::default())
     }
 
     /// [`Expr::eval`] going on from what `memo` kept of the points before.
     #[inline]
     pub fn eval_in(&self, vars: &Vars, memo: &mut Memo) -> f64 {
-        run(&self.ops, vars, &[], memo)
+        run(&self.ops, &self.data, vars, &[], memo)
     }
 
     /// Evaluates at many points at once: `out[j] = self.eval(&vars[j])`,
@@ -706,7 +805,7 @@ impl Expr {
     pub fn eval_many_in(&self, vars: &[Vars], out: &mut [f64], lanes: &mut Lanes) {
         assert_eq!(vars.len(), out.len(), "one result per point");
         for (v, o) in vars.chunks(LANES).zip(out.chunks_mut(LANES)) {
-            run_lanes(&self.ops, v, o, lanes);
+            run_lanes(&self.ops, &self.data, v, o, lanes);
         }
     }
 
@@ -714,7 +813,7 @@ impl Expr {
     /// named extra values, then [`Expr::rands`] random numbers.
     #[inline]
     pub fn eval_ext(&self, vars: &Vars, ext: &[f64], memo: &mut Memo) -> f64 {
-        run(&self.ops, vars, ext, memo)
+        run(&self.ops, &self.data, vars, ext, memo)
     }
 
     /// How many `rand()` calls the expression makes per evaluation.
@@ -756,7 +855,11 @@ impl Expr {
 /// The text meval reads for `src`: refuses one too long or blank, writes
 /// Kanada's `**` as `^`, and (with extra `names`) marks `rand()` and the
 /// calls of no arguments as variables (see [`mark_call`]).
-fn source_text(src: &str, names: Option<&[&str]>) -> Result<String, ExprError> {
+fn source_text(
+    src: &str,
+    params: &Params,
+    names: Option<&[&str]>,
+) -> Result<(String, Vec<usize>), ExprError> {
     if src.len() > MAX_LEN {
         return Err(ExprError::new(
             ExprErrorKind::TooDeep,
@@ -774,15 +877,17 @@ fn source_text(src: &str, names: Option<&[&str]>) -> Result<String, ExprError> {
             "an empty expression; expected a number or an expression",
         ));
     }
-    // Kanada's Python recipes write powers as `**`; meval's operator is `^`.
-    let mut text = src.replace("**", "^");
+    let lower::Lowered { text, from } = lower::lower(src, params)?;
+    // Kanada's Python recipes write powers as `**`; meval's operator is `^`
+    // (a space after it keeps every byte where it was).
+    let mut text = text.replace("**", "^ ");
     if let Some(ns) = names {
         text = mark_rand(&text);
         for base in ns.iter().filter_map(|n| n.strip_suffix("()")) {
             text = mark_call(&text, base);
         }
     }
-    Ok(text)
+    Ok((text, from))
 }
 
 /// The state of [`Expr::compile_inner`] while it turns reverse Polish
@@ -804,6 +909,8 @@ struct Compiler<'a> {
     used: u32,
     /// `rand()` calls met so far.
     rands: u16,
+    /// The values of the list params read so far ([`Op::At`]).
+    data: Vec<f64>,
 }
 
 impl Compiler<'_> {
@@ -909,10 +1016,15 @@ impl Compiler<'_> {
             Node::Var(k as u8)
         } else if let Some(v) = params.get(&name) {
             Node::Num(*v)
-        } else if name == "pi" {
-            Node::Num(std::f64::consts::PI)
-        } else if name == "e" {
-            Node::Num(std::f64::consts::E)
+        } else if let Some(v) = constant(&name) {
+            Node::Num(v)
+        } else if params.list(&name).is_some() {
+            return Err(ExprError::new(
+                ExprErrorKind::Name,
+                format!(
+                    "`{name}` in `{src}` is a list; read one of its values as `{name}[k]` (k from 0), its length as `len({name})`"
+                ),
+            ));
         } else {
             return Err(ExprError::new(
                 ExprErrorKind::Name,
@@ -927,6 +1039,9 @@ impl Compiler<'_> {
     /// The call of `name` on the top `nargs` trees of the stack.
     fn call(&mut self, name: String, nargs: Option<usize>) -> Result<Node, ExprError> {
         let k = nargs.unwrap_or(0);
+        if let Some(list) = name.strip_prefix(lower::AT) {
+            return self.list_at(list);
+        }
         let op = function_op(&name, k, self.src)?;
         if self.stack.len() < k {
             return Err(ExprError::new(
@@ -939,6 +1054,37 @@ impl Compiler<'_> {
         }
         let args = self.stack.split_off(self.stack.len() - k);
         Ok(Node::Call(op, args))
+    }
+
+    /// `list[k]` (the pre-pass's `__at_list(k)`, one argument): the value
+    /// when k is known, else the read of the list's values at run time.
+    fn list_at(&mut self, name: &str) -> Result<Node, ExprError> {
+        let values = self.params.list(name).unwrap_or(&[]);
+        let k = self.pop()?;
+        if let Some(k) = k.num() {
+            let v = list_at(values, k);
+            if v.is_nan() && !values.iter().any(|x| x.is_nan()) {
+                let n = values.len();
+                return Err(ExprError::new(
+                    ExprErrorKind::NotFinite,
+                    format!(
+                        "`{name}[{}]` in `{}`: the list has {n} value{}, read by whole numbers from 0 to {} (or from the end, -1 to -{n})",
+                        short(k),
+                        self.src,
+                        if n == 1 { "" } else { "s" },
+                        n as i64 - 1
+                    ),
+                ));
+            }
+            return Ok(Node::Num(v));
+        }
+        let off = self.data.len() as u32;
+        self.data.extend_from_slice(values);
+        let op = Op::At {
+            off,
+            len: values.len() as u32,
+        };
+        Ok(Node::Call(op, vec![k]))
     }
 
     /// The compiled expression: one tree left, shallow enough for the
@@ -966,6 +1112,7 @@ impl Compiler<'_> {
         Ok(Expr {
             src: src.to_string(),
             ops,
+            data: self.data,
             used: self.used,
             rands: self.rands,
         })
@@ -1033,6 +1180,8 @@ fn arity_error(n: &str, k: usize, src: &str) -> ExprError {
 fn fold(node: Node) -> Node {
     let all_const = match &node {
         Node::Num(_) | Node::Var(_) | Node::Ext(_) => return node,
+        // a list's values are the expression's own data, not at hand here
+        Node::Call(Op::At { .. }, _) => return node,
         Node::Neg(a) => a.num().is_some(),
         Node::Bin(_, a, b) => a.num().is_some() && b.num().is_some(),
         Node::Call(_, args) => args.iter().all(|a| a.num().is_some()),
@@ -1042,7 +1191,13 @@ fn fold(node: Node) -> Node {
     }
     let mut ops = Vec::new();
     node.emit(&mut ops);
-    Node::Num(run(&ops, &[0.0; var::COUNT], &[], &mut Memo::default()))
+    Node::Num(run(
+        &ops,
+        &[],
+        &[0.0; var::COUNT],
+        &[],
+        &mut Memo::default(),
+    ))
 }
 
 fn is_rand_mark(name: &str) -> bool {
@@ -1174,14 +1329,57 @@ mod tests {
     }
 
     #[test]
-    fn comparisons_are_refused_with_the_functions_that_replace_them() {
-        let all: Vec<usize> = (0..var::COUNT).collect();
-        for src in ["x > 4", "x*x + y*y >= 4", "x == 1", "x < 1 && y < 1"] {
-            let e = Expr::compile(src, &Params::new(), &all).unwrap_err();
-            assert!(e.message.contains("step(a, x)"), "{src}: {e}");
+    fn comparisons_logic_and_if() {
+        let mut v = [0.0; var::COUNT];
+        v[var::X] = 2.0;
+        v[var::Y] = 3.0;
+        assert_eq!(ev("x > 1", &v), 1.0);
+        assert_eq!(ev("x*x + y*y >= 13", &v), 1.0);
+        assert_eq!(ev("x == 2 and y != 3", &v), 0.0);
+        assert_eq!(ev("x < 1 || y < 4", &v), 1.0);
+        assert_eq!(ev("not (x < 1)", &v), 1.0);
+        assert_eq!(ev("if(x <= 2, 10, 1/0)", &v), 10.0);
+        assert_eq!(ev("if(x > 2, 10, -1) + 1", &v), 0.0);
+        assert_eq!(ev("int(-2.7) + tau/pi + true - false", &v), 1.0);
+        // the same bits in many lanes as one by one
+        let e = Expr::compile("if(x < 1.5, x, -y) * (y >= x)", &Params::new(), &[0, 1]).unwrap();
+        let vars: Vec<Vars> = (0..70)
+            .map(|k| {
+                let mut w = [0.0; var::COUNT];
+                w[var::X] = k as f64 * 0.05;
+                w[var::Y] = 3.0 - k as f64 * 0.07;
+                w
+            })
+            .collect();
+        let mut out = vec![0.0; vars.len()];
+        e.eval_many(&vars, &mut out);
+        for (w, got) in vars.iter().zip(&out) {
+            assert_eq!(got.to_bits(), e.eval(w).to_bits());
         }
-        let e = Expr::compile("x 4", &Params::new(), &all).unwrap_err();
-        assert!(!e.message.contains("step"), "{e}");
+        let e = Expr::compile("x = 4", &Params::new(), &[0]).unwrap_err();
+        assert!(e.message.contains("`=` alone"), "{e}");
+    }
+
+    #[test]
+    fn lists_and_choices() {
+        let mut p = Params::new();
+        p.insert_list("fr", vec![1.0, 0.5, 0.25]);
+        p.set_symbols(["wing_nut", "wing_bolt"]);
+        p.insert("part_type".into(), 1.0);
+        let e = Expr::compile("fr[i] + len(fr) + fr[-1]", &p, &[var::I]).unwrap();
+        let mut v = [0.0; var::COUNT];
+        v[var::I] = 1.0;
+        assert_eq!(e.eval(&v), 0.5 + 3.0 + 0.25);
+        v[var::I] = 3.0;
+        assert!(e.eval(&v).is_nan());
+        let e = Expr::compile("if(part_type == 'wing_bolt', 7, 8)", &p, &[]).unwrap();
+        assert_eq!(e.constant(), Some(7.0));
+        let e = Expr::compile("fr[3]", &p, &[]).unwrap_err();
+        assert!(e.message.contains("the list has 3 values"), "{e}");
+        let e = Expr::compile("fr + 1", &p, &[]).unwrap_err();
+        assert!(e.message.contains("is a list"), "{e}");
+        let e = Expr::compile("part_type == 'threaded_tube'", &p, &[]).unwrap_err();
+        assert!(e.message.contains("'wing_nut', 'wing_bolt'"), "{e}");
     }
 
     #[test]

@@ -1,0 +1,73 @@
+//! The curves a program draws in one command (FullControl's `arcXY`,
+//! `spiralXY`, `helixZ`, `bezier`, `segmented_line` and `rectangleXY`):
+//! each goes through its points in order, its first point included, drawing
+//! with the pen down and travelling with it up.
+
+use serde::Deserialize;
+
+use super::num::{Num, RawPoint};
+
+/// `arc:` an arc of a circle about `center`, or of a spiral (`end_radius`)
+/// or helix (`rise`): point k of `segments` + 1 at angle start + sweep·k/n,
+/// radius radius + (end_radius − radius)·k/n, height center.z + rise·k/n.
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RawArcCmd {
+    /// The centre (missing coordinates: the head's).
+    pub center: RawPoint,
+    /// mm, at the first point.
+    pub radius: Num,
+    /// Angle of the first point, radians from +x, counter-clockwise.
+    pub start: Num,
+    /// Angle from the first point to the last, radians (negative: clockwise;
+    /// `tau`: a full circle).
+    pub sweep: Num,
+    /// Strings along the arc (FullControl's `segments`).
+    pub segments: Num,
+    /// mm at the last point (a spiral); `radius` when absent.
+    #[serde(default)]
+    pub end_radius: Option<Num>,
+    /// mm the last point is above the first (a helix); 0 when absent.
+    #[serde(default)]
+    pub rise: Option<Num>,
+}
+
+/// `bezier:` the Bézier curve of the control `points`, at `segments` + 1
+/// evenly spaced values of its parameter, from the first control point to
+/// the last.
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RawBezier {
+    /// Control points, at least two (missing coordinates: the head's).
+    pub points: Vec<RawPoint>,
+    /// Strings along the curve.
+    pub segments: Num,
+}
+
+/// `line:` a straight line cut into `segments` equal strings.
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RawLine {
+    /// Where it starts; the head when absent.
+    #[serde(default)]
+    pub from: Option<RawPoint>,
+    /// Where it ends.
+    pub to: RawPoint,
+    /// Strings along it.
+    pub segments: Num,
+}
+
+/// `rectangle:` four sides from `corner` and back to it, along x first
+/// (counter-clockwise for positive sizes), or along y first with
+/// `clockwise: true` (FullControl's `rectangleXY`).
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RawRectangle {
+    /// The first (and last) corner.
+    pub corner: RawPoint,
+    /// `[dx, dy]`, mm (signed).
+    pub size: [Num; 2],
+    /// Along y first (false when absent).
+    #[serde(default)]
+    pub clockwise: Option<bool>,
+}

@@ -1,0 +1,85 @@
+//! A param as written: a number or expression, a boolean, a list, or a
+//! choice among strings (FullControl's `part_type = 'wing_nut'`).
+
+use std::fmt;
+
+use serde::de::{self, Deserializer, MapAccess, SeqAccess, Visitor};
+use serde::Deserialize;
+
+use super::num::Num;
+
+/// One param of `params:`.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RawParam {
+    /// A number or an expression over the params before it.
+    Num(Num),
+    /// `true` or `false`: 1 or 0 in expressions.
+    Bool(bool),
+    /// A list of numbers or expressions, read as `name[k]` and `len(name)`.
+    List(Vec<Num>),
+    /// One of a declared set of strings.
+    Choice(RawChoice),
+}
+
+/// `{choices: [a, b, c], default: b}`: a param that is one of these strings.
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RawChoice {
+    /// The strings it may be (letters, digits and `_`).
+    pub choices: Vec<String>,
+    /// The one it is unless `--set` says otherwise.
+    pub default: String,
+}
+
+impl<'de> Deserialize<'de> for RawParam {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<RawParam, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = RawParam;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a number, an expression string, true or false, a list [a, b, …] or {choices: [a, b], default: a}")
+            }
+            fn visit_bool<E: de::Error>(self, v: bool) -> Result<RawParam, E> {
+                Ok(RawParam::Bool(v))
+            }
+            fn visit_f64<E: de::Error>(self, v: f64) -> Result<RawParam, E> {
+                Ok(RawParam::Num(Num::Value(v)))
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<RawParam, E> {
+                Ok(RawParam::Num(Num::Value(v as f64)))
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<RawParam, E> {
+                Ok(RawParam::Num(Num::Value(v as f64)))
+            }
+            fn visit_str<E: de::Error>(self, v: &str) -> Result<RawParam, E> {
+                Ok(RawParam::Num(Num::Expr(v.to_string())))
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut s: A) -> Result<RawParam, A::Error> {
+                let mut v = Vec::new();
+                while let Some(n) = s.next_element::<Num>()? {
+                    v.push(n);
+                }
+                Ok(RawParam::List(v))
+            }
+            fn visit_map<A: MapAccess<'de>>(self, m: A) -> Result<RawParam, A::Error> {
+                RawChoice::deserialize(de::value::MapAccessDeserializer::new(m))
+                    .map(RawParam::Choice)
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+impl schemars::JsonSchema for RawParam {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "RawParam".into()
+    }
+    fn json_schema(g: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        let num = g.subschema_for::<Num>();
+        let choice = g.subschema_for::<RawChoice>();
+        schemars::json_schema!({
+            "description": "A number or an expression over the params before it; true or false; a list of numbers [a, b, …] (read as name[k], len(name)); or {choices: [a, b], default: a}, one of a set of strings (compared as name == 'a').",
+            "anyOf": [num, {"type": "boolean"}, {"type": "array", "items": num}, choice]
+        })
+    }
+}
