@@ -40,6 +40,12 @@ pub enum Command {
         #[command(flatten)]
         batch: BatchFlags,
     },
+    /// Explain a check code: what it measures, why a print fails, how to fix it, the `allow` that silences it.
+    Explain {
+        /// The code, as a finding shows it in brackets (e.g. `small-contact`).
+        #[arg(value_name = "CODE")]
+        code: String,
+    },
     /// List the built-in printer profiles: flavour, bed, origin, nozzle and filament.
     Printers,
     /// Print `SHA256  RECIPE`: the hash of exactly the bytes `build` would write.
@@ -319,6 +325,10 @@ pub fn run(cli: Cli) -> Vec<Error> {
                 .map(|b| pipeline::run(batch.jobs.threads(), || command::check::run(&b))),
         ),
         Command::Hash(a) => errors(hash(&a)),
+        Command::Explain { code } => errors(command::explain::run(&code).map(|text| {
+            crate::say!("{text}");
+            Vec::new()
+        })),
         Command::Printers => {
             crate::say!("{}", command::printers::list());
             Vec::new()

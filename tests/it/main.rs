@@ -19,6 +19,7 @@ mod ca;
 mod checks;
 mod cli;
 mod error_snapshots;
+mod explain;
 mod extruder_turtle;
 mod gallery;
 mod hostile;

@@ -40,7 +40,7 @@ pub(crate) fn fmt_p(p: DVec3) -> String {
 /// before the cheap ones refuse it). The costly checks are plain functions
 /// of the parts, independent of each other ([`Costly`] lists them), so the
 /// application may run them side by side; [`merge`] puts their findings in
-/// one fixed order.
+/// one fixed order; each message ends with [`see`].
 pub fn run(
     recipe: &Recipe,
     paths: &[&Toolpath],
@@ -127,8 +127,8 @@ impl Costly {
 }
 
 /// Every finding in the one fixed order (the cheap checks', starvation,
-/// first layer, support, collision, the pattern helix's) and the parts'
-/// footprints.
+/// first layer, support, collision, the pattern helix's), each message
+/// ending with [`see`], and the parts' footprints.
 pub fn merge(cheap: Cheap, costly: Costly) -> (Vec<Finding>, Vec<first_layer::Footprint>) {
     let mut out = cheap.findings;
     for v in [
@@ -140,7 +140,16 @@ pub fn merge(cheap: Cheap, costly: Costly) -> (Vec<Finding>, Vec<first_layer::Fo
     ] {
         out.extend(v);
     }
+    for f in &mut out {
+        f.message.push_str(&see(f.code));
+    }
     (out, costly.footprints)
+}
+
+/// `; see: p3dp explain CODE`: the end of every finding's message, where
+/// the user reads what the code means and how to fix it.
+pub fn see(code: &str) -> String {
+    format!("; see: p3dp explain {code}")
 }
 
 /// Temperature events (a turtle's `nozzle_temp`, `bed_temp`) above the limits: a nozzle temperature above the

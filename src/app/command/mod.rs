@@ -4,6 +4,7 @@
 
 pub mod build;
 pub mod check;
+pub mod explain;
 pub mod hash;
 pub mod mesh;
 pub mod new;

@@ -1,0 +1,40 @@
+//! `p3dp explain CODE`: what a check measures, why a print fails from it,
+//! how to fix it in the recipe and the `allow` that silences it. The text
+//! is `docs/checks.md`, one section per code (its one source).
+
+use crate::base::error::{Error, Result};
+use crate::base::finding::CODES;
+
+/// The page: an introduction, then one `` ## `CODE` `` section per code.
+pub const PAGE: &str = include_str!("../../../docs/checks.md");
+
+/// The section of `code` in [`PAGE`], from its heading to the next one.
+pub fn section(code: &str) -> Option<&'static str> {
+    let heading = format!("## `{code}`\n");
+    let start = PAGE.find(&heading)?;
+    let body = &PAGE[start..];
+    let end = body[heading.len()..]
+        .find("\n## ")
+        .map_or(body.len(), |k| heading.len() + k + 1);
+    Some(body[..end].trim_end())
+}
+
+/// `p3dp explain CODE`: the section of `code`, or an input error listing
+/// every code.
+pub fn run(code: &str) -> Result<String> {
+    match CODES.iter().find(|(c, _)| *c == code) {
+        Some(_) => section(code).map(|s| format!("{s}\n")).ok_or_else(|| {
+            Error::input("", format!("no explanation of `{code}` in docs/checks.md"))
+        }),
+        None => {
+            let known: Vec<&str> = CODES.iter().map(|(c, _)| *c).collect();
+            Err(Error::input(
+                "",
+                format!(
+                    "unknown check code `{code}`; expected one of {}",
+                    known.join(", ")
+                ),
+            ))
+        }
+    }
+}
