@@ -42,9 +42,9 @@ pub enum Command {
     },
     /// Explain a check code: what it measures, why a print fails, how to fix it, the `allow` that silences it.
     Explain {
-        /// The code, as a finding shows it in brackets (e.g. `small-contact`).
+        /// The code, as a finding shows it in brackets (e.g. `small-contact`); without one, every code in a line each.
         #[arg(value_name = "CODE")]
-        code: String,
+        code: Option<String>,
     },
     /// List the built-in printer profiles: flavour, bed, origin, nozzle and filament.
     Printers,
@@ -325,7 +325,7 @@ pub fn run(cli: Cli) -> Vec<Error> {
                 .map(|b| pipeline::run(batch.jobs.threads(), || command::check::run(&b))),
         ),
         Command::Hash(a) => errors(hash(&a)),
-        Command::Explain { code } => errors(command::explain::run(&code).map(|text| {
+        Command::Explain { code } => errors(command::explain::run(code.as_deref()).map(|text| {
             crate::say!("{text}");
             Vec::new()
         })),

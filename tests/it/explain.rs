@@ -98,3 +98,17 @@ fn an_unknown_code_is_refused_with_the_list() {
         assert!(err.contains(code), "{code} missing from {err}");
     }
 }
+
+#[test]
+fn without_a_code_every_code_in_a_line() {
+    let out = p3dp(&root(), &["explain"]);
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    for (code, what) in CODES {
+        assert!(
+            text.lines()
+                .any(|l| l.starts_with(code) && l.ends_with(what)),
+            "{code}: {text}"
+        );
+    }
+}

@@ -20,8 +20,11 @@ pub fn section(code: &str) -> Option<&'static str> {
 }
 
 /// `p3dp explain CODE`: the section of `code`, or an input error listing
-/// every code.
-pub fn run(code: &str) -> Result<String> {
+/// every code; `p3dp explain`: every code and what it means, a line each.
+pub fn run(code: Option<&str>) -> Result<String> {
+    let Some(code) = code else {
+        return Ok(list());
+    };
     match CODES.iter().find(|(c, _)| *c == code) {
         Some(_) => section(code).map(|s| format!("{s}\n")).ok_or_else(|| {
             Error::input("", format!("no explanation of `{code}` in docs/checks.md"))
@@ -37,4 +40,15 @@ pub fn run(code: &str) -> Result<String> {
             ))
         }
     }
+}
+
+/// Every code and its one-line meaning, then how to read more.
+fn list() -> String {
+    let width = CODES.iter().map(|(c, _)| c.len()).max().unwrap_or(0);
+    let mut out: String = CODES
+        .iter()
+        .map(|(c, what)| format!("{c:<width$}  {what}\n"))
+        .collect();
+    out.push_str("`p3dp explain CODE` says what a check measures, why a print fails from it, how to fix the recipe and how to silence it.\n");
+    out
 }
