@@ -33,6 +33,7 @@ struct Block {
 
 /// The fenced blocks of `page` (a path from the crate root).
 fn blocks(page: &str) -> Vec<Block> {
+    let page = page.trim_start_matches("./");
     let text = std::fs::read_to_string(root().join(page)).unwrap();
     let mut out = Vec::new();
     let mut open: Option<(usize, String, String)> = None;
@@ -200,7 +201,24 @@ fn run_yaml(dir: &Path, at: &str, text: &str) {
 
 #[test]
 fn every_fence_says_its_language() {
-    for page in pages() {
+    let mut all = pages();
+    for dir in ["docs", "."] {
+        for e in std::fs::read_dir(root().join(dir)).unwrap() {
+            let p = e.unwrap().path();
+            if p.extension().is_some_and(|e| e == "md") {
+                let rel = p
+                    .strip_prefix(root())
+                    .unwrap()
+                    .to_string_lossy()
+                    .into_owned();
+                if !all.contains(&rel) {
+                    all.push(rel);
+                }
+            }
+        }
+    }
+    assert!(all.iter().any(|p| p == "SECURITY.md"), "{all:?}");
+    for page in all {
         for b in blocks(&page) {
             assert!(
                 !b.lang.is_empty(),
