@@ -8,7 +8,10 @@
 //!   `NAME.yaml` and checked: it loads, builds and has no finding at all
 //!   (`0 warnings, 0 errors`, no note). One that is a printer profile
 //!   (`inherits:` or `flavor:`) is given to `p3dp check` as `--printer`.
-//!   Any other is a fragment: it must be valid YAML.
+//!   Any other is a fragment: it is set in a recipe round it where its shape
+//!   says (top-level keys, a part, steps, turtle commands, a solid's
+//!   features), which must load (its checks may fail: it is a piece); one
+//!   that includes other files is only parsed.
 //! - In a `sh` block every line that starts with `p3dp` runs (through `sh`,
 //!   the test's binary first on `PATH`) and must succeed; other commands
 //!   (`cargo …`) are the project's and are left alone, as is `p3dp watch`,
@@ -196,7 +199,93 @@ fn run_yaml(dir: &Path, at: &str, text: &str) {
             "{at}: the profile is refused:\n{}",
             String::from_utf8_lossy(&o.stderr)
         );
+    } else if let Some(recipe) = in_a_recipe(&doc) {
+        // a fragment, set in a recipe round it: the loader must take its
+        // keys and expressions (its checks may fail: it is a piece)
+        let sub = dir.join("fragments");
+        std::fs::create_dir_all(&sub).unwrap();
+        let file = format!("fragment-{}.yaml", at.rsplit(':').next().unwrap());
+        let text = serde_yaml::to_string(&recipe).unwrap();
+        std::fs::write(sub.join(&file), &text).unwrap();
+        let o = p3dp(&sub, &["check", &file]);
+        assert!(
+            matches!(o.status.code(), Some(0 | 1)),
+            "{at}: the fragment does not load in a recipe round it:\n{}\n{text}",
+            String::from_utf8_lossy(&o.stderr)
+        );
     }
+}
+
+/// The recipe a fragment is shown in: a sphere's helix with the params the
+/// pages' fragments use, the fragment set where its shape says (top-level
+/// keys, a part, a list of parts, of steps or of turtle commands, a
+/// solid's features). None for one that reads other files by relative path
+/// (`include:`) or has no place: those are parsed only.
+fn in_a_recipe(doc: &serde_yaml::Value) -> Option<serde_yaml::Value> {
+    use serde_yaml::Value;
+    let mut recipe: Value = serde_yaml::from_str(
+        "p3dp: 1\nname: fragment\nparams: {radius: 25, height: \"pi/2*radius\", lift: 0.4, sea: 0.65, thin: 0.65}\nparts:\n  - name: sphere\n    primitive: {helix: {radius: radius, height: height, pitch: 0.2}}\n",
+    )
+    .unwrap();
+    let first_key = |v: &Value| -> Option<String> {
+        let m = match v {
+            Value::Sequence(s) => s.first()?.as_mapping()?,
+            Value::Mapping(m) => m,
+            _ => return None,
+        };
+        m.keys().next()?.as_str().map(str::to_string)
+    };
+    const STEPS: &[&str] = &[
+        "deform_xyz",
+        "deform_cylinder",
+        "modulate_cylinder",
+        "modulate_map",
+        "subdivide",
+        "translate",
+    ];
+    const TOP: &[&str] = &[
+        "allow",
+        "templates",
+        "parts",
+        "params",
+        "defaults",
+        "skirt",
+        "material",
+    ];
+    let part = &mut recipe["parts"][0];
+    let key = first_key(doc)?;
+    match doc {
+        Value::Mapping(m) if m.contains_key("include") => return None,
+        Value::Mapping(m)
+            if m.keys()
+                .all(|k| k.as_str().is_some_and(|k| TOP.contains(&k))) =>
+        {
+            for (k, v) in m {
+                recipe[k.as_str()?] = v.clone();
+            }
+        }
+        Value::Mapping(m) if m.contains_key("steps") => part["steps"] = m["steps"].clone(),
+        Value::Mapping(m) if m.contains_key("primitive") => {
+            part["primitive"] = m["primitive"].clone()
+        }
+        Value::Mapping(m) if m.contains_key("features") => {
+            part["primitive"] =
+                serde_yaml::from_str("{solid: {layer_height: 0.2, line_width: 0.45}}").unwrap();
+            part["primitive"]["solid"]["features"] = m["features"].clone();
+            part["cross_section"] = Value::from(0.09);
+        }
+        Value::Sequence(_) if STEPS.contains(&key.as_str()) => part["steps"] = doc.clone(),
+        Value::Sequence(s) if key == "name" || key == "primitive" => {
+            recipe["parts"] = Value::Sequence(s.clone())
+        }
+        Value::Sequence(_) => {
+            part["primitive"] =
+                serde_yaml::from_str("{turtle: {start: {position: [0, 0, 0.2]}}}").unwrap();
+            part["primitive"]["turtle"]["program"] = doc.clone();
+        }
+        _ => return None,
+    }
+    Some(recipe)
 }
 
 #[test]
