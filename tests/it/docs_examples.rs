@@ -1,4 +1,5 @@
-//! Every example of the README, the guide and the recipe reference runs:
+//! Every example of the README, the guide, the recipe reference and the
+//! checks' page runs:
 //! the fenced blocks of those pages are read and executed, so a wrong word
 //! about a command or a key fails the tests.
 //!
@@ -66,7 +67,11 @@ fn blocks(page: &str) -> Vec<Block> {
 
 /// The pages whose examples run.
 fn pages() -> Vec<String> {
-    let mut v = vec!["README.md".to_string(), "docs/recipe.md".to_string()];
+    let mut v = vec![
+        "README.md".to_string(),
+        "docs/recipe.md".to_string(),
+        "docs/checks.md".to_string(),
+    ];
     let mut guide: Vec<String> = std::fs::read_dir(root().join("docs/guide"))
         .unwrap()
         .map(|e| e.unwrap().path())
@@ -332,6 +337,11 @@ fn the_readme_is_short_and_its_examples_run() {
 #[test]
 fn the_recipe_reference_examples_run() {
     assert!(run_page("docs/recipe.md") >= 2);
+}
+
+#[test]
+fn the_checks_page_examples_run() {
+    assert!(run_page("docs/checks.md") >= 1);
 }
 
 #[test]
