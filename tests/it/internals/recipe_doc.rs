@@ -213,7 +213,24 @@ fn stated_defaults_and_units_are_the_loaders() {
     );
     let tp = p3dp::generate::model::make_part(&plain, 0).unwrap();
     let m = &plain.material;
+    let extras = resolved(
+        "p3dp: 1\nname: e\nparts:\n  - speed: 33\n    brim: {loops: 3}\n    stand: {radius: 7}\n    primitive: {circle: {radius: 10, center: [0, 0, 5]}}\n",
+    );
+    let brim = extras.parts[0].brim.as_ref().unwrap();
+    let stand = extras.parts[0].stand.as_ref().unwrap();
     let rows: Vec<(&str, bool)> = vec![
+        (
+            "`line_width` (0.45 mm, also the step between loops), `layer_height` (0.2 mm), `speed` (the part's)",
+            brim.line_width == 0.45 && brim.layer_height == 0.2 && brim.speed == 33.0,
+        ),
+        (
+            "`walls` concentric circles (2), `line_width` apart (0.45 mm)",
+            stand.walls == 2 && stand.line_width == 0.45,
+        ),
+        (
+            "in layers of `layer_height` (0.2 mm; the first at that nozzle height) at `speed` (the part's)",
+            stand.layer_height == 0.2 && stand.speed == 33.0 && stand.height.is_none(),
+        ),
         (
             "| `printer` | `generic-220` |",
             plain.printer.name == "generic-220",
