@@ -36,7 +36,7 @@ pub use analyse::stats::Stats;
 pub use app::pipeline;
 pub use app::prepare::{plan, prepare, prepare_in, Options};
 pub use base::error::{Error, Kind, Result};
-pub use base::finding::{Finding, Severity, SAFETY};
+pub use base::finding::{Finding, Severity, CODES, SAFETY};
 pub use base::input::Reads;
 pub use base::toolpath::{Event, Toolpath};
 pub use generate::assembly::make_parts;
@@ -62,6 +62,7 @@ pub mod presets {
 /// it, print each error with [`cli::print_error`].
 pub mod cli {
     pub use crate::app::cli::{run, Cli};
+    pub use crate::app::command::new::STARTERS;
 
     /// Prints an error to standard error as the command line shows it
     /// (rustc-style, in colour on a terminal).

@@ -42,6 +42,12 @@ pub enum Command {
     },
     /// Upload built files to the printer's host (Moonraker, OctoPrint or PrusaLink, found by asking it); the API key comes from the environment variable P3DP_API_KEY.
     Send(SendArgs),
+    /// Explain a check code: what it measures, why a print fails, how to fix it, the `allow` that silences it.
+    Explain {
+        /// The code, as a finding shows it in brackets (e.g. `small-contact`); without one, every code in a line each.
+        #[arg(value_name = "CODE")]
+        code: Option<String>,
+    },
     /// List the built-in printer profiles (flavour, bed, origin, nozzle, filament), or list and import a slicer's printer presets.
     Printers(PrintersArgs),
     /// Print `SHA256  RECIPE`: the hash of exactly the bytes `build` would write.
@@ -381,6 +387,10 @@ pub fn run(cli: Cli) -> Vec<Error> {
             print: a.print,
             host: a.host,
             timeout: a.timeout,
+        })),
+        Command::Explain { code } => errors(command::explain::run(code.as_deref()).map(|text| {
+            crate::say!("{text}");
+            Vec::new()
         })),
         Command::Printers(a) => errors(printers(a.action).map(|text| {
             crate::say!("{text}");

@@ -33,6 +33,10 @@ pub(crate) fn p3dp(dir: &Path, args: &[&str]) -> Output {
         args.first() != Some(&"build") || args.contains(&"-o"),
         "a build run in process must name its output with -o"
     );
+    assert!(
+        args.first() != Some(&"new") || args.get(1).is_some_and(|n| n.ends_with(".yaml")),
+        "a starter made in process must be named NAME.yaml"
+    );
     let mut argv = vec!["p3dp".to_string()];
     for a in args {
         let file = !a.starts_with('-') && a.contains('.') && a.parse::<f64>().is_err();

@@ -29,7 +29,7 @@ impl Severity {
 }
 
 /// Every code a finding may carry, with what it means (for `allow:` and docs).
-pub(crate) const CODES: &[(&str, &str)] = &[
+pub const CODES: &[(&str, &str)] = &[
     ("non-finite", "a point is not a finite number (error)"),
     ("out-of-bed", "a point lies outside the bed (error)"),
     ("below-bed", "a point lies below z = 0 (error)"),

@@ -109,9 +109,11 @@ fn a_sweep_range_without_a_step_steps_by_one_as_for_does() {
 }
 
 #[test]
-fn every_starter_builds_and_passes_its_checks() {
+fn every_starter_builds_clean_on_the_default_printer() {
     let dir = tmp("authoring-new");
-    for kind in ["sphere", "globe", "plate", "turtle", "solid"] {
+    let kinds: Vec<&str> = p3dp::cli::STARTERS.iter().map(|(k, _)| *k).collect();
+    assert!(kinds.len() >= 5, "{kinds:?}");
+    for kind in kinds {
         let name = format!("my-{kind}");
         let o = p3dp(&dir, &["new", &name, "--from", kind]);
         assert!(o.status.success(), "new --from {kind}: {}", stderr(&o));
@@ -130,6 +132,12 @@ fn every_starter_builds_and_passes_its_checks() {
             stdout(&c),
             stderr(&c)
         );
+        // a newcomer's first build shows no warning (and no note)
+        assert!(
+            stdout(&c).contains(&format!("{file}: 0 warnings, 0 errors\n")),
+            "check {file}: {}",
+            stdout(&c)
+        );
         let b = p3dp(&dir, &["build", &file]);
         assert!(b.status.success(), "build {file}: {}", stderr(&b));
         assert!(dir.join(format!("{name}.gcode")).is_file());
@@ -147,7 +155,7 @@ fn every_starter_builds_and_passes_its_checks() {
 #[test]
 fn completions_and_the_manual_name_the_subcommands() {
     let dir = tmp("authoring-completions");
-    for shell in ["bash", "zsh", "fish", "powershell"] {
+    for shell in ["bash", "zsh", "fish", "powershell", "elvish"] {
         let o = p3dp(&dir, &["completions", shell]);
         assert!(o.status.success(), "{shell}: {}", stderr(&o));
         let text = stdout(&o);
@@ -159,6 +167,7 @@ fn completions_and_the_manual_name_the_subcommands() {
             "mesh",
             "watch",
             "new",
+            "explain",
             "completions",
         ] {
             assert!(text.contains(sub), "{shell} completions lack {sub}");

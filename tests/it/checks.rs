@@ -101,6 +101,11 @@ fn each_corpus_recipe_triggers_exactly_its_finding() {
         let g = &got[0];
         assert_eq!(g["code"], e.code.as_str(), "{name}: {g:#?}");
         assert_eq!(g["severity"], e.severity.as_str(), "{name}: {g:#?}");
+        let see = format!("; see: p3dp explain {}", e.code);
+        assert!(
+            g["message"].as_str().unwrap().ends_with(&see),
+            "{name}: {g:#?}"
+        );
         match e.at {
             None => assert!(g.get("at").is_none(), "{name}: {g:#?}"),
             Some(want) => {

@@ -41,7 +41,7 @@ pub(crate) fn fmt_p(p: DVec3) -> String {
 /// before the cheap ones refuse it). The costly checks are plain functions
 /// of the parts, independent of each other ([`Costly`] lists them), so the
 /// application may run them side by side; [`merge`] puts their findings in
-/// one fixed order.
+/// one fixed order; each message ends with [`see`].
 pub(crate) fn run(
     recipe: &Recipe,
     paths: &[&Toolpath],
@@ -128,8 +128,8 @@ impl Costly {
 }
 
 /// Every finding in the one fixed order (the cheap checks', starvation,
-/// first layer, support, collision, the pattern helix's) and the parts'
-/// footprints.
+/// first layer, support, collision, the pattern helix's), each message
+/// ending with [`see`], and the parts' footprints.
 pub(crate) fn merge(cheap: Cheap, costly: Costly) -> (Vec<Finding>, Vec<first_layer::Footprint>) {
     let mut out = cheap.findings;
     for v in [
@@ -141,7 +141,16 @@ pub(crate) fn merge(cheap: Cheap, costly: Costly) -> (Vec<Finding>, Vec<first_la
     ] {
         out.extend(v);
     }
+    for f in &mut out {
+        f.message.push_str(&see(f.code));
+    }
     (out, costly.footprints)
+}
+
+/// `; see: p3dp explain CODE`: the end of every finding's message, where
+/// the user reads what the code means and how to fix it.
+pub(crate) fn see(code: &str) -> String {
+    format!("; see: p3dp explain {code}")
 }
 
 /// Temperature events (a turtle's `nozzle_temp`, `bed_temp`) above the limits: a nozzle temperature above the

@@ -4,6 +4,7 @@
 
 pub(crate) mod build;
 pub(crate) mod check;
+pub(crate) mod explain;
 pub(crate) mod hash;
 pub(crate) mod mesh;
 pub(crate) mod new;

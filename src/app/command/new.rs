@@ -8,7 +8,7 @@ use crate::base::error::{Error, Result};
 
 /// The starter recipes of `p3dp new --from KIND`: each kind and its text,
 /// with `__NAME__` where the recipe's name goes.
-pub(crate) const STARTERS: &[(&str, &str)] = &[
+pub const STARTERS: &[(&str, &str)] = &[
     ("sphere", include_str!("../starters/sphere.yaml")),
     ("globe", include_str!("../starters/globe.yaml")),
     ("plate", include_str!("../starters/plate.yaml")),

@@ -224,3 +224,84 @@ fn not_mirrored_east_is_counter_clockwise() {
     assert!(east > 0.95, "eastward fit {east}");
     assert!(west < 0.6, "mirrored fits too well: {west} vs {east}");
 }
+
+/// `p3dp new --from globe`: its lettering reads left to right seen from
+/// outside. Seen from outside (from −y, x to the right), the front of the
+/// sphere runs from theta = 180° (left) through 270° to 360° (right): a text
+/// reads from outside when its columns follow the counter-clockwise angle
+/// seen from above, and mirror-image when they run clockwise. The strings'
+/// factors (read off against the starter built without its `modulate_map`)
+/// are binned by that angle and by latitude (north up) and compared with
+/// the text's own bitmap, at every turn of the globe about its axis.
+#[test]
+fn the_starter_globe_reads_from_outside() {
+    use crate::generate::step::Bitmap;
+    let dir = tmp("globe-starter");
+    let o = crate::app::testing::p3dp(&dir, &["new", "lettered.yaml", "--from", "globe"]);
+    assert!(o.success());
+    let file = dir.join("lettered.yaml");
+    let text_of = std::fs::read_to_string(&file).unwrap();
+    let text = text_of
+        .split("text: \"")
+        .nth(1)
+        .and_then(|t| t.split('"').next())
+        .expect("the starter letters a text")
+        .to_string();
+    let mut recipe = Recipe::load(&file, &[], None).unwrap();
+    let fin = crate::generate::model::make_part(&recipe, 0).unwrap();
+    let last = recipe.parts[0].steps.pop().unwrap();
+    assert_eq!(last.key(), "modulate_map");
+    let base = crate::generate::model::make_part(&recipe, 0).unwrap();
+    let bitmap = Bitmap::from_text(&text).unwrap();
+    let (w, h) = (bitmap.width, bitmap.height);
+    // the sphere's centre: radius 25 lifted by 0.4 (the starter's params)
+    let centre_z = 25.4;
+    let mut cells = vec![(0.0, 0.0); w * h];
+    for k in 0..fin.len() {
+        let m = fin.midpoint(k);
+        let lat = (m.z - centre_z).atan2(m.truncate().length());
+        // the starter's band: v = 0.5 − 3·lat/pi over the text's rows
+        let v = 0.5 - 3.0 * lat / std::f64::consts::PI;
+        if !(0.0..1.0).contains(&v) || base.strings[k].travel {
+            continue;
+        }
+        let ang = m.y.atan2(m.x).rem_euclid(std::f64::consts::TAU);
+        let col = ((ang / std::f64::consts::TAU * w as f64) as usize).min(w - 1);
+        let row = ((v * h as f64) as usize).min(h - 1);
+        let dark = (fin.strings[k].c / base.strings[k].c - 1.0).abs() < 1e-9;
+        cells[row * w + col].1 += 1.0;
+        cells[row * w + col].0 += f64::from(u8::from(dark));
+    }
+    let printed: Vec<f64> = cells
+        .iter()
+        .map(|&(d, n)| if n > 0.0 { d / n } else { 0.0 })
+        .collect();
+    let best = |mirror: bool| {
+        (0..w)
+            .map(|s| {
+                let want: Vec<f64> = (0..h)
+                    .flat_map(|r| (0..w).map(move |c| (r, c)))
+                    .map(|(r, c)| {
+                        let col = if mirror {
+                            (w - 1 - c + s) % w
+                        } else {
+                            (c + s) % w
+                        };
+                        f64::from(u8::from(bitmap.pixels[r * w + col] < 0.5))
+                    })
+                    .collect();
+                correlation(&printed, &want)
+            })
+            .fold(f64::MIN, f64::max)
+    };
+    let (reads, mirrored) = (best(false), best(true));
+    assert!(
+        reads > 0.85,
+        "the text fits only {reads:.3} read from outside"
+    );
+    assert!(
+        mirrored < 0.7,
+        "mirror-image fits as well: {mirrored:.3} vs {reads:.3}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -195,3 +195,125 @@ fn every_variable_and_function_is_in_the_reference() {
         missing.join("\n")
     );
 }
+
+/// A recipe resolved from `text` (relative paths from the crate root).
+fn resolved(text: &str) -> crate::recipe::Recipe {
+    let raw: RawRecipe = parse_yaml(text, "doc.yaml").unwrap();
+    crate::recipe::Recipe::resolve(&raw, &[], None, std::path::Path::new(".")).unwrap()
+}
+
+/// The defaults and units `docs/recipe.md` states are the loader's: each
+/// row below is text the reference holds, beside the value the loader
+/// gives when the key is left out (or the unit the G-code shows).
+#[test]
+fn stated_defaults_and_units_are_the_loaders() {
+    let doc = std::fs::read_to_string(crate::base::testing::root().join("docs/recipe.md")).unwrap();
+    let plain = resolved(
+        "p3dp: 1\nname: d\nmaterial: {density: 1.24, nozzle_temp: 215, bed_temp: 60}\nparts:\n  - primitive: {circle: {radius: 10}}\n",
+    );
+    let tp = crate::generate::model::make_part(&plain, 0).unwrap();
+    let m = &plain.material;
+    let extras = resolved(
+        "p3dp: 1\nname: e\nparts:\n  - speed: 33\n    brim: {loops: 3}\n    stand: {radius: 7}\n    primitive: {circle: {radius: 10, center: [0, 0, 5]}}\n",
+    );
+    let brim = extras.parts[0].brim.as_ref().unwrap();
+    let stand = extras.parts[0].stand.as_ref().unwrap();
+    let rows: Vec<(&str, bool)> = vec![
+        (
+            "`line_width` (0.45 mm, also the step between loops), `layer_height` (0.2 mm), `speed` (the part's)",
+            brim.line_width == 0.45 && brim.layer_height == 0.2 && brim.speed == 33.0,
+        ),
+        (
+            "`walls` concentric circles (2), `line_width` apart (0.45 mm)",
+            stand.walls == 2 && stand.line_width == 0.45,
+        ),
+        (
+            "in layers of `layer_height` (0.2 mm; the first at that nozzle height) at `speed` (the part's)",
+            stand.layer_height == 0.2 && stand.speed == 33.0 && stand.height.is_none(),
+        ),
+        (
+            "| `printer` | `generic-220` |",
+            plain.printer.name == "generic-220",
+        ),
+        (
+            "| `max_strings` | 50 000 000 |",
+            plain.max_strings == 50_000_000,
+        ),
+        (
+            "| `defaults.cross_section` | 0.196 | mm²",
+            tp.strings.iter().all(|s| s.c == 0.196),
+        ),
+        (
+            "| `defaults.speed` | 40 | mm/s",
+            tp.strings.iter().all(|s| s.v == 40.0),
+        ),
+        (
+            "`segments` the strings per turn (default 72)",
+            tp.strings.iter().filter(|s| !s.travel).count() == 72,
+        ),
+        (
+            "| `max_nozzle_temp` | `nozzle_temp` + 25 |",
+            m.max_nozzle_temp == 215.0 + 25.0,
+        ),
+        ("| `fan_speed` | 0 (off) |", m.fan_speed == 0.0),
+        ("| `fan_start_z` | 0.5 |", m.fan_start_z == 0.5),
+        (
+            "| `color` | `#FA8F29` (orange) |",
+            m.color == [0xFA, 0x8F, 0x29],
+        ),
+        ("| `name` | `part N` |", plain.parts[0].name == "part 1"),
+    ];
+    for (text, holds) in rows {
+        assert!(doc.contains(text), "docs/recipe.md no longer says {text}");
+        assert!(holds, "docs/recipe.md says {text}, the loader disagrees");
+    }
+}
+
+/// `dwell` waits milliseconds, as the reference says: `{dwell: 500}` is
+/// `G4 P500`, half a second in the print-time estimate.
+#[test]
+fn dwell_is_milliseconds() {
+    let doc = std::fs::read_to_string(crate::base::testing::root().join("docs/recipe.md")).unwrap();
+    assert!(
+        doc.contains("wait, in **milliseconds** (`G4 P<ms>`"),
+        "docs/recipe.md"
+    );
+    let dir = crate::base::testing::tmp("doc-dwell");
+    let recipe = |ms: u32| {
+        format!(
+            "p3dp: 1\nname: w{ms}\nparts:\n  - primitive:\n      turtle:\n        start: {{position: [0, 0, 0.2]}}\n        program:\n          - {{forward: 10}}\n          - {{dwell: {ms}}}\n          - {{forward: 10}}\n"
+        )
+    };
+    let mut times = Vec::new();
+    for ms in [0u32, 500] {
+        std::fs::write(dir.join(format!("w{ms}.yaml")), recipe(ms)).unwrap();
+        let o = crate::app::testing::p3dp(
+            &dir,
+            &[
+                "build",
+                &format!("w{ms}.yaml"),
+                "-o",
+                &format!("w{ms}.gcode"),
+                "--stats-json",
+                &format!("w{ms}.json"),
+            ],
+        );
+        assert!(o.success(), "{}", o.stderr);
+        let gcode = std::fs::read_to_string(dir.join(format!("w{ms}.gcode"))).unwrap();
+        assert!(
+            gcode.contains(&format!("\nG4 P{ms} ")),
+            "no G4 P{ms} in the G-code"
+        );
+        let stats: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(dir.join(format!("w{ms}.json"))).unwrap(),
+        )
+        .unwrap();
+        times.push(stats["print_time_s"].as_f64().unwrap());
+    }
+    let waited = times[1] - times[0];
+    assert!(
+        (waited - 0.5).abs() < 1e-6,
+        "a 500 ms dwell added {waited} s"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
