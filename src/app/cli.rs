@@ -78,6 +78,9 @@ pub struct RecipeFlags {
     /// Silence a check for this build: its code, e.g. `bridge`; repeatable.
     #[arg(long = "allow", value_name = "CODE")]
     pub allow: Vec<String>,
+    /// Let the recipe read files below DIR too (it reads only below its project: the folder holding p3dp.lock or .git, else its own); repeatable.
+    #[arg(long = "allow-read", value_name = "DIR")]
+    pub allow_read: Vec<PathBuf>,
 }
 
 /// The thread budget.
@@ -149,6 +152,7 @@ impl RecipeFlags {
                 .collect::<Result<_>>()?,
             printer: self.printer.clone(),
             allow: self.allow.clone(),
+            allow_read: self.allow_read.clone(),
             ..Builds::default()
         })
     }
@@ -422,6 +426,7 @@ fn watch(a: &WatchArgs) -> Result<()> {
             sets: b.sets,
             printer: b.printer,
             allow: b.allow,
+            allow_read: b.allow_read,
         },
         threads: a.jobs.threads(),
         port: a.port,

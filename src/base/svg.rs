@@ -76,18 +76,14 @@ pub fn load(
     opt: &Options,
     reads: &crate::base::input::Reads,
 ) -> Result<Vec<Subpath>> {
-    reads.note(path);
     let io = |e: &std::io::Error| Error {
         io_kind: Some(e.kind()),
         ..Error::input("", format!("cannot read the SVG file `{shown}`: {e}"))
     };
-    let file = std::fs::File::open(path).map_err(|e| io(&e))?;
-    if !file.metadata().map_err(|e| io(&e))?.is_file() {
-        return Err(Error::input(
-            "",
-            format!("the SVG file `{shown}` is not a regular file; expected an SVG file"),
-        ));
-    }
+    reads.reach(path, "SVG file")?;
+    std::fs::metadata(path).map_err(|e| io(&e))?;
+    // a regular file only (never a FIFO or device)
+    let file = crate::base::input::open_regular(path, "SVG file")?;
     let bytes = crate::base::input::read_bounded(file, MAX_SVG_BYTES).map_err(|e| io(&e))?;
     let Some(bytes) = bytes else {
         return Err(Error::input(

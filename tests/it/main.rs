@@ -22,6 +22,7 @@ mod error_snapshots;
 mod extruder_turtle;
 mod gallery;
 mod hostile;
+mod inputs;
 mod internals;
 mod io_errors;
 mod layers;
