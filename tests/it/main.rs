@@ -14,6 +14,7 @@ mod common;
 mod authoring;
 mod bad_inputs;
 mod batch;
+mod bounds;
 mod bowl;
 mod ca;
 mod checks;

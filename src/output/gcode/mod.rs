@@ -620,6 +620,14 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
             return Ok(());
         }
         self.unretract()?;
+        // no faster than the machine feeds filament alone (its head's speed
+        // when the profile gives no extrude-only limit)
+        let limits = self.printer.limits();
+        let speed = speed.min(
+            limits
+                .max_extrude_only_velocity
+                .unwrap_or(limits.max_velocity),
+        );
         self.begin(b"G1 E");
         self.put_e(filament);
         self.set_feed(speed);
@@ -644,7 +652,17 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
         let mut events = tp.events.iter().peekable();
         let arcs = if self.printer.arcs {
             let fw = flavor::arc_firmware(self.printer.flavor);
-            crate::base::geom::arc::fit_part(tp, self.printer.arc_tolerance, fw)
+            let mut arcs = crate::base::geom::arc::fit_part(tp, self.printer.arc_tolerance, fw);
+            // an arc bulges past its strings by up to the tolerance: one whose
+            // sweep leaves the bed stays strings (which the checks held to it)
+            let o = self.printer.origin;
+            let bed_origin = glam::DVec2::new(-o[0], -o[1]);
+            arcs.retain(|a| {
+                a.bounding_points(bed_origin)
+                    .into_iter()
+                    .all(|p| self.printer.bed.contains_xy(self.printer.to_machine(p)))
+            });
+            arcs
         } else {
             Vec::new()
         };
