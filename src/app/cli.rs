@@ -86,7 +86,7 @@ pub struct RecipeFlags {
 /// The thread budget.
 #[derive(Args, Clone, Copy, Debug, Default)]
 pub struct JobsFlag {
-    /// At most N threads in all (default: one per core); the output is the same on any number.
+    /// At most N threads in all (default: one per core; at most 4 per core are used); the output is the same on any number.
     #[arg(short = 'j', long = "jobs", value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
     pub jobs: Option<u16>,
 }
@@ -95,7 +95,7 @@ impl JobsFlag {
     /// The threads of `-j N`: one per core by default.
     fn threads(self) -> Threads {
         self.jobs
-            .map_or_else(Threads::available, |n| Threads::new(usize::from(n)))
+            .map_or_else(Threads::available, |n| Threads::asked(usize::from(n)))
     }
 }
 

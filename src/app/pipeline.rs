@@ -46,6 +46,16 @@ impl Threads {
         Threads(n.max(1))
     }
 
+    /// Most threads per core a budget may have: more only add the cost of
+    /// starting them and of smaller shares of work.
+    pub const PER_CORE_MAX: usize = 4;
+
+    /// A budget of `n` threads asked for (`-j N`), at most
+    /// [`Threads::PER_CORE_MAX`] per core.
+    pub fn asked(n: usize) -> Threads {
+        Threads::new(n.min(Threads::available().get() * Threads::PER_CORE_MAX))
+    }
+
     /// One thread per core the machine offers (1 when that is unknown).
     pub fn available() -> Threads {
         Threads::new(std::thread::available_parallelism().map_or(1, |n| n.get()))

@@ -134,3 +134,48 @@ fn the_turtles_extrusion_in_place_keeps_to_the_machines_feed() {
         .unwrap();
     assert!(f <= 200.0 * 60.0, "{line}");
 }
+
+#[test]
+fn a_for_over_many_names_is_refused_before_it_allocates() {
+    let dir = tmp("bounds-for");
+    let part = |names: usize| {
+        let loops: Vec<String> = (0..names).map(|k| format!("n{k}: \"0..9999\"")).collect();
+        format!(
+            "p3dp: 1\nname: many\nparts:\n  - primitive: {{circle: {{radius: 5, center: [0, 0, 0.2]}}}}\n    for: {{{}}}\n",
+            loops.join(", ")
+        )
+    };
+    for (names, says) in [
+        (30_000, "more than 64"),
+        (60, "more than the limit of 10000"),
+    ] {
+        std::fs::write(dir.join("r.yaml"), part(names)).unwrap();
+        let t = std::time::Instant::now();
+        let out = p3dp(&dir, &["check", "r.yaml"]);
+        let e = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{names}: {e}");
+        assert!(
+            e.contains("parts[0].for") && e.contains(says),
+            "{names}: {e}"
+        );
+        // 30,000 × 10,000 values would be 2.4 GB; refused at once
+        assert!(t.elapsed().as_secs() < 10, "{names}: {:?}", t.elapsed());
+    }
+}
+
+#[test]
+fn jobs_past_the_useful_are_fine() {
+    let dir = tmp("bounds-jobs");
+    let r = recipe("sphere.yaml").display().to_string();
+    let one = p3dp(&dir, &["hash", &r, "-j", "1"]);
+    let many = p3dp(&dir, &["hash", &r, "-j", "65535"]);
+    assert_eq!(
+        many.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&many.stderr)
+    );
+    assert_eq!(one.stdout, many.stdout);
+    let help = p3dp(&dir, &["build", "--help"]);
+    assert!(String::from_utf8_lossy(&help.stdout).contains("at most 4 per core"));
+}
