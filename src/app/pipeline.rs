@@ -143,6 +143,8 @@ pub fn render_unhashed<W: Write>(plan: &Plan, out: W) -> Result<Stats> {
 /// G-code written for its stats (and, for a viewer, its moves) beside the
 /// drawing when the pool allows; the same preview either way.
 pub fn preview(plan: &Plan, out: &Path, opts: &preview::Options) -> Result<preview::Finished> {
+    crate::analyse::check::within_reach(&plan.recipe, &plan.paths, "preview")
+        .map_err(|e| e.in_file(&plan.path))?;
     let job = preview::Job::new(plan, out, opts)?;
     let mut reader = job.reader();
     let (stats, drawing) = if parallel() {

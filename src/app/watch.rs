@@ -369,6 +369,8 @@ fn build(opts: &Options, cx: &Context) -> Result<Built> {
     let (p, stats) = crate::app::pipeline::run(opts.threads, || {
         let mut p = prepare_in(&opts.recipe, &opts.build, cx)?;
         crate::app::pipeline::check(&mut p, &opts.build.allow);
+        crate::analyse::check::within_reach(&p.recipe, &p.paths, "preview")
+            .map_err(|e| e.in_file(&p.path))?;
         let stats = crate::app::pipeline::render(&p, &mut gcode)?;
         Ok::<_, Error>((p, stats))
     })?;

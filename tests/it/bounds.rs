@@ -179,3 +179,46 @@ fn jobs_past_the_useful_are_fine() {
     let help = p3dp(&dir, &["build", "--help"]);
     assert!(String::from_utf8_lossy(&help.stdout).contains("at most 4 per core"));
 }
+
+#[test]
+fn previews_and_meshes_of_a_model_metres_away_are_refused_at_once() {
+    let dir = tmp("bounds-far");
+    let helix = |r: &str| {
+        format!("p3dp: 1\nname: far\nparts:\n  - primitive: {{helix: {{radius: {r}, height: 1, pitch: 0.25, segments: 72}}}}\n")
+    };
+    // 288 strings of radius 1e8 mm: minutes and gigabytes before
+    std::fs::write(dir.join("r.yaml"), helix("1e8")).unwrap();
+    for args in [
+        &["preview", "r.yaml", "-o", "r.png"][..],
+        &["preview", "r.yaml", "-o", "r.html"],
+        &["mesh", "r.yaml", "-o", "r.stl"],
+        &[
+            "build",
+            "r.yaml",
+            "-o",
+            "r.gcode",
+            "--force",
+            "--preview",
+            "r.png",
+        ],
+    ] {
+        let t = std::time::Instant::now();
+        let out = p3dp(&dir, args);
+        let e = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {e}");
+        assert!(e.contains("farther than 250 mm"), "{args:?}: {e}");
+        assert!(t.elapsed().as_secs() < 5, "{args:?}: {:?}", t.elapsed());
+    }
+    let left: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
+    assert_eq!(left.len(), 1, "only the recipe: {left:?}");
+    // off the bed but near it: drawn, so the user can see where it went
+    std::fs::write(dir.join("r.yaml"), helix("150")).unwrap();
+    let out = p3dp(&dir, &["preview", "r.yaml", "-o", "r.png"]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(dir.join("r.png").exists());
+}
