@@ -5,6 +5,7 @@ pub mod batch;
 pub mod cli;
 pub mod command;
 pub mod diagnostic;
+pub mod http;
 pub mod pipeline;
 pub mod prepare;
 pub mod watch;

@@ -58,6 +58,7 @@ const LAYERS: &[(&str, &[&str])] = &[
             "prepare",
             "batch",
             "diagnostic",
+            "http",
             "watch",
             "command",
             "cli",
