@@ -19,6 +19,7 @@ seed printer "$root"/src/machine/printers/*.yaml "$root"/tests/fixtures/printers
 seed lock "$root"/p3dp.lock
 seed image "$root"/maps/* "$root"/tests/bad/*.png
 seed svg "$root"/recipes/*.svg "$root"/tests/bad/svg/*.svg
+seed include "$root"/recipes/cup.yaml "$root"/recipes/plate.yaml "$root"/tests/fixtures/*.yaml
 # expressions: every quoted string of the recipes, one a file
 mkdir -p "$here/corpus/expr"
 grep -ho '"[^"]*"' "$root"/recipes/*.yaml | sed 's/^"//; s/"$//' | sort -u | while IFS= read -r e; do

@@ -11,7 +11,10 @@ fuzz_target!(|data: &[u8]| {
     if std::fs::write(&file, data).is_err() {
         return;
     }
-    if let Ok(b) = p3dp::recipe::load_bitmap(&file, "map.png") {
+    // the folder is the project the image is read in
+    let reads = p3dp::base::input::Reads::default();
+    reads.allow(&dir);
+    if let Ok(b) = p3dp::recipe::load_bitmap(&file, "map.png", &reads) {
         assert!(b.width as u64 * b.height as u64 <= p3dp::base::input::MAX_IMAGE_PIXELS);
     }
 });

@@ -29,17 +29,21 @@ fuzz_target!(|data: &[u8]| {
     let Ok(recipe) = Recipe::resolve(&raw, &[], None, &dir) else {
         return;
     };
-    let strings: u64 = recipe.parts.iter().map(|p| p.primitive.string_count()).sum();
+    let strings: u64 = recipe
+        .parts
+        .iter()
+        .map(|p| p.primitive.string_count())
+        .sum();
     if strings > BUILD_STRINGS {
         return;
     }
     let mut paths = Vec::new();
     for k in 0..recipe.parts.len() {
-        match p3dp::app::build::make_part(&recipe, k, p3dp::base::threads::Threads::ONE) {
+        match p3dp::generate::model::make_part(&recipe, k) {
             Ok(tp) => paths.push(tp),
             Err(_) => return,
         }
     }
     let refs: Vec<&p3dp::base::toolpath::Toolpath> = paths.iter().collect();
-    let _ = p3dp::analyse::check::run(&recipe, &refs, &recipe.allow, p3dp::base::threads::Threads::ONE);
+    let _ = p3dp::analyse::check::run(&recipe, &refs, &recipe.allow);
 });

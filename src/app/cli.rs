@@ -120,12 +120,15 @@ pub struct RecipeFlags {
     /// Silence a check for this build: its code, e.g. `bridge`; repeatable.
     #[arg(long = "allow", value_name = "CODE")]
     pub allow: Vec<String>,
+    /// Let the recipe read files below DIR too (it reads only below its project: the folder holding p3dp.lock or .git, else its own); repeatable.
+    #[arg(long = "allow-read", value_name = "DIR")]
+    pub allow_read: Vec<PathBuf>,
 }
 
 /// The thread budget.
 #[derive(Args, Clone, Copy, Debug, Default)]
 pub struct JobsFlag {
-    /// At most N threads in all (default: one per core); the output is the same on any number.
+    /// At most N threads in all (default: one per core; at most 4 per core are used); the output is the same on any number.
     #[arg(short = 'j', long = "jobs", value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
     pub jobs: Option<u16>,
 }
@@ -134,7 +137,7 @@ impl JobsFlag {
     /// The threads of `-j N`: one per core by default.
     fn threads(self) -> Threads {
         self.jobs
-            .map_or_else(Threads::available, |n| Threads::new(usize::from(n)))
+            .map_or_else(Threads::available, |n| Threads::asked(usize::from(n)))
     }
 }
 
@@ -191,6 +194,7 @@ impl RecipeFlags {
                 .collect::<Result<_>>()?,
             printer: self.printer.clone(),
             allow: self.allow.clone(),
+            allow_read: self.allow_read.clone(),
             ..Builds::default()
         })
     }
@@ -519,6 +523,7 @@ fn watch(a: &WatchArgs) -> Result<()> {
             sets: b.sets,
             printer: b.printer,
             allow: b.allow,
+            allow_read: b.allow_read,
         },
         threads: a.jobs.threads(),
         port: a.port,

@@ -5,6 +5,7 @@ pub(crate) mod batch;
 pub(crate) mod cli;
 pub(crate) mod command;
 pub(crate) mod diagnostic;
+pub(crate) mod http;
 pub mod pipeline;
 pub(crate) mod prepare;
 pub(crate) mod watch;

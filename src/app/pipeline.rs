@@ -48,6 +48,16 @@ impl Threads {
         Threads(n.max(1))
     }
 
+    /// Most threads per core a budget may have: more only add the cost of
+    /// starting them and of smaller shares of work.
+    pub const PER_CORE_MAX: usize = 4;
+
+    /// A budget of `n` threads asked for (`-j N`), at most
+    /// [`Threads::PER_CORE_MAX`] per core.
+    pub fn asked(n: usize) -> Threads {
+        Threads::new(n.min(Threads::available().get() * Threads::PER_CORE_MAX))
+    }
+
     /// One thread per core the machine offers (1 when that is unknown).
     pub fn available() -> Threads {
         Threads::new(std::thread::available_parallelism().map_or(1, |n| n.get()))
@@ -109,7 +119,7 @@ pub fn write<W: Write>(plan: &Plan, out: W) -> Result<(W, MoveStats)> {
 /// [`write`], stamped as `options` say (the date, Bambu's package).
 pub fn write_with<W: Write>(plan: &Plan, options: &Options, out: W) -> Result<(W, MoveStats)> {
     let thumbnails = crate::output::preview::thumbnail::blocks(plan)?;
-    written(plan, options, thumbnails, out, None)
+    written(plan, options, thumbnails, out, None, false)
 }
 
 /// Whether the G-code needs the print's time before it is written: `M73`
@@ -129,6 +139,7 @@ fn written<W: Write>(
     thumbnails: String,
     out: W,
     failed: Option<&AtomicBool>,
+    draft: bool,
 ) -> Result<(W, MoveStats)> {
     let never = AtomicBool::new(false);
     let failed = failed.unwrap_or(&never);
@@ -137,9 +148,10 @@ fn written<W: Write>(
         options: *options,
         ahead: None,
         thumbnails,
+        draft,
     };
     let done = if ahead(plan, options) {
-        let (estimate, timeline, stats) = plan_first(plan, options, failed)?;
+        let (estimate, timeline, stats) = plan_first(plan, options, failed, draft)?;
         head.ahead = Some(Ahead::of(&stats));
         let clock = Clock::new(timeline, estimate);
         crate::output::gcode::write(plan, head, out, clock, |c| c.estimate())
@@ -164,9 +176,11 @@ fn plan_first(
     plan: &Plan,
     options: &Options,
     failed: &AtomicBool,
+    draft: bool,
 ) -> Result<(Estimate, Timeline, MoveStats)> {
     let head = Head {
         options: *options,
+        draft,
         ..Head::default()
     };
     let discard = Until {
@@ -211,8 +225,12 @@ pub fn render<W: Write>(plan: &Plan, out: W) -> Result<Stats> {
 
 /// [`render`] without the SHA-256 of the G-code (its `gcode_sha256` is
 /// empty; the size is counted): for the previews, which show neither.
+/// Written as a draft: a profile's start or end G-code that failed its
+/// checks does not stop a picture of the print.
 pub fn render_unhashed<W: Write>(plan: &Plan, out: W) -> Result<Stats> {
-    let (counted, moves) = write(plan, Counted { out, bytes: 0 })?;
+    let thumbnails = crate::output::preview::thumbnail::blocks(plan)?;
+    let out = Counted { out, bytes: 0 };
+    let (counted, moves) = written(plan, &Options::default(), thumbnails, out, None, true)?;
     Ok(Stats::of(plan, &moves, String::new(), counted.bytes))
 }
 
@@ -220,6 +238,8 @@ pub fn render_unhashed<W: Write>(plan: &Plan, out: W) -> Result<Stats> {
 /// G-code written for its stats (and, for a viewer, its moves) beside the
 /// drawing when the pool allows; the same preview either way.
 pub fn preview(plan: &Plan, out: &Path, opts: &preview::Options) -> Result<preview::Finished> {
+    crate::analyse::check::within_reach(&plan.recipe, &plan.paths, "preview")
+        .map_err(|e| e.in_file(&plan.path))?;
     let job = preview::Job::new(plan, out, opts)?;
     let mut reader = job.reader();
     let (stats, drawing) = if parallel() {
@@ -373,6 +393,7 @@ fn written_beside<W: Write>(
         options: *options,
         ahead: Some(Ahead::of(&stats)),
         thumbnails: String::new(),
+        draft: false,
     };
     let clock = Clock::new(feed.timeline(), estimate);
     let out = Until { out, failed };

@@ -19,6 +19,8 @@ pub struct Options {
     pub printer: Option<String>,
     /// `--allow CODE`: check codes silenced for this build.
     pub allow: Vec<String>,
+    /// `--allow-read DIR`: folders the recipe may read in besides its project.
+    pub allow_read: Vec<std::path::PathBuf>,
 }
 
 /// Loads, builds and checks a recipe (on the pool it runs in, if any).
@@ -40,8 +42,14 @@ pub fn prepare_in(path: &Path, opts: &Options, cx: &Context) -> Result<Plan> {
     let shown = path.display().to_string();
     // the command line's own mistakes name the option, not the recipe
     check::validate_allow(&opts.allow, |i| format!("--allow {}", opts.allow[i]))?;
+    for dir in &opts.allow_read {
+        cx.reads.allow(dir);
+    }
     let printer = match &opts.printer {
-        Some(spec) => Some(
+        Some(spec) => Some({
+            // a profile named on the command line may inherit from its own project
+            cx.reads.name(Path::new(spec));
+
             Printer::resolve(spec, Path::new("."), &cx.reads).map_err(|e| {
                 if e.file.is_none() && e.place.as_deref() == Some("printer") {
                     Error {
@@ -51,8 +59,8 @@ pub fn prepare_in(path: &Path, opts: &Options, cx: &Context) -> Result<Plan> {
                 } else {
                     e
                 }
-            })?,
-        ),
+            })?
+        }),
         None => None,
     };
     let recipe = Recipe::load_in(path, &opts.sets, printer.as_ref(), cx)?;

@@ -29,6 +29,7 @@ use std::time::{Duration, Instant};
 
 use serde_json::{json, Value};
 
+use crate::app::http;
 use crate::app::prepare::{prepare_in, Options as BuildOptions};
 use crate::base::error::{Error, Result};
 use crate::generate::primitive::solid::Reusing;
@@ -160,9 +161,6 @@ pub(crate) fn run(opts: &Options) -> Result<()> {
     })?;
     let listener = bind(opts.port)?;
     let port = listener.local_addr().map(|a| a.port()).unwrap_or(opts.port);
-    let server = tiny_http::Server::from_listener(listener, None)
-        .map(Arc::new)
-        .map_err(|e| Error::io(format!("--port {port}"), format!("cannot serve: {e}")))?;
     let name = opts
         .recipe
         .file_stem()
@@ -182,10 +180,14 @@ pub(crate) fn run(opts: &Options) -> Result<()> {
         crate::output::file::stop_on_signals(Box::new(move |_| tx.send(Wake::Stop).is_ok()));
     }
     let http = {
-        let (server, shared) = (Arc::clone(&server), Arc::clone(&shared));
+        let shared = Arc::clone(&shared);
+        let handle: Arc<dyn Fn(&http::Request) -> http::Answer + Send + Sync> = {
+            let shared = Arc::clone(&shared);
+            Arc::new(move |req: &http::Request| answer(req, &shared))
+        };
         std::thread::Builder::new()
-            .name("p3dp-http".into())
-            .spawn(move || serve(&server, &shared))
+            .name("p3dp-serve".into())
+            .spawn(move || http::serve(listener, handle, || shared.lock().stop))
             .map_err(|e| Error::io("p3dp watch", format!("cannot start the server: {e}")))?
     };
     let url = format!("http://127.0.0.1:{port}/");
@@ -200,7 +202,6 @@ pub(crate) fn run(opts: &Options) -> Result<()> {
     // stop: the pages' streams end, the server thread returns, the socket closes
     shared.lock().stop = true;
     shared.changed.notify_all();
-    server.unblock();
     // a page still being sent to a stalled client is not waited for long
     let until = Instant::now() + Duration::from_millis(500);
     while !http.is_finished() && Instant::now() < until {
@@ -209,7 +210,6 @@ pub(crate) fn run(opts: &Options) -> Result<()> {
     if http.is_finished() {
         let _ = http.join();
     }
-    drop(server);
     result
 }
 
@@ -369,6 +369,8 @@ fn build(opts: &Options, cx: &Context) -> Result<Built> {
     let (p, stats) = crate::app::pipeline::run(opts.threads, || {
         let mut p = prepare_in(&opts.recipe, &opts.build, cx)?;
         crate::app::pipeline::check(&mut p, &opts.build.allow);
+        crate::analyse::check::within_reach(&p.recipe, &p.paths, "preview")
+            .map_err(|e| e.in_file(&p.path))?;
         let stats = crate::app::pipeline::render(&p, &mut gcode)?;
         Ok::<_, Error>((p, stats))
     })?;
@@ -492,98 +494,54 @@ impl Files {
     }
 }
 
-/// Answers requests until the server is unblocked.
-fn serve(server: &tiny_http::Server, shared: &Arc<Shared>) {
-    for req in server.incoming_requests() {
-        if shared.lock().stop {
-            break;
-        }
-        answer(req, shared);
-    }
-}
-
-fn header(name: &str, value: &str) -> Option<tiny_http::Header> {
-    tiny_http::Header::from_bytes(name.as_bytes(), value.as_bytes()).ok()
-}
-
-/// A short plain-text answer.
-fn text(status: u16, body: &str) -> tiny_http::Response<std::io::Cursor<Vec<u8>>> {
-    let mut r = tiny_http::Response::from_string(body).with_status_code(status);
-    if let Some(h) = header("Content-Type", "text/plain; charset=utf-8") {
-        r.add_header(h);
-    }
-    r
-}
-
 /// Whether the request names this server: `127.0.0.1`, `localhost` or
 /// `[::1]`, with this port or none (refuses a page of another site that a
 /// DNS name rebound to 127.0.0.1 would let read the model).
-fn host_ok(req: &tiny_http::Request, port: u16) -> bool {
-    let Some(host) = req
-        .headers()
-        .iter()
-        .find(|h| h.field.equiv("Host"))
-        .map(|h| h.value.as_str().to_ascii_lowercase())
-    else {
-        return false;
-    };
+fn host_ok(host: &str, port: u16) -> bool {
     ["127.0.0.1", "localhost", "[::1]"]
         .iter()
         .any(|name| host == *name || host == format!("{name}:{port}"))
 }
 
+/// A short plain-text answer.
+fn text(status: u16, body: &str) -> http::Answer {
+    let kind = "text/plain; charset=utf-8";
+    http::Answer::Whole(status, kind, Vec::new(), body.as_bytes().to_vec())
+}
+
 /// Answers one request: `/` the page, `/events` the stream.
-fn answer(req: tiny_http::Request, shared: &Arc<Shared>) {
-    if !host_ok(&req, shared.port) {
-        let _ = req.respond(text(
+fn answer(req: &http::Request, shared: &Arc<Shared>) -> http::Answer {
+    if !host_ok(&req.host, shared.port) {
+        return text(
             403,
             "p3dp watch answers only requests addressed to 127.0.0.1 or localhost\n",
-        ));
-        return;
+        );
     }
-    if *req.method() != tiny_http::Method::Get {
-        let _ = req.respond(text(405, "p3dp watch answers GET only\n"));
-        return;
+    if req.method != "GET" {
+        return text(405, "p3dp watch answers GET only\n");
     }
-    let path = req.url().split('?').next().unwrap_or("");
-    match path {
-        "/" | "/index.html" => {
-            let mut r = tiny_http::Response::from_string(page(shared));
-            for h in [
-                header("Content-Type", "text/html; charset=utf-8"),
-                header("Cache-Control", "no-store"),
-            ]
-            .into_iter()
-            .flatten()
-            {
-                r.add_header(h);
-            }
-            let _ = req.respond(r);
-        }
+    match req.path.as_str() {
+        "/" | "/index.html" => http::Answer::Whole(
+            200,
+            "text/html; charset=utf-8",
+            vec![("Cache-Control", "no-store".to_string())],
+            page(shared).into_bytes(),
+        ),
         "/events" => {
             {
                 let mut st = shared.lock();
                 if st.streams >= MAX_STREAMS {
-                    drop(st);
-                    let _ = req.respond(text(503, "too many pages follow this p3dp watch\n"));
-                    return;
+                    return text(503, "too many pages follow this p3dp watch\n");
                 }
                 st.streams += 1;
             }
-            let shared2 = Arc::clone(shared);
-            let spawned = std::thread::Builder::new()
-                .name("p3dp-events".into())
-                .spawn(move || {
-                    stream(req.into_writer(), &shared2);
-                    shared2.lock().streams -= 1;
-                });
-            if spawned.is_err() {
+            let shared = Arc::clone(shared);
+            http::Answer::Stream(Box::new(move |sock| {
+                stream(Box::new(sock), &shared);
                 shared.lock().streams -= 1;
-            }
+            }))
         }
-        _ => {
-            let _ = req.respond(text(404, "not found; p3dp watch serves / and /events\n"));
-        }
+        _ => text(404, "not found; p3dp watch serves / and /events\n"),
     }
 }
 

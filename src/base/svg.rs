@@ -76,18 +76,14 @@ pub(crate) fn load(
     opt: &Options,
     reads: &crate::base::input::Reads,
 ) -> Result<Vec<Subpath>> {
-    reads.note(path);
     let io = |e: &std::io::Error| Error {
         io_kind: Some(e.kind()),
         ..Error::input("", format!("cannot read the SVG file `{shown}`: {e}"))
     };
-    let file = std::fs::File::open(path).map_err(|e| io(&e))?;
-    if !file.metadata().map_err(|e| io(&e))?.is_file() {
-        return Err(Error::input(
-            "",
-            format!("the SVG file `{shown}` is not a regular file; expected an SVG file"),
-        ));
-    }
+    reads.reach(path, "SVG file")?;
+    std::fs::metadata(path).map_err(|e| io(&e))?;
+    // a regular file only (never a FIFO or device)
+    let file = crate::base::input::open_regular(path, "SVG file")?;
     let bytes = crate::base::input::read_bounded(file, MAX_SVG_BYTES).map_err(|e| io(&e))?;
     let Some(bytes) = bytes else {
         return Err(Error::input(
@@ -126,6 +122,23 @@ pub(crate) fn parse(text: &str, opt: &Options) -> std::result::Result<Vec<Subpat
         )
     })?;
     check_xml(&doc, opt)?;
+    // paint servers and effects out of usvg's way (see `plain_paint`)
+    let plain;
+    let doc = match plain_paint(text, &doc) {
+        Some(t) => {
+            plain = t;
+            roxmltree::Document::parse_with_options(
+                &plain,
+                roxmltree::ParsingOptions {
+                    allow_dtd: false,
+                    nodes_limit: MAX_NODES,
+                    ..Default::default()
+                },
+            )
+            .map_err(|e| format!("cannot read it as XML once its paint is made plain: {e}"))?
+        }
+        None => doc,
+    };
     let uopt = usvg::Options {
         // never read a file or decode a picture an `<image>` names
         image_href_resolver: usvg::ImageHrefResolver {
@@ -138,6 +151,97 @@ pub(crate) fn parse(text: &str, opt: &Options) -> std::result::Result<Vec<Subpat
         .map_err(|e| format!("cannot read it as SVG: {e}; expected an SVG file"))?;
     let out = flatten(&tree, opt)?;
     drawn(out, opt)
+}
+
+/// The text of a drawing whose paint servers and effects usvg never sees,
+/// or `None` when it names none: p3dp takes only the geometry, and usvg
+/// panics on some degenerate ones (a `<pattern>` 1e-9 wide: its tile is
+/// placed in f32, where the width vanishes against its position, and
+/// tiny-skia's `NonZeroRect` unwraps a `None`). Every `url(…)` of a `fill`
+/// or `stroke` (attribute, `style` or style sheet) becomes `black`, of a
+/// `clip-path`, `mask`, `filter` or marker `none`; the shapes stay as
+/// drawn, and `<pattern>`s and gradients are left unused.
+fn plain_paint(text: &str, doc: &roxmltree::Document) -> Option<String> {
+    let mut edits: Vec<(std::ops::Range<usize>, String)> = Vec::new();
+    for n in doc.descendants() {
+        if n.is_element() {
+            for a in n.attributes() {
+                if !has_url(a.value()) {
+                    continue;
+                }
+                let plain = match a.name() {
+                    "style" => xml_escape(&css_plain(a.value())),
+                    "fill" | "stroke" => "black".to_string(),
+                    "clip-path" | "mask" | "filter" | "marker-start" | "marker-mid"
+                    | "marker-end" => "none".to_string(),
+                    _ => continue,
+                };
+                edits.push((a.range_value(), plain));
+            }
+        } else if n.is_text() && n.parent().is_some_and(|p| p.tag_name().name() == "style") {
+            let t = n.text().unwrap_or("");
+            if has_url(t) {
+                edits.push((n.range(), xml_escape(&css_plain(t))));
+            }
+        }
+    }
+    if edits.is_empty() {
+        return None;
+    }
+    edits.sort_by_key(|(r, _)| r.start);
+    let mut out = String::with_capacity(text.len());
+    let mut at = 0;
+    for (r, plain) in edits {
+        if r.start < at || r.end > text.len() {
+            continue; // overlapping ranges cannot occur; kept safe anyway
+        }
+        out.push_str(&text[at..r.start]);
+        out.push_str(&plain);
+        at = r.end;
+    }
+    out.push_str(&text[at..]);
+    Some(out)
+}
+
+/// Whether CSS or attribute text holds a `url(` (in any case).
+fn has_url(s: &str) -> bool {
+    s.to_ascii_lowercase().contains("url(")
+}
+
+/// CSS with each `url(…)` replaced: `black` where the property it is the
+/// value of ends in `fill` or `stroke`, `none` elsewhere.
+fn css_plain(css: &str) -> String {
+    let lower = css.to_ascii_lowercase();
+    let mut out = String::with_capacity(css.len());
+    let mut at = 0;
+    while let Some(k) = lower[at..].find("url(").map(|k| k + at) {
+        let end = lower[k..].find(')').map_or(css.len(), |e| k + e + 1);
+        let before = &lower[..k];
+        let prop: String = before[..before.rfind(':').unwrap_or(0)]
+            .trim_end()
+            .chars()
+            .rev()
+            .take_while(|c| c.is_ascii_alphanumeric() || *c == '-')
+            .collect::<Vec<_>>()
+            .into_iter()
+            .rev()
+            .collect();
+        let paint = prop.ends_with("fill") || prop.ends_with("stroke");
+        out.push_str(&css[at..k]);
+        out.push_str(if paint { "black" } else { "none" });
+        at = end;
+    }
+    out.push_str(&css[at..]);
+    out
+}
+
+/// Text safe inside an XML attribute value (either quote) or element.
+fn xml_escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+        .replace('\'', "&apos;")
 }
 
 /// The checks on the XML before usvg sees it: the `<use>` expansion, the
@@ -740,6 +844,31 @@ mod tests {
     }
 
     const MM: &str = r#"<svg xmlns="http://www.w3.org/2000/svg" width="100mm" height="100mm" viewBox="0 0 100 100">"#;
+
+    #[test]
+    fn degenerate_paint_servers_never_reach_usvg_and_the_shapes_stay() {
+        // a pattern 1e-9 wide made tiny-skia unwrap a None inside usvg
+        let defs = r#"<defs><pattern id="p" width="1e-9" height="1e-9"><rect width="1" height="1" fill="url(#p)"/></pattern><linearGradient id="g" x1="0" x2="1e-9"/><filter id="f" width="1e-9"/></defs>"#;
+        let rect = r#"<rect id="r" x="20" y="20" width="10" height="10""#;
+        let plain = parse(&format!("{MM}{rect}/></svg>"), &opt()).unwrap();
+        for paint in [
+            r#" fill="url(#p)""#,
+            r#" stroke="url(#p)" fill="none""#,
+            r#" fill="URL('#p') red""#,
+            r#" style="fill: url(#p); stroke:url(#g)""#,
+            r#" class="a""#,
+            r#" fill="url(#g)" filter="url(#f)" mask="url(#p)" clip-path="url(#p)""#,
+        ] {
+            let sheet = r##"<style>.a { fill: url(#p) } rect { stroke: url( "#p" ) }</style>"##;
+            let svg = format!("{MM}{sheet}{defs}{rect}{paint}/></svg>");
+            let s = parse(&svg, &opt()).unwrap_or_else(|e| panic!("{paint}: {e}"));
+            assert_eq!(s, plain, "{paint}");
+        }
+        assert_eq!(
+            css_plain("a{fill:url(#p)} b{clip-path: url(#c) ;stroke-width:1}"),
+            "a{fill:black} b{clip-path: none ;stroke-width:1}"
+        );
+    }
 
     #[test]
     fn a_mm_root_gives_mm_and_y_up() {

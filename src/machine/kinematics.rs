@@ -98,6 +98,9 @@ impl Default for Kinematics {
     }
 }
 
+/// Largest `min_segment_time`, s (1e300 made every estimate 0 s).
+pub(crate) const MAX_MIN_SEGMENT_TIME: f64 = 1.0;
+
 impl Kinematics {
     /// Checks the values; errors name the key under `kinematics.`.
     pub fn validate(&self) -> Result<()> {
@@ -123,6 +126,10 @@ impl Kinematics {
         check("jerk", self.jerk, true)?;
         check("square_corner_velocity", self.square_corner_velocity, true)?;
         check("min_segment_time", self.min_segment_time, true)?;
+        if let Some(t) = self.min_segment_time {
+            // Marlin's MIN_SEGMENT_TIME is 20 ms: a second is already no planner
+            super::limits::at_most("kinematics.min_segment_time", t, MAX_MIN_SEGMENT_TIME, "s")?;
+        }
         check("minimum_cruise_ratio", self.minimum_cruise_ratio, true)?;
         check("max_z_speed", self.max_z_speed, false)?;
         check("max_z_acceleration", self.max_z_acceleration, false)?;
@@ -324,5 +331,22 @@ impl Limits {
             ));
         }
         s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_min_segment_time_past_a_second_is_refused_naming_the_key() {
+        let mut k = Kinematics {
+            min_segment_time: Some(1e300),
+            ..Kinematics::default()
+        };
+        let e = k.validate().unwrap_err();
+        assert_eq!(e.place.as_deref(), Some("kinematics.min_segment_time"));
+        k.min_segment_time = Some(0.02);
+        k.validate().unwrap();
     }
 }

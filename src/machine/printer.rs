@@ -251,6 +251,10 @@ pub struct Printer {
     pub checks: super::head::CheckLimits,
 }
 
+/// Largest `arc_tolerance`, mm: an arc strays from its strings by up to
+/// this, and beyond a nozzle's width it is no longer the path drawn.
+pub(crate) const MAX_ARC_TOLERANCE: f64 = 0.5;
+
 impl Printer {
     /// The planner's limits: the profile's `kinematics:` with every default
     /// filled in (Klipper's extrude-only limits from the nozzle and filament).
@@ -272,6 +276,7 @@ impl Printer {
         positive("max_speed", self.max_speed)?;
         positive("max_flow", self.max_flow)?;
         positive("arc_tolerance", self.arc_tolerance)?;
+        super::limits::at_most("arc_tolerance", self.arc_tolerance, MAX_ARC_TOLERANCE, "mm")?;
         match self.bed {
             Bed::Rectangle { size, .. } => {
                 positive("bed.size[0]", size[0])?;

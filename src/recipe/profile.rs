@@ -2,7 +2,7 @@
 //! binary, parsed by the same code as a user's file), a user's file, and
 //! `inherits:` chains merged key by key.
 
-use crate::base::input::Reads;
+use crate::base::input::{Reads, MAX_TEXT_BYTES};
 use std::path::Path;
 
 use super::schema::{
@@ -97,13 +97,16 @@ impl Printer {
     /// override those of a built-in profile or another file (maps merged key
     /// by key, see [`Tree::merge`]); a file without it is parsed on its own.
     pub fn from_file(path: &Path) -> Result<Printer> {
-        Printer::from_file_in(path, &Reads::default())
+        let reads = Reads::default();
+        reads.name(path);
+        Printer::from_file_in(path, &reads)
     }
 
-    /// [`Printer::from_file`], every file read noted in `reads`.
+    /// [`Printer::from_file`], every file read noted in `reads` and read
+    /// only inside its roots ([`Reads::reach`]).
     pub fn from_file_in(path: &Path, reads: &Reads) -> Result<Printer> {
         let shown = path.display().to_string();
-        let text = reads.read_text(path, "printer profile")?;
+        let text = reads.read_reached(path, "printer profile", MAX_TEXT_BYTES)?;
         let tree = Tree::parse(&text, &shown)?;
         let raw: RawPrinter = if tree.has("inherits") {
             let named = tree.has("name");
@@ -151,8 +154,10 @@ impl Printer {
         } else {
             base.join(spec)
         };
-        reads.note(&path);
-        if !path.is_file() {
+        reads
+            .reach(&path, "printer profile")
+            .map_err(|e| e.under("printer"))?;
+        if !path.exists() {
             let at = if path == Path::new(spec) {
                 String::new()
             } else {
@@ -246,7 +251,9 @@ fn inherit(
             Some(dir) if !dir.as_os_str().is_empty() && dir != Path::new(".") => dir.join(rel),
             _ => Path::new(rel).to_path_buf(),
         };
-        reads.note(&file);
+        reads
+            .reach(&file, "printer profile")
+            .map_err(|e| e.under("inherits"))?;
         let canon = file.canonicalize().map_err(|e| {
             Error::input(
                 "inherits",
@@ -264,7 +271,15 @@ fn inherit(
         }
         seen.push(canon);
         let shown = file.display().to_string();
-        let text = reads.read_text(&file, "printer profile")?;
+        let text = reads
+            .read_reached(&file, "printer profile", MAX_TEXT_BYTES)
+            .map_err(|e| {
+                if e.file.is_none() {
+                    e.under("inherits")
+                } else {
+                    e
+                }
+            })?;
         let t = Tree::parse(&text, &shown)?;
         inherit(t, &file, seen, reads).map_err(|e| e.in_file(&shown))?
     } else {

@@ -41,8 +41,12 @@ pub(crate) fn parse_yaml<T: de::DeserializeOwned>(text: &str, file: &str) -> Res
         err.line = e.location().map(|l| (l.line(), l.column()));
         if err.line.is_none() && msg.contains("more than one document") {
             // serde_yaml gives no place: the second `---` is where it begins
-            err.line = second_document(text).map(|l| (l, 1));
-            err.message = "a second YAML document begins here; expected one document".into();
+            let at = second_document(text);
+            err.line = at.map(|l| (l, 1));
+            err.message = match at.and_then(|l| text.lines().nth(l - 1)) {
+                Some(l) if l.contains('\u{feff}') => "a byte-order mark (U+FEFF) here starts a second YAML document; expected one document (remove the mark)".into(),
+                _ => "a second YAML document begins here; expected one document".into(),
+            };
         }
         if err.message.contains("expected map with a single key") {
             if let Some((variant, extra, line)) = extra_key(text, &segments, err.line) {
@@ -292,11 +296,29 @@ fn explain(mut err: Error, text: &str) -> Error {
     err
 }
 
-/// The line (1-based) of the `---` that starts a second YAML document.
+/// The line (1-based) of the `---` (or of the `...` that ends the first,
+/// or of a byte-order mark, which YAML takes as a new stream's start) that
+/// starts a second YAML document.
 fn second_document(text: &str) -> Option<usize> {
     let mut content = false;
+    // the indentation of the first content line: a line indented less ends
+    // the first document too (YAML reads it as a second)
+    let mut first_indent: Option<usize> = None;
     for (k, line) in text.lines().enumerate() {
         let t = line.trim_end();
+        let indent = line.len() - line.trim_start().len();
+        let blank = t.trim_start().is_empty() || t.trim_start().starts_with('#');
+        if let Some(i) = first_indent.filter(|_| !blank) {
+            if indent < i {
+                return Some(k + 1);
+            }
+        }
+        if !blank && first_indent.is_none() && !t.starts_with("---") {
+            first_indent = Some(indent);
+        }
+        if content && (t.contains('\u{feff}') || t == "..." || t.starts_with("... ")) {
+            return Some(k + 1);
+        }
         if t == "---" || t.starts_with("--- ") {
             if content {
                 return Some(k + 1);
@@ -348,4 +370,22 @@ fn shorten_quoted(msg: &str) -> String {
 /// `value` as YAML text (for the files p3dp writes in YAML: lock files).
 pub(crate) fn to_yaml<T: serde::Serialize>(value: &T) -> String {
     serde_yaml::to_string(value).expect("p3dp's own values serialise")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_second_document_is_placed_where_it_begins() {
+        for (text, line, says) in [
+            ("a: 1\n---\nb: 2\n", 2, "second YAML document"),
+            ("a: 1\n...\nb: 2\n", 2, "second YAML document"),
+            ("# c\n  a: 1\nb: 2\n", 3, "second YAML document"),
+        ] {
+            let e = parse_yaml::<serde_yaml::Value>(text, "f.yaml").unwrap_err();
+            assert_eq!(e.line.map(|l| l.0), Some(line), "{text:?}: {e}");
+            assert!(e.message.contains(says), "{text:?}: {e}");
+        }
+    }
 }

@@ -83,11 +83,18 @@ fn pages() -> Vec<String> {
     v
 }
 
-/// A fresh folder with the repository's `recipes/`, `maps/` and `docs/`
-/// linked in.
+/// A fresh folder with the repository's `recipes/` and `docs/` linked in and
+/// `maps/` copied (a recipe written there reads `../maps/…`, which must lie
+/// inside its project: the folder is marked as one by a `.git` folder).
 fn workspace(tag: &str) -> PathBuf {
     let dir = tmp(&format!("docs-{tag}"));
-    for d in ["recipes", "maps", "docs"] {
+    std::fs::create_dir_all(dir.join(".git")).unwrap();
+    std::fs::create_dir_all(dir.join("maps")).unwrap();
+    for e in std::fs::read_dir(root().join("maps")).unwrap() {
+        let e = e.unwrap();
+        std::fs::copy(e.path(), dir.join("maps").join(e.file_name())).unwrap();
+    }
+    for d in ["recipes", "docs"] {
         #[cfg(unix)]
         std::os::unix::fs::symlink(root().join(d), dir.join(d)).unwrap();
         #[cfg(not(unix))]

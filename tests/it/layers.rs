@@ -63,6 +63,7 @@ const LAYERS: &[(&str, &[&str])] = &[
             "prepare",
             "batch",
             "diagnostic",
+            "http",
             "watch",
             "command",
             "cli",

@@ -222,7 +222,9 @@ fn try_mutant(path: &Path, build: bool) -> Result<Option<p3dp::Error>, String> {
             if e.file.is_none() {
                 return Err(format!("the error names no file: {e}"));
             }
-            if e.line.is_none() && e.place.is_none() && !e.to_string().starts_with(&shown) {
+            // the file is the recipe or one it reads (an include, a profile)
+            let file = e.file.as_deref().unwrap_or(&shown);
+            if e.line.is_none() && e.place.is_none() && !e.to_string().starts_with(file) {
                 return Err(format!("the error names no place: {e}"));
             }
             // an empty or comments-only file: the place is the whole file
@@ -234,6 +236,72 @@ fn try_mutant(path: &Path, build: bool) -> Result<Option<p3dp::Error>, String> {
         }
     }
     Ok(err)
+}
+
+/// `dir` made a copy of the gallery's project: `maps/`, the drawings and
+/// included files beside the recipes in `recipes/`, and a `p3dp.lock` that
+/// marks `dir` as the project's top (so `../maps/` may be read).
+fn gallery_project(dir: &Path) {
+    let rdir = dir.join("recipes");
+    std::fs::create_dir_all(&rdir).unwrap();
+    std::fs::create_dir_all(dir.join("maps")).unwrap();
+    for e in std::fs::read_dir(root().join("maps")).unwrap().flatten() {
+        std::fs::copy(e.path(), dir.join("maps").join(e.file_name())).unwrap();
+    }
+    for e in std::fs::read_dir(root().join("recipes")).unwrap().flatten() {
+        std::fs::copy(e.path(), rdir.join(e.file_name())).unwrap();
+    }
+    std::fs::write(dir.join("p3dp.lock"), "p3dp_lock: 1\nentries: []\n").unwrap();
+}
+
+/// The files a recipe reaches, mutated in place (issue 33): an included
+/// library (`plate-sampler.yaml` → `plate.yaml` → `cup.yaml`), the SVG of
+/// `star-vase.yaml`, and a printer profile that inherits a built-in one.
+/// The recipe that reads each is loaded (and built now and then): no
+/// panic, and every error names a file and a place.
+#[test]
+fn mutated_includes_drawings_and_profiles_never_panic() {
+    let per_file: usize = std::env::var("P3DP_MUTANTS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(150);
+    let dir = tmp("mutate-reached");
+    gallery_project(&dir);
+    let rdir = dir.join("recipes");
+    let profile = format!(
+        "inherits: generic-220\n{}",
+        std::fs::read_to_string(root().join("src/machine/printers/prusa-mk4.yaml")).unwrap()
+    );
+    std::fs::write(rdir.join("mine.yaml"), &profile).unwrap();
+    let with_profile = std::fs::read_to_string(rdir.join("sphere.yaml"))
+        .unwrap()
+        .replacen("\nparts:", "\nprinter: mine.yaml\nparts:", 1);
+    std::fs::write(rdir.join("sphere-mine.yaml"), with_profile).unwrap();
+    let cases = [
+        ("cup.yaml", "plate-sampler.yaml"),
+        ("plate.yaml", "plate-sampler.yaml"),
+        ("star.svg", "star-vase.yaml"),
+        ("mine.yaml", "sphere-mine.yaml"),
+    ];
+    let mut rng = Rng(0x2545_f491_4f6c_dd1d);
+    let mut problems = Vec::new();
+    for (file, recipe) in cases {
+        let original = std::fs::read_to_string(rdir.join(file)).unwrap();
+        for k in 0..per_file {
+            let mutant = mutate(&original, &mut rng);
+            std::fs::write(rdir.join(file), &mutant).unwrap();
+            if let Err(m) = try_mutant(&rdir.join(recipe), k % BUILD_EVERY == 0) {
+                problems.push(format!("{file} of {recipe}: {m}\n--- mutant ---\n{mutant}"));
+            }
+        }
+        std::fs::write(rdir.join(file), &original).unwrap();
+    }
+    assert!(
+        problems.is_empty(),
+        "{} mutants went wrong:\n\n{}",
+        problems.len(),
+        problems.join("\n\n")
+    );
 }
 
 #[test]
@@ -249,10 +317,7 @@ fn mutated_gallery_recipes_never_panic_and_errors_have_places() {
     let dir = tmp("mutate");
     let rdir = dir.join("recipes");
     std::fs::create_dir_all(&rdir).unwrap();
-    std::fs::create_dir_all(dir.join("maps")).unwrap();
-    for e in std::fs::read_dir(root().join("maps")).unwrap().flatten() {
-        std::fs::copy(e.path(), dir.join("maps").join(e.file_name())).unwrap();
-    }
+    gallery_project(&dir);
     let mut gallery: Vec<PathBuf> = std::fs::read_dir(root().join("recipes"))
         .unwrap()
         .flatten()

@@ -377,3 +377,53 @@ fn an_edited_feature_re_slices_only_its_layers() {
     let l = line_with(&server, ": ok in ", Duration::from_secs(20));
     assert!(l.contains("solid layers re-sliced: 20 of 70"), "{l}");
 }
+
+/// A line of `/proc/PID/status` as a number (`Threads`, `VmHWM` in kB).
+fn proc_status(pid: u32, key: &str) -> Option<u64> {
+    let text = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
+    let line = text.lines().find(|l| l.starts_with(&format!("{key}:")))?;
+    line.split_whitespace().nth(1)?.parse().ok()
+}
+
+#[test]
+fn hostile_clients_never_hold_a_fresh_get_up() {
+    let dir = tmp("watch-hostile");
+    std::fs::write(dir.join("r.yaml"), RECIPE).unwrap();
+    std::fs::write(dir.join("lib.yaml"), LIB).unwrap();
+    let server = start(&dir, &["r.yaml"]);
+    let (port, pid) = (server.port, server.child.id());
+    let host = format!("127.0.0.1:{port}");
+    // a header of up to 64 MB: refused past 16 kB, never held in memory
+    let mut big = TcpStream::connect(("127.0.0.1", port)).unwrap();
+    big.set_write_timeout(Some(Duration::from_secs(5))).unwrap();
+    let _ = write!(big, "GET / HTTP/1.1\r\nHost: {host}\r\nX-Big: ");
+    let chunk = vec![b'a'; 1 << 20];
+    for _ in 0..64 {
+        if big.write_all(&chunk).is_err() {
+            break;
+        }
+    }
+    // pages and streams asked for and never read, and 500 connections idle
+    let mut held = Vec::new();
+    for k in 0..80 {
+        let mut s = TcpStream::connect(("127.0.0.1", port)).unwrap();
+        let path = if k % 2 == 0 { "/" } else { "/events" };
+        write!(s, "GET {path} HTTP/1.1\r\nHost: {host}\r\n\r\n").unwrap();
+        held.push(s);
+    }
+    for _ in 0..500 {
+        held.push(TcpStream::connect(("127.0.0.1", port)).unwrap());
+    }
+    std::thread::sleep(Duration::from_millis(200));
+    let t = Instant::now();
+    let (status, body) = get(port, "/", &host);
+    assert_eq!(status, 200);
+    assert!(body.contains("<html"), "the page");
+    assert!(t.elapsed() < Duration::from_secs(1), "{:?}", t.elapsed());
+    let threads = proc_status(pid, "Threads").unwrap_or(0);
+    assert!(threads < 120, "{threads} threads");
+    let peak = proc_status(pid, "VmHWM").unwrap_or(0);
+    assert!(peak < 300_000, "{peak} kB at most");
+    drop(held);
+    drop(server);
+}

@@ -32,6 +32,55 @@ pub(crate) fn fmt_p(p: DVec3) -> String {
     format!("({:.3}, {:.3}, {:.3})", p.x, p.y, p.z)
 }
 
+/// Refuses toolpaths that reach farther from the machine than its own size
+/// (the largest of the bed's sides and its height) in any direction, or
+/// that are not finite: previews and meshes sample the strings along their
+/// length, so their work grows with the coordinates (a helix of radius 1e8
+/// mm would take minutes and gigabytes) while a model near the bed, even
+/// off it, is drawn as it is. `what` names the output (`preview`, `mesh`).
+pub(crate) fn within_reach(
+    recipe: &Recipe,
+    paths: &[Toolpath],
+    what: &str,
+) -> crate::base::error::Result<()> {
+    let printer = &recipe.printer;
+    let bed = printer.bed;
+    let max_z = bed.max_z();
+    let (lo, hi, reach) = match bed {
+        crate::machine::Bed::Rectangle { size, .. } => {
+            let m = size[0].max(size[1]).max(max_z);
+            (
+                DVec3::new(-m, -m, -m),
+                DVec3::new(size[0] + m, size[1] + m, max_z + m),
+                m,
+            )
+        }
+        crate::machine::Bed::Circle { diameter, .. } => {
+            let m = diameter.max(max_z);
+            let r = diameter / 2.0 + m;
+            (DVec3::new(-r, -r, -m), DVec3::new(r, r, max_z + m), m)
+        }
+    };
+    for tp in paths {
+        for p in &tp.points {
+            let q = printer.to_machine(*p);
+            if !(q.is_finite() && q.cmpge(lo).all() && q.cmple(hi).all()) {
+                return Err(crate::base::error::Error::input(
+                    "",
+                    format!(
+                        "part `{}` reaches {} (machine coordinates {}), farther than {reach} mm from the printer's {} bed; a {what} is drawn of what lies near the machine: expected points within {reach} mm of it",
+                        crate::base::safe_text::one_line(&tp.name),
+                        fmt_p(*p),
+                        fmt_p(q),
+                        bed.describe()
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Runs every check on the toolpaths of `recipe` (skirt first, then parts),
 /// one after the other: the findings, and each part's footprint on the bed.
 ///

@@ -3,6 +3,7 @@
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use super::{job_label, make_parent, non_empty, recipe_name, stage, variant_stem, Builds};
 use crate::analyse::plan::Plan;
@@ -123,6 +124,8 @@ struct Done {
 /// the batch folder and the stats file opened early.
 struct Prepared {
     jobs: Vec<Job>,
+    /// Every file the command writes, with its option.
+    outputs: Vec<(String, PathBuf)>,
     targets: Vec<Result<Target>>,
     dir: PathBuf,
     stats_file: Option<AtomicFile>,
@@ -133,8 +136,10 @@ fn prepare(a: &Options) -> Result<Prepared> {
     let jobs = a.builds.jobs()?;
     refuse_flags(a, jobs.len())?;
     let (targets, dir) = targets(a, &jobs)?;
-    // no output over another, nor over an input: refused before any is written
-    crate::output::file::check_distinct(&outputs(a, &targets, &dir), &a.builds.inputs())?;
+    // no output over another, nor over an input: refused before any is
+    // written (and each job's own reads before it writes: `build_job`)
+    let outputs = outputs(a, &targets, &dir);
+    crate::output::file::check_distinct(&outputs, &a.builds.inputs())?;
     // open the stats file first where its folder exists: if it cannot be
     // written, no G-code is; a missing folder is made only after a build
     let mut stats_file = None;
@@ -148,6 +153,7 @@ fn prepare(a: &Options) -> Result<Prepared> {
     }
     Ok(Prepared {
         jobs,
+        outputs,
         targets,
         dir,
         stats_file,
@@ -236,10 +242,23 @@ fn outputs(a: &Options, targets: &[Result<Target>], dir: &Path) -> Vec<(String, 
 }
 
 /// Builds one job to its target (with its preview and pattern, if asked):
-/// the stats, where it went, and whether that was standard output.
-fn build_job(a: &Options, job: &Job, target: Result<Target>, single: bool) -> Result<Done> {
+/// the stats, where it went, and whether that was standard output. Sets
+/// `clobber` when one of `outputs` is a file the job read.
+fn build_job(
+    a: &Options,
+    job: &Job,
+    target: Result<Target>,
+    single: bool,
+    (outputs, clobber): (&[(String, PathBuf)], &AtomicBool),
+) -> Result<Done> {
     let mut target = target?;
-    let mut p = a.builds.prepared(job)?;
+    let (p, reads) = a.builds.load(job);
+    // an output over a file the job read (or tried) stops the whole command
+    if let Err(e) = super::check_reads(outputs, &reads) {
+        clobber.store(true, Ordering::Relaxed);
+        return Err(e);
+    }
+    let mut p = p?;
     if let Target::File(f, true) = &target {
         if p.recipe.printer.binary_gcode {
             target = Target::File(f.with_extension("bgcode"), true);
@@ -490,6 +509,7 @@ fn report_builds(jobs: &[Job], results: &[Built], preview_lines: &[String]) {
 pub(crate) fn run(a: &Options) -> Vec<Error> {
     let Prepared {
         jobs,
+        outputs,
         targets,
         dir,
         stats_file,
@@ -499,9 +519,13 @@ pub(crate) fn run(a: &Options) -> Vec<Error> {
     };
     let single = jobs.len() == 1;
     let bar = progress(jobs.len());
+    let clobber = AtomicBool::new(false);
     let done = batch::run_parallel(
         jobs.len(),
-        |k| build_job(a, &jobs[k], targets[k].clone(), single),
+        |k| {
+            let guard = (&outputs[..], &clobber);
+            build_job(a, &jobs[k], targets[k].clone(), single, guard)
+        },
         || bar.inc(1),
     );
     bar.finish_and_clear();
@@ -522,6 +546,11 @@ pub(crate) fn run(a: &Options) -> Vec<Error> {
         })
         .collect();
     let mut errors: Vec<Error> = results.iter().filter_map(|r| r.clone().err()).collect();
+    if clobber.load(Ordering::Relaxed) {
+        // an output would replace an input: no stats, summary or G-code
+        // left pending is written
+        return errors;
+    }
     let all_stats: Vec<Stats> = results
         .iter()
         .filter_map(|r| r.as_ref().ok().map(|(s, _, _)| s.clone()))

@@ -13,7 +13,7 @@ pub(crate) fn run(c: &Builds) -> Vec<Error> {
     let results = batch::run_parallel(
         jobs.len(),
         |k| {
-            let mut p = c.prepared(&jobs[k])?;
+            let mut p = c.prepared(&jobs[k], &[])?;
             crate::app::pipeline::check(&mut p, &c.allow);
             Ok(p)
         },

@@ -25,13 +25,18 @@ pub(crate) struct Options {
 
 /// Builds a job on `threads` into nothing but its hash and line fingerprint.
 /// The fingerprints of `jobs`, built in parallel within `-j`'s budget.
-fn fingerprints(c: &Builds, jobs: &[Job]) -> Vec<Result<(String, LineHashes)>> {
-    batch::run_parallel(jobs.len(), |k| fingerprint(c, &jobs[k]), || {})
+/// `outs`: the lock file written, if any (no recipe may read it).
+fn fingerprints(
+    c: &Builds,
+    jobs: &[Job],
+    outs: &[(String, PathBuf)],
+) -> Vec<Result<(String, LineHashes)>> {
+    batch::run_parallel(jobs.len(), |k| fingerprint(c, &jobs[k], outs), || {})
 }
 
-fn fingerprint(c: &Builds, job: &Job) -> Result<(String, LineHashes)> {
+fn fingerprint(c: &Builds, job: &Job, outs: &[(String, PathBuf)]) -> Result<(String, LineHashes)> {
     // nothing is written: the G-code is hashed while the checks run
-    let mut p = c.prepared(job)?;
+    let mut p = c.prepared(job, outs)?;
     let stop = (!c.force).then_some(c.strict);
     // stamped as `build` stamps it (SOURCE_DATE_EPOCH's date)
     let options = super::stamp()?;
@@ -59,15 +64,19 @@ pub(crate) fn run(a: &Options) -> Vec<Error> {
         Ok(j) => j,
         Err(e) => return vec![e],
     };
+    let outs: Vec<(String, PathBuf)> = a
+        .lock
+        .iter()
+        .map(|l| ("--lock".to_string(), l.clone()))
+        .collect();
     if let Some(lockfile) = &a.lock {
-        let outs = [("--lock".to_string(), lockfile.clone())];
         if let Err(e) = non_empty("--lock", Some(lockfile))
             .and_then(|_| crate::output::file::check_distinct(&outs, &c.inputs()))
         {
             return vec![e];
         }
     }
-    let results = fingerprints(c, &jobs);
+    let results = fingerprints(c, &jobs, &outs);
     let mut errors = Vec::new();
     let mut entries = Vec::new();
     for (job, r) in jobs.iter().zip(results) {
@@ -206,7 +215,7 @@ fn check_lock(a: &Options, lockfile: &Path) -> Vec<Error> {
         Err(e) => return vec![e],
     };
     let c = &a.builds;
-    let results = fingerprints(c, &jobs);
+    let results = fingerprints(c, &jobs, &[]);
     let mut errors = Vec::new();
     for ((entry, job), r) in lock.entries.iter().zip(&jobs).zip(results) {
         let mut label = entry.recipe.clone();
@@ -286,8 +295,15 @@ fn entry_job(base: &Path, k: usize, e: &Entry) -> Result<Job> {
             ),
         ));
     }
+    // a FIFO or device named by a lock is refused before it is opened
+    crate::base::input::check_regular(&recipe, "recipe")
+        .map_err(|e| e.under(&format!("entries[{k}].recipe")))?;
     let built_in = |p: &str| crate::machine::Printer::built_in(p).is_some();
     if let Some(p) = &e.printer {
+        if !built_in(p) && base.join(p).exists() {
+            crate::base::input::check_regular(&base.join(p), "printer profile")
+                .map_err(|e| e.under(&format!("entries[{k}].printer")))?;
+        }
         if !built_in(p) && !base.join(p).exists() {
             return Err(Error::input(
                 format!("entries[{k}].printer"),

@@ -31,8 +31,9 @@ fn write(a: &Options) -> Result<()> {
     };
     non_empty("-o", Some(&out))?;
     crate::output::mesh::write::Format::of(&out)?;
-    crate::output::file::check_distinct(&[("-o".to_string(), out.clone())], &a.builds.inputs())?;
-    let p = a.builds.plan_one()?;
+    let outs = [("-o".to_string(), out.clone())];
+    crate::output::file::check_distinct(&outs, &a.builds.inputs())?;
+    let p = a.builds.plan_one(&outs)?;
     make_parent(&out)?;
     crate::sayln!("{}", crate::output::mesh::write::write(&p, &out)?);
     Ok(())

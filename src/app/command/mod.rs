@@ -18,9 +18,11 @@ use std::path::{Path, PathBuf};
 use crate::analyse::plan::Plan;
 use crate::app::batch::{self, Job};
 use crate::app::pipeline;
-use crate::app::prepare::{prepare, Options};
+use crate::app::prepare::{prepare_in, Options};
 use crate::base::error::{Error, Result};
+use crate::base::input::Reads;
 use crate::output::file::AtomicFile;
+use crate::recipe::context::Context;
 use crate::recipe::{parse_yaml, RawRecipe};
 
 /// What the builds of a command take from the command line: the recipes,
@@ -37,6 +39,8 @@ pub(crate) struct Builds {
     pub printer: Option<String>,
     /// `--allow CODE`.
     pub allow: Vec<String>,
+    /// `--allow-read DIR`.
+    pub allow_read: Vec<PathBuf>,
     /// `--strict`: warnings fail the build too.
     pub strict: bool,
     /// `--force`: write even when checks fail.
@@ -71,27 +75,40 @@ impl Builds {
 
     /// Plans a job and refuses it when its checks fail (unless forced).
     pub(crate) fn checked_plan(&self, job: &Job) -> Result<Plan> {
-        let mut p = self.prepared(job)?;
+        let mut p = self.prepared(job, &[])?;
         pipeline::check(&mut p, &self.allow);
         self.refuse_failing(&p)?;
         Ok(p)
     }
 
-    /// Plans a job without checking it yet.
-    pub(crate) fn prepared(&self, job: &Job) -> Result<Plan> {
+    /// Plans a job without checking it yet, and refuses it when one of
+    /// `outputs` (the files the command writes) is a file the load read (or
+    /// tried): an include, a profile or its parent, an image, an SVG… — all
+    /// of them, whether the load succeeded or not, before anything is written.
+    pub(crate) fn prepared(&self, job: &Job, outputs: &[(String, PathBuf)]) -> Result<Plan> {
+        let (plan, reads) = self.load(job);
+        check_reads(outputs, &reads)?;
+        plan
+    }
+
+    /// Plans a job (unchecked), with the files its load read or tried.
+    pub(crate) fn load(&self, job: &Job) -> (Result<Plan>, Reads) {
         let opts = Options {
             sets: job.sets.clone(),
             printer: self.printer.clone().or_else(|| job.printer.clone()),
             allow: self.allow.clone(),
+            allow_read: self.allow_read.clone(),
         };
-        prepare(&job.recipe, &opts)
+        let cx = Context::default();
+        let plan = prepare_in(&job.recipe, &opts, &cx);
+        (plan, cx.reads)
     }
 
     /// A plan of the one recipe, checked; drawn or meshed whatever its
-    /// findings.
-    pub(crate) fn plan_one(&self) -> Result<Plan> {
+    /// findings; refused when one of `outputs` is a file it read.
+    pub(crate) fn plan_one(&self, outputs: &[(String, PathBuf)]) -> Result<Plan> {
         let jobs = self.jobs()?;
-        let mut p = self.prepared(&jobs[0])?;
+        let mut p = self.prepared(&jobs[0], outputs)?;
         pipeline::check(&mut p, &self.allow);
         Ok(p)
     }
@@ -192,6 +209,23 @@ pub(crate) fn non_empty(option: &str, value: Option<&Path>) -> Result<()> {
 
 /// The files read by a command of these `recipes` and `--printer` (a file
 /// unless it names a built-in profile).
+/// Refuses `outputs` that would replace a file of `reads` (those that exist).
+pub(crate) fn check_reads(outputs: &[(String, PathBuf)], reads: &Reads) -> Result<()> {
+    if outputs.is_empty() {
+        return Ok(());
+    }
+    let read: Vec<(String, PathBuf)> = reads
+        .files()
+        .into_iter()
+        .filter(|f| f.exists())
+        .map(|f| ("the file read".to_string(), f))
+        .collect();
+    crate::output::file::check_distinct(outputs, &read).map_err(|e| Error {
+        message: format!("{} (nothing written)", e.message),
+        ..e
+    })
+}
+
 pub(crate) fn inputs_of(recipes: &[PathBuf], printer: Option<&str>) -> Vec<(String, PathBuf)> {
     let mut v: Vec<(String, PathBuf)> = recipes
         .iter()

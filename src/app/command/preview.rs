@@ -49,8 +49,9 @@ fn draw(a: &Options) -> Result<()> {
     };
     crate::output::preview::Format::of(&out)?;
     non_empty("-o", Some(&out))?;
-    crate::output::file::check_distinct(&[("-o".to_string(), out.clone())], &a.builds.inputs())?;
-    let p = a.builds.plan_one()?;
+    let outs = [("-o".to_string(), out.clone())];
+    crate::output::file::check_distinct(&outs, &a.builds.inputs())?;
+    let p = a.builds.plan_one(&outs)?;
     make_parent(&out)?;
     crate::sayln!("{}", pipeline::preview(&p, &out, &opts)?.write()?);
     Ok(())

@@ -109,6 +109,34 @@ impl Arc {
         )
     }
 
+    /// The points that bound the arc's sweep: its ends, the points where x
+    /// or y is extreme (angles 0, π/2, π, 3π/2 when the sweep passes them)
+    /// and the point farthest from `from` (at the angle of centre − `from`,
+    /// when swept). A rectangle, or a disc round `from`, holds the whole arc
+    /// exactly when it holds these points.
+    pub(crate) fn bounding_points(&self, from: DVec2) -> Vec<DVec3> {
+        use std::f64::consts::{FRAC_PI_2, PI, TAU};
+        let away = self.center - from;
+        let mut angles = vec![0.0, FRAC_PI_2, PI, -FRAC_PI_2];
+        if away.length_squared() > 0.0 {
+            angles.push(libm::atan2(away.y, away.x));
+        }
+        let mut out = vec![self.point_at(0.0), self.point_at(self.sweep)];
+        for a in angles {
+            // the angle travelled from the start to `a`, in [0, 2π)
+            let d = if self.ccw {
+                a - self.theta0
+            } else {
+                self.theta0 - a
+            };
+            let phi = d - TAU * libm::floor(d / TAU);
+            if phi <= self.sweep {
+                out.push(self.point_at(phi));
+            }
+        }
+        out
+    }
+
     /// Length of the helix, mm: sqrt((R·sweep)² + Δz²).
     pub(crate) fn length(&self) -> f64 {
         let xy = self.radius * self.sweep;

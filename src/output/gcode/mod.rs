@@ -52,6 +52,10 @@ pub(crate) struct Head {
     pub ahead: Option<metadata::Ahead>,
     /// Thumbnail blocks (comments, see `output::preview::thumbnail`).
     pub thumbnails: String,
+    /// G-code drawn, never sent (a preview's): written even when the
+    /// profile's start or end G-code failed its checks, so that a preview
+    /// shows a print the checks refuse too.
+    pub draft: bool,
 }
 
 /// Writes the G-code of `plan` to `out`: the header (with `head`'s
@@ -68,7 +72,9 @@ pub(crate) fn write<W: Write, M: Moves>(
     let io = |e: io::Error| {
         crate::base::error::Error::io_from(&plan.path, format!("cannot write the G-code: {e}"), &e)
     };
-    plan.frame_ok()?;
+    if !head.draft {
+        plan.frame_ok()?;
+    }
     let extent = metadata::Extent::of(plan);
     let mut em = Emitter::new(out, &plan.recipe, moves);
     em.thumbnails = head.thumbnails;
@@ -750,6 +756,14 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
             return Ok(());
         }
         self.unretract()?;
+        // no faster than the machine feeds filament alone (its head's speed
+        // when the profile gives no extrude-only limit)
+        let limits = self.printer.limits();
+        let speed = speed.min(
+            limits
+                .max_extrude_only_velocity
+                .unwrap_or(limits.max_velocity),
+        );
         self.begin(b"G1 E");
         self.put_e(filament);
         self.set_feed(speed);
@@ -776,7 +790,17 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
         let mut events = tp.events.iter().peekable();
         let arcs = if self.printer.arcs {
             let fw = flavor::arc_firmware(self.printer.flavor);
-            crate::base::geom::arc::fit_part(tp, self.printer.arc_tolerance, fw)
+            let mut arcs = crate::base::geom::arc::fit_part(tp, self.printer.arc_tolerance, fw);
+            // an arc bulges past its strings by up to the tolerance: one whose
+            // sweep leaves the bed stays strings (which the checks held to it)
+            let o = self.printer.origin;
+            let bed_origin = glam::DVec2::new(-o[0], -o[1]);
+            arcs.retain(|a| {
+                a.bounding_points(bed_origin)
+                    .into_iter()
+                    .all(|p| self.printer.bed.contains_xy(self.printer.to_machine(p)))
+            });
+            arcs
         } else {
             Vec::new()
         };

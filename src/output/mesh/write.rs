@@ -58,6 +58,8 @@ impl Format {
 /// atomically); returns the report line.
 pub(crate) fn write(plan: &Plan, out: &Path) -> Result<String> {
     let format = Format::of(out)?;
+    crate::analyse::check::within_reach(&plan.recipe, &plan.paths, "mesh")
+        .map_err(|e| e.in_file(&plan.path))?;
     let mesh = super::of_plan(plan);
     let shown = out.display().to_string();
     let fail = |e: io::Error| Error::io_from(&shown, format!("cannot write the mesh: {e}"), &e);

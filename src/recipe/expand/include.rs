@@ -158,9 +158,18 @@ impl Loader<'_> {
         };
         for (k, inc) in list.iter().enumerate() {
             let place = format!("{}[{k}]", key!(RawRecipe, include));
+            // an error in the included file's text stays there; any other
+            // is at the key that names it
+            let at = |e: Error| {
+                if e.file.is_none() {
+                    here(e.under(&place))
+                } else {
+                    e
+                }
+            };
             let path = dir.join(inc);
             let shown = path.display().to_string();
-            self.reads.note(&path);
+            self.reads.reach(&path, "included file").map_err(at)?;
             let canon = std::fs::canonicalize(&path).map_err(|e| {
                 here(Error::input(
                     &place,
@@ -188,19 +197,10 @@ impl Loader<'_> {
                     format!("more than {MAX_INCLUDES} included files; expected fewer"),
                 )));
             }
-            let size = std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0);
-            if size > MAX_INCLUDE_BYTES {
-                return Err(here(Error::input(
-                    &place,
-                    format!("`{inc}` is {size} bytes, more than the {MAX_INCLUDE_BYTES} an included file may have"),
-                )));
-            }
-            let text = std::fs::read_to_string(&path).map_err(|e| {
-                here(Error::input(
-                    &place,
-                    format!("cannot read the included file `{inc}` ({shown}): {e}"),
-                ))
-            })?;
+            let text = self
+                .reads
+                .read_reached(&path, "included file", MAX_INCLUDE_BYTES)
+                .map_err(at)?;
             let raw: RawLibrary = parse_yaml(&text, &shown)?;
             if raw.p3dp != 1 {
                 return Err(Error::input(

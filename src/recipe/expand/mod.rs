@@ -45,6 +45,9 @@ use crate::recipe::schema::{RawLoop, RawPart, RawRecipe, RawStep, RawTemplate};
 
 /// Most leaf parts a recipe may expand to.
 pub(crate) const MAX_PARTS: usize = 10_000;
+
+/// Most names one `for` may loop over.
+pub(crate) const MAX_LOOP_NAMES: usize = 64;
 /// Deepest nesting of groups and template uses.
 pub(crate) const MAX_DEPTH: usize = 32;
 
@@ -492,8 +495,23 @@ fn loop_values<'p>(
     params: &Params,
     place: &str,
 ) -> Result<Vec<(&'p str, Vec<f64>)>> {
+    if p.repeat.len() > MAX_LOOP_NAMES {
+        return Err(Error::input(
+            format!("{place}.for"),
+            format!(
+                "{} loop names, more than {MAX_LOOP_NAMES}; expected fewer",
+                p.repeat.len()
+            ),
+        ));
+    }
     let mut out = Vec::with_capacity(p.repeat.len());
+    let mut copies = 1usize;
     for (var, l) in &p.repeat {
+        if copies > MAX_PARTS {
+            // too many copies already: the caller refuses them, and the
+            // values of the names left are never made
+            break;
+        }
         // the field `repeat` is read as `for`
         let at = format!("{place}.for.{var}");
         if !is_identifier(var) || expr::is_reserved(var) {
@@ -524,6 +542,7 @@ fn loop_values<'p>(
             }
             RawLoop::Range(s) => range(s, params, &at)?,
         };
+        copies = copies.saturating_mul(values.len());
         out.push((var.as_str(), values));
     }
     Ok(out)

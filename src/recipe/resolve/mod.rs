@@ -94,6 +94,10 @@ impl Recipe {
         cx: &Context,
     ) -> Result<Recipe> {
         check_top(raw)?;
+        if file.is_none() {
+            // a recipe given as parsed YAML reads in the project of `dir`
+            cx.reads.allow(&crate::base::input::project_root(dir));
+        }
         let library = super::expand::load_library(raw, file, dir, &cx.reads)?;
         let params = library.eval_params(sets)?;
         let top = Scope::new(&params);

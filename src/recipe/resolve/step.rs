@@ -214,15 +214,26 @@ pub(crate) fn load_bitmap(
         io_kind: Some(e.kind()),
         ..Error::input("", message)
     };
-    reads.note(path);
+    reads.reach(path, "image")?;
+    if let Err(e) = std::fs::metadata(path) {
+        let m = format!("cannot open the image `{shown}` ({}): {e}", path.display());
+        return Err(io(m, &e));
+    }
+    // a regular file only (never a FIFO or device), bounded
+    let file = crate::base::input::open_regular(path, "image")?;
+    let bytes = crate::base::input::read_bounded(file, crate::base::input::MAX_IMAGE_BYTES)
+        .map_err(|e| io(format!("cannot read the image `{shown}`: {e}"), &e))?
+        .ok_or_else(|| {
+            Error::input(
+                "",
+                format!(
+                    "the image `{shown}` is larger than {} MB; expected a smaller file",
+                    crate::base::input::MAX_IMAGE_BYTES >> 20
+                ),
+            )
+        })?;
     let open = || {
-        image::ImageReader::open(path)
-            .map_err(|e| {
-                io(
-                    format!("cannot open the image `{shown}` ({}): {e}", path.display()),
-                    &e,
-                )
-            })?
+        image::ImageReader::new(std::io::Cursor::new(&bytes[..]))
             .with_guessed_format()
             .map_err(|e| io(format!("cannot read the image `{shown}`: {e}"), &e))
     };

@@ -827,7 +827,15 @@ impl<'a> Run<'a> {
                 let speed = match feed {
                     Some(f) => {
                         let p = place.replace(".extrude", ".feed");
-                        self.positive(f, vals, &p)?
+                        let max = crate::machine::limits::SPEED_MAX;
+                        let s = self.positive(f, vals, &p)?;
+                        if s > max {
+                            return Err(Error::input(
+                                &p,
+                                format!("{s} mm/s of filament is past any machine's feed; expected at most {max} mm/s"),
+                            ));
+                        }
+                        s
                     }
                     None => DEFAULT_FEED,
                 };
