@@ -20,8 +20,6 @@
 // the library writes through `say!`/`tell!` (output::file::stdout) instead
 #![deny(clippy::print_stdout, clippy::print_stderr)]
 #![warn(unreachable_pub)]
-// re-exports kept for paths the crate uses in some builds only (tests)
-#![allow(unused_imports)]
 
 mod analyse;
 mod app;
@@ -57,6 +55,11 @@ pub mod presets {
     pub use crate::recipe::preset::map::{to_yaml, Imported};
     pub use crate::recipe::preset::{list, load, Preset, Setting, Source};
 }
+
+/// The fuzz targets' entry points (`fuzz/`; the `fuzzing` feature only).
+#[cfg(feature = "fuzzing")]
+#[doc(hidden)]
+pub use app::fuzzing;
 
 /// The command line, for the `p3dp` binary: parse [`cli::Cli`], [`cli::run`]
 /// it, print each error with [`cli::print_error`].

@@ -3,13 +3,4 @@
 
 use libfuzzer_sys::fuzz_target;
 
-fuzz_target!(|data: &[u8]| {
-    // one file per process, beside the built-in-looking names it may inherit
-    let dir = std::env::temp_dir().join(format!("p3dp-fuzz-printer-{}", std::process::id()));
-    let _ = std::fs::create_dir_all(&dir);
-    let file = dir.join("profile.yaml");
-    if std::fs::write(&file, data).is_err() {
-        return;
-    }
-    let _ = p3dp::machine::Printer::from_file(&file);
-});
+fuzz_target!(|data: &[u8]| p3dp::fuzzing::printer(data));

@@ -12,3 +12,6 @@ pub(crate) mod watch;
 
 #[cfg(test)]
 pub(crate) mod testing;
+
+#[cfg(feature = "fuzzing")]
+pub mod fuzzing;

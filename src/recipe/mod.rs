@@ -27,11 +27,8 @@ pub(crate) mod resolve;
 pub(crate) mod schema;
 pub(crate) mod yaml;
 
-pub(crate) use crate::generate::model::{Part, Recipe, Skirt};
-pub(crate) use params::{eval_params, parse_set};
-pub(crate) use resolve::load_bitmap;
+pub(crate) use params::parse_set;
 pub(crate) use schema::RawRecipe;
-pub(crate) use schema::{Num, Num3};
 pub(crate) use yaml::parse_yaml;
 
 #[cfg(test)]

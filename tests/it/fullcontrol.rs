@@ -6,7 +6,8 @@
 //! (FullControl's notebook run with the printer `generic`, no primer, the
 //! extruder on from the start): `P3DP_FC_PYTHON` is a Python with the
 //! `fullcontrol` package, `P3DP_FC_MODELS` the folder of the notebooks
-//! (`models/` of github.com/FullControlXYZ/fullcontrol); `.ci/run` sets up
+//! (`models/` of FullControl 0.1.2, in its source distribution on PyPI and
+//! its repository github.com/FullControlXYZ/fullcontrol); `.ci/run` sets up
 //! both. Without them the test says so and passes, except under `CI=true`,
 //! where it fails. Nothing of FullControl's code or output is committed.
 //!

@@ -59,6 +59,7 @@ const LAYERS: &[(&str, &[&str])] = &[
     (
         "app",
         &[
+            "fuzzing",
             "pipeline",
             "prepare",
             "batch",

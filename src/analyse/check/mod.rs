@@ -20,13 +20,13 @@ pub(crate) mod support;
 use glam::DVec3;
 
 pub(crate) use crate::base::finding::{
-    apply_allow, failing, is_code, summary, validate_allow, Finding, Severity, CODES, SAFETY,
+    apply_allow, failing, summary, validate_allow, Finding, Severity,
 };
 
 use crate::base::toolpath::Toolpath;
 use crate::generate::model::Recipe;
 
-pub(crate) use crate::machine::{CheckLimits, Head};
+pub(crate) use crate::machine::Head;
 
 pub(crate) fn fmt_p(p: DVec3) -> String {
     format!("({:.3}, {:.3}, {:.3})", p.x, p.y, p.z)

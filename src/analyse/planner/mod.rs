@@ -56,10 +56,9 @@ use junction::Turn;
 use klipper::{klipper_passes, Mcr};
 use marlin::{Queue, SETTLE};
 
-pub(crate) use crate::machine::kinematics::{
-    Kinematics, Limits, KLIPPER_MINIMUM_CRUISE_RATIO, MARLIN_JUNCTION_DEVIATION,
-    MARLIN_MIN_SEGMENT_TIME,
-};
+#[cfg(test)]
+use crate::machine::kinematics::Kinematics;
+pub(crate) use crate::machine::kinematics::Limits;
 
 /// What a move is, which chooses its acceleration.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -10,7 +10,7 @@ use crate::analyse::check::{self, Severity};
 use crate::base::testing::linking_by_gauss;
 use crate::base::toolpath::Toolpath;
 use crate::generate::assembly::make_parts;
-use crate::recipe::Recipe;
+use crate::generate::model::Recipe;
 use glam::DVec3;
 use std::path::PathBuf;
 

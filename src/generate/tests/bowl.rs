@@ -12,8 +12,8 @@
 //! `generate::step::Bitmap::from_text`. Home: beside `generate::step::modulate`.
 
 use crate::base::testing::*;
+use crate::generate::model::Recipe;
 use crate::generate::step::Bitmap;
-use crate::recipe::Recipe;
 
 const TEXT: &str = "PROCEDURAL 3D PRINTING  ";
 

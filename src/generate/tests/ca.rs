@@ -14,9 +14,9 @@ use std::path::Path;
 use crate::app::testing::p3dp;
 use crate::base::testing::{parse, recipe, tmp};
 use crate::generate::model::make_part;
+use crate::generate::model::Recipe;
 use crate::generate::primitive::ca::{Automaton, CaHelix, Initial, Layout, Pattern, Rule};
 use crate::generate::primitive::{PatternHelix, Primitive};
-use crate::recipe::Recipe;
 use sha2::{Digest, Sha256};
 
 const N: usize = 288;

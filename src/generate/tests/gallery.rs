@@ -12,7 +12,7 @@ use std::path::PathBuf;
 
 use crate::base::toolpath::{polar, Toolpath};
 use crate::generate::assembly::make_parts;
-use crate::recipe::Recipe;
+use crate::generate::model::Recipe;
 use glam::DVec3;
 
 /// The recipes made of a filled bottom and a wall standing on it.

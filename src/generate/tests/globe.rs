@@ -10,7 +10,7 @@
 
 use crate::base::testing::*;
 use crate::base::toolpath::Toolpath;
-use crate::recipe::Recipe;
+use crate::generate::model::Recipe;
 
 const SEA: f64 = 0.65;
 

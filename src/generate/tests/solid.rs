@@ -16,10 +16,10 @@ use std::path::{Path, PathBuf};
 use crate::app::prepare::plan;
 use crate::base::toolpath::Toolpath;
 use crate::generate::model::make_part;
+use crate::generate::model::Recipe;
 use crate::generate::primitive::solid::piece::Piece;
 use crate::generate::primitive::solid::{Loop, Region, Solid};
 use crate::generate::primitive::Primitive;
-use crate::recipe::Recipe;
 use glam::{DVec2, DVec3};
 
 /// Writes a one-part recipe whose primitive is `solid: {SOLID}` (YAML flow
@@ -858,7 +858,7 @@ fn grid_infill_lays_both_directions_in_every_layer_inside_the_perimeters() {
 
 #[test]
 fn connected_infill_travels_less_and_its_joins_stay_inside() {
-    use crate::generate::primitive::solid::plan_join_inside as join_inside;
+    use crate::generate::primitive::solid::plan::join_inside;
     for pattern in ["lines", "grid"] {
         let base = BOX_WITH_HOLE.replace(
             "infill: {angle: 45, spacing: 0.8, alternate: true}",

@@ -5,7 +5,7 @@
 //! Home: beside `generate::primitive::outline`.
 
 use crate::base::testing::*;
-use crate::recipe::Recipe;
+use crate::generate::model::Recipe;
 use glam::DVec2;
 
 #[test]

@@ -17,10 +17,10 @@ pub(crate) mod temp;
 use std::io;
 use std::path::{Component, Path, PathBuf};
 
-pub(crate) use atomic::{write_atomic, AtomicFile, Streaming};
+pub(crate) use atomic::{write_atomic, AtomicFile};
 pub(crate) use hash::HashWriter;
 pub(crate) use stdout::{say_fmt, stdout_closed, tell_fmt, Stdout};
-pub(crate) use temp::{remove_temp_files_on_signals, stop_on_signals, StopHook};
+pub(crate) use temp::{remove_temp_files_on_signals, stop_on_signals};
 
 use crate::base::error::{Error, Result};
 
@@ -183,7 +183,7 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("p3dp-stream-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let target = dir.join("big.gcode");
-        let bytes: Vec<u8> = (0..(2 * Streaming::KICK + 12_345))
+        let bytes: Vec<u8> = (0..(2 * crate::output::file::atomic::Streaming::KICK + 12_345))
             .map(|k| (k % 251) as u8)
             .collect();
         let mut f = AtomicFile::create(&target).unwrap();

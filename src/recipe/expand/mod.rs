@@ -34,7 +34,7 @@ use std::path::Path;
 
 use indexmap::IndexMap;
 
-pub(crate) use include::{load_library, Library, Template};
+pub(crate) use include::{load_library, Template};
 
 use crate::base::error::{Error, Result};
 use crate::base::expr::{self, Params};

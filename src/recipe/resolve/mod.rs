@@ -12,7 +12,7 @@ mod part;
 mod pattern;
 mod primitive;
 mod solid;
-mod step;
+pub(crate) mod step;
 mod turtle;
 
 use std::path::Path;
@@ -27,8 +27,6 @@ use crate::generate::model::{
     Group, Part, Recipe, Skirt, DEFAULT_CROSS_SECTION, DEFAULT_MAX_STRINGS, DEFAULT_SPEED,
 };
 use crate::machine::Printer;
-
-pub(crate) use step::load_bitmap;
 
 /// Evaluates numbers of one recipe: its params, and where images and a
 /// turtle's limits come from.

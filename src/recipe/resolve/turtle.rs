@@ -662,8 +662,8 @@ fn scalar(w: &str, v: Val) -> Op {
 mod tests {
     use super::*;
     use crate::base::toolpath::{Event, Toolpath};
+    use crate::generate::model::Recipe;
     use crate::generate::primitive::Primitive;
-    use crate::recipe::Recipe;
 
     fn env() -> Env {
         Env {

@@ -23,21 +23,20 @@ use indexmap::IndexMap;
 use serde::de::{self, Deserializer, IgnoredAny, MapAccess, Visitor};
 use serde::Deserialize;
 
-pub(crate) use curve::{RawArcCmd, RawBezier, RawLine, RawRectangle};
 pub(crate) use num::{Num, Num3, RawPoint};
 pub(crate) use param::{RawChoice, RawParam};
-pub(crate) use part::{RawBrim, RawLoop, RawPart, RawPrimitiveItem, RawPrimitives, RawStand};
+pub(crate) use part::{RawBrim, RawLoop, RawPart, RawPrimitiveItem, RawStand};
 pub(crate) use primitive::{
-    PathMap, RawArc, RawCaHelix, RawCircle, RawCylinder, RawDirection, RawFirstLayer, RawHelix,
-    RawInitial, RawLayout, RawOutline, RawPath, RawPatternHelix, RawPrimitive, RawRule, RawSpiral,
+    RawArc, RawCaHelix, RawCircle, RawCylinder, RawDirection, RawHelix, RawInitial, RawLayout,
+    RawOutline, RawPath, RawPatternHelix, RawPrimitive, RawRule, RawSpiral,
 };
 pub(crate) use profile::{
-    RawBed, RawCheckLimits, RawEnvelope, RawExtrusion, RawFlavor, RawHead, RawKinematics,
-    RawPrinter, RawRetraction, RawVariable,
+    RawBed, RawCheckLimits, RawExtrusion, RawFlavor, RawHead, RawKinematics, RawPrinter,
+    RawRetraction, RawVariable,
 };
-pub(crate) use solid::{RawBox, RawFeature, RawInfill, RawOp, RawPattern, RawSolid};
+pub(crate) use solid::{RawFeature, RawInfill, RawOp, RawPattern, RawSolid};
 pub(crate) use step::{RawAxis, RawDeform, RawKeep, RawStep};
-pub(crate) use turtle::{RawCommand, RawLsystem, RawProcedure, RawStart, RawTurtle};
+pub(crate) use turtle::{RawCommand, RawLsystem, RawProcedure, RawTurtle};
 
 /// `material:` a built-in name or an inline map.
 #[derive(Clone, Debug, PartialEq)]

@@ -17,7 +17,8 @@ use std::f64::consts::PI;
 use crate::base::testing::recipe;
 use crate::base::toolpath::{polar, Toolpath};
 use crate::generate::assembly::make_parts;
-use crate::recipe::{parse_yaml, RawRecipe, Recipe};
+use crate::generate::model::Recipe;
+use crate::recipe::{parse_yaml, RawRecipe};
 use glam::DVec3;
 
 /// Resolves recipe `text` as if it were a file in `tests/fixtures/procedural`.
@@ -370,7 +371,7 @@ fn lamp_shade_tiers_follow_their_templates_profile() {
     let parts = make_parts(&recipe).unwrap();
     for (t, tp) in parts.iter().enumerate().skip(1) {
         let with = |k: &str| match &uses[t].with[k] {
-            crate::recipe::Num::Value(v) => *v,
+            crate::recipe::schema::Num::Value(v) => *v,
             other => panic!("{other:?}"),
         };
         let (r0, r1, h, z0, lobes) = (with("r0"), with("r1"), with("h"), with("z0"), with("lobes"));

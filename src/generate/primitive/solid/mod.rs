@@ -61,16 +61,14 @@ pub(crate) const MAX_LINES: f64 = 1e5;
 
 mod export;
 mod model;
-mod plan;
+pub(crate) mod plan;
 mod stats;
 mod zbuffer;
 
 pub(crate) use export::*;
 pub(crate) use model::*;
-pub(crate) use plan::join_inside as plan_join_inside;
-pub(crate) use plan::JOIN_SPACINGS;
 pub(crate) use stats::*;
-pub(crate) use zbuffer::{Cache, Reuse, Reusing, Update, ZBuffer};
+pub(crate) use zbuffer::{Cache, Reuse, Reusing, ZBuffer};
 
 #[cfg(test)]
 mod tests {

@@ -21,8 +21,6 @@
 mod gcode;
 mod page;
 
-#[cfg(test)]
-pub(crate) use gcode::moves;
 pub(crate) use gcode::Reader;
 pub(crate) use page::{page_with, write_page};
 

@@ -302,7 +302,6 @@ fn encode_with(pm: &Pixmap, alpha: bool, level: image::codecs::png::CompressionT
 mod tests {
     use super::*;
     use crate::output::preview::View;
-    pub(crate) use model::flat_tube;
 
     #[test]
     fn fit_centres_and_scales() {

@@ -1,0 +1,180 @@
+//! The fuzz targets' entry points (`fuzz/`, run by hand with cargo-fuzz):
+//! each takes the fuzzer's bytes through one of p3dp's readers, as the
+//! command line would, and must never panic. Built only with the `fuzzing`
+//! feature, so the crate's face stays small.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use crate::base::expr::{eval_const, var, Expr, Memo, Params};
+use crate::base::input::{check_nesting, decode, Reads, MAX_IMAGE_PIXELS};
+use crate::base::svg::{parse, Options, Outline};
+use crate::base::toolpath::Toolpath;
+use crate::generate::model::{make_part, Recipe};
+use crate::output::lock::{first_difference, LineHashes, Lock};
+use crate::recipe::schema::Num;
+use crate::recipe::{parse_yaml, RawRecipe};
+
+/// Parts of at most this many strings are built and checked too.
+const BUILD_STRINGS: u64 = 20_000;
+
+/// A scratch folder of this process for one target, marked as a project.
+fn scratch(target: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("p3dp-fuzz-{target}-{}", std::process::id()));
+    let _ = std::fs::create_dir_all(&dir);
+    let _ = std::fs::write(dir.join("p3dp.lock"), "p3dp_lock: 1\nentries: []\n");
+    dir
+}
+
+/// Recipe text → load and resolve (relative paths from `recipes`), then
+/// build and check it when small.
+pub fn recipe(data: &[u8], recipes: &Path) {
+    // as Recipe::load reads a file: UTF-8 without a BOM, nesting capped
+    let Ok(text) = decode(data.to_vec()) else {
+        return;
+    };
+    if check_nesting(&text).is_err() {
+        return;
+    }
+    let Ok(raw) = parse_yaml::<RawRecipe>(&text, "fuzz.yaml") else {
+        return;
+    };
+    // a bound on the work of one input: the fuzzer wants many fast runs
+    let raw = RawRecipe {
+        max_strings: raw.max_strings.or(Some(Num::Value(200_000.0))),
+        ..raw
+    };
+    let Ok(recipe) = Recipe::resolve(&raw, &[], None, recipes) else {
+        return;
+    };
+    if recipe.string_count() > BUILD_STRINGS {
+        return;
+    }
+    let mut paths = Vec::new();
+    for k in 0..recipe.parts.len() {
+        match make_part(&recipe, k) {
+            Ok(tp) => paths.push(tp),
+            Err(_) => return,
+        }
+    }
+    let refs: Vec<&Toolpath> = paths.iter().collect();
+    let _ = crate::analyse::check::run(&recipe, &refs, &recipe.allow);
+}
+
+/// Included library text → a recipe that includes it and uses its template
+/// `cup` (the gallery's `cup.yaml` is the seed), loaded through files.
+pub fn include(data: &[u8]) {
+    const RECIPE: &str =
+        "p3dp: 1\nname: f\ninclude: [lib.yaml]\nmax_strings: 200000\nparts:\n  - template: cup\n";
+    let dir = scratch("include");
+    let recipe = dir.join("r.yaml");
+    if std::fs::write(&recipe, RECIPE).is_err()
+        || std::fs::write(dir.join("lib.yaml"), data).is_err()
+    {
+        return;
+    }
+    let _ = Recipe::load(&recipe, &[], None);
+}
+
+/// Expression text → compiled and evaluated at ordinary and extreme values.
+pub fn expr(data: &[u8]) {
+    let Ok(src) = std::str::from_utf8(data) else {
+        return;
+    };
+    let mut params = Params::new();
+    params.insert("radius".into(), 30.0);
+    params.insert("height".into(), 100.0);
+    let _ = eval_const(src, &params);
+    let all: Vec<usize> = (0..var::COUNT).collect();
+    if let Ok(e) = Expr::compile(src, &params, &all) {
+        for vars in [
+            [0.0; var::COUNT],
+            [1.0, -2.0, 3.5, 4.0, 0.5, 0.2, 40.0, 7.0, 100.0, 0.07, 0.25],
+            [
+                1e300,
+                -1e300,
+                f64::MIN_POSITIVE,
+                1e-300,
+                6.25,
+                1e9,
+                1e-9,
+                1e6,
+                1e6,
+                1.0,
+                0.999,
+            ],
+        ] {
+            let _ = e.eval(&vars);
+        }
+    }
+    if let Ok(e) = Expr::compile_ext(src, &params, &all, &["len", "depth"]) {
+        let ext = vec![0.5; 2 + e.rands()];
+        let _ = e.eval_ext(&[1.0; var::COUNT], &ext, &mut Memo::default());
+    }
+}
+
+/// Image bytes → a `modulate_map` bitmap, within the pixel cap.
+pub fn image(data: &[u8]) {
+    let dir = scratch("image");
+    let file = dir.join("map.png");
+    if std::fs::write(&file, data).is_err() {
+        return;
+    }
+    let reads = Reads::default();
+    reads.allow(&dir);
+    if let Ok(b) = crate::recipe::resolve::step::load_bitmap(&file, "map.png", &reads) {
+        assert!(b.width as u64 * b.height as u64 <= MAX_IMAGE_PIXELS);
+    }
+}
+
+/// Lock text → validated, its entries compared with a small G-code's.
+pub fn lock(data: &[u8]) {
+    let Ok(text) = decode(data.to_vec()) else {
+        return;
+    };
+    if check_nesting(&text).is_err() {
+        return;
+    }
+    let Ok(lock) = parse_yaml::<Lock>(&text, "fuzz.lock") else {
+        return;
+    };
+    if lock.validate().is_err() {
+        return;
+    }
+    let mut lines = LineHashes::default();
+    let _ = lines.write_all(b"G1 X1\nG1 X2\n; end\n");
+    for e in &lock.entries {
+        let new = lines.blocks(e.block_lines);
+        let _ = first_difference(&e.blocks, &new);
+        let _ = &e.sha256[..12];
+    }
+}
+
+/// Printer profile text → a profile loaded from a file.
+pub fn printer(data: &[u8]) {
+    let dir = scratch("printer");
+    let file = dir.join("profile.yaml");
+    if std::fs::write(&file, data).is_err() {
+        return;
+    }
+    let _ = crate::machine::printer::Printer::from_file(&file);
+}
+
+/// SVG text → an outline, sampled.
+pub fn svg(data: &[u8]) {
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    let opt = Options {
+        id: None,
+        scale: 1.0,
+        tolerance: 0.01,
+        max_points: 200_000,
+    };
+    if let Ok(subpaths) = parse(text, &opt) {
+        if let Ok(o) = Outline::from_subpaths(&subpaths) {
+            let _ = o.fractions(240);
+            let _ = o.point_at(0.5);
+        }
+    }
+}
