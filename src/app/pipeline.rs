@@ -150,7 +150,8 @@ fn written<W: Write>(
         thumbnails,
         draft,
     };
-    let done = if ahead(plan, options) {
+    // a draft (a preview) needs no progress lines: one pass
+    let done = if !draft && ahead(plan, options) {
         let (estimate, timeline, stats) = plan_first(plan, options, failed, draft)?;
         head.ahead = Some(Ahead::of(&stats));
         let clock = Clock::new(timeline, estimate);
