@@ -120,6 +120,21 @@ pub(crate) fn each<T: Send>(items: &mut [T], f: impl Fn(&mut T) + Sync + Send) {
     items.par_iter_mut().with_max_len(1).for_each(f);
 }
 
+/// Sorts `items` by `order` (unstable), over the pool when it has a
+/// second thread; `order` must be total with no ties for the result to be
+/// the same whatever the threads.
+pub(crate) fn sort_unstable_by<T: Send>(
+    items: &mut [T],
+    order: impl Fn(&T, &T) -> std::cmp::Ordering + Sync,
+) {
+    use rayon::slice::ParallelSliceMut;
+    if width() > 1 {
+        items.par_sort_unstable_by(order);
+    } else {
+        items.sort_unstable_by(order);
+    }
+}
+
 /// `a()` and `b()`, side by side when the pool has a second thread.
 #[allow(dead_code)] // the previews' two halves will use it
 pub(crate) fn join<A: Send, B: Send>(

@@ -201,12 +201,7 @@ fn sort_far_first(strokes: &mut [Px]) {
         px.seq = i as u32;
     }
     let order = |a: &Px, b: &Px| a.depth.total_cmp(&b.depth).then(a.seq.cmp(&b.seq));
-    if par::width() > 1 {
-        use rayon::slice::ParallelSliceMut;
-        strokes.par_sort_unstable_by(order);
-    } else {
-        strokes.sort_unstable_by(order);
-    }
+    par::sort_unstable_by(strokes, order);
 }
 
 /// Where the model goes in the image, whether the text goes round it, and
