@@ -36,6 +36,7 @@ mod mesh;
 mod new_user;
 mod olympic;
 mod planner;
+mod plate;
 mod presets;
 mod preview;
 mod procedural;

@@ -606,6 +606,39 @@ mod tests {
             .is_none());
     }
 
+    /// The `head-collision` findings of a tall tower at x = -40, then a low
+    /// ring at x = +40, on `printer`.
+    fn tower_then_ring(printer: &str) -> Vec<Finding> {
+        let text = format!(
+            "p3dp: 1\nname: t\nprinter: {printer}\nparts:\n  - {{name: tower, primitive: {{helix: {{radius: 8, height: 40, pitch: 0.3, center: [-40, 0, 0.2]}}}}}}\n  - {{name: ring, primitive: {{helix: {{radius: 8, height: 2, pitch: 0.3, center: [40, 0, 0.2]}}}}}}\n"
+        );
+        let raw = crate::recipe::parse_yaml(&text, "t.yaml").unwrap();
+        let recipe = Recipe::resolve(&raw, &[], None, std::path::Path::new(".")).unwrap();
+        let parts = crate::generate::assembly::make_parts(&recipe).unwrap();
+        let refs: Vec<&Toolpath> = parts.iter().collect();
+        check(&recipe, &refs)
+            .into_iter()
+            .filter(|f| f.code == "head-collision")
+            .collect()
+    }
+
+    #[test]
+    fn the_gantry_meets_a_taller_part_anywhere_across_the_bed() {
+        // 80 mm apart in x, beyond the box's 30 mm: only the gantry (25 mm
+        // above the tip, the whole bed's width) reaches the 40 mm tower
+        let found = tower_then_ring("bambu-a1-mini");
+        assert_eq!(found.len(), 1, "{found:?}");
+        assert!(
+            found[0].message.contains("the gantry"),
+            "{}",
+            found[0].message
+        );
+        assert_eq!(found[0].part.as_deref(), Some("ring"));
+        assert!(found[0].message.contains("filament of part `tower`"));
+        // a profile without a gantry finds nothing
+        assert!(tower_then_ring("generic-220").is_empty());
+    }
+
     #[test]
     fn cone_reaches_wider_higher_up() {
         let hd = super::super::Head::default();

@@ -78,14 +78,18 @@ pub(crate) fn value(
         },
         (RawParam::List(_), _) => Err(Error::input(place, "expected a list [a, b, …]")),
         (RawParam::Bool(_), RawParam::Bool(b)) => Ok(Given::Bool(*b)),
-        (RawParam::Bool(_), RawParam::Num(n)) => match eval(n)? {
-            v if v == 1.0 => Ok(Given::Bool(true)),
-            v if v == 0.0 => Ok(Given::Bool(false)),
-            v => Err(Error::input(
-                place,
-                format!("{v} is not allowed for a true/false param; expected true or false"),
-            )),
-        },
+        (RawParam::Bool(_), RawParam::Num(n)) => {
+            // a caller's true/false param passed on: 1 or 0
+            let v = eval(n)?;
+            if v == 1.0 || v == 0.0 {
+                Ok(Given::Bool(v == 1.0))
+            } else {
+                Err(Error::input(
+                    place,
+                    format!("{v} is not allowed for a true/false param; expected true or false"),
+                ))
+            }
+        }
         (RawParam::Bool(_), _) => Err(Error::input(place, "expected true or false")),
         (RawParam::Num(_), RawParam::Num(n)) => eval(n).map(Given::Num),
         (RawParam::Num(_), RawParam::Bool(b)) => Ok(Given::Num(if *b { 1.0 } else { 0.0 })),
