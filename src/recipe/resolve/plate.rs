@@ -30,9 +30,10 @@ use crate::recipe::schema::{
 };
 
 /// Most copies of one entry.
-pub(crate) const MAX_COPIES: u32 = 1000;
-/// Most objects on one plate.
-pub(crate) const MAX_OBJECTS: usize = 1000;
+pub(crate) const MAX_COPIES: u32 = 200;
+/// Most objects on one plate (the arrangement's work grows as the cube of
+/// their number; a bed holds far fewer with the head's reach between them).
+pub(crate) const MAX_OBJECTS: usize = 200;
 
 /// A plate as the build takes it, from a plate file or the command line.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -316,6 +317,17 @@ fn load_objects(
         let path = spec.dir.join(&e.recipe);
         reach(spec, e, &path, cx)?;
         let shown = path.display().to_string();
+        // counted before any is made: sweeps multiply
+        let count = e
+            .sweeps
+            .iter()
+            .fold(e.copies as usize, |n, (_, v)| n.saturating_mul(v.len()));
+        if out.len().saturating_add(count) > MAX_OBJECTS {
+            return Err(Error::input(
+                &e.place,
+                format!("{} objects with the ones before, more than {MAX_OBJECTS} on one plate; expected fewer copies or variants", out.len().saturating_add(count)),
+            ));
+        }
         for variant in variants(&e.sweeps) {
             let mut s = e.sets.clone();
             s.extend(variant);
@@ -324,12 +336,6 @@ fn load_objects(
             let paths = arrange::made(&recipe).map_err(|err| err.in_file(&shown))?;
             let (recipe, paths) = (std::sync::Arc::new(recipe), std::sync::Arc::new(paths));
             for _ in 0..e.copies {
-                if out.len() >= MAX_OBJECTS {
-                    return Err(Error::input(
-                        &e.place,
-                        format!("more than {MAX_OBJECTS} objects on one plate; expected fewer copies or variants"),
-                    ));
-                }
                 out.push(Loaded {
                     entry: i,
                     recipe: recipe.clone(),
