@@ -580,3 +580,71 @@ fn a_whole_recipe_is_a_part_with_its_params_overridden() {
     );
     assert!((top("pot/wall") - 20.6).abs() < 0.01, "{}", top("pot/wall"));
 }
+
+/// The hosts read a plate's objects (run with `P3DP_HOST_VENV`, as
+/// `tests/it/hosts.rs`; skipped with a note without it): Moonraker's object
+/// processing makes Klipper's labels of the `; printing object` comments,
+/// one object per pot, and bambox finds the vases' package valid.
+#[test]
+fn the_hosts_read_a_plates_objects() {
+    let Some(py) = crate::hosts::venv("P3DP_HOST_VENV", "the hosts' readers of a plate") else {
+        return;
+    };
+    let dir = tmp("plate-hosts");
+    let pots = plates("pots.yaml");
+    build(
+        &dir,
+        &["build", pots.to_str().unwrap(), "-o", "pots.gcode"],
+        "pots.gcode",
+    );
+    let site = std::process::Command::new(&py)
+        .args(["-c", "import importlib.util as u; print(u.find_spec('moonraker').submodule_search_locations[0])"])
+        .output()
+        .unwrap();
+    let script = PathBuf::from(String::from_utf8_lossy(&site.stdout).trim())
+        .join("components/file_manager/metadata.py");
+    let out = std::process::Command::new(&py)
+        .arg(&script)
+        .args(["-p", dir.to_str().unwrap(), "-f", "pots.gcode", "-o"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(dir.join("pots.gcode")).unwrap();
+    let defined: Vec<&str> = text
+        .lines()
+        .filter_map(|l| l.strip_prefix("EXCLUDE_OBJECT_DEFINE NAME="))
+        .map(|l| l.split(' ').next().unwrap())
+        .collect();
+    assert_eq!(defined.len(), 4, "{defined:?}");
+    for n in &defined {
+        assert!(n.to_ascii_lowercase().starts_with("pot"), "{n}");
+        assert_eq!(
+            text.matches(&format!("EXCLUDE_OBJECT_START NAME={n}\n"))
+                .count(),
+            1,
+            "{n}"
+        );
+    }
+    // Bambu's package of the nine vases, as bambox validates it
+    let vases = plates("vases.yaml");
+    let o = p3dp(
+        &dir,
+        &["build", vases.to_str().unwrap(), "-o", "v.gcode.3mf"],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = std::process::Command::new(py.with_file_name("bambox"))
+        .args(["validate", "--strict", "--json"])
+        .arg(dir.join("v.gcode.3mf"))
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    let json = &text[text.find('{').unwrap_or(0)..];
+    let v: serde_json::Value = serde_json::from_str(json).unwrap_or_else(|e| panic!("{e}: {text}"));
+    assert_eq!(v["valid"], true, "{v}");
+    assert_eq!(v["errors"], serde_json::json!([]), "{v}");
+    assert_eq!(v["warnings"], serde_json::json!([]), "{v}");
+}

@@ -74,7 +74,23 @@ impl Recipe {
     pub(crate) fn read_raw(path: &Path, cx: &Context) -> Result<RawRecipe> {
         let shown = path.display().to_string();
         let text = cx.reads.read_text(path, "recipe")?;
-        parse_yaml(&text, &shown)
+        let raw: RawRecipe = parse_yaml(&text, &shown)?;
+        if raw.parts.is_empty() && raw.plate.is_none() {
+            // neither key: named where the top-level map starts, as a
+            // missing key is
+            #[derive(serde::Deserialize)]
+            struct Parts {
+                #[allow(dead_code)]
+                parts: serde::de::IgnoredAny,
+            }
+            if let Err(e) = parse_yaml::<Parts>(&text, &shown) {
+                return Err(Error {
+                    message: "missing field `parts`; expected `parts` (the parts to print) or `plate` (the recipes a plate puts on the bed)".into(),
+                    ..e
+                });
+            }
+        }
+        Ok(raw)
     }
 
     /// [`Recipe::load_in`] of the recipe `raw` read from `path`.

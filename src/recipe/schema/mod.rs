@@ -230,6 +230,11 @@ pub(crate) struct RawLibrary {
 pub(crate) fn json_schema() -> serde_json::Value {
     let mut s = serde_json::to_value(schemars::schema_for!(RawRecipe)).unwrap_or_default();
     if let Some(o) = s.as_object_mut() {
+        // a recipe has `parts`, a plate `plate`: one of them
+        o.insert(
+            "oneOf".into(),
+            serde_json::json!([{"required": ["parts"]}, {"required": ["plate"]}]),
+        );
         o.insert("title".into(), "p3dp recipe (format version 1)".into());
         o.insert(
             "description".into(),
