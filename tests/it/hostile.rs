@@ -1080,7 +1080,7 @@ fn endless_inputs_are_refused_not_read_until_memory_runs_out() {
         ),
         (
             &["hash", "--check", "z.lock"],
-            "the recipe `/dev/zero` is a device",
+            "entries[0].recipe: the recipe `/dev/zero` is outside the folders a lock may name",
         ),
         (
             &["build", "/dev/zero", "-o", "x.gcode"],
