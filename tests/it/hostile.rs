@@ -883,6 +883,32 @@ fn zip_text(file: &Path, name: &str) -> String {
     s
 }
 
+/// A lock's own text (an entry's recipe name) reaches the terminal escaped:
+/// no escape sequence of a hostile lock is printed raw by `hash --check`.
+#[test]
+fn a_changed_entrys_name_is_printed_escaped() {
+    let dir = tmp("lock-escape");
+    let name = "a\u{1b}]0;owned\u{7}b.yaml";
+    std::fs::copy(recipe("sphere.yaml"), dir.join(name)).unwrap();
+    let out = p3dp(&dir, &["hash", name, "--lock", "l.lock"]);
+    assert_eq!(code(&out), Some(0), "{}", describe(&out));
+    let lock = std::fs::read_to_string(dir.join("l.lock")).unwrap();
+    let sha = lock
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("sha256: "))
+        .unwrap()
+        .to_string();
+    std::fs::write(dir.join("l.lock"), lock.replace(&sha, &"0".repeat(64))).unwrap();
+    let out = p3dp(&dir, &["hash", "--check", "l.lock"]);
+    assert_eq!(code(&out), Some(1), "{}", describe(&out));
+    let all = format!("{}{}", String::from_utf8_lossy(&out.stdout), stderr(&out));
+    assert!(!all.contains(['\u{1b}', '\u{7}']), "{all:?}");
+    assert!(
+        all.contains("CHANGED  a\\u{1b}]0;owned\\u{7}b.yaml"),
+        "{all}"
+    );
+}
+
 /// Two recipes whose part and material are named `name`: `file`, a helix,
 /// and `solid-FILE`, the cup with a solid base.
 fn xml_named(dir: &Path, file: &str, name: &str) {

@@ -273,12 +273,14 @@ fn check_lock(a: &Options, lockfile: &Path) -> Vec<Error> {
                 };
                 // only what changed is shown, with both whole hashes
                 changed += 1;
+                // a lock's text reaches the terminal escaped, on one line
                 crate::sayln!(
-                    "CHANGED  {label}\n         was {}\n         now {digest}",
+                    "CHANGED  {}\n         was {}\n         now {digest}",
+                    one_line(&label),
                     entry.sha256
                 );
                 errors.push(Error::check(
-                    &entry.recipe,
+                    one_line(&entry.recipe),
                     format!(
                         "G-code changed: sha256 was {}, now {digest}; {place}",
                         entry.sha256
