@@ -20,6 +20,7 @@ const LAYERS: &[(&str, &[&str])] = &[
             "mem",
             "par",
             "toolpath",
+            "grammar",
             "expr",
             "finding",
             "rng",
