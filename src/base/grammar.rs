@@ -394,13 +394,13 @@ mod tests {
         }
         // a recipe's `not` takes a comparison; a macro's is its host's
         assert_eq!(parse("! a = b", &RECIPE), "!(a=b)");
-        assert_eq!(parse("! a = b", &MACRO), "`!` at 0");
+        assert!(parse("! a = b", &MACRO).starts_with("`!` at 0"));
         // chains: C's for macros, refused for recipes
         assert_eq!(parse("a = b < c", &MACRO), "(a=(b<c))");
         assert_eq!(parse("a < b < c", &MACRO), "((a<b)<c)");
-        assert_eq!(parse("a < b < c", &RECIPE), "OneComparison at 6");
-        assert_eq!(parse("a = b < c", &RECIPE), "OneComparison at 2");
-        assert_eq!(parse("a = b = c", &RECIPE), "OneComparison at 6");
+        assert!(parse("a < b < c", &RECIPE).starts_with("OneComparison at 6"));
+        assert!(parse("a = b < c", &RECIPE).starts_with("OneComparison at 2"));
+        assert!(parse("a = b = c", &RECIPE).starts_with("OneComparison at 6"));
     }
 
     #[test]

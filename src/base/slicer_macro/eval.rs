@@ -66,14 +66,20 @@ impl<'t> Run<'t> {
     fn step(&mut self, n: usize, at: usize) -> R<()> {
         self.work += n as u64;
         if self.work > MAX_WORK {
-            return Err(self.error(at, format!("the template takes more than {MAX_WORK} steps to expand")));
+            return Err(self.error(
+                at,
+                format!("the template takes more than {MAX_WORK} steps to expand"),
+            ));
         }
         Ok(())
     }
 
     fn write(&mut self, s: &str, at: usize) -> R<()> {
         if self.out.len() + s.len() > MAX_OUTPUT {
-            return Err(self.error(at, format!("the expansion is longer than {MAX_OUTPUT} bytes")));
+            return Err(self.error(
+                at,
+                format!("the expansion is longer than {MAX_OUTPUT} bytes"),
+            ));
         }
         self.out.push_str(s);
         Ok(())
@@ -118,7 +124,10 @@ impl<'t> Run<'t> {
             Stmt::Output(e) => {
                 let v = self.eval(e)?;
                 if let Value::Nil = v {
-                    return Err(self.error(e.at, "a nil value (a setting left undefined) cannot be written"));
+                    return Err(self.error(
+                        e.at,
+                        "a nil value (a setting left undefined) cannot be written",
+                    ));
                 }
                 self.write(&v.text(), e.at)
             }
@@ -177,7 +186,10 @@ impl<'t> Run<'t> {
                 let n = items.len();
                 Err(self.error(at, format!("`{name}` has {n} elements, no index {i}")))
             }
-            _ => Err(self.error(at, format!("`{name}` is not a vector; it cannot be indexed"))),
+            _ => Err(self.error(
+                at,
+                format!("`{name}` is not a vector; it cannot be indexed"),
+            )),
         }
     }
 
@@ -207,7 +219,10 @@ impl<'t> Run<'t> {
                     other => {
                         return Err(self.error(
                             n.at,
-                            format!("`repeat` takes a count of 0 to {MAX_VALUE}, not {}", other.text()),
+                            format!(
+                                "`repeat` takes a count of 0 to {MAX_VALUE}, not {}",
+                                other.text()
+                            ),
                         ))
                     }
                 };
@@ -227,13 +242,18 @@ impl<'t> Run<'t> {
         }
         self.step(vals.len(), at)?;
         if has(|v| matches!(v, Value::Str(_))) {
-            return Ok(Value::List(vals.iter().map(|v| Value::Str(v.text())).collect()));
+            return Ok(Value::List(
+                vals.iter().map(|v| Value::Str(v.text())).collect(),
+            ));
         }
         let bools = has(|v| matches!(v, Value::Bool(_)));
         if bools && has(|v| v.number().is_some()) {
             return Err(self.error(at, "a vector mixing numbers and booleans"));
         }
-        if let Some(v) = vals.iter().find(|v| matches!(v, Value::List(_) | Value::Nil)) {
+        if let Some(v) = vals
+            .iter()
+            .find(|v| matches!(v, Value::List(_) | Value::Nil))
+        {
             return Err(self.error(at, format!("{} inside a vector", v.kind())));
         }
         if has(|v| matches!(v, Value::Float(_) | Value::Shown(..))) {
@@ -273,7 +293,9 @@ impl<'t> Run<'t> {
                 self.error(at, format!("`{name}` has {n} element{s}, no index {index}"))
             })?,
             v if idx.is_none() || index == 0 => v,
-            _ => return Err(self.error(at, format!("`{name}` is not a list; it cannot be indexed"))),
+            _ => {
+                return Err(self.error(at, format!("`{name}` is not a list; it cannot be indexed")))
+            }
         };
         if let Value::Nil = v {
             return Err(self.error(at, format!("`{name}` is nil (left undefined)")));
@@ -286,7 +308,10 @@ impl<'t> Run<'t> {
             Value::Int(i) if i >= 0 => Ok(i as usize),
             _ => Err(self.error(
                 at,
-                format!("the index `{what}` is {}, expected an integer ≥ 0", v.kind()),
+                format!(
+                    "the index `{what}` is {}, expected an integer ≥ 0",
+                    v.kind()
+                ),
             )),
         }
     }
@@ -295,14 +320,20 @@ impl<'t> Run<'t> {
     fn index(&mut self, e: &Expr) -> R<usize> {
         let v = self.eval(e)?;
         self.as_index(&v, "", e.at).map_err(|_| {
-            self.error(e.at, format!("an index is {}, expected an integer ≥ 0", v.kind()))
+            self.error(
+                e.at,
+                format!("an index is {}, expected an integer ≥ 0", v.kind()),
+            )
         })
     }
 
     fn truth(&mut self, e: &Expr) -> R<bool> {
         match self.eval(e)? {
             Value::Bool(b) => Ok(b),
-            v => Err(self.error(e.at, format!("a condition is {}, expected a boolean", v.kind()))),
+            v => Err(self.error(
+                e.at,
+                format!("a condition is {}, expected a boolean", v.kind()),
+            )),
         }
     }
 
@@ -398,14 +429,13 @@ impl<'t> Run<'t> {
                 }
             }
             // a string with anything written as text: the texts compared
-            (Value::Str(_), v) | (v, Value::Str(_)) if !matches!(v, Value::List(_) | Value::Nil) => {
+            (Value::Str(_), v) | (v, Value::Str(_))
+                if !matches!(v, Value::List(_) | Value::Nil) =>
+            {
                 x.text().cmp(&y.text())
             }
             _ => {
-                return Err(self.error(
-                    at,
-                    format!("cannot compare {} with {}", x.kind(), y.kind()),
-                ))
+                return Err(self.error(at, format!("cannot compare {} with {}", x.kind(), y.kind())))
             }
         };
         Ok(Value::Bool(op.holds(ord)))
@@ -498,11 +528,17 @@ impl<'t> Run<'t> {
             vals[k].number().ok_or_else(|| {
                 self.error(
                     args[k].at,
-                    format!("argument {} is {}, expected a number", k + 1, vals[k].kind()),
+                    format!(
+                        "argument {} is {}, expected a number",
+                        k + 1,
+                        vals[k].kind()
+                    ),
                 )
             })
         };
-        let real = vals.iter().any(|v| matches!(v, Value::Float(_) | Value::Shown(..)));
+        let real = vals
+            .iter()
+            .any(|v| matches!(v, Value::Float(_) | Value::Shown(..)));
         match f {
             Func::Min | Func::Max => {
                 let (a, b) = (num(0)?, num(1)?);
@@ -538,7 +574,10 @@ impl<'t> Run<'t> {
     /// without `d` (C's `%*.*f` and `%*d`, PrusaSlicer's).
     fn digits(&self, zeros: bool, vals: &[Value], args: &[Expr], at: usize) -> R<Value> {
         let x = vals[0].number().ok_or_else(|| {
-            self.error(args[0].at, format!("`digits` formats a number, not {}", vals[0].kind()))
+            self.error(
+                args[0].at,
+                format!("`digits` formats a number, not {}", vals[0].kind()),
+            )
         })?;
         let int = |k: usize| match vals.get(k) {
             Some(Value::Int(i)) => Ok(Some((*i).clamp(0, 64) as usize)),
@@ -574,7 +613,9 @@ impl<'t> Run<'t> {
     fn one_of(&mut self, s: &Expr, choices: &[Choice], at: usize) -> R<Value> {
         let subject = match self.eval(s)? {
             Value::Str(x) => x,
-            v => return Err(self.error(s.at, format!("`one_of` matches a string, not {}", v.kind()))),
+            v => {
+                return Err(self.error(s.at, format!("`one_of` matches a string, not {}", v.kind())))
+            }
         };
         for c in choices {
             let hit = match c {
@@ -604,7 +645,10 @@ impl<'t> Run<'t> {
             if self.t.patterns.len() + self.computed.len() >= super::parse::MAX_PATTERNS {
                 return Err(self.error(
                     at,
-                    format!("more than {} different patterns in one template", super::parse::MAX_PATTERNS),
+                    format!(
+                        "more than {} different patterns in one template",
+                        super::parse::MAX_PATTERNS
+                    ),
                 ));
             }
             let re = super::parse::compile_pattern(p).map_err(|m| self.error(at, m))?;
@@ -618,8 +662,12 @@ impl<'t> Run<'t> {
     fn table(&mut self, x: &Expr, pts: &[(Expr, Expr)], at: usize) -> R<Value> {
         let num = |r: &mut Run, e: &Expr| -> R<f64> {
             let v = r.eval(e)?;
-            v.number()
-                .ok_or_else(|| r.error(e.at, format!("`interpolate_table` takes numbers, not {}", v.kind())))
+            v.number().ok_or_else(|| {
+                r.error(
+                    e.at,
+                    format!("`interpolate_table` takes numbers, not {}", v.kind()),
+                )
+            })
         };
         let xv = num(self, x)?;
         let mut table = Vec::with_capacity(pts.len());
@@ -653,7 +701,12 @@ impl<'t> Run<'t> {
         }
         Err(self.error(
             at,
-            format!("{} is outside the table ({} to {})", fmt_g(xv), fmt_g(first.0), fmt_g(last.0)),
+            format!(
+                "{} is outside the table ({} to {})",
+                fmt_g(xv),
+                fmt_g(first.0),
+                fmt_g(last.0)
+            ),
         ))
     }
 }

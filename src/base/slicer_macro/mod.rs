@@ -275,7 +275,9 @@ fn walk_nodes(nodes: &[parse::Node], add: &mut impl FnMut(&str, usize)) {
     use parse::{Init, LegacyIndex, Node, Stmt};
     let init = |i: &Init, add: &mut dyn FnMut(&str, usize)| match i {
         Init::Expr(e) => e.walk(&mut |n: &str, a| add(n, a)),
-        Init::List(items, _) => items.iter().for_each(|e| e.walk(&mut |n: &str, a| add(n, a))),
+        Init::List(items, _) => items
+            .iter()
+            .for_each(|e| e.walk(&mut |n: &str, a| add(n, a))),
         Init::Repeat(a, b) => {
             a.walk(&mut |n: &str, k| add(n, k));
             b.walk(&mut |n: &str, k| add(n, k));

@@ -279,7 +279,9 @@ impl<'a> Parser<'a> {
     /// Nodes up to the end or to an `{elsif}`, `{else}` or `{endif}`,
     /// returned with the keyword and its `{` (consumed up to the keyword).
     #[allow(clippy::type_complexity)]
-    pub(super) fn block(&mut self) -> Result<(Vec<Node>, Option<(&'static str, usize)>), MacroError> {
+    pub(super) fn block(
+        &mut self,
+    ) -> Result<(Vec<Node>, Option<(&'static str, usize)>), MacroError> {
         let s = self.lex.src.as_bytes();
         let mut nodes = Vec::new();
         loop {
@@ -340,7 +342,10 @@ impl<'a> Parser<'a> {
                 (Tok::Sym(";") | Tok::Close, _) => {}
                 (t, at) => {
                     let t = shown(t);
-                    return Err(self.error(at, format!("expected `;` or `}}` after a statement, found {t}")));
+                    return Err(self.error(
+                        at,
+                        format!("expected `;` or `}}` after a statement, found {t}"),
+                    ));
                 }
             }
         }
@@ -646,7 +651,10 @@ impl<'a> Parser<'a> {
                 format!("{lo} or {hi}")
             };
             let s = if hi == 1 { "" } else { "s" };
-            return Err(self.error(at, format!("`{w}` takes {n} argument{s}, not {}", args.len())));
+            return Err(self.error(
+                at,
+                format!("`{w}` takes {n} argument{s}, not {}", args.len()),
+            ));
         }
         Ok(args)
     }

@@ -202,20 +202,41 @@ fn functions_of_the_current_bundles() {
         Value::List(vec![Value::Nil, Value::Int(170)]),
     );
     v.insert("extruded_weight_total".into(), Value::Float(500.0));
-    assert_eq!(xv("{is_nil(idle_temperature[0])} {is_nil(idle_temperature[1])}", &v), "true false");
+    assert_eq!(
+        xv(
+            "{is_nil(idle_temperature[0])} {is_nil(idle_temperature[1])}",
+            &v
+        ),
+        "true false"
+    );
     assert_eq!(
         xv("{one_of(printer_model, \"MINI\", /MK3.*/)} {one_of(printer_model, \"XL\")} {one_of(printer_model, ~\"M\" + \"K.S\")}", &v),
         "true false true"
     );
     assert_eq!(
-        xv("{interpolate_table(extruded_weight_total, (0,4000), (1000,1700), (10000,1700))}", &v),
+        xv(
+            "{interpolate_table(extruded_weight_total, (0,4000), (1000,1700), (10000,1700))}",
+            &v
+        ),
         "2850"
     );
     assert!(expand("{interpolate_table(20000, (0,1), (10,2))}", &v).is_err());
     assert!(expand("{interpolate_table(5, (10,1), (0,2))}", &v).is_err());
-    assert_eq!(xv("{digits(2.6, 4)}|{zdigits(-3, 4)}|{zdigits(7.25, 6, 1)}", &v), "   3|-003|0007.2");
-    assert_eq!(xv("{min(2, 3.5)} {max(2, 3)} {int(-2.7)} {round(-2.5)}", &v), "2 3 -2 -3");
-    assert_eq!(xv("{first_layer_temperature[0] == 215.000000001}", &v), "true");
+    assert_eq!(
+        xv(
+            "{digits(2.6, 4)}|{zdigits(-3, 4)}|{zdigits(7.25, 6, 1)}",
+            &v
+        ),
+        "   3|-003|0007.2"
+    );
+    assert_eq!(
+        xv("{min(2, 3.5)} {max(2, 3)} {int(-2.7)} {round(-2.5)}", &v),
+        "2 3 -2 -3"
+    );
+    assert_eq!(
+        xv("{first_layer_temperature[0] == 215.000000001}", &v),
+        "true"
+    );
     assert_eq!(xv("{\"5\" == 5} {printer_model < \"Z\"}", &v), "true true");
 }
 
@@ -298,7 +319,10 @@ fn patterns_are_compiled_once_and_capped() {
         .map(|k| format!("{{if printer_model =~ /M{k}.*/}}a{{endif}}"))
         .collect();
     let e = Template::parse(&many).unwrap_err();
-    assert!(e.message.contains("more than 64 different patterns"), "{e:?}");
+    assert!(
+        e.message.contains("more than 64 different patterns"),
+        "{e:?}"
+    );
     // computed ones share the cap
     let computed: String = (0..100)
         .map(|k| format!("{{one_of(printer_model, ~\"X{k}\")}}"))
