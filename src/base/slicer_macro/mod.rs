@@ -238,8 +238,9 @@ impl Template {
         let mut own = std::collections::HashSet::new();
         own_names(&self.nodes, &mut own);
         let mut out: Vec<(String, usize)> = Vec::new();
+        let mut seen = std::collections::HashSet::new();
         let mut add = |name: &str, at: usize| {
-            if !own.contains(name) && !out.iter().any(|(n, _)| n == name) {
+            if !own.contains(name) && seen.insert(name.to_string()) {
                 out.push((name.to_string(), self.lines.locate(&self.src, at).0));
             }
         };

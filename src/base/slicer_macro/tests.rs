@@ -302,6 +302,13 @@ fn parsing_is_linear() {
     assert!(t0.elapsed().as_secs_f64() < 10.0, "{:?}", t0.elapsed());
     assert_eq!(out.lines().count(), 100_000);
     assert!(out.starts_with("G1 X0.2 Y10.4\n"));
+    // as many different names, listed in one pass too
+    let names: String = (0..100_000).map(|k| format!("[v{k}]\n")).collect();
+    let t0 = std::time::Instant::now();
+    let vs = Template::parse(&names).unwrap().variables();
+    assert!(t0.elapsed().as_secs_f64() < 10.0, "{:?}", t0.elapsed());
+    assert_eq!(vs.len(), 100_000);
+    assert_eq!(vs[99_999], ("v99999".to_string(), 100_000));
     // an error at the end still names its line
     let bad = text.clone() + "{oops";
     assert_eq!(Template::parse(&bad).unwrap_err().line, 100_001);
