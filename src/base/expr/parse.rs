@@ -237,7 +237,7 @@ impl Parser<'_, '_> {
             Tok::Open => {
                 self.k += 1;
                 let e = self.nested(t.start)?;
-                self.expect(Tok::Close, t.start)?;
+                self.expect(Tok::Close)?;
                 hole(holes, e)
             }
             Tok::Ident => {
@@ -288,7 +288,7 @@ impl Parser<'_, '_> {
         Ok(e)
     }
 
-    fn expect(&mut self, tok: Tok, open: usize) -> Result<(), ExprError> {
+    fn expect(&mut self, tok: Tok) -> Result<(), ExprError> {
         if self.tok().tok == tok {
             self.k += 1;
             return Ok(());
@@ -306,10 +306,7 @@ impl Parser<'_, '_> {
                 syntax(self.src, t.start, "a `,` outside a function's arguments")
             }
             (Tok::RBracket, _) => syntax(self.src, t.start, "`]` expected"),
-            _ => {
-                let _ = open;
-                unexpected(self.src, t.start)
-            }
+            _ => unexpected(self.src, t.start),
         })
     }
 
@@ -350,7 +347,7 @@ impl Parser<'_, '_> {
                     self.k += 1;
                     continue;
                 }
-                self.expect(Tok::Close, open)?;
+                self.expect(Tok::Close)?;
                 break;
             }
         }
@@ -364,7 +361,7 @@ impl Parser<'_, '_> {
     fn list(&mut self, name: &str, at: usize) -> Result<Tall, ExprError> {
         self.k += 1;
         let k = self.nested(at)?;
-        self.expect(Tok::RBracket, at)?;
+        self.expect(Tok::RBracket)?;
         let node = self.c.list_at(name, k.0)?;
         self.node(node, &[k.1])
     }
@@ -451,10 +448,9 @@ impl Host for Parser<'_, '_> {
         self.node(Node::Call(Op::F3(super::f_if), vec![c.0, a.0, b.0]), &h)
     }
 
-    fn enter(&mut self, at: usize) -> Result<(), ExprError> {
+    fn enter(&mut self, _: usize) -> Result<(), ExprError> {
         self.depth += 1;
         if self.depth > MAX_DEPTH {
-            let _ = at;
             return Err(self.c.too_deep());
         }
         Ok(())

@@ -385,7 +385,7 @@ impl<'t> Run<'t> {
                 v => Err(self.error(at, format!("`=~` matches a string, not {}", v.kind()))),
             },
             Kind::Call(f, args) => self.call(*f, args, at),
-            Kind::OneOf(s, choices) => self.one_of(s, choices, at),
+            Kind::OneOf(s, choices) => self.one_of(s, choices),
             Kind::Table(x, pts) => self.table(x, pts, at),
         }
     }
@@ -610,7 +610,7 @@ impl<'t> Run<'t> {
         }
     }
 
-    fn one_of(&mut self, s: &Expr, choices: &[Choice], at: usize) -> R<Value> {
+    fn one_of(&mut self, s: &Expr, choices: &[Choice]) -> R<Value> {
         let subject = match self.eval(s)? {
             Value::Str(x) => x,
             v => {
@@ -634,7 +634,6 @@ impl<'t> Run<'t> {
                 return Ok(Value::Bool(true));
             }
         }
-        let _ = at;
         Ok(Value::Bool(false))
     }
 

@@ -231,6 +231,28 @@ impl Template {
         Ok(run.out)
     }
 
+    /// The names the template's `global` statements make (a later template
+    /// expanded with the same globals may read them).
+    pub fn globals(&self) -> Vec<String> {
+        fn walk(nodes: &[parse::Node], out: &mut Vec<String>) {
+            for n in nodes {
+                match n {
+                    parse::Node::Stmt(parse::Stmt::New {
+                        global: true, name, ..
+                    }) if !out.contains(name) => out.push(name.clone()),
+                    parse::Node::If(arms, other) => {
+                        arms.iter().for_each(|(_, b)| walk(b, out));
+                        walk(other, out);
+                    }
+                    _ => {}
+                }
+            }
+        }
+        let mut out = Vec::new();
+        walk(&self.nodes, &mut out);
+        out
+    }
+
     /// Every variable the template reads from outside, in any branch, with
     /// the line of its first use, in order of appearance (those its own
     /// `local` and `global` statements make are its own).

@@ -484,30 +484,29 @@ impl<'a> Parser<'a> {
                     if self.lex.eat(")")? {
                         break;
                     }
-                    self.expect(",", at)?;
+                    self.expect(",")?;
                 }
             }
             return Ok(Init::List(items, at));
         }
         if matches!(t, Tok::Ident(w) if w == "repeat") {
             self.lex.next()?;
-            self.expect("(", at)?;
+            self.expect("(")?;
             let n = self.expression()?;
-            self.expect(",", at)?;
+            self.expect(",")?;
             let v = self.expression()?;
-            self.expect(")", at)?;
+            self.expect(")")?;
             return Ok(Init::Repeat(n, v));
         }
         Ok(Init::Expr(self.expression()?))
     }
 
-    fn expect(&mut self, sym: &str, open: usize) -> Result<(), MacroError> {
+    fn expect(&mut self, sym: &str) -> Result<(), MacroError> {
         if self.lex.eat(sym)? {
             return Ok(());
         }
         let (t, at) = self.lex.peek()?;
         let t = shown(t);
-        let _ = open;
         Err(self.error(at, format!("expected `{sym}`, found {t}")))
     }
 
@@ -686,7 +685,7 @@ impl<'a> Parser<'a> {
                 choices.push(Choice::Equal(self.expression()?));
             }
         }
-        self.expect(")", at)?;
+        self.expect(")")?;
         self.node(Kind::OneOf(Box::new(s), choices), at)
     }
 
@@ -695,15 +694,14 @@ impl<'a> Parser<'a> {
         let x = self.expression()?;
         let mut pts = Vec::new();
         while self.lex.eat(",")? {
-            let p = self.lex.at()?;
-            self.expect("(", p)?;
+            self.expect("(")?;
             let a = self.expression()?;
-            self.expect(",", p)?;
+            self.expect(",")?;
             let b = self.expression()?;
-            self.expect(")", p)?;
+            self.expect(")")?;
             pts.push((a, b));
         }
-        self.expect(")", at)?;
+        self.expect(")")?;
         if pts.is_empty() {
             return Err(self.error(at, "`interpolate_table` takes a value and (x, y) points"));
         }

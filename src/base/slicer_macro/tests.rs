@@ -183,6 +183,7 @@ fn statements_local_global_and_vectors() {
     let mut globals = Vars::new();
     let a = Template::parse("{global used = 5}").unwrap();
     let b = Template::parse("M117 {used + 1}").unwrap();
+    assert_eq!(a.globals(), ["used"]);
     a.expand_with(&vars(), &mut globals).unwrap();
     assert_eq!(b.expand_with(&vars(), &mut globals).unwrap(), "M117 6");
     // a local is not a slicer's setting to change, nor one to read later
