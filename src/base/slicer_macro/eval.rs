@@ -553,7 +553,7 @@ impl<'t> Run<'t> {
             Func::Digits | Func::Zdigits => self.digits(f == Func::Zdigits, &vals, args, at),
             Func::Random => {
                 let (lo, hi) = (num(0)?, num(1)?);
-                if !(lo <= hi) {
+                if lo.partial_cmp(&hi).is_none_or(|o| o.is_gt()) {
                     return Err(self.error(at, "`random(lo, hi)` takes lo ≤ hi"));
                 }
                 if !real {
