@@ -21,6 +21,7 @@ const LAYERS: &[(&str, &[&str])] = &[
             "mem",
             "par",
             "toolpath",
+            "grammar",
             "expr",
             "finding",
             "rng",
