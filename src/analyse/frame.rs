@@ -9,17 +9,19 @@ use glam::DVec3;
 
 use crate::analyse::check::gcode::{self, Start};
 use crate::base::error::{Error, Result};
+use crate::base::gcode::Verbatim;
 use crate::base::slicer_macro::{Value, Vars};
 use crate::base::toolpath::Toolpath;
 use crate::generate::model::Recipe;
 
-/// A print's start and end G-code, expanded and checked.
+/// A print's start and end G-code, expanded and checked: each line as it
+/// is written, and what its firmware reads in it.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Frame {
     /// Before the first part.
-    pub start: String,
+    pub start: Vec<Verbatim>,
     /// After the last part.
-    pub end: String,
+    pub end: Vec<Verbatim>,
 }
 
 /// What the strings say about the print for the templates: heights of the
@@ -54,7 +56,7 @@ pub(crate) fn frame(recipe: &Recipe, paths: &[Toolpath]) -> Result<Frame> {
         Some(f) => f.clone(),
         None => format!("built-in printer `{}`", p.name),
     };
-    let one = |key: &str, text: &str, end: bool| -> Result<String> {
+    let one = |key: &str, text: &str, end: bool| -> Result<Vec<Verbatim>> {
         let t = p.template(key, text).map_err(|e| e.in_file(&shown))?;
         let vars = variables(recipe, &ext, end);
         let out = t
@@ -66,8 +68,7 @@ pub(crate) fn frame(recipe: &Recipe, paths: &[Toolpath]) -> Result<Frame> {
         } else {
             Start::Unknown
         };
-        gcode::check(key, &out, recipe, from).map_err(|e| e.in_file(&shown))?;
-        Ok(out)
+        gcode::check(key, &out, recipe, from).map_err(|e| e.in_file(&shown))
     };
     Ok(Frame {
         start: one("start_gcode", &p.start_gcode, false)?,

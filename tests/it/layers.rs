@@ -19,6 +19,7 @@ const LAYERS: &[(&str, &[&str])] = &[
             "input",
             "mem",
             "par",
+            "gcode",
             "toolpath",
             "expr",
             "finding",
@@ -39,6 +40,7 @@ const LAYERS: &[(&str, &[&str])] = &[
             "kinematics",
             "printer",
             "travel",
+            "firmware",
         ],
     ),
     (

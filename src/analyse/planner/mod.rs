@@ -623,6 +623,10 @@ pub(crate) trait Moves {
     fn move_to(&mut self, to: DVec3, e: f64, feed: f64, kind: MoveKind);
     /// See [`Planner::extrude_only`].
     fn extrude_only(&mut self, length: f64, feed: f64);
+    /// A setting the firmware follows from here on (accelerations, speed
+    /// limits, corners): see [`Planner::setting`].
+    #[inline]
+    fn setting(&mut self, _s: &crate::base::gcode::Setting) {}
     /// A progress line due before the writer's next line: only a sink that
     /// knows the print's time ahead has one (a [`Clock`]).
     #[inline]
