@@ -43,6 +43,7 @@ mod schema;
 mod send;
 mod solid;
 mod sphere;
+mod stream;
 mod svg;
 mod threads;
 mod thumbnails;

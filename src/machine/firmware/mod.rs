@@ -7,14 +7,14 @@ pub(crate) mod read;
 pub(crate) mod state;
 pub(crate) mod write;
 
-pub(crate) use read::{read, Read};
+pub(crate) use read::read;
 pub(crate) use state::{Motion, State};
 pub(crate) use write::Dialect;
 
 #[cfg(test)]
 mod tests;
 
-use crate::machine::Flavor;
+use crate::machine::printer::Flavor;
 
 /// What the G-code's header says of `flavor`'s arcs: Marlin (ARC_SUPPORT),
 /// Prusa, RepRapFirmware and Bambu run `G2`/`G3`; Klipper with a

@@ -18,7 +18,7 @@
 
 use crate::base::gcode::lex::{lex, Code, Grammar, Line};
 use crate::base::gcode::{Arc, Command, Heater, Move, Object, Setting, Shaper};
-use crate::machine::Flavor;
+use crate::machine::printer::Flavor;
 
 /// A line read: its words as the firmware cuts them, and what it means.
 #[derive(Clone, Debug, PartialEq)]

@@ -10,7 +10,7 @@
 //! redefines the position of the axes it names.
 
 use crate::base::gcode::{Command, Move};
-use crate::machine::Flavor;
+use crate::machine::printer::Flavor;
 
 /// What a command did to the head and the filament.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -147,9 +147,9 @@ impl State {
                 Motion::None
             }
             Command::SetPosition { axes, e } => {
-                for k in 0..3 {
-                    if let Some(v) = axes[k] {
-                        self.pos[k] = Some(v);
+                for (p, a) in self.pos.iter_mut().zip(axes) {
+                    if let Some(v) = a {
+                        *p = Some(*v);
                     }
                 }
                 if let Some(e) = e {
@@ -158,9 +158,9 @@ impl State {
                 Motion::None
             }
             Command::Home { axes } => {
-                for k in 0..3 {
-                    if axes[k] {
-                        self.pos[k] = None;
+                for (p, &homed) in self.pos.iter_mut().zip(axes) {
+                    if homed {
+                        *p = None;
                     }
                 }
                 Motion::Stop

@@ -25,7 +25,7 @@
 use crate::base::format::{fmt_num, units, Chunk};
 use crate::base::gcode::{Command, Heater, Object, Setting};
 use crate::base::safe_text::one_line;
-use crate::machine::Flavor;
+use crate::machine::printer::Flavor;
 
 /// µm per mm: XYZ, I and J are written to 3 decimals.
 pub(crate) const XYZ: f64 = 1e3;
@@ -47,6 +47,7 @@ pub(crate) struct Dialect {
 
 impl Dialect {
     /// A plain dialect of `flavor`.
+    #[cfg(test)]
     pub(crate) fn of(flavor: Flavor) -> Dialect {
         Dialect {
             flavor,

@@ -17,7 +17,7 @@ pub(crate) mod labels;
 pub(crate) mod metadata;
 pub(crate) mod sink;
 
-use std::io::{self, Write};
+use std::io::{self, Read, Write};
 
 use glam::DVec3;
 
@@ -33,7 +33,7 @@ use crate::generate::model::Recipe;
 use crate::machine::firmware::write::{E, XYZ};
 use crate::machine::firmware::{self, Dialect};
 use crate::machine::{Extrusion, Printer};
-use sink::{Discard, Out, Output, Stream};
+use sink::{Out, Stream};
 
 /// A feed of `mm_s` mm/s in whole mm/min as written after `F`, at least 1:
 /// `libm::round(mm_s * 60).max(1) as i64` (`as` is monotone and 1 exact).
@@ -80,30 +80,85 @@ pub(crate) fn write<W: Write, M: Moves>(
     moves: M,
     estimate: impl FnOnce(&mut M) -> Estimate,
 ) -> Result<(W, MoveStats)> {
-    let (stream, stats) = emit(plan, head, Out::new(out), moves, estimate)?;
+    let (stream, stats) = emit(plan, head, out, moves, estimate)?;
     Ok((stream.out.out, stats))
 }
 
-/// The commands of `plan` followed, nothing formatted: their motion handed
-/// to `moves` as [`write`] would hand it (the same calls in the same
-/// order), and what they add up to.
-pub(crate) fn follow<M: Moves>(
+/// The G-code of `plan` formatted into `scratch` (see [`write`]; the
+/// header that needs the print's totals left out) put into `out`: that
+/// header (Bambu's block, from `ahead`), then the text with a progress line
+/// (`M73`) before each offset of `lines` — the way slicers put progress in,
+/// from the planner's times, the text formatted once.
+pub(crate) fn with_progress<W: Write>(
     plan: &Plan,
-    head: Head,
-    moves: M,
-    estimate: impl FnOnce(&mut M) -> Estimate,
-) -> Result<MoveStats> {
-    emit(plan, head, Discard::default(), moves, estimate).map(|(_, s)| s)
+    head: &Head,
+    ahead: &metadata::Ahead,
+    scratch: impl std::io::Read,
+    lines: &[(u64, crate::analyse::planner::Progress)],
+    mut out: W,
+) -> Result<W> {
+    let io = |e: io::Error| {
+        crate::base::error::Error::io_from(&plan.path, format!("cannot write the G-code: {e}"), &e)
+    };
+    if head.options.bambu {
+        let extent = metadata::Extent::of(plan);
+        let layers = metadata::Layers::of(&extent, plan.recipe.printer.nozzle_diameter);
+        let block = metadata::bambu_header(&plan.recipe, ahead, layers.as_ref());
+        out.write_all(block.as_bytes()).map_err(io)?;
+    }
+    let d = dialect(&plan.recipe.printer);
+    let mut text = scratch;
+    // the text in large pieces: each a few reads and one write through
+    let mut buf = vec![0u8; 1 << 20];
+    let mut at = 0u64;
+    let mut line = crate::base::format::Chunk::new();
+    for &(offset, p) in lines {
+        copy_exactly(&mut text, &mut out, offset.saturating_sub(at), &mut buf).map_err(io)?;
+        line.clear();
+        let c = Command::Progress {
+            percent: p.percent,
+            minutes_left: p.minutes_left,
+        };
+        crate::machine::firmware::write::write(d, &c, "", &mut line);
+        out.write_all(line.bytes()).map_err(io)?;
+        at = offset;
+    }
+    loop {
+        let k = text.read(&mut buf).map_err(io)?;
+        if k == 0 {
+            break;
+        }
+        out.write_all(&buf[..k]).map_err(io)?;
+    }
+    out.flush().map_err(io)?;
+    Ok(out)
 }
 
-/// [`write`] into `out`, whatever it keeps.
-fn emit<O: Output, M: Moves>(
+/// Copies `n` bytes of `from` to `to` through `buf`.
+fn copy_exactly(
+    from: &mut impl Read,
+    to: &mut impl Write,
+    n: u64,
+    buf: &mut [u8],
+) -> io::Result<()> {
+    let mut left = n;
+    while left > 0 {
+        let k = left.min(buf.len() as u64) as usize;
+        from.read_exact(&mut buf[..k])?;
+        to.write_all(&buf[..k])?;
+        left -= k as u64;
+    }
+    Ok(())
+}
+
+/// [`write`], the stream back.
+fn emit<W: Write, M: Moves>(
     plan: &Plan,
     head: Head,
-    out: O,
+    out: W,
     moves: M,
     estimate: impl FnOnce(&mut M) -> Estimate,
-) -> Result<(Stream<O, M>, MoveStats)> {
+) -> Result<(Stream<W, M>, MoveStats)> {
     let io = |e: io::Error| {
         crate::base::error::Error::io_from(&plan.path, format!("cannot write the G-code: {e}"), &e)
     };
@@ -112,7 +167,7 @@ fn emit<O: Output, M: Moves>(
     }
     let p = &plan.recipe.printer;
     let retraction = (units(p.retraction.length, E) as f64 / E, p.retraction.speed);
-    let stream = Stream::new(out, dialect(p), moves, retraction);
+    let stream = Stream::new(Out::new(out), dialect(p), moves, retraction);
     let extent = metadata::Extent::of(plan);
     let mut em = Emitter::new(stream, &plan.recipe);
     em.thumbnails = head.thumbnails;
@@ -144,8 +199,8 @@ fn emit<O: Output, M: Moves>(
 /// Turns a plan's strings into commands: the moves, retractions, events
 /// and decorations of one print, into a [`Stream`] (which writes and
 /// follows them).
-pub(crate) struct Emitter<'a, O: Output, M: Moves> {
-    s: Stream<O, M>,
+pub(crate) struct Emitter<'a, W: Write, M: Moves> {
+    s: Stream<W, M>,
     printer: &'a Printer,
     /// Filament cross-section area, mm².
     area: f64,
@@ -203,9 +258,9 @@ struct Pending {
     v_last: f64,
 }
 
-impl<'a, O: Output, M: Moves> Emitter<'a, O, M> {
+impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
     /// An emitter of `recipe`'s commands into `s`.
-    pub(crate) fn new(s: Stream<O, M>, recipe: &'a Recipe) -> Emitter<'a, O, M> {
+    pub(crate) fn new(s: Stream<W, M>, recipe: &'a Recipe) -> Emitter<'a, W, M> {
         let d = recipe
             .material
             .filament_diameter
@@ -338,7 +393,7 @@ impl<'a, O: Output, M: Moves> Emitter<'a, O, M> {
             ))
             .map_err(io)?;
         }
-        self.s.progress_point().map_err(io)?;
+        self.s.first_place();
         self.profile_lines(start).map_err(io)?;
         let mode = match self.printer.extrusion {
             Extrusion::Absolute => (false, " ; absolute extrusion"),
@@ -877,7 +932,7 @@ impl<'a, O: Output, M: Moves> Emitter<'a, O, M> {
         recipe: &Recipe,
         end: &[crate::base::gcode::Verbatim],
         estimate: impl FnOnce(&mut M) -> Estimate,
-    ) -> Result<(Stream<O, M>, MoveStats)> {
+    ) -> Result<(Stream<W, M>, MoveStats)> {
         let io = |e: io::Error| crate::base::error::Error::io_from("output", e.to_string(), &e);
         self.flush().map_err(io)?;
         if self.retracted && !self.printer.firmware_retraction {

@@ -2,10 +2,9 @@
 //! dialect) and the consumers of the stream (the firmware's state, and
 //! through it the planner or the progress clock), in one pass.
 //!
-//! A [`Stream`] formats each command once ([`Output`]) and runs it through
+//! A [`Stream`] formats each command once ([`Out`]) and runs it through
 //! the firmware's [`State`], handing the motion it makes to a [`Moves`]
-//! sink. With [`Discard`] nothing is formatted: the moves alone, which is
-//! how a build with progress plans its print before writing it.
+//! sink (the planner, the places of progress lines, a viewer).
 
 use std::io::{self, Write};
 
@@ -16,23 +15,13 @@ use crate::base::format::Chunk;
 use crate::base::gcode::{Command, Setting, Verbatim};
 use crate::machine::firmware::{write::write, Dialect, Motion, State};
 
-/// Where the text goes, if anywhere.
-pub(crate) trait Output {
-    /// Whether anything is written (false: the commands are only followed).
-    const WRITES: bool;
-    /// The text not yet handed on.
-    fn chunk(&mut self) -> &mut Chunk;
-    /// Hands the text on once there is a chunk of it.
-    fn hand_on(&mut self) -> io::Result<()>;
-    /// Hands on what is left and flushes.
-    fn flush(&mut self) -> io::Result<()>;
-}
-
 /// Text formatted into chunks and handed to `out`.
 pub(crate) struct Out<W: Write> {
     /// The destination.
     pub out: W,
     buf: Chunk,
+    /// Bytes handed on so far.
+    handed: u64,
 }
 
 impl<W: Write> Out<W> {
@@ -41,116 +30,99 @@ impl<W: Write> Out<W> {
         Out {
             out,
             buf: Chunk::new(),
+            handed: 0,
         }
     }
-}
 
-impl<W: Write> Output for Out<W> {
-    const WRITES: bool = true;
+    /// The text not yet handed on.
     #[inline]
     fn chunk(&mut self) -> &mut Chunk {
         &mut self.buf
     }
+
+    /// Hands the text on once there is a chunk of it.
     #[inline]
     fn hand_on(&mut self) -> io::Result<()> {
         if self.buf.full() {
             self.out.write_all(self.buf.bytes())?;
+            self.handed += self.buf.bytes().len() as u64;
             self.buf.clear();
         }
         Ok(())
     }
+
+    /// Hands on what is left and flushes.
     fn flush(&mut self) -> io::Result<()> {
         self.out.write_all(self.buf.bytes())?;
+        self.handed += self.buf.bytes().len() as u64;
         self.buf.clear();
         self.out.flush()
     }
-}
 
-/// No text: the commands only followed.
-#[derive(Default)]
-pub(crate) struct Discard(Chunk);
-
-impl Output for Discard {
-    const WRITES: bool = false;
-    fn chunk(&mut self) -> &mut Chunk {
-        &mut self.0
-    }
-    fn hand_on(&mut self) -> io::Result<()> {
-        Ok(())
-    }
-    fn flush(&mut self) -> io::Result<()> {
-        Ok(())
+    /// Bytes written so far (handed on or not).
+    #[inline]
+    fn position(&self) -> u64 {
+        self.handed + self.buf.bytes().len() as u64
     }
 }
 
 /// The emitter's commands written and followed (see the module comment).
-pub(crate) struct Stream<O: Output, M: Moves> {
+pub(crate) struct Stream<W: Write, M: Moves> {
     /// The text.
-    pub out: O,
+    pub out: Out<W>,
     dialect: Dialect,
     state: State,
     /// The moves' consumer.
     pub moves: M,
     /// The firmware's own retraction: length (mm) and speed (mm/s).
     firmware_retraction: (f64, f64),
+    /// The speed factor (`M220`), 1 = 100 %: every feed runs at it.
+    speed: f64,
 }
 
-impl<O: Output, M: Moves> Stream<O, M> {
+impl<W: Write, M: Moves> Stream<W, M> {
     /// A stream in `dialect` whose firmware retracts `firmware_retraction`
     /// (length, speed) on a `G10`.
     pub(crate) fn new(
-        out: O,
+        out: Out<W>,
         dialect: Dialect,
         moves: M,
         firmware_retraction: (f64, f64),
-    ) -> Stream<O, M> {
+    ) -> Stream<W, M> {
         Stream {
             out,
             dialect,
             state: State::new(dialect.flavor),
             moves,
             firmware_retraction,
+            speed: 1.0,
         }
     }
 
-    /// A point where a progress line may go (before a move's line): writes
-    /// the one due, if any.
+    /// A place where a progress line may go (before a move's line): told
+    /// to the moves' consumer, which keeps it when it places progress.
     #[inline]
     pub(crate) fn progress_point(&mut self) -> io::Result<()> {
-        if let Some(p) = self.moves.due() {
-            self.put(
-                &Command::Progress {
-                    percent: p.percent,
-                    minutes_left: p.minutes_left,
-                },
-                "",
-            )?;
-        }
+        self.moves.place(self.out.position());
         Ok(())
     }
 
-    /// The last progress line (100 %), before the end G-code.
+    /// The first place of a progress line (0 %), before the start G-code.
+    pub(crate) fn first_place(&mut self) {
+        self.moves.first_place(self.out.position());
+    }
+
+    /// The last place of a progress line (100 %), before the end G-code.
     pub(crate) fn done(&mut self) -> io::Result<()> {
-        if let Some(p) = self.moves.done() {
-            self.put(
-                &Command::Progress {
-                    percent: p.percent,
-                    minutes_left: p.minutes_left,
-                },
-                "",
-            )?;
-        }
+        self.moves.last_place(self.out.position());
         Ok(())
     }
 
     /// Writes `c` (`note` completing its line) without following it.
     #[inline]
     fn put(&mut self, c: &Command, note: &str) -> io::Result<()> {
-        if O::WRITES {
-            write(self.dialect, c, note, self.out.chunk());
-            self.out.hand_on()?;
-        }
-        Ok(())
+        write(self.dialect, c, note, self.out.chunk());
+        self.out.hand_on()
     }
 
     /// Writes `c` and follows it.
@@ -164,7 +136,7 @@ impl<O: Output, M: Moves> Stream<O, M> {
     /// Text written as it is (comments, the header), a line feed added
     /// when it does not end with one; nothing for empty text.
     pub(crate) fn text(&mut self, s: &str) -> io::Result<()> {
-        if O::WRITES && !s.is_empty() {
+        if !s.is_empty() {
             let buf = self.out.chunk();
             buf.put(s.as_bytes());
             if !s.ends_with('\n') {
@@ -175,23 +147,36 @@ impl<O: Output, M: Moves> Stream<O, M> {
         Ok(())
     }
 
-    /// A profile's line, written as it was read and checked; its settings
-    /// followed (its motion is the firmware's own business: the estimate
-    /// is of p3dp's moves).
+    /// A profile's line, written as it was read and checked, and followed:
+    /// its settings told to the moves' consumer, its motion as a profile's
+    /// (drawn by a viewer, not planned: the estimate is of p3dp's moves).
     pub(crate) fn verbatim(&mut self, line: &Verbatim) -> io::Result<()> {
-        if O::WRITES {
-            let buf = self.out.chunk();
-            buf.put(line.text.as_bytes());
-            buf.push(b'\n');
-            self.out.hand_on()?;
-        }
+        let buf = self.out.chunk();
+        buf.put(line.text.as_bytes());
+        buf.push(b'\n');
+        self.out.hand_on()?;
         for c in &line.commands {
-            match c {
-                Command::Set(s) => self.moves.setting(s),
-                Command::RelativeXyz(_) | Command::RelativeE(_) | Command::SetPosition { .. } => {
-                    self.state.apply(c);
+            if let Command::Set(s) = c {
+                self.moves.setting(s);
+                if let Setting::Speed(f) = s {
+                    self.speed = *f;
                 }
-                _ => {}
+            }
+            if let Motion::Line {
+                to: [Some(x), Some(y), Some(z)],
+                de,
+                feed,
+                travel,
+                ..
+            } = self.state.apply(c)
+            {
+                let kind = if travel {
+                    MoveKind::Travel
+                } else {
+                    MoveKind::Extrude
+                };
+                let f = feed.unwrap_or(0.0) / 60.0;
+                self.moves.profile_move(DVec3::new(x, y, z), de, f, kind);
             }
         }
         Ok(())
@@ -220,6 +205,9 @@ impl<O: Output, M: Moves> Stream<O, M> {
     fn follow(&mut self, c: &Command) {
         if let Command::Set(s) = c {
             self.moves.setting(s);
+            if let Setting::Speed(f) = s {
+                self.speed = *f;
+            }
         }
         if let Command::Set(Setting::Retraction { length, speed }) = c {
             let (l, v) = &mut self.firmware_retraction;
@@ -235,7 +223,7 @@ impl<O: Output, M: Moves> Stream<O, M> {
                 travel,
                 from,
             } => {
-                let f = feed.unwrap_or(0.0) / 60.0;
+                let f = feed.unwrap_or(0.0) / 60.0 * self.speed;
                 if to == from && matches!(c, Command::Move(m) if m.to == [None; 3]) {
                     // E alone: a retraction, its undoing, or filament fed in place
                     self.moves.extrude_only(de.abs(), f);
@@ -261,7 +249,10 @@ impl<O: Output, M: Moves> Stream<O, M> {
                 ccw,
                 de,
                 feed,
-            } => self.arc(from, to, center, ccw, de, feed.unwrap_or(0.0) / 60.0),
+            } => {
+                let f = feed.unwrap_or(0.0) / 60.0 * self.speed;
+                self.arc(from, to, center, ccw, de, f)
+            }
             Motion::Dwell(s) => self.moves.dwell(s),
             Motion::Stop => match c {
                 Command::FirmwareRetract { .. } => {

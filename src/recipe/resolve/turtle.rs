@@ -696,7 +696,12 @@ mod tests {
         let raw: RawTurtle = crate::recipe::parse_yaml(yaml, "t.yaml")?;
         let mut params = Params::new();
         params.insert("side".into(), 13.7);
-        resolve(&raw, &Scope::new(&params).under("turtle"), env).map(|t| t.path)
+        // a recipe's own commands checked as for generic-220 and PLA
+        let printer = crate::recipe::profile::built_in("generic-220").unwrap();
+        let material = crate::machine::Material::built_in("pla").unwrap();
+        let check =
+            |t: &str| crate::analyse::check::gcode::command(t, &printer, &material).map(|_| ());
+        resolve(&raw, &Scope::new(&params).under("turtle"), env, &check).map(|t| t.path)
     }
 
     fn run(yaml: &str) -> Toolpath {

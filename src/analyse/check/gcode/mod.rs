@@ -17,8 +17,8 @@
 //!   another of the firmware's own moves the position is unknown, and the
 //!   relative moves from it may span no more than the machine is wide.
 //! - Filament: at most [`FEED_MAX`] mm fed or pulled back by one move or
-//!   in place at once; an absolute E move before the E position is set
-//!   (`G92 E`) is refused, since what it feeds depends on the print before.
+//!   in place at once (the start G-code's E counted from 0, as a printer
+//!   starts; the end G-code's from the print's total).
 //! - Settings (accelerations, limits, corners, pressure advance, input
 //!   shaping, flow and speed factors) within the machine's limits, which
 //!   the planner and the stats then follow.
@@ -53,9 +53,9 @@ pub(crate) enum Start {
     /// Unknown (the start G-code: the printer was just switched on, or
     /// finished another print).
     Unknown,
-    /// At this machine point, E read as the printer's `extrusion` says (the
-    /// end G-code: the print's last point).
-    At(DVec3),
+    /// At this machine point, E read as the printer's `extrusion` says and
+    /// at this total (the end G-code: the print's last point and filament).
+    At(DVec3, f64),
 }
 
 /// How much a line may do.
@@ -145,9 +145,6 @@ struct Checker {
     policy: Policy,
     lim: Limits,
     st: State,
-    /// Whether the firmware's E position is known (so an absolute E says
-    /// how much it feeds).
-    e_known: bool,
     /// Per axis whose position is unknown: the relative moves' sum since it
     /// became unknown, and the least and most of that sum so far.
     drift: [(f64, f64, f64); 3],
@@ -161,11 +158,11 @@ struct Checker {
 pub(crate) fn check(key: &str, text: &str, recipe: &Recipe, start: Start) -> Result<Vec<Verbatim>> {
     let p = &recipe.printer;
     let mut c = Checker::new(p.flavor, Policy::Frame, Limits::of(p, &recipe.material));
-    if let Start::At(q) = start {
+    if let Start::At(q, e) = start {
         c.st = State::at(p.flavor, q.to_array());
         let relative = p.extrusion == Extrusion::Relative;
         c.st.apply(&Command::RelativeE(relative));
-        c.e_known = relative;
+        c.st.e = if relative { 0.0 } else { e };
     }
     let body = text.strip_suffix('\n').unwrap_or(text);
     if body.is_empty() {
@@ -217,8 +214,10 @@ impl Checker {
             flavor,
             policy,
             lim,
+            // a printer starts at E = 0, and the start G-code that purges
+            // in absolute E (without `G92 E0`) counts on it; whatever a
+            // firmware keeps from a print before, each feed is bounded
             st: State::new(flavor),
-            e_known: false,
             drift: [(0.0, 0.0, 0.0); 3],
             in_place: 0.0,
         }
@@ -328,6 +327,14 @@ impl Checker {
         if (code.is(b'G', 2) || code.is(b'G', 3)) && l.has("R") {
             return Err("an arc given by its radius (R); p3dp checks arcs given by I and J".into());
         }
+        if let (Code::Name(_), Policy::Raw) = (code, self.policy) {
+            if self.flavor != Flavor::Klipper {
+                return Err(format!(
+                    "`{shown}` is not a command {} firmware runs; expected an M-code (M600, M117 …) or G4",
+                    self.flavor.display_name()
+                ));
+            }
+        }
         let Some(kind) = vocabulary::kind(self.flavor, code) else {
             return Err(format!(
                 "`{shown}` is a command p3dp cannot check on {} firmware; expected moves (G0–G3), dwell (G4), units (G21), modes (G90, G91, M82, M83, G92 E), homing or probing (G28, G29), temperatures, fans, or a command its table of known commands names (docs/printers.md)",
@@ -385,7 +392,7 @@ impl Checker {
         };
         match c {
             Command::Move(_) | Command::Arc(_) if raw => moves_refused(),
-            Command::Move(m) => self.linear(c, m.to, m.e.is_some()),
+            Command::Move(m) => self.linear(c, m.to),
             Command::Arc(a) => self.arc(c, a),
             Command::Dwell { ms } => {
                 if !(ms.is_finite() && *ms <= DWELL_MAX * 1000.0) {
@@ -411,7 +418,7 @@ impl Checker {
                 "`T{n}` is refused: a tool change moves the head and swaps the filament the checks were made for"
             )),
             Command::Inches(true) => Err("G20 switches to inches; p3dp checks millimetres only".into()),
-            Command::SetPosition { axes, e } => {
+            Command::SetPosition { axes, .. } => {
                 if let Some(k) = (0..3).find(|&k| axes[k].is_some()) {
                     let axis = ["X", "Y", "Z"][k];
                     return Err(if l.params.is_empty() {
@@ -422,15 +429,12 @@ impl Checker {
                         )
                     });
                 }
-                if e.is_some() {
-                    self.e_known = true;
-                }
                 self.st.apply(c);
                 Ok(())
             }
             Command::Home { axes } => {
-                for k in 0..3 {
-                    if axes[k] {
+                for (k, &homed) in axes.iter().enumerate() {
+                    if homed {
                         self.st.pos[k] = None;
                         self.drift[k] = (0.0, 0.0, 0.0);
                     }
@@ -443,9 +447,6 @@ impl Checker {
             }
             Command::RelativeXyz(_) | Command::RelativeE(_) | Command::Inches(false) => {
                 self.st.apply(c);
-                if self.st.e_relative() {
-                    self.e_known = true;
-                }
                 Ok(())
             }
             Command::FirmwareRetract { .. }
@@ -459,17 +460,9 @@ impl Checker {
 
     /// A `G0`/`G1`: where it takes the head, each axis inside the
     /// envelope, and the filament it feeds.
-    fn linear(
-        &mut self,
-        c: &Command,
-        to: [Option<f64>; 3],
-        has_e: bool,
-    ) -> std::result::Result<(), String> {
+    fn linear(&mut self, c: &Command, to: [Option<f64>; 3]) -> std::result::Result<(), String> {
         if self.st.inches {
             return Err("a move in inches; p3dp checks millimetres only".into());
-        }
-        if has_e && !self.st.e_relative() && !self.e_known {
-            return Err("an absolute E move before the E position is set (`G92 E0`, or `M83` for relative E): what it feeds depends on the print before".into());
         }
         let before = self.st.pos;
         let span = self.lim.span();
@@ -550,9 +543,6 @@ impl Checker {
         let (Some(x0), Some(y0)) = (self.st.pos[0], self.st.pos[1]) else {
             return Err("an arc from an unknown position; p3dp cannot check where it goes".into());
         };
-        if a.e.is_some() && !self.st.e_relative() && !self.e_known {
-            return Err("an absolute E move before the E position is set (`G92 E0`, or `M83` for relative E): what it feeds depends on the print before".into());
-        }
         let mut probe = self.st.clone();
         let firmware::Motion::Line { to, .. } =
             probe.apply(&Command::Move(crate::base::gcode::Move {
@@ -679,7 +669,7 @@ impl Checker {
             }
             Setting::Flow(f) => {
                 let hi = if raw { 1.5 } else { 1.0 };
-                if f <= 0.0 || !(f <= hi) {
+                if !(f > 0.0 && f <= hi) {
                     return Err(format!(
                         "a flow factor of {} %: the strings would get {} the filament the checks were made for; expected above 0 and at most {} %",
                         fmt_num(f * 100.0),
@@ -786,7 +776,7 @@ fn temperature(h: Heater, t: f64, lim: &Limits) -> std::result::Result<(), Strin
             Ok(())
         }
         Heater::Chamber => {
-            if !(t.is_finite() && t >= 0.0 && t <= CHAMBER_TEMP_MAX) {
+            if !(0.0..=CHAMBER_TEMP_MAX).contains(&t) {
                 return Err(format!(
                     "a chamber temperature of {t} °C, outside 0 to {CHAMBER_TEMP_MAX} °C"
                 ));
@@ -849,6 +839,3 @@ fn within(k: usize, axis: &str, v: f64, lim: &Limits) -> std::result::Result<(),
     }
     Ok(())
 }
-
-#[cfg(test)]
-mod tests;
