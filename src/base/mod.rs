@@ -16,6 +16,7 @@ pub(crate) mod safe_text;
 pub(crate) mod slicer_macro;
 pub(crate) mod svg;
 pub(crate) mod toolpath;
+pub(crate) mod xml;
 
 #[cfg(test)]
 pub(crate) mod testing;

@@ -16,6 +16,7 @@ const LAYERS: &[(&str, &[&str])] = &[
         &[
             "error",
             "safe_text",
+            "xml",
             "input",
             "mem",
             "par",

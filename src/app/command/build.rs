@@ -444,7 +444,9 @@ fn zbuffer_files(a: &Options, p: &Plan) -> Result<Vec<(PathBuf, Vec<u8>)>> {
     if let Some(f) = &a.zbuffer_svg {
         let n = a.zbuffer_layer.unwrap_or(1);
         let most = curves.iter().map(|c| c.layers.len()).max().unwrap_or(0);
-        let Some(svg) = crate::analyse::stats::zbuffer_svg(&p.recipe, n) else {
+        let svg = crate::analyse::stats::zbuffer_svg(&p.recipe, n)
+            .map_err(|e| e.under("--zbuffer-svg"))?;
+        let Some(svg) = svg else {
             return Err(Error::input(
                 "--zbuffer-layer",
                 format!("{n} is above the solid parts' layers; expected a layer from 1 to {most}"),
