@@ -85,11 +85,13 @@ pub(crate) fn frame(recipe: &Recipe, ext: &Extent) -> Result<Frame> {
         Some(f) => f.clone(),
         None => format!("built-in printer `{}`", p.name),
     };
-    let one = |key: &str, text: &str, end: bool| -> Result<Vec<Verbatim>> {
+    // a `global` of the start G-code is still set in the end G-code
+    let mut globals = Vars::new();
+    let mut one = |key: &str, text: &str, end: bool| -> Result<Vec<Verbatim>> {
         let t = p.template(key, text).map_err(|e| e.in_file(&shown))?;
         let vars = variables(recipe, &ext, end);
         let out = t
-            .expand(&vars)
+            .expand_with(&vars, &mut globals)
             .map_err(|e| Error::input(format!("{key} line {}", e.line), e.message))
             .map_err(|e| e.in_file(&shown))?;
         let from = if end {

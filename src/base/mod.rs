@@ -8,6 +8,7 @@ pub(crate) mod finding;
 pub(crate) mod format;
 pub(crate) mod gcode;
 pub(crate) mod geom;
+pub(crate) mod grammar;
 pub(crate) mod input;
 pub(crate) mod mem;
 pub(crate) mod par;

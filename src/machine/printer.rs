@@ -389,8 +389,13 @@ impl Printer {
             crate::base::safe_text::check_gcode_line("", l).map_err(|e| at(k + 1, e.message))?;
         }
         let t = Template::parse(text).map_err(|e| at(e.line, e.message))?;
+        // the end G-code may read what the start G-code's `global`s set
+        let globals = match key {
+            "end_gcode" => Template::parse(&self.start_gcode).map_or(Vec::new(), |s| s.globals()),
+            _ => Vec::new(),
+        };
         for (name, line) in t.variables() {
-            if !self.knows(&name) {
+            if !self.knows(&name) && !globals.contains(&name) {
                 return Err(at(
                     line,
                     format!(

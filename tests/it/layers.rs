@@ -22,6 +22,7 @@ const LAYERS: &[(&str, &[&str])] = &[
             "par",
             "gcode",
             "toolpath",
+            "grammar",
             "expr",
             "finding",
             "rng",

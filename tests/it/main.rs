@@ -32,6 +32,7 @@ mod inputs;
 mod io_errors;
 mod layers;
 mod machines;
+mod macros;
 mod mesh;
 mod new_user;
 mod olympic;

@@ -107,7 +107,18 @@ pub(super) struct Compiler<'a> {
     gcode: super::GcodeCheck<'a>,
 }
 
+/// Most names one scope of a turtle holds (loop counters, procedure
+/// parameters, `let` values): each value compiled sees them all, so a chain
+/// of 12,000 `let` names made 72 million names' worth of scopes (1.5 GB).
+pub(crate) const MAX_NAMES: usize = 256;
+
 fn check_name(name: &str, params: &Params, scope: &[String], place: &str) -> Result<()> {
+    if scope.len() >= MAX_NAMES {
+        return Err(Error::input(
+            place,
+            format!("`{name}` is one name too many: a turtle's scope holds at most {MAX_NAMES} loop counters, parameters and `let` values"),
+        ));
+    }
     let ident = {
         let mut cs = name.chars();
         matches!(cs.next(), Some(c) if c.is_ascii_alphabetic() || c == '_')
@@ -246,6 +257,9 @@ impl<'a> Compiler<'a> {
         let mut vals = Vec::with_capacity(lets.len());
         for (name, n) in lets {
             let at = join(&place, name);
+            if s.len() >= MAX_NAMES {
+                check_name(name, self.params, &s, &at)?;
+            }
             let v = self.val(n, &Arc::new(s.clone()), &at)?;
             check_name(name, self.params, &s, &at)?;
             s.push(name.clone());
