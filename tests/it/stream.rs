@@ -79,17 +79,18 @@ fn accelerations_a_start_gcode_sets_are_the_estimates() {
     );
     assert!((ta - tp).abs() <= 1e-9 * tp, "{ta} vs {tp}");
     assert!(tq < tp, "3000 mm/s² is faster: {tq} vs {tp}");
-    // M201 caps M204 as Marlin does
+    // M201 X Y caps M204's accelerations of the head as Marlin does (a
+    // retraction, a move of E alone, is held by M201 E, not by X and Y)
     let capped = printer(
         &dir,
         "capped",
-        "{max_acceleration: 3000, travel_acceleration: 3000}",
+        "{max_acceleration: 3000, travel_acceleration: 3000, retract_acceleration: 600}",
         "M201 X600 Y800\n  M204 P2000 T900",
     );
     let profile2 = printer(
         &dir,
         "profile2",
-        "{max_acceleration: 600, travel_acceleration: 600}",
+        "{max_acceleration: 600, travel_acceleration: 600, retract_acceleration: 600}",
         "",
     );
     let (c, p2) = (stats(&dir, &capped), stats(&dir, &profile2));

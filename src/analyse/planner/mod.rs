@@ -217,8 +217,10 @@ pub(crate) struct Planner {
     /// The accelerations last asked for (print, travel, retract: `M204`),
     /// before the per-axis caps (`M201`) hold them.
     asked: [f64; 3],
-    /// The per-axis acceleration cap of X and Y (`M201`), mm/s².
-    accel_cap: f64,
+    /// The per-axis acceleration caps (`M201`), mm/s²: of X and Y (the
+    /// lower of the two), which hold moves of the head, and of E, which
+    /// holds a retraction (a move of E alone).
+    accel_cap: [f64; 2],
 }
 
 impl Planner {
@@ -246,13 +248,13 @@ impl Planner {
                 limits.travel_acceleration,
                 limits.retract_acceleration,
             ],
-            accel_cap: f64::INFINITY,
+            accel_cap: [f64::INFINITY; 2],
             limits,
         }
     }
 
     /// A setting the firmware follows from here on, as it does: `M204`'s
-    /// accelerations (held to `M201`'s per-axis caps of X and Y, the
+    /// accelerations (a move of the head held to `M201`'s caps of X and Y, the
     /// lower of the two), the speed limits (`M203`, Klipper's
     /// `VELOCITY`), the junction deviation, classic jerk (as Marlin's
     /// conversion, 0.4·jerk²/acceleration), the square-corner velocity and
@@ -282,9 +284,12 @@ impl Planner {
                     .flatten()
                     .filter(|&a| positive(a));
                 if let Some(cap) = xy.reduce(f64::min) {
-                    self.accel_cap = cap;
-                    self.hold_accelerations();
+                    self.accel_cap[0] = cap;
                 }
+                if let Some(ce) = axes[3].filter(|&a| positive(a)) {
+                    self.accel_cap[1] = ce;
+                }
+                self.hold_accelerations();
                 if let Some(az) = axes[2].filter(|&a| positive(a)) {
                     self.limits.max_z_acceleration = Some(az);
                 }
@@ -320,12 +325,13 @@ impl Planner {
         }
     }
 
-    /// The accelerations asked for, each held to the per-axis cap.
+    /// The accelerations asked for, each held to its per-axis cap (a move
+    /// of the head to X's and Y's, a retraction to E's).
     fn hold_accelerations(&mut self) {
-        let c = self.accel_cap;
+        let [c, ce] = self.accel_cap;
         self.limits.max_acceleration = self.asked[0].min(c);
         self.limits.travel_acceleration = self.asked[1].min(c);
-        self.limits.retract_acceleration = self.asked[2].min(c);
+        self.limits.retract_acceleration = self.asked[2].min(ce);
     }
 
     /// A planner that also keeps each block's planned time
