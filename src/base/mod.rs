@@ -6,6 +6,7 @@ pub(crate) mod error;
 pub(crate) mod expr;
 pub(crate) mod finding;
 pub(crate) mod format;
+pub(crate) mod gcode;
 pub(crate) mod geom;
 pub(crate) mod grammar;
 pub(crate) mod input;

@@ -20,6 +20,7 @@ const LAYERS: &[(&str, &[&str])] = &[
             "input",
             "mem",
             "par",
+            "gcode",
             "toolpath",
             "grammar",
             "expr",
@@ -41,6 +42,7 @@ const LAYERS: &[(&str, &[&str])] = &[
             "kinematics",
             "printer",
             "travel",
+            "firmware",
         ],
     ),
     (

@@ -45,6 +45,7 @@ mod schema;
 mod send;
 mod solid;
 mod sphere;
+mod stream;
 mod svg;
 mod threads;
 mod thumbnails;

@@ -39,18 +39,14 @@ fn fingerprints(
 fn fingerprint(c: &Builds, job: &Job, outs: &[(String, PathBuf)]) -> Result<(String, LineHashes)> {
     // nothing is written: the G-code is hashed while the checks run
     let mut p = c.prepared(job, outs)?;
-    let stop = (!c.force).then_some(c.strict);
     // stamped as `build` stamps it (SOURCE_DATE_EPOCH's date)
-    let options = super::stamp()?;
-    let written = pipeline::check_and_write_with(
-        &mut p,
-        &c.allow,
-        stop,
-        &options,
-        HashWriter::new(LineHashes::default()),
-    );
+    let job = pipeline::Job {
+        hash: false,
+        ..c.job(super::stamp()?)
+    };
+    let written = pipeline::write(&mut p, &job, HashWriter::new(LineHashes::default()));
     c.refuse_failing(&p)?;
-    let (hw, _) = written?;
+    let hw = written?.out;
     let (digest, _, lines) = hw.finish_into();
     Ok((digest, lines))
 }
@@ -504,8 +500,14 @@ fn new_lines(c: &Builds, job: &Job, k: u64, n: u64) -> Vec<String> {
     let Some(text) = c
         .checked_plan(job)
         .ok()
-        .and_then(|p| pipeline::write_with(&p, &options, Vec::new()).ok())
-        .and_then(|(buf, _)| String::from_utf8(buf).ok())
+        .and_then(|mut p| {
+            let job = pipeline::Job {
+                stamp: options,
+                ..pipeline::Job::default()
+            };
+            pipeline::write(&mut p, &job, Vec::new()).ok()
+        })
+        .and_then(|w| String::from_utf8(w.out).ok())
     else {
         return Vec::new();
     };

@@ -31,8 +31,14 @@ use crate::machine::Printer;
 
 /// Evaluates numbers of one recipe: its params, and where images and a
 /// turtle's limits come from.
+/// The check of a recipe's own printer command (`gcode:`, `gcode_at:`) for
+/// the recipe's printer and material: `Err` says why it is refused.
+pub(super) type GcodeCheck<'a> = &'a dyn Fn(&str) -> std::result::Result<(), String>;
+
 struct Ctx<'a> {
     scope: Scope<'a>,
+    /// The check of the recipe's own printer commands.
+    gcode: GcodeCheck<'a>,
     dir: &'a Path,
     /// The load's files read and z-buffers lent.
     cx: &'a Context,
@@ -170,14 +176,16 @@ impl Recipe {
         let includes = super::expand::load_part_includes(raw, file, dir, &library, &cx.reads)?;
         let expansion =
             super::expand::expand(&raw.parts, &library.templates, &params, dir, &includes)?;
-        let (parts, kept) = leaves(&expansion, turtle, (c0, v0), max_strings, cx)?;
+        let check =
+            |t: &str| crate::analyse::check::gcode::command(t, &printer, &material).map(|_| ());
+        let (parts, kept) = leaves(&expansion, turtle, (c0, v0), max_strings, cx, &check)?;
         if parts.is_empty() {
             return Err(Error::input(
                 key!(raw.parts),
                 "every part is switched off (by `if`, an empty `for` or a path that moves nowhere): nothing to print; expected at least one part",
             ));
         }
-        let groups = groups(&expansion, &kept, turtle, cx)?;
+        let groups = groups(&expansion, &kept, turtle, cx, &check)?;
         let allow: Vec<String> = raw.allow.iter().map(|a| a.code().to_string()).collect();
         let allow_key = key!(raw.allow);
         crate::base::finding::validate_allow(&allow, |i| format!("{allow_key}[{i}]"))?;
@@ -237,6 +245,7 @@ fn leaves(
     (c0, v0): (f64, f64),
     max_strings: u64,
     cx: &Context,
+    gcode: GcodeCheck,
 ) -> Result<(Vec<Part>, Vec<Option<usize>>)> {
     // the limit holds for all parts together too (YAML aliases, loops)
     let total_limit = max_strings;
@@ -246,6 +255,7 @@ fn leaves(
     for (k, leaf) in expansion.leaves.iter().enumerate() {
         let place = &leaf.place;
         let ctx = Ctx {
+            gcode,
             scope: Scope::new(&leaf.params),
             dir: leaf.dir,
             cx,
@@ -296,6 +306,7 @@ fn groups(
     kept: &[Option<usize>],
     turtle: (f64, u64),
     cx: &Context,
+    gcode: GcodeCheck,
 ) -> Result<Vec<Group>> {
     let mut groups = Vec::with_capacity(expansion.groups.len());
     for g in &expansion.groups {
@@ -306,6 +317,7 @@ fn groups(
         };
         let end = made.last().map_or(first, |&k| k) + 1;
         let ctx = Ctx {
+            gcode,
             scope: Scope::new(&g.params),
             dir: g.dir,
             cx,
