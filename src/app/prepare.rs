@@ -17,6 +17,9 @@ pub struct Options {
     pub sets: Vec<(String, String)>,
     /// `--printer NAME|FILE` overrides the recipe's printer.
     pub printer: Option<String>,
+    /// `--filament FILE [--filament-preset NAME]`: a slicer's filament
+    /// preset overrides the recipe's material.
+    pub filament: Option<crate::recipe::preset::Source>,
     /// `--allow CODE`: check codes silenced for this build.
     pub allow: Vec<String>,
     /// `--allow-read DIR`: folders the recipe may read in besides its project.
@@ -63,7 +66,20 @@ pub fn prepare_in(path: &Path, opts: &Options, cx: &Context) -> Result<Plan> {
         }),
         None => None,
     };
-    let recipe = Recipe::load_in(path, &opts.sets, printer.as_ref(), cx)?;
+    let material = match &opts.filament {
+        Some(src) => Some({
+            cx.reads.name(&src.file);
+            crate::recipe::resolve::from_filament(src, &cx.reads).map_err(|e| {
+                if e.file.is_none() {
+                    e.under("--filament")
+                } else {
+                    e
+                }
+            })?
+        }),
+        None => None,
+    };
+    let recipe = Recipe::load_with(path, &opts.sets, printer.as_ref(), material.as_ref(), cx)?;
     // each part with its own steps, then the steps of groups
     let parts = crate::generate::assembly::make_parts(&recipe).map_err(|e| e.in_file(&shown))?;
     let mut paths = Vec::with_capacity(parts.len() + 1);

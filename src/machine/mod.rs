@@ -13,5 +13,5 @@ pub(crate) mod travel;
 pub(crate) use head::{CheckLimits, Head};
 pub(crate) use kinematics::Kinematics;
 pub(crate) use material::{Material, FAN_START_Z};
-pub(crate) use printer::{Bed, Extrusion, Flavor, Printer, Retraction, VARIABLES};
+pub(crate) use printer::{Bed, Extrusion, Flavor, Printer, Retraction};
 pub(crate) use size::Size;

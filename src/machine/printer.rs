@@ -193,6 +193,13 @@ pub struct Printer {
     pub filament_diameter: f64,
     /// Absolute or relative E.
     pub extrusion: Extrusion,
+    /// Extruders (or a filament changer's slots) the start and end G-code
+    /// know, the length of the slicers' per-extruder values; p3dp prints
+    /// with `tool`.
+    pub extruders: usize,
+    /// The extruder p3dp prints with, 0-based (0): the one the maker's
+    /// start G-code selects (Bambu's H2D its main, right-hand one, 1).
+    pub tool: usize,
     /// G-code before the print: a template of the slicers' macro language
     /// ([`crate::base::slicer_macro`]) over the variables of [`VARIABLES`]
     /// and `gcode_variables`.
@@ -275,6 +282,26 @@ impl Printer {
         positive("bed.max_z", self.bed.max_z())?;
         positive("max_speed", self.max_speed)?;
         positive("max_flow", self.max_flow)?;
+        if !(1..=MAX_EXTRUDERS).contains(&self.extruders) {
+            return Err(Error::input(
+                "extruders",
+                format!(
+                    "{} is not allowed; expected 1 to {MAX_EXTRUDERS}",
+                    self.extruders
+                ),
+            ));
+        }
+        if self.tool >= self.extruders {
+            return Err(Error::input(
+                "tool",
+                format!(
+                    "{} is not allowed; expected an extruder from 0 to {} (`extruders` is {})",
+                    self.tool,
+                    self.extruders - 1,
+                    self.extruders
+                ),
+            ));
+        }
         positive("arc_tolerance", self.arc_tolerance)?;
         super::limits::at_most("arc_tolerance", self.arc_tolerance, MAX_ARC_TOLERANCE, "mm")?;
         match self.bed {
@@ -365,10 +392,14 @@ impl Printer {
     }
 
     /// Whether a template may name variable `name` (as itself or, for a
-    /// legacy `[name_N]`, as a list `name` indexed).
+    /// legacy `[name_N]`, as a list `name` indexed): one p3dp gives, one of
+    /// `gcode_variables`, or a filament preset's (refused at the build when
+    /// the material has none).
     fn knows(&self, name: &str) -> bool {
         let known = |n: &str| {
-            VARIABLES.iter().any(|(v, _)| *v == n) || self.gcode_variables.contains_key(n)
+            gives(n)
+                || self.gcode_variables.contains_key(n)
+                || super::material::from_filament_preset(n)
         };
         known(name)
             || name
@@ -456,10 +487,13 @@ impl Printer {
     }
 }
 
-/// Every variable p3dp gives a start or end G-code template, with what it
+/// Every variable p3dp gives a start or end G-code template from the
+/// profile and the print (the material's are
+/// [`super::material::VARIABLES`]), with what it
 /// holds (`crate::analyse::frame` computes them from the recipe, the
 /// profile and the strings built). Lists, as the slicers hold per-extruder
-/// values, have one element: p3dp drives one extruder. p3dp prints strings,
+/// values, have one element per extruder of the profile (`extruders`), the
+/// first the one p3dp prints with. p3dp prints strings,
 /// not layers: the "layer" values describe the strings honestly (the
 /// lowest extruding point's height for `layer_height`, the highest for
 /// `max_layer_z`).
@@ -488,23 +522,49 @@ pub(crate) const VARIABLES: &[(&str, &str)] = &[
     ("eng_plate_temp_initial_layer", "[bed temperature], °C"),
     ("textured_plate_temp", "[bed temperature], °C"),
     ("textured_plate_temp_initial_layer", "[bed temperature], °C"),
-    ("filament_type", "[the material's name in capitals]: PLA, ABS, PETG, …"),
-    ("filament_settings_id", "[the material's name]"),
+    ("filament_type", "[the filament preset's filament_type, else the material's name in capitals]: PLA, ABS, PETG, …"),
+    ("filament_settings_id", "[the filament preset's name, else the material's]"),
     ("printer_settings_id", "the profile's name"),
+    ("printer_preset", "the profile's name"),
     ("printer_model", "the profile's `model`"),
-    ("initial_tool", "0: p3dp drives one extruder"),
+    ("initial_tool", "0: p3dp prints with the first tool, the one the maker's start G-code selects"),
     ("initial_extruder", "0"),
     ("current_extruder", "0"),
+    ("initial_no_support_extruder", "0"),
+    ("initial_no_support_tool", "0"),
+    ("num_extruders", "the profile's `extruders`"),
+    ("is_extruder_used", "[true for the profile's `tool`, false for the other extruders]"),
+    ("filament_map", "[the profile's `tool` + 1]: the extruder (1-based) of the print's one filament"),
+    ("first_filaments", "[0 for every extruder]: the print's one filament"),
+    ("first_non_support_filaments", "[0 for every extruder]"),
+    ("initial_filament_id", "0: the print's one filament"),
+    ("initial_no_support_filament_id", "0"),
+    ("initial_nozzle_id", "0"),
+    ("initial_no_support_hotend", "0: the first hotend (Bambu's hotend rack)"),
+    ("first_non_support_hotend", "0"),
+    ("current_hotend", "0"),
+    ("nozzle_diameter_at_nozzle_id", "[the nozzle's diameter, for every nozzle], mm"),
     ("has_wipe_tower", "false"),
     ("has_single_extruder_multi_material_priming", "false"),
     ("total_toolchanges", "0"),
+    ("e_retracted", "[filament retracted where the template runs]: 0 at the start; at the end, the retraction length when the print ends on a retracted travel, mm"),
+    ("zhop", "0: the head is not lifted where the template runs, mm"),
     ("first_layer_height", "the lowest extruding point's height above the bed, mm"),
+    ("initial_layer_print_height", "the same, mm"),
     ("layer_height", "the same: the one layer height every print has, mm"),
     ("layer_z", "start: first_layer_height; end: the last extruding point's height, mm"),
     ("max_layer_z", "the highest extruding point's height, mm"),
+    ("max_print_z", "the same, mm"),
+    ("total_layer_count", "max_layer_z over layer_height, rounded up: the layers a slicer would cut the print's height into"),
+    ("layer_num", "start: 0; end: total_layer_count − 1"),
     ("first_layer_print_min", "[x, y]: the least corner of the extruding strings below twice first_layer_height, machine mm"),
     ("first_layer_print_max", "[x, y]: their greatest corner, machine mm"),
     ("first_layer_print_size", "[width, depth] of that extent, mm"),
+    ("first_layer_center_no_wipe_tower", "[x, y]: the centre of that extent, machine mm"),
+    ("adaptive_bed_mesh_min", "[x, y]: OrcaSlicer's adaptive mesh: first_layer_print_min less the profile's adaptive_bed_mesh_margin (0), within its bed_mesh_min/bed_mesh_max, machine mm"),
+    ("adaptive_bed_mesh_max", "[x, y]: first_layer_print_max plus the margin, within the same limits, machine mm"),
+    ("bed_mesh_probe_count", "[x, y]: per axis, the mesh's size over the profile's bed_mesh_probe_distance (50 mm) rounded up, plus one, at least 3"),
+    ("bed_mesh_algo", "`lagrange` below 4 points an axis, else `bicubic`"),
     ("print_bed_min", "[x, y]: the bed's least corner, machine mm"),
     ("print_bed_max", "[x, y]: the bed's greatest corner, machine mm"),
     ("print_bed_size", "[width, depth] of the bed, mm"),
@@ -519,6 +579,15 @@ pub(crate) const VARIABLES: &[(&str, &str)] = &[
     ("retract_lift", "[0]: p3dp lifts for travel between parts, not on retraction"),
     ("z_hop", "[0]"),
     ("extrusion_width", "the first extruding string's cross-section over layer_height, mm"),
+    ("line_width", "the same, mm"),
+    ("external_perimeter_extrusion_width", "the same, mm"),
+    ("initial_layer_speed", "the first extruding string's speed, mm/s"),
+    ("external_perimeter_speed", "the same, mm/s"),
+    ("outer_wall_speed", "the same, mm/s"),
+    ("outer_wall_volumetric_speed", "the highest volumetric flow (cross-section × speed) of the print's extruding strings, mm³/s"),
+    ("default_acceleration", "the acceleration of printing moves, at which p3dp prints every string, mm/s²"),
+    ("outer_wall_acceleration", "the same, mm/s²"),
+    ("initial_layer_acceleration", "the same, mm/s²"),
     ("machine_max_acceleration_extruding", "[acceleration of printing moves], mm/s²"),
     ("machine_max_acceleration_travel", "[acceleration of travel moves], mm/s²"),
     ("machine_max_acceleration_retracting", "[acceleration of retractions], mm/s²"),
@@ -528,6 +597,23 @@ pub(crate) const VARIABLES: &[(&str, &str)] = &[
     ("input_filename_base", "the recipe's name"),
     ("input_filename", "the recipe's name"),
 ];
+
+/// Whether p3dp gives a start or end G-code template the variable `name`
+/// (or, for a legacy `[name_N]`, the list `name`): one of [`VARIABLES`] or
+/// of the material's ([`super::material::VARIABLES`]).
+pub(crate) fn gives(name: &str) -> bool {
+    let listed = |n: &str| {
+        VARIABLES.iter().any(|(v, _)| *v == n)
+            || super::material::VARIABLES.iter().any(|(v, _)| *v == n)
+    };
+    listed(name)
+        || name
+            .rsplit_once('_')
+            .is_some_and(|(b, i)| i.parse::<usize>().is_ok() && listed(b))
+}
+
+/// Most extruders (or filament slots) a profile may declare.
+pub(crate) const MAX_EXTRUDERS: usize = 16;
 
 /// Refuses a `gcode_variables` value that could break a G-code line or is
 /// no finite number.

@@ -26,7 +26,9 @@ use crate::base::error::{Error, Result};
 use crate::generate::model::{
     Group, Part, Recipe, Skirt, DEFAULT_CROSS_SECTION, DEFAULT_MAX_STRINGS, DEFAULT_SPEED,
 };
-use crate::machine::Printer;
+use crate::machine::{Material, Printer};
+
+pub(crate) use material::from_filament;
 
 /// Evaluates numbers of one recipe: its params, and where images and a
 /// turtle's limits come from.
@@ -64,11 +66,24 @@ impl Recipe {
         printer: Option<&Printer>,
         cx: &Context,
     ) -> Result<Recipe> {
+        Recipe::load_with(path, sets, printer, None, cx)
+    }
+
+    /// [`Recipe::load_in`], `material` (a filament preset's, `--filament`)
+    /// overriding the recipe's material.
+    pub fn load_with(
+        path: &Path,
+        sets: &[(String, String)],
+        printer: Option<&Printer>,
+        material: Option<&Material>,
+        cx: &Context,
+    ) -> Result<Recipe> {
         let shown = path.display().to_string();
         let text = cx.reads.read_text(path, "recipe")?;
         let raw: RawRecipe = parse_yaml(&text, &shown)?;
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-        Recipe::resolve_in(&raw, sets, printer, &dir, Some(path), cx).map_err(|e| e.in_file(&shown))
+        let given = (printer, material);
+        Recipe::resolve_in(&raw, sets, given, &dir, Some(path), cx).map_err(|e| e.in_file(&shown))
     }
 
     /// Resolves a parsed recipe; relative paths are taken from `dir`.
@@ -78,7 +93,7 @@ impl Recipe {
         printer: Option<&Printer>,
         dir: &Path,
     ) -> Result<Recipe> {
-        Recipe::resolve_in(raw, sets, printer, dir, None, &Context::default())
+        Recipe::resolve_in(raw, sets, (printer, None), dir, None, &Context::default())
     }
 
     /// [`Recipe::resolve`] for the recipe read from `file` (so that an
@@ -86,7 +101,7 @@ impl Recipe {
     fn resolve_in(
         raw: &RawRecipe,
         sets: &[(String, String)],
-        printer: Option<&Printer>,
+        (printer, given): (Option<&Printer>, Option<&Material>),
         dir: &Path,
         file: Option<&Path>,
         cx: &Context,
@@ -106,7 +121,15 @@ impl Recipe {
                 Printer::resolve(spec, dir, &cx.reads)?
             }
         };
-        let material = material::resolve(&top.under(key!(raw.material)), raw.material.as_ref())?;
+        let material = match given {
+            Some(m) => m.clone(),
+            None => material::resolve(&top.under(key!(raw.material)), raw.material.as_ref())?,
+        };
+        let mut printer = printer;
+        if let Some(q) = material.max_volumetric_speed {
+            // the filament's own flow limit, where it is below the hot end's
+            printer.max_flow = printer.max_flow.min(q);
+        }
         let defaults = &raw.defaults;
         let ds = top.under(key!(raw.defaults));
         let c0 = ds.positive_or(at!(defaults.cross_section), DEFAULT_CROSS_SECTION)?;

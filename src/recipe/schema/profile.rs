@@ -116,6 +116,14 @@ pub(crate) struct RawPrinter {
     /// Absolute or relative E.
     #[serde(default)]
     pub extrusion: RawExtrusion,
+    /// Extruders (or a filament changer's slots) the start and end G-code
+    /// know: the length of the slicers' per-extruder values (1); p3dp prints
+    /// with the first.
+    #[serde(default = "d_extruders")]
+    pub extruders: u32,
+    /// The extruder p3dp prints with, 0-based (0).
+    #[serde(default)]
+    pub tool: u32,
     /// G-code before the print, with placeholders.
     #[serde(default)]
     pub start_gcode: String,
@@ -218,6 +226,55 @@ impl Default for RawEnvelope {
     }
 }
 
+impl RawPrinter {
+    /// A profile of the given required keys, every other key its default
+    /// (what a file naming only those keys parses into).
+    pub(crate) fn new(
+        name: String,
+        bed: RawBed,
+        origin: [f64; 3],
+        nozzle_diameter: f64,
+        filament_diameter: f64,
+    ) -> RawPrinter {
+        RawPrinter {
+            name,
+            model: String::new(),
+            flavor: RawFlavor::default(),
+            bed,
+            origin,
+            nozzle_diameter,
+            filament_diameter,
+            extrusion: RawExtrusion::default(),
+            extruders: d_extruders(),
+            tool: 0,
+            start_gcode: String::new(),
+            end_gcode: String::new(),
+            gcode_variables: indexmap::IndexMap::new(),
+            envelope: RawEnvelope::default(),
+            travel_speed: d_travel(),
+            retraction: RawRetraction::default(),
+            firmware_retraction: false,
+            max_nozzle_temp: d_max_nozzle(),
+            max_bed_temp: d_max_bed(),
+            max_speed: d_max_speed(),
+            max_flow: d_max_flow(),
+            min_string_length: d_min_string(),
+            arcs: false,
+            arc_tolerance: d_arc_tolerance(),
+            thumbnails: Vec::new(),
+            progress: None,
+            object_labels: None,
+            binary_gcode: false,
+            kinematics: RawKinematics::default(),
+            head: RawHead::default(),
+            checks: RawCheckLimits::default(),
+        }
+    }
+}
+
+fn d_extruders() -> u32 {
+    1
+}
 fn d_travel() -> f64 {
     120.0
 }
