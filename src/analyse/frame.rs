@@ -611,10 +611,14 @@ fn material(recipe: &Recipe, n: usize, set: &mut impl FnMut(&str, Value)) {
     set("is_all_bbl_filament", Value::Bool(vendor == "Bambu Lab"));
     set("filament_vendor", each(n, Value::Str(vendor)));
     if m.preset.is_some() {
-        // OrcaSlicer's default when a filament preset names none
+        // OrcaSlicer's defaults when a filament preset names none
         set(
             "enable_pressure_advance",
             or("enable_pressure_advance", Value::Bool(false)),
+        );
+        set(
+            "pressure_advance",
+            or("pressure_advance", Value::Float(0.02)),
         );
     }
     if let Some(Value::Str(id)) = preset("filament_id") {
@@ -631,19 +635,61 @@ fn material(recipe: &Recipe, n: usize, set: &mut impl FnMut(&str, Value)) {
 mod tests {
     use super::*;
 
+    fn recipe(material: &str) -> Recipe {
+        let text = format!("p3dp: 1\nname: t\nmaterial: {material}\nparts:\n  - primitive: {{helix: {{radius: 10, height: 2, pitch: 0.5}}}}\n");
+        let raw: crate::recipe::RawRecipe = crate::recipe::parse_yaml(&text, "t.yaml").unwrap();
+        Recipe::resolve(&raw, &[], None, std::path::Path::new(".")).unwrap()
+    }
+
+    /// Every variable the two tables list has a value (a built-in
+    /// material's), and nothing else is given.
     #[test]
     fn every_listed_variable_has_a_value() {
-        let raw: crate::recipe::RawRecipe =
-            crate::recipe::parse_yaml("p3dp: 1\nname: t\nparts:\n  - primitive: {helix: {radius: 10, height: 2, pitch: 0.5}}\n", "t.yaml").unwrap();
-        let r = Recipe::resolve(&raw, &[], None, std::path::Path::new(".")).unwrap();
+        let r = recipe("pla");
         let ext = extent(&r, &[]);
         let v = variables(&r, &ext, false);
-        for (name, _) in crate::machine::printer::VARIABLES {
+        let listed: Vec<&str> = crate::machine::printer::VARIABLES
+            .iter()
+            .chain(crate::machine::material::VARIABLES)
+            .map(|(n, _)| *n)
+            .collect();
+        for name in &listed {
+            // a filament preset's own, for a material from one
+            if matches!(
+                *name,
+                "enable_pressure_advance" | "pressure_advance" | "filament_ids"
+            ) {
+                continue;
+            }
             assert!(v.contains_key(*name), "{name}");
         }
+        assert_eq!(v.len(), listed.len() - 3);
+        // the tool's list: true for the tool p3dp prints with
+        assert_eq!(v["is_extruder_used"], Value::List(vec![Value::Bool(true)]));
         assert_eq!(
-            v.len(),
-            crate::machine::printer::VARIABLES.len() + crate::machine::material::VARIABLES.len()
+            v["temperature_vitrification"],
+            Value::List(vec![Value::Int(45)])
         );
+    }
+
+    /// A variable whose value p3dp cannot know is refused by name, with where
+    /// a value may come from; wherever it stands (a comment line too).
+    #[test]
+    fn a_variable_without_a_value_is_refused_by_name() {
+        let mut r = recipe("{name: mine, density: 1.2, nozzle_temp: 200, bed_temp: 50}");
+        r.printer.start_gcode = "G28\n; softens at [temperature_vitrification]\n".into();
+        let e = frame(&r, &[]).unwrap_err();
+        assert_eq!(e.place.as_deref(), Some("start_gcode line 2"));
+        assert!(
+            e.message
+                .contains("`temperature_vitrification` has no value for this print")
+                && e.message
+                    .contains("the material `mine` comes from none: give one with --filament"),
+            "{e}"
+        );
+        // the built-in material's figure
+        let mut r = recipe("pla");
+        r.printer.start_gcode = "G28\n; softens at [temperature_vitrification]\n".into();
+        assert!(frame(&r, &[]).unwrap().start.contains("; softens at 45"));
     }
 }

@@ -127,6 +127,7 @@ pub(crate) const VARIABLES: &[(&str, &str)] = &[
     ("is_all_bbl_filament", "whether the filament preset's vendor is Bambu Lab (false for a recipe's material)"),
     ("filament_multitool_ramming", "[the filament preset's, else false: p3dp changes no tool]"),
     ("enable_pressure_advance", "[the filament preset's, else false, OrcaSlicer's default] (a recipe's own material: refused)"),
+    ("pressure_advance", "[the filament preset's, else 0.02, OrcaSlicer's default] (a recipe's own material: refused)"),
     ("filament_ids", "[the filament preset's filament_id] (a recipe's own material: refused)"),
 ];
 

@@ -21,15 +21,13 @@
 //! tool-change hooks are named as ignored: p3dp prints strings, not layers,
 //! with one tool.
 
-use std::fmt::Write as _;
-
 use indexmap::IndexMap;
 
-use super::{Format, Kind, Preset};
+use super::{refuse, Format, Kind, Preset};
 use crate::base::error::{Error, Result};
 use crate::base::slicer_macro::Template;
 use crate::recipe::schema::{
-    RawBed, RawExtrusion, RawFlavor, RawKinematics, RawPrinter, RawRetraction, RawVariable,
+    RawExtrusion, RawFlavor, RawKinematics, RawPrinter, RawRetraction, RawVariable,
 };
 
 /// A preset made into a profile: its raw form and what was left out or
@@ -88,6 +86,11 @@ pub(crate) const SLICER_DEFAULTS: &[(&str, &str, &str)] = &[
         "no slicer's spiral-vase mode: p3dp prints its strings as written",
     ),
     ("wipe_tower", "false", "p3dp prints no wipe tower"),
+    (
+        "long_retraction_when_cut",
+        "false",
+        "Bambu's long retraction when the filament is cut: none, p3dp cuts no filament",
+    ),
     (
         "long_retraction_when_ec",
         "false",
@@ -187,114 +190,6 @@ fn flavor(p: &Preset) -> Result<(RawFlavor, Option<String>)> {
     })
 }
 
-fn refuse(p: &Preset, key: &str, what: String) -> Error {
-    Error::input(
-        key,
-        format!("preset `{}`: p3dp cannot import {what}", p.name),
-    )
-    .in_file(&p.file)
-}
-
-/// The corners of the bed setting `key`, `XxY` each; `None` when the
-/// setting holds no corners at all (OrcaSlicer's legacy `bed_shape =
-/// rectangular`, its `printable_area` being the bed).
-fn corners(p: &Preset, key: &str) -> Result<Option<Vec<(f64, f64)>>> {
-    let mut pts = Vec::new();
-    let list = p.list(key).unwrap_or_default();
-    if list.iter().all(|s| !s.contains(['x', 'X'])) {
-        return Ok(None);
-    }
-    for s in list {
-        let parsed = s
-            .split_once(['x', 'X'])
-            .and_then(|(x, y)| Some((x.trim().parse::<f64>().ok()?, y.trim().parse::<f64>().ok()?)))
-            .filter(|(x, y)| x.is_finite() && y.is_finite());
-        match parsed {
-            Some(xy) => pts.push(xy),
-            None => {
-                return Err(
-                    Error::input(key, format!("`{s}` is not a corner; expected XxY"))
-                        .in_file(&p.file),
-                )
-            }
-        }
-    }
-    Ok(Some(pts))
-}
-
-/// The bed and the XY point of its centre (where recipe (0, 0) lands).
-fn bed(p: &Preset, max_z: f64) -> Result<(RawBed, [f64; 2])> {
-    // PrusaSlicer's bed is bed_shape; OrcaSlicer's and Bambu's printable_area
-    let order: [&str; 2] = match p.format {
-        Format::Ini => ["bed_shape", "printable_area"],
-        Format::Json => ["printable_area", "bed_shape"],
-    };
-    let mut found = None;
-    for key in order {
-        if p.has(key) {
-            if let Some(pts) = corners(p, key)? {
-                found = Some((key, pts));
-                break;
-            }
-        }
-    }
-    let Some((key, pts)) = found else {
-        return Err(refuse(
-            p,
-            order[0],
-            "a preset without a bed (no bed_shape or printable_area corners)".into(),
-        ));
-    };
-    let (xs, ys): (Vec<f64>, Vec<f64>) = pts.iter().copied().unzip();
-    let (x0, x1) = (
-        xs.iter().copied().fold(f64::INFINITY, f64::min),
-        xs.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-    );
-    let (y0, y1) = (
-        ys.iter().copied().fold(f64::INFINITY, f64::min),
-        ys.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-    );
-    let on = |v: f64, a: f64, b: f64| (v - a).abs() < 1e-6 || (v - b).abs() < 1e-6;
-    if pts.len() == 4
-        && pts.iter().all(|&(x, y)| on(x, x0, x1) && on(y, y0, y1))
-        && x1 > x0
-        && y1 > y0
-    {
-        let bed = RawBed::Rectangle {
-            size: [x1 - x0, y1 - y0],
-            min: [x0, y0],
-            max_z,
-        };
-        return Ok((bed, [(x0 + x1) / 2.0, (y0 + y1) / 2.0]));
-    }
-    if pts.len() >= 8 {
-        let k = pts.len() as f64;
-        let (cx, cy) = (xs.iter().sum::<f64>() / k, ys.iter().sum::<f64>() / k);
-        let radii: Vec<f64> = pts.iter().map(|&(x, y)| (x - cx).hypot(y - cy)).collect();
-        let r = radii.iter().sum::<f64>() / k;
-        let round = r > 0.0 && radii.iter().all(|q| (q - r).abs() <= 0.005 * r);
-        if round && cx.hypot(cy) <= 0.01 * r {
-            let d = libm::round(2.0 * r * 1000.0) / 1000.0;
-            return Ok((RawBed::Circle { diameter: d, max_z }, [0.0, 0.0]));
-        }
-        if round {
-            return Err(refuse(
-                p,
-                key,
-                "a round bed whose centre is not the origin".into(),
-            ));
-        }
-    }
-    Err(refuse(
-        p,
-        key,
-        format!(
-            "a bed of {} corners that is neither a rectangle nor a circle",
-            pts.len()
-        ),
-    ))
-}
-
 /// The preset as a profile, or the refusal naming what p3dp cannot do.
 pub fn import(p: &Preset) -> Result<Imported> {
     if p.kind != Kind::Printer {
@@ -328,7 +223,7 @@ pub fn import(p: &Preset) -> Result<Imported> {
             "a preset without a height (max_print_height or printable_height)".into(),
         ));
     };
-    let (bed, centre) = bed(p, max_z)?;
+    let (bed, centre) = super::bed::bed(p, max_z, &mut notes)?;
     let (flavor, flavor_note) = flavor(p)?;
     notes.extend(flavor_note);
     let z_offset = p.number("z_offset")?.unwrap_or(0.0);
@@ -666,7 +561,7 @@ fn gcode(
                         }
                         v => v,
                     };
-                    notes.push(format!("gcode_variables.{base} = {}: {why}", variable_yaml(&v)));
+                    notes.push(format!("gcode_variables.{base} = {value}: {why}"));
                     vars.insert(base.to_string(), v);
                 }
                 None => {
@@ -812,270 +707,10 @@ fn scalar(name: &str, s: &str) -> RawVariable {
     RawVariable::Str(crate::base::safe_text::one_line(s).into_owned())
 }
 
-impl Imported {
-    /// The profile's name.
-    pub fn name(&self) -> &str {
-        &self.raw.name
-    }
-
-    /// The profile as the YAML `p3dp printers import` writes: every key
-    /// whose value is not a profile's default, each as it reads back (a
-    /// test parses it into the same value), with the import's notes.
-    pub fn yaml(&self) -> String {
-        let r = &self.raw;
-        let d = RawPrinter::new(
-            String::new(),
-            r.bed,
-            r.origin,
-            r.nozzle_diameter,
-            r.filament_diameter,
-        );
-        let mut y = String::new();
-        let _ = writeln!(
-            y,
-            "# Imported by `p3dp printers import` from {} ({}).\n# The figures are the preset's own; the start and end G-code is the maker's,\n# in the slicers' macro language, expanded and checked against the machine's\n# limits at every build. Edit freely.",
-            crate::base::safe_text::one_line(&self.file),
-            self.format.describe()
-        );
-        let _ = writeln!(y, "name: {}", q(&r.name));
-        if !r.model.is_empty() {
-            let _ = writeln!(y, "model: {}", q(&r.model));
-        }
-        let _ = writeln!(y, "flavor: {}", flavor_name(r.flavor));
-        let _ = writeln!(y, "bed: {}", bed_yaml(&r.bed));
-        let _ = writeln!(y, "origin: [{}]", r.origin.map(num).join(", "));
-        let _ = writeln!(y, "nozzle_diameter: {}", num(r.nozzle_diameter));
-        let _ = writeln!(y, "filament_diameter: {}", num(r.filament_diameter));
-        if r.extruders != d.extruders {
-            let _ = writeln!(y, "# the extruders (or filament slots) the maker's G-code knows; p3dp prints with `tool`\nextruders: {}", r.extruders);
-        }
-        if r.tool != d.tool {
-            let _ = writeln!(y, "tool: {}", r.tool);
-        }
-        let _ = writeln!(
-            y,
-            "extrusion: {}",
-            match r.extrusion {
-                RawExtrusion::Absolute => "absolute",
-                RawExtrusion::Relative => "relative",
-            }
-        );
-        if r.retraction != d.retraction {
-            let t = &r.retraction;
-            let _ = writeln!(
-                y,
-                "retraction: {{ length: {}, speed: {}, min_travel: {} }}",
-                num(t.length),
-                num(t.speed),
-                num(t.min_travel)
-            );
-        }
-        if r.firmware_retraction {
-            let _ = writeln!(y, "firmware_retraction: true");
-        }
-        if r.max_speed != d.max_speed {
-            let _ = writeln!(y, "max_speed: {}", num(r.max_speed));
-        }
-        if r.travel_speed != d.travel_speed {
-            let _ = writeln!(y, "travel_speed: {}", num(r.travel_speed));
-        }
-        kinematics_yaml(&mut y, &r.kinematics, &d.kinematics);
-        if !r.thumbnails.is_empty() {
-            let _ = writeln!(y, "thumbnails: [{}]", r.thumbnails.join(", "));
-        }
-        if !r.gcode_variables.is_empty() {
-            y.push_str("# values the G-code below reads that p3dp does not compute: the preset's own\n# settings, and defaults a slicer would use; change them to suit\ngcode_variables:\n");
-            for (name, v) in &r.gcode_variables {
-                let _ = writeln!(y, "  {}: {}", key(name), variable_yaml(v));
-            }
-        }
-        block(&mut y, "start_gcode", &r.start_gcode);
-        block(&mut y, "end_gcode", &r.end_gcode);
-        if !self.notes.is_empty() {
-            y.push_str("# Notes from the import:\n");
-            for note in &self.notes {
-                let _ = writeln!(y, "# - {}", crate::base::safe_text::one_line(note));
-            }
-        }
-        y
-    }
-}
-
-fn flavor_name(f: RawFlavor) -> &'static str {
-    match f {
-        RawFlavor::Marlin => "marlin",
-        RawFlavor::Klipper => "klipper",
-        RawFlavor::Reprap => "reprap",
-        RawFlavor::Prusa => "prusa",
-    }
-}
-
-fn bed_yaml(b: &RawBed) -> String {
-    match *b {
-        RawBed::Rectangle { size, max_z, min } => format!(
-            "{{ shape: rectangle, size: [{}, {}], min: [{}, {}], max_z: {} }}",
-            num(size[0]),
-            num(size[1]),
-            num(min[0]),
-            num(min[1]),
-            num(max_z)
-        ),
-        RawBed::Circle { diameter, max_z } => format!(
-            "{{ shape: circle, diameter: {}, max_z: {} }}",
-            num(diameter),
-            num(max_z)
-        ),
-    }
-}
-
-/// The `kinematics:` keys that differ from the profile's defaults.
-fn kinematics_yaml(y: &mut String, k: &RawKinematics, d: &RawKinematics) {
-    let mut out = String::new();
-    let mut put = |key: &str, v: Option<f64>, dv: Option<f64>| {
-        if let Some(v) = v.filter(|_| v != dv) {
-            let _ = writeln!(out, "  {key}: {}", num(v));
-        }
-    };
-    put(
-        "max_acceleration",
-        Some(k.max_acceleration),
-        Some(d.max_acceleration),
-    );
-    put(
-        "travel_acceleration",
-        k.travel_acceleration,
-        d.travel_acceleration,
-    );
-    put(
-        "retract_acceleration",
-        k.retract_acceleration,
-        d.retract_acceleration,
-    );
-    put(
-        "junction_deviation",
-        k.junction_deviation,
-        d.junction_deviation,
-    );
-    put("jerk", k.jerk, d.jerk);
-    put(
-        "square_corner_velocity",
-        k.square_corner_velocity,
-        d.square_corner_velocity,
-    );
-    put("max_z_speed", k.max_z_speed, d.max_z_speed);
-    put(
-        "max_z_acceleration",
-        k.max_z_acceleration,
-        d.max_z_acceleration,
-    );
-    put(
-        "max_extrude_only_velocity",
-        k.max_extrude_only_velocity,
-        d.max_extrude_only_velocity,
-    );
-    put(
-        "max_extrude_only_accel",
-        k.max_extrude_only_accel,
-        d.max_extrude_only_accel,
-    );
-    if !out.is_empty() {
-        let _ = writeln!(y, "# the firmware's limits (machine_max_*), for the time estimate; p3dp does not\n# write M201–M205: the firmware keeps its own\nkinematics:\n{out}");
-    }
-}
-
-/// A number as YAML that reads back as the same `f64`: Rust's shortest
-/// round-trip form.
-fn num(v: f64) -> String {
-    if v == 0.0 {
-        "0".into()
-    } else {
-        format!("{v}")
-    }
-}
-
-/// A string as YAML: JSON's quoting, which YAML reads.
-fn q(s: &str) -> String {
-    serde_json::to_string(s).expect("a string serialises")
-}
-
-/// A map key as YAML: plain when it is a plain identifier, else quoted.
-fn key(s: &str) -> String {
-    if !s.is_empty()
-        && s.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
-        && !s.starts_with(|c: char| c.is_ascii_digit())
-    {
-        s.to_string()
-    } else {
-        q(s)
-    }
-}
-
-/// A `gcode_variables` value as YAML that reads back as the same variant: a
-/// real always with a decimal point or an exponent.
-fn variable_yaml(v: &RawVariable) -> String {
-    match v {
-        RawVariable::Bool(b) => b.to_string(),
-        RawVariable::Int(i) => i.to_string(),
-        RawVariable::Float(f) => {
-            let s = format!("{f:?}");
-            if s.contains(['.', 'e', 'E']) {
-                s
-            } else {
-                format!("{s}.0")
-            }
-        }
-        RawVariable::Str(s) => q(s),
-        RawVariable::List(l) => format!(
-            "[{}]",
-            l.iter().map(variable_yaml).collect::<Vec<_>>().join(", ")
-        ),
-    }
-}
-
-/// `key: |2…` a literal block of `text`, every line kept as it is.
-fn block(out: &mut String, key: &str, text: &str) {
-    if text.is_empty() {
-        return;
-    }
-    let trailing = text.len() - text.trim_end_matches('\n').len();
-    let chomp = match trailing {
-        0 => "-",
-        1 => "",
-        _ => "+",
-    };
-    let _ = writeln!(out, "{key}: |2{chomp}");
-    for line in text.trim_end_matches('\n').split('\n') {
-        if line.is_empty() {
-            out.push('\n');
-        } else {
-            let _ = writeln!(out, "  {line}");
-        }
-    }
-    // `|2+` keeps the line breaks after the last line: one is written above
-    for _ in 1..trailing {
-        out.push('\n');
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn blocks_keep_every_line() {
-        for text in [
-            "G28\nG1 X1\n",
-            "G28",
-            " G28 ; indented\n\n",
-            "\tG4\n\nM84\n\n\n",
-        ] {
-            let mut y = String::new();
-            block(&mut y, "start_gcode", text);
-            let v: std::collections::BTreeMap<String, String> =
-                crate::recipe::yaml::parse_yaml(&y, "p.yaml").unwrap();
-            assert_eq!(v["start_gcode"], text, "{y}");
-        }
-    }
+    use crate::recipe::schema::RawBed;
 
     fn preset(format: Format, values: &[(&str, &str)]) -> Preset {
         use super::super::Setting;
@@ -1155,6 +790,11 @@ mod tests {
         assert_eq!(back, i.raw, "{y}");
     }
 
+    /// Text YAML cannot carry as it is (C1 controls, U+FFFE, a carriage
+    /// return, U+2028, tabs and quotes) reads back unchanged.
+    /// A polygon bed: p3dp keeps to a rectangle or a circle inside it, every
+    /// corner of which lies inside the maker's bed; a non-convex one (or a
+    /// malformed rectangle) is refused.
     /// Klipper's square-corner velocity from a jerk no machine has is left
     /// out (Klipper's 5 mm/s), not written as a value the profile refuses;
     /// OrcaSlicer's `bed_shape = rectangular` yields to `printable_area`.

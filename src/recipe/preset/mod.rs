@@ -10,9 +10,11 @@
 //! and the filament's template variables (see
 //! `crate::recipe::resolve::material`).
 
+mod bed;
 pub(crate) mod ini;
 pub(crate) mod json;
 pub(crate) mod map;
+mod write;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -151,6 +153,15 @@ impl Preset {
         }
         Ok(None)
     }
+}
+
+/// The refusal of preset `p` at `key`: p3dp cannot import `what`.
+pub(crate) fn refuse(p: &Preset, key: &str, what: String) -> Error {
+    Error::input(
+        key,
+        format!("preset `{}`: p3dp cannot import {what}", p.name),
+    )
+    .in_file(&p.file)
 }
 
 fn json_text(v: &serde_json::Value) -> String {

@@ -440,6 +440,27 @@ mod tests {
     use super::*;
     use crate::recipe::yaml::parse_yaml;
 
+    /// `RawPrinter::new` is what a file of the required keys parses into.
+    #[test]
+    fn new_is_the_defaults_of_a_file() {
+        let p: RawPrinter = parse_yaml(
+            "name: d\nbed: {shape: circle, diameter: 280, max_z: 300}\norigin: [0,0,0]\nnozzle_diameter: 0.4\nfilament_diameter: 1.75\n",
+            "d.yaml",
+        )
+        .unwrap();
+        let new = RawPrinter::new(
+            "d".into(),
+            RawBed::Circle {
+                diameter: 280.0,
+                max_z: 300.0,
+            },
+            [0.0; 3],
+            0.4,
+            1.75,
+        );
+        assert_eq!(p, new);
+    }
+
     #[test]
     fn round_bed_and_unknown_keys() {
         let p: RawPrinter = parse_yaml(
