@@ -92,6 +92,11 @@ pub(crate) const SLICER_DEFAULTS: &[(&str, &str, &str)] = &[
         "Bambu's long retraction when the filament is cut: none, p3dp cuts no filament",
     ),
     (
+        "retraction_distance_when_cut",
+        "0",
+        "the same: no retraction at a cut, mm",
+    ),
+    (
         "long_retraction_when_ec",
         "false",
         "Bambu's long retraction at an extruder change: none, p3dp changes no extruder",
