@@ -341,7 +341,9 @@ fn tools(recipe: &Recipe, ext: &Extent, end: bool, n: usize, set: &mut impl FnMu
     }
     set("num_extruders", Value::Int(n as i64));
     let tool = recipe.printer.tool;
-    let used = (0..n).map(|k| Value::Bool(k == tool)).collect();
+    // PrusaSlicer's list is 255 long at least, for templates written for
+    // more tools than the machine has (its GCode.cpp)
+    let used = (0..n.max(255)).map(|k| Value::Bool(k == tool)).collect();
     set("is_extruder_used", Value::List(used));
     // Bambu's filaments and nozzles: the print's one filament, on `tool`
     set(
@@ -665,7 +667,12 @@ mod tests {
         }
         assert_eq!(v.len(), listed.len() - 3);
         // the tool's list: true for the tool p3dp prints with
-        assert_eq!(v["is_extruder_used"], Value::List(vec![Value::Bool(true)]));
+        let Value::List(used) = &v["is_extruder_used"] else {
+            panic!()
+        };
+        assert_eq!(used.len(), 255);
+        assert_eq!(used[0], Value::Bool(true));
+        assert!(used[1..].iter().all(|u| *u == Value::Bool(false)));
         assert_eq!(
             v["temperature_vitrification"],
             Value::List(vec![Value::Int(45)])

@@ -533,7 +533,7 @@ pub(crate) const VARIABLES: &[(&str, &str)] = &[
     ("initial_no_support_extruder", "0"),
     ("initial_no_support_tool", "0"),
     ("num_extruders", "the profile's `extruders`"),
-    ("is_extruder_used", "[true for the profile's `tool`, false for the other extruders]"),
+    ("is_extruder_used", "[true for the profile's `tool`, false for the others]: 255 long at least, as PrusaSlicer makes it for templates written for more tools"),
     ("filament_map", "[the profile's `tool` + 1]: the extruder (1-based) of the print's one filament"),
     ("first_filaments", "[0 for every extruder]: the print's one filament"),
     ("first_non_support_filaments", "[0 for every extruder]"),
