@@ -5,8 +5,10 @@
 //! the SHA-256 of its G-code, with a
 //! fingerprint of the G-code's lines: the hashes of at most 512 consecutive
 //! blocks of lines (one line per block when the output is that short).
-//! `p3dp hash --check p3dp.lock` rebuilds every entry and, for each that
-//! changed, names the first differing block and shows its first new line.
+//! `p3dp hash --check p3dp.lock` rebuilds every entry (each read only inside
+//! the lock's project, as any file a key reaches) and shows only those that
+//! changed: the old and new SHA-256 whole, the first differing block and
+//! its new lines.
 
 use std::io::{self, Write};
 

@@ -104,6 +104,7 @@ fn flavor_name(f: RawFlavor) -> &'static str {
         RawFlavor::Klipper => "klipper",
         RawFlavor::Reprap => "reprap",
         RawFlavor::Prusa => "prusa",
+        RawFlavor::Bambu => "bambu",
     }
 }
 
