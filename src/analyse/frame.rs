@@ -9,10 +9,13 @@ use glam::DVec3;
 
 use crate::analyse::check::gcode::{self, Start};
 use crate::base::error::{Error, Result};
-use crate::base::gcode::Verbatim;
+use crate::base::format::Chunk;
+use crate::base::gcode::{Command, Setting, Verbatim};
 use crate::base::slicer_macro::{Template, Value, Vars};
 use crate::base::toolpath::Toolpath;
 use crate::generate::model::Recipe;
+use crate::machine::firmware::write::{self, Dialect};
+use crate::machine::{Flavor, Printer};
 
 /// A print's start and end G-code, expanded and checked: each line as it
 /// is written, and what its firmware reads in it.
@@ -98,7 +101,7 @@ pub(crate) fn frame(recipe: &Recipe, ext: &Extent) -> Result<Frame> {
     let mut one = |key: &str, text: &str, end: bool| -> Result<Vec<Verbatim>> {
         let t = p.template(key, text).map_err(|e| e.in_file(&shown))?;
         let vars = variables(recipe, &ext, end);
-        has_values(recipe, &t, &vars).map_err(|(line, message)| {
+        has_values(recipe, &t, &vars, &globals).map_err(|(line, message)| {
             Error::input(format!("{key} line {line}"), message).in_file(&shown)
         })?;
         let out = t
@@ -120,27 +123,97 @@ pub(crate) fn frame(recipe: &Recipe, ext: &Extent) -> Result<Frame> {
         };
         gcode::check(key, &out, recipe, from).map_err(|e| e.in_file(&shown))
     };
+    let mut start = emitted_limits(p);
+    start.extend(one("start_gcode", &p.start_gcode, false)?);
     Ok(Frame {
-        start: one("start_gcode", &p.start_gcode, false)?,
+        start,
         end: one("end_gcode", &p.end_gcode, true)?,
     })
+}
+
+/// The firmware's limits written before the start G-code when the profile
+/// says `emit_limits` (PrusaSlicer's `machine_limits_usage = emit_to_gcode`,
+/// OrcaSlicer's `emit_machine_limits_to_gcode`, which write `M201`, `M203`,
+/// `M204`, `M205` there, on Marlin and RepRapFirmware only): typed settings
+/// through the one writer, which the planner then follows as it follows any
+/// setting of the start G-code. `M201 X Y` is the profile's
+/// `axis_acceleration`, else the head's highest acceleration.
+fn emitted_limits(p: &Printer) -> Vec<Verbatim> {
+    if !p.emit_limits || !matches!(p.flavor, Flavor::Marlin | Flavor::Prusa | Flavor::Reprap) {
+        return Vec::new();
+    }
+    let l = p.limits();
+    let head = l.max_acceleration.max(l.travel_acceleration);
+    let [ax, ay] = p.axis_acceleration.unwrap_or([head, head]);
+    let mut settings = vec![
+        Setting::MaxAcceleration {
+            axes: [
+                Some(ax),
+                Some(ay),
+                l.max_z_acceleration,
+                l.max_extrude_only_accel,
+            ],
+        },
+        Setting::MaxFeedrate {
+            axes: [
+                Some(l.max_velocity),
+                Some(l.max_velocity),
+                l.max_z_velocity,
+                l.max_extrude_only_velocity,
+            ],
+        },
+        Setting::Acceleration {
+            print: Some(l.max_acceleration),
+            travel: Some(l.travel_acceleration),
+            retract: Some(l.retract_acceleration),
+        },
+    ];
+    match (p.kinematics.jerk, p.kinematics.junction_deviation) {
+        (Some(j), _) => settings.push(Setting::Jerk(j)),
+        (None, Some(jd)) if p.flavor == Flavor::Marlin => {
+            settings.push(Setting::JunctionDeviation(jd))
+        }
+        _ => {}
+    }
+    // the dialect as the output writes it (output::gcode::dialect)
+    let m = p.model.to_ascii_uppercase();
+    let d = Dialect {
+        flavor: p.flavor,
+        object_labels: p.object_labels,
+        prusa_8bit: m.starts_with("MK3") || m.starts_with("MK2"),
+    };
+    settings
+        .into_iter()
+        .map(|s| {
+            let c = Command::Set(s);
+            let mut out = Chunk::new();
+            write::write(d, &c, "", &mut out);
+            let text = String::from_utf8_lossy(out.bytes()).trim_end().to_string();
+            Verbatim {
+                text,
+                commands: vec![c],
+            }
+        })
+        .collect()
 }
 
 /// Refuses a variable of the template `t` that has no value for this print
 /// (a filament preset's setting where the material comes from none): its
 /// line and a message naming it and where a value may come from. A variable
-/// is refused wherever it stands, a comment line or a branch not taken.
+/// is refused wherever it stands, a comment line or a branch not taken;
+/// a `global` of a template expanded before (the start G-code's) has one.
 fn has_values(
     recipe: &Recipe,
     t: &Template,
     vars: &Vars,
+    globals: &Vars,
 ) -> std::result::Result<(), (usize, String)> {
     for (name, line) in t.variables() {
         let base = match name.rsplit_once('_') {
             Some((b, i)) if i.parse::<usize>().is_ok() => b,
             _ => name.as_str(),
         };
-        if vars.contains_key(&name) || vars.contains_key(base) {
+        if vars.contains_key(&name) || vars.contains_key(base) || globals.contains_key(&name) {
             continue;
         }
         let m = &recipe.material;

@@ -178,15 +178,22 @@ impl Default for Retraction {
 
 /// Where a profile's own start and end G-code may move the head: the bed
 /// grown by `margin` in X and Y (makers purge just outside the bed, Prusa's
-/// MK3S at Y −3) and up to `max_z + margin`, down to `-below_bed` (a probe's
-/// declared offset; 0: never below the bed). p3dp's own moves stay on the
-/// bed whatever this says.
+/// MK3S at Y −3), or on an axis `x`/`y` names the range the head really
+/// reaches (Bambu's A1 purges at X −48.2, Prusa's CORE One parks at Y −9);
+/// up to `max_z + margin`, down to `-below_bed` (a probe's declared offset;
+/// 0: never below the bed). p3dp's own moves stay on the bed whatever this
+/// says.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Envelope {
     /// Reach beyond the bed's edges and above its height, mm.
     pub margin: f64,
     /// Reach below z = 0, mm.
     pub below_bed: f64,
+    /// The head's reach along X, machine mm (lowest, highest), in place of
+    /// the bed grown by `margin`; it holds the bed.
+    pub x: Option<[f64; 2]>,
+    /// The head's reach along Y, as `x`.
+    pub y: Option<[f64; 2]>,
 }
 
 impl Envelope {
@@ -195,6 +202,18 @@ impl Envelope {
     pub const MAX_MARGIN: f64 = 50.0;
     /// Largest `below_bed` a profile may declare, mm.
     pub const MAX_BELOW_BED: f64 = 5.0;
+    /// Farthest a reach `x`/`y` may extend past the bed's edge, mm: a purge
+    /// chute or a park beside the bed.
+    pub const MAX_REACH: f64 = 60.0;
+
+    /// The range the head may reach along axis `k` (0: X, 1: Y) of a bed
+    /// spanning `lo` to `hi` there.
+    pub fn reach(&self, k: usize, lo: f64, hi: f64) -> [f64; 2] {
+        match [self.x, self.y][k] {
+            Some(r) => r,
+            None => [lo - self.margin, hi + self.margin],
+        }
+    }
 }
 
 impl Default for Envelope {
@@ -202,6 +221,8 @@ impl Default for Envelope {
         Envelope {
             margin: 5.0,
             below_bed: 0.0,
+            x: None,
+            y: None,
         }
     }
 }
@@ -285,6 +306,19 @@ pub struct Printer {
     /// Write Prusa's binary G-code (`.bgcode`) when the output's name does
     /// not say (PrusaSlicer's `binary_gcode`); off by default.
     pub binary_gcode: bool,
+    /// The start G-code is the maker's own sequence (an imported preset's):
+    /// its nozzle temperatures (flushes, purges, nozzle cleaning hotter than
+    /// the print) are held to `max_nozzle_temp`, and the last one, where
+    /// the print starts, to the material's limit; off by default.
+    pub maker_temperatures: bool,
+    /// Write the firmware's limits of `kinematics` as `M201`, `M203`,
+    /// `M204`, `M205` before the start G-code (PrusaSlicer's
+    /// `machine_limits_usage = emit_to_gcode`); off by default.
+    pub emit_limits: bool,
+    /// The firmware's maximum X and Y accelerations, mm/s² (a slicer's
+    /// `machine_max_acceleration_x`/`_y`), written as `M201 X Y` with
+    /// `emit_limits`; the head's highest acceleration when absent.
+    pub axis_acceleration: Option<[f64; 2]>,
     /// The firmware planner's limits, for the print-time estimate (see
     /// [`super::Kinematics`]).
     pub kinematics: super::kinematics::Kinematics,
@@ -382,6 +416,15 @@ impl Printer {
         self.checks.validate()?;
         crate::base::safe_text::check("model", &self.model)?;
         self.envelope_ranges()?;
+        for (k, a) in self.axis_acceleration.into_iter().flatten().enumerate() {
+            let max = super::limits::ACCELERATION_MAX;
+            if !(a.is_finite() && a > 0.0 && a <= max) {
+                return Err(Error::input(
+                    format!("axis_acceleration[{k}]"),
+                    format!("{a} mm/s² is not allowed; expected above 0 and at most {max} mm/s²"),
+                ));
+            }
+        }
         for (name, v) in &self.gcode_variables {
             check_variable(name, v)?;
         }
@@ -403,7 +446,28 @@ impl Printer {
             }
         };
         within("margin", e.margin, Envelope::MAX_MARGIN)?;
-        within("below_bed", e.below_bed, Envelope::MAX_BELOW_BED)
+        within("below_bed", e.below_bed, Envelope::MAX_BELOW_BED)?;
+        let (bmin, bmax) = self.bed.extent();
+        for (k, (key, r)) in [("x", e.x), ("y", e.y)].into_iter().enumerate() {
+            let Some([lo, hi]) = r else { continue };
+            let (b0, b1) = (bmin[k], bmax[k]);
+            let m = Envelope::MAX_REACH;
+            if !(lo.is_finite()
+                && hi.is_finite()
+                && lo <= b0
+                && hi >= b1
+                && lo >= b0 - m
+                && hi <= b1 + m)
+            {
+                return Err(Error::input(
+                    format!("envelope.{key}"),
+                    format!(
+                        "[{lo}, {hi}] mm is not allowed; expected a range holding the bed ({b0} to {b1} mm) and reaching at most {m} mm past it"
+                    ),
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// The start or end G-code template under `key`, parsed: no character

@@ -320,6 +320,8 @@ fn printer(raw: RawPrinter) -> Printer {
         envelope: Envelope {
             margin: raw.envelope.margin,
             below_bed: raw.envelope.below_bed,
+            x: raw.envelope.x,
+            y: raw.envelope.y,
         },
         travel_speed: raw.travel_speed,
         retraction: retraction(raw.retraction),
@@ -338,6 +340,9 @@ fn printer(raw: RawPrinter) -> Printer {
             .unwrap_or(matches!(flavor, Flavor::Marlin | Flavor::Prusa)),
         object_labels: raw.object_labels.unwrap_or(flavor == Flavor::Klipper),
         binary_gcode: raw.binary_gcode,
+        maker_temperatures: raw.maker_temperatures,
+        emit_limits: raw.emit_limits,
+        axis_acceleration: raw.axis_acceleration,
         kinematics: kinematics(raw.kinematics),
         head: head(raw.head),
         checks: checks(raw.checks),

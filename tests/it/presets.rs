@@ -425,11 +425,43 @@ fn mk3s_start_gcode_is_what_prusaslicer_writes() {
     );
     let theirs = std::fs::read_to_string(dir.join("ps.gcode")).unwrap();
     let (ours, theirs) = (lines(&ours), lines(&theirs));
+    // machine_limits_usage = emit_to_gcode: the firmware's limits first, each
+    // word the figure PrusaSlicer writes (its text differs: `X8.00`, comments)
+    let limits = ours
+        .iter()
+        .take_while(|l| {
+            ["M201 ", "M203 ", "M204 ", "M205 "]
+                .iter()
+                .any(|c| l.starts_with(c))
+        })
+        .count();
+    assert_eq!(limits, 4, "{ours:?}");
+    let words = |l: &str| -> Vec<(char, f64)> {
+        l.split(';')
+            .next()
+            .unwrap()
+            .split_whitespace()
+            .skip(1)
+            .map(|w| (w.chars().next().unwrap(), w[1..].parse::<f64>().unwrap()))
+            .collect()
+    };
+    for l in &ours[..limits] {
+        let code = l.split_whitespace().next().unwrap();
+        let t = theirs
+            .iter()
+            .find(|t| t.starts_with(&format!("{code} ")) && !t.starts_with("M205 S"))
+            .unwrap_or_else(|| panic!("PrusaSlicer writes no {code}"));
+        let tw = words(t);
+        for w in words(l) {
+            assert!(tw.contains(&w), "{l} against PrusaSlicer's {t}");
+        }
+    }
+    let ours = &ours[limits..];
     let at = theirs
         .iter()
         .position(|l| *l == ours[0])
         .expect("PrusaSlicer's start G-code");
-    assert_eq!(ours, theirs[at..at + ours.len()]);
+    assert_eq!(ours, &theirs[at..at + ours.len()]);
 }
 
 /// A variable p3dp cannot give is refused, naming it and its line, by
@@ -1119,4 +1151,80 @@ fn a_profile_folder_of_links_to_one_big_file_is_scanned_once() {
     assert!(err.contains("stopped at its cap of 4000 files"), "{err}");
     // unbounded, 8000 parses of 15 MB take minutes
     assert!(t.elapsed().as_secs_f64() < 30.0, "{:?}", t.elapsed());
+}
+
+/// A Bambu printer's own sequence (a preset written for the tests in its
+/// style): imported as Bambu's firmware, its purge chute and the plate's
+/// bare edge the profile's reach, its flush above the filament's limit
+/// accepted as the maker's, every command read as the firmware reads it;
+/// each of those moved past what the maker wrote is refused by name.
+#[test]
+fn a_bambu_sequence_builds_with_its_reach_and_flush() {
+    let dir = vase_dir("bambu-sequence");
+    let t9 = fixture("bbl/machine/Acme T9 0.4 nozzle.json");
+    let pla = fixture("bbl/filament/Acme PLA.json");
+    let out = p3dp(&dir, &["printers", "import", path(&t9), "-o", "t9.yaml"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let yaml = std::fs::read_to_string(dir.join("t9.yaml")).unwrap();
+    for line in [
+        "flavor: bambu",
+        "envelope: { margin: 5, below_bed: 1.01, x: [-48.2, 261] }",
+        "maker_temperatures: true",
+        "# - envelope.x [-48.2, 261]: where the maker's own G-code takes the head (start_gcode line 16: `G1 X-48.2 Y10 F12000`), past the bed grown by 5 mm",
+        "# - envelope.below_bed 1.01: where the maker's own G-code takes the nozzle below the bed (start_gcode line 20: `G0 X128 Y261 Z-1.01 F1200`)",
+    ] {
+        assert!(yaml.lines().any(|l| l == line), "no `{line}` in\n{yaml}");
+    }
+    let g = build_with(&dir, &["--printer", "t9.yaml", "--filament", path(&pla)]).unwrap();
+    has_lines(
+        &g,
+        &[
+            "G392 S0 ; clog detection off",
+            "M109 S250 ; flush hotter than the filament prints",
+            "G1 X-48.2 Y10 F12000 ; to the purge chute",
+            "G0 X128 Y261 Z-1.01 F1200 ; stop the nozzle on the plate's bare edge",
+            "M109 S215",
+            "G1 X-48.2 F12000 ; park at the chute",
+        ],
+    );
+    // the same preset built directly reads the same
+    let direct = build_with(&dir, &["--printer", path(&t9), "--filament", path(&pla)]).unwrap();
+    assert!(direct.contains("G1 X-48.2 Y10 F12000 ; to the purge chute"));
+
+    let edited = |from: &str, to: &str| {
+        assert!(yaml.contains(from), "{from}");
+        std::fs::write(dir.join("edited.yaml"), yaml.replace(from, to)).unwrap();
+        build_with(
+            &dir,
+            &["--printer", "edited.yaml", "--filament", path(&pla)],
+        )
+        .unwrap_err()
+    };
+    let e = edited("G1 X-48.2 Y10 F12000", "G1 X-60 Y10 F12000");
+    assert!(
+        e.contains("start_gcode line 16: `G1 X-60 Y10 F12000 ; to the purge chute`: x = -60 mm is outside the machine's travel envelope (x from -48.2 to 261 mm: the profile's envelope.x)"),
+        "{e}"
+    );
+    let e = edited("maker_temperatures: true", "maker_temperatures: false");
+    assert!(
+        e.contains("`M109 S250 ; flush hotter than the filament prints`: a nozzle temperature of 250 °C, above the limit"),
+        "{e}"
+    );
+    // the print would start at the flush temperature
+    let e = edited(
+        "M109 S{nozzle_temperature_initial_layer[initial_no_support_extruder]}",
+        "M117 no print temperature",
+    );
+    assert!(
+        e.contains("start_gcode line 15: `M109 S250 ; flush hotter than the filament prints`: the print would start at 250 °C, above the limit"),
+        "{e}"
+    );
+    let e = edited("G29.1 Z-0.04", "G29.1 Z-4");
+    assert!(e.contains("offsets the coordinates by Z -4 mm"), "{e}");
+    let e = edited("M211 R", "M290 X40 Y40 Z2");
+    assert!(e.contains("`M290` is refused"), "{e}");
 }

@@ -27,7 +27,7 @@ use super::{refuse, Format, Kind, Preset};
 use crate::base::error::{Error, Result};
 use crate::base::slicer_macro::Template;
 use crate::recipe::schema::{
-    RawExtrusion, RawFlavor, RawKinematics, RawPrinter, RawRetraction, RawVariable,
+    RawBed, RawExtrusion, RawFlavor, RawKinematics, RawPrinter, RawRetraction, RawVariable,
 };
 
 /// A preset made into a profile: its raw form and what was left out or
@@ -170,9 +170,20 @@ fn flavor(p: &Preset) -> Result<(RawFlavor, Option<String>)> {
         .text("printer_notes")
         .is_some_and(|n| n.contains("PRINTER_VENDOR_PRUSA3D"))
         || p.text("printer_model")
-            .is_some_and(|m| m.starts_with("Prusa ") || m.starts_with("Original Prusa"));
+            .is_some_and(|m| m.starts_with("Prusa ") || m.starts_with("Original Prusa"))
+        // Prusa's firmware alone checks the printer's model (the newest
+        // bundle's MK4IS, CORE One notes no longer name the vendor)
+        || p.first_text(&["start_gcode", "machine_start_gcode"])
+            .is_some_and(|(_, g)| g.contains("M862.3 P"));
+    // Bambu Lab's printers run Bambu's own Marlin-like firmware (its
+    // presets say `marlin`): their own commands are read as it reads them
+    let bambu = p
+        .text("printer_model")
+        .is_some_and(|m| m.starts_with("Bambu Lab"));
     let marlin = if prusa {
         RawFlavor::Prusa
+    } else if bambu {
+        RawFlavor::Bambu
     } else {
         RawFlavor::Marlin
     };
@@ -249,6 +260,22 @@ pub fn import(p: &Preset) -> Result<Imported> {
     limits(p, &mut raw, &mut notes)?;
     raw.thumbnails = thumbnails(p, &mut notes);
     gcode(p, &mut raw, extruders, &mut notes)?;
+    // the start G-code is the maker's: its flushes and purges may be hotter
+    // than the print (docs/checks.md)
+    raw.maker_temperatures = true;
+    if let RawBed::Rectangle { size, min, .. } = raw.bed {
+        let max = [min[0] + size[0], min[1] + size[1]];
+        let texts = [
+            ("start_gcode", raw.start_gcode.as_str()),
+            ("end_gcode", raw.end_gcode.as_str()),
+        ];
+        let r = super::reach::reach(&texts, min, max, raw.envelope.margin);
+        [raw.envelope.x, raw.envelope.y] = r.xy;
+        if let Some(d) = r.below {
+            raw.envelope.below_bed = d;
+        }
+        notes.extend(r.notes);
+    }
     for (key, why) in IGNORED {
         if p.has(key) {
             notes.push(format!("{key} ignored: {why}"));
@@ -381,8 +408,42 @@ fn limits(p: &Preset, raw: &mut RawPrinter, notes: &mut Vec<String>) -> Result<(
         notes.push("machine_limits_usage is `ignore`: p3dp's default limits".into());
         return Ok(());
     }
-    if usage.as_deref() == Some("emit_to_gcode") {
-        notes.push("machine_limits_usage is `emit_to_gcode`: the limits are p3dp's for its checks and estimate, but p3dp writes no M201–M205; the firmware keeps its own".into());
+    // PrusaSlicer's `emit_to_gcode`, OrcaSlicer's flag (its default, on, is
+    // taken only where the preset says it): M201–M205 before the start
+    // G-code, on Marlin and RepRapFirmware as the slicers write them
+    let orca = p
+        .text("emit_machine_limits_to_gcode")
+        .is_some_and(|t| t == "1" || t.eq_ignore_ascii_case("true"));
+    if usage.as_deref() == Some("emit_to_gcode") || orca {
+        let key = if orca {
+            "emit_machine_limits_to_gcode"
+        } else {
+            "machine_limits_usage = emit_to_gcode"
+        };
+        if matches!(
+            raw.flavor,
+            RawFlavor::Marlin | RawFlavor::Prusa | RawFlavor::Reprap
+        ) {
+            raw.emit_limits = true;
+            let mut a = |axis: &str| -> Result<Option<f64>> {
+                let key = format!("machine_max_acceleration_{axis}");
+                Ok(bounded(
+                    notes,
+                    &key,
+                    p.number(&key)?.filter(|v| *v > 0.0),
+                    ACCELERATION_MAX,
+                    "mm/s²",
+                ))
+            };
+            if let (Some(x), Some(y)) = (a("x")?, a("y")?) {
+                raw.axis_acceleration = Some([x, y]);
+            }
+            notes.push(format!("{key}: the limits below are written as M201, M203, M204 and M205 before the start G-code (emit_limits), and the estimate follows them"));
+        } else {
+            notes.push(format!(
+                "{key}: the slicers write no limits for this firmware, nor does p3dp"
+            ));
+        }
     }
     // OrcaSlicer and Bambu Studio call the feed rates machine_max_speed_*
     let pos = |key: &str| -> Result<Option<f64>> {
@@ -715,7 +776,6 @@ fn scalar(name: &str, s: &str) -> RawVariable {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::recipe::schema::RawBed;
 
     fn preset(format: Format, values: &[(&str, &str)]) -> Preset {
         use super::super::Setting;

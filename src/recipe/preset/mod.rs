@@ -14,6 +14,7 @@ mod bed;
 pub(crate) mod ini;
 pub(crate) mod json;
 pub(crate) mod map;
+mod reach;
 mod write;
 
 use std::collections::BTreeMap;

@@ -76,6 +76,33 @@ impl Imported {
         if r.travel_speed != d.travel_speed {
             let _ = writeln!(y, "travel_speed: {}", num(r.travel_speed));
         }
+        if r.envelope != d.envelope {
+            let e = &r.envelope;
+            let mut keys = vec![
+                format!("margin: {}", num(e.margin)),
+                format!("below_bed: {}", num(e.below_bed)),
+            ];
+            for (k, v) in [("x", e.x), ("y", e.y)] {
+                if let Some([lo, hi]) = v {
+                    keys.push(format!("{k}: [{}, {}]", num(lo), num(hi)));
+                }
+            }
+            let _ = writeln!(
+                y,
+                "# where the maker's G-code takes the head beyond the bed (see the notes)
+envelope: {{ {} }}",
+                keys.join(", ")
+            );
+        }
+        if r.maker_temperatures {
+            let _ = writeln!(y, "# the start G-code is the maker's: its flushes and purges may heat the nozzle\n# to max_nozzle_temp, the print starting within the material's limit\nmaker_temperatures: true");
+        }
+        if r.emit_limits {
+            let _ = writeln!(y, "# the limits below written as M201, M203, M204, M205 before the start G-code\nemit_limits: true");
+            if let Some([ax, ay]) = r.axis_acceleration {
+                let _ = writeln!(y, "axis_acceleration: [{}, {}]", num(ax), num(ay));
+            }
+        }
         kinematics_yaml(&mut y, &r.kinematics, &d.kinematics);
         if !r.thumbnails.is_empty() {
             let _ = writeln!(y, "thumbnails: [{}]", r.thumbnails.join(", "));
@@ -177,7 +204,7 @@ fn kinematics_yaml(y: &mut String, k: &RawKinematics, d: &RawKinematics) {
         d.max_extrude_only_accel,
     );
     if !out.is_empty() {
-        let _ = writeln!(y, "# the firmware's limits (machine_max_*), for the time estimate; p3dp does not\n# write M201–M205: the firmware keeps its own\nkinematics:\n{out}");
+        let _ = writeln!(y, "# the firmware's limits (machine_max_*), for the checks and the time estimate\nkinematics:\n{out}");
     }
 }
 

@@ -180,6 +180,19 @@ pub(crate) struct RawPrinter {
     /// Binary G-code (`.bgcode`) unless the output's name says otherwise (off).
     #[serde(default)]
     pub binary_gcode: bool,
+    /// The start G-code is the maker's own sequence: its nozzle
+    /// temperatures held to the printer's limit, the one the print starts
+    /// at to the material's (off).
+    #[serde(default)]
+    pub maker_temperatures: bool,
+    /// Write the firmware's limits (`kinematics`) as `M201`–`M205` before
+    /// the start G-code, as PrusaSlicer's `emit_to_gcode` (off).
+    #[serde(default)]
+    pub emit_limits: bool,
+    /// The firmware's maximum X and Y accelerations, mm/s², written as
+    /// `M201 X Y` with `emit_limits` (none).
+    #[serde(default)]
+    pub axis_acceleration: Option<[f64; 2]>,
     /// The firmware planner's limits.
     #[serde(default)]
     pub kinematics: RawKinematics,
@@ -215,6 +228,10 @@ pub(crate) enum RawVariable {
 pub(crate) struct RawEnvelope {
     pub margin: f64,
     pub below_bed: f64,
+    /// `[lowest, highest]` machine X the head reaches.
+    pub x: Option<[f64; 2]>,
+    /// `[lowest, highest]` machine Y the head reaches.
+    pub y: Option<[f64; 2]>,
 }
 
 impl Default for RawEnvelope {
@@ -223,6 +240,8 @@ impl Default for RawEnvelope {
         RawEnvelope {
             margin: e.margin,
             below_bed: e.below_bed,
+            x: e.x,
+            y: e.y,
         }
     }
 }
@@ -266,6 +285,9 @@ impl RawPrinter {
             progress: None,
             object_labels: None,
             binary_gcode: false,
+            maker_temperatures: false,
+            emit_limits: false,
+            axis_acceleration: None,
             kinematics: RawKinematics::default(),
             head: RawHead::default(),
             checks: RawCheckLimits::default(),
