@@ -249,7 +249,7 @@ pub(crate) fn extent(recipe: &Recipe, paths: &[Toolpath]) -> Extent {
             .iter()
             .flat_map(|t| t.points.iter().map(|p| p.z))
             .fold(0.0, f64::max),
-        ends_retracted: paths.iter().rev().find(|t| t.len() > 0).is_some_and(|t| {
+        ends_retracted: paths.iter().rev().find(|t| !t.is_empty()).is_some_and(|t| {
             let k = t.len() - 1;
             let (a, b) = t.ends(k);
             let r = &recipe.printer.retraction;

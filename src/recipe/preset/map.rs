@@ -263,6 +263,23 @@ pub fn import(p: &Preset) -> Result<Imported> {
     // the start G-code is the maker's: its flushes and purges may be hotter
     // than the print (docs/checks.md)
     raw.maker_temperatures = true;
+    reach(&mut raw, &mut notes);
+    for (key, why) in IGNORED {
+        if p.has(key) {
+            notes.push(format!("{key} ignored: {why}"));
+        }
+    }
+    Ok(Imported {
+        raw,
+        notes,
+        file: p.file.clone(),
+        format: p.format,
+    })
+}
+
+/// The head's reach beyond a rectangular bed, from the maker's own moves
+/// ([`super::reach`]).
+fn reach(raw: &mut RawPrinter, notes: &mut Vec<String>) {
     if let RawBed::Rectangle { size, min, .. } = raw.bed {
         let max = [min[0] + size[0], min[1] + size[1]];
         let texts = [
@@ -276,17 +293,6 @@ pub fn import(p: &Preset) -> Result<Imported> {
         }
         notes.extend(r.notes);
     }
-    for (key, why) in IGNORED {
-        if p.has(key) {
-            notes.push(format!("{key} ignored: {why}"));
-        }
-    }
-    Ok(Imported {
-        raw,
-        notes,
-        file: p.file.clone(),
-        format: p.format,
-    })
 }
 
 /// The nozzle, the filament, the extrusion mode and the number of
@@ -408,43 +414,7 @@ fn limits(p: &Preset, raw: &mut RawPrinter, notes: &mut Vec<String>) -> Result<(
         notes.push("machine_limits_usage is `ignore`: p3dp's default limits".into());
         return Ok(());
     }
-    // PrusaSlicer's `emit_to_gcode`, OrcaSlicer's flag (its default, on, is
-    // taken only where the preset says it): M201–M205 before the start
-    // G-code, on Marlin and RepRapFirmware as the slicers write them
-    let orca = p
-        .text("emit_machine_limits_to_gcode")
-        .is_some_and(|t| t == "1" || t.eq_ignore_ascii_case("true"));
-    if usage.as_deref() == Some("emit_to_gcode") || orca {
-        let key = if orca {
-            "emit_machine_limits_to_gcode"
-        } else {
-            "machine_limits_usage = emit_to_gcode"
-        };
-        if matches!(
-            raw.flavor,
-            RawFlavor::Marlin | RawFlavor::Prusa | RawFlavor::Reprap
-        ) {
-            raw.emit_limits = true;
-            let mut a = |axis: &str| -> Result<Option<f64>> {
-                let key = format!("machine_max_acceleration_{axis}");
-                Ok(bounded(
-                    notes,
-                    &key,
-                    p.number(&key)?.filter(|v| *v > 0.0),
-                    ACCELERATION_MAX,
-                    "mm/s²",
-                ))
-            };
-            if let (Some(x), Some(y)) = (a("x")?, a("y")?) {
-                raw.axis_acceleration = Some([x, y]);
-            }
-            notes.push(format!("{key}: the limits below are written as M201, M203, M204 and M205 before the start G-code (emit_limits), and the estimate follows them"));
-        } else {
-            notes.push(format!(
-                "{key}: the slicers write no limits for this firmware, nor does p3dp"
-            ));
-        }
-    }
+    emitted(p, usage.as_deref(), raw, notes)?;
     // OrcaSlicer and Bambu Studio call the feed rates machine_max_speed_*
     let pos = |key: &str| -> Result<Option<f64>> {
         let alias = match key.strip_prefix("machine_max_feedrate_") {
@@ -500,6 +470,54 @@ fn limits(p: &Preset, raw: &mut RawPrinter, notes: &mut Vec<String>) -> Result<(
     k.max_extrude_only_velocity = pos("machine_max_feedrate_e")?;
     k.max_extrude_only_accel = pos("machine_max_acceleration_e")?;
     raw.kinematics = k;
+    Ok(())
+}
+
+/// PrusaSlicer's `emit_to_gcode`, OrcaSlicer's flag (its default, on, is
+/// taken only where the preset says it): the limits written as `M201`–`M205`
+/// before the start G-code, on Marlin and RepRapFirmware as the slicers
+/// write them, with the preset's per-axis X and Y accelerations.
+fn emitted(
+    p: &Preset,
+    usage: Option<&str>,
+    raw: &mut RawPrinter,
+    notes: &mut Vec<String>,
+) -> Result<()> {
+    use crate::machine::limits::ACCELERATION_MAX;
+    let orca = p
+        .text("emit_machine_limits_to_gcode")
+        .is_some_and(|t| t == "1" || t.eq_ignore_ascii_case("true"));
+    if usage == Some("emit_to_gcode") || orca {
+        let key = if orca {
+            "emit_machine_limits_to_gcode"
+        } else {
+            "machine_limits_usage = emit_to_gcode"
+        };
+        if matches!(
+            raw.flavor,
+            RawFlavor::Marlin | RawFlavor::Prusa | RawFlavor::Reprap
+        ) {
+            raw.emit_limits = true;
+            let mut a = |axis: &str| -> Result<Option<f64>> {
+                let key = format!("machine_max_acceleration_{axis}");
+                Ok(bounded(
+                    notes,
+                    &key,
+                    p.number(&key)?.filter(|v| *v > 0.0),
+                    ACCELERATION_MAX,
+                    "mm/s²",
+                ))
+            };
+            if let (Some(x), Some(y)) = (a("x")?, a("y")?) {
+                raw.axis_acceleration = Some([x, y]);
+            }
+            notes.push(format!("{key}: the limits below are written as M201, M203, M204 and M205 before the start G-code (emit_limits), and the estimate follows them"));
+        } else {
+            notes.push(format!(
+                "{key}: the slicers write no limits for this firmware, nor does p3dp"
+            ));
+        }
+    }
     Ok(())
 }
 
