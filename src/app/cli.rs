@@ -87,11 +87,14 @@ pub struct PrintersArgs {
 /// The actions of `p3dp printers`.
 #[derive(Subcommand, Clone, Debug)]
 pub enum PrintersAction {
-    /// List the printer presets of a slicer's file: a PrusaSlicer/SuperSlicer .ini (bundle or exported config) or an OrcaSlicer/Bambu Studio .json.
+    /// List the printer (or, with --filaments, filament) presets of a slicer's file: a PrusaSlicer/SuperSlicer .ini (bundle or exported config) or an OrcaSlicer/Bambu Studio .json.
     List {
         /// The preset file.
         #[arg(value_name = "FILE")]
         file: PathBuf,
+        /// List the file's filament presets (for --filament-preset) instead of its printer presets.
+        #[arg(long)]
+        filaments: bool,
     },
     /// Write a slicer's printer preset as a p3dp printer profile (YAML, to standard output or -o): bed, height, nozzle, flavour, limits, retraction, thumbnails and the maker's start/end G-code.
     Import {
@@ -119,6 +122,12 @@ pub struct RecipeFlags {
     /// Use this printer (built-in name, YAML file, or a slicer's single-preset FILE.ini|FILE.json) instead of the recipe's.
     #[arg(long, value_name = "NAME|FILE")]
     pub printer: Option<String>,
+    /// Use this slicer's filament preset (a PrusaSlicer .ini bundle or exported config, an OrcaSlicer/Bambu Studio .json) instead of the recipe's material: temperatures, diameter, density, flow limit, and the filament's values for the start and end G-code.
+    #[arg(long, value_name = "FILE.ini|FILE.json")]
+    pub filament: Option<PathBuf>,
+    /// The filament preset of a bundle (`p3dp printers list FILE --filaments` lists them).
+    #[arg(long, value_name = "NAME", requires = "filament")]
+    pub filament_preset: Option<String>,
     /// Silence a check for this build: its code, e.g. `bridge`; repeatable.
     #[arg(long = "allow", value_name = "CODE")]
     pub allow: Vec<String>,
@@ -195,6 +204,14 @@ impl RecipeFlags {
                 .map(|s| parse_set(s))
                 .collect::<Result<_>>()?,
             printer: self.printer.clone(),
+            filament: self
+                .filament
+                .as_ref()
+                .map(|f| crate::recipe::preset::Source {
+                    file: f.clone(),
+                    preset: self.filament_preset.clone(),
+                    profiles: None,
+                }),
             allow: self.allow.clone(),
             allow_read: self.allow_read.clone(),
             ..Builds::default()
@@ -513,7 +530,14 @@ fn plate(a: &PlateArgs) -> Result<Vec<Error>> {
 fn printers(action: Option<PrintersAction>) -> Result<String> {
     match action {
         None => Ok(command::printers::list()),
-        Some(PrintersAction::List { file }) => command::printers::presets(&file),
+        Some(PrintersAction::List { file, filaments }) => {
+            let kind = if filaments {
+                crate::recipe::preset::Kind::Filament
+            } else {
+                crate::recipe::preset::Kind::Printer
+            };
+            command::printers::presets(kind, &file)
+        }
         Some(PrintersAction::Import {
             file,
             preset,
@@ -587,6 +611,7 @@ fn watch(a: &WatchArgs) -> Result<()> {
         build: crate::app::prepare::Options {
             sets: b.sets,
             printer: b.printer,
+            filament: b.filament,
             allow: b.allow,
             allow_read: b.allow_read,
         },

@@ -17,6 +17,9 @@ pub struct Options {
     pub sets: Vec<(String, String)>,
     /// `--printer NAME|FILE` overrides the recipe's printer.
     pub printer: Option<String>,
+    /// `--filament FILE [--filament-preset NAME]`: a slicer's filament
+    /// preset overrides the recipe's material.
+    pub filament: Option<crate::recipe::preset::Source>,
     /// `--allow CODE`: check codes silenced for this build.
     pub allow: Vec<String>,
     /// `--allow-read DIR`: folders the recipe may read in besides its project.
@@ -47,7 +50,9 @@ pub fn prepare_in(path: &Path, opts: &Options, cx: &Context) -> Result<Plan> {
         let spec = crate::recipe::resolve::plate::PlateSpec::from_raw(&raw, path)?;
         return prepare_plate(&spec, &shown, opts, printer.as_ref(), cx);
     }
-    let recipe = Recipe::from_raw_in(&raw, path, &opts.sets, printer.as_ref(), cx)?;
+    let material = filament(opts, cx)?;
+    let given = (printer.as_ref(), material.as_ref());
+    let recipe = Recipe::from_raw_in(&raw, path, &opts.sets, given, cx)?;
     // each part with its own steps, then the steps of groups; the skirt first
     let paths = crate::generate::plate::made(&recipe).map_err(|e| e.in_file(&shown))?;
     Plan::new(shown, recipe, paths)
@@ -94,6 +99,23 @@ fn command_line(opts: &Options, cx: &Context) -> Result<Option<Printer>> {
     }
 }
 
+/// The command line's `--filament` preset as the material.
+fn filament(opts: &Options, cx: &Context) -> Result<Option<crate::machine::Material>> {
+    let Some(src) = &opts.filament else {
+        return Ok(None);
+    };
+    cx.reads.name(&src.file);
+    crate::recipe::resolve::from_filament(src, &cx.reads)
+        .map(Some)
+        .map_err(|e| {
+            if e.file.is_none() {
+                e.under("--filament")
+            } else {
+                e
+            }
+        })
+}
+
 /// The plan of a plate (`shown` as reports name it): its objects loaded
 /// with the command line's `--set` and `--printer`, arranged.
 pub(crate) fn prepare_plate(
@@ -103,6 +125,12 @@ pub(crate) fn prepare_plate(
     printer: Option<&Printer>,
     cx: &Context,
 ) -> Result<Plan> {
+    if opts.filament.is_some() {
+        return Err(Error::input(
+            "--filament",
+            "a plate's objects keep their recipes' materials; expected --filament with a recipe, not a plate",
+        ));
+    }
     let (recipe, paths) = crate::recipe::resolve::plate::make(spec, &opts.sets, printer, cx)
         .map_err(|e| e.in_file(shown))?;
     Plan::new(shown.to_string(), recipe, paths)

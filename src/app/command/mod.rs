@@ -38,6 +38,8 @@ pub(crate) struct Builds {
     pub sweeps: Vec<(String, Vec<String>)>,
     /// `--printer NAME|FILE`.
     pub printer: Option<String>,
+    /// `--filament FILE [--filament-preset NAME]`.
+    pub filament: Option<crate::recipe::preset::Source>,
     /// `--allow CODE`.
     pub allow: Vec<String>,
     /// `--allow-read DIR`.
@@ -108,6 +110,7 @@ impl Builds {
         let opts = Options {
             sets: job.sets.clone(),
             printer: self.printer.clone().or_else(|| job.printer.clone()),
+            filament: self.filament.clone(),
             allow: self.allow.clone(),
             allow_read: self.allow_read.clone(),
         };

@@ -27,7 +27,9 @@ use crate::base::error::{Error, Result};
 use crate::generate::model::{
     Group, Part, Recipe, Skirt, DEFAULT_CROSS_SECTION, DEFAULT_MAX_STRINGS, DEFAULT_SPEED,
 };
-use crate::machine::Printer;
+use crate::machine::{Material, Printer};
+
+pub(crate) use material::from_filament;
 
 /// Evaluates numbers of one recipe: its params, and where images and a
 /// turtle's limits come from.
@@ -71,8 +73,20 @@ impl Recipe {
         printer: Option<&Printer>,
         cx: &Context,
     ) -> Result<Recipe> {
+        Recipe::load_with(path, sets, printer, None, cx)
+    }
+
+    /// [`Recipe::load_in`], `material` (a filament preset's, `--filament`)
+    /// overriding the recipe's material.
+    pub fn load_with(
+        path: &Path,
+        sets: &[(String, String)],
+        printer: Option<&Printer>,
+        material: Option<&Material>,
+        cx: &Context,
+    ) -> Result<Recipe> {
         let raw = Recipe::read_raw(path, cx)?;
-        Recipe::from_raw_in(&raw, path, sets, printer, cx)
+        Recipe::from_raw_in(&raw, path, sets, (printer, material), cx)
     }
 
     /// The recipe file at `path` as written (a recipe or a plate), read in
@@ -99,17 +113,18 @@ impl Recipe {
         Ok(raw)
     }
 
-    /// [`Recipe::load_in`] of the recipe `raw` read from `path`.
+    /// [`Recipe::load_in`] of the recipe `raw` read from `path`, with the
+    /// command line's printer and material (`--filament`) if given.
     pub(crate) fn from_raw_in(
         raw: &RawRecipe,
         path: &Path,
         sets: &[(String, String)],
-        printer: Option<&Printer>,
+        given: (Option<&Printer>, Option<&Material>),
         cx: &Context,
     ) -> Result<Recipe> {
         let shown = path.display().to_string();
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-        Recipe::resolve_in(raw, sets, printer, &dir, Some(path), cx).map_err(|e| e.in_file(&shown))
+        Recipe::resolve_in(raw, sets, given, &dir, Some(path), cx).map_err(|e| e.in_file(&shown))
     }
 
     /// Resolves a parsed recipe; relative paths are taken from `dir`.
@@ -119,7 +134,7 @@ impl Recipe {
         printer: Option<&Printer>,
         dir: &Path,
     ) -> Result<Recipe> {
-        Recipe::resolve_in(raw, sets, printer, dir, None, &Context::default())
+        Recipe::resolve_in(raw, sets, (printer, None), dir, None, &Context::default())
     }
 
     /// [`Recipe::resolve`] for the recipe read from `file` (so that an
@@ -127,7 +142,7 @@ impl Recipe {
     fn resolve_in(
         raw: &RawRecipe,
         sets: &[(String, String)],
-        printer: Option<&Printer>,
+        (printer, given): (Option<&Printer>, Option<&Material>),
         dir: &Path,
         file: Option<&Path>,
         cx: &Context,
@@ -147,7 +162,15 @@ impl Recipe {
                 Printer::resolve(spec, dir, &cx.reads)?
             }
         };
-        let material = material::resolve(&top.under(key!(raw.material)), raw.material.as_ref())?;
+        let material = match given {
+            Some(m) => m.clone(),
+            None => material::resolve(&top.under(key!(raw.material)), raw.material.as_ref())?,
+        };
+        let mut printer = printer;
+        if let Some(q) = material.max_volumetric_speed {
+            // the filament's own flow limit, where it is below the hot end's
+            printer.max_flow = printer.max_flow.min(q);
+        }
         let defaults = &raw.defaults;
         let ds = top.under(key!(raw.defaults));
         let c0 = ds.positive_or(at!(defaults.cross_section), DEFAULT_CROSS_SECTION)?;
