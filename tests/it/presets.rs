@@ -722,7 +722,7 @@ fn build_with(dir: &Path, args: &[&str]) -> Result<String, String> {
     }
 }
 
-fn vase_dir(name: &str) -> PathBuf {
+fn vase_dir(name: &str) -> crate::common::Tmp {
     let dir = tmp(name);
     std::fs::write(dir.join("vase.yaml"), VASE).unwrap();
     dir
