@@ -37,7 +37,7 @@ pub fn prepare(path: &Path, opts: &Options) -> Result<Plan> {
 }
 
 /// [`prepare`] in the loading context `cx` (the files read noted there,
-/// its lent z-buffers used).
+/// its lent z-buffers and kept parts used).
 pub fn prepare_in(path: &Path, opts: &Options, cx: &Context) -> Result<Plan> {
     let shown = path.display().to_string();
     // the command line's own mistakes name the option, not the recipe
@@ -65,7 +65,8 @@ pub fn prepare_in(path: &Path, opts: &Options, cx: &Context) -> Result<Plan> {
     };
     let recipe = Recipe::load_in(path, &opts.sets, printer.as_ref(), cx)?;
     // each part with its own steps, then the steps of groups
-    let parts = crate::generate::assembly::make_parts(&recipe).map_err(|e| e.in_file(&shown))?;
+    let parts = crate::generate::assembly::make_parts_in(&recipe, cx.parts.as_ref())
+        .map_err(|e| e.in_file(&shown))?;
     let mut paths = Vec::with_capacity(parts.len() + 1);
     if let Some(s) = &recipe.skirt {
         let cv = (recipe.parts[0].cross_section, recipe.parts[0].speed);
