@@ -351,8 +351,8 @@ fn example_script_makes_the_same_files_as_the_sweep() {
 }
 
 /// `check --sweep` keeps no variant's plan once it is checked (each was kept
-/// until the end: 300 variants of a 30 mm helix held 166 MB); the lines
-/// come out in the variants' order all the same.
+/// until the end, so the peak grew with the variants); the lines come out
+/// in the variants' order all the same.
 #[test]
 fn a_checked_sweep_lets_each_variant_go() {
     let dir = tmp("sweep-memory");
