@@ -29,6 +29,7 @@ use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Condvar, Mutex, MutexGuard};
 
+use crate::analyse::check::first_layer::Footprint;
 use crate::analyse::check::tasks::{Task, Tasks};
 use crate::analyse::plan::Plan;
 use crate::analyse::planner::{
@@ -36,6 +37,7 @@ use crate::analyse::planner::{
 };
 use crate::analyse::stats::{MoveStats, Stats};
 use crate::base::error::{Error, Result};
+use crate::base::finding::Finding;
 use crate::output::file::{HashWriter, Scratch};
 use crate::output::gcode::metadata::{Ahead, Options};
 use crate::output::gcode::Head;
@@ -143,6 +145,13 @@ pub struct Written<W> {
 /// Runs every check of `plan` and keeps what they found; the costly checks
 /// side by side when the pool allows.
 pub fn check(plan: &mut Plan, allow: &[String]) {
+    (plan.findings, plan.footprints) = checked(plan, allow);
+}
+
+/// What every check of `plan` finds (silenced as `allow` says) and each
+/// part's hold on the bed, the plan left as it is: for a caller that reads
+/// the plan meanwhile (`p3dp watch` draws it while it is checked).
+pub(crate) fn checked(plan: &Plan, allow: &[String]) -> (Vec<Finding>, Vec<Footprint>) {
     let tasks = Tasks::new(
         &plan.recipe,
         plan.paths.iter().collect(),
@@ -157,7 +166,7 @@ pub fn check(plan: &mut Plan, allow: &[String]) {
     });
     let (mut findings, footprints) = tasks.merged();
     plan.silence(&mut findings, allow);
-    (plan.findings, plan.footprints) = (findings, footprints);
+    (findings, footprints)
 }
 
 /// The one entry of a build: `plan`'s G-code written to `out` as `job`

@@ -40,7 +40,7 @@ pub fn prepare(path: &Path, opts: &Options) -> Result<Plan> {
 }
 
 /// [`prepare`] in the loading context `cx` (the files read noted there,
-/// its lent z-buffers used).
+/// its lent z-buffers and kept parts used).
 pub fn prepare_in(path: &Path, opts: &Options, cx: &Context) -> Result<Plan> {
     let shown = path.display().to_string();
     let printer = command_line(opts, cx)?;
@@ -54,7 +54,8 @@ pub fn prepare_in(path: &Path, opts: &Options, cx: &Context) -> Result<Plan> {
     let given = (printer.as_ref(), material.as_ref());
     let recipe = Recipe::from_raw_in(&raw, path, &opts.sets, given, cx)?;
     // each part with its own steps, then the steps of groups; the skirt first
-    let paths = crate::generate::plate::made(&recipe).map_err(|e| e.in_file(&shown))?;
+    let paths = crate::generate::plate::made_in(&recipe, cx.parts.as_ref())
+        .map_err(|e| e.in_file(&shown))?;
     Plan::new(shown, recipe, paths)
 }
 

@@ -6,13 +6,26 @@
 //! (the recipe, its `include:`s, images, printer profiles and what they
 //! `inherits`; the [`crate::recipe::context::Context`] of its load) is followed by watching its
 //! folder (so an editor that saves by writing a new file and renaming it
-//! over the old one is seen too); a change, settled for [`SETTLE`], starts a
-//! new build. The page follows `/events` (server-sent events): `model` swaps
-//! the geometry in place (the camera stays), `build-error` shows the error,
-//! rendered as in the terminal, beside the last good model.
-//! The `solid` parts' z-buffers are kept from one build to the next
-//! ([`crate::generate::primitive::solid::Reusing`]): an edited feature re-slices only
-//! the layers it reaches, and the build line says how many.
+//! over the old one is seen too). A save starts a new build at once, with no
+//! settling delay: a write is taken as done by its own last event (the file
+//! closed after writing, or renamed into place), and the events already
+//! queued when a build starts are covered by it (a burst builds once, from
+//! the last state). Only a change that no such event ends (a file system
+//! that reports no closes) waits for the files to be quiet for
+//! [`UNCLOSED`].
+//!
+//! The page follows `/events` (server-sent events): `model` swaps the
+//! geometry in place (the camera stays) as soon as it is drawn, while the
+//! checks still run beside it; `checks` then gives their findings and the
+//! moves they flag; `build-error` shows an error, rendered as in the
+//! terminal, beside the last good model.
+//!
+//! What a build made is kept for the next, in the loading context
+//! ([`crate::recipe::context::Context`]): the `solid` parts' z-buffers
+//! ([`crate::generate::primitive::solid::Reusing`]: an edited feature
+//! re-slices only the layers it reaches) and every part's toolpath
+//! ([`crate::generate::assembly::Parts`]: a part whose resolved form is
+//! unchanged is not made again); the build line says how much was made.
 //!
 //! The server binds 127.0.0.1 only and answers only requests addressed to
 //! it by that name or `localhost`. Nothing is written to disk. The first
@@ -23,7 +36,7 @@ use std::collections::BTreeSet;
 use std::io::Write;
 use std::net::{Ipv4Addr, SocketAddr, TcpListener};
 use std::path::{Path, PathBuf};
-use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
+use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender, TryRecvError};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
 
@@ -32,6 +45,7 @@ use serde_json::{json, Value};
 use crate::app::http;
 use crate::app::prepare::{prepare_in, Options as BuildOptions};
 use crate::base::error::{Error, Result};
+use crate::generate::assembly::{Parts, PartsMade};
 use crate::generate::primitive::solid::Reusing;
 use crate::output::file::identity;
 use crate::recipe::context::Context;
@@ -39,12 +53,10 @@ use crate::recipe::context::Context;
 /// The port `p3dp watch` serves on unless `--port` says otherwise.
 pub(crate) const DEFAULT_PORT: u16 = 8430;
 
-/// How long the files must stay unchanged after a change before a build
-/// starts (an editor's save may be several writes and a rename).
-pub(crate) const SETTLE: Duration = Duration::from_millis(100);
-
-/// The longest a stream of changes delays a build.
-const SETTLE_AT_MOST: Duration = Duration::from_secs(1);
+/// How long the files must stay quiet after a change that no close or
+/// rename ends before a build starts (a file system that reports no closes;
+/// a file written through a memory map).
+pub(crate) const UNCLOSED: Duration = Duration::from_millis(100);
 
 /// How often an idle event stream gets a comment (finds closed pages).
 const KEEP_ALIVE: Duration = Duration::from_secs(15);
@@ -74,8 +86,13 @@ struct State {
     build: u64,
     /// The last good build: its number, the viewer's data and the event.
     model: Option<(u64, Arc<Value>, Arc<String>)>,
+    /// The checks of a build drawn: its number, the findings (as the
+    /// viewer lists them) and the event.
+    checks: Option<(u64, Arc<Value>, Arc<String>)>,
     /// The newest build when it failed: its number, text and the event.
     error: Option<(u64, Arc<String>, Arc<String>)>,
+    /// The newest build drawn and how long it took to draw.
+    drawn: (u64, Duration),
     /// Bumped on every change, so a stream knows it has news.
     seq: u64,
     /// Set when the server stops.
@@ -108,14 +125,30 @@ impl Shared {
 enum Wake {
     /// A file event from the watcher.
     Files(notify::Result<notify::Event>),
+    /// A build's model is drawn (its checks still run).
+    Drawn(Box<Drawn>),
     /// A build finished.
     Built(Box<Outcome>),
     /// A signal: stop.
     Stop,
 }
 
-/// The solids' z-buffers kept between builds (lent to each, see [`crate::generate::primitive::solid::Reusing`]).
-type Buffers = Arc<Mutex<crate::generate::primitive::solid::Cache>>;
+/// What one build keeps for the next (lent to each in its [`Context`]):
+/// the solids' z-buffers ([`crate::generate::primitive::solid::Reusing`])
+/// and the parts made ([`Parts`]).
+#[derive(Default)]
+struct Kept {
+    zbuffers: crate::generate::primitive::solid::Cache,
+    parts: Parts,
+}
+
+/// A build's model, drawn before its checks finish.
+struct Drawn {
+    number: u64,
+    /// The viewer's data (its findings empty: the checks are still running).
+    data: Value,
+    took: Duration,
+}
 
 /// One build's result.
 struct Outcome {
@@ -123,14 +156,19 @@ struct Outcome {
     result: Result<Built>,
     /// Per solid: its layers and how many were recomputed.
     solids: Vec<crate::generate::primitive::solid::Reuse>,
+    /// How many parts were made anew, of how many.
+    parts: PartsMade,
     /// The files the build read or tried to read.
     inputs: Vec<PathBuf>,
     took: Duration,
 }
 
-/// What a good build gives the page and the terminal.
+/// What a good build gives the page and the terminal once checked.
 struct Built {
-    data: Value,
+    /// The findings as the viewer lists them.
+    findings: Value,
+    /// The moves they flag, by index.
+    flagged: Vec<u32>,
     /// `2 warnings, 0 errors · 100.0 × 100.0 × 50.0 mm`.
     summary: String,
 }
@@ -256,94 +294,98 @@ fn follow(
     let mut files = Files::default();
     // the recipe's folder from the start: a save during the first build counts
     files.update(&mut watcher, &opts.recipe, &[]);
-    let buffers = Buffers::default();
-    let mut number = 1;
-    start_build(opts, number, tx, &buffers);
-    let mut building = true;
-    let mut again = false;
-    // the first change not yet built, and the newest
-    let mut pending: Option<(Instant, Instant)> = None;
+    let kept = Arc::new(Mutex::new(Kept::default()));
+    let mut number = 0;
+    // a build is wanted (the first, or a change); one is running
+    let (mut wanted, mut building) = (true, false);
+    // when the newest change that no close or rename ended was seen
+    let mut unclosed: Option<Instant> = None;
     loop {
-        let wake = match pending {
-            Some((first, last)) => {
-                let due = (last + SETTLE).min(first + SETTLE_AT_MOST);
-                match rx.recv_timeout(due.saturating_duration_since(Instant::now())) {
-                    Ok(w) => Some(w),
-                    Err(RecvTimeoutError::Timeout) => None,
-                    Err(RecvTimeoutError::Disconnected) => return Ok(()),
+        let wake = if wanted && !building {
+            // the events queued already belong to this build (both halves
+            // of a rename, a burst of saves): it reads the files after them
+            match rx.try_recv() {
+                Ok(w) => Some(w),
+                Err(TryRecvError::Empty) => {
+                    (wanted, building, unclosed) = (false, true, None);
+                    number += 1;
+                    start_build(opts, number, tx, &kept);
+                    continue;
                 }
+                Err(TryRecvError::Disconnected) => return Ok(()),
             }
-            None => match rx.recv() {
+        } else if let Some(t) = unclosed {
+            match rx.recv_timeout((t + UNCLOSED).saturating_duration_since(Instant::now())) {
+                Ok(w) => Some(w),
+                Err(RecvTimeoutError::Timeout) => None,
+                Err(RecvTimeoutError::Disconnected) => return Ok(()),
+            }
+        } else {
+            match rx.recv() {
                 Ok(w) => Some(w),
                 Err(_) => return Ok(()),
-            },
+            }
         };
         match wake {
             Some(Wake::Stop) => return Ok(()),
-            Some(Wake::Files(Ok(ev))) => {
-                if files.touches(&ev) {
-                    let now = Instant::now();
-                    pending = Some(pending.map_or((now, now), |(first, _)| (first, now)));
-                }
-            }
+            Some(Wake::Files(Ok(ev))) => match files.change(&ev) {
+                Change::Done => (wanted, unclosed) = (true, None),
+                Change::Begun => unclosed = Some(Instant::now()),
+                Change::None => {}
+            },
             Some(Wake::Files(Err(e))) => crate::tellln!("note: watching files: {e}"),
+            Some(Wake::Drawn(d)) => publish_model(shared, *d),
             Some(Wake::Built(out)) => {
                 building = false;
                 files.update(&mut watcher, &opts.recipe, &out.inputs);
                 publish(shared, *out);
-                if again {
-                    again = false;
-                    number += 1;
-                    start_build(opts, number, tx, &buffers);
-                    building = true;
-                }
             }
-            None => {
-                // the files have settled
-                pending = None;
-                if building {
-                    again = true;
-                } else {
-                    number += 1;
-                    start_build(opts, number, tx, &buffers);
-                    building = true;
-                }
-            }
+            None => (wanted, unclosed) = (true, None),
         }
     }
 }
 
 /// Builds on a thread of its own (a signal is answered mid-build), telling
-/// the main loop the outcome; the solids start from the z-buffers of the
-/// build before, so an edited feature re-slices only the layers it reaches.
-fn start_build(opts: &Options, number: u64, tx: &Sender<Wake>, buffers: &Buffers) {
-    let (opts, to_main, buffers) = (opts.clone(), tx.clone(), Arc::clone(buffers));
+/// the main loop the model as soon as it is drawn, then the outcome; the
+/// build starts from what the build before kept.
+fn start_build(opts: &Options, number: u64, tx: &Sender<Wake>, kept: &Arc<Mutex<Kept>>) {
+    let (opts, to_main, kept) = (opts.clone(), tx.clone(), Arc::clone(kept));
     let spawned = std::thread::Builder::new()
         .name(format!("p3dp-build-{number}"))
         .spawn(move || {
             let t0 = Instant::now();
-            // a bug in a stage must not leave the loop waiting for this build
-            let mut kept = buffers.lock().unwrap_or_else(|e| e.into_inner());
+            let mut kept = kept.lock().unwrap_or_else(|e| e.into_inner());
             let cx = Context {
-                zbuffers: Some(Reusing::new(std::mem::take(&mut *kept))),
+                zbuffers: Some(Reusing::new(std::mem::take(&mut kept.zbuffers))),
+                parts: Some(std::mem::take(&mut kept.parts)),
                 ..Context::default()
             };
-            let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| build(&opts, &cx)))
-                .unwrap_or_else(|_| {
-                    Err(Error::io(
-                        "p3dp watch",
-                        "the build stopped on an internal error (a bug of p3dp; please report it with the recipe)",
-                    ))
-                });
+            let drawn = |data: Value| {
+                let took = t0.elapsed();
+                let d = Drawn { number, data, took };
+                let _ = to_main.send(Wake::Drawn(Box::new(d)));
+            };
+            // a bug in a stage must not leave the loop waiting for this build
+            let result =
+                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| build(&opts, &cx, &drawn)))
+                    .unwrap_or_else(|_| {
+                        Err(Error::io(
+                            "p3dp watch",
+                            "the build stopped on an internal error (a bug of p3dp; please report it with the recipe)",
+                        ))
+                    });
             let inputs = cx.reads.files();
             let cache = cx.zbuffers.map(Reusing::finish).unwrap_or_default();
             let solids = cache.last.clone();
-            *kept = cache;
+            let parts = cx.parts.unwrap_or_default();
+            let made = parts.finish(result.is_err());
+            (kept.zbuffers, kept.parts) = (cache, parts);
             drop(kept);
             let _ = to_main.send(Wake::Built(Box::new(Outcome {
                 number,
                 result,
                 solids,
+                parts: made,
                 inputs,
                 took: t0.elapsed(),
             })));
@@ -356,59 +398,102 @@ fn start_build(opts: &Options, number: u64, tx: &Sender<Wake>, buffers: &Buffers
                 format!("cannot start a build: {e}"),
             )),
             solids: Vec::new(),
+            parts: PartsMade::default(),
             inputs: Vec::new(),
             took: Duration::ZERO,
         })));
     }
 }
 
-/// One build in the loading context `cx`: the plan, its G-code (in
-/// memory) and the viewer's data.
-fn build(opts: &Options, cx: &Context) -> Result<Built> {
-    let (p, stats, viewer) = crate::app::pipeline::run(opts.threads, || {
+/// One build in the loading context `cx`: the plan, refused when it
+/// reaches far beyond the machine (as `preview` refuses it); then its
+/// model drawn (G-code written in memory, handed to `drawn`) while its
+/// checks run beside, when the pool has a second thread; then what the
+/// checks found.
+fn build(opts: &Options, cx: &Context, drawn: &(dyn Fn(Value) + Sync)) -> Result<Built> {
+    use crate::output::preview::html;
+    crate::app::pipeline::run(opts.threads, || {
         let mut p = prepare_in(&opts.recipe, &opts.build, cx)?;
-        crate::app::pipeline::check(&mut p, &opts.build.allow);
         crate::analyse::check::within_reach(&p.recipe, &p.paths, "preview")
             .map_err(|e| e.in_file(&p.path))?;
-        let mut viewer = crate::output::preview::html::reader(&p);
-        let stats = crate::app::pipeline::view(&p, &mut viewer)?;
-        Ok::<_, Error>((p, stats, viewer))
-    })?;
-    let view = crate::output::preview::Options::default();
-    let (data, _) = crate::output::preview::html::data(&p, viewer, &stats, &view);
-    let size = [0, 1, 2].map(|k| format!("{:.1}", stats.bbox.max[k] - stats.bbox.min[k]));
-    Ok(Built {
-        data,
-        summary: format!(
-            "{} · {} mm",
-            crate::base::finding::summary(&p.findings),
-            size.join(" × ")
-        ),
+        // the viewer's moves read from the G-code beside the passes' spacing
+        let draw = || -> Result<[f64; 3]> {
+            let read = || -> Result<_> {
+                let mut viewer = html::reader(&p);
+                let stats = crate::app::pipeline::view(&p, &mut viewer)?;
+                Ok((viewer, stats))
+            };
+            let view = crate::output::preview::Options::default();
+            let (read, drawing) = rayon::join(read, || html::draw(&p, &view));
+            let (viewer, stats) = read?;
+            drawn(html::finish(drawing, viewer, &stats).to_value());
+            Ok([0, 1, 2].map(|k| stats.bbox.max[k] - stats.bbox.min[k]))
+        };
+        let check = || crate::app::pipeline::checked(&p, &opts.build.allow);
+        let (size, (findings, footprints)) = rayon::join(draw, check);
+        let size = size?;
+        (p.findings, p.footprints) = (findings, footprints);
+        let (findings, flagged) =
+            html::checked(&p, |r| crate::app::pipeline::view(&p, r).map(drop))?;
+        let size = size.map(|x| format!("{x:.1}"));
+        Ok(Built {
+            findings: Value::Array(findings),
+            flagged,
+            summary: format!(
+                "{} · {} mm",
+                crate::base::finding::summary(&p.findings),
+                size.join(" × ")
+            ),
+        })
     })
 }
 
-/// Tells the terminal and the pages how a build went.
+/// Tells the pages a build's model, drawn before its checks are done.
+fn publish_model(shared: &Shared, d: Drawn) {
+    let mut st = shared.lock();
+    st.build = st.build.max(d.number);
+    let event = json!({"run": shared.run, "build": d.number, "model": d.data, "pending": "checks"});
+    st.model = Some((d.number, Arc::new(d.data), Arc::new(event.to_string())));
+    st.drawn = (d.number, d.took);
+    st.error = None;
+    st.seq += 1;
+    drop(st);
+    shared.changed.notify_all();
+}
+
+/// Tells the terminal and the pages how a build went: its checks' findings
+/// when it drew a model, else its error.
 fn publish(shared: &Shared, out: Outcome) {
     let secs = out.took.as_secs_f64();
     let mut st = shared.lock();
     st.build = st.build.max(out.number);
     match out.result {
         Ok(b) => {
+            let drawn = match st.drawn {
+                (n, t) if n == out.number => format!(" (drawn in {:.2} s)", t.as_secs_f64()),
+                _ => String::new(),
+            };
             crate::sayln!(
-                "build {}: ok in {secs:.2} s · {}{} · watching {} file{}",
+                "build {}: ok in {secs:.2} s{drawn} · {}{}{} · watching {} file{}",
                 out.number,
                 b.summary,
+                made(&out.parts),
                 resliced(&out.solids),
                 out.inputs.len(),
                 if out.inputs.len() == 1 { "" } else { "s" }
             );
-            let event = json!({"run": shared.run, "build": out.number, "model": b.data});
-            st.model = Some((out.number, Arc::new(b.data), Arc::new(event.to_string())));
-            st.error = None;
+            let event = json!({"run": shared.run, "build": out.number,
+                "findings": b.findings, "flagged": b.flagged});
+            st.checks = Some((
+                out.number,
+                Arc::new(b.findings),
+                Arc::new(event.to_string()),
+            ));
         }
         Err(e) => {
             let kept = match &st.model {
-                Some((n, _, _)) => format!("the page keeps build {n}'s model"),
+                Some((n, _, _)) if *n != out.number => format!("the page keeps build {n}'s model"),
+                Some(_) => "its model stays on the page".to_string(),
                 None => "no model to show yet".to_string(),
             };
             crate::tellln!("build {} failed in {secs:.2} s ({kept}):", out.number);
@@ -425,6 +510,14 @@ fn publish(shared: &Shared, out: Outcome) {
     st.seq += 1;
     drop(st);
     shared.changed.notify_all();
+}
+
+/// ` · parts made: 1 of 2` (made anew, of all), or nothing without parts.
+fn made(parts: &PartsMade) -> String {
+    if parts.parts == 0 {
+        return String::new();
+    }
+    format!(" · parts made: {} of {}", parts.made, parts.parts)
 }
 
 /// ` · solid layers re-sliced: 20 of 70` (each solid's count, `+`-joined),
@@ -445,6 +538,8 @@ fn resliced(solids: &[crate::generate::primitive::solid::Reuse]) -> String {
 struct Files {
     files: BTreeSet<PathBuf>,
     dirs: BTreeSet<PathBuf>,
+    /// The tracker of the last rename seen by its new name.
+    renamed: Option<usize>,
 }
 
 impl Files {
@@ -477,20 +572,63 @@ impl Files {
         self.dirs = dirs;
     }
 
-    /// Whether a file event concerns a file followed (or a missing folder on
-    /// the way to one). Reading a file is no change; closing one written is
-    /// (the last event of a slow write).
-    fn touches(&self, ev: &notify::Event) -> bool {
-        use notify::event::{AccessKind, AccessMode};
+    /// What a file event says of the files followed (or of a missing
+    /// folder on the way to one): reading is no change; a write ends when
+    /// the file is closed, or renamed into place.
+    fn change(&mut self, ev: &notify::Event) -> Change {
+        use notify::event::{AccessKind, AccessMode, CreateKind, ModifyKind, RenameMode};
         use notify::EventKind;
-        if matches!(ev.kind, EventKind::Access(a) if a != AccessKind::Close(AccessMode::Write)) {
-            return false;
+        // a rename told twice (its new name, then both names) is one change
+        if let EventKind::Modify(ModifyKind::Name(mode)) = ev.kind {
+            let told = ev.tracker().is_some() && ev.tracker() == self.renamed;
+            if mode == RenameMode::To {
+                self.renamed = ev.tracker();
+            }
+            if mode == RenameMode::Both && told {
+                return Change::None;
+            }
         }
-        ev.paths.iter().any(|p| {
+        let kind = match ev.kind {
+            EventKind::Access(AccessKind::Close(AccessMode::Write)) => Change::Done,
+            EventKind::Access(_) => return Change::None,
+            // the new file in place (a rename's own half, or one reported whole)
+            EventKind::Modify(ModifyKind::Name(
+                RenameMode::To | RenameMode::Both | RenameMode::Any,
+            )) => Change::Done,
+            // gone, or a missing folder made: nothing more will come
+            EventKind::Remove(_) | EventKind::Create(CreateKind::Folder) => Change::Done,
+            // written or made, not yet closed (or renamed away, a new one to come)
+            _ => Change::Begun,
+        };
+        // a rename reported whole names where from, then where to
+        let paths = match ev.kind {
+            EventKind::Modify(ModifyKind::Name(RenameMode::Both)) => {
+                ev.paths.last().into_iter().collect()
+            }
+            _ => ev.paths.iter().collect::<Vec<_>>(),
+        };
+        let followed = paths.into_iter().any(|p| {
             let id = identity(p);
             self.files.iter().any(|f| *f == id || f.starts_with(&id))
-        })
+        });
+        if followed {
+            kind
+        } else {
+            Change::None
+        }
     }
+}
+
+/// What a file event means for the build.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Change {
+    /// Nothing followed changed.
+    None,
+    /// A followed file is being written (or renamed away): its close or
+    /// rename ends the change.
+    Begun,
+    /// A followed file's change is complete: build.
+    Done,
 }
 
 /// Whether the request names this server: `127.0.0.1`, `localhost` or
@@ -547,10 +685,16 @@ fn answer(req: &http::Request, shared: &Arc<Shared>) -> http::Answer {
 /// The viewer page as it stands: the last good model and the newest state.
 fn page(shared: &Shared) -> String {
     let st = shared.lock();
-    let data = st
+    let mut data = st
         .model
         .as_ref()
         .map_or(Value::Null, |(_, d, _)| (**d).clone());
+    // the model's checks, once done (their flags come with the stream)
+    if let (Some((n, _, _)), Some((c, findings, _))) = (&st.model, &st.checks) {
+        if n == c {
+            data["findings"] = (**findings).clone();
+        }
+    }
     let live = json!({
         "run": shared.run,
         "build": st.build,
@@ -576,10 +720,10 @@ fn stream(mut out: Box<dyn Write + Send>, shared: &Shared) {
     {
         return;
     }
-    let (mut sent_model, mut sent_error) = (0u64, 0u64);
+    let (mut sent_model, mut sent_checks, mut sent_error) = (0u64, 0u64, 0u64);
     let mut seen = u64::MAX;
     loop {
-        let (model, error) = {
+        let (model, checks, error) = {
             let st = shared.lock();
             let (st, timeout) = shared
                 .changed
@@ -589,7 +733,7 @@ fn stream(mut out: Box<dyn Write + Send>, shared: &Shared) {
                 return;
             }
             if timeout.timed_out() {
-                (None, None)
+                (None, None, None)
             } else {
                 seen = st.seq;
                 let model = st
@@ -597,18 +741,27 @@ fn stream(mut out: Box<dyn Write + Send>, shared: &Shared) {
                     .as_ref()
                     .filter(|(n, _, _)| *n != sent_model)
                     .map(|(n, _, e)| (*n, Arc::clone(e)));
+                let checks = st
+                    .checks
+                    .as_ref()
+                    .filter(|(n, _, _)| *n != sent_checks)
+                    .map(|(n, _, e)| (*n, Arc::clone(e)));
                 let error = st
                     .error
                     .as_ref()
                     .filter(|(n, _, _)| *n != sent_error)
                     .map(|(n, _, e)| (*n, Arc::clone(e)));
-                (model, error)
+                (model, checks, error)
             }
         };
         let mut msg = String::new();
         if let Some((n, e)) = model {
             sent_model = n;
             msg.push_str(&format!("event: model\nid: {n}\ndata: {e}\n\n"));
+        }
+        if let Some((n, e)) = checks {
+            sent_checks = n;
+            msg.push_str(&format!("event: checks\nid: {n}\ndata: {e}\n\n"));
         }
         if let Some((n, e)) = error {
             sent_error = n;
@@ -645,7 +798,7 @@ mod tests {
     }
 
     #[test]
-    fn events_of_followed_files_count_reads_do_not() {
+    fn a_write_is_done_when_closed_or_renamed_into_place_reads_are_nothing() {
         let dir = std::env::temp_dir();
         let mut files = Files::default();
         let recipe = dir.join("p3dp-watch-unit.yaml");
@@ -654,27 +807,53 @@ mod tests {
             .files
             .insert(identity(&dir.join("p3dp-no-such-dir/map.png")));
         let ev = |kind, p: PathBuf| notify::Event::new(kind).add_path(p);
-        use notify::event::{AccessKind, CreateKind, ModifyKind, RenameMode};
-        assert!(files.touches(&ev(
-            notify::EventKind::Modify(ModifyKind::Name(RenameMode::To)),
-            recipe.clone()
-        )));
-        assert!(!files.touches(&ev(
-            notify::EventKind::Access(AccessKind::Any),
-            recipe.clone()
-        )));
-        assert!(files.touches(&ev(
-            notify::EventKind::Access(AccessKind::Close(notify::event::AccessMode::Write)),
-            recipe.clone()
-        )));
-        assert!(!files.touches(&ev(
-            notify::EventKind::Create(CreateKind::File),
-            dir.join("p3dp-watch-unit.yaml.swp")
-        )));
+        use notify::event::{
+            AccessKind, AccessMode, CreateKind, DataChange, ModifyKind, RenameMode,
+        };
+        use notify::EventKind;
+        let data = EventKind::Modify(ModifyKind::Data(DataChange::Any));
+        let close = EventKind::Access(AccessKind::Close(AccessMode::Write));
+        // written in place: begun by the writes, done when closed
+        assert_eq!(files.change(&ev(data, recipe.clone())), Change::Begun);
+        assert_eq!(files.change(&ev(close, recipe.clone())), Change::Done);
+        // a new file renamed over it: done at the rename
+        let to = EventKind::Modify(ModifyKind::Name(RenameMode::To));
+        assert_eq!(files.change(&ev(to, recipe.clone())), Change::Done);
+        let tmp = dir.join("p3dp-watch-unit.yaml.tmp");
+        let both = notify::Event::new(EventKind::Modify(ModifyKind::Name(RenameMode::Both)))
+            .add_path(tmp.clone())
+            .add_path(recipe.clone());
+        assert_eq!(files.change(&both), Change::Done);
+        // the same rename told by its new name, then by both: one change
+        let to = ev(to, recipe.clone()).set_tracker(7);
+        assert_eq!(files.change(&to), Change::Done);
+        assert_eq!(files.change(&both.clone().set_tracker(7)), Change::None);
+        assert_eq!(files.change(&both.set_tracker(8)), Change::Done);
+        // renamed away (an editor's backup): a new one is to come
+        let away = notify::Event::new(EventKind::Modify(ModifyKind::Name(RenameMode::Both)))
+            .add_path(recipe.clone())
+            .add_path(dir.join("p3dp-watch-unit.yaml~"));
+        assert_eq!(files.change(&away), Change::None);
+        let from = EventKind::Modify(ModifyKind::Name(RenameMode::From));
+        assert_eq!(files.change(&ev(from, recipe.clone())), Change::Begun);
+        // reading is no change; others' files neither
+        let read = EventKind::Access(AccessKind::Any);
+        assert_eq!(files.change(&ev(read, recipe.clone())), Change::None);
+        assert_eq!(files.change(&ev(close, tmp)), Change::None);
+        assert_eq!(
+            files.change(&ev(
+                EventKind::Create(CreateKind::File),
+                dir.join("p3dp-watch-unit.yaml.swp")
+            )),
+            Change::None
+        );
         // the missing folder made: the image may be there now
-        assert!(files.touches(&ev(
-            notify::EventKind::Create(CreateKind::Folder),
-            dir.join("p3dp-no-such-dir")
-        )));
+        assert_eq!(
+            files.change(&ev(
+                EventKind::Create(CreateKind::Folder),
+                dir.join("p3dp-no-such-dir")
+            )),
+            Change::Done
+        );
     }
 }

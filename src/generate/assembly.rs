@@ -16,7 +16,7 @@
 
 use crate::base::error::{Error, Result};
 use crate::base::toolpath::{Strand, Toolpath};
-use crate::generate::model::{make_part_within, Group, Recipe};
+use crate::generate::model::{make_part_within, Group, Part, Recipe};
 use crate::generate::step::Step;
 
 /// Most strings all parts of a recipe may have together, before and after
@@ -27,13 +27,23 @@ pub(crate) fn total_limit(recipe: &Recipe) -> u64 {
 
 /// Makes every part with its own steps, then runs the group steps.
 pub fn make_parts(recipe: &Recipe) -> Result<Vec<Toolpath>> {
+    make_parts_in(recipe, None)
+}
+
+/// [`make_parts`], each part's own toolpath taken from `kept` when the
+/// build before made it from the same inputs (`p3dp watch`).
+pub(crate) fn make_parts_in(recipe: &Recipe, kept: Option<&Parts>) -> Result<Vec<Toolpath>> {
     let limit = total_limit(recipe);
     let mut parts = Vec::with_capacity(recipe.parts.len());
     let mut total = 0u64;
     for k in 0..recipe.parts.len() {
         // each part's steps get what the limits leave after the parts before it
         let budget = recipe.max_strings.min(limit.saturating_sub(total));
-        let tp = make_part_within(recipe, k, budget)?;
+        let make = || make_part_within(recipe, k, budget);
+        let tp = match kept {
+            Some(kept) => kept.part(&recipe.parts[k], budget, make)?,
+            None => make()?,
+        };
         total = total.saturating_add(tp.len() as u64);
         if total > limit {
             return Err(over_total(&recipe.parts[k].place, total, limit));
@@ -197,6 +207,107 @@ fn split(all: Toolpath) -> Vec<Toolpath> {
         }
         first = k;
     }
+}
+
+/// The parts one build made, kept for the next by a long-running command
+/// (`p3dp watch`, in its loading context): each part's own toolpath (its
+/// primitives and steps, before groups, stands and brims) under the
+/// fingerprint of everything that made it, so that a part whose inputs are
+/// unchanged is taken back instead of made again. What a part reads is in
+/// its resolved form (its expressions with the params they read, the pixels
+/// of its images, its turtle's path), so the fingerprint is SHA-256 of that
+/// form as `Debug` writes it (every field, floats in their shortest exact
+/// form) and of the strings its steps may make.
+#[derive(Debug, Default)]
+pub struct Parts(std::sync::Mutex<Kept>);
+
+/// The inside of [`Parts`].
+#[derive(Debug, Default)]
+struct Kept {
+    /// The build before's parts.
+    last: Vec<([u8; 32], Toolpath)>,
+    /// This build's, as they are made.
+    next: Vec<([u8; 32], Toolpath)>,
+    /// This build's parts taken back.
+    reused: usize,
+}
+
+/// What a build did with the parts kept ([`Parts::finish`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PartsMade {
+    /// Parts made anew.
+    pub made: usize,
+    /// All the parts of the build.
+    pub parts: usize,
+}
+
+impl Parts {
+    fn lock(&self) -> std::sync::MutexGuard<'_, Kept> {
+        self.0.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// The toolpath of `part` under `budget`: the build before's when it
+    /// was made from the same, else `make`'s.
+    fn part(
+        &self,
+        part: &Part,
+        budget: u64,
+        make: impl FnOnce() -> Result<Toolpath>,
+    ) -> Result<Toolpath> {
+        let key = fingerprint(part, budget);
+        let found = (self.lock().last.iter())
+            .find(|(k, _)| *k == key)
+            .map(|(_, tp)| tp.clone());
+        let reused = found.is_some();
+        let tp = match found {
+            Some(tp) => tp,
+            None => make()?,
+        };
+        let mut kept = self.lock();
+        kept.reused += usize::from(reused);
+        kept.next.push((key, tp.clone()));
+        Ok(tp)
+    }
+
+    /// Ends a build: the parts it made are those kept for the next (a
+    /// build that `failed` part way keeps the ones before too); how many it
+    /// made anew, of how many it took.
+    pub fn finish(&self, failed: bool) -> PartsMade {
+        let mut kept = self.lock();
+        let next = std::mem::take(&mut kept.next);
+        let made = PartsMade {
+            made: next.len() - kept.reused,
+            parts: next.len(),
+        };
+        let old = std::mem::replace(&mut kept.last, next);
+        if failed {
+            // at most twice the parts of a whole build, however many fail
+            let most = 2 * old.len().max(kept.last.len());
+            for (k, tp) in old {
+                if kept.last.len() < most && !kept.last.iter().any(|(n, _)| *n == k) {
+                    kept.last.push((k, tp));
+                }
+            }
+        }
+        kept.reused = 0;
+        made
+    }
+}
+
+/// SHA-256 of `part`'s resolved form as `Debug` writes it and of `budget`.
+fn fingerprint(part: &Part, budget: u64) -> [u8; 32] {
+    use sha2::Digest;
+    use std::fmt::Write;
+    struct Hashing(sha2::Sha256);
+    impl Write for Hashing {
+        fn write_str(&mut self, s: &str) -> std::fmt::Result {
+            self.0.update(s.as_bytes());
+            Ok(())
+        }
+    }
+    let mut h = Hashing(sha2::Sha256::new());
+    let _ = write!(h, "{budget} {part:?}");
+    h.0.finalize().into()
 }
 
 #[cfg(test)]

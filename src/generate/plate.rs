@@ -448,7 +448,16 @@ fn centre(placed: &mut [(usize, DVec2, Shadow)], area: &Area) {
 /// first, then each part with its own steps, its groups' steps, stands and
 /// brims ([`crate::generate::assembly::make_parts`]).
 pub(crate) fn made(recipe: &Recipe) -> Result<Vec<Toolpath>> {
-    let parts = crate::generate::assembly::make_parts(recipe)?;
+    made_in(recipe, None)
+}
+
+/// [`made`], each part's own toolpath taken from `kept` when the build
+/// before made it from the same inputs (`p3dp watch`).
+pub(crate) fn made_in(
+    recipe: &Recipe,
+    kept: Option<&crate::generate::assembly::Parts>,
+) -> Result<Vec<Toolpath>> {
+    let parts = crate::generate::assembly::make_parts_in(recipe, kept)?;
     let mut paths = Vec::with_capacity(parts.len() + 1);
     if let Some(s) = &recipe.skirt {
         let cv = (recipe.parts[0].cross_section, recipe.parts[0].speed);

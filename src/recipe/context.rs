@@ -1,8 +1,10 @@
 //! What loading one recipe shares with the command that asked for it,
 //! passed down explicitly (no state of a thread's own): the files it read,
-//! and the z-buffers a long-running command lends each build.
+//! and what a long-running command keeps from one build for the next (the
+//! solids' z-buffers, the parts made).
 
 use crate::base::input::Reads;
+use crate::generate::assembly::Parts;
 use crate::generate::primitive::solid::Reusing;
 
 /// The context of one load: [`Context::default`] keeps nothing for later.
@@ -14,4 +16,7 @@ pub struct Context {
     /// The z-buffers of the build before, for its solids to start from
     /// (`p3dp watch`).
     pub zbuffers: Option<Reusing>,
+    /// The parts of the build before, each taken back when its inputs are
+    /// unchanged (`p3dp watch`).
+    pub parts: Option<Parts>,
 }

@@ -349,3 +349,62 @@ fn example_script_makes_the_same_files_as_the_sweep() {
         }
     }
 }
+
+/// `check --sweep` keeps no variant's plan once it is checked (each was kept
+/// until the end, so the peak grew with the variants); the lines come out
+/// in the variants' order all the same.
+#[test]
+fn a_checked_sweep_lets_each_variant_go() {
+    let dir = tmp("sweep-memory");
+    std::fs::write(
+        dir.join("big.yaml"),
+        "p3dp: 1\nname: big\nprinter: generic-220\nmaterial: pla\nparams: {rad: 10}\nparts:\n  - primitive:\n      helix: { radius: rad, height: 30, pitch: 0.2 }\n",
+    )
+    .unwrap();
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_p3dp"))
+        .args([
+            "check",
+            "big.yaml",
+            "--sweep",
+            "rad=10..10.299:0.001",
+            "-j",
+            "2",
+        ])
+        .current_dir(&dir)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let pid = child.id();
+    // the peak, read until the process ends
+    let peak = std::thread::spawn(move || {
+        let mut peak = 0u64;
+        while let Ok(s) = std::fs::read_to_string(format!("/proc/{pid}/status")) {
+            let kb = s
+                .lines()
+                .find_map(|l| l.strip_prefix("VmHWM:"))
+                .and_then(|v| v.trim().trim_end_matches("kB").trim().parse().ok());
+            match kb {
+                Some(kb) => peak = peak.max(kb),
+                None => break, // a zombie: done
+            }
+            std::thread::sleep(std::time::Duration::from_millis(10));
+        }
+        peak
+    });
+    let out = child.wait_with_output().unwrap();
+    let peak = peak.join().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    let labels: Vec<&str> = text
+        .lines()
+        .filter(|l| l.starts_with("big.yaml ["))
+        .collect();
+    assert_eq!(labels.len(), 300, "{text}");
+    assert!(labels[0].starts_with("big.yaml [rad=10]:"), "{}", labels[0]);
+    assert!(
+        labels[299].starts_with("big.yaml [rad=10.299]:"),
+        "{}",
+        labels[299]
+    );
+    assert!(peak > 0 && peak < 60_000, "peak {peak} kB");
+}

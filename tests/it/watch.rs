@@ -200,7 +200,13 @@ fn the_page_follows_edits_errors_and_stops_on_sigint() {
         (s[0] - 20.0).abs() < 0.5 && (s[2] - 2.0).abs() < 0.3,
         "{s:?}"
     );
-    let findings = first["model"]["findings"].as_array().unwrap();
+    // the model comes before its checks are done; their findings follow,
+    // for the same build, with the moves they flag
+    assert_eq!(first["pending"], "checks", "{}", first["pending"]);
+    let checks = next(&ev, "checks", Duration::from_secs(10));
+    assert_eq!(checks["build"], first["build"]);
+    assert!(checks["flagged"].is_array(), "{checks}");
+    let findings = checks["findings"].as_array().unwrap();
     for f in findings {
         for k in ["code", "severity", "message"] {
             assert!(f[k].is_string(), "{f}");
@@ -426,4 +432,64 @@ fn hostile_clients_never_hold_a_fresh_get_up() {
     assert!(peak < 300_000, "{peak} kB at most");
     drop(held);
     drop(server);
+}
+
+/// Two parts, one edited: only that one is made again; the other is the
+/// build before's toolpath (the build line says how many were made).
+#[test]
+fn an_edited_part_is_made_again_alone() {
+    let dir = tmp("watch-parts");
+    let recipe = dir.join("two.yaml");
+    let text = "p3dp: 1\nname: two\nprinter: generic-220\nmaterial: pla\nparams: {rad: 10, h: 2}\nparts:\n  - name: left\n    primitive:\n      helix: { radius: rad, height: h, pitch: 0.5 }\n    steps: [{translate: [-30, 0, 0]}]\n  - name: right\n    primitive:\n      helix: { radius: 8, height: 3, pitch: 0.5 }\n    steps: [{translate: [30, 0, 0]}]\n";
+    std::fs::write(&recipe, text).unwrap();
+    let server = start(&dir, &["two.yaml"]);
+    let l = line_with(&server, ": ok in ", Duration::from_secs(20));
+    assert!(l.contains("parts made: 2 of 2"), "{l}");
+    // the right part's helix taller: the left one is taken back
+    save(&recipe, &text.replace("height: 3", "height: 4"));
+    let l = line_with(&server, ": ok in ", Duration::from_secs(20));
+    assert!(l.contains("parts made: 1 of 2"), "{l}");
+    // a param the left part reads: that one only
+    save(
+        &recipe,
+        &text
+            .replace("height: 3", "height: 4")
+            .replace("rad: 10", "rad: 11"),
+    );
+    let l = line_with(&server, ": ok in ", Duration::from_secs(20));
+    assert!(l.contains("parts made: 1 of 2"), "{l}");
+    // a comment: nothing made
+    save(
+        &recipe,
+        &format!(
+            "{}# a note\n",
+            text.replace("height: 3", "height: 4")
+                .replace("rad: 10", "rad: 11")
+        ),
+    );
+    let l = line_with(&server, ": ok in ", Duration::from_secs(20));
+    assert!(l.contains("parts made: 0 of 2"), "{l}");
+}
+
+/// A model far beyond the machine is refused as `preview` refuses it (its
+/// drawing would take minutes and gigabytes), named in the page's error;
+/// the page keeps the last model.
+#[test]
+fn a_model_far_beyond_the_machine_is_refused() {
+    let dir = tmp("watch-far");
+    let recipe = dir.join("far.yaml");
+    std::fs::write(&recipe, RECIPE).unwrap();
+    std::fs::write(dir.join("lib.yaml"), LIB).unwrap();
+    let server = start(&dir, &["far.yaml"]);
+    let ev = events(server.port);
+    let first = next(&ev, "model", Duration::from_secs(10));
+    save(&recipe, &RECIPE.replace("radius: 10", "radius: 100000000"));
+    let e = next(&ev, "build-error", Duration::from_secs(10));
+    let text = e["error"].as_str().unwrap();
+    assert!(
+        text.contains("farther than")
+            && text.contains("a preview is drawn of what lies near the machine"),
+        "{text}"
+    );
+    assert!(e["build"].as_u64() > first["build"].as_u64());
 }

@@ -75,8 +75,14 @@ impl Builds {
         // a variant is named (file, summary) by the values its sweep gives
         // the params, not the text: `amplitude=1 + cycles/2` is 2.5 there;
         // a recipe that cannot be read keeps the text, its build says why
+        // (each recipe read once, however many variants it has)
+        let mut libraries = std::collections::HashMap::new();
         for job in jobs.iter_mut().filter(|j| !j.sweep.is_empty()) {
-            if let Ok(params) = crate::recipe::expand::param_values(&job.recipe, &job.sets) {
+            let library = libraries
+                .entry(job.recipe.clone())
+                .or_insert_with(|| crate::recipe::expand::param_library(&job.recipe).ok());
+            let params = library.as_ref().map(|l| l.eval_params(&job.sets));
+            if let Some(Ok(params)) = params {
                 for (name, value) in &mut job.sweep {
                     if let Some(shown) = params.show(name) {
                         *value = shown;

@@ -28,9 +28,16 @@ const MAX_CORNERS: usize = 64;
 /// Columns the hull's points are gathered in (see [`hull`]).
 const COLUMNS: usize = 4096;
 
-/// Part names made safe for Klipper's parser and unique up to case.
+/// Part names made safe for Klipper's parser and unique up to case: a name
+/// taken already gets the first of `_2`, `_3`… not taken. In time linear in
+/// the names: the names taken are kept in a set (lower case), and each base
+/// remembers the suffix it reached (a name once taken stays taken, so the
+/// first free one is never below it).
 pub(crate) fn names<'a>(parts: impl IntoIterator<Item = &'a str>) -> Vec<String> {
+    use std::collections::{HashMap, HashSet};
     let mut out: Vec<String> = Vec::new();
+    let mut taken: HashSet<String> = HashSet::new();
+    let mut next: HashMap<String, usize> = HashMap::new();
     for name in parts {
         let mut base: String = name
             .chars()
@@ -45,13 +52,19 @@ pub(crate) fn names<'a>(parts: impl IntoIterator<Item = &'a str>) -> Vec<String>
         if base.is_empty() {
             base = "part".to_string();
         }
-        let taken = |n: &str| out.iter().any(|o| o.eq_ignore_ascii_case(n));
+        let key = base.to_ascii_lowercase();
         let mut n = base.clone();
-        let mut k = 2;
-        while taken(&n) {
-            n = format!("{base}_{k}");
-            k += 1;
+        if taken.contains(&key) {
+            let k = next.entry(key).or_insert(2);
+            loop {
+                n = format!("{base}_{k}");
+                *k += 1;
+                if !taken.contains(&n.to_ascii_lowercase()) {
+                    break;
+                }
+            }
         }
+        taken.insert(n.to_ascii_lowercase());
         out.push(n);
     }
     out
@@ -175,6 +188,33 @@ pub(crate) fn define(name: &str, hull: &[DVec2]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn ten_thousand_names_alike_are_made_unique_in_linear_time() {
+        // each name was tried against every one before it, for every suffix
+        let alike: Vec<String> = (0..10_000)
+            .map(|k| {
+                if k % 3 == 0 {
+                    "Ring".into()
+                } else {
+                    format!("ring_{}", k % 7 + 2)
+                }
+            })
+            .collect();
+        let t0 = std::time::Instant::now();
+        let n = names(alike.iter().map(String::as_str));
+        assert!(
+            t0.elapsed() < std::time::Duration::from_secs(2),
+            "{:?}",
+            t0.elapsed()
+        );
+        let lower: std::collections::HashSet<String> =
+            n.iter().map(|s| s.to_ascii_lowercase()).collect();
+        assert_eq!(lower.len(), 10_000, "unique up to case");
+        assert_eq!(&n[..4], ["Ring", "ring_3", "ring_4", "Ring_2"]);
+        // the first free suffix, as before: `ring_2` was taken as a name
+        assert_eq!(names(["a", "a_2", "a", "A"]), ["a", "a_2", "a_3", "A_4"]);
+    }
 
     #[test]
     fn names_are_safe_and_unique_up_to_case() {

@@ -36,7 +36,7 @@ use std::sync::Arc;
 
 use indexmap::IndexMap;
 
-pub(crate) use include::{load_library, load_part_includes, Includes, Template};
+pub(crate) use include::{load_library, load_part_includes, Includes, Library, Template};
 
 use crate::base::error::{Error, Result};
 use crate::base::expr::{self, Params};
@@ -808,13 +808,11 @@ fn reserved_names() -> String {
     v.join(", ")
 }
 
-/// The params of the recipe at `path` (its includes' first) with `sets`
-/// in place of their values: what a build would evaluate them to, without
-/// building (a sweep's names and summary show these values).
-pub(crate) fn param_values(
-    path: &std::path::Path,
-    sets: &[(String, String)],
-) -> crate::base::error::Result<crate::base::expr::Params> {
+/// The params of the recipe at `path` (its includes' first), read once:
+/// [`Library::eval_params`] with a variant's `--set`s gives what a build
+/// would evaluate them to, without building (a sweep's names and summary
+/// show these values; its thousands of variants share one read).
+pub(crate) fn param_library(path: &std::path::Path) -> crate::base::error::Result<Library> {
     let shown = path.display().to_string();
     let reads = crate::base::input::Reads::default();
     let text = reads.read_text(path, "recipe")?;
@@ -823,7 +821,7 @@ pub(crate) fn param_values(
         .parent()
         .map(std::path::Path::to_path_buf)
         .unwrap_or_default();
-    load_library(&raw, Some(path), &dir, &reads)?.eval_params(sets)
+    load_library(&raw, Some(path), &dir, &reads)
 }
 
 #[cfg(test)]

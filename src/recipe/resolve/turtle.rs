@@ -112,6 +112,11 @@ pub(super) struct Compiler<'a> {
 /// of 12,000 `let` names made 72 million names' worth of scopes (1.5 GB).
 pub(crate) const MAX_NAMES: usize = 256;
 
+/// Most control points of one `bezier` (each point of the curve sums a
+/// term per control point; past about a thousand the binomial weights
+/// leave f64's range anyway).
+pub(crate) const MAX_BEZIER_POINTS: usize = 1000;
+
 fn check_name(name: &str, params: &Params, scope: &[String], place: &str) -> Result<()> {
     if scope.len() >= MAX_NAMES {
         return Err(Error::input(
@@ -398,6 +403,15 @@ impl<'a> Compiler<'a> {
                     return Err(Error::input(
                         join(&p, "points"),
                         format!("{} control point(s); expected at least two", b.points.len()),
+                    ));
+                }
+                if b.points.len() > MAX_BEZIER_POINTS {
+                    return Err(Error::input(
+                        join(&p, "points"),
+                        format!(
+                            "{} control points; expected at most {MAX_BEZIER_POINTS} (a curve of more is better made of several)",
+                            b.points.len()
+                        ),
                     ));
                 }
                 let mut points = Vec::with_capacity(b.points.len());
@@ -870,6 +884,35 @@ mod tests {
         assert!(e.message.contains("one line"), "{e}");
         let e = err("program:\n  - {bezier: {points: [[0,0,0]], segments: 2}}\n");
         assert!(e.message.contains("at least two"), "{e}");
+        // a curve of 1,001 control points, and one whose points times
+        // segments pass the cap: refused, naming the key, before any is made
+        let many = |n: usize| vec!["[0,0,0]"; n].join(",");
+        let e = err(&format!(
+            "program:\n  - {{bezier: {{points: [{}], segments: 2}}}}\n",
+            many(1001)
+        ));
+        assert_eq!(
+            e.place.as_deref(),
+            Some("turtle.program[0].bezier.points"),
+            "{e}"
+        );
+        assert!(e.message.contains("at most 1000"), "{e}");
+        let t0 = std::time::Instant::now();
+        let e = err(&format!(
+            "program:\n  - {{bezier: {{points: [{}], segments: 10000000}}}}\n",
+            many(1000)
+        ));
+        assert_eq!(
+            e.place.as_deref(),
+            Some("turtle.program[0].bezier.segments"),
+            "{e}"
+        );
+        assert!(e.message.contains("expected at most"), "{e}");
+        assert!(
+            t0.elapsed() < std::time::Duration::from_secs(2),
+            "{:?}",
+            t0.elapsed()
+        );
     }
 
     #[test]

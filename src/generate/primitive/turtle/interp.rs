@@ -961,6 +961,11 @@ impl<'a> Run<'a> {
 /// Most strings one curve command may make (each a step of its own beside).
 pub(crate) const MAX_CURVE_SEGMENTS: f64 = 1e7;
 
+/// Most terms of one `bezier`: (segments + 1) × control points, each term
+/// two powers (a straight Bézier of two points may still have the most
+/// segments).
+pub(crate) const MAX_BEZIER_TERMS: f64 = 2e7;
+
 impl<'a> Run<'a> {
     /// The commands the turtle shares with a path: `move`/`draw`, `for`,
     /// `let`, the curves, `extrude_volume` and `gcode`.
@@ -1120,6 +1125,17 @@ impl<'a> Run<'a> {
                     ctrl.push(self.eval3(p, vals, &format!("{place}.points[{k}]"))?);
                 }
                 let n = segments(self, n, vals)?;
+                // each point of the curve sums a term per control point
+                let terms = (n as f64 + 1.0) * ctrl.len() as f64;
+                if terms > MAX_BEZIER_TERMS {
+                    return Err(Error::input(
+                        key("segments"),
+                        format!(
+                            "{n} segments of a curve of {} control points make {terms:.0} terms; expected at most {MAX_BEZIER_TERMS:.0} (fewer segments or control points)",
+                            ctrl.len()
+                        ),
+                    ));
+                }
                 super::shapes::bezier(&ctrl, n)
             }
             Curve::Line {

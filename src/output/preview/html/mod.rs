@@ -129,6 +129,29 @@ pub(crate) fn reader(plan: &Plan) -> Reader {
     r
 }
 
+/// The checks' part of a model drawn before they ran (`p3dp watch` sends
+/// the geometry first): the findings as the viewer lists them, and the
+/// moves they flag, by index. `view` hands the plan's moves to a reader
+/// (as the pipeline's `view` does); it runs only when a string is
+/// flagged.
+pub(crate) fn checked(
+    plan: &Plan,
+    view: impl FnOnce(&mut Reader) -> crate::base::error::Result<()>,
+) -> crate::base::error::Result<(Vec<serde_json::Value>, Vec<u32>)> {
+    let flags = super::scene::flags(plan);
+    let ends = flagged_ends(plan, &flags);
+    if ends.is_empty() {
+        return Ok((findings_json(plan), Vec::new()));
+    }
+    let mut r = Reader::new(origin(plan), ends, filament_area(plan));
+    view(&mut r)?;
+    let flagged = (r.kind.iter().enumerate())
+        .filter(|(_, &k)| k == 2)
+        .map(|(i, _)| i as u32)
+        .collect();
+    Ok((findings_json(plan), flagged))
+}
+
 /// A viewer before the G-code is read: the plan read for drawing (but for
 /// its flags, which the [`Reader`] holds) and what it shows.
 pub(crate) struct Drawing<'p> {
@@ -166,19 +189,6 @@ fn filament_area(plan: &Plan) -> f64 {
         .filament_diameter
         .unwrap_or(plan.recipe.printer.filament_diameter);
     std::f64::consts::PI * d * d / 4.0
-}
-
-/// What the viewer shows of `plan` (whose G-code is `gcode` and stats
-/// `stats`): its moves, stats and findings, as the JSON the page reads; and
-/// how many points it carries.
-pub(crate) fn data(
-    plan: &Plan,
-    r: Reader,
-    stats: &Stats,
-    opts: &Options,
-) -> (serde_json::Value, usize) {
-    let data = finish(draw(plan, opts), r, stats);
-    (data.to_value(), data.points())
 }
 
 /// What the viewer shows of a plan: per move its point, feed rate, kind,

@@ -38,7 +38,7 @@ pub(crate) fn write_page(title: &str, data: &Data, w: &mut dyn Write) -> std::io
     }
 }
 
-/// A viewer page showing `data` (as [`data`] makes it; `null`: no model
+/// A viewer page showing `data` (as [`super::Data::to_value`] makes it; `null`: no model
 /// yet) under `title`. `live` is `null` for a file; `p3dp watch` gives the
 /// state the page starts from and follows its server-sent events.
 pub(crate) fn page_with(title: &str, data: &serde_json::Value, live: &serde_json::Value) -> String {
