@@ -27,7 +27,7 @@ pub(crate) use num::{Num, Num3, RawPoint};
 pub(crate) use param::{RawChoice, RawParam};
 pub(crate) use part::{RawBrim, RawLoop, RawPart, RawPrimitiveItem, RawStand};
 pub(crate) use primitive::{
-    RawArc, RawCaHelix, RawCircle, RawCylinder, RawDirection, RawHelix, RawInitial, RawLayout,
+    RawArc, RawCaHelix, RawCircle, RawLabel, RawCylinder, RawDirection, RawHelix, RawInitial, RawLayout,
     RawOutline, RawPath, RawPatternHelix, RawPrimitive, RawRule, RawSpiral,
 };
 pub(crate) use profile::{
@@ -35,7 +35,7 @@ pub(crate) use profile::{
     RawRetraction, RawVariable,
 };
 pub(crate) use solid::{RawFeature, RawInfill, RawOp, RawPattern, RawSolid};
-pub(crate) use step::{RawAxis, RawDeform, RawKeep, RawStep};
+pub(crate) use step::{RawAxis, RawDeform, RawKeep, RawSet, RawStep};
 pub(crate) use turtle::{RawCommand, RawLsystem, RawProcedure, RawTurtle};
 
 /// `material:` a built-in name or an inline map.
