@@ -278,6 +278,9 @@ pub struct Printer {
     /// Write Prusa's binary G-code (`.bgcode`) when the output's name does
     /// not say (PrusaSlicer's `binary_gcode`); off by default.
     pub binary_gcode: bool,
+    /// Pressure (linear) advance written after the start G-code, s (none:
+    /// the firmware keeps its own).
+    pub pressure_advance: Option<f64>,
     /// The firmware planner's limits, for the print-time estimate (see
     /// [`super::Kinematics`]).
     pub kinematics: super::kinematics::Kinematics,
@@ -314,6 +317,17 @@ impl Printer {
         positive("max_speed", self.max_speed)?;
         positive("max_flow", self.max_flow)?;
         positive("arc_tolerance", self.arc_tolerance)?;
+        if let Some(k) = self.pressure_advance {
+            if !(k >= 0.0) {
+                return Err(Error::input("pressure_advance", "expected 0 or more"));
+            }
+            super::limits::at_most(
+                "pressure_advance",
+                k,
+                super::limits::PRESSURE_ADVANCE_MAX,
+                "s",
+            )?;
+        }
         super::limits::at_most("arc_tolerance", self.arc_tolerance, MAX_ARC_TOLERANCE, "mm")?;
         match self.bed {
             Bed::Rectangle { size, .. } => {

@@ -336,6 +336,7 @@ fn printer(raw: RawPrinter) -> Printer {
             .unwrap_or(matches!(flavor, Flavor::Marlin | Flavor::Prusa)),
         object_labels: raw.object_labels.unwrap_or(flavor == Flavor::Klipper),
         binary_gcode: raw.binary_gcode,
+        pressure_advance: raw.pressure_advance,
         kinematics: kinematics(raw.kinematics),
         head: head(raw.head),
         checks: checks(raw.checks),

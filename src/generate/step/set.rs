@@ -361,9 +361,12 @@ mod tests {
     fn one_setting_per_band_at_its_first_string_with_any_step() {
         for (every, step) in [(1.0, 5.0), (1.0, 2.5), (0.6, 3.0), (5.0, 1.0)] {
             let mut tp = wall(50); // 0.2 .. 10.0
-            set(Bands::Height { from: 0.0, every }, &format!("230 - band*{step}"))
-                .apply(&mut tp)
-                .unwrap();
+            set(
+                Bands::Height { from: 0.0, every },
+                &format!("230 - band*{step}"),
+            )
+            .apply(&mut tp)
+            .unwrap();
             let bands: Vec<(usize, Band)> = tp
                 .events
                 .iter()
@@ -393,12 +396,22 @@ mod tests {
     #[test]
     fn a_layer_on_a_band_edge_opens_the_band_above() {
         let mut tp = wall(50);
-        set(Bands::Height { from: 0.0, every: 1.0 }, "band")
-            .apply(&mut tp)
-            .unwrap();
+        set(
+            Bands::Height {
+                from: 0.0,
+                every: 1.0,
+            },
+            "band",
+        )
+        .apply(&mut tp)
+        .unwrap();
         // layer 5 is at z = 5 × 0.2 (= 1.0000000000000002): band 1 begins there
         let (k, _) = tp.events[1];
-        assert!((tp.points[k + 1].z - 1.0).abs() < 1e-9, "{}", tp.points[k + 1].z);
+        assert!(
+            (tp.points[k + 1].z - 1.0).abs() < 1e-9,
+            "{}",
+            tp.points[k + 1].z
+        );
     }
 
     #[test]

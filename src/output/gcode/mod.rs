@@ -310,7 +310,10 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
             names: Vec::new(),
             defines: Vec::new(),
             flow: 1.0,
-            retraction: (recipe.printer.retraction.length, recipe.printer.retraction.speed),
+            retraction: (
+                recipe.printer.retraction.length,
+                recipe.printer.retraction.speed,
+            ),
             retracted_units: 0,
         }
     }
@@ -431,6 +434,14 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
             "",
         )
         .map_err(io)?;
+        if let Some(k) = self.printer.pressure_advance {
+            // the profile's calibrated value (`p3dp calibrate apply`)
+            s.command(
+                &Command::Set(Setting::PressureAdvance { k }),
+                " ; the profile's pressure_advance",
+            )
+            .map_err(io)?;
+        }
         Ok(())
     }
 

@@ -61,7 +61,10 @@ pub(super) fn resolve(
 }
 
 /// `label:`; `s` is under `label`.
-fn label(raw: &crate::recipe::schema::RawLabel, s: &Scope) -> Result<crate::generate::primitive::Label> {
+fn label(
+    raw: &crate::recipe::schema::RawLabel,
+    s: &Scope,
+) -> Result<crate::generate::primitive::Label> {
     use crate::generate::primitive::label::{segments, CHARSET};
     let text = crate::recipe::expand::fill_name(&raw.text, s.params, &s.place("text"))?;
     crate::base::safe_text::check(&s.place("text"), &text)?;

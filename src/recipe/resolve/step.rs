@@ -116,7 +116,8 @@ fn set(s: &Scope, raw: &crate::recipe::schema::RawSet) -> Result<Set> {
     };
     let mut values = Vec::new();
     for (key, n) in raw.values() {
-        let e = Expr::compile_ext(&n.src(), s.params, VARS, NAMES).map_err(|e| e.at(s.place(key)))?;
+        let e =
+            Expr::compile_ext(&n.src(), s.params, VARS, NAMES).map_err(|e| e.at(s.place(key)))?;
         if e.rands() > 0 {
             return Err(s.error(key, "`rand()` would set another value on every build of the same band; expected an expression of the position and `band`"));
         }
@@ -135,7 +136,10 @@ fn set(s: &Scope, raw: &crate::recipe::schema::RawSet) -> Result<Set> {
         return Err(s.error("", "a `set` step sets nothing; expected a setting such as `nozzle_temperature: \"start + band*step\"` (see docs/recipe.md)"));
     }
     if raw.wait.is_some() && raw.nozzle_temperature.is_none() {
-        return Err(s.error("wait", "`wait` waits for `nozzle_temperature`; expected it beside that key"));
+        return Err(s.error(
+            "wait",
+            "`wait` waits for `nozzle_temperature`; expected it beside that key",
+        ));
     }
     Ok(Set {
         bands,

@@ -27,8 +27,8 @@ pub(crate) use num::{Num, Num3, RawPoint};
 pub(crate) use param::{RawChoice, RawParam};
 pub(crate) use part::{RawBrim, RawLoop, RawPart, RawPrimitiveItem, RawStand};
 pub(crate) use primitive::{
-    RawArc, RawCaHelix, RawCircle, RawLabel, RawCylinder, RawDirection, RawHelix, RawInitial, RawLayout,
-    RawOutline, RawPath, RawPatternHelix, RawPrimitive, RawRule, RawSpiral,
+    RawArc, RawCaHelix, RawCircle, RawCylinder, RawDirection, RawHelix, RawInitial, RawLabel,
+    RawLayout, RawOutline, RawPath, RawPatternHelix, RawPrimitive, RawRule, RawSpiral,
 };
 pub(crate) use profile::{
     RawBed, RawCheckLimits, RawExtrusion, RawFlavor, RawHead, RawKinematics, RawPrinter,

@@ -172,6 +172,10 @@ pub(crate) struct RawPrinter {
     /// Binary G-code (`.bgcode`) unless the output's name says otherwise (off).
     #[serde(default)]
     pub binary_gcode: bool,
+    /// Pressure (linear) advance written after the start G-code, s (none:
+    /// the firmware keeps its own); `p3dp calibrate apply` writes it.
+    #[serde(default)]
+    pub pressure_advance: Option<f64>,
     /// The firmware planner's limits.
     #[serde(default)]
     pub kinematics: RawKinematics,
