@@ -163,7 +163,8 @@ pub(crate) fn bands(paths: &[crate::base::toolpath::Toolpath]) -> Vec<BandStats>
             if let crate::base::toolpath::Event::Set { band: Some(b), .. } = e {
                 out.push(BandStats {
                     index: b.index,
-                    value: b.value,
+                    // start + band·step to 9 decimals: 0.6, not 0.6000000000000001
+                    value: libm::round(b.value * 1e9) / 1e9,
                     part: tp.name.clone(),
                     z_from: b.z.map(|z| z[0]),
                     z_to: b.z.map(|z| z[1]),

@@ -21,6 +21,8 @@ pub(crate) struct Test {
     pub ranges: &'static [(&'static str, [f64; 3])],
     /// The profile key `apply` writes, if any.
     pub key: Option<&'static str>,
+    /// The recipe and key for a Klipper printer, when they differ.
+    pub klipper: Option<(&'static str, &'static str)>,
 }
 
 macro_rules! recipe {
@@ -42,6 +44,15 @@ pub(crate) const TESTS: &[Test] = &[
             ("tpu", [240.0, 210.0, -5.0]),
         ],
         key: None,
+        klipper: None,
+    },
+    Test {
+        name: "volumetric-speed",
+        what: "maximum volumetric speed: a vase, one flow (mm³/s) per band",
+        recipe: recipe!("volumetric-speed"),
+        ranges: &[("pla", [5.0, 15.0, 1.0]), ("petg", [4.0, 12.0, 1.0])],
+        key: None,
+        klipper: None,
     },
     Test {
         name: "pressure-advance-tower",
@@ -49,6 +60,7 @@ pub(crate) const TESTS: &[Test] = &[
         recipe: recipe!("pressure-advance-tower"),
         ranges: &[("pla", [0.0, 0.08, 0.008]), ("petg", [0.0, 0.1, 0.01])],
         key: Some("pressure_advance"),
+        klipper: None,
     },
     Test {
         name: "pressure-advance-line",
@@ -56,6 +68,23 @@ pub(crate) const TESTS: &[Test] = &[
         recipe: recipe!("pressure-advance-line"),
         ranges: &[("pla", [0.0, 0.08, 0.01]), ("petg", [0.0, 0.1, 0.0125])],
         key: Some("pressure_advance"),
+        klipper: None,
+    },
+    Test {
+        name: "pressure-advance-pattern",
+        what: "pressure (linear) advance: Ellis' chevrons, one factor per chevron",
+        recipe: recipe!("pressure-advance-pattern"),
+        ranges: &[("pla", [0.0, 0.08, 0.01]), ("petg", [0.0, 0.1, 0.0125])],
+        key: Some("pressure_advance"),
+        klipper: None,
+    },
+    Test {
+        name: "flow",
+        what: "flow factor: blocks, one factor per block",
+        recipe: recipe!("flow"),
+        ranges: &[("pla", [0.9, 1.1, 0.025])],
+        key: None,
+        klipper: None,
     },
     Test {
         name: "retraction",
@@ -63,6 +92,18 @@ pub(crate) const TESTS: &[Test] = &[
         recipe: recipe!("retraction"),
         ranges: &[("pla", [0.2, 2.0, 0.2]), ("petg", [0.4, 2.4, 0.2])],
         key: Some("retraction.length"),
+        klipper: None,
+    },
+    Test {
+        name: "cornering",
+        what: "cornering: a fast tower, one jerk (Klipper: square-corner velocity) per band",
+        recipe: recipe!("cornering"),
+        ranges: &[("pla", [2.0, 20.0, 2.0])],
+        key: Some("kinematics.jerk"),
+        klipper: Some((
+            recipe!("cornering-scv"),
+            "kinematics.square_corner_velocity",
+        )),
     },
     Test {
         name: "input-shaping-frequency",
@@ -70,6 +111,23 @@ pub(crate) const TESTS: &[Test] = &[
         recipe: recipe!("input-shaping-frequency"),
         ranges: &[("pla", [20.0, 70.0, 5.0])],
         key: None,
+        klipper: None,
+    },
+    Test {
+        name: "input-shaping-damping",
+        what: "input shaper damping: a fast tower, one damping ratio per band",
+        recipe: recipe!("input-shaping-damping"),
+        ranges: &[("pla", [0.02, 0.2, 0.02])],
+        key: None,
+        klipper: None,
+    },
+    Test {
+        name: "vfa",
+        what: "vertical fine artefacts: a round tower, one head speed per band",
+        recipe: recipe!("vfa"),
+        ranges: &[("pla", [40.0, 200.0, 20.0])],
+        key: None,
+        klipper: None,
     },
 ];
 
@@ -129,8 +187,13 @@ pub(crate) fn sets(
 
 /// The test's recipe for `material` written into `dir` (the recipe's own
 /// material swapped for it): the file to build.
-pub(crate) fn stage_recipe(t: &Test, material: Option<&str>, dir: &Path) -> Result<PathBuf> {
-    let mut text = t.recipe.to_string();
+pub(crate) fn stage_recipe(
+    t: &Test,
+    recipe: &str,
+    material: Option<&str>,
+    dir: &Path,
+) -> Result<PathBuf> {
+    let mut text = recipe.to_string();
     if let Some(m) = material {
         crate::base::safe_text::check("--material", m)?;
         if !m
@@ -194,17 +257,25 @@ pub(crate) fn run(o: &Options) -> Vec<Error> {
 fn prepare(o: &Options) -> Result<(build::Options, PathBuf)> {
     let t = test(&o.test)?;
     let mut opts = o.build.clone();
-    let nozzle = nozzle(opts.builds.printer.as_deref(), t)?;
+    let printer = printer(opts.builds.printer.as_deref(), t)?;
     let material = o.material.as_deref().unwrap_or("pla");
-    opts.builds.sets = sets(t, material, nozzle, &opts.builds.sets);
+    opts.builds.sets = sets(t, material, printer.nozzle_diameter, &opts.builds.sets);
     let dir = scratch();
-    let file = stage_recipe(t, o.material.as_deref(), &dir)?;
+    let file = stage_recipe(t, recipe_for(t, &printer).0, o.material.as_deref(), &dir)?;
     opts.builds.recipes = vec![file];
     Ok((opts, dir))
 }
 
-/// The nozzle diameter of `printer` (the recipe's own when none is given).
-fn nozzle(printer: Option<&str>, t: &Test) -> Result<f64> {
+/// The recipe and `apply`'s key of `t` for `printer`'s firmware.
+fn recipe_for(t: &Test, printer: &crate::machine::Printer) -> (&'static str, Option<&'static str>) {
+    match t.klipper {
+        Some((r, k)) if printer.flavor == crate::machine::Flavor::Klipper => (r, Some(k)),
+        _ => (t.recipe, t.key),
+    }
+}
+
+/// The printer `printer` names (the recipe's own when none is given).
+fn printer(printer: Option<&str>, t: &Test) -> Result<crate::machine::Printer> {
     let spec = match printer {
         Some(p) => p.to_string(),
         None => {
@@ -214,8 +285,7 @@ fn nozzle(printer: Option<&str>, t: &Test) -> Result<f64> {
     };
     let reads = crate::base::input::Reads::default();
     reads.allow(Path::new("."));
-    let p = crate::machine::Printer::resolve(&spec, Path::new("."), &reads)?;
-    Ok(p.nozzle_diameter)
+    crate::machine::Printer::resolve(&spec, Path::new("."), &reads)
 }
 
 /// Which band `apply` reads: its index, or the height it holds.
@@ -247,7 +317,8 @@ pub(crate) struct Apply {
 /// inherits the printer; the line to print.
 pub(crate) fn apply(a: &Apply) -> Result<String> {
     let t = test(&a.test)?;
-    let Some(key) = t.key else {
+    let printer_spec = a.printer.clone().unwrap_or_else(|| "generic-220".into());
+    let Some(key) = recipe_for(t, &printer(Some(&printer_spec), t)?).1 else {
         return Err(Error::input(
             "TEST",
             format!(
@@ -300,9 +371,9 @@ pub(crate) fn apply(a: &Apply) -> Result<String> {
             )
         })?;
     let value = band.value;
-    let body = match key {
-        "retraction.length" => format!("retraction: {{ length: {value} }}\n"),
-        k => format!("{k}: {value}\n"),
+    let body = match key.split_once('.') {
+        Some((map, k)) => format!("{map}: {{ {k}: {value} }}\n"),
+        None => format!("{key}: {value}\n"),
     };
     let text = format!(
         "# p3dp calibrate apply {} --band {}: {key} = {value}\ninherits: {printer}\n{body}",
@@ -349,9 +420,19 @@ mod tests {
         match (test, c) {
             ("temperature", Command::Set(Setting::Temperature { celsius, .. })) => Some(*celsius),
             (
-                "pressure-advance-tower" | "pressure-advance-line",
+                "pressure-advance-tower" | "pressure-advance-line" | "pressure-advance-pattern",
                 Command::Set(Setting::PressureAdvance { k }),
             ) => Some(*k),
+            ("flow", Command::Set(Setting::Flow(f))) => Some(*f),
+            ("cornering", Command::Set(Setting::Jerk(j) | Setting::SquareCornerVelocity(j))) => {
+                Some(*j)
+            }
+            (
+                "input-shaping-damping",
+                Command::Set(Setting::InputShaper {
+                    damping: Some(d), ..
+                }),
+            ) => Some(*d),
             (
                 "input-shaping-frequency",
                 Command::Set(Setting::InputShaper {
@@ -409,21 +490,32 @@ mod tests {
             "temperature",
             "pressure-advance-tower",
             "pressure-advance-line",
+            "pressure-advance-pattern",
+            "flow",
+            "cornering",
             "input-shaping-frequency",
+            "input-shaping-damping",
         ] {
             for (printer, flavor) in FLAVOURS {
                 // a step no slicer offers: 3 °C, 7/1000 s, 7 Hz
                 let step = match test {
                     "temperature" => "step=-3",
                     "input-shaping-frequency" => "step=7",
+                    "cornering" => "step=3",
+                    "flow" => "step=3/100",
+                    "input-shaping-damping" => "step=3/100",
                     _ => "step=7/1000",
                 };
                 let b = match build(test, printer, &[step]) {
                     Ok(b) => b,
                     Err(e) => {
-                        // Bambu's firmware has no input shaper command: refused by name
+                        // Bambu's firmware has no input shaper command and no
+                        // jerk: refused by name
                         assert!(
-                            test == "input-shaping-frequency" && flavor == Flavor::Bambu,
+                            matches!(
+                                test,
+                                "input-shaping-frequency" | "input-shaping-damping" | "cornering"
+                            ) && flavor == Flavor::Bambu,
                             "{test} on {printer}: {e}"
                         );
                         assert!(e.contains("[setting]") && e.contains("Bambu"), "{e}");
@@ -448,7 +540,13 @@ mod tests {
         let mut in_parts = false;
         for line in b.gcode.lines() {
             if let Some(name) = line.strip_prefix("; part: label-") {
-                labels.push(name.split([' ', '-']).nth(1).unwrap().parse::<f64>().unwrap());
+                labels.push(
+                    name.split([' ', '-'])
+                        .nth(1)
+                        .unwrap()
+                        .parse::<f64>()
+                        .unwrap(),
+                );
             }
             in_parts |= line.starts_with("; part: ");
             let r = read(flavor, line).unwrap();
@@ -472,7 +570,10 @@ mod tests {
         assert_eq!(seen.len(), bands.len(), "{test} {flavor:?}: {seen:?}");
         for (i, ((v, z), band)) in seen.iter().zip(bands).enumerate() {
             let want = start + i as f64 * step;
-            assert!((v - want).abs() < 6e-5, "{test} {flavor:?} band {i}: {v} ≠ {want}");
+            assert!(
+                (v - want).abs() < 6e-5,
+                "{test} {flavor:?} band {i}: {v} ≠ {want}"
+            );
             assert!((band["value"].as_f64().unwrap() - want).abs() < 1e-9);
             assert_eq!(band["index"].as_u64(), Some(i as u64));
             if let (Some(lo), Some(hi)) = (band["z_from"].as_f64(), band["z_to"].as_f64()) {
