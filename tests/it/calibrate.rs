@@ -295,3 +295,20 @@ fn the_estimate_follows_the_settings() {
         "{with_set} {in_profile}"
     );
 }
+
+#[test]
+fn every_gallery_recipe_is_in_the_lock() {
+    let lock = std::fs::read_to_string(root().join("p3dp.lock")).unwrap();
+    let mut n = 0;
+    for e in std::fs::read_dir(root().join("recipes/calibration")).unwrap() {
+        let name = e.unwrap().file_name().to_string_lossy().to_string();
+        if name.ends_with(".yaml") {
+            n += 1;
+            assert!(
+                lock.contains(&format!("recipe: recipes/calibration/{name}\n")),
+                "{name} is not locked"
+            );
+        }
+    }
+    assert!(n >= 11);
+}

@@ -25,7 +25,7 @@ pub(crate) struct Test {
     pub klipper: Option<(&'static str, &'static str)>,
 }
 
-macro_rules! recipe {
+macro_rules! gallery_file {
     ($f:literal) => {
         include_str!(concat!("../../../recipes/calibration/", $f, ".yaml"))
     };
@@ -36,7 +36,7 @@ pub(crate) const TESTS: &[Test] = &[
     Test {
         name: "temperature",
         what: "nozzle temperature: a tower, one band per temperature",
-        recipe: recipe!("temperature"),
+        recipe: gallery_file!("temperature"),
         ranges: &[
             ("pla", [220.0, 190.0, -5.0]),
             ("petg", [250.0, 230.0, -5.0]),
@@ -49,7 +49,7 @@ pub(crate) const TESTS: &[Test] = &[
     Test {
         name: "volumetric-speed",
         what: "maximum volumetric speed: a vase, one flow (mm³/s) per band",
-        recipe: recipe!("volumetric-speed"),
+        recipe: gallery_file!("volumetric-speed"),
         ranges: &[("pla", [5.0, 15.0, 1.0]), ("petg", [4.0, 12.0, 1.0])],
         key: None,
         klipper: None,
@@ -57,7 +57,7 @@ pub(crate) const TESTS: &[Test] = &[
     Test {
         name: "pressure-advance-tower",
         what: "pressure (linear) advance: a tower, one band per factor",
-        recipe: recipe!("pressure-advance-tower"),
+        recipe: gallery_file!("pressure-advance-tower"),
         ranges: &[("pla", [0.0, 0.08, 0.008]), ("petg", [0.0, 0.1, 0.01])],
         key: Some("pressure_advance"),
         klipper: None,
@@ -65,7 +65,7 @@ pub(crate) const TESTS: &[Test] = &[
     Test {
         name: "pressure-advance-line",
         what: "pressure (linear) advance: lines slow-fast-slow, one factor per line",
-        recipe: recipe!("pressure-advance-line"),
+        recipe: gallery_file!("pressure-advance-line"),
         ranges: &[("pla", [0.0, 0.08, 0.01]), ("petg", [0.0, 0.1, 0.0125])],
         key: Some("pressure_advance"),
         klipper: None,
@@ -73,7 +73,7 @@ pub(crate) const TESTS: &[Test] = &[
     Test {
         name: "pressure-advance-pattern",
         what: "pressure (linear) advance: Ellis' chevrons, one factor per chevron",
-        recipe: recipe!("pressure-advance-pattern"),
+        recipe: gallery_file!("pressure-advance-pattern"),
         ranges: &[("pla", [0.0, 0.08, 0.01]), ("petg", [0.0, 0.1, 0.0125])],
         key: Some("pressure_advance"),
         klipper: None,
@@ -81,7 +81,7 @@ pub(crate) const TESTS: &[Test] = &[
     Test {
         name: "flow",
         what: "flow factor: blocks, one factor per block",
-        recipe: recipe!("flow"),
+        recipe: gallery_file!("flow"),
         ranges: &[("pla", [0.9, 1.1, 0.025])],
         key: None,
         klipper: None,
@@ -89,7 +89,7 @@ pub(crate) const TESTS: &[Test] = &[
     Test {
         name: "retraction",
         what: "retraction length: two towers, one band per length",
-        recipe: recipe!("retraction"),
+        recipe: gallery_file!("retraction"),
         ranges: &[("pla", [0.2, 2.0, 0.2]), ("petg", [0.4, 2.4, 0.2])],
         key: Some("retraction.length"),
         klipper: None,
@@ -97,18 +97,18 @@ pub(crate) const TESTS: &[Test] = &[
     Test {
         name: "cornering",
         what: "cornering: a fast tower, one jerk (Klipper: square-corner velocity) per band",
-        recipe: recipe!("cornering"),
+        recipe: gallery_file!("cornering"),
         ranges: &[("pla", [2.0, 20.0, 2.0])],
         key: Some("kinematics.jerk"),
         klipper: Some((
-            recipe!("cornering-scv"),
+            gallery_file!("cornering-scv"),
             "kinematics.square_corner_velocity",
         )),
     },
     Test {
         name: "input-shaping-frequency",
         what: "input shaper frequency: a fast tower, one band per frequency",
-        recipe: recipe!("input-shaping-frequency"),
+        recipe: gallery_file!("input-shaping-frequency"),
         ranges: &[("pla", [20.0, 70.0, 5.0])],
         key: None,
         klipper: None,
@@ -116,7 +116,7 @@ pub(crate) const TESTS: &[Test] = &[
     Test {
         name: "input-shaping-damping",
         what: "input shaper damping: a fast tower, one damping ratio per band",
-        recipe: recipe!("input-shaping-damping"),
+        recipe: gallery_file!("input-shaping-damping"),
         ranges: &[("pla", [0.02, 0.2, 0.02])],
         key: None,
         klipper: None,
@@ -124,7 +124,7 @@ pub(crate) const TESTS: &[Test] = &[
     Test {
         name: "vfa",
         what: "vertical fine artefacts: a round tower, one head speed per band",
-        recipe: recipe!("vfa"),
+        recipe: gallery_file!("vfa"),
         ranges: &[("pla", [40.0, 200.0, 20.0])],
         key: None,
         klipper: None,
@@ -418,7 +418,15 @@ mod tests {
     /// The value a test's band sets, if `c` is that setting.
     fn value(test: &str, c: &Command) -> Option<f64> {
         match (test, c) {
-            ("temperature", Command::Set(Setting::Temperature { celsius, .. })) => Some(*celsius),
+            // the end G-code's heaters off are no band's
+            (
+                "temperature",
+                Command::Set(Setting::Temperature {
+                    heater: crate::base::gcode::Heater::Nozzle(_),
+                    celsius,
+                    ..
+                }),
+            ) if *celsius > 0.0 => Some(*celsius),
             (
                 "pressure-advance-tower" | "pressure-advance-line" | "pressure-advance-pattern",
                 Command::Set(Setting::PressureAdvance { k }),
