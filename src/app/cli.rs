@@ -30,6 +30,8 @@ pub enum Command {
     Build(BuildArgs),
     /// Build a calibration print of the gallery for a printer and material (`--list`), or write the value read off one into a profile (`calibrate apply`).
     Calibrate(CalibrateArgs),
+    /// Put several recipes on one bed, arranged and printed one after another (RECIPE*N: N copies); write its G-code as build does.
+    Plate(PlateArgs),
     /// Draw the toolpath: a PNG image, or a self-contained HTML file with a 3D viewer.
     Preview(PreviewArgs),
     /// Write the toolpath as solid beads for a slicer or CAD: FILE.stl, FILE.3mf or FILE.obj.
@@ -286,6 +288,41 @@ pub enum CalibrateAction {
     },
 }
 
+/// Flags of `plate`.
+#[derive(Args, Clone, Debug, Default)]
+pub struct PlateArgs {
+    /// The recipes to put on the bed, in print order: RECIPE, or RECIPE*N for N copies.
+    #[arg(value_name = "RECIPE[*N]", required = true)]
+    pub recipes: Vec<String>,
+    /// The plate's name: the G-code's, and the file's (NAME.gcode).
+    #[arg(long, value_name = "NAME", default_value = "plate")]
+    pub name: String,
+    /// Variants on the plate: NAME=v1,v2,…, NAME=a..b:step or NAME=a..b; every recipe goes on once per combination (each N times); repeatable.
+    #[arg(long = "sweep", value_name = "NAME=VALUES")]
+    pub sweeps: Vec<String>,
+    /// Warnings fail the build too.
+    #[arg(long)]
+    pub strict: bool,
+    /// Write even when checks fail.
+    #[arg(long)]
+    pub force: bool,
+    /// Params (every recipe's), printer and checks.
+    #[command(flatten)]
+    pub recipe: RecipeFlags,
+    /// Threads.
+    #[command(flatten)]
+    pub jobs: JobsFlag,
+    /// Output file (NAME.bgcode: Prusa's binary G-code; NAME.gcode.3mf: Bambu's package); `-` for standard output.
+    #[arg(short, long, value_name = "OUT")]
+    pub output: Option<String>,
+    /// Also write the stats as JSON to FILE.
+    #[arg(long, value_name = "FILE")]
+    pub stats_json: Option<PathBuf>,
+    /// Also write a preview of the plate: FILE.png (an image) or FILE.html (a 3D viewer).
+    #[arg(long, value_name = "FILE")]
+    pub preview: Option<PathBuf>,
+}
+
 /// Flags of `send`.
 #[derive(Args, Clone, Debug, Default)]
 pub struct SendArgs {
@@ -434,6 +471,7 @@ pub fn run(cli: Cli) -> Vec<Error> {
     match cli.command {
         Command::Build(a) => errors(build(&a)),
         Command::Calibrate(a) => errors(calibrate(a)),
+        Command::Plate(a) => errors(plate(&a)),
         Command::Preview(a) => errors(preview(&a)),
         Command::Mesh(a) => errors(mesh(&a)),
         Command::Watch(a) => errors(watch(&a).map(|()| Vec::new())),
@@ -564,6 +602,33 @@ fn calibrate(a: CalibrateArgs) -> Result<Vec<Error>> {
     };
     Ok(pipeline::run(b.batch.jobs.threads(), || {
         calibrate::run(&opts)
+    }))
+}
+
+fn plate(a: &PlateArgs) -> Result<Vec<Error>> {
+    let builds = Builds {
+        strict: a.strict,
+        force: a.force,
+        ..a.recipe.one(PathBuf::new())?
+    };
+    let opts = command::plate::Options {
+        recipes: a.recipes.clone(),
+        name: a.name.clone(),
+        sweeps: a
+            .sweeps
+            .iter()
+            .map(|s| crate::app::batch::parse_sweep(s))
+            .collect::<Result<_>>()?,
+        build: command::build::Options {
+            builds,
+            output: a.output.clone(),
+            stats_json: a.stats_json.clone(),
+            preview: a.preview.clone(),
+            ..command::build::Options::default()
+        },
+    };
+    Ok(pipeline::run(a.jobs.threads(), || {
+        command::plate::run(&opts)
     }))
 }
 

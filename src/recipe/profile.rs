@@ -400,6 +400,10 @@ fn head(h: RawHead) -> Head {
         tip_diameter: h.tip_diameter,
         head_box: h.head_box,
         clearance: h.clearance,
+        gantry: h.gantry.map(|g| crate::machine::Gantry {
+            height: g.height,
+            y: g.y,
+        }),
     }
 }
 

@@ -399,7 +399,6 @@ pub(crate) fn apply(a: &Apply) -> Result<String> {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
     use crate::app::testing::p3dp;
     use crate::base::gcode::{Command, Setting};
     use crate::base::testing::{root, tmp};
@@ -595,6 +594,55 @@ mod tests {
         assert_eq!(labels.len(), values.len(), "{test}: {labels:?}");
         for (l, v) in labels.iter().zip(&values) {
             assert!((l - v).abs() < 1e-6, "{test}: label {l} for band value {v}");
+        }
+    }
+
+    /// p3dp's own retraction per band: after band k's note every
+    /// retraction the reader reads takes back `start + k·step` mm, in
+    /// absolute and relative E; with firmware retraction, one `M207` /
+    /// `SET_RETRACTION` per band.
+    #[test]
+    fn retraction_bands_are_the_retractions_read_back() {
+        for (printer, flavor) in [
+            ("generic-220", Flavor::Marlin),
+            ("prusa-mk4", Flavor::Prusa),
+            ("voron-350", Flavor::Klipper),
+        ] {
+            let b = build("retraction", printer, &["step=3/10", "end=2"]).unwrap();
+            let bands = b.stats["bands"].as_array().unwrap();
+            let (mut relative, mut e, mut band): (bool, f64, Option<f64>) = (false, 0.0, None);
+            let mut checked = vec![0; bands.len()];
+            for line in b.gcode.lines() {
+                if let Some(rest) = line.strip_prefix("; retraction: ") {
+                    band = Some(rest.split(' ').next().unwrap().parse().unwrap());
+                }
+                for c in read(flavor, line).unwrap().commands {
+                    match c {
+                        Command::RelativeE(r) => relative = r,
+                        Command::SetPosition { e: Some(v), .. } => e = v,
+                        Command::Move(m) => {
+                            let Some(v) = m.e else { continue };
+                            let de = if relative { v } else { v - e };
+                            e = if relative { e + v } else { v };
+                            if m.to == [None; 3] && de < 0.0 && line.contains("retract") {
+                                if let Some(len) = band {
+                                    assert!((-de - len).abs() < 1e-5, "{printer}: {de} for {len}");
+                                    let k = bands
+                                        .iter()
+                                        .position(|x| (x["value"].as_f64().unwrap() - len).abs() < 1e-9)
+                                        .unwrap();
+                                    checked[k] += 1;
+                                }
+                            }
+                        }
+                        _ => {}
+                    }
+                }
+            }
+            assert!(checked.iter().all(|&n| n > 0), "{printer}: {checked:?}");
+            let values: Vec<f64> = bands.iter().map(|x| x["value"].as_f64().unwrap()).collect();
+            let want: Vec<f64> = (0..values.len()).map(|i| libm::round((0.2 + 0.3 * i as f64) * 1e9) / 1e9).collect();
+            assert_eq!(values, want);
         }
     }
 }

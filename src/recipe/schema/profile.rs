@@ -328,6 +328,17 @@ pub(crate) struct RawHead {
     #[serde(rename = "box")]
     pub head_box: [f64; 4],
     pub clearance: f64,
+    pub gantry: Option<RawGantry>,
+}
+
+/// `head.gantry:` from `height` above the tip, the whole bed in x, `y`
+/// round the nozzle.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub(crate) struct RawGantry {
+    pub height: f64,
+    pub y: [f64; 2],
 }
 
 impl Default for RawHead {
@@ -339,6 +350,7 @@ impl Default for RawHead {
             tip_diameter: h.tip_diameter,
             head_box: h.head_box,
             clearance: h.clearance,
+            gantry: None,
         }
     }
 }
