@@ -629,7 +629,9 @@ mod tests {
                                     assert!((-de - len).abs() < 1e-5, "{printer}: {de} for {len}");
                                     let k = bands
                                         .iter()
-                                        .position(|x| (x["value"].as_f64().unwrap() - len).abs() < 1e-9)
+                                        .position(|x| {
+                                            (x["value"].as_f64().unwrap() - len).abs() < 1e-9
+                                        })
                                         .unwrap();
                                     checked[k] += 1;
                                 }
@@ -641,7 +643,9 @@ mod tests {
             }
             assert!(checked.iter().all(|&n| n > 0), "{printer}: {checked:?}");
             let values: Vec<f64> = bands.iter().map(|x| x["value"].as_f64().unwrap()).collect();
-            let want: Vec<f64> = (0..values.len()).map(|i| libm::round((0.2 + 0.3 * i as f64) * 1e9) / 1e9).collect();
+            let want: Vec<f64> = (0..values.len())
+                .map(|i| libm::round((0.2 + 0.3 * i as f64) * 1e9) / 1e9)
+                .collect();
             assert_eq!(values, want);
         }
     }
