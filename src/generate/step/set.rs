@@ -395,8 +395,9 @@ mod tests {
                 let lo = f64::from(b.index) * every;
                 let z = tp.points[k + 1].z;
                 assert!(z >= lo - 1e-6 && z < lo + every - 1e-6, "{z} {lo}");
-                // the band's first string: every string before it is below
-                assert!(tp.points[..=*k].iter().all(|p| p.z < lo - 1e-6 || p.z < z));
+                // the band's first string: every string before it ends in a band below
+                let band_of = |z: f64| libm::floor(z / every + 1e-9) as u32;
+                assert!(tp.points[1..=*k].iter().all(|p| band_of(p.z) < b.index));
             }
         }
     }
