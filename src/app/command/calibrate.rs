@@ -125,7 +125,7 @@ pub(crate) const TESTS: &[Test] = &[
         name: "vfa",
         what: "vertical fine artefacts: a round tower, one head speed per band",
         recipe: gallery_file!("vfa"),
-        ranges: &[("pla", [40.0, 200.0, 20.0])],
+        ranges: &[("pla", [20.0, 100.0, 10.0])],
         key: None,
         klipper: None,
     },
