@@ -84,14 +84,15 @@ fn every_test_builds_clean_on_small_beds() {
 #[test]
 fn a_bed_too_small_is_refused_by_name() {
     let dir = tmp("calibrate-tiny");
-    let printer = root().join("tests/fixtures/printers/tiny-bed.yaml");
+    let fixture = root().join("tests/fixtures/printers/tiny-bed.yaml");
+    std::fs::copy(fixture, dir.join("tiny-bed.yaml")).unwrap();
     let out = p3dp(
         &dir,
         &[
             "calibrate",
             "temperature",
             "--printer",
-            printer.to_str().unwrap(),
+            "tiny-bed.yaml",
             "-o",
             "out.gcode",
         ],
