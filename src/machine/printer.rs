@@ -318,7 +318,7 @@ impl Printer {
         positive("max_flow", self.max_flow)?;
         positive("arc_tolerance", self.arc_tolerance)?;
         if let Some(k) = self.pressure_advance {
-            if !(k >= 0.0) {
+            if k.is_nan() || k < 0.0 {
                 return Err(Error::input("pressure_advance", "expected 0 or more"));
             }
             super::limits::at_most(
