@@ -147,6 +147,52 @@ pub struct Stats {
     /// The z-buffer of each `solid` part: loops and area per layer (absent without solids).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub solids: Vec<crate::generate::primitive::solid::SolidStats>,
+    /// The bands of a calibration print's `set` steps, in print order
+    /// (absent without them).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub bands: Vec<BandStats>,
+}
+
+/// One band of a calibration print: its index, its setting's value, and
+/// its heights (a height band) or its line (a line test's part).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct BandStats {
+    /// The band's index.
+    pub index: u32,
+    /// The value its setting takes.
+    pub value: f64,
+    /// The part it belongs to.
+    pub part: String,
+    /// Where the band begins, mm (height bands).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub z_from: Option<f64>,
+    /// Where it ends, mm (height bands).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub z_to: Option<f64>,
+    /// The line (a line test's band).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub line: Option<u32>,
+}
+
+/// The bands the `set` steps of `paths` begin, in print order.
+pub(crate) fn bands(paths: &[crate::base::toolpath::Toolpath]) -> Vec<BandStats> {
+    let mut out = Vec::new();
+    for tp in paths {
+        for (_, e) in &tp.events {
+            if let crate::base::toolpath::Event::Set { band: Some(b), .. } = e {
+                out.push(BandStats {
+                    index: b.index,
+                    // start + band·step to 9 decimals: 0.6, not 0.6000000000000001
+                    value: libm::round(b.value * 1e9) / 1e9,
+                    part: tp.name.clone(),
+                    z_from: b.z.map(|z| z[0]),
+                    z_to: b.z.map(|z| z[1]),
+                    line: b.z.is_none().then_some(b.index),
+                });
+            }
+        }
+    }
+    out
 }
 
 impl Stats {
@@ -174,6 +220,7 @@ impl Stats {
             plan.findings.clone(),
         );
         stats.first_layer = plan.footprints.clone();
+        stats.bands = bands(&plan.paths);
         if !plan.recipe.objects.is_empty() {
             stats.objects = objects(plan, &stats.parts);
         }
@@ -259,6 +306,7 @@ impl Stats {
             warnings: findings,
             solids: solid_stats(recipe),
             first_layer: Vec::new(),
+            bands: Vec::new(),
         }
     }
 
@@ -299,6 +347,27 @@ impl Stats {
             })
             .collect();
         format!("  bed contact: {}\n", each.join("; "))
+    }
+
+    /// The bands' table of a calibration print (empty without bands).
+    fn bands_table(&self) -> String {
+        if self.bands.is_empty() {
+            return String::new();
+        }
+        let mut s = String::from("  bands:\n    band  value       where\n");
+        for b in &self.bands {
+            let at = match (b.z_from, b.z_to, b.line) {
+                (Some(lo), Some(hi), _) => format!("z {lo:.2} to {hi:.2} mm"),
+                (_, _, Some(l)) => format!("line {l} ({})", b.part),
+                _ => String::new(),
+            };
+            s.push_str(&format!(
+                "    {:>4}  {:<10}  {at}\n",
+                b.index,
+                crate::base::format::fmt_num(b.value)
+            ));
+        }
+        s
     }
 
     /// The short human report printed after a build.
@@ -345,6 +414,7 @@ impl Stats {
             self.bed_contact(),
             crate::analyse::check::summary(&self.warnings),
         );
+        s.push_str(&self.bands_table());
         for f in &self.warnings {
             s.push_str(&format!(
                 "  {} [{}]: {}\n",

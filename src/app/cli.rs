@@ -28,6 +28,8 @@ pub struct Cli {
 pub enum Command {
     /// Write G-code (default ./NAME.gcode) and print a stats report.
     Build(BuildArgs),
+    /// Build a calibration print of the gallery for a printer and material (`--list`), or write the value read off one into a profile (`calibrate apply`).
+    Calibrate(CalibrateArgs),
     /// Put several recipes on one bed, arranged and printed one after another (RECIPE*N: N copies); write its G-code as build does.
     Plate(PlateArgs),
     /// Draw the toolpath: a PNG image, or a self-contained HTML file with a 3D viewer.
@@ -248,6 +250,61 @@ pub struct BuildArgs {
     pub zbuffer_layer: Option<u64>,
 }
 
+/// Flags of `calibrate`.
+#[derive(Args, Clone, Debug, Default)]
+#[command(args_conflicts_with_subcommands = true)]
+pub struct CalibrateArgs {
+    /// `apply`: write a band's value into a profile.
+    #[command(subcommand)]
+    pub action: Option<CalibrateAction>,
+    /// List the tests.
+    #[arg(long)]
+    pub list: bool,
+    /// The test (see --list).
+    #[arg(value_name = "TEST")]
+    pub test: Option<String>,
+    /// The material (a built-in's name; its range of values by default).
+    #[arg(long, value_name = "NAME")]
+    pub material: Option<String>,
+    /// `build`'s flags (--set start=… end=… step=…, --printer, -o, --stats-json, --preview …).
+    #[command(flatten)]
+    pub build: BuildArgs,
+}
+
+/// `calibrate apply`.
+#[derive(clap::Subcommand, Clone, Debug)]
+pub enum CalibrateAction {
+    /// Write the value of a band of a printed test into a profile that inherits the printer.
+    Apply {
+        /// The test.
+        #[arg(value_name = "TEST")]
+        test: String,
+        /// The band read off the print.
+        #[arg(
+            long,
+            value_name = "N",
+            conflicts_with = "height",
+            required_unless_present = "height"
+        )]
+        band: Option<u32>,
+        /// The height (mm) of the band read off the print.
+        #[arg(long, value_name = "Z")]
+        height: Option<f64>,
+        /// The printer the test was printed on.
+        #[arg(long, value_name = "NAME|FILE")]
+        printer: Option<String>,
+        /// The material it was printed with.
+        #[arg(long, value_name = "NAME")]
+        material: Option<String>,
+        /// The params it was built with: NAME=VALUE; repeatable.
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        sets: Vec<String>,
+        /// The profile to write.
+        #[arg(short = 'o', long, value_name = "OUT.yaml")]
+        output: PathBuf,
+    },
+}
+
 /// Flags of `plate`.
 #[derive(Args, Clone, Debug, Default)]
 pub struct PlateArgs {
@@ -430,6 +487,7 @@ fn errors(r: Result<Vec<Error>>) -> Vec<Error> {
 pub fn run(cli: Cli) -> Vec<Error> {
     match cli.command {
         Command::Build(a) => errors(build(&a)),
+        Command::Calibrate(a) => errors(calibrate(a)),
         Command::Plate(a) => errors(plate(&a)),
         Command::Preview(a) => errors(preview(&a)),
         Command::Mesh(a) => errors(mesh(&a)),
@@ -496,6 +554,71 @@ fn build(a: &BuildArgs) -> Result<Vec<Error>> {
     };
     Ok(pipeline::run(a.batch.jobs.threads(), || {
         command::build::run(&opts)
+    }))
+}
+
+/// `p3dp calibrate …`.
+fn calibrate(a: CalibrateArgs) -> Result<Vec<Error>> {
+    use command::calibrate;
+    if let Some(CalibrateAction::Apply {
+        test,
+        band,
+        height,
+        printer,
+        material,
+        sets,
+        output,
+    }) = a.action
+    {
+        let pick = match (band, height) {
+            (Some(n), _) => calibrate::Pick::Band(n),
+            (None, Some(z)) => calibrate::Pick::Height(z),
+            (None, None) => return Err(Error::input("--band", "expected --band N or --height Z")),
+        };
+        let line = calibrate::apply(&calibrate::Apply {
+            test,
+            pick,
+            printer,
+            material,
+            sets: sets.iter().map(|s| parse_set(s)).collect::<Result<_>>()?,
+            output,
+        })?;
+        crate::sayln!("{line}");
+        return Ok(Vec::new());
+    }
+    if a.list {
+        crate::say!("{}", calibrate::list());
+        return Ok(Vec::new());
+    }
+    let Some(test) = a.test else {
+        return Err(Error::input(
+            "TEST",
+            "expected a test's name (see `p3dp calibrate --list`)",
+        ));
+    };
+    if !a.build.batch.recipes.is_empty() || !a.build.batch.sweeps.is_empty() {
+        return Err(Error::input(
+            "TEST",
+            "calibrate builds one test; expected one TEST and no recipes or sweeps",
+        ));
+    }
+    let b = &a.build;
+    let opts = calibrate::Options {
+        test,
+        material: a.material,
+        build: command::build::Options {
+            builds: b.batch.builds()?,
+            output: b.output.clone(),
+            stats_json: b.stats_json.clone(),
+            pattern: b.pattern.clone(),
+            preview: b.preview.clone(),
+            zbuffer: b.zbuffer.clone(),
+            zbuffer_svg: b.zbuffer_svg.clone(),
+            zbuffer_layer: b.zbuffer_layer,
+        },
+    };
+    Ok(pipeline::run(b.batch.jobs.threads(), || {
+        calibrate::run(&opts)
     }))
 }
 

@@ -68,6 +68,27 @@ pub enum Event {
     /// checked when the recipe was read (no line break, no move the
     /// writer cannot account for).
     Gcode(std::sync::Arc<str>),
+    /// A setting of the printer (a `set` step): written in the printer's
+    /// dialect and followed by the planner and the stats; the first setting
+    /// of a calibration band carries the band.
+    Set {
+        /// What it sets.
+        setting: crate::base::gcode::Setting,
+        /// The band it begins, if any.
+        band: Option<Band>,
+    },
+}
+
+/// A band of a calibration print: where one value of a `set` step holds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Band {
+    /// The band's index (0 at the bottom, or the line's number).
+    pub index: u32,
+    /// The value its setting takes.
+    pub value: f64,
+    /// Its heights, `[from, to)` in recipe z, mm; `None` for a line (a
+    /// part of its own).
+    pub z: Option<[f64; 2]>,
 }
 
 /// Where a turtle stood when its program said `draw_turtle`

@@ -319,6 +319,9 @@ pub struct Printer {
     /// `machine_max_acceleration_x`/`_y`), written as `M201 X Y` with
     /// `emit_limits`; the head's highest acceleration when absent.
     pub axis_acceleration: Option<[f64; 2]>,
+    /// Pressure (linear) advance written after the start G-code, s (none:
+    /// the firmware keeps its own).
+    pub pressure_advance: Option<f64>,
     /// The firmware planner's limits, for the print-time estimate (see
     /// [`super::Kinematics`]).
     pub kinematics: super::kinematics::Kinematics,
@@ -375,6 +378,17 @@ impl Printer {
             ));
         }
         positive("arc_tolerance", self.arc_tolerance)?;
+        if let Some(k) = self.pressure_advance {
+            if k.is_nan() || k < 0.0 {
+                return Err(Error::input("pressure_advance", "expected 0 or more"));
+            }
+            super::limits::at_most(
+                "pressure_advance",
+                k,
+                super::limits::PRESSURE_ADVANCE_MAX,
+                "s",
+            )?;
+        }
         super::limits::at_most("arc_tolerance", self.arc_tolerance, MAX_ARC_TOLERANCE, "mm")?;
         match self.bed {
             Bed::Rectangle { size, .. } => {

@@ -343,6 +343,7 @@ fn printer(raw: RawPrinter) -> Printer {
         maker_temperatures: raw.maker_temperatures,
         emit_limits: raw.emit_limits,
         axis_acceleration: raw.axis_acceleration,
+        pressure_advance: raw.pressure_advance,
         kinematics: kinematics(raw.kinematics),
         head: head(raw.head),
         checks: checks(raw.checks),

@@ -17,6 +17,7 @@ mod batch;
 mod bounds;
 mod bowl;
 mod ca;
+mod calibrate;
 mod checks;
 mod cli;
 mod docs_examples;

@@ -130,6 +130,7 @@ pub(crate) fn cheap(recipe: &Recipe, paths: &[&Toolpath], allowed: &[String]) ->
         strings(recipe, tp, &mut out);
         flow::cross_sections(recipe, tp, &mut out);
         out.extend(events(recipe, tp));
+        out.extend(settings(recipe, tp));
     }
     let cheap_error = out
         .iter()
@@ -244,6 +245,45 @@ pub(crate) fn events(recipe: &Recipe, tp: &Toolpath) -> Vec<Finding> {
         pick(true, p.max_bed_temp),
     );
     out
+}
+
+/// A part's `set` steps' settings (`setting`): each one the printer's
+/// firmware has a command for, each value within the material's and the
+/// machine's limits; one finding per part, naming the first at fault, its
+/// band and how many are.
+pub(crate) fn settings(recipe: &Recipe, tp: &Toolpath) -> Vec<Finding> {
+    let (m, p) = (&recipe.material, &recipe.printer);
+    let faults: Vec<(usize, Option<u32>, String)> = tp
+        .events
+        .iter()
+        .filter_map(|(k, e)| match e {
+            crate::base::toolpath::Event::Set { setting, band } => gcode::setting(setting, p, m)
+                .err()
+                .map(|why| (*k, band.map(|b| b.index), why)),
+            _ => None,
+        })
+        .collect();
+    let Some((k, band, why)) = faults.first() else {
+        return Vec::new();
+    };
+    let at = tp.points[(*k + 1).min(tp.points.len() - 1)];
+    let band = band.map_or(String::new(), |b| format!(" (band {b})"));
+    vec![Finding {
+        code: "setting",
+        severity: Severity::Error,
+        message: format!(
+            "part `{}` has {} setting{} the printer {} refuses; the first, before string {k}{band} at {}: {why}",
+            tp.name,
+            faults.len(),
+            if faults.len() == 1 { "" } else { "s" },
+            p.name,
+            fmt_p(at)
+        ),
+        part: Some(tp.name.clone()),
+        string: Some(*k),
+        at: Some(at.to_array()),
+        strings: Vec::new(),
+    }]
 }
 
 fn temperatures(recipe: &Recipe, out: &mut Vec<Finding>) {

@@ -3,6 +3,7 @@
 //! returns the errors it met, one per failed job.
 
 pub(crate) mod build;
+pub(crate) mod calibrate;
 pub(crate) mod check;
 pub(crate) mod explain;
 pub(crate) mod hash;

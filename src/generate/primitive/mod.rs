@@ -11,6 +11,7 @@ pub(crate) mod ca;
 mod circle;
 mod cylinder;
 mod helix;
+pub(crate) mod label;
 /// Primitives over SVG sources: `path: {svg: …}` and the `outline:` of helix, spiral, cylinder.
 pub(crate) mod outline;
 mod path;
@@ -27,6 +28,7 @@ pub(crate) use ca::CaHelix;
 pub(crate) use circle::Circle;
 pub(crate) use cylinder::Cylinder;
 pub(crate) use helix::Helix;
+pub(crate) use label::Label;
 pub(crate) use path::PathCmd;
 pub(crate) use pattern::PatternHelix;
 pub(crate) use solid::Solid;
@@ -58,6 +60,8 @@ pub enum Primitive {
     CaHelix(CaHelix),
     /// A 3D turtle program, run when the recipe was resolved.
     Turtle(Box<Turtle>),
+    /// Digits and short words as strokes (band labels).
+    Label(Label),
 }
 
 impl Primitive {
@@ -74,6 +78,7 @@ impl Primitive {
             Primitive::PatternHelix(p) => p.string_count(),
             Primitive::CaHelix(p) => p.string_count(),
             Primitive::Turtle(p) => p.string_count(),
+            Primitive::Label(p) => p.string_count(),
         }
     }
 
@@ -94,6 +99,7 @@ impl Primitive {
             Primitive::CaHelix(p) => p.build(c, v),
             // the part's c and v were the turtle's starting values
             Primitive::Turtle(p) => p.build(),
+            Primitive::Label(p) => p.build(c, v),
         }
     }
 }

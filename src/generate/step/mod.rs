@@ -8,10 +8,12 @@
 
 mod deform;
 mod modulate;
+pub(crate) mod set;
 mod subdivide;
 
 pub(crate) use deform::Deform;
 pub(crate) use modulate::{Bitmap, Modulate, ModulateMap};
+pub(crate) use set::Set;
 
 use glam::{DAffine3, DVec3};
 
@@ -49,6 +51,8 @@ pub enum Step {
     /// A printer command (checked when read) before the first extruding
     /// string that reaches this height, mm.
     GcodeAt(f64, std::sync::Arc<str>),
+    /// The printer's settings, once per band (see [`set`]).
+    Set(Box<Set>),
 }
 
 impl Step {
@@ -63,6 +67,7 @@ impl Step {
             Step::Translate(_) => "translate",
             Step::Place(key, _) => key,
             Step::GcodeAt(..) => "gcode_at",
+            Step::Set(_) => "set",
         }
     }
 
@@ -78,6 +83,7 @@ impl Step {
                 .any(|e| e.uses(k)),
             Step::ModulateCylinder(m) => m.factor.uses(k),
             Step::ModulateMap(m) => m.u.uses(k) || m.v.uses(k),
+            Step::Set(s) => s.values.iter().any(|(_, e)| e.uses(k)),
             Step::Subdivide(_) | Step::Translate(_) | Step::Place(..) | Step::GcodeAt(..) => false,
         }
     }
@@ -105,6 +111,7 @@ impl Step {
                 }
                 Ok(())
             }
+            Step::Set(s) => s.apply(tp),
             Step::GcodeAt(z, text) => {
                 gcode_at(tp, *z, text);
                 Ok(())

@@ -184,7 +184,18 @@ fn emit<W: Write, M: Moves>(
             .map(|((_, r), n)| labels::define(n, &labels::hull_of(&plan.paths[r.clone()], p)))
             .collect();
     }
-    let fan_events = |t: &Toolpath| t.events.iter().any(|(_, e)| matches!(e, Event::Fan { .. }));
+    let fan_events = |t: &Toolpath| {
+        t.events.iter().any(|(_, e)| {
+            matches!(
+                e,
+                Event::Fan { .. }
+                    | Event::Set {
+                        setting: Setting::Fan { .. },
+                        ..
+                    }
+            )
+        })
+    };
     if plan.paths.iter().any(fan_events) {
         em.manual_fan();
     }
@@ -249,6 +260,11 @@ pub(crate) struct Emitter<'a, W: Write, M: Moves> {
     /// The flow factor the firmware applies (`M221`), 1 = 100 %: the
     /// filament it feeds is the E written times this.
     flow: f64,
+    /// p3dp's own retraction: length (mm) and speed (mm/s), the printer's
+    /// until a `set` step changes them.
+    retraction: (f64, f64),
+    /// The length of the retraction in force, 10 nm (its undoing feeds it back).
+    retracted_units: i64,
 }
 
 #[derive(Default)]
@@ -297,6 +313,11 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
             names: Vec::new(),
             defines: Vec::new(),
             flow: 1.0,
+            retraction: (
+                recipe.printer.retraction.length,
+                recipe.printer.retraction.speed,
+            ),
+            retracted_units: 0,
         }
     }
 
@@ -416,6 +437,14 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
             "",
         )
         .map_err(io)?;
+        if let Some(k) = self.printer.pressure_advance {
+            // the profile's calibrated value (`p3dp calibrate apply`)
+            s.command(
+                &Command::Set(Setting::PressureAdvance { k }),
+                " ; the profile's pressure_advance",
+            )
+            .map_err(io)?;
+        }
         Ok(())
     }
 
@@ -471,11 +500,12 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
     }
 
     fn retract(&mut self) -> io::Result<()> {
-        let r = self.printer.retraction;
-        if r.length <= 0.0 || self.retracted {
+        let (length, speed) = self.retraction;
+        if length <= 0.0 || self.retracted {
             return Ok(());
         }
-        let len = units(r.length, E);
+        let len = units(length, E);
+        self.retracted_units = len;
         self.retracted = true;
         self.stats.retractions += 1;
         if self.printer.firmware_retraction {
@@ -489,7 +519,7 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
             Extrusion::Absolute => self.e_units - len,
             Extrusion::Relative => -len,
         };
-        let feed = self.feed_word(feed_units(r.speed));
+        let feed = self.feed_word(feed_units(speed));
         let m = Move {
             e: Some(e as f64 / E),
             feed,
@@ -508,8 +538,8 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
 
     /// Writes the unretraction (see [`Emitter::unretract`]).
     fn unretract_now(&mut self) -> io::Result<()> {
-        let r = self.printer.retraction;
-        let len = units(r.length, E);
+        let speed = self.retraction.1;
+        let len = self.retracted_units;
         self.retracted = false;
         if self.printer.firmware_retraction {
             return self
@@ -521,7 +551,7 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
             Extrusion::Absolute => self.e_units,
             Extrusion::Relative => len,
         };
-        let feed = self.feed_word(feed_units(r.speed));
+        let feed = self.feed_word(feed_units(speed));
         let m = Move {
             e: Some(e as f64 / E),
             feed,
@@ -814,8 +844,37 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
                     .unwrap_or_else(|_| vec![Command::Other(text.to_string())]);
                 return self.s.raw(text, &commands);
             }
+            Event::Set { setting, band } => return self.set(setting, band),
         };
         self.s.command(&c, "")
+    }
+
+    /// A `set` step's setting: written in the dialect (p3dp's own
+    /// retraction as a comment, its moves carry it) and followed: the flow
+    /// factor into the stats, the retraction into p3dp's retractions, the
+    /// rest by the stream (the planner).
+    fn set(&mut self, s: Setting, band: Option<crate::base::toolpath::Band>) -> io::Result<()> {
+        let note = match band {
+            Some(b) => format!(" ; band {}", b.index),
+            None => String::new(),
+        };
+        match s {
+            Setting::Flow(f) => self.flow = f,
+            Setting::Fan { .. } => self.fan = None,
+            Setting::Retraction { length, speed } if !self.printer.firmware_retraction => {
+                let r = &mut self.retraction;
+                r.0 = length.unwrap_or(r.0);
+                r.1 = speed.unwrap_or(r.1);
+                let t = format!(
+                    "; retraction: {} mm at {} mm/s{note}",
+                    fmt_num(r.0),
+                    fmt_num(r.1)
+                );
+                return self.text(&t);
+            }
+            _ => {}
+        }
+        self.s.command(&Command::Set(s), &note)
     }
 
     /// `G1 E… F…`: feeds `filament` mm at `speed` mm/s without moving.
@@ -941,7 +1000,7 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
         if self.retracted && !self.printer.firmware_retraction {
             // a print that ends retracted took that filament back: the
             // stats count the filament fed, net (what the E values add to)
-            let back = units(self.printer.retraction.length, E) as f64 / E * self.flow;
+            let back = self.retracted_units as f64 / E * self.flow;
             self.stats.filament -= back;
             self.stats.volume -= back * self.area;
         }

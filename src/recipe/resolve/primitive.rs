@@ -56,6 +56,40 @@ pub(super) fn resolve(
         RawPrimitive::Turtle(t) => {
             Primitive::Turtle(Box::new(super::turtle::resolve(t, &s, env, gcode)?))
         }
+        RawPrimitive::Label(p) => Primitive::Label(label(p, &s)?),
+    })
+}
+
+/// `label:`; `s` is under `label`.
+fn label(
+    raw: &crate::recipe::schema::RawLabel,
+    s: &Scope,
+) -> Result<crate::generate::primitive::Label> {
+    use crate::generate::primitive::label::{segments, CHARSET};
+    let text = crate::recipe::expand::fill_name(&raw.text, s.params, &s.place("text"))?;
+    crate::base::safe_text::check(&s.place("text"), &text)?;
+    if text.trim().is_empty() || text.chars().count() > 32 {
+        return Err(s.error("text", format!("{text:?}: expected 1 to 32 characters")));
+    }
+    if let Some(c) = text.chars().find(|c| segments(*c).is_none()) {
+        return Err(s.error(
+            "text",
+            format!("{text:?} holds {c:?}, which the seven-segment font cannot draw; expected {CHARSET}"),
+        ));
+    }
+    Ok(crate::generate::primitive::Label {
+        text,
+        center: s.center(at!(raw.center))?,
+        height: s.positive_or(at!(raw.height), 5.0)?,
+        layers: match at!(raw.layers).some() {
+            Some(n) => s.whole_max(n, 1, 1000)?,
+            None => 1,
+        },
+        layer_height: s.positive_or(at!(raw.layer_height), 0.2)?,
+        angle: match at!(raw.angle).some() {
+            Some(n) => s.num(n)?,
+            None => 0.0,
+        },
     })
 }
 

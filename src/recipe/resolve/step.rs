@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use super::Ctx;
 use crate::base::error::{Error, Result};
 use crate::base::expr::{var, Expr};
-use crate::generate::step::{Bitmap, Deform, Keep, Modulate, ModulateMap, Step};
+use crate::generate::step::{Bitmap, Deform, Keep, Modulate, ModulateMap, Set, Step};
 use crate::recipe::eval::{at, At, Scope};
 use crate::recipe::schema::{Num, RawAxis, RawDeform, RawKeep, RawStep};
 use glam::{DAffine3, DVec3};
@@ -85,6 +85,67 @@ pub(super) fn resolve(ctx: &Ctx, step: &RawStep) -> Result<Step> {
             (ctx.gcode)(gcode).map_err(|m| s.error("gcode", m))?;
             Step::GcodeAt(s.num(at!(z))?, gcode.trim().into())
         }
+        RawStep::Set(raw) => Step::Set(Box::new(set(&s, raw)?)),
+    })
+}
+
+/// A `set` step; `s` is under its key.
+fn set(s: &Scope, raw: &crate::recipe::schema::RawSet) -> Result<Set> {
+    use crate::generate::step::set::{Bands, Key, NAMES, VARS};
+    let bands = match (&raw.every, &raw.band) {
+        (Some(_), Some(_)) => {
+            return Err(s.error(
+                "band",
+                "a `set` step has height bands (`every`) or is one line's band (`band`), not both; expected one of them",
+            ))
+        }
+        (Some(_), None) => Bands::Height {
+            from: match &raw.from {
+                Some(n) => s.num(At::new(n, "from"))?,
+                None => 0.0,
+            },
+            every: s.positive(at!(raw.every).some().expect("given"))?,
+        },
+        (None, Some(_)) => Bands::Line(s.whole(at!(raw.band).some().expect("given"), 0)?),
+        (None, None) => {
+            if raw.from.is_some() {
+                return Err(s.error("from", "`from` is where height bands begin; expected `every` beside it"));
+            }
+            Bands::Once
+        }
+    };
+    let mut values = Vec::new();
+    for (key, n) in raw.values() {
+        let e =
+            Expr::compile_ext(&n.src(), s.params, VARS, NAMES).map_err(|e| e.at(s.place(key)))?;
+        if e.rands() > 0 {
+            return Err(s.error(key, "`rand()` would set another value on every build of the same band; expected an expression of the position and `band`"));
+        }
+        values.push((Key::of(key).expect("a setting's key"), e));
+    }
+    let shaper = match &raw.input_shaper_type {
+        Some(t) => Some(crate::base::gcode::Shaper::parse(t).ok_or_else(|| {
+            s.error(
+                "input_shaper_type",
+                format!("unknown input shaper `{t}`; expected one of zv, mzv, zvd, ei, 2hump_ei, 3hump_ei"),
+            )
+        })?),
+        None => None,
+    };
+    if values.is_empty() && shaper.is_none() {
+        return Err(s.error("", "a `set` step sets nothing; expected a setting such as `nozzle_temperature: \"start + band*step\"` (see docs/recipe.md)"));
+    }
+    if raw.wait.is_some() && raw.nozzle_temperature.is_none() {
+        return Err(s.error(
+            "wait",
+            "`wait` waits for `nozzle_temperature`; expected it beside that key",
+        ));
+    }
+    Ok(Set {
+        bands,
+        values,
+        wait: raw.wait.unwrap_or(false),
+        shaper,
     })
 }
 

@@ -29,15 +29,15 @@ pub(crate) use param::{RawChoice, RawParam};
 pub(crate) use part::{RawBrim, RawLoop, RawPart, RawPrimitiveItem, RawStand};
 pub(crate) use plate::{RawPlateItem, RawSweep};
 pub(crate) use primitive::{
-    RawArc, RawCaHelix, RawCircle, RawCylinder, RawDirection, RawHelix, RawInitial, RawLayout,
-    RawOutline, RawPath, RawPatternHelix, RawPrimitive, RawRule, RawSpiral,
+    RawArc, RawCaHelix, RawCircle, RawCylinder, RawDirection, RawHelix, RawInitial, RawLabel,
+    RawLayout, RawOutline, RawPath, RawPatternHelix, RawPrimitive, RawRule, RawSpiral,
 };
 pub(crate) use profile::{
     RawBed, RawCheckLimits, RawExtrusion, RawFlavor, RawHead, RawKinematics, RawPrinter,
     RawRetraction, RawVariable,
 };
 pub(crate) use solid::{RawFeature, RawInfill, RawOp, RawPattern, RawSolid};
-pub(crate) use step::{RawAxis, RawDeform, RawKeep, RawStep};
+pub(crate) use step::{RawAxis, RawDeform, RawKeep, RawSet, RawStep};
 pub(crate) use turtle::{RawCommand, RawLsystem, RawProcedure, RawTurtle};
 
 /// `material:` a built-in name or an inline map.

@@ -22,6 +22,7 @@ pub enum RawPrimitive {
     CaHelix(RawCaHelix),
     Solid(RawSolid),
     Turtle(RawTurtle),
+    Label(RawLabel),
 }
 
 impl RawPrimitive {
@@ -39,6 +40,7 @@ impl RawPrimitive {
             RawPrimitive::CaHelix(_) => "ca_helix",
             RawPrimitive::Solid(_) => "solid",
             RawPrimitive::Turtle(_) => "turtle",
+            RawPrimitive::Label(_) => "label",
         }
     }
 }
@@ -141,6 +143,25 @@ pub struct RawCircle {
     pub center: Option<Num3>,
     #[serde(default)]
     pub segments: Option<Num>,
+}
+
+/// `label:` as written: a short text in a seven-segment font; `{EXPR}` in
+/// `text` is replaced by the expression's value.
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawLabel {
+    pub text: String,
+    #[serde(default)]
+    pub center: Option<Num3>,
+    #[serde(default)]
+    pub height: Option<Num>,
+    #[serde(default)]
+    pub layers: Option<Num>,
+    #[serde(default)]
+    pub layer_height: Option<Num>,
+    #[serde(default)]
+    pub angle: Option<Num>,
 }
 
 /// `arc:` as written.

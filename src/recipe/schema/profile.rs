@@ -193,6 +193,10 @@ pub(crate) struct RawPrinter {
     /// `M201 X Y` with `emit_limits` (none).
     #[serde(default)]
     pub axis_acceleration: Option<[f64; 2]>,
+    /// Pressure (linear) advance written after the start G-code, s (none:
+    /// the firmware keeps its own); `p3dp calibrate apply` writes it.
+    #[serde(default)]
+    pub pressure_advance: Option<f64>,
     /// The firmware planner's limits.
     #[serde(default)]
     pub kinematics: RawKinematics,
@@ -288,6 +292,7 @@ impl RawPrinter {
             maker_temperatures: false,
             emit_limits: false,
             axis_acceleration: None,
+            pressure_advance: None,
             kinematics: RawKinematics::default(),
             head: RawHead::default(),
             checks: RawCheckLimits::default(),

@@ -87,6 +87,86 @@ pub enum RawStep {
         z: Num,
         gcode: String,
     },
+    /// `set: {every, from, band, <setting>: value, …}`: the printer's
+    /// settings as expressions of the position (`x`, `y`, `z`) and the band
+    /// index (`band`), written once per band at its first extruding string.
+    Set(Box<RawSet>),
+}
+
+/// The keys of a `set` step: where its bands are, and the settings (each a
+/// number or an expression over the params, `x`, `y`, `z` and `band`).
+#[derive(Clone, Debug, Default, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawSet {
+    /// Height of a band, mm: band `k` runs from `from + k·every` up.
+    #[serde(default)]
+    pub every: Option<Num>,
+    /// Height where band 0 begins, mm (0).
+    #[serde(default)]
+    pub from: Option<Num>,
+    /// This part is band `band` of a line test (no `every`).
+    #[serde(default)]
+    pub band: Option<Num>,
+    #[serde(default)]
+    pub nozzle_temperature: Option<Num>,
+    /// Wait for `nozzle_temperature` (false).
+    #[serde(default)]
+    pub wait: Option<bool>,
+    #[serde(default)]
+    pub fan: Option<Num>,
+    #[serde(default)]
+    pub pressure_advance: Option<Num>,
+    #[serde(default)]
+    pub retraction_length: Option<Num>,
+    #[serde(default)]
+    pub retraction_speed: Option<Num>,
+    #[serde(default)]
+    pub acceleration: Option<Num>,
+    #[serde(default)]
+    pub travel_acceleration: Option<Num>,
+    #[serde(default)]
+    pub speed_limit: Option<Num>,
+    #[serde(default)]
+    pub square_corner_velocity: Option<Num>,
+    #[serde(default)]
+    pub junction_deviation: Option<Num>,
+    #[serde(default)]
+    pub jerk: Option<Num>,
+    #[serde(default)]
+    pub input_shaper_frequency: Option<Num>,
+    #[serde(default)]
+    pub input_shaper_damping: Option<Num>,
+    /// `zv`, `mzv`, `zvd`, `ei`, `2hump_ei`, `3hump_ei`.
+    #[serde(default)]
+    pub input_shaper_type: Option<String>,
+    #[serde(default)]
+    pub flow: Option<Num>,
+}
+
+impl RawSet {
+    /// The settings given, in the order of the docs: key and value.
+    pub fn values(&self) -> Vec<(&'static str, &Num)> {
+        [
+            ("nozzle_temperature", &self.nozzle_temperature),
+            ("fan", &self.fan),
+            ("pressure_advance", &self.pressure_advance),
+            ("retraction_length", &self.retraction_length),
+            ("retraction_speed", &self.retraction_speed),
+            ("acceleration", &self.acceleration),
+            ("travel_acceleration", &self.travel_acceleration),
+            ("speed_limit", &self.speed_limit),
+            ("square_corner_velocity", &self.square_corner_velocity),
+            ("junction_deviation", &self.junction_deviation),
+            ("jerk", &self.jerk),
+            ("input_shaper_frequency", &self.input_shaper_frequency),
+            ("input_shaper_damping", &self.input_shaper_damping),
+            ("flow", &self.flow),
+        ]
+        .into_iter()
+        .filter_map(|(k, v)| v.as_ref().map(|v| (k, v)))
+        .collect()
+    }
 }
 
 /// The coordinate a `mirror` step reflects.
@@ -114,6 +194,7 @@ impl RawStep {
             RawStep::Scale { .. } => "scale",
             RawStep::Mirror { .. } => "mirror",
             RawStep::GcodeAt { .. } => "gcode_at",
+            RawStep::Set(_) => "set",
         }
     }
 }
@@ -136,6 +217,7 @@ mod tests {
             ("scale", "{factor: [1, 2, 1]}"),
             ("mirror", "{axis: x}"),
             ("gcode_at", "{z: 10, gcode: M600}"),
+            ("set", "{every: 5, nozzle_temperature: 200 + band}"),
         ] {
             let s: RawStep = parse_yaml(&format!("{{{key}: {map}}}"), "t").unwrap();
             assert_eq!(s.key(), key);

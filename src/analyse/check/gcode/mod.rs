@@ -251,6 +251,21 @@ pub(crate) fn command(
     })
 }
 
+/// Checks a `set` step's setting for printer `p` and material `m`: a
+/// command the printer's firmware has (`write::refusal`), its values within
+/// the limits a recipe's own command is held to ([`Policy::Raw`]).
+pub(crate) fn setting(s: &Setting, p: &Printer, m: &Material) -> std::result::Result<(), String> {
+    let d = firmware::Dialect {
+        flavor: p.flavor,
+        object_labels: false,
+        prusa_8bit: false,
+    };
+    if let Some(why) = firmware::write::refusal(d, &Command::Set(*s)) {
+        return Err(why);
+    }
+    Checker::new(p.flavor, Policy::Raw, Limits::of(p, m)).setting(s)
+}
+
 impl Checker {
     fn new(flavor: Flavor, policy: Policy, lim: Limits) -> Checker {
         Checker {

@@ -1,0 +1,447 @@
+//! `set`: the printer's settings as values of the position and of a band
+//! index, written once per band before the band's first extruding string
+//! (a calibration print's temperature, pressure advance, acceleration …).
+//!
+//! Height bands: band k holds the extruding strings whose end lies in
+//! `[from + k·every, from + (k+1)·every)`. The index is
+//! `floor((z − from)/every + 1e-9)`: a layer at exactly a band's edge (5.0
+//! written as 25 × 0.2 = 5.000000000000001 or 4.999999999999999) belongs to
+//! the band above it, whatever the rounding of its z; only the part's top,
+//! when it lies on an edge, closes the band below it.
+
+use crate::base::error::{Error, Result};
+use crate::base::expr::{var, Expr, Memo, Vars};
+use crate::base::gcode::{Heater, Setting, Shaper};
+use crate::base::toolpath::{Band, Event, Toolpath};
+
+/// A setting a `set` step may give a value to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Key {
+    /// The nozzle's target, °C.
+    NozzleTemperature,
+    /// The part-cooling fan, 0 to 1.
+    Fan,
+    /// Pressure (linear) advance, s.
+    PressureAdvance,
+    /// p3dp's retraction length, mm.
+    RetractionLength,
+    /// p3dp's retraction speed, mm/s.
+    RetractionSpeed,
+    /// Print acceleration, mm/s².
+    Acceleration,
+    /// Travel acceleration, mm/s².
+    TravelAcceleration,
+    /// The head's speed limit, mm/s.
+    SpeedLimit,
+    /// Klipper's square-corner velocity, mm/s.
+    SquareCornerVelocity,
+    /// Marlin's junction deviation, mm.
+    JunctionDeviation,
+    /// Classic jerk, mm/s.
+    Jerk,
+    /// Input shaper frequency (both axes), Hz.
+    ShaperFrequency,
+    /// Input shaper damping ratio.
+    ShaperDamping,
+    /// Flow factor, 1 = 100 %.
+    Flow,
+}
+
+impl Key {
+    /// The key of `name` as a recipe writes it.
+    pub fn of(name: &str) -> Option<Key> {
+        Some(match name {
+            "nozzle_temperature" => Key::NozzleTemperature,
+            "fan" => Key::Fan,
+            "pressure_advance" => Key::PressureAdvance,
+            "retraction_length" => Key::RetractionLength,
+            "retraction_speed" => Key::RetractionSpeed,
+            "acceleration" => Key::Acceleration,
+            "travel_acceleration" => Key::TravelAcceleration,
+            "speed_limit" => Key::SpeedLimit,
+            "square_corner_velocity" => Key::SquareCornerVelocity,
+            "junction_deviation" => Key::JunctionDeviation,
+            "jerk" => Key::Jerk,
+            "input_shaper_frequency" => Key::ShaperFrequency,
+            "input_shaper_damping" => Key::ShaperDamping,
+            "flow" => Key::Flow,
+            _ => return None,
+        })
+    }
+}
+
+/// Where a `set` step's bands are.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Bands {
+    /// Height bands `every` mm tall from `from`.
+    Height {
+        /// Where band 0 begins, mm.
+        from: f64,
+        /// A band's height, mm.
+        every: f64,
+    },
+    /// The whole part is band `k` (a line test's line).
+    Line(u32),
+    /// Once, at the first extruding string, no band.
+    Once,
+}
+
+/// A `set` step resolved.
+#[derive(Clone, Debug)]
+pub struct Set {
+    /// Its bands.
+    pub bands: Bands,
+    /// Each setting's value: an expression of x, y, z (variables) and
+    /// `band` (extra slot 0).
+    pub values: Vec<(Key, Expr)>,
+    /// Wait for the nozzle temperature.
+    pub wait: bool,
+    /// The input shaper's kind, if set.
+    pub shaper: Option<Shaper>,
+}
+
+/// The variables a `set` value may read.
+pub(crate) const VARS: &[usize] = &[var::X, var::Y, var::Z];
+/// The extra names a `set` value may read.
+pub(crate) const NAMES: &[&str] = &["band"];
+
+impl Set {
+    /// The settings at `vars` in band `band`, merged as the firmware sets
+    /// them (print and travel acceleration in one, the shaper's values in
+    /// one …), and the first value given (the band's).
+    pub fn settings(&self, vars: &Vars, band: u32, memo: &mut Memo) -> Result<(Vec<Setting>, f64)> {
+        let mut out: Vec<Setting> = Vec::new();
+        let mut first = None;
+        for (key, e) in &self.values {
+            let v = e.eval_ext(vars, &[f64::from(band)], memo);
+            if !v.is_finite() {
+                return Err(Error::input(
+                    "",
+                    format!(
+                        "`{}` gives {v} in band {band} at (x, y, z) = ({:.3}, {:.3}, {:.3}); expected a finite number",
+                        e.src(),
+                        vars[var::X],
+                        vars[var::Y],
+                        vars[var::Z]
+                    ),
+                ));
+            }
+            first.get_or_insert(v);
+            merge(&mut out, setting(*key, v, self.wait));
+        }
+        if let Some(kind) = self.shaper {
+            merge(
+                &mut out,
+                Setting::InputShaper {
+                    frequency: [None; 2],
+                    damping: None,
+                    kind: Some(kind),
+                },
+            );
+        }
+        Ok((out, first.unwrap_or(0.0)))
+    }
+
+    /// Puts the settings into `tp` before the first extruding string of
+    /// each band (after the events already there).
+    pub fn apply(&self, tp: &mut Toolpath) -> Result<()> {
+        let mut memo = Memo::default();
+        let mut new: Vec<(usize, Event)> = Vec::new();
+        let top = (0..tp.len())
+            .filter(|&k| !tp.strings[k].travel)
+            .map(|k| tp.points[k + 1].z)
+            .fold(f64::NEG_INFINITY, f64::max);
+        let mut last: Option<u32> = None;
+        for k in 0..tp.len() {
+            if tp.strings[k].travel {
+                continue;
+            }
+            let p = tp.points[k + 1];
+            let (band, z) = match self.bands {
+                Bands::Height { from, every } => {
+                    let mut b = libm::floor((p.z - from) / every + 1e-9);
+                    if b < 0.0 || b >= f64::from(u32::MAX) {
+                        continue;
+                    }
+                    // the part's top on an edge closes the band below it
+                    if b > 0.0 && from + b * every >= top - 1e-9 {
+                        b -= 1.0;
+                    }
+                    let b = b as u32;
+                    let lo = from + f64::from(b) * every;
+                    (b, Some([lo, (lo + every).min(top.max(lo))]))
+                }
+                Bands::Line(b) => (b, None),
+                Bands::Once => (0, None),
+            };
+            if last.is_some_and(|l| band <= l) {
+                continue;
+            }
+            last = Some(band);
+            let mut vars = [0.0; var::COUNT];
+            vars[var::X] = p.x;
+            vars[var::Y] = p.y;
+            vars[var::Z] = p.z;
+            let (settings, value) = self.settings(&vars, band, &mut memo)?;
+            let mark = (self.bands != Bands::Once).then_some(Band {
+                index: band,
+                value,
+                z,
+            });
+            for (j, s) in settings.into_iter().enumerate() {
+                let band = if j == 0 { mark } else { None };
+                new.push((k, Event::Set { setting: s, band }));
+            }
+            if !matches!(self.bands, Bands::Height { .. }) {
+                break;
+            }
+        }
+        merge_events(tp, new);
+        Ok(())
+    }
+}
+
+/// The setting `key` at value `v`.
+fn setting(key: Key, v: f64, wait: bool) -> Setting {
+    match key {
+        Key::NozzleTemperature => Setting::Temperature {
+            heater: Heater::Nozzle(0),
+            celsius: v,
+            wait,
+        },
+        Key::Fan => Setting::Fan { speed: v },
+        Key::PressureAdvance => Setting::PressureAdvance { k: v },
+        Key::RetractionLength => Setting::Retraction {
+            length: Some(v),
+            speed: None,
+        },
+        Key::RetractionSpeed => Setting::Retraction {
+            length: None,
+            speed: Some(v),
+        },
+        Key::Acceleration => Setting::Acceleration {
+            print: Some(v),
+            travel: None,
+            retract: None,
+        },
+        Key::TravelAcceleration => Setting::Acceleration {
+            print: None,
+            travel: Some(v),
+            retract: None,
+        },
+        Key::SpeedLimit => Setting::SpeedLimit { velocity: v },
+        Key::SquareCornerVelocity => Setting::SquareCornerVelocity(v),
+        Key::JunctionDeviation => Setting::JunctionDeviation(v),
+        Key::Jerk => Setting::Jerk(v),
+        Key::ShaperFrequency => Setting::InputShaper {
+            frequency: [Some(v); 2],
+            damping: None,
+            kind: None,
+        },
+        Key::ShaperDamping => Setting::InputShaper {
+            frequency: [None; 2],
+            damping: Some(v),
+            kind: None,
+        },
+        Key::Flow => Setting::Flow(v),
+    }
+}
+
+/// Adds `s` to `out`, into the setting of its kind already there when the
+/// firmware sets both in one command (accelerations, retraction, shaper).
+fn merge(out: &mut Vec<Setting>, s: Setting) {
+    for o in out.iter_mut() {
+        match (o, s) {
+            (
+                Setting::Acceleration { print, travel, .. },
+                Setting::Acceleration {
+                    print: p,
+                    travel: t,
+                    ..
+                },
+            ) => {
+                *print = p.or(*print);
+                *travel = t.or(*travel);
+                return;
+            }
+            (
+                Setting::Retraction { length, speed },
+                Setting::Retraction {
+                    length: l,
+                    speed: v,
+                },
+            ) => {
+                *length = l.or(*length);
+                *speed = v.or(*speed);
+                return;
+            }
+            (
+                Setting::InputShaper {
+                    frequency,
+                    damping,
+                    kind,
+                },
+                Setting::InputShaper {
+                    frequency: f,
+                    damping: d,
+                    kind: k,
+                },
+            ) => {
+                for a in 0..2 {
+                    frequency[a] = f[a].or(frequency[a]);
+                }
+                *damping = d.or(*damping);
+                *kind = k.or(*kind);
+                return;
+            }
+            _ => {}
+        }
+    }
+    out.push(s);
+}
+
+/// `new` (sorted by string index) merged into `tp`'s events: each after
+/// the events already at its index.
+fn merge_events(tp: &mut Toolpath, new: Vec<(usize, Event)>) {
+    if new.is_empty() {
+        return;
+    }
+    let old = std::mem::take(&mut tp.events);
+    let mut out = Vec::with_capacity(old.len() + new.len());
+    let mut old = old.into_iter().peekable();
+    for (k, e) in new {
+        while let Some(o) = old.next_if(|(i, _)| *i <= k) {
+            out.push(o);
+        }
+        out.push((k, e));
+    }
+    out.extend(old);
+    tp.events = out;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::base::expr::Params;
+    use crate::base::toolpath::Strand;
+    use glam::DVec3;
+
+    /// A square wall of `layers` layers 0.2 mm apart, four strings a layer.
+    fn wall(layers: usize) -> Toolpath {
+        let mut tp = Toolpath::new(DVec3::new(0.0, 0.0, 0.2));
+        let s = Strand {
+            c: 0.2,
+            v: 30.0,
+            travel: false,
+            hair: false,
+        };
+        for l in 0..layers {
+            let z = 0.2 * (l + 1) as f64;
+            for (x, y) in [(10.0, 0.0), (10.0, 10.0), (0.0, 10.0), (0.0, 0.0)] {
+                tp.points.push(DVec3::new(x, y, z));
+                tp.strings.push(s);
+            }
+        }
+        tp
+    }
+
+    fn set(bands: Bands, src: &str) -> Set {
+        Set {
+            bands,
+            values: vec![(
+                Key::NozzleTemperature,
+                Expr::compile_ext(src, &Params::new(), VARS, NAMES).unwrap(),
+            )],
+            wait: false,
+            shaper: None,
+        }
+    }
+
+    #[test]
+    fn one_setting_per_band_at_its_first_string_with_any_step() {
+        for (every, step) in [(1.0, 5.0), (1.0, 2.5), (0.6, 3.0), (5.0, 1.0)] {
+            let mut tp = wall(50); // 0.2 .. 10.0
+            set(
+                Bands::Height { from: 0.0, every },
+                &format!("230 - band*{step}"),
+            )
+            .apply(&mut tp)
+            .unwrap();
+            let bands: Vec<(usize, Band)> = tp
+                .events
+                .iter()
+                .map(|(k, e)| match e {
+                    Event::Set { band: Some(b), .. } => (*k, *b),
+                    e => panic!("{e:?}"),
+                })
+                .collect();
+            // every band some layer reaches, each exactly once and in order
+            // (the top, 10 mm, on an edge closes the band below it)
+            let mut want: Vec<u32> = (1..=50)
+                .map(|l| {
+                    let b = libm::floor(0.2 * l as f64 / every + 1e-9) as u32;
+                    if l == 50 && f64::from(b) * every >= 10.0 - 1e-9 {
+                        b - 1
+                    } else {
+                        b
+                    }
+                })
+                .collect();
+            want.dedup();
+            let got: Vec<u32> = bands.iter().map(|(_, b)| b.index).collect();
+            assert_eq!(got, want, "every {every}");
+            for (k, b) in &bands {
+                assert_eq!(b.value, 230.0 - f64::from(b.index) * step);
+                let lo = f64::from(b.index) * every;
+                let z = tp.points[k + 1].z;
+                assert!(z >= lo - 1e-6 && z < lo + every - 1e-6, "{z} {lo}");
+                // the band's first string: every string before it ends in a band below
+                let band_of = |z: f64| libm::floor(z / every + 1e-9) as u32;
+                assert!(tp.points[1..=*k].iter().all(|p| band_of(p.z) < b.index));
+            }
+        }
+    }
+
+    #[test]
+    fn a_layer_on_a_band_edge_opens_the_band_above() {
+        let mut tp = wall(50);
+        set(
+            Bands::Height {
+                from: 0.0,
+                every: 1.0,
+            },
+            "band",
+        )
+        .apply(&mut tp)
+        .unwrap();
+        // layer 5 is at z = 5 × 0.2 (= 1.0000000000000002): band 1 begins there
+        let (k, _) = tp.events[1];
+        assert!(
+            (tp.points[k + 1].z - 1.0).abs() < 1e-9,
+            "{}",
+            tp.points[k + 1].z
+        );
+    }
+
+    #[test]
+    fn a_line_band_is_written_once() {
+        let mut tp = wall(3);
+        set(Bands::Line(4), "200 + band").apply(&mut tp).unwrap();
+        assert_eq!(tp.events.len(), 1);
+        assert_eq!(
+            tp.events[0].1,
+            Event::Set {
+                setting: Setting::Temperature {
+                    heater: Heater::Nozzle(0),
+                    celsius: 204.0,
+                    wait: false
+                },
+                band: Some(Band {
+                    index: 4,
+                    value: 204.0,
+                    z: None
+                })
+            }
+        );
+    }
+}

@@ -1,0 +1,315 @@
+//! `p3dp calibrate` through the real binary: the gallery listed, each test
+//! built clean on every built-in printer it fits (a bed too small refused
+//! by name), the bands in the report and the stats, `apply` round-tripping
+//! into a profile a rebuild uses, and the estimate following the settings.
+//! (The settings read back through the firmware's own reader, per band
+//! and flavour, are tested beside the code: `app::command::calibrate`.)
+
+use crate::common::*;
+
+const TESTS: [&str; 11] = [
+    "temperature",
+    "volumetric-speed",
+    "pressure-advance-tower",
+    "pressure-advance-line",
+    "pressure-advance-pattern",
+    "flow",
+    "retraction",
+    "cornering",
+    "input-shaping-frequency",
+    "input-shaping-damping",
+    "vfa",
+];
+
+fn stats(dir: &std::path::Path, file: &str) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join(file)).unwrap()).unwrap()
+}
+
+#[test]
+fn the_list_names_every_test_in_the_guides_order() {
+    let out = p3dp(&root(), &["calibrate", "--list"]);
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    let names: Vec<&str> = text
+        .lines()
+        .map(|l| l.split_whitespace().next().unwrap())
+        .collect();
+    for t in TESTS {
+        assert!(names.contains(&t), "{t} missing from\n{text}");
+    }
+    let pos = |n: &str| names.iter().position(|x| *x == n).unwrap();
+    assert!(pos("temperature") < pos("volumetric-speed"));
+    assert!(pos("volumetric-speed") < pos("pressure-advance-tower"));
+    assert!(pos("flow") < pos("retraction") && pos("retraction") < pos("cornering"));
+    assert!(
+        pos("cornering") < pos("input-shaping-frequency")
+            && pos("input-shaping-damping") < pos("vfa")
+    );
+}
+
+/// Every test on the smallest built-in beds (the A1 mini's and the MINI's
+/// 180 mm) and a Klipper and a delta printer: clean, with its bands.
+#[test]
+fn every_test_builds_clean_on_small_beds() {
+    let dir = tmp("calibrate-small");
+    for printer in ["bambu-a1-mini", "prusa-mini", "voron-350", "rostock-max"] {
+        for t in TESTS {
+            let out = p3dp(
+                &dir,
+                &[
+                    "calibrate",
+                    t,
+                    "--printer",
+                    printer,
+                    "-o",
+                    "out.gcode",
+                    "--stats-json",
+                    "s.json",
+                ],
+            );
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert!(out.status.success(), "{t} on {printer}: {err}");
+            let report = String::from_utf8_lossy(&out.stdout);
+            assert!(report.contains("0 errors"), "{t} on {printer}: {report}");
+            let s = stats(&dir, "s.json");
+            if !matches!(t, "vfa" | "volumetric-speed") {
+                let bands = s["bands"].as_array().unwrap();
+                assert!(bands.len() >= 5, "{t}: {bands:?}");
+                assert!(report.contains("  bands:\n"), "{report}");
+            }
+        }
+    }
+}
+
+#[test]
+fn a_bed_too_small_is_refused_by_name() {
+    let dir = tmp("calibrate-tiny");
+    let fixture = root().join("tests/fixtures/printers/tiny-bed.yaml");
+    std::fs::copy(fixture, dir.join("tiny-bed.yaml")).unwrap();
+    let out = p3dp(
+        &dir,
+        &[
+            "calibrate",
+            "temperature",
+            "--printer",
+            "tiny-bed.yaml",
+            "-o",
+            "out.gcode",
+        ],
+    );
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("out-of-bed"), "{err}");
+    assert!(!dir.join("out.gcode").exists());
+}
+
+#[test]
+fn any_range_and_step_gives_its_bands_in_the_stats() {
+    let dir = tmp("calibrate-range");
+    let out = p3dp(
+        &dir,
+        &[
+            "calibrate",
+            "temperature",
+            "--material",
+            "petg",
+            "--set",
+            "start=241",
+            "--set",
+            "end=229",
+            "--set",
+            "step=-3",
+            "-o",
+            "t.gcode",
+            "--stats-json",
+            "t.json",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let s = stats(&dir, "t.json");
+    assert_eq!(s["material"], "petg");
+    let bands = s["bands"].as_array().unwrap();
+    let values: Vec<f64> = bands.iter().map(|b| b["value"].as_f64().unwrap()).collect();
+    assert_eq!(values, [241.0, 238.0, 235.0, 232.0, 229.0]);
+    for (i, b) in bands.iter().enumerate() {
+        assert_eq!(b["index"].as_u64(), Some(i as u64));
+        assert_eq!(b["z_from"].as_f64(), Some(5.0 * i as f64));
+        assert_eq!(b["z_to"].as_f64(), Some(5.0 * (i + 1) as f64));
+    }
+    let g = std::fs::read_to_string(dir.join("t.gcode")).unwrap();
+    for v in values {
+        assert_eq!(
+            g.matches(&format!("M104 S{v} ; nozzle temperature ; band"))
+                .count(),
+            1,
+            "{v}"
+        );
+    }
+}
+
+/// `apply` writes band N's value into a profile inheriting the printer, and
+/// a build of another recipe with that profile writes it at the start.
+#[test]
+fn apply_round_trips_into_a_profile_a_rebuild_uses() {
+    let dir = tmp("calibrate-apply");
+    let out = p3dp(
+        &dir,
+        &[
+            "calibrate",
+            "pressure-advance-tower",
+            "--printer",
+            "voron-350",
+            "-o",
+            "pa.gcode",
+            "--stats-json",
+            "pa.json",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let band3 = stats(&dir, "pa.json")["bands"][3]["value"]
+        .as_f64()
+        .unwrap();
+    let out = p3dp(
+        &dir,
+        &[
+            "calibrate",
+            "apply",
+            "pressure-advance-tower",
+            "--band",
+            "3",
+            "--printer",
+            "voron-350",
+            "-o",
+            "my.yaml",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let profile = std::fs::read_to_string(dir.join("my.yaml")).unwrap();
+    assert!(profile.contains("inherits: voron-350\n"), "{profile}");
+    assert!(
+        profile.contains(&format!("pressure_advance: {band3}\n")),
+        "{profile}"
+    );
+    let vase = root().join("recipes/vase.yaml");
+    let out = p3dp(
+        &dir,
+        &[
+            "build",
+            vase.to_str().unwrap(),
+            "--printer",
+            "my.yaml",
+            "-o",
+            "vase.gcode",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let g = std::fs::read_to_string(dir.join("vase.gcode")).unwrap();
+    let want = format!("SET_PRESSURE_ADVANCE ADVANCE={band3} ");
+    assert_eq!(g.matches(&want).count(), 1, "{want}");
+    // the retraction length goes into the profile's retraction map
+    let out = p3dp(
+        &dir,
+        &[
+            "calibrate",
+            "apply",
+            "retraction",
+            "--height",
+            "4.5",
+            "-o",
+            "r.yaml",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r = std::fs::read_to_string(dir.join("r.yaml")).unwrap();
+    // band 2 of 2 mm bands from 0.2 mm in steps of 0.2 mm
+    assert!(r.contains("retraction: { length: 0.6 }\n"), "{r}");
+}
+
+/// A tower raising the print acceleration: timed as the planner times the
+/// same tower with that acceleration in the profile.
+#[test]
+fn the_estimate_follows_the_settings() {
+    let dir = tmp("calibrate-accel");
+    let recipe = |set: &str| {
+        format!(
+            "p3dp: 1\nname: accel\nparts:\n  - speed: 80\n    primitive: {{helix: {{radius: 14, height: 6, pitch: 0.2, segments: 4, center: [0, 0, 0.2]}}}}\n{set}"
+        )
+    };
+    std::fs::write(
+        dir.join("set.yaml"),
+        recipe("    steps:\n      - set: {every: 3, acceleration: 400}\n"),
+    )
+    .unwrap();
+    std::fs::write(dir.join("plain.yaml"), recipe("")).unwrap();
+    std::fs::write(
+        dir.join("slow.yaml"),
+        "inherits: generic-220\nkinematics: { max_acceleration: 400 }\n",
+    )
+    .unwrap();
+    let time = |r: &str, printer: &str| {
+        let out = p3dp(
+            &dir,
+            &[
+                "build",
+                r,
+                "--printer",
+                printer,
+                "-o",
+                "o.gcode",
+                "--stats-json",
+                "o.json",
+            ],
+        );
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        stats(&dir, "o.json")["print_time_s"].as_f64().unwrap()
+    };
+    let with_set = time("set.yaml", "generic-220");
+    let in_profile = time("plain.yaml", "slow.yaml");
+    let fast = time("plain.yaml", "generic-220");
+    assert!(fast < with_set - 1.0, "{fast} {with_set}");
+    assert!(
+        (with_set - in_profile).abs() < 0.05,
+        "{with_set} {in_profile}"
+    );
+}
+
+#[test]
+fn every_gallery_recipe_is_in_the_lock() {
+    let lock = std::fs::read_to_string(root().join("p3dp.lock")).unwrap();
+    let mut n = 0;
+    for e in std::fs::read_dir(root().join("recipes/calibration")).unwrap() {
+        let name = e.unwrap().file_name().to_string_lossy().to_string();
+        if name.ends_with(".yaml") {
+            n += 1;
+            assert!(
+                lock.contains(&format!("recipe: recipes/calibration/{name}\n")),
+                "{name} is not locked"
+            );
+        }
+    }
+    assert!(n >= 11);
+}
