@@ -45,7 +45,14 @@ fn main() {
             let mut plan = p3dp::prepare(&recipe, &opts).expect("plan");
             strings = plan.paths.iter().map(|p| p.len()).sum::<usize>();
             let file = std::fs::File::create(&out).expect("temp file");
-            let stats = pipeline::check_and_render(&mut plan, &[], None, file).expect("render");
+            let job = pipeline::Job {
+                check: Some((&[], pipeline::Stop::Never)),
+                hash: true,
+                ..Default::default()
+            };
+            let stats = pipeline::write(&mut plan, &job, file)
+                .expect("render")
+                .stats;
             assert!(plan.failing(false).is_empty(), "the vase passes its checks");
             stats
         });
@@ -84,7 +91,11 @@ fn stages(path: &Path, opts: &p3dp::Options, runs: usize) {
         pipeline::check(&mut plan, &[]);
         check.push(t1.elapsed().as_secs_f64());
         let t2 = Instant::now();
-        pipeline::render(&plan, std::io::sink()).expect("render");
+        let job = pipeline::Job {
+            hash: true,
+            ..Default::default()
+        };
+        pipeline::write(&mut plan, &job, std::io::sink()).expect("render");
         write.push(t2.elapsed().as_secs_f64());
     }
     let (m, c, w) = (median(&mut make), median(&mut check), median(&mut write));

@@ -26,4 +26,20 @@ grep -ho '"[^"]*"' "$root"/recipes/*.yaml | sed 's/^"//; s/"$//' | sort -u | whi
   printf '%s' "$e" > "$here/corpus/expr/$(printf '%s' "$e" | cksum | cut -d' ' -f1)"
 done
 if [ -d "$here/findings/expr" ]; then cp "$here/findings/expr"/* "$here/corpus/expr/" 2>/dev/null || true; fi
+# slicer macros: the start/end G-code of the built-in profiles and the test
+# presets, one template a file
+mkdir -p "$here/corpus/slicer_macro"
+for f in "$root"/src/machine/printers/*.yaml "$root"/tests/fixtures/printers/*.yaml "$root"/tests/fixtures/presets/*; do
+  [ -f "$f" ] || continue
+  cp "$f" "$here/corpus/slicer_macro/$(echo "$f" | sed "s|^$root/||; s|/|_|g")"
+done
+cat > "$here/corpus/slicer_macro/constructs" <<'TEMPLATE'
+M104 S[temperature] ; [printer_model] {layer_height*2}
+{if printer_model =~ /MK4.*/ and not has_wipe_tower}G28{elsif layer_height > 0.1}G29{else}G30{endif}
+{local t = (1, 2.5, 3); global g = repeat(2, "a"); t[1] = 7; g[0] = g[1] + "b"}{size(t)} {empty(g)} {t[1]}
+{is_nil(temperature[1]) ? "nil" : "set"} {one_of(printer_model, "MINI", /MK.*/, ~"X" + "L")}
+{interpolate_table(layer_height, (0, 1), (0.3, 2))} {digits(park, 6, 2)} {zdigits(7, 3)} {random(1, 6)}
+{if layer_height < 0.1 then "fine" else "draft" endif}; {min(1, 2.5)} {max(3, 4)} {int(-2.7)} {round(2.5)}
+TEMPLATE
+if [ -d "$here/findings/slicer_macro" ]; then cp "$here/findings/slicer_macro"/* "$here/corpus/slicer_macro/" 2>/dev/null || true; fi
 echo "seeded $(ls "$here"/corpus/* | wc -l) files into $here/corpus"

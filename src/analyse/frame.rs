@@ -9,23 +9,41 @@ use glam::DVec3;
 
 use crate::analyse::check::gcode::{self, Start};
 use crate::base::error::{Error, Result};
+use crate::base::gcode::Verbatim;
 use crate::base::slicer_macro::{Value, Vars};
 use crate::base::toolpath::Toolpath;
 use crate::generate::model::Recipe;
 
-/// A print's start and end G-code, expanded and checked.
+/// A print's start and end G-code, expanded and checked: each line as it
+/// is written, and what its firmware reads in it.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Frame {
     /// Before the first part.
-    pub start: String,
+    pub start: Vec<Verbatim>,
     /// After the last part.
-    pub end: String,
+    pub end: Vec<Verbatim>,
+}
+
+impl Frame {
+    /// The start G-code as it is written, a line feed after each line.
+    pub fn start_text(&self) -> String {
+        lines(&self.start)
+    }
+
+    /// The end G-code as it is written, a line feed after each line.
+    pub fn end_text(&self) -> String {
+        lines(&self.end)
+    }
+}
+
+fn lines(v: &[Verbatim]) -> String {
+    v.iter().map(|l| format!("{}\n", l.text)).collect()
 }
 
 /// What the strings say about the print for the templates: heights of the
 /// extruding points (recipe z) and the first layer's extent (machine XY).
-#[derive(Clone, Copy, Debug)]
-struct Extent {
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Extent {
     /// Lowest extruding point's z.
     low: f64,
     /// Highest extruding point's z.
@@ -42,32 +60,54 @@ struct Extent {
     end_at: Option<DVec3>,
     /// Highest z of any point, travel included, and at least 0.
     top: f64,
+    /// Volume of the extruding strings, mm³ (what E adds up to, times the
+    /// filament's area).
+    volume: f64,
+    /// Lowest and highest z of any string that is not a travel (extruding
+    /// or not), recipe z: the G-code's layers.
+    pub(crate) drawn: Option<(f64, f64)>,
+}
+
+impl Extent {
+    /// Highest z of any point, travel included, and at least 0.
+    pub(crate) fn top(&self) -> f64 {
+        self.top
+    }
 }
 
 /// The start and end G-code of `recipe` printing `paths`, expanded and
 /// checked; an error names the profile (its file, or the built-in name),
 /// the template's key and line, and why.
-pub(crate) fn frame(recipe: &Recipe, paths: &[Toolpath]) -> Result<Frame> {
+pub(crate) fn frame(recipe: &Recipe, ext: &Extent) -> Result<Frame> {
     let p = &recipe.printer;
-    let ext = extent(recipe, paths);
+    let ext = *ext;
     let shown = match &p.source {
         Some(f) => f.clone(),
         None => format!("built-in printer `{}`", p.name),
     };
-    let one = |key: &str, text: &str, end: bool| -> Result<String> {
+    // a `global` of the start G-code is still set in the end G-code
+    let mut globals = Vars::new();
+    let mut one = |key: &str, text: &str, end: bool| -> Result<Vec<Verbatim>> {
         let t = p.template(key, text).map_err(|e| e.in_file(&shown))?;
         let vars = variables(recipe, &ext, end);
         let out = t
-            .expand(&vars)
+            .expand_with(&vars, &mut globals)
             .map_err(|e| Error::input(format!("{key} line {}", e.line), e.message))
             .map_err(|e| e.in_file(&shown))?;
         let from = if end {
-            Start::At(p.to_machine(ext.end_at.unwrap_or(DVec3::ZERO)))
+            let d = recipe
+                .material
+                .filament_diameter
+                .unwrap_or(p.filament_diameter);
+            let area = std::f64::consts::PI * d * d / 4.0;
+            Start::At(
+                p.to_machine(ext.end_at.unwrap_or(DVec3::ZERO)),
+                ext.volume / area,
+            )
         } else {
             Start::Unknown
         };
-        gcode::check(key, &out, recipe, from).map_err(|e| e.in_file(&shown))?;
-        Ok(out)
+        gcode::check(key, &out, recipe, from).map_err(|e| e.in_file(&shown))
     };
     Ok(Frame {
         start: one("start_gcode", &p.start_gcode, false)?,
@@ -75,7 +115,9 @@ pub(crate) fn frame(recipe: &Recipe, paths: &[Toolpath]) -> Result<Frame> {
     })
 }
 
-fn extent(recipe: &Recipe, paths: &[Toolpath]) -> Extent {
+/// The heights and the first layer of `paths`, in one pass over their
+/// strings (and one over the first layer's).
+pub(crate) fn extent(recipe: &Recipe, paths: &[Toolpath]) -> Extent {
     let mut e = Extent {
         low: f64::INFINITY,
         high: f64::NEG_INFINITY,
@@ -88,22 +130,32 @@ fn extent(recipe: &Recipe, paths: &[Toolpath]) -> Extent {
             .iter()
             .flat_map(|t| t.points.iter().map(|p| p.z))
             .fold(0.0, f64::max),
+        volume: 0.0,
+        drawn: None,
     };
+    let (mut dlo, mut dhi) = (f64::INFINITY, f64::NEG_INFINITY);
     let extruding = |t: &Toolpath, k: usize| !t.strings[k].travel && t.strings[k].c > 0.0;
     for t in paths {
         for k in 0..t.len() {
-            if !extruding(t, k) {
+            if t.strings[k].travel {
                 continue;
             }
             let (a, b) = t.ends(k);
+            dlo = dlo.min(a.z.min(b.z));
+            dhi = dhi.max(a.z.max(b.z));
+            if !extruding(t, k) {
+                continue;
+            }
             if e.first_c == 0.0 {
                 e.first_c = t.strings[k].c;
             }
+            e.volume += t.strings[k].c * a.distance(b);
             e.low = e.low.min(a.z.min(b.z));
             e.high = e.high.max(a.z.max(b.z));
             e.last = b.z;
         }
     }
+    e.drawn = (dlo <= dhi).then_some((dlo, dhi));
     if !e.low.is_finite() {
         // nothing extrudes: every height is the bed's
         (e.low, e.high) = (0.0, 0.0);

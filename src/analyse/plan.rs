@@ -28,6 +28,8 @@ pub struct Plan {
     /// material hotter than the printer allows is its check's finding
     /// before it is the start G-code's `M104`).
     pub frame_error: Option<crate::base::error::Error>,
+    /// The heights and the first layer of the strings, measured once.
+    pub(crate) extent: crate::analyse::frame::Extent,
 }
 
 /// What the checks of a plan found: its findings (those `allow`ed already
@@ -40,7 +42,8 @@ impl Plan {
     /// checked now (see [`crate::analyse::frame`]): an error if unsafe,
     /// kept in `frame_error` (see [`Plan::frame_ok`]).
     pub fn new(path: String, recipe: Recipe, paths: Vec<Toolpath>) -> Result<Plan> {
-        let (frame, frame_error) = match crate::analyse::frame::frame(&recipe, &paths) {
+        let extent = crate::analyse::frame::extent(&recipe, &paths);
+        let (frame, frame_error) = match crate::analyse::frame::frame(&recipe, &extent) {
             Ok(f) => (f, None),
             Err(e) => (Frame::default(), Some(e)),
         };
@@ -52,6 +55,7 @@ impl Plan {
             footprints: Vec::new(),
             frame,
             frame_error,
+            extent,
         })
     }
 

@@ -337,7 +337,10 @@ pub(crate) fn zbuffer_curves(
 }
 
 /// An SVG of layer `index` of a recipe's solid parts (`--zbuffer-svg`);
-/// `None` when none has that layer.
-pub(crate) fn zbuffer_svg(recipe: &Recipe, index: u64) -> Option<String> {
+/// `None` when none has that layer, an error for a name XML cannot hold.
+pub(crate) fn zbuffer_svg(
+    recipe: &Recipe,
+    index: u64,
+) -> crate::base::error::Result<Option<String>> {
     crate::generate::primitive::solid::layer_svg(&solids(recipe), index)
 }

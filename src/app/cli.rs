@@ -235,7 +235,7 @@ pub struct SendArgs {
     /// The files to upload (G-code, .bgcode, .gcode.3mf), in order.
     #[arg(value_name = "FILE", required = true)]
     pub files: Vec<PathBuf>,
-    /// The host's base URL: http://HOST[:PORT] (Moonraker's port is usually 7125).
+    /// The host's base URL: http://HOST[:PORT] (Moonraker's port is usually 7125); the API key goes in P3DP_API_KEY.
     #[arg(long, value_name = "URL")]
     pub to: String,
     /// Start printing the last file once it is uploaded.
@@ -244,7 +244,7 @@ pub struct SendArgs {
     /// The host's software, when asking it does not tell.
     #[arg(long, value_name = "HOST", value_parser = ["moonraker", "octoprint", "prusalink"])]
     pub host: Option<String>,
-    /// Seconds a request may take, connecting included.
+    /// Seconds the host may stay silent (connecting, each write of the upload, its answer), 1 to 3600.
     #[arg(long, value_name = "S", default_value_t = 60)]
     pub timeout: u64,
 }

@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 
 use crate::base::expr::{eval_const, var, Expr, Memo, Params};
 use crate::base::input::{check_nesting, decode, Reads, MAX_IMAGE_PIXELS};
+use crate::base::slicer_macro::{Template, Value, Vars};
 use crate::base::svg::{parse, Options, Outline};
 use crate::base::toolpath::Toolpath;
 use crate::generate::model::{make_part, Recipe};
@@ -110,6 +111,37 @@ pub fn expr(data: &[u8]) {
     if let Ok(e) = Expr::compile_ext(src, &params, &all, &["len", "depth"]) {
         let ext = vec![0.5; 2 + e.rands()];
         let _ = e.eval_ext(&[1.0; var::COUNT], &ext, &mut Memo::default());
+    }
+}
+
+/// Slicer macro text → a template parsed, its variables listed, and
+/// expanded twice over a few typical variables (the same bytes both times:
+/// `random` is seeded by the text), within the output cap.
+pub fn slicer_macro(data: &[u8]) {
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    let Ok(t) = Template::parse(text) else {
+        return;
+    };
+    let _ = t.variables();
+    let mut vars = Vars::new();
+    let list = |v: Vec<Value>| Value::List(v);
+    vars.insert("layer_height".into(), Value::Float(0.2));
+    vars.insert("initial_tool".into(), Value::Int(0));
+    vars.insert("printer_model".into(), Value::Str("MK4S".into()));
+    vars.insert("has_wipe_tower".into(), Value::Bool(false));
+    vars.insert(
+        "temperature".into(),
+        list(vec![Value::Int(215), Value::Nil]),
+    );
+    vars.insert("bed_shape".into(), list(vec![Value::Str("0x0".into()); 4]));
+    vars.insert("park".into(), Value::Shown(12.3, "12.300".into()));
+    let a = t.expand(&vars);
+    let b = t.expand(&vars);
+    assert_eq!(a, b, "the same template, the same bytes");
+    if let Ok(out) = a {
+        assert!(out.len() <= 4 << 20, "the output cap");
     }
 }
 

@@ -4,33 +4,39 @@
 //! code's own data parallelism (`base::par`: a helix's points, a deform's
 //! chunks, the previews' bands) and everything scheduled here share it, and
 //! no other thread computes. The stages of a build are plain functions —
-//! the checks ([`crate::analyse::check`]) from the parts to findings, the
-//! G-code writer ([`crate::output::gcode::write`]) from the parts to bytes
-//! and moves, the planner ([`Planner`]) from moves to times — and this
-//! module runs them side by side and puts their results together in one
-//! fixed order, so the bytes never depend on the threads.
+//! the checks ([`crate::analyse::check::tasks`]: which tasks there are and
+//! how their findings merge is theirs to say), the emitter
+//! ([`crate::output::gcode`]: the plan's strings into typed commands, each
+//! written once and followed by the firmware's state) and the planner
+//! ([`Planner`]: moves into times). This module runs them side by side and
+//! puts their results together in one fixed order, so the bytes never
+//! depend on the threads.
 //!
-//! A checked build on two threads or more ([`check_and_write`]): this
-//! thread writes the G-code, its moves recorded in batches for the planner;
-//! a second takes the cheap checks, then the costly ones one at a time,
-//! planning the moves recorded so far after each; the writer plans too when
-//! the backlog grows (so it stays small), and once everything is written it
-//! plans what is left and takes the checks not yet taken. With one thread
-//! the checks run first, then the writer with the planner inline.
+//! [`write`] is the one entry of a build: a [`Job`] says whether to check
+//! (and when to give up: [`Stop`]), how the G-code is stamped, and whether
+//! it is hashed. On two threads or more, this thread writes while a second
+//! takes the checks one task at a time, planning the moves recorded so far
+//! between them; the writer plans too when the backlog grows, and once
+//! everything is written it takes the checks not yet taken. A G-code with
+//! progress lines (`M73`, Bambu's header) needs the print's time before its
+//! first line: its commands are followed once without being formatted (the
+//! moves alone, planned as they come), then written once with a
+//! [`Clock`] reading the planned times.
 
 use std::collections::VecDeque;
 use std::io::{self, Write};
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::{Condvar, Mutex, MutexGuard, OnceLock};
+use std::sync::{Condvar, Mutex, MutexGuard};
 
-use crate::analyse::check::{self, first_layer, Cheap, Costly, Finding};
+use crate::analyse::check::tasks::{Task, Tasks};
 use crate::analyse::plan::Plan;
-use crate::analyse::planner::{Call, Clock, Estimate, MoveKind, Moves, Planner, Timeline};
+use crate::analyse::planner::{
+    place, Both, Call, Estimate, Marks, MoveKind, Moves, Planner, Timeline,
+};
 use crate::analyse::stats::{MoveStats, Stats};
 use crate::base::error::{Error, Result};
-use crate::base::toolpath::Toolpath;
-use crate::output::file::HashWriter;
+use crate::output::file::{HashWriter, Scratch};
 use crate::output::gcode::metadata::{Ahead, Options};
 use crate::output::gcode::Head;
 use crate::output::preview;
@@ -95,72 +101,133 @@ fn parallel() -> bool {
     rayon::current_num_threads() >= 2
 }
 
+/// When a checked build gives up writing.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Stop {
+    /// Never: everything is written whatever the checks find (`--force`).
+    #[default]
+    Never,
+    /// As soon as the checks fail, warnings counting when `strict`: the
+    /// caller refuses the build, so the rest of the G-code would be waste.
+    Failing {
+        /// Warnings fail too (`--strict`).
+        strict: bool,
+    },
+}
+
+/// What a build does besides writing (see [`write`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Job<'a> {
+    /// Run the checks first or beside the writing, silencing these codes
+    /// and stopping as said; `None`: write unchecked.
+    pub check: Option<(&'a [String], Stop)>,
+    /// How the G-code is stamped (the date, Bambu's package).
+    pub stamp: Options,
+    /// Hash the G-code (the stats' `gcode_sha256`; empty when not).
+    pub hash: bool,
+    /// A preview's draft: written even when the profile's start or end
+    /// G-code failed its checks, with no progress lines.
+    pub draft: bool,
+}
+
+/// What a build wrote: the output back, the moves' figures and the stats.
+pub struct Written<W> {
+    /// The output, flushed.
+    pub out: W,
+    /// The stats report.
+    pub stats: Stats,
+    /// What the written moves add up to (for packages).
+    pub(crate) moves: MoveStats,
+}
+
 /// Runs every check of `plan` and keeps what they found; the costly checks
 /// side by side when the pool allows.
 pub fn check(plan: &mut Plan, allow: &[String]) {
-    let refs: Vec<&Toolpath> = plan.paths.iter().collect();
-    let tasks = CheckTasks::new(plan, &refs, allow);
+    let tasks = Tasks::new(
+        &plan.recipe,
+        plan.paths.iter().collect(),
+        plan.allowed(allow),
+    );
+    let queue = Queue::new(&tasks);
     rayon::in_place_scope(|s| {
         if parallel() {
-            s.spawn(|_| while tasks.run_next() {});
+            s.spawn(|_| while queue.run_next() {});
         }
-        while tasks.run_next() {}
+        while queue.run_next() {}
     });
-    (plan.findings, plan.footprints) = tasks.finish(plan, allow);
+    let (mut findings, footprints) = tasks.merged();
+    plan.silence(&mut findings, allow);
+    (plan.findings, plan.footprints) = (findings, footprints);
 }
 
-/// The G-code of `plan` written to `out` (its thumbnails made first), and
-/// what its moves add up to; the print-time planner runs beside the writer
-/// when the pool allows.
-pub fn write<W: Write>(plan: &Plan, out: W) -> Result<(W, MoveStats)> {
-    write_with(plan, &Options::default(), out)
-}
-
-/// [`write`], stamped as `options` say (the date, Bambu's package).
-pub fn write_with<W: Write>(plan: &Plan, options: &Options, out: W) -> Result<(W, MoveStats)> {
-    let thumbnails = crate::output::preview::thumbnail::blocks(plan)?;
-    written(plan, options, thumbnails, out, None, false)
+/// The one entry of a build: `plan`'s G-code written to `out` as `job`
+/// says (see the module comment). With checks, their findings are in the
+/// plan whatever the result, and the caller must look at them first: with
+/// checks that fail, `out` holds G-code that must not be committed (so
+/// `out` should be a temp file, never standard output); under
+/// [`Stop::Failing`] the writing gives up early, its error "stopped". The
+/// bytes are those of the checks then the writing, on any thread count.
+pub fn write<W: Write>(plan: &mut Plan, job: &Job, out: W) -> Result<Written<W>> {
+    let out = Hashing::new(out, job.hash);
+    let (out, moves) = match job.check {
+        Some((allow, stop)) if !parallel() => {
+            check(plan, allow);
+            if let Stop::Failing { strict } = stop {
+                if !plan.failing(strict).is_empty() {
+                    return Err(Error::check(&plan.path, "stopped: the checks failed"));
+                }
+            }
+            written(plan, job, out, None)?
+        }
+        Some((allow, stop)) => checked_beside(plan, job, allow, stop, out)?,
+        None => written(plan, job, out, None)?,
+    };
+    let (out, digest, bytes) = out.finish();
+    let stats = Stats::of(plan, &moves, digest, bytes);
+    Ok(Written { out, stats, moves })
 }
 
 /// Whether the G-code needs the print's time before it is written: `M73`
 /// progress, Bambu's header block.
-fn ahead(plan: &Plan, options: &Options) -> bool {
-    plan.recipe.printer.progress || options.bambu
+fn ahead(plan: &Plan, job: &Job) -> bool {
+    !job.draft && (plan.recipe.printer.progress || job.stamp.bambu)
 }
 
-/// The G-code of `plan`, in one pass (the planner beside the writer when
-/// the pool allows), or, when it needs the print's time ahead ([`ahead`]),
-/// in two: the moves planned first with their times ([`plan_first`]), then
-/// the G-code written with a [`Clock`] reading them. `failed` (the checks
-/// refused the build) stops the writing.
+/// The G-code of `plan`, unchecked, in one pass: the planner beside the
+/// writer when the pool allows; with progress lines, formatted into a
+/// scratch file first ([`progressive`]). `failed` (the checks refused the
+/// build) stops the writing.
 fn written<W: Write>(
     plan: &Plan,
-    options: &Options,
-    thumbnails: String,
+    job: &Job,
     out: W,
     failed: Option<&AtomicBool>,
-    draft: bool,
 ) -> Result<(W, MoveStats)> {
     let never = AtomicBool::new(false);
     let failed = failed.unwrap_or(&never);
-    let out = Until { out, failed };
-    let mut head = Head {
-        options: *options,
+    let thumbnails = crate::output::preview::thumbnail::blocks(plan)?;
+    let head = Head {
+        options: job.stamp,
         ahead: None,
         thumbnails,
-        draft,
+        draft: job.draft,
     };
-    // a draft (a preview) needs no progress lines: one pass
-    let done = if !draft && ahead(plan, options) {
-        let (estimate, timeline, stats) = plan_first(plan, options, failed, draft)?;
-        head.ahead = Some(Ahead::of(&stats));
-        let clock = Clock::new(timeline, estimate);
-        crate::output::gcode::write(plan, head, out, clock, |c| c.estimate())
-    } else if !parallel() {
-        let planner = Planner::new(plan.recipe.printer.limits());
+    let limits = plan.recipe.printer.limits();
+    if ahead(plan, job) {
+        let feed = Feed::new(Planner::recording(limits));
+        return rayon::in_place_scope(|s| {
+            if parallel() {
+                s.spawn(|_| feed.plan_to_end());
+            }
+            progressive(plan, head, &feed, failed, out)
+        });
+    }
+    let out = Until { out, failed };
+    let done = if !parallel() {
+        let planner = Planner::new(limits);
         crate::output::gcode::write(plan, head, out, planner, finish_planner)
     } else {
-        let feed = Feed::new(Planner::new(plan.recipe.printer.limits()));
+        let feed = Feed::new(Planner::new(limits));
         rayon::in_place_scope(|s| {
             s.spawn(|_| feed.plan_to_end());
             let sink = Batches::new(&feed);
@@ -170,350 +237,198 @@ fn written<W: Write>(
     done.map(|(w, m)| (w.out, m))
 }
 
-/// The first of two passes ([`written`]): the writer's moves alone (its
-/// text thrown away), planned by a recording planner beside it when the
-/// pool allows; the estimate, each block's time and the totals.
-fn plan_first(
+/// A G-code with progress lines (see the module comment): formatted once
+/// into a scratch file while its moves go to `feed` (a recording planner)
+/// and [`Marks`] keeps where progress lines may go; then, the moves
+/// planned, copied to `out` with the lines put in ([`place`]).
+fn progressive<W: Write>(
     plan: &Plan,
-    options: &Options,
+    head: Head,
+    feed: &Feed,
     failed: &AtomicBool,
-    draft: bool,
-) -> Result<(Estimate, Timeline, MoveStats)> {
-    let head = Head {
-        options: *options,
-        draft,
-        ..Head::default()
-    };
-    let discard = Until {
-        out: io::sink(),
+    out: W,
+) -> Result<(W, MoveStats)> {
+    let io = |e: io::Error| Error::io_from(&plan.path, format!("cannot write the G-code: {e}"), &e);
+    let scratch = Until {
+        out: Scratch::new(),
         failed,
     };
-    let planner = Planner::recording(plan.recipe.printer.limits());
-    let mut timeline = Timeline::default();
-    let (_, mut stats) = if !parallel() {
-        crate::output::gcode::write(plan, head, discard, planner, |p| {
-            let (e, t) = take_planner(p).finish_timed();
-            timeline = t;
-            e
-        })?
-    } else {
-        let feed = Feed::new(planner);
-        let r = rayon::in_place_scope(|s| {
-            s.spawn(|_| feed.plan_to_end());
-            let sink = Batches::new(&feed);
-            crate::output::gcode::write(plan, head, discard, sink, |b| b.end())
-        })?;
-        timeline = feed.timeline();
-        r
-    };
-    let estimate = std::mem::take(&mut stats.estimate);
-    Ok((estimate, timeline, stats))
+    let sink = Both(Batches::new(feed), Marks::default());
+    let mut marks = Marks::default();
+    let (scratch, moves) = crate::output::gcode::write(plan, head.clone(), scratch, sink, |b| {
+        marks = std::mem::take(&mut b.1);
+        b.0.end()
+    })?;
+    let lines = place(&marks, feed.timeline(), &moves.estimate);
+    drop(marks);
+    let ahead = Ahead::of(&moves);
+    let text = scratch.out.into_reader().map_err(io)?;
+    let out = Until { out, failed };
+    let out = crate::output::gcode::with_progress(plan, &head, &ahead, text, &lines, out)?;
+    Ok((out.out, moves))
 }
 
-/// [`write_with`] through a hashing writer: the stats.
-pub fn render_with<W: Write>(plan: &Plan, options: &Options, out: W) -> Result<Stats> {
-    let (hw, moves) = write_with(plan, options, HashWriter::new(out))?;
-    let (digest, bytes) = hw.finish();
-    Ok(Stats::of(plan, &moves, digest, bytes))
-}
-
-/// [`write`] through a hashing writer: the stats.
-pub fn render<W: Write>(plan: &Plan, out: W) -> Result<Stats> {
-    let (hw, moves) = write(plan, HashWriter::new(out))?;
-    let (digest, bytes) = hw.finish();
-    Ok(Stats::of(plan, &moves, digest, bytes))
-}
-
-/// [`render`] without the SHA-256 of the G-code (its `gcode_sha256` is
-/// empty; the size is counted): for the previews, which show neither.
-/// Written as a draft: a profile's start or end G-code that failed its
-/// checks does not stop a picture of the print.
-pub fn render_unhashed<W: Write>(plan: &Plan, out: W) -> Result<Stats> {
-    let thumbnails = crate::output::preview::thumbnail::blocks(plan)?;
-    let out = Counted { out, bytes: 0 };
-    let (counted, moves) = written(plan, &Options::default(), thumbnails, out, None, true)?;
-    Ok(Stats::of(plan, &moves, String::new(), counted.bytes))
-}
-
-/// A preview of `plan` for `out` (PNG or HTML by its extension): the
-/// G-code written for its stats (and, for a viewer, its moves) beside the
-/// drawing when the pool allows; the same preview either way.
-pub fn preview(plan: &Plan, out: &Path, opts: &preview::Options) -> Result<preview::Finished> {
-    crate::analyse::check::within_reach(&plan.recipe, &plan.paths, "preview")
-        .map_err(|e| e.in_file(&plan.path))?;
-    let job = preview::Job::new(plan, out, opts)?;
-    let mut reader = job.reader();
-    let (stats, drawing) = if parallel() {
-        rayon::join(|| render_unhashed(plan, &mut reader), || job.draw())
-    } else {
-        // in turn, the G-code first, so that its memory is let go before
-        // the drawing takes its own
-        let stats = render_unhashed(plan, &mut reader);
-        (stats, job.draw())
-    };
-    Ok(job.finish(drawing, reader, &stats?))
-}
-
-/// Checks `plan` (as [`check`]) and writes its G-code to `out` (as
-/// [`write`]) at the same time; with one thread, or when the G-code depends
-/// on the findings (thumbnails mark them), one after the other. The
-/// findings are in the plan whatever the G-code's result, and the caller
-/// must look at them first: with checks that fail, `out` holds G-code that
-/// must not be committed (so `out` should be a temp file, never standard
-/// output). The bytes are those of `check` then `write`.
-///
-/// With `stop = Some(strict)` the writing is given up as soon as the
-/// checks fail at that strictness (the caller refuses the build, so the
-/// rest of the G-code would be wasted work): the writer's error is then
-/// "stopped", and the caller reports the findings instead. `None` (a
-/// `--force` build) always writes everything.
-pub fn check_and_write<W: Write>(
+/// [`write`] with checks beside the writing (see the module comment).
+fn checked_beside<W: Write>(
     plan: &mut Plan,
+    job: &Job,
     allow: &[String],
-    stop: Option<bool>,
+    stop: Stop,
     out: W,
 ) -> Result<(W, MoveStats)> {
-    check_and_write_with(plan, allow, stop, &Options::default(), out)
-}
-
-/// [`check_and_write`], stamped as `options` say.
-pub fn check_and_write_with<W: Write>(
-    plan: &mut Plan,
-    allow: &[String],
-    stop: Option<bool>,
-    options: &Options,
-    out: W,
-) -> Result<(W, MoveStats)> {
-    if !parallel() || !plan.recipe.printer.thumbnails.is_empty() {
-        check(plan, allow);
-        if stop.is_some_and(|strict| !plan.failing(strict).is_empty()) {
-            return Err(Error::check(&plan.path, "stopped: the checks failed"));
-        }
-        return write_with(plan, options, out);
-    }
     let this = &*plan;
-    let refs: Vec<&Toolpath> = this.paths.iter().collect();
-    let all = CheckTasks::new(this, &refs, allow);
+    let tasks = Tasks::new(
+        &this.recipe,
+        this.paths.iter().collect(),
+        this.allowed(allow),
+    );
+    let queue = Queue::new(&tasks);
     let limits = this.recipe.printer.limits();
-    let two_passes = ahead(this, options);
+    let two_passes = ahead(this, job);
     let feed = Feed::new(if two_passes {
         Planner::recording(limits)
     } else {
         Planner::new(limits)
     });
     let failed = AtomicBool::new(false);
-    let (tasks, feed, failed) = (&all, &feed, &failed);
+    let (queue, feed, failed) = (&queue, &feed, &failed);
     let written = rayon::in_place_scope(|s| {
         // the checks' side: every task it can take, planning between them;
         // then, unless they refuse the build, the planning that is left
         s.spawn(move |_| {
-            while tasks.run_next() {
+            while queue.run_next() {
                 feed.catch_up();
             }
-            let refused = tasks.all_done() && stop.is_some_and(|strict| tasks.fail(strict));
+            let refused = queue.all_done()
+                && matches!(stop, Stop::Failing { strict } if queue.tasks.fail(strict));
             failed.store(refused, Ordering::Relaxed);
             if !refused {
                 feed.plan_to_end();
             }
         });
-        let written = written_beside(this, options, two_passes, feed, failed, out);
+        let written = written_beside(this, job, two_passes, feed, failed, out);
         if written.is_ok() {
             // the checks not yet taken (the other side may not have begun)
-            while tasks.run_next() {}
+            while queue.run_next() {}
         }
         written
     });
-    let checked = all.finish(this, allow);
-    (plan.findings, plan.footprints) = checked;
+    let (mut findings, footprints) = tasks.merged();
+    plan.silence(&mut findings, allow);
+    (plan.findings, plan.footprints) = (findings, footprints);
     written
 }
 
-/// [`check_and_write`] through a hashing writer: the stats.
-pub fn check_and_render<W: Write>(
-    plan: &mut Plan,
-    allow: &[String],
-    stop: Option<bool>,
-    out: W,
-) -> Result<Stats> {
-    check_and_render_with(plan, allow, stop, &Options::default(), out)
-}
-
-/// [`check_and_render`], stamped as `options` say.
-pub fn check_and_render_with<W: Write>(
-    plan: &mut Plan,
-    allow: &[String],
-    stop: Option<bool>,
-    options: &Options,
-    out: W,
-) -> Result<Stats> {
-    let (hw, moves) = check_and_write_with(plan, allow, stop, options, HashWriter::new(out))?;
-    let (digest, bytes) = hw.finish();
-    Ok(Stats::of(plan, &moves, digest, bytes))
-}
-
-/// The planner's estimate once every move is in.
-fn finish_planner(p: &mut Planner) -> Estimate {
-    take_planner(p).finish()
-}
-
-/// The planner, a fresh one left in its place.
-fn take_planner(p: &mut Planner) -> Planner {
-    let limits = p.limits().clone();
-    std::mem::replace(p, Planner::new(limits))
-}
-
-/// The writer's side of [`check_and_write`]: the G-code written with its
-/// moves sent to `feed` (which the checks' thread plans between checks);
-/// with `two_passes`, those moves written first with their text thrown
-/// away, then the G-code with a [`Clock`] over the feed's timeline.
+/// The writer's side of [`checked_beside`]: the G-code written with its
+/// moves sent to `feed` (which the checks' thread plans between checks),
+/// with progress lines through a scratch file ([`progressive`]).
 fn written_beside<W: Write>(
     plan: &Plan,
-    options: &Options,
-    two_passes: bool,
+    job: &Job,
+    progress: bool,
     feed: &Feed,
     failed: &AtomicBool,
     out: W,
 ) -> Result<(W, MoveStats)> {
     let head = Head {
-        options: *options,
+        options: job.stamp,
+        thumbnails: crate::output::preview::thumbnail::blocks(plan)?,
         ..Head::default()
     };
-    let sink = Batches::new(feed);
-    if !two_passes {
-        let out = Until { out, failed };
-        return crate::output::gcode::write(plan, head, out, sink, |b| b.end())
-            .map(|(w, m)| (w.out, m));
+    if progress {
+        return progressive(plan, head, feed, failed, out);
     }
-    let discard = Until {
-        out: io::sink(),
-        failed,
-    };
-    let (_, mut stats) = crate::output::gcode::write(plan, head, discard, sink, |b| b.end())?;
-    let estimate = std::mem::take(&mut stats.estimate);
-    let head = Head {
-        options: *options,
-        ahead: Some(Ahead::of(&stats)),
-        thumbnails: String::new(),
-        draft: false,
-    };
-    let clock = Clock::new(feed.timeline(), estimate);
     let out = Until { out, failed };
-    crate::output::gcode::write(plan, head, out, clock, |c| c.estimate()).map(|(w, m)| (w.out, m))
+    let sink = Batches::new(feed);
+    crate::output::gcode::write(plan, head, out, sink, |b| b.end()).map(|(w, m)| (w.out, m))
 }
 
-/// The checks of one plan as tasks that any thread may take, one at a time,
-/// in any interleaving: the cheap checks first (the costly ones run only if
-/// they allow), then the costly ones, the longest first, each writing its
-/// findings to its own slot; [`CheckTasks::finish`] puts them together in
-/// the one fixed order of [`check::merge`].
-struct CheckTasks<'a> {
-    recipe: &'a crate::generate::model::Recipe,
-    paths: &'a [&'a Toolpath],
-    allowed: Vec<String>,
-    cheap: OnceLock<Cheap>,
-    /// The next task to take (an index into [`CheckTasks::ORDER`]).
+/// A preview of `plan` for `out` (PNG or HTML by its extension): the
+/// G-code written as a draft for its stats (and, for a viewer, its moves)
+/// beside the drawing when the pool allows; the same preview either way.
+pub fn preview(plan: &Plan, out: &Path, opts: &preview::Options) -> Result<preview::Finished> {
+    crate::analyse::check::within_reach(&plan.recipe, &plan.paths, "preview")
+        .map_err(|e| e.in_file(&plan.path))?;
+    let job = preview::Job::new(plan, out, opts)?;
+    let mut reader = job.reader();
+    let render = |reader: &mut preview::Reader| -> Result<Stats> { view(plan, reader) };
+    let (stats, drawing) = if parallel() {
+        rayon::join(|| render(&mut reader), || job.draw())
+    } else {
+        // in turn, the G-code first, so that its memory is let go before
+        // the drawing takes its own
+        let stats = render(&mut reader);
+        (stats, job.draw())
+    };
+    Ok(job.finish(drawing, reader, &stats?))
+}
+
+/// The G-code of `plan` written as a draft (counted, not kept), its moves
+/// handed to the planner and to `viewer`: the stats. The viewer's
+/// consumer of the command stream, for previews and `p3dp watch`.
+pub(crate) fn view(plan: &Plan, viewer: impl Moves) -> Result<Stats> {
+    let head = Head {
+        thumbnails: crate::output::preview::thumbnail::blocks(plan)?,
+        draft: true,
+        ..Head::default()
+    };
+    let out = Counted {
+        out: io::sink(),
+        bytes: 0,
+    };
+    let sink = Both(Planner::new(plan.recipe.printer.limits()), viewer);
+    let (out, moves) =
+        crate::output::gcode::write(plan, head, out, sink, |b| finish_planner(&mut b.0))?;
+    Ok(Stats::of(plan, &moves, String::new(), out.bytes))
+}
+
+/// The planner's estimate once every move is in.
+fn finish_planner(p: &mut Planner) -> Estimate {
+    let limits = p.limits().clone();
+    std::mem::replace(p, Planner::new(limits)).finish()
+}
+
+/// The tasks of one plan's checks, taken one at a time by whichever thread
+/// asks, in [`Task::ORDER`]: a geometric task waits for the cheap checks'
+/// verdict first.
+struct Queue<'a> {
+    tasks: &'a Tasks<'a>,
+    /// The next task to take (an index into [`Task::ORDER`]).
     next: AtomicUsize,
     /// How many tasks have finished.
     finished: AtomicUsize,
-    starvation: OnceLock<Vec<Finding>>,
-    support: OnceLock<Vec<Finding>>,
-    collision: OnceLock<Vec<Finding>>,
-    /// The first layer's strings on the bed, found by whichever half comes
-    /// first, and the halves' results.
-    bed: OnceLock<first_layer::Bed>,
-    contacts: OnceLock<Vec<Option<first_layer::Contact>>>,
-    areas: OnceLock<Vec<u64>>,
-    /// Tasks waiting for the cheap checks: taken only once they are done.
-    cheap_done: (Mutex<bool>, Condvar),
+    /// Whether the cheap checks are done; `done` wakes a task waiting on them.
+    cheap: (Mutex<bool>, Condvar),
 }
 
-/// A task of [`CheckTasks`].
-#[derive(Clone, Copy)]
-enum Task {
-    Cheap,
-    Support,
-    FirstLayerArea,
-    Collision,
-    FirstLayerContacts,
-    Starvation,
-}
-
-impl<'a> CheckTasks<'a> {
-    /// The order tasks are taken in: the cheap checks (the others wait for
-    /// them), then the longest first, so the last to finish is a short one;
-    /// the first layer in two halves, each shorter than the support check.
-    const ORDER: [Task; 6] = [
-        Task::Cheap,
-        Task::Support,
-        Task::FirstLayerArea,
-        Task::Collision,
-        Task::FirstLayerContacts,
-        Task::Starvation,
-    ];
-
-    fn new(plan: &'a Plan, paths: &'a [&'a Toolpath], allow: &[String]) -> CheckTasks<'a> {
-        CheckTasks {
-            recipe: &plan.recipe,
-            paths,
-            allowed: plan.allowed(allow),
-            cheap: OnceLock::new(),
+impl<'a> Queue<'a> {
+    fn new(tasks: &'a Tasks<'a>) -> Queue<'a> {
+        Queue {
+            tasks,
             next: AtomicUsize::new(0),
             finished: AtomicUsize::new(0),
-            starvation: OnceLock::new(),
-            support: OnceLock::new(),
-            collision: OnceLock::new(),
-            bed: OnceLock::new(),
-            contacts: OnceLock::new(),
-            areas: OnceLock::new(),
-            cheap_done: (Mutex::new(false), Condvar::new()),
+            cheap: (Mutex::new(false), Condvar::new()),
         }
-    }
-
-    /// Whether the costly geometric checks run: waits for the cheap ones.
-    fn geometric(&self) -> bool {
-        let (lock, cond) = &self.cheap_done;
-        let mut done = relock(lock.lock());
-        while !*done {
-            done = relock(cond.wait(done));
-        }
-        self.cheap.get().is_some_and(|c| c.geometric)
     }
 
     /// Takes the next task and runs it on the caller's thread; false when
     /// none is left to take.
     fn run_next(&self) -> bool {
         let k = self.next.fetch_add(1, Ordering::Relaxed);
-        let Some(&task) = Self::ORDER.get(k) else {
+        let Some(&task) = Task::ORDER.get(k) else {
             return false;
         };
-        let (recipe, paths) = (self.recipe, self.paths);
-        let nozzle = recipe.printer.nozzle_diameter;
-        match task {
-            Task::Cheap => {
-                let _ = self.cheap.set(check::cheap(recipe, paths, &self.allowed));
-                let (lock, cond) = &self.cheap_done;
-                *relock(lock.lock()) = true;
-                cond.notify_all();
+        let (lock, cond) = &self.cheap;
+        if task.geometric() {
+            let mut done = relock(lock.lock());
+            while !*done {
+                done = relock(cond.wait(done));
             }
-            Task::Starvation => {
-                let _ = self.starvation.set(check::starvation::check(recipe, paths));
-            }
-            _ if !self.geometric() => {}
-            Task::Support => {
-                let _ = self.support.set(check::support::check(recipe, paths));
-            }
-            Task::Collision => {
-                let _ = self.collision.set(check::collision::check(recipe, paths));
-            }
-            Task::FirstLayerContacts => {
-                let bed = self.bed.get_or_init(|| first_layer::Bed::of(paths, nozzle));
-                let min_h = first_layer::min_height(recipe);
-                let _ = self.contacts.set(bed.contacts(paths, min_h));
-            }
-            Task::FirstLayerArea => {
-                let bed = self.bed.get_or_init(|| first_layer::Bed::of(paths, nozzle));
-                let _ = self.areas.set(bed.areas(paths, nozzle));
-            }
+        }
+        self.tasks.run(task);
+        if task == Task::Cheap {
+            *relock(lock.lock()) = true;
+            cond.notify_all();
         }
         self.finished.fetch_add(1, Ordering::Release);
         true
@@ -521,47 +436,7 @@ impl<'a> CheckTasks<'a> {
 
     /// Whether every task has finished (on whichever thread).
     fn all_done(&self) -> bool {
-        self.finished.load(Ordering::Acquire) == Self::ORDER.len()
-    }
-
-    /// Whether the findings, every task done, fail a build at this
-    /// strictness (the codes the recipe and the command line allow
-    /// silenced).
-    fn fail(&self, strict: bool) -> bool {
-        let (mut all, _) = self.merged();
-        check::apply_allow(&mut all, &self.allowed);
-        !check::failing(&all, strict).is_empty()
-    }
-
-    /// The findings in the one fixed order, and the footprints; every task
-    /// must have run.
-    fn merged(&self) -> (Vec<Finding>, Vec<first_layer::Footprint>) {
-        let cheap = self.cheap.get().expect("the cheap checks ran");
-        let cheap = Cheap {
-            findings: cheap.findings.clone(),
-            pattern: cheap.pattern.clone(),
-            geometric: cheap.geometric,
-        };
-        let take = |s: &OnceLock<Vec<Finding>>| s.get().cloned().unwrap_or_default();
-        let mut costly = Costly {
-            starvation: take(&self.starvation),
-            support: take(&self.support),
-            collision: take(&self.collision),
-            ..Costly::default()
-        };
-        if let (Some(c), Some(a)) = (self.contacts.get(), self.areas.get()) {
-            (costly.first_layer, costly.footprints) =
-                first_layer::findings(self.recipe, self.paths, c, a);
-        }
-        check::merge(cheap, costly)
-    }
-
-    /// Every finding and the footprints, the codes `plan`'s recipe and
-    /// `allow` silence marked.
-    fn finish(self, plan: &Plan, allow: &[String]) -> (Vec<Finding>, Vec<first_layer::Footprint>) {
-        let (mut findings, footprints) = self.merged();
-        plan.silence(&mut findings, allow);
-        (findings, footprints)
+        self.finished.load(Ordering::Acquire) == Task::ORDER.len()
     }
 }
 
@@ -569,6 +444,56 @@ impl<'a> CheckTasks<'a> {
 /// raised when its scope ends).
 fn relock<T>(r: std::sync::LockResult<T>) -> T {
     r.unwrap_or_else(|e| e.into_inner())
+}
+
+/// The output of a build, hashed as it goes when asked, and counted.
+enum Hashing<W: Write> {
+    /// SHA-256 and size.
+    Hashed(HashWriter<W>),
+    /// Size alone.
+    Counted(Counted<W>),
+}
+
+impl<W: Write> Hashing<W> {
+    fn new(out: W, hash: bool) -> Hashing<W> {
+        if hash {
+            Hashing::Hashed(HashWriter::new(out))
+        } else {
+            Hashing::Counted(Counted { out, bytes: 0 })
+        }
+    }
+
+    /// The output, the SHA-256 (empty when not hashed) and the size.
+    fn finish(self) -> (W, String, u64) {
+        match self {
+            Hashing::Hashed(h) => {
+                let (digest, bytes, out) = h.finish_into();
+                (out, digest, bytes)
+            }
+            Hashing::Counted(c) => (c.out, String::new(), c.bytes),
+        }
+    }
+}
+
+impl<W: Write> Write for Hashing<W> {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        match self {
+            Hashing::Hashed(h) => h.write(buf),
+            Hashing::Counted(c) => c.write(buf),
+        }
+    }
+    fn write_all(&mut self, buf: &[u8]) -> io::Result<()> {
+        match self {
+            Hashing::Hashed(h) => h.write_all(buf),
+            Hashing::Counted(c) => c.write_all(buf),
+        }
+    }
+    fn flush(&mut self) -> io::Result<()> {
+        match self {
+            Hashing::Hashed(h) => h.flush(),
+            Hashing::Counted(c) => c.flush(),
+        }
+    }
 }
 
 /// Calls recorded at a time before they go to the [`Feed`].
@@ -756,6 +681,9 @@ impl Moves for Batches<'_> {
     }
     fn extrude_only(&mut self, length: f64, feed: f64) {
         self.push(Call::ExtrudeOnly(length, feed));
+    }
+    fn setting(&mut self, s: &crate::base::gcode::Setting) {
+        self.push(Call::Setting(*s));
     }
 }
 

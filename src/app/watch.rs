@@ -365,18 +365,17 @@ fn start_build(opts: &Options, number: u64, tx: &Sender<Wake>, buffers: &Buffers
 /// One build in the loading context `cx`: the plan, its G-code (in
 /// memory) and the viewer's data.
 fn build(opts: &Options, cx: &Context) -> Result<Built> {
-    let mut gcode = Vec::new();
-    let (p, stats) = crate::app::pipeline::run(opts.threads, || {
+    let (p, stats, viewer) = crate::app::pipeline::run(opts.threads, || {
         let mut p = prepare_in(&opts.recipe, &opts.build, cx)?;
         crate::app::pipeline::check(&mut p, &opts.build.allow);
         crate::analyse::check::within_reach(&p.recipe, &p.paths, "preview")
             .map_err(|e| e.in_file(&p.path))?;
-        let stats = crate::app::pipeline::render(&p, &mut gcode)?;
-        Ok::<_, Error>((p, stats))
+        let mut viewer = crate::output::preview::html::reader(&p);
+        let stats = crate::app::pipeline::view(&p, &mut viewer)?;
+        Ok::<_, Error>((p, stats, viewer))
     })?;
-    let text = String::from_utf8_lossy(&gcode);
     let view = crate::output::preview::Options::default();
-    let (data, _) = crate::output::preview::html::data(&p, &text, &stats, &view);
+    let (data, _) = crate::output::preview::html::data(&p, viewer, &stats, &view);
     let size = [0, 1, 2].map(|k| format!("{:.1}", stats.bbox.max[k] - stats.bbox.min[k]));
     Ok(Built {
         data,

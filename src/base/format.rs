@@ -88,12 +88,6 @@ impl Chunk {
         self.len >= Chunk::SIZE
     }
 
-    /// Its length in bytes.
-    #[inline]
-    pub(crate) fn len(&self) -> usize {
-        self.len
-    }
-
     #[cfg(test)]
     /// Whether it holds nothing.
     #[inline]
@@ -111,12 +105,6 @@ impl Chunk {
     #[inline]
     pub(crate) fn clear(&mut self) {
         self.len = 0;
-    }
-
-    /// Drops what was written after the first `len` bytes.
-    #[inline]
-    pub(crate) fn truncate(&mut self, len: usize) {
-        self.len = self.len.min(len);
     }
 
     /// Makes room for `n` more bytes.
@@ -431,10 +419,9 @@ mod tests {
         c.put_fixed::<3>(-1234);
         c.push(b'\n');
         assert!(c.full());
-        assert_eq!(c.len(), 2 + long.len() + 7);
+        assert_eq!(c.bytes().len(), 2 + long.len() + 7);
+        assert!(c.bytes().starts_with(b"G1xx"));
         assert!(c.bytes().ends_with(b"xx-1.234\n"));
-        c.truncate(2);
-        assert_eq!(c.bytes(), b"G1");
         c.clear();
         assert!(c.is_empty());
     }

@@ -6,7 +6,9 @@ pub(crate) mod error;
 pub(crate) mod expr;
 pub(crate) mod finding;
 pub(crate) mod format;
+pub(crate) mod gcode;
 pub(crate) mod geom;
+pub(crate) mod grammar;
 pub(crate) mod input;
 pub(crate) mod mem;
 pub(crate) mod par;
@@ -15,6 +17,7 @@ pub(crate) mod safe_text;
 pub(crate) mod slicer_macro;
 pub(crate) mod svg;
 pub(crate) mod toolpath;
+pub(crate) mod xml;
 
 #[cfg(test)]
 pub(crate) mod testing;

@@ -27,6 +27,24 @@ pub(crate) const FLOW_MAX: f64 = 1000.0;
 pub(crate) const MACHINE_LENGTH_MAX: f64 = 10_000.0;
 /// Filament density, g/cm³.
 pub(crate) const DENSITY: (f64, f64) = (0.1, 25.0);
+/// Most filament fed by one move, or fed in place at once, mm: a purge or
+/// a blob feeds centimetres; a metre is past any of them (the turtle's
+/// `extrude`, `extrude_volume` and a profile's G-code are held to it).
+pub(crate) const FEED_MAX: f64 = 1000.0;
+/// Hottest chamber temperature anything may ask for, °C (heated chambers
+/// reach 60–65 °C).
+pub(crate) const CHAMBER_TEMP_MAX: f64 = 80.0;
+/// Largest pressure (linear) advance factor, s (Klipper and RepRapFirmware
+/// use 0–1, Marlin's linear advance 1.5 and Prusa's 0–0.5).
+pub(crate) const PRESSURE_ADVANCE_MAX: f64 = 2.0;
+/// Largest corner speed (jerk, square-corner velocity), mm/s.
+pub(crate) const CORNER_SPEED_MAX: f64 = 100.0;
+/// Largest junction deviation, mm.
+pub(crate) const JUNCTION_DEVIATION_MAX: f64 = 1.0;
+/// Highest input-shaper frequency, Hz.
+pub(crate) const SHAPER_FREQUENCY_MAX: f64 = 500.0;
+/// Longest dwell a G-code may ask for, s: an hour of a hot, idle machine.
+pub(crate) const DWELL_MAX: f64 = 3600.0;
 
 /// Refuses `v` outside `[min, max]` (or not finite), naming `key` and the range.
 pub(crate) fn range(key: &str, v: f64, (min, max): (f64, f64), unit: &str) -> Result<()> {

@@ -2,6 +2,7 @@
 //! limits, check thresholds, thumbnail sizes) and a material. Data only:
 //! [`crate::recipe::profile`] reads profiles from YAML.
 
+pub(crate) mod firmware;
 pub(crate) mod head;
 pub(crate) mod kinematics;
 pub(crate) mod limits;

@@ -19,8 +19,46 @@ pub enum Flavor {
     /// RepRapFirmware.
     Reprap,
     /// Prusa's firmware (MK3S's Prusa-Firmware, MK4's Buddy): Marlin but for
-    /// the pause, `M601` (see [`crate::flavor`]).
+    /// the pause, `M601`, and pressure advance, `M572`.
     Prusa,
+    /// Bambu Lab's firmware: Marlin-like, with Bambu's own commands (the part
+    /// fan is `M106 P1`, a pause `M400 U1`).
+    Bambu,
+}
+
+impl Flavor {
+    /// Every flavour, in the order `p3dp printers` and the docs list them.
+    pub const ALL: [Flavor; 5] = [
+        Flavor::Marlin,
+        Flavor::Prusa,
+        Flavor::Klipper,
+        Flavor::Reprap,
+        Flavor::Bambu,
+    ];
+
+    /// The profile's name of the flavour: `marlin`, `prusa`, `klipper`,
+    /// `reprap`, `bambu`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Flavor::Marlin => "marlin",
+            Flavor::Prusa => "prusa",
+            Flavor::Klipper => "klipper",
+            Flavor::Reprap => "reprap",
+            Flavor::Bambu => "bambu",
+        }
+    }
+
+    /// The firmware's name in messages: `Marlin`, `Prusa's`, `Klipper`,
+    /// `RepRapFirmware`, `Bambu's`.
+    pub(crate) fn display_name(self) -> &'static str {
+        match self {
+            Flavor::Marlin => "Marlin",
+            Flavor::Prusa => "Prusa's",
+            Flavor::Klipper => "Klipper",
+            Flavor::Reprap => "RepRapFirmware",
+            Flavor::Bambu => "Bambu's",
+        }
+    }
 }
 
 /// Absolute (M82) or relative (M83) E values.
@@ -351,8 +389,13 @@ impl Printer {
             crate::base::safe_text::check_gcode_line("", l).map_err(|e| at(k + 1, e.message))?;
         }
         let t = Template::parse(text).map_err(|e| at(e.line, e.message))?;
+        // the end G-code may read what the start G-code's `global`s set
+        let globals = match key {
+            "end_gcode" => Template::parse(&self.start_gcode).map_or(Vec::new(), |s| s.globals()),
+            _ => Vec::new(),
+        };
         for (name, line) in t.variables() {
-            if !self.knows(&name) {
+            if !self.knows(&name) && !globals.contains(&name) {
                 return Err(at(
                     line,
                     format!(

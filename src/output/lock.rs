@@ -7,8 +7,10 @@
 //! blocks of lines (one line per block when the output is that short), the
 //! thumbnails' lines left out (a changed print changes its pictures first:
 //! the fingerprint finds where its moves changed).
-//! `p3dp hash --check p3dp.lock` rebuilds every entry and, for each that
-//! changed, names the first differing block and shows its first new line.
+//! `p3dp hash --check p3dp.lock` rebuilds every entry (each read only inside
+//! the lock's project, as any file a key reaches) and shows only those that
+//! changed: the old and new SHA-256 whole, the first differing block and
+//! its new lines.
 
 use std::io::{self, Write};
 

@@ -358,6 +358,7 @@ fn flavor(f: RawFlavor) -> Flavor {
         RawFlavor::Klipper => Flavor::Klipper,
         RawFlavor::Reprap => Flavor::Reprap,
         RawFlavor::Prusa => Flavor::Prusa,
+        RawFlavor::Bambu => Flavor::Bambu,
     }
 }
 

@@ -132,10 +132,15 @@ fn lock_check_names_the_recipe_whose_default_changed() {
     let check = p3dp(&dir, &["hash", "--check", "p3dp.lock"]);
     ok(&check);
     let stdout = String::from_utf8_lossy(&check.stdout);
-    assert!(
-        stdout.contains("ok       sphere.yaml") && stdout.contains("ok       other.yaml"),
-        "{stdout}"
-    );
+    // an unchanged lock says so in one line
+    assert_eq!(stdout, "2 entries, unchanged\n");
+    let sha = |name: &str| -> String {
+        let lock = std::fs::read_to_string(dir.join("p3dp.lock")).unwrap();
+        let at = lock.find(&format!("recipe: {name}")).unwrap();
+        let line = lock[at..].lines().find(|l| l.contains("sha256: ")).unwrap();
+        line.trim().trim_start_matches("sha256: ").to_string()
+    };
+    let old = sha("sphere.yaml");
     // change one param default of one recipe
     std::fs::write(
         dir.join("sphere.yaml"),
@@ -146,8 +151,22 @@ fn lock_check_names_the_recipe_whose_default_changed() {
     assert_eq!(check.status.code(), Some(1));
     let stdout = String::from_utf8_lossy(&check.stdout);
     let stderr = String::from_utf8_lossy(&check.stderr);
-    assert!(stdout.contains("CHANGED  sphere.yaml"), "{stdout}");
-    assert!(stdout.contains("ok       other.yaml"), "{stdout}");
+    // only the entry that changed, with its old and new hashes whole
+    // (issue 41)
+    let new = String::from_utf8_lossy(&p3dp(&dir, &["hash", "sphere.yaml"]).stdout)
+        .split_whitespace()
+        .next()
+        .unwrap()
+        .to_string();
+    assert_eq!((old.len(), new.len()), (64, 64));
+    assert_eq!(
+        stdout,
+        format!("CHANGED  sphere.yaml\n         was {old}\n         now {new}\n2 entries: 1 changed, 1 unchanged\n")
+    );
+    assert!(
+        stderr.contains(&format!("sha256 was {old}, now {new}")),
+        "{stderr}"
+    );
     assert!(
         stderr.contains("sphere.yaml") && !stderr.contains("other.yaml"),
         "{stderr}"
@@ -221,6 +240,8 @@ fn batch_lines_count_findings_by_severity() {
 fn lock_keeps_the_printer_and_paths_outside_its_folder() {
     let dir = tmp("lock-printer");
     std::fs::create_dir_all(dir.join("ci")).unwrap();
+    // a repository: the lock in ci/ may name the project's files above it
+    std::fs::create_dir_all(dir.join(".git")).unwrap();
     let text = "p3dp: 1\nname: ring\nparts:\n  - primitive: {circle: {radius: 10, center: [0, 0, 0.2], segments: 36}}\n";
     std::fs::write(dir.join("ring.yaml"), text).unwrap();
     std::fs::write(
@@ -228,10 +249,13 @@ fn lock_keeps_the_printer_and_paths_outside_its_folder() {
         "inherits: prusa-mk4\nname: mine\nnozzle_diameter: 0.6\n",
     )
     .unwrap();
-    for (printer, want) in [
+    for (n, (printer, want)) in [
         ("voron-350", "printer: voron-350"),
         ("mine.yaml", "printer: ../mine.yaml"),
-    ] {
+    ]
+    .into_iter()
+    .enumerate()
+    {
         let args = [
             "hash",
             "--lock",
@@ -259,13 +283,9 @@ fn lock_keeps_the_printer_and_paths_outside_its_folder() {
         let check = p3dp(&dir.join("ci"), &["hash", "--check", "l.lock"]);
         ok(&check);
         let stdout = String::from_utf8_lossy(&check.stdout);
-        assert!(
-            stdout.contains(&format!(
-                "ok       ../ring.yaml (printer {})",
-                want.trim_start_matches("printer: ")
-            )),
-            "{stdout}"
-        );
+        // the second printer's entry joins the first's
+        let entries = ["1 entry", "2 entries"][n];
+        assert_eq!(stdout, format!("{entries}, unchanged\n"));
     }
 }
 

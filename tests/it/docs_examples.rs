@@ -20,8 +20,8 @@
 //!
 //! Each page runs in a fresh folder of its own, its blocks in order (a
 //! recipe written by one block is built by the next), with `recipes/`,
-//! `maps/` and `docs/` of the repository linked in, so the commands read
-//! as they would from the repository's root.
+//! `maps/` (copied) and `docs/` (linked) of the repository, so the commands
+//! read as they would from the repository's root.
 
 use crate::common::*;
 use std::path::{Path, PathBuf};
@@ -83,24 +83,31 @@ fn pages() -> Vec<String> {
     v
 }
 
-/// A fresh folder with the repository's `recipes/` and `docs/` linked in and
-/// `maps/` copied (a recipe written there reads `../maps/…`, which must lie
-/// inside its project: the folder is marked as one by a `.git` folder).
+/// A fresh folder with the repository's `docs/` linked in and `maps/` and
+/// `recipes/` copied (a recipe written there reads `../maps/…`, and a lock
+/// written there names `recipes/…`, which must lie inside its project: the
+/// folder is marked as one by a `.git` folder).
 fn workspace(tag: &str) -> PathBuf {
     let dir = tmp(&format!("docs-{tag}"));
     std::fs::create_dir_all(dir.join(".git")).unwrap();
-    std::fs::create_dir_all(dir.join("maps")).unwrap();
-    for e in std::fs::read_dir(root().join("maps")).unwrap() {
-        let e = e.unwrap();
-        std::fs::copy(e.path(), dir.join("maps").join(e.file_name())).unwrap();
-    }
-    for d in ["recipes", "docs"] {
-        #[cfg(unix)]
-        std::os::unix::fs::symlink(root().join(d), dir.join(d)).unwrap();
-        #[cfg(not(unix))]
-        let _ = d;
-    }
+    copy_tree(&root().join("maps"), &dir.join("maps"));
+    copy_tree(&root().join("recipes"), &dir.join("recipes"));
+    #[cfg(unix)]
+    std::os::unix::fs::symlink(root().join("docs"), dir.join("docs")).unwrap();
     dir
+}
+
+/// Copies the folder `from` to `to`, its subfolders too.
+fn copy_tree(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        if e.file_type().unwrap().is_dir() {
+            copy_tree(&e.path(), &to.join(e.file_name()));
+        } else {
+            std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
+        }
+    }
 }
 
 /// Runs `line` through `sh` in `dir`, the test's `p3dp` first on `PATH`.

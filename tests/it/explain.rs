@@ -10,8 +10,20 @@ use p3dp::{CODES, SAFETY};
 /// literal of `src/analyse/check/` and every `code: "…"` literal.
 fn codes_in_sources() -> std::collections::BTreeSet<String> {
     let mut found = std::collections::BTreeSet::new();
-    for e in std::fs::read_dir(root().join("src/analyse/check")).unwrap() {
-        let text = std::fs::read_to_string(e.unwrap().path()).unwrap();
+    let mut files = Vec::new();
+    let mut dirs = vec![root().join("src/analyse/check")];
+    while let Some(d) = dirs.pop() {
+        for e in std::fs::read_dir(d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                dirs.push(p);
+            } else {
+                files.push(p);
+            }
+        }
+    }
+    for f in files {
+        let text = std::fs::read_to_string(f).unwrap();
         for (k, lit) in text.split('"').enumerate().filter(|(k, _)| k % 2 == 1) {
             let plain = !lit.is_empty() && lit.chars().all(|c| c.is_ascii_lowercase() || c == '-');
             let before = text.split('"').nth(k - 1).unwrap_or("");

@@ -769,6 +769,249 @@ fn every_broken_lock_is_refused_with_its_place() {
     assert_eq!(code(&out), Some(1), "{}", describe(&out));
 }
 
+/// Issue 42: a lock's entries are confined as any file reached through a
+/// key. A lock naming a file outside its project (by `..`, an absolute
+/// path, a symlink, or as its printer) is refused before the file is
+/// opened, and the error names the entry and nothing of the file: before,
+/// the file was built and its fake key quoted into the error.
+#[test]
+fn lock_entries_outside_the_locks_project_are_refused_unread() {
+    let dir = tmp("lock-confined");
+    let secret = "AKIAFAKEKEY0123456789";
+    std::fs::write(
+        dir.join("secret.yaml"),
+        format!("p3dp: 1\nname: x\naws_secret_access_key: {secret}\nparts: []\n"),
+    )
+    .unwrap();
+    let proj = dir.join("proj");
+    std::fs::create_dir_all(&proj).unwrap();
+    std::fs::copy(recipe("sphere.yaml"), proj.join("r.yaml")).unwrap();
+    std::os::unix::fs::symlink(dir.join("secret.yaml"), proj.join("link.yaml")).unwrap();
+    let out = p3dp(&proj, &["hash", "r.yaml", "--lock", "good.lock"]);
+    assert_eq!(code(&out), Some(0), "{}", describe(&out));
+    let good = std::fs::read_to_string(proj.join("good.lock")).unwrap();
+    let abs = dir.join("secret.yaml").display().to_string();
+    let cases = [
+        (
+            "recipe: r.yaml",
+            "recipe: ../secret.yaml",
+            "entries[0].recipe",
+            "../secret.yaml",
+        ),
+        (
+            "recipe: r.yaml",
+            "recipe: link.yaml",
+            "entries[0].recipe",
+            "link.yaml",
+        ),
+        (
+            "recipe: r.yaml",
+            &format!("recipe: {abs}"),
+            "entries[0].recipe",
+            &abs,
+        ),
+        // missing or not, a file outside gets the same answer
+        (
+            "recipe: r.yaml",
+            "recipe: ../nothing.yaml",
+            "entries[0].recipe",
+            "../nothing.yaml",
+        ),
+        (
+            "  sha256",
+            "  printer: ../secret.yaml\n  sha256",
+            "entries[0].printer",
+            "../secret.yaml",
+        ),
+    ];
+    for (k, (from, to, place, name)) in cases.iter().enumerate() {
+        let f = format!("out{k}.lock");
+        std::fs::write(proj.join(&f), good.replacen(from, to, 1)).unwrap();
+        let out = p3dp(&proj, &["hash", "--check", &f]);
+        refused(&out, &format!("{f}: {place}: the "));
+        let e = stderr(&out);
+        assert!(
+            e.contains(&format!("`{name}` is outside the folders a lock may name")),
+            "{e}"
+        );
+        assert!(!e.contains(secret) && !e.contains("aws_secret"), "{e}");
+    }
+    // --allow-read lets the lock reach the folder above (the user's choice)
+    let out = p3dp(
+        &proj,
+        &["hash", "--check", "out0.lock", "--allow-read", ".."],
+    );
+    assert!(
+        !stderr(&out).contains("outside the folders"),
+        "{}",
+        describe(&out)
+    );
+    // and no lock is written that --check would refuse
+    std::fs::copy(recipe("sphere.yaml"), dir.join("top.yaml")).unwrap();
+    let out = p3dp(&proj, &["hash", "../top.yaml", "--lock", "new.lock"]);
+    refused(
+        &out,
+        "--lock: the recipe `../top.yaml` is outside the folders",
+    );
+    assert!(!proj.join("new.lock").exists());
+}
+
+/// `s` as a YAML double-quoted string, every character outside printable
+/// ASCII written as an escape (`\U0000FFFE`), so YAML reads any of them.
+fn yaml_escaped(s: &str) -> String {
+    let mut out = String::from("\"");
+    for c in s.chars() {
+        match c {
+            '"' | '\\' => {
+                out.push('\\');
+                out.push(c);
+            }
+            ' '..='~' => out.push(c),
+            c => out.push_str(&format!("\\U{:08X}", c as u32)),
+        }
+    }
+    out.push('"');
+    out
+}
+
+/// The text of entry `name` of the zip `file`.
+fn zip_text(file: &Path, name: &str) -> String {
+    let bytes = std::fs::read(file).unwrap();
+    let mut z = zip::ZipArchive::new(std::io::Cursor::new(bytes)).unwrap();
+    let mut s = String::new();
+    std::io::Read::read_to_string(&mut z.by_name(name).unwrap(), &mut s).unwrap();
+    s
+}
+
+/// A lock's own text (an entry's recipe name) reaches the terminal escaped:
+/// no escape sequence of a hostile lock is printed raw by `hash --check`.
+#[test]
+fn a_changed_entrys_name_is_printed_escaped() {
+    let dir = tmp("lock-escape");
+    let name = "a\u{1b}]0;owned\u{7}b.yaml";
+    std::fs::copy(recipe("sphere.yaml"), dir.join(name)).unwrap();
+    let out = p3dp(&dir, &["hash", name, "--lock", "l.lock"]);
+    assert_eq!(code(&out), Some(0), "{}", describe(&out));
+    let lock = std::fs::read_to_string(dir.join("l.lock")).unwrap();
+    let sha = lock
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("sha256: "))
+        .unwrap()
+        .to_string();
+    std::fs::write(dir.join("l.lock"), lock.replace(&sha, &"0".repeat(64))).unwrap();
+    let out = p3dp(&dir, &["hash", "--check", "l.lock"]);
+    assert_eq!(code(&out), Some(1), "{}", describe(&out));
+    let all = format!("{}{}", String::from_utf8_lossy(&out.stdout), stderr(&out));
+    assert!(!all.contains(['\u{1b}', '\u{7}']), "{all:?}");
+    assert!(
+        all.contains("CHANGED  a\\u{1b}]0;owned\\u{7}b.yaml"),
+        "{all}"
+    );
+}
+
+/// Two recipes whose part and material are named `name`: `file`, a helix,
+/// and `solid-FILE`, the cup with a solid base.
+fn xml_named(dir: &Path, file: &str, name: &str) {
+    let q = yaml_escaped(name);
+    let text = format!(
+        "p3dp: 1\nname: n\nmaterial: {{name: {q}, density: 1.24, nozzle_temp: 210, bed_temp: 60}}\nparts:\n  - name: {q}\n    primitive: {{helix: {{radius: 10, height: 2, pitch: 0.5}}}}\n"
+    );
+    std::fs::write(dir.join(file), text).unwrap();
+    let solid = std::fs::read_to_string(recipe("cup-solid-base.yaml"))
+        .unwrap()
+        .replace("  - name: base\n", &format!("  - name: {q}\n"));
+    std::fs::write(dir.join(format!("solid-{file}")), solid).unwrap();
+}
+
+/// Issue 42: every XML p3dp writes (the `.gcode.3mf`'s metadata, the mesh's
+/// 3MF, the z-buffer's SVG) reads back in a real XML parser with a hostile
+/// name whole.
+#[test]
+fn xml_outputs_hold_hostile_names_whole() {
+    let dir = tmp("xml-names");
+    let name = "a <b> & \"c\" 'd' ]]> \u{202e}x 🐢";
+    xml_named(&dir, "ok.yaml", name);
+    let args = [
+        "build",
+        "ok.yaml",
+        "--printer",
+        "bambu-x1c",
+        "-o",
+        "ok.gcode.3mf",
+    ];
+    let built = p3dp(&dir, &args);
+    assert_eq!(code(&built), Some(0), "{}", describe(&built));
+    let info = zip_text(&dir.join("ok.gcode.3mf"), "Metadata/slice_info.config");
+    let doc = roxmltree::Document::parse(&info).unwrap_or_else(|e| panic!("{e}: {info}"));
+    let names: Vec<&str> = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("object"))
+        .filter_map(|n| n.attribute("name"))
+        .collect();
+    assert_eq!(names, [name]);
+    let meshed = p3dp(&dir, &["mesh", "ok.yaml", "-o", "ok.3mf"]);
+    assert_eq!(code(&meshed), Some(0), "{}", describe(&meshed));
+    let model = zip_text(&dir.join("ok.3mf"), "3D/3dmodel.model");
+    let doc = roxmltree::Document::parse(&model).unwrap();
+    let base = doc.descendants().find(|n| n.has_tag_name("base")).unwrap();
+    assert_eq!(base.attribute("name"), Some(name));
+    let args = [
+        "build",
+        "solid-ok.yaml",
+        "-o",
+        "s.gcode",
+        "--zbuffer-svg",
+        "z.svg",
+    ];
+    let svg = p3dp(&dir, &args);
+    assert_eq!(code(&svg), Some(0), "{}", describe(&svg));
+    let svg = std::fs::read_to_string(dir.join("z.svg")).unwrap();
+    let doc = roxmltree::Document::parse(&svg).unwrap_or_else(|e| panic!("{e}: {svg}"));
+    let title = doc.descendants().find(|n| n.has_tag_name("title")).unwrap();
+    assert!(title.text().unwrap().starts_with(name), "{svg}");
+}
+
+/// Issue 42: a name XML cannot hold (U+FFFE, U+FFFF) is refused by name
+/// with nothing written: it made `slice_info.config` malformed with exit 0.
+#[test]
+fn xml_outputs_refuse_names_xml_forbids() {
+    let dir = tmp("xml-bad-names");
+    for (bad, code_point) in [("a\u{fffe}b", "U+FFFE"), ("a\u{ffff}", "U+FFFF")] {
+        xml_named(&dir, "bad.yaml", bad);
+        let package = [
+            "build",
+            "bad.yaml",
+            "--printer",
+            "bambu-x1c",
+            "-o",
+            "bad.gcode.3mf",
+        ];
+        let svg = [
+            "build",
+            "solid-bad.yaml",
+            "-o",
+            "b.gcode",
+            "--zbuffer-svg",
+            "b.svg",
+        ];
+        let runs: [(&[&str], &str); 3] = [
+            (&package, "bad.gcode.3mf"),
+            (&["mesh", "bad.yaml", "-o", "bad.3mf"], "bad.3mf"),
+            (&svg, "b.svg"),
+        ];
+        for (args, out) in runs {
+            let o = p3dp(&dir, args);
+            assert_eq!(code(&o), Some(2), "{args:?}: {}", describe(&o));
+            let e = stderr(&o);
+            assert!(
+                e.contains(&format!("{code_point} at character")) && e.contains("XML 1.0"),
+                "{e}"
+            );
+            assert!(!dir.join(out).exists(), "{out} written");
+        }
+    }
+}
+
 // ---------------------------------------------------------------------------
 // Defect 4: machine and material values outside a sane range.
 
@@ -863,7 +1106,7 @@ fn endless_inputs_are_refused_not_read_until_memory_runs_out() {
         ),
         (
             &["hash", "--check", "z.lock"],
-            "the recipe `/dev/zero` is a device",
+            "entries[0].recipe: the recipe `/dev/zero` is outside the folders a lock may name",
         ),
         (
             &["build", "/dev/zero", "-o", "x.gcode"],

@@ -25,8 +25,14 @@ fn a_broken_pipe_is_recognisable() {
         .filter(|p| p.extension().is_some_and(|x| x == "yaml"))
         .min()
         .unwrap();
-    let p = p3dp::plan(&first, &Default::default()).unwrap();
-    let e = p3dp::pipeline::render(&p, ClosedPipe).unwrap_err();
+    let mut p = p3dp::plan(&first, &Default::default()).unwrap();
+    let job = p3dp::pipeline::Job {
+        hash: true,
+        ..Default::default()
+    };
+    let e = p3dp::pipeline::write(&mut p, &job, ClosedPipe)
+        .err()
+        .unwrap();
     assert_eq!(e.io_kind, Some(io::ErrorKind::BrokenPipe), "{e}");
     assert_eq!(e.exit_code(), 2);
 }

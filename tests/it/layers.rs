@@ -16,10 +16,13 @@ const LAYERS: &[(&str, &[&str])] = &[
         &[
             "error",
             "safe_text",
+            "xml",
             "input",
             "mem",
             "par",
+            "gcode",
             "toolpath",
+            "grammar",
             "expr",
             "finding",
             "rng",
@@ -39,6 +42,7 @@ const LAYERS: &[(&str, &[&str])] = &[
             "kinematics",
             "printer",
             "travel",
+            "firmware",
         ],
     ),
     (

@@ -508,7 +508,10 @@ fn events_and_firmware_retraction_in_each_dialect() {
         tp.event(Event::Fan { speed: 0.0 });
         tp.name = "events".into();
         pl.paths = vec![tp];
-        let (bytes, _) = p3dp::pipeline::write(&pl, Vec::new()).unwrap();
+        let job = p3dp::pipeline::Job::default();
+        let bytes = p3dp::pipeline::write(&mut pl, &job, Vec::new())
+            .unwrap()
+            .out;
         let text = String::from_utf8(bytes).unwrap();
         check_dialect(&text, pl.recipe.printer.flavor.name());
         for want in [pause, heat, fan] {
@@ -570,12 +573,12 @@ fn arcs_follow_the_strings(recipe_name: &str, profile: &str) -> (usize, usize) {
         printer: Some(p.to_string()),
         ..Default::default()
     };
-    let arcs = plan(
+    let mut arcs = plan(
         &recipe(recipe_name),
         &opts(fixture(profile).to_str().unwrap()),
     )
     .unwrap();
-    let printer = &arcs.recipe.printer;
+    let printer = &arcs.recipe.printer.clone();
     assert!(printer.arcs);
     let plain_printer = Printer {
         arcs: false,
@@ -583,8 +586,10 @@ fn arcs_follow_the_strings(recipe_name: &str, profile: &str) -> (usize, usize) {
     };
     let mut plain = arcs.clone();
     plain.recipe.printer = plain_printer;
-    let (a_bytes, a_stats) = p3dp::pipeline::write(&arcs, Vec::new()).unwrap();
-    let (p_bytes, p_stats) = p3dp::pipeline::write(&plain, Vec::new()).unwrap();
+    let job = p3dp::pipeline::Job::default();
+    let a = p3dp::pipeline::write(&mut arcs, &job, Vec::new()).unwrap();
+    let p = p3dp::pipeline::write(&mut plain, &job, Vec::new()).unwrap();
+    let (a_bytes, a_stats, p_bytes, p_stats) = (a.out, a.stats, p.out, p.stats);
     let (a_text, p_text) = (
         String::from_utf8(a_bytes).unwrap(),
         String::from_utf8(p_bytes).unwrap(),
@@ -595,9 +600,13 @@ fn arcs_follow_the_strings(recipe_name: &str, profile: &str) -> (usize, usize) {
     // the same filament, in the G-code and in the stats
     let (fa, fp) = (filament(&a_text), filament(&p_text));
     assert!((fa - fp).abs() <= 1e-6 * fp, "{recipe_name}: {fa} vs {fp}");
-    assert!((a_stats.filament - p_stats.filament).abs() <= 1e-6 * p_stats.filament);
     assert!(
-        (a_stats.extrude_length - p_stats.extrude_length).abs() <= 1e-3 * p_stats.extrude_length
+        (a_stats.filament_length_mm - p_stats.filament_length_mm).abs()
+            <= 1e-6 * p_stats.filament_length_mm
+    );
+    assert!(
+        (a_stats.extrude_length_mm - p_stats.extrude_length_mm).abs()
+            <= 1e-3 * p_stats.extrude_length_mm
     );
 
     // every arc within the tolerance of the strings, in order (each sample

@@ -210,7 +210,10 @@ fn try_mutant(path: &Path, build: bool) -> Result<Option<p3dp::Error>, String> {
             } else {
                 let built = catch_unwind(AssertUnwindSafe(|| {
                     plan(path, &Options::default())
-                        .and_then(|p| p3dp::pipeline::render(&p, std::io::sink()).map(|_| ()))
+                        .and_then(|mut p| {
+                            let job = p3dp::pipeline::Job::default();
+                            p3dp::pipeline::write(&mut p, &job, std::io::sink()).map(|_| ())
+                        })
                 }))
                 .map_err(|_| "panicked while building".to_string())?;
                 built.err()

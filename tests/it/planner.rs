@@ -10,9 +10,15 @@ pub(crate) fn build(recipe_name: &str, printer: Option<&str>) -> (String, p3dp::
         printer: printer.map(str::to_string),
         ..Default::default()
     };
-    let plan = p3dp::plan(&recipe(recipe_name), &opts).unwrap();
+    let mut plan = p3dp::plan(&recipe(recipe_name), &opts).unwrap();
     let mut out = Vec::new();
-    let stats = p3dp::pipeline::render(&plan, &mut out).unwrap();
+    let job = p3dp::pipeline::Job {
+        hash: true,
+        ..Default::default()
+    };
+    let stats = p3dp::pipeline::write(&mut plan, &job, &mut out)
+        .unwrap()
+        .stats;
     (String::from_utf8(out).unwrap(), stats)
 }
 

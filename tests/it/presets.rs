@@ -74,9 +74,9 @@ fn build_vase(dir: &Path, profile: &Path) -> p3dp::Result<(String, Printer, Stri
     };
     let mut plan = plan(&recipe, &opts)?;
     plan.recipe.printer.thumbnails.clear();
-    let (bytes, _) = p3dp::pipeline::write(&plan, Vec::new())?;
+    let bytes = p3dp::pipeline::write(&mut plan, &p3dp::pipeline::Job::default(), Vec::new())?.out;
     let text = String::from_utf8(bytes).unwrap();
-    Ok((text, plan.recipe.printer.clone(), plan.frame.end.clone()))
+    Ok((text, plan.recipe.printer.clone(), plan.frame.end_text()))
 }
 
 /// Every move p3dp writes itself (after the start G-code and before the
@@ -381,7 +381,10 @@ fn mk3s_start_gcode_is_what_prusaslicer_writes() {
         printer: Some(profile.to_str().unwrap().into()),
         ..Default::default()
     };
-    let ours = plan(&dir.join("vase.yaml"), &opts).unwrap().frame.start;
+    let ours = plan(&dir.join("vase.yaml"), &opts)
+        .unwrap()
+        .frame
+        .start_text();
     assert!(text.contains(&ours));
     assert!(ours.contains("M862.3 P \"MK3S\""), "{ours}");
     assert!(

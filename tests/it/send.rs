@@ -254,89 +254,153 @@ fn octoprint_takes_the_file_byte_for_byte_and_refuses_a_wrong_key() {
     assert_eq!(num(&f, "size") as usize, sent.len());
 }
 
-/// What a stand-in PrusaLink saw of one request.
+/// What a stand-in host saw of one request: the body's first and last
+/// bytes (at most 1 MB and 64 bytes) and its length.
 struct Seen {
     method: String,
     url: String,
     headers: Vec<(String, String)>,
     body: Vec<u8>,
+    tail: Vec<u8>,
+    len: u64,
+}
+
+impl Seen {
+    fn header(&self, k: &str) -> Option<&str> {
+        self.headers
+            .iter()
+            .find(|(h, _)| h.eq_ignore_ascii_case(k))
+            .map(|(_, v)| v.as_str())
+    }
+}
+
+/// A stand-in's answer: status, headers, body.
+type Reply = (u16, Vec<(&'static str, String)>, Vec<u8>);
+
+/// A stand-in host on loopback, answering each request by `answer`; what
+/// it saw comes back from [`StandIn::seen`], which stops it.
+struct StandIn {
+    url: String,
+    stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    thread: std::thread::JoinHandle<Vec<Seen>>,
+}
+
+impl StandIn {
+    fn start(answer: impl Fn(&Seen) -> Reply + Send + 'static) -> StandIn {
+        use std::sync::atomic::{AtomicBool, Ordering};
+        let server = tiny_http::Server::http("127.0.0.1:0").unwrap();
+        let url = format!("http://{}", server.server_addr().to_ip().unwrap());
+        let stop = std::sync::Arc::new(AtomicBool::new(false));
+        let stopped = stop.clone();
+        let thread = std::thread::spawn(move || {
+            let mut seen = Vec::new();
+            while !stopped.load(Ordering::Relaxed) {
+                let Ok(Some(mut req)) = server.recv_timeout(Duration::from_millis(50)) else {
+                    continue;
+                };
+                let s = read_request(&mut req);
+                let (code, headers, body) = answer(&s);
+                let mut resp = tiny_http::Response::from_data(body).with_status_code(code);
+                for (k, v) in headers {
+                    resp.add_header(tiny_http::Header::from_bytes(k, v.as_bytes()).unwrap());
+                }
+                let _ = req.respond(resp);
+                seen.push(s);
+            }
+            seen
+        });
+        StandIn { url, stop, thread }
+    }
+
+    /// Stops the host: every request it saw, in order.
+    fn seen(self) -> Vec<Seen> {
+        self.stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        self.thread.join().unwrap()
+    }
+}
+
+/// A request read whole, its body streamed through (never held whole).
+fn read_request(req: &mut tiny_http::Request) -> Seen {
+    let mut body = Vec::new();
+    let mut tail = Vec::new();
+    let mut len = 0u64;
+    let mut buf = vec![0u8; 1 << 20];
+    loop {
+        let n = match req.as_reader().read(&mut buf) {
+            Ok(0) | Err(_) => break,
+            Ok(n) => n,
+        };
+        len += n as u64;
+        let room = (1usize << 20).saturating_sub(body.len());
+        body.extend_from_slice(&buf[..n.min(room)]);
+        tail.extend_from_slice(&buf[..n]);
+        let cut = tail.len().saturating_sub(64);
+        tail.drain(..cut);
+    }
+    Seen {
+        method: req.method().to_string(),
+        url: req.url().to_string(),
+        headers: req
+            .headers()
+            .iter()
+            .map(|h| (h.field.to_string(), h.value.to_string()))
+            .collect(),
+        body,
+        tail,
+        len,
+    }
+}
+
+/// A PrusaLink answer to `/api/version` (and 404 to Moonraker's question).
+fn prusalink_question(s: &Seen) -> Option<Reply> {
+    match s.url.as_str() {
+        "/server/info" => Some((404, vec![], b"not found".to_vec())),
+        "/api/version" => Some((
+            200,
+            vec![],
+            br#"{"api":"2.0.0","server":"2.1.2","text":"PrusaLink"}"#.to_vec(),
+        )),
+        _ => None,
+    }
 }
 
 /// A stand-in for PrusaLink (no real one runs here: its published API):
 /// answers `/api/version` as PrusaLink does, then each upload with
-/// `status`; what it saw comes back when the thread ends.
-fn fake_prusalink(status: u16, uploads: usize) -> (String, std::thread::JoinHandle<Vec<Seen>>) {
-    let server = tiny_http::Server::http("127.0.0.1:0").unwrap();
-    let url = format!("http://{}", server.server_addr().to_ip().unwrap());
-    let thread = std::thread::spawn(move || {
-        let mut seen = Vec::new();
-        let mut left = uploads;
-        while left > 0 {
-            let mut req = server.recv().unwrap();
-            let mut body = Vec::new();
-            req.as_reader().read_to_end(&mut body).unwrap();
-            let path = req.url().to_string();
-            let (code, text) = match path.as_str() {
-                "/server/info" => (404, String::from("not found")),
-                "/api/version" => (
-                    200,
-                    r#"{"api":"2.0.0","server":"2.1.2","text":"PrusaLink"}"#.to_string(),
-                ),
-                _ => {
-                    left -= 1;
-                    (status, String::new())
-                }
-            };
-            seen.push(Seen {
-                method: req.method().to_string(),
-                url: path,
-                headers: req
-                    .headers()
-                    .iter()
-                    .map(|h| (h.field.to_string(), h.value.to_string()))
-                    .collect(),
-                body,
-            });
-            req.respond(tiny_http::Response::from_string(text).with_status_code(code))
-                .unwrap();
-        }
-        seen
-    });
-    (url, thread)
+/// `status` and `body`.
+fn fake_prusalink_saying(status: u16, body: &'static [u8]) -> StandIn {
+    StandIn::start(move |s| prusalink_question(s).unwrap_or((status, vec![], body.to_vec())))
+}
+
+fn fake_prusalink(status: u16) -> StandIn {
+    fake_prusalink_saying(status, b"")
 }
 
 #[test]
 fn prusalink_gets_a_put_of_the_bytes_and_a_conflict_is_named() {
     let dir = tmp("send-prusalink");
     std::fs::write(dir.join("a b.bgcode"), b"GCDE\x01\x00\x00\x00 not really").unwrap();
-    let (url, server) = fake_prusalink(201, 1);
+    let server = fake_prusalink(201);
     let ok = send(
         &dir,
         Some("link-key"),
-        &["a b.bgcode", "--to", &url, "--print"],
+        &["a b.bgcode", "--to", &server.url, "--print"],
     );
     assert!(ok.status.success(), "{}", stderr(&ok));
-    let seen = server.join().unwrap();
+    let seen = server.seen();
     let put = seen.last().unwrap();
     assert_eq!(
         (put.method.as_str(), put.url.as_str()),
         ("PUT", "/api/v1/files/usb/a%20b.bgcode")
     );
     assert_eq!(put.body, std::fs::read(dir.join("a b.bgcode")).unwrap());
-    let header = |k: &str| {
-        put.headers
-            .iter()
-            .find(|(h, _)| h.eq_ignore_ascii_case(k))
-            .map(|(_, v)| v.as_str())
-    };
-    assert_eq!(header("X-Api-Key"), Some("link-key"));
-    assert_eq!(header("Print-After-Upload"), Some("?1"));
-    assert_eq!(header("Overwrite-File"), Some("?0"));
+    assert_eq!(put.header("X-Api-Key"), Some("link-key"));
+    assert_eq!(put.header("Print-After-Upload"), Some("?1"));
+    assert_eq!(put.header("Overwrite-File"), Some("?0"));
     assert!(String::from_utf8_lossy(&ok.stdout).contains("sent to prusalink"));
 
-    let (url, server) = fake_prusalink(409, 1);
-    let taken = send(&dir, Some("link-key"), &["a b.bgcode", "--to", &url]);
-    server.join().unwrap();
+    let server = fake_prusalink(409);
+    let taken = send(&dir, Some("link-key"), &["a b.bgcode", "--to", &server.url]);
+    server.seen();
     assert_eq!(taken.status.code(), Some(2));
     assert!(
         stderr(&taken).contains("409 Conflict"),
@@ -360,4 +424,328 @@ fn a_host_that_never_answers_times_out_by_name() {
         "{}",
         stderr(&out)
     );
+}
+
+// ---------------------------------------------------------------------------
+// Issue 42: `send` as careful as a package manager, against hostile hosts.
+
+const KEY: &str = "KEY-p3dp-0123456789";
+
+fn gcode_in(dir: &Path) {
+    std::fs::write(dir.join("x.gcode"), "G28\nG1 X10 Y10\n").unwrap();
+}
+
+#[test]
+fn a_redirect_to_another_origin_is_refused_and_never_carries_the_key() {
+    let dir = tmp("send-redirect-away");
+    gcode_in(&dir);
+    // the other origin records anything that reaches it
+    let other = StandIn::start(|_| (200, vec![], b"{}".to_vec()));
+    let away = format!("{}/steal", other.url);
+    let to = away.clone();
+    let host = StandIn::start(move |_| (302, vec![("Location", to.clone())], Vec::new()));
+    let out = send(&dir, Some(KEY), &["x.gcode", "--to", &host.url]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains(&format!(
+            "redirects /server/info to another address, `{away}` (HTTP 302)"
+        )),
+        "{}",
+        stderr(&out)
+    );
+    // an upload answered by a redirect: an error naming it, nothing followed
+    let out = send(
+        &dir,
+        Some(KEY),
+        &["x.gcode", "--to", &host.url, "--host", "moonraker"],
+    );
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains(&format!(
+            "the upload with HTTP 302 (a redirect, to `{away}`)"
+        )),
+        "{}",
+        stderr(&out)
+    );
+    assert!(!String::from_utf8_lossy(&out.stdout).contains("sent"));
+    let asked = host.seen();
+    assert_eq!(asked.len(), 2, "one question, one upload, no second try");
+    assert_eq!(asked[1].method, "POST");
+    assert!(other.seen().is_empty(), "the other origin heard nothing");
+}
+
+#[test]
+fn an_upload_answered_by_a_redirect_within_the_host_is_not_sent() {
+    let dir = tmp("send-redirect-upload");
+    gcode_in(&dir);
+    let host = StandIn::start(|s| {
+        prusalink_question(s).unwrap_or((302, vec![("Location", "/login".to_string())], Vec::new()))
+    });
+    let out = send(&dir, Some(KEY), &["x.gcode", "--to", &host.url]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("HTTP 302 (a redirect, to `/login`)"),
+        "{}",
+        stderr(&out)
+    );
+    assert!(String::from_utf8_lossy(&out.stdout).is_empty());
+    let asked = host.seen();
+    // not turned into a body-less GET of /login
+    assert!(asked.iter().all(|s| s.url != "/login"), "followed");
+    assert_eq!(asked.last().unwrap().method, "PUT");
+}
+
+#[test]
+fn a_redirect_within_the_host_is_followed_for_a_question() {
+    let dir = tmp("send-redirect-within");
+    gcode_in(&dir);
+    let host = StandIn::start(|s| match s.url.as_str() {
+        "/server/info" => (404, vec![], Vec::new()),
+        "/api/version" => (
+            301,
+            vec![("Location", "/api/version/".to_string())],
+            Vec::new(),
+        ),
+        "/api/version/" => (200, vec![], br#"{"text":"PrusaLink"}"#.to_vec()),
+        _ => (201, vec![], Vec::new()),
+    });
+    let out = send(&dir, Some(KEY), &["x.gcode", "--to", &host.url]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let asked = host.seen();
+    let followed = asked.iter().find(|s| s.url == "/api/version/").unwrap();
+    assert_eq!(followed.header("X-Api-Key"), Some(KEY));
+    assert_eq!(asked.last().unwrap().method, "PUT");
+}
+
+#[test]
+fn credentials_in_the_url_are_sent_but_never_printed() {
+    let dir = tmp("send-credentials");
+    gcode_in(&dir);
+    let password = "pw-S3CRET-99";
+    let host = fake_prusalink(201);
+    let port = host.url.rsplit(':').next().unwrap().to_string();
+    let to = format!("http://maker:{password}@127.0.0.1:{port}");
+    let out = send(&dir, None, &["x.gcode", "--to", &to]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        said.contains(&format!(
+            "sent to prusalink at http://127.0.0.1:{port} as usb/x.gcode"
+        )),
+        "{said}"
+    );
+    let (o, e) = (said.to_string(), stderr(&out));
+    for text in [&o, &e] {
+        assert!(
+            !text.contains(password) && !text.contains("maker"),
+            "{text}"
+        );
+    }
+    assert!(
+        e.contains("warning: --to holds a user name and password") && e.contains("P3DP_API_KEY"),
+        "{e}"
+    );
+    let put = host.seen().pop().unwrap();
+    // basic authentication: base64 of maker:pw-S3CRET-99
+    assert_eq!(
+        put.header("Authorization"),
+        Some("Basic bWFrZXI6cHctUzNDUkVULTk5")
+    );
+    // a host echoing both secrets back in an error, a closed port, a bad URL
+    let echo: &'static [u8] = b"denied for maker:pw-S3CRET-99 with key KEY-p3dp-0123456789";
+    let host = fake_prusalink_saying(500, echo);
+    let port = host.url.rsplit(':').next().unwrap().to_string();
+    let to = format!("http://maker:{password}@127.0.0.1:{port}");
+    let out = send(&dir, Some(KEY), &["x.gcode", "--to", &to]);
+    host.seen();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains("HTTP 500: denied for ******** with key ********"),
+        "{}",
+        stderr(&out)
+    );
+    let closed = format!("http://maker:{password}@127.0.0.1:{}", free_port());
+    for to in [
+        closed.as_str(),
+        "http://maker:pw-S3CRET-99@",
+        "http://maker:pw-S3CRET-99@h:x",
+    ] {
+        let out = send(&dir, Some(KEY), &["x.gcode", "--to", to]);
+        assert_eq!(out.status.code(), Some(2), "{to}");
+        let e = stderr(&out);
+        assert!(!e.contains(password) && !e.contains(KEY), "{e}");
+    }
+}
+
+#[test]
+fn a_hosts_text_reaches_the_terminal_as_short_clean_lines() {
+    let dir = tmp("send-hostile-text");
+    gcode_in(&dir);
+    let mut body = b"\x1b]0;owned\x07\x1b[2J\x1b[31mfirst line\x1b[0m\r\nsecond line, key KEY-p3dp-\x1b[0m0123456789\n\xc2\x9b6n\xe2\x80\xaeend".to_vec();
+    body.extend(std::iter::repeat_n(b'z', 1 << 20));
+    let body: &'static [u8] = Box::leak(body.into_boxed_slice());
+    let host = fake_prusalink_saying(500, body);
+    let out = send(&dir, Some(KEY), &["x.gcode", "--to", &host.url]);
+    host.seen();
+    assert_eq!(out.status.code(), Some(2));
+    let e = stderr(&out);
+    assert!(
+        e.contains("the host answered HTTP 500:\n    first line\n    second line, key ********\n    endzzz"),
+        "{e}"
+    );
+    assert!(
+        !e.contains(['\u{1b}', '\u{7}', '\u{9b}', '\u{202e}']),
+        "{e:?}"
+    );
+    assert!(!e.contains(KEY) && !e.contains("\\u{"), "{e}");
+    assert!(e.len() < 2000, "{} bytes: capped", e.len());
+    // the file name a host answers with is made printable too
+    let host = StandIn::start(|s| {
+        match s.url.as_str() {
+        "/server/info" => (200, vec![], br#"{"result":{"klippy_state":"ready"}}"#.to_vec()),
+        _ => (
+            201,
+            vec![],
+            br#"{"item":{"path":"\u001b[2J\u001b]0;x\u0007evil\nname.gcode"},"print_started":false}"#.to_vec(),
+        ),
+    }
+    });
+    let out = send(&dir, Some(KEY), &["x.gcode", "--to", &host.url]);
+    host.seen();
+    assert!(out.status.success(), "{}", stderr(&out));
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert!(said.contains(" as evil ⏎ name.gcode ("), "{said:?}");
+    assert!(!said.contains('\u{1b}'), "{said:?}");
+}
+
+#[test]
+fn timeouts_past_an_hour_are_refused_not_a_panic() {
+    let dir = tmp("send-timeout-cap");
+    gcode_in(&dir);
+    for t in ["18446744073709551615", "3601", "0"] {
+        let out = send(
+            &dir,
+            None,
+            &["x.gcode", "--to", "http://127.0.0.1:9", "--timeout", t],
+        );
+        assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+        assert!(
+            stderr(&out).contains(&format!(
+                "--timeout: {t} s is not allowed; expected 1 to 3600 s"
+            )),
+            "{}",
+            stderr(&out)
+        );
+        assert!(!stderr(&out).contains("panicked"));
+    }
+}
+
+/// `p3dp send ARGS` in `dir`, its process id told to `pid` as soon as it
+/// starts; killed (and `None`) after `secs`.
+fn send_within(
+    dir: &Path,
+    args: &[&str],
+    pid: &std::sync::atomic::AtomicU32,
+    secs: u64,
+) -> Option<Output> {
+    let child = Command::new(env!("CARGO_BIN_EXE_p3dp"))
+        .arg("send")
+        .args(args)
+        .current_dir(dir)
+        .env_remove("P3DP_API_KEY")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let id = child.id();
+    pid.store(id, std::sync::atomic::Ordering::SeqCst);
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(child.wait_with_output());
+    });
+    match rx.recv_timeout(Duration::from_secs(secs)) {
+        Ok(out) => Some(out.unwrap()),
+        Err(_) => {
+            let _ = Command::new("kill")
+                .args(["-KILL", &id.to_string()])
+                .status();
+            None
+        }
+    }
+}
+
+/// The peak resident memory of process `pid`, kB (`VmHWM`).
+fn peak_kb(pid: u32) -> u64 {
+    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).unwrap_or_default();
+    status
+        .lines()
+        .find_map(|l| l.strip_prefix("VmHWM:"))
+        .and_then(|v| v.trim().trim_end_matches("kB").trim().parse().ok())
+        .unwrap_or(0)
+}
+
+#[test]
+fn a_fifo_is_refused_unopened_and_a_2_gb_file_is_streamed() {
+    use std::io::{Seek, SeekFrom, Write};
+    use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
+    use std::sync::Arc;
+    let dir = tmp("send-streamed");
+    gcode_in(&dir);
+    let made = Command::new("mkfifo").arg(dir.join("pipe.gcode")).status();
+    assert!(made.is_ok_and(|s| s.success()), "mkfifo");
+    let host = fake_prusalink(201);
+    let pid = AtomicU32::new(0);
+    // no writer ever opens the FIFO: reading it would hang
+    let out = send_within(
+        &dir,
+        &["x.gcode", "pipe.gcode", "--to", &host.url],
+        &pid,
+        30,
+    )
+    .expect("a FIFO hung `send`");
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("pipe.gcode` is a FIFO; expected a regular file"),
+        "{}",
+        stderr(&out)
+    );
+    assert!(
+        host.seen().is_empty(),
+        "nothing is sent when one file is refused"
+    );
+
+    // 2 GiB and 5 bytes, sparse, marked at both ends
+    let size: u64 = (2 << 30) + 5;
+    let mut f = std::fs::File::create(dir.join("big.gcode")).unwrap();
+    f.write_all(b";head").unwrap();
+    f.seek(SeekFrom::Start(size - 5)).unwrap();
+    f.write_all(b";tail").unwrap();
+    drop(f);
+    let pid = Arc::new(AtomicU32::new(0));
+    let peak = Arc::new(AtomicU64::new(0));
+    let (p, k) = (pid.clone(), peak.clone());
+    let host = StandIn::start(move |s| {
+        prusalink_question(s).unwrap_or_else(|| {
+            // the whole body is in: p3dp waits for the answer
+            k.store(peak_kb(p.load(Ordering::SeqCst)), Ordering::SeqCst);
+            (201, vec![], Vec::new())
+        })
+    });
+    let out = send_within(&dir, &["big.gcode", "--to", &host.url], &pid, 300)
+        .expect("a 2 GB upload within 5 minutes");
+    assert!(out.status.success(), "{}", stderr(&out));
+    let put = host.seen().pop().unwrap();
+    assert_eq!(put.len, size);
+    assert_eq!(
+        put.header("Content-Length"),
+        Some(size.to_string().as_str())
+    );
+    assert!(put.body.starts_with(b";head") && put.tail.ends_with(b";tail"));
+    let peak = peak.load(Ordering::SeqCst);
+    assert!(
+        peak > 0 && peak < 256 << 10,
+        "peak memory {peak} kB: not streamed"
+    );
+    // sparse, but no test leaves a 2 GB file behind
+    std::fs::remove_file(dir.join("big.gcode")).unwrap();
 }

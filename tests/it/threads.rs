@@ -36,10 +36,12 @@ fn the_vase_is_the_same_bytes_on_1_2_and_4_threads() {
     std::fs::write(&path, VASE).unwrap();
     let build = |n: usize| {
         pipeline::run(Threads::new(n), || {
-            let p = plan(&path, &Default::default()).unwrap();
+            let mut p = plan(&path, &Default::default()).unwrap();
             assert!(p.paths.iter().map(|t| t.len()).sum::<usize>() > 50_000);
             let mut out = Vec::new();
-            let stats = pipeline::render(&p, &mut out).unwrap();
+            let stats = pipeline::write(&mut p, &hashed(None), &mut out)
+                .unwrap()
+                .stats;
             (out, stats)
         })
     };
@@ -49,7 +51,8 @@ fn the_vase_is_the_same_bytes_on_1_2_and_4_threads() {
         pipeline::run(Threads::new(n), || {
             let mut p = prepare(&path, &Default::default()).unwrap();
             let mut out = Vec::new();
-            let stats = pipeline::check_and_render(&mut p, &[], None, &mut out).unwrap();
+            let job = hashed(Some(pipeline::Stop::Never));
+            let stats = pipeline::write(&mut p, &job, &mut out).unwrap().stats;
             (out, stats)
         })
     };
@@ -135,7 +138,7 @@ fn a_refused_build_stops_writing_and_keeps_its_findings() {
     let mut forced = prepared();
     let mut full = Vec::new();
     pipeline::run(Threads::new(2), || {
-        pipeline::check_and_render(&mut forced, &[], None, &mut full).unwrap()
+        pipeline::write(&mut forced, &hashed(Some(pipeline::Stop::Never)), &mut full).unwrap();
     });
     assert!(!forced.failing(false).is_empty(), "the tall vase fails");
     assert!(full.len() > 100_000);
@@ -143,7 +146,8 @@ fn a_refused_build_stops_writing_and_keeps_its_findings() {
         let mut p = prepared();
         let mut out = Vec::new();
         let r = pipeline::run(Threads::new(n), || {
-            pipeline::check_and_render(&mut p, &[], Some(false), &mut out)
+            let job = hashed(Some(pipeline::Stop::Failing { strict: false }));
+            pipeline::write(&mut p, &job, &mut out).map(|w| w.stats)
         });
         assert_eq!(p.findings, forced.findings, "{n} threads: other findings");
         match r {
@@ -177,7 +181,8 @@ fn the_checks_find_the_same_whichever_thread_runs_them() {
             pipeline::run(Threads::new(n), || {
                 let mut p = prepare(path, &Default::default()).unwrap();
                 let mut out = Vec::new();
-                pipeline::check_and_render(&mut p, &[], None, &mut out).unwrap();
+                let job = hashed(Some(pipeline::Stop::Never));
+                pipeline::write(&mut p, &job, &mut out).unwrap();
                 (p.findings, p.footprints, out)
             })
         };
@@ -203,5 +208,14 @@ fn the_checks_find_the_same_whichever_thread_runs_them() {
             kinds.contains(code),
             "no `{code}` finding in tests/checks: {kinds:?}"
         );
+    }
+}
+
+/// A hashed build, checked (stopping as `stop` says) or not.
+fn hashed(stop: Option<pipeline::Stop>) -> pipeline::Job<'static> {
+    pipeline::Job {
+        check: stop.map(|s| (&[][..], s)),
+        hash: true,
+        ..Default::default()
     }
 }

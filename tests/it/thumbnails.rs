@@ -216,3 +216,26 @@ fn ok(out: &std::process::Output) -> String {
     );
     String::from_utf8_lossy(&out.stdout).to_string()
 }
+
+/// A thumbnail is the print as the printer shows it, not the checks' view
+/// of it: the G-code's bytes are the same whether a warning was found, was
+/// allowed or the checks were not asked for, on one thread and on two (a
+/// thumbnail drawn from the findings made the G-code wait for the checks,
+/// and changed with an `--allow`).
+#[test]
+fn thumbnails_do_not_depend_on_the_findings() {
+    let dir = tmp("thumbnails-findings");
+    let bridge = root().join("tests/checks/long-bridge.yaml");
+    let build = |name: &str, extra: &[&str]| -> Vec<u8> {
+        let mut args = vec!["build", s(&bridge), "-o", name];
+        args.extend_from_slice(extra);
+        ok(&p3dp(&dir, &args));
+        std::fs::read(dir.join(name)).unwrap()
+    };
+    let found = build("found.gcode", &["-j", "2"]);
+    let text = String::from_utf8_lossy(&found);
+    assert_eq!(every_block(&text), ["48x48/PNG", "300x300/PNG"]);
+    assert!(found == build("allowed.gcode", &["-j", "2", "--allow", "bridge"]));
+    assert!(found == build("one-thread.gcode", &["-j", "1"]));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -423,24 +423,15 @@ impl Bed {
     }
 }
 
-/// The `first-layer` findings (a warning per part where the nozzle runs too
-/// close to the bed, and small contacts), and the footprints of the paths
-/// that touch the bed, in print order, for the stats.
-pub(crate) fn check(recipe: &Recipe, paths: &[&Toolpath]) -> (Vec<Finding>, Vec<Footprint>) {
-    let nozzle = recipe.printer.nozzle_diameter;
-    let bed = Bed::of(paths, nozzle);
-    let contacts = bed.contacts(paths, min_height(recipe));
-    let areas = bed.areas(paths, nozzle);
-    findings(recipe, paths, &contacts, &areas)
-}
-
 /// The nozzle height under which a bed string scrapes the bed, mm.
 pub(crate) fn min_height(recipe: &Recipe) -> f64 {
     recipe.printer.checks.first_layer_min * recipe.printer.nozzle_diameter
 }
 
-/// [`check`] from the two halves of its work, [`Bed::contacts`] and
-/// [`Bed::areas`] of `paths`: the same findings and footprints.
+/// The `first-layer` findings (a warning per part where the nozzle runs too
+/// close to the bed, and small contacts), and the footprints of the paths
+/// that touch the bed, in print order, for the stats: from the two halves
+/// of the work, [`Bed::contacts`] and [`Bed::areas`] of `paths`.
 pub(crate) fn findings(
     recipe: &Recipe,
     paths: &[&Toolpath],

@@ -16,6 +16,7 @@ pub(crate) mod gcode;
 pub(crate) mod pattern;
 pub(crate) mod starvation;
 pub(crate) mod support;
+pub(crate) mod tasks;
 
 use glam::DVec3;
 
@@ -96,9 +97,11 @@ pub(crate) fn run(
     paths: &[&Toolpath],
     allowed: &[String],
 ) -> (Vec<Finding>, Vec<first_layer::Footprint>) {
-    let cheap = cheap(recipe, paths, allowed);
-    let costly = Costly::run(recipe, paths, cheap.geometric);
-    merge(cheap, costly)
+    let tasks = tasks::Tasks::new(recipe, paths.to_vec(), allowed.to_vec());
+    for t in tasks::Task::ORDER {
+        tasks.run(t);
+    }
+    tasks.merged()
 }
 
 /// What the cheap checks found (one pass over each part's points and
@@ -142,10 +145,11 @@ pub(crate) fn cheap(recipe: &Recipe, paths: &[&Toolpath], allowed: &[String]) ->
     }
 }
 
-/// The costly checks' findings, each from a plain function of the parts:
-/// [`support::check`], [`collision::check`], [`starvation::check`], and the
-/// first layer's two halves ([`first_layer::Bed::contacts`] and
-/// [`first_layer::Bed::areas`], put together by [`first_layer::findings`]).
+/// The costly checks' findings, each from a plain function of the parts
+/// ([`tasks`] runs them): [`support::check`], [`collision::check`],
+/// [`starvation::check`], and the first layer's two halves
+/// ([`first_layer::Bed::contacts`] and [`first_layer::Bed::areas`], put
+/// together by [`first_layer::findings`]).
 #[derive(Default)]
 pub(crate) struct Costly {
     /// Runs of moves too short for the firmware's planner.
@@ -158,23 +162,6 @@ pub(crate) struct Costly {
     pub collision: Vec<Finding>,
     /// Each part's footprint on the bed.
     pub footprints: Vec<first_layer::Footprint>,
-}
-
-impl Costly {
-    /// Every costly check, one after the other; the geometric ones only when
-    /// `geometric` (see [`Cheap::geometric`]).
-    pub(crate) fn run(recipe: &Recipe, paths: &[&Toolpath], geometric: bool) -> Costly {
-        let mut c = Costly {
-            starvation: starvation::check(recipe, paths),
-            ..Costly::default()
-        };
-        if geometric {
-            (c.first_layer, c.footprints) = first_layer::check(recipe, paths);
-            c.support = support::check(recipe, paths);
-            c.collision = collision::check(recipe, paths);
-        }
-        c
-    }
 }
 
 /// Every finding in the one fixed order (the cheap checks', starvation,

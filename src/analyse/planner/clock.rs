@@ -1,18 +1,22 @@
-//! Progress from the planner's own time (`M73 P… R…`), known before the
-//! G-code is written.
+//! Progress from the planner's own time (`M73 P… R…`), placed the way
+//! slicers place it: the G-code is formatted once, while its moves are
+//! planned, and the progress lines are put in when it is copied to its
+//! output, from the planned times.
 //!
 //! A printer shows how far a print is and how long is left from the `M73`
-//! lines in its G-code, so their values must be known as the lines are
-//! written: the print's total time first. The build plans the moves once
-//! with a [`Planner::recording`](super::Planner::recording) planner (the
-//! writer's moves alone, its text thrown away), which keeps each block's
-//! planned time, the [`Timeline`]; then writes the G-code with a [`Clock`]
-//! as its moves' sink: the same calls in the same order, so the clock makes
-//! the same blocks the planner made (a move of no length or of nothing makes
-//! none, exactly as [`Planner::move_to`](super::Planner::move_to) and
-//! [`Planner::extrude_only`](super::Planner::extrude_only) decide) and
-//! adds their times up as the writer goes, dwells included. The writer asks
-//! it after each line whether a progress line is due ([`Moves::due`]).
+//! lines in its G-code, so their values need the print's total time, known
+//! only once every move is planned. As the G-code is written, [`Marks`]
+//! follows the writer's moves as a consumer of the command stream: it
+//! counts the planner's blocks as [`Planner::move_to`](super::Planner::move_to)
+//! and [`Planner::extrude_only`](super::Planner::extrude_only) make them (a
+//! move of no length or of nothing makes none), and keeps, for each block,
+//! where in the G-code the next line a progress line may precede begins
+//! (each move's line, and the start and the end of the print), with the
+//! dwells and the parts' beginnings between them. Once the planner has the
+//! times of its blocks (a [`Timeline`]), [`place`] walks them as a clock
+//! would: a progress line is due at each whole percent reached and at each
+//! part, and goes at the next such place; the last, 100 % and 0 min,
+//! before the end G-code.
 
 use glam::DVec3;
 
@@ -48,53 +52,146 @@ pub(crate) struct Progress {
     pub minutes_left: u64,
 }
 
-/// The moves' sink that reads the time of each block off a [`Timeline`]
-/// (see the module comment): a progress line is due at each whole percent
-/// and at each part, and [`Moves::done`] gives the last, 100 % and 0 min.
-#[derive(Clone, Debug)]
-pub(crate) struct Clock {
+/// Something between blocks that moves the clock (see [`Marks`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Event {
+    /// The first place a progress line may go (0 % is due at once).
+    First,
+    /// The head stood this many seconds.
+    Dwell(f64),
+    /// A part begins: its progress line is due whatever the percent.
+    Part,
+    /// Every move is written: 100 % before the end G-code.
+    Done,
+}
+
+/// Where progress lines may go in a G-code being written, and what moves
+/// the clock between them (see the module comment).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Marks {
+    /// The head's position as the planner knows it.
+    pos: Option<DVec3>,
+    /// Per block, the offset of the next place after it, as the step from
+    /// the previous block's (the first from 0).
+    steps: Vec<u32>,
+    /// Blocks since the last place, waiting for its offset.
+    waiting: usize,
+    /// The offset the last block's place was at.
+    last: u64,
+    /// Events: the number of blocks before each, its place's offset (0
+    /// until that place comes) and what it is.
+    events: Vec<(usize, u64, Event)>,
+    /// Events since the last place, waiting for its offset.
+    events_waiting: usize,
+}
+
+impl Marks {
+    /// A place a progress line may go, at byte `offset` of the G-code.
+    pub(crate) fn place(&mut self, offset: u64) {
+        if self.waiting > 0 {
+            let step = u32::try_from(offset - self.last).unwrap_or(u32::MAX);
+            let n = self.steps.len();
+            // the first waiting block carries the step; the rest are at
+            // the same place
+            self.steps[n - self.waiting] = step;
+            self.last = offset;
+            self.waiting = 0;
+        }
+        let n = self.events.len();
+        for e in &mut self.events[n - self.events_waiting..] {
+            e.1 = offset;
+        }
+        self.events_waiting = 0;
+    }
+
+    /// The first place (before the start G-code), at `offset`.
+    pub(crate) fn first(&mut self, offset: u64) {
+        self.event(Event::First);
+        self.place(offset);
+    }
+
+    /// The last place (before the end G-code), at `offset`: 100 %.
+    pub(crate) fn done(&mut self, offset: u64) {
+        self.event(Event::Done);
+        self.place(offset);
+    }
+
+    fn event(&mut self, e: Event) {
+        self.events.push((self.steps.len(), 0, e));
+        self.events_waiting += 1;
+    }
+
+    /// One block.
+    fn block(&mut self) {
+        self.steps.push(0);
+        self.waiting += 1;
+    }
+}
+
+impl Moves for Marks {
+    fn place(&mut self, offset: u64) {
+        Marks::place(self, offset)
+    }
+    fn first_place(&mut self, offset: u64) {
+        self.first(offset)
+    }
+    fn last_place(&mut self, offset: u64) {
+        self.done(offset)
+    }
+    fn begin_part(&mut self, _name: &str) {
+        self.event(Event::Part);
+    }
+    fn stop(&mut self) {}
+    fn dwell(&mut self, seconds: f64) {
+        if seconds > 0.0 {
+            self.event(Event::Dwell(seconds));
+        }
+    }
+    fn move_to(&mut self, to: DVec3, e: f64, _feed: f64, _kind: MoveKind) {
+        let Some(from) = self.pos else {
+            self.pos = Some(to);
+            return;
+        };
+        // as Planner::step: a move of length > 0 (not NaN) is a block;
+        // otherwise the position stays and filament fed alone is one
+        // (|d|² > 0 exactly when |d| > 0: no square root needed)
+        if (to - from).length_squared() > 0.0 {
+            self.pos = Some(to);
+            self.block();
+        } else if e > 0.0 {
+            self.extrude_only(e, 0.0);
+        }
+    }
+    fn extrude_only(&mut self, length: f64, _feed: f64) {
+        let length = length.abs();
+        if length > 0.0 && length.is_finite() {
+            self.block();
+        }
+    }
+}
+
+/// The clock that reads each block's time off a [`Timeline`]: a progress
+/// line is due at each whole percent and at each part.
+struct Clock {
     timeline: Timeline,
-    estimate: Estimate,
     /// The whole print's planned time, s.
     total: f64,
+    /// A time below which the percent cannot exceed the last shown (a
+    /// margin under the exact step): [`Clock::check`] works the percent out
+    /// only from there.
+    below: f64,
     /// Blocks taken so far.
     next: usize,
     /// Planned time so far, s.
     elapsed: f64,
-    /// The head's position as the planner knows it.
-    pos: Option<DVec3>,
     /// The last percent handed out.
     shown: Option<u32>,
-    /// A progress line due before the next line.
+    /// A progress line due at the next place.
     due: Option<Progress>,
 }
 
 impl Clock {
-    /// A clock over `timeline`, the print's `estimate` (what the writer's
-    /// summary reports); the first progress line (0 %) is due at once.
-    pub(crate) fn new(timeline: Timeline, estimate: Estimate) -> Clock {
-        let total = estimate.total.planned;
-        let mut c = Clock {
-            timeline,
-            estimate,
-            total,
-            next: 0,
-            elapsed: 0.0,
-            pos: None,
-            shown: None,
-            due: None,
-        };
-        c.due = Some(c.now());
-        c.shown = Some(0);
-        c
-    }
-
-    /// The estimate the clock was made with.
-    pub(crate) fn estimate(&self) -> Estimate {
-        self.estimate.clone()
-    }
-
-    /// Progress at the time so far (never 100 % before [`Moves::done`]).
+    /// Progress at the time so far (never 100 % before the end).
     fn now(&self) -> Progress {
         let frac = if self.total > 0.0 {
             self.elapsed / self.total
@@ -120,58 +217,110 @@ impl Clock {
     }
 
     fn check(&mut self) {
+        if self.elapsed < self.below {
+            return;
+        }
         let p = self.now();
         if self.shown.is_none_or(|s| p.percent > s) {
             self.shown = Some(p.percent);
             self.due = Some(p);
         }
+        self.below = self.next_step();
+    }
+
+    /// Just under the time at which the percent passes the last shown: the
+    /// step's exact time less a relative 1e-9 (far more than the rounding
+    /// of `100·elapsed/total`), so the exact test decides at every block
+    /// near it.
+    fn next_step(&self) -> f64 {
+        match self.shown {
+            Some(s) if self.total > 0.0 => f64::from(s + 1) * self.total / 100.0 * (1.0 - 1e-9),
+            _ => f64::NEG_INFINITY,
+        }
+    }
+
+    fn event(&mut self, e: Event) {
+        match e {
+            Event::First => {
+                self.due = Some(self.now());
+                self.shown = Some(0);
+                self.below = self.next_step();
+            }
+            Event::Dwell(s) => {
+                self.elapsed += s;
+                self.check();
+            }
+            Event::Part => {
+                let p = self.now();
+                self.shown = Some(self.shown.map_or(p.percent, |s| s.max(p.percent)));
+                self.due = Some(p);
+                self.below = self.next_step();
+            }
+            Event::Done => {
+                self.due = Some(Progress {
+                    percent: 100,
+                    minutes_left: 0,
+                });
+            }
+        }
     }
 }
 
-impl Moves for Clock {
-    fn begin_part(&mut self, _name: &str) {
-        let p = self.now();
-        self.shown = Some(self.shown.map_or(p.percent, |s| s.max(p.percent)));
-        self.due = Some(p);
-    }
-    fn stop(&mut self) {}
-    fn dwell(&mut self, seconds: f64) {
-        if seconds > 0.0 {
-            self.elapsed += seconds;
-            self.check();
+/// The progress lines of a G-code whose places are `marks`, from the
+/// blocks' planned times and the print's `estimate`: each line's byte
+/// offset (the line it goes before) and its values, in order.
+///
+/// The blocks and events run through the clock in the order they came,
+/// each with the place that followed it; a place holds a line when the
+/// clock has one due there (the last thing before it moved the clock).
+pub(crate) fn place(
+    marks: &Marks,
+    timeline: Timeline,
+    estimate: &Estimate,
+) -> Vec<(u64, Progress)> {
+    let mut clock = Clock {
+        total: estimate.total.planned,
+        below: f64::NEG_INFINITY,
+        timeline,
+        next: 0,
+        elapsed: 0.0,
+        shown: None,
+        due: None,
+    };
+    let mut out = Vec::new();
+    let mut items = items(marks).peekable();
+    while let Some((item, at)) = items.next() {
+        match item {
+            None => clock.block(),
+            Some(e) => clock.event(e),
+        }
+        if items.peek().is_none_or(|&(_, next)| next != at) {
+            if let Some(p) = clock.due.take() {
+                out.push((at, p));
+            }
         }
     }
-    fn move_to(&mut self, to: DVec3, e: f64, _feed: f64, _kind: MoveKind) {
-        let Some(from) = self.pos else {
-            self.pos = Some(to);
-            return;
-        };
-        // as Planner::step: a move of length > 0 (not NaN) is a block;
-        // otherwise the position stays and filament fed alone is one
-        if (to - from).length() > 0.0 {
-            self.pos = Some(to);
-            self.block();
-        } else if e > 0.0 {
-            self.extrude_only(e, 0.0);
+    out
+}
+
+/// The blocks (`None`) and events of `marks` in the order they came, each
+/// with the offset of the place after it.
+fn items(marks: &Marks) -> impl Iterator<Item = (Option<Event>, u64)> + '_ {
+    let mut events = marks.events.iter().peekable();
+    let mut offset = 0u64;
+    let mut b = 0usize;
+    std::iter::from_fn(move || {
+        if let Some(&&(before, at, e)) = events.peek() {
+            if before <= b {
+                events.next();
+                return Some((Some(e), at));
+            }
         }
-    }
-    fn extrude_only(&mut self, length: f64, _feed: f64) {
-        let length = length.abs();
-        if length > 0.0 && length.is_finite() {
-            self.block();
-        }
-    }
-    #[inline]
-    fn due(&mut self) -> Option<Progress> {
-        self.due.take()
-    }
-    fn done(&mut self) -> Option<Progress> {
-        self.due = None;
-        Some(Progress {
-            percent: 100,
-            minutes_left: 0,
-        })
-    }
+        let &step = marks.steps.get(b)?;
+        b += 1;
+        offset += u64::from(step);
+        Some((None, offset))
+    })
 }
 
 #[cfg(test)]
@@ -180,66 +329,136 @@ mod tests {
     use super::super::Planner;
     use super::*;
 
+    /// The clock as it ran beside the writer: every call in order, a
+    /// progress line written at each place when one is due.
+    struct Reference {
+        clock: Clock,
+        lines: Vec<(u64, Progress)>,
+        pos: Option<DVec3>,
+    }
+
+    impl Reference {
+        fn at(&mut self, offset: u64) {
+            if let Some(p) = self.clock.due.take() {
+                self.lines.push((offset, p));
+            }
+        }
+    }
+
+    /// A writer of the calls: a place before each move's line (30 bytes),
+    /// a part's comment and a dwell's line (20 bytes) with none.
+    struct Writer {
+        marks: Marks,
+        reference: Reference,
+        offset: u64,
+    }
+
+    impl Writer {
+        fn line(&mut self, place: bool, len: u64) {
+            if place {
+                self.marks.place(self.offset);
+                self.reference.at(self.offset);
+            }
+            self.offset += len;
+        }
+    }
+
+    impl Moves for Writer {
+        fn begin_part(&mut self, name: &str) {
+            self.line(false, 20);
+            self.marks.begin_part(name);
+            self.reference.clock.event(Event::Part);
+        }
+        fn stop(&mut self) {}
+        fn dwell(&mut self, seconds: f64) {
+            self.line(false, 20);
+            self.marks.dwell(seconds);
+            if seconds > 0.0 {
+                self.reference.clock.event(Event::Dwell(seconds));
+            }
+        }
+        fn move_to(&mut self, to: DVec3, e: f64, feed: f64, kind: MoveKind) {
+            self.line(true, 30);
+            self.marks.move_to(to, e, feed, kind);
+            let r = &mut self.reference;
+            match r.pos {
+                None => r.pos = Some(to),
+                Some(from) if (to - from).length() > 0.0 => {
+                    r.pos = Some(to);
+                    r.clock.block();
+                }
+                Some(_) if e > 0.0 => r.clock.block(),
+                Some(_) => {}
+            }
+        }
+        fn extrude_only(&mut self, length: f64, feed: f64) {
+            self.line(true, 30);
+            self.marks.extrude_only(length, feed);
+            if length.abs() > 0.0 {
+                self.reference.clock.block();
+            }
+        }
+    }
+
     #[test]
-    fn the_clock_takes_the_planners_blocks_and_ends_at_its_total() {
+    fn progress_lines_go_where_a_clock_beside_the_writer_put_them() {
         for limits in [
             marlin(1000.0, 0.013, 300.0),
             klipper(3000.0, 5.0, 300.0, 0.5),
         ] {
-            clock_over(limits);
-        }
-    }
-
-    fn clock_over(limits: crate::analyse::planner::Limits) {
-        let mut p = Planner::recording(limits);
-        long_print(&mut p);
-        let (est, timeline) = p.finish_timed();
-        assert!(timeline.len() > 30_000);
-        let mut c = Clock::new(timeline, est.clone());
-        assert_eq!(c.due().map(|p| p.percent), Some(0));
-        let mut shown = vec![];
-        long_print(&mut RecordDue(&mut c, &mut shown));
-        // every block of the timeline taken, no more
-        assert_eq!(c.next, c.timeline.len());
-        let rel = (c.elapsed - est.total.planned).abs() / est.total.planned;
-        assert!(rel < 1e-5, "{} vs {}", c.elapsed, est.total.planned);
-        // whole percents in order, each once (parts repeat the current one)
-        let mut last = 0;
-        for p in &shown {
-            assert!(p.percent >= last && p.percent <= 99, "{shown:?}");
-            last = p.percent;
-        }
-        assert!(last >= 98, "{last}");
-        let left: Vec<u64> = shown.iter().map(|p| p.minutes_left).collect();
-        assert!(left.windows(2).all(|w| w[0] >= w[1]), "{left:?}");
-        assert_eq!(
-            c.done().map(|p| (p.percent, p.minutes_left)),
-            Some((100, 0))
-        );
-    }
-
-    /// Passes the calls on to a clock and keeps each progress line due.
-    struct RecordDue<'a>(&'a mut Clock, &'a mut Vec<Progress>);
-
-    impl Moves for RecordDue<'_> {
-        fn begin_part(&mut self, name: &str) {
-            self.0.begin_part(name);
-            self.1.extend(self.0.due());
-        }
-        fn stop(&mut self) {
-            self.0.stop();
-        }
-        fn dwell(&mut self, s: f64) {
-            self.0.dwell(s);
-            self.1.extend(self.0.due());
-        }
-        fn move_to(&mut self, to: DVec3, e: f64, f: f64, k: MoveKind) {
-            self.0.move_to(to, e, f, k);
-            self.1.extend(self.0.due());
-        }
-        fn extrude_only(&mut self, l: f64, f: f64) {
-            self.0.extrude_only(l, f);
-            self.1.extend(self.0.due());
+            let mut p = Planner::recording(limits);
+            long_print(&mut p);
+            let (est, timeline) = p.finish_timed();
+            assert!(timeline.len() > 30_000);
+            let clock = Clock {
+                total: est.total.planned,
+                below: f64::NEG_INFINITY,
+                timeline: timeline.clone(),
+                next: 0,
+                elapsed: 0.0,
+                shown: None,
+                due: None,
+            };
+            let mut w = Writer {
+                marks: Marks::default(),
+                reference: Reference {
+                    clock,
+                    lines: Vec::new(),
+                    pos: None,
+                },
+                offset: 100,
+            };
+            w.marks.first(w.offset);
+            w.reference.clock.event(Event::First);
+            w.reference.at(w.offset);
+            long_print(&mut w);
+            w.marks.done(w.offset);
+            w.reference.clock.event(Event::Done);
+            w.reference.at(w.offset);
+            let lines = place(&w.marks, timeline, &est);
+            assert_eq!(lines, w.reference.lines);
+            // 0 % first, whole percents in order, minutes counting down, 100 % last
+            assert_eq!(
+                lines[0],
+                (
+                    100,
+                    Progress {
+                        percent: 0,
+                        minutes_left: libm::round(est.total.planned / 60.0) as u64
+                    }
+                )
+            );
+            let (last, p) = lines[lines.len() - 1];
+            assert_eq!((last, p.percent, p.minutes_left), (w.offset, 100, 0));
+            assert!(lines
+                .windows(2)
+                .all(|x| x[0].0 < x[1].0 && x[0].1.percent <= x[1].1.percent));
+            assert!(lines
+                .windows(2)
+                .all(|x| x[0].1.minutes_left >= x[1].1.minutes_left));
+            assert!(lines.len() > 95, "{}", lines.len());
+            // the reference's clock took every block of the timeline
+            assert_eq!(w.reference.clock.next, w.reference.clock.timeline.len());
         }
     }
 }

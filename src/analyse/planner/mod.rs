@@ -48,7 +48,7 @@ mod junction;
 mod klipper;
 mod marlin;
 
-pub(crate) use clock::{Clock, Progress, Timeline};
+pub(crate) use clock::{place, Marks, Progress, Timeline};
 
 use glam::DVec3;
 
@@ -214,6 +214,13 @@ pub(crate) struct Planner {
     /// Each block's planned time in order, when asked for
     /// ([`Planner::recording`]): the timeline of `M73` progress.
     timeline: Option<Vec<f32>>,
+    /// The accelerations last asked for (print, travel, retract: `M204`),
+    /// before the per-axis caps (`M201`) hold them.
+    asked: [f64; 3],
+    /// The per-axis acceleration caps (`M201`), mm/s²: of X and Y (the
+    /// lower of the two), which hold moves of the head, and of E, which
+    /// holds a retraction (a move of E alone).
+    accel_cap: [f64; 2],
 }
 
 impl Planner {
@@ -236,8 +243,95 @@ impl Planner {
             slot: 0,
             next_settle: SETTLE,
             timeline: None,
+            asked: [
+                limits.max_acceleration,
+                limits.travel_acceleration,
+                limits.retract_acceleration,
+            ],
+            accel_cap: [f64::INFINITY; 2],
             limits,
         }
+    }
+
+    /// A setting the firmware follows from here on, as it does: `M204`'s
+    /// accelerations (a move of the head held to `M201`'s caps of X and Y, the
+    /// lower of the two), the speed limits (`M203`, Klipper's
+    /// `VELOCITY`), the junction deviation, classic jerk (as Marlin's
+    /// conversion, 0.4·jerk²/acceleration), the square-corner velocity and
+    /// minimum cruise ratio of Klipper's model. A setting of the other
+    /// firmware's model, or one that does not change times (temperatures,
+    /// pressure advance, input shaping), changes nothing.
+    pub(crate) fn setting(&mut self, s: &crate::base::gcode::Setting) {
+        use crate::base::gcode::Setting as S;
+        let l = &mut self.limits;
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        match *s {
+            S::Acceleration {
+                print,
+                travel,
+                retract,
+            } => {
+                for (k, v) in [print, travel, retract].into_iter().enumerate() {
+                    if let Some(a) = v.filter(|&a| positive(a)) {
+                        self.asked[k] = a;
+                    }
+                }
+                self.hold_accelerations();
+            }
+            S::MaxAcceleration { axes } => {
+                let xy = [axes[0], axes[1]]
+                    .into_iter()
+                    .flatten()
+                    .filter(|&a| positive(a));
+                if let Some(cap) = xy.reduce(f64::min) {
+                    self.accel_cap[0] = cap;
+                }
+                if let Some(ce) = axes[3].filter(|&a| positive(a)) {
+                    self.accel_cap[1] = ce;
+                }
+                self.hold_accelerations();
+                if let Some(az) = axes[2].filter(|&a| positive(a)) {
+                    self.limits.max_z_acceleration = Some(az);
+                }
+            }
+            S::SpeedLimit { velocity } if positive(velocity) => l.max_velocity = velocity,
+            S::MaxFeedrate { axes } => {
+                let xy = [axes[0], axes[1]]
+                    .into_iter()
+                    .flatten()
+                    .filter(|&v| positive(v));
+                if let Some(v) = xy.reduce(f64::min) {
+                    l.max_velocity = v;
+                }
+                if let Some(vz) = axes[2].filter(|&v| positive(v)) {
+                    l.max_z_velocity = Some(vz);
+                }
+            }
+            S::JunctionDeviation(j) if positive(j) && l.junction_deviation.is_some() => {
+                l.junction_deviation = Some(j);
+            }
+            S::Jerk(j) if positive(j) && l.junction_deviation.is_some() => {
+                l.junction_deviation = Some(0.4 * j * j / l.max_acceleration);
+            }
+            S::SquareCornerVelocity(v) if v >= 0.0 && l.square_corner_velocity.is_some() => {
+                l.square_corner_velocity = Some(v);
+            }
+            S::MinimumCruiseRatio(r)
+                if (0.0..1.0).contains(&r) && l.square_corner_velocity.is_some() =>
+            {
+                l.minimum_cruise_ratio = r;
+            }
+            _ => {}
+        }
+    }
+
+    /// The accelerations asked for, each held to its per-axis cap (a move
+    /// of the head to X's and Y's, a retraction to E's).
+    fn hold_accelerations(&mut self) {
+        let [c, ce] = self.accel_cap;
+        self.limits.max_acceleration = self.asked[0].min(c);
+        self.limits.travel_acceleration = self.asked[1].min(c);
+        self.limits.retract_acceleration = self.asked[2].min(ce);
     }
 
     /// A planner that also keeps each block's planned time
@@ -461,7 +555,12 @@ impl Planner {
     /// operations on the same values, so the same estimate.
     pub(crate) fn replay(&mut self, calls: &[Call]) {
         let mut steps = std::mem::take(&mut self.steps);
-        for run in calls.chunks(STEPS) {
+        // a setting changes the limits the steps are worked out with: the
+        // runs end at each one
+        let runs = calls
+            .split_inclusive(|c| matches!(c, Call::Setting(_)))
+            .flat_map(|r| r.chunks(STEPS));
+        for run in runs {
             steps.clear();
             for c in run {
                 if let Call::MoveTo(to, _, _, kind) = *c {
@@ -623,17 +722,103 @@ pub(crate) trait Moves {
     fn move_to(&mut self, to: DVec3, e: f64, feed: f64, kind: MoveKind);
     /// See [`Planner::extrude_only`].
     fn extrude_only(&mut self, length: f64, feed: f64);
-    /// A progress line due before the writer's next line: only a sink that
-    /// knows the print's time ahead has one (a [`Clock`]).
+    /// A setting the firmware follows from here on (accelerations, speed
+    /// limits, corners): see [`Planner::setting`].
     #[inline]
-    fn due(&mut self) -> Option<Progress> {
-        None
+    fn setting(&mut self, _s: &crate::base::gcode::Setting) {}
+    /// A move of a profile's own G-code (its start or end sequence): not
+    /// p3dp's, so not planned (the estimate is of p3dp's moves), but drawn
+    /// by a viewer.
+    #[inline]
+    fn profile_move(&mut self, _to: DVec3, _e: f64, _feed: f64, _kind: MoveKind) {}
+    /// A place a progress line may go, at byte `offset` of the G-code
+    /// (before a move's line): only [`Marks`] keeps them.
+    #[inline]
+    fn place(&mut self, _offset: u64) {}
+    /// The first place (before the start G-code).
+    #[inline]
+    fn first_place(&mut self, _offset: u64) {}
+    /// The last place (before the end G-code).
+    #[inline]
+    fn last_place(&mut self, _offset: u64) {}
+}
+
+impl<T: Moves + ?Sized> Moves for &mut T {
+    fn begin_part(&mut self, name: &str) {
+        (**self).begin_part(name)
     }
-    /// The last progress line, once every move is written (a [`Clock`]'s
-    /// 100 %).
-    #[inline]
-    fn done(&mut self) -> Option<Progress> {
-        None
+    fn stop(&mut self) {
+        (**self).stop()
+    }
+    fn dwell(&mut self, seconds: f64) {
+        (**self).dwell(seconds)
+    }
+    fn move_to(&mut self, to: DVec3, e: f64, feed: f64, kind: MoveKind) {
+        (**self).move_to(to, e, feed, kind)
+    }
+    fn extrude_only(&mut self, length: f64, feed: f64) {
+        (**self).extrude_only(length, feed)
+    }
+    fn setting(&mut self, s: &crate::base::gcode::Setting) {
+        (**self).setting(s)
+    }
+    fn profile_move(&mut self, to: DVec3, e: f64, feed: f64, kind: MoveKind) {
+        (**self).profile_move(to, e, feed, kind)
+    }
+    fn place(&mut self, offset: u64) {
+        (**self).place(offset)
+    }
+    fn first_place(&mut self, offset: u64) {
+        (**self).first_place(offset)
+    }
+    fn last_place(&mut self, offset: u64) {
+        (**self).last_place(offset)
+    }
+}
+
+/// Two consumers of the same moves, in turn.
+pub(crate) struct Both<A, B>(pub A, pub B);
+
+impl<A: Moves, B: Moves> Moves for Both<A, B> {
+    fn begin_part(&mut self, name: &str) {
+        self.0.begin_part(name);
+        self.1.begin_part(name);
+    }
+    fn stop(&mut self) {
+        self.0.stop();
+        self.1.stop();
+    }
+    fn dwell(&mut self, seconds: f64) {
+        self.0.dwell(seconds);
+        self.1.dwell(seconds);
+    }
+    fn move_to(&mut self, to: DVec3, e: f64, feed: f64, kind: MoveKind) {
+        self.0.move_to(to, e, feed, kind);
+        self.1.move_to(to, e, feed, kind);
+    }
+    fn extrude_only(&mut self, length: f64, feed: f64) {
+        self.0.extrude_only(length, feed);
+        self.1.extrude_only(length, feed);
+    }
+    fn setting(&mut self, s: &crate::base::gcode::Setting) {
+        self.0.setting(s);
+        self.1.setting(s);
+    }
+    fn profile_move(&mut self, to: DVec3, e: f64, feed: f64, kind: MoveKind) {
+        self.0.profile_move(to, e, feed, kind);
+        self.1.profile_move(to, e, feed, kind);
+    }
+    fn place(&mut self, offset: u64) {
+        self.0.place(offset);
+        self.1.place(offset);
+    }
+    fn first_place(&mut self, offset: u64) {
+        self.0.first_place(offset);
+        self.1.first_place(offset);
+    }
+    fn last_place(&mut self, offset: u64) {
+        self.0.last_place(offset);
+        self.1.last_place(offset);
     }
 }
 
@@ -653,6 +838,9 @@ impl Moves for Planner {
     fn extrude_only(&mut self, length: f64, feed: f64) {
         Planner::extrude_only(self, length, feed)
     }
+    fn setting(&mut self, s: &crate::base::gcode::Setting) {
+        Planner::setting(self, s)
+    }
 }
 
 /// One call on a [`Planner`], recorded to [`Planner::replay`] later: the
@@ -669,6 +857,8 @@ pub(crate) enum Call {
     MoveTo(DVec3, f64, f64, MoveKind),
     /// [`Planner::extrude_only`].
     ExtrudeOnly(f64, f64),
+    /// [`Planner::setting`].
+    Setting(crate::base::gcode::Setting),
 }
 
 impl Moves for Vec<Call> {
@@ -687,6 +877,9 @@ impl Moves for Vec<Call> {
     fn extrude_only(&mut self, length: f64, feed: f64) {
         self.push(Call::ExtrudeOnly(length, feed));
     }
+    fn setting(&mut self, s: &crate::base::gcode::Setting) {
+        self.push(Call::Setting(*s));
+    }
 }
 
 impl Planner {
@@ -698,6 +891,7 @@ impl Planner {
             Call::Dwell(s) => self.dwell(s),
             Call::MoveTo(to, e, feed, kind) => self.move_to(to, e, feed, kind),
             Call::ExtrudeOnly(l, feed) => self.extrude_only(l, feed),
+            Call::Setting(ref s) => self.setting(s),
         }
     }
 }

@@ -1,4 +1,6 @@
-//! The checks and the planner on real recipes.
+//! The checks and the planner on real recipes, and a profile's own G-code
+//! checked as its firmware reads it.
 
 mod extruder_turtle;
+mod gcode;
 mod planner;

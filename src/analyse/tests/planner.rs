@@ -129,8 +129,14 @@ fn build(recipe_name: &str, printer: Option<&str>) -> (String, crate::analyse::s
         printer: printer.map(str::to_string),
         ..Default::default()
     };
-    let plan = crate::app::prepare::plan(&recipe(recipe_name), &opts).unwrap();
+    let mut plan = crate::app::prepare::plan(&recipe(recipe_name), &opts).unwrap();
     let mut out = Vec::new();
-    let stats = crate::app::pipeline::render(&plan, &mut out).unwrap();
+    let job = crate::app::pipeline::Job {
+        hash: true,
+        ..Default::default()
+    };
+    let stats = crate::app::pipeline::write(&mut plan, &job, &mut out)
+        .unwrap()
+        .stats;
     (String::from_utf8(out).unwrap(), stats)
 }

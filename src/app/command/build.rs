@@ -278,14 +278,8 @@ fn build_job(
         let folder = f.parent().filter(|d| !d.as_os_str().is_empty());
         if folder.is_none_or(|d| d.is_dir()) {
             if let Ok(mut file) = AtomicFile::create(f) {
-                let stop = (!a.builds.force).then_some(a.builds.strict);
-                let stats = pipeline::check_and_render_with(
-                    &mut p,
-                    &a.builds.allow,
-                    stop,
-                    &options,
-                    file.streaming(),
-                );
+                let job = a.builds.job(options);
+                let stats = pipeline::write(&mut p, &job, file.streaming()).map(|w| w.stats);
                 early = Some((file, stats));
             }
         }
@@ -303,15 +297,16 @@ fn build_job(
     let mut files = Vec::new();
     let lines = Vec::new();
     let built = match &target {
-        Target::Stdout => pipeline::render_with(&p, &options, crate::output::file::Stdout)
-            .map(|s| (s, "standard output".to_string(), true)),
+        Target::Stdout => pipeline::write(&mut p, &unchecked(options), crate::output::file::Stdout)
+            .map(|w| (w.stats, "standard output".to_string(), true)),
         Target::File(f, _) => {
             let (file, stats) = match early {
                 Some((file, stats)) => (file, stats?),
                 None => {
                     make_parent(f)?;
                     let mut file = AtomicFile::create(f)?;
-                    let stats = pipeline::render_with(&p, &options, file.streaming())?;
+                    let stats =
+                        pipeline::write(&mut p, &unchecked(options), file.streaming())?.stats;
                     (file, stats)
                 }
             };
@@ -320,6 +315,15 @@ fn build_job(
         }
     }?;
     extras(a, &p, pattern, zbuffer, built, files, lines, single)
+}
+
+/// A job that writes the G-code of a plan already checked, hashed.
+fn unchecked(stamp: Stamp) -> pipeline::Job<'static> {
+    pipeline::Job {
+        stamp,
+        hash: true,
+        ..pipeline::Job::default()
+    }
 }
 
 /// Builds one job into a printer's package (`.bgcode`, `.gcode.3mf`): the
@@ -334,11 +338,14 @@ fn build_package(
 ) -> Result<Done> {
     let package = Package::of(f);
     options.bambu = package == Package::Bambu;
-    let stop = (!a.builds.force).then_some(a.builds.strict);
-    let written =
-        pipeline::check_and_write_with(&mut p, &a.builds.allow, stop, &options, Vec::new());
+    let job = pipeline::Job {
+        hash: false,
+        ..a.builds.job(options)
+    };
+    let written = pipeline::write(&mut p, &job, Vec::new());
     a.builds.refuse_failing(&p)?;
-    let (gcode, moves) = written?;
+    let w = written?;
+    let (gcode, moves) = (w.out, w.moves);
     let images = crate::output::preview::thumbnail::images(&p)?;
     let bytes = match package {
         Package::Bgcode => crate::output::host::bgcode_of(&p, &gcode, &moves, &images)?,
@@ -437,7 +444,9 @@ fn zbuffer_files(a: &Options, p: &Plan) -> Result<Vec<(PathBuf, Vec<u8>)>> {
     if let Some(f) = &a.zbuffer_svg {
         let n = a.zbuffer_layer.unwrap_or(1);
         let most = curves.iter().map(|c| c.layers.len()).max().unwrap_or(0);
-        let Some(svg) = crate::analyse::stats::zbuffer_svg(&p.recipe, n) else {
+        let svg = crate::analyse::stats::zbuffer_svg(&p.recipe, n)
+            .map_err(|e| e.under("--zbuffer-svg"))?;
+        let Some(svg) = svg else {
             return Err(Error::input(
                 "--zbuffer-layer",
                 format!("{n} is above the solid parts' layers; expected a layer from 1 to {most}"),

@@ -2,12 +2,14 @@
 //! written and checked, a change located to its first differing lines.
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::{Component, Path, PathBuf};
 
 use super::{non_empty, Builds};
 use crate::app::batch::{self, Job};
 use crate::app::pipeline;
 use crate::base::error::{Error, Result};
+use crate::base::input::Reads;
+use crate::base::safe_text::one_line;
 use crate::output::file::{write_atomic, HashWriter};
 use crate::output::lock::{self, Entry, LineHashes, Lock};
 use crate::recipe::{parse_set, parse_yaml};
@@ -37,18 +39,14 @@ fn fingerprints(
 fn fingerprint(c: &Builds, job: &Job, outs: &[(String, PathBuf)]) -> Result<(String, LineHashes)> {
     // nothing is written: the G-code is hashed while the checks run
     let mut p = c.prepared(job, outs)?;
-    let stop = (!c.force).then_some(c.strict);
     // stamped as `build` stamps it (SOURCE_DATE_EPOCH's date)
-    let options = super::stamp()?;
-    let written = pipeline::check_and_write_with(
-        &mut p,
-        &c.allow,
-        stop,
-        &options,
-        HashWriter::new(LineHashes::default()),
-    );
+    let job = pipeline::Job {
+        hash: false,
+        ..c.job(super::stamp()?)
+    };
+    let written = pipeline::write(&mut p, &job, HashWriter::new(LineHashes::default()));
     c.refuse_failing(&p)?;
-    let (hw, _) = written?;
+    let hw = written?.out;
     let (digest, _, lines) = hw.finish_into();
     Ok((digest, lines))
 }
@@ -72,6 +70,7 @@ pub(crate) fn run(a: &Options) -> Vec<Error> {
     if let Some(lockfile) = &a.lock {
         if let Err(e) = non_empty("--lock", Some(lockfile))
             .and_then(|_| crate::output::file::check_distinct(&outs, &c.inputs()))
+            .and_then(|_| lockable(lockfile, c, &jobs))
         {
             return vec![e];
         }
@@ -128,6 +127,24 @@ pub(crate) fn run(a: &Options) -> Vec<Error> {
         }
     }
     errors
+}
+
+/// Refuses to write a lock `hash --check` would refuse: a recipe or
+/// profile outside the lock's project and `--allow-read`.
+fn lockable(lockfile: &Path, c: &Builds, jobs: &[Job]) -> Result<()> {
+    let roots = LockRoots::new(&lock_folder(lockfile), &c.allow_read);
+    let printer = c
+        .printer
+        .as_deref()
+        .filter(|p| crate::machine::Printer::built_in(p).is_none());
+    for job in jobs {
+        let shown = job.recipe.display().to_string();
+        roots.confine(&job.recipe, &shown, "recipe", "--lock")?;
+    }
+    if let Some(p) = printer {
+        roots.confine(Path::new(p), p, "printer profile", "--lock")?;
+    }
+    Ok(())
 }
 
 /// The entries of the lock at `lockfile` (none when there is no file) with
@@ -210,13 +227,14 @@ fn lock_entry(
 }
 
 fn check_lock(a: &Options, lockfile: &Path) -> Vec<Error> {
-    let (lock, jobs) = match read_lock(lockfile) {
+    let (lock, jobs) = match read_lock(lockfile, &a.builds.allow_read) {
         Ok(l) => l,
         Err(e) => return vec![e],
     };
     let c = &a.builds;
     let results = fingerprints(c, &jobs, &[]);
     let mut errors = Vec::new();
+    let mut changed = 0;
     for ((entry, job), r) in lock.entries.iter().zip(&jobs).zip(results) {
         let mut label = entry.recipe.clone();
         if !entry.set.is_empty() {
@@ -226,7 +244,7 @@ fn check_lock(a: &Options, lockfile: &Path) -> Vec<Error> {
             label.push_str(&format!(" (printer {p})"));
         }
         match r {
-            Ok((digest, _)) if digest == entry.sha256 => crate::sayln!("ok       {label}"),
+            Ok((digest, _)) if digest == entry.sha256 => {}
             Ok((digest, lines)) => {
                 let new = lines.blocks(entry.block_lines);
                 let place = match lock::first_difference(&entry.blocks, &new) {
@@ -255,66 +273,180 @@ fn check_lock(a: &Options, lockfile: &Path) -> Vec<Error> {
                     }
                     None => "the lines hash alike block by block, thumbnails left out: its thumbnails changed (or the hashes collide)".into(),
                 };
-                crate::sayln!("CHANGED  {label}");
+                // only what changed is shown, with both whole hashes
+                changed += 1;
+                // a lock's text reaches the terminal escaped, on one line
+                crate::sayln!(
+                    "CHANGED  {}\n         was {}\n         now {digest}",
+                    one_line(&label),
+                    entry.sha256
+                );
                 errors.push(Error::check(
-                    &entry.recipe,
+                    one_line(&entry.recipe),
                     format!(
                         "G-code changed: sha256 was {}, now {digest}; {place}",
-                        &entry.sha256[..12]
+                        entry.sha256
                     ),
                 ));
             }
             Err(e) => errors.push(e),
         }
     }
+    crate::sayln!(
+        "{}",
+        summary(lock.entries.len(), changed, errors.len() - changed)
+    );
     errors
 }
 
+/// `hash --check`'s last line: how many of `n` entries changed or failed.
+fn summary(n: usize, changed: usize, failed: usize) -> String {
+    let entries = if n == 1 {
+        "1 entry".to_string()
+    } else {
+        format!("{n} entries")
+    };
+    let same = n - changed - failed;
+    match (changed, failed) {
+        (0, 0) => format!("{entries}, unchanged"),
+        (c, 0) => format!("{entries}: {c} changed, {same} unchanged"),
+        (c, f) => format!("{entries}: {c} changed, {f} failed to build, {same} unchanged"),
+    }
+}
+
 /// A lock file read and checked, and the job of each entry (its recipe and
-/// printer relative to the lock file's folder).
-fn read_lock(lockfile: &Path) -> Result<(Lock, Vec<Job>)> {
+/// printer relative to the lock file's folder, confined to the lock's
+/// project and the `allow` folders).
+fn read_lock(lockfile: &Path, allow: &[PathBuf]) -> Result<(Lock, Vec<Job>)> {
     let shown = lockfile.display().to_string();
     let text = crate::base::input::read_text(lockfile, "lock file")?;
     let lock = parse_yaml::<Lock>(&text, &shown)?;
     lock.validate().map_err(|e| e.in_file(&shown))?;
-    let base = lockfile.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let base = lock_folder(lockfile);
+    let roots = LockRoots::new(&base, allow);
     let jobs = lock
         .entries
         .iter()
         .enumerate()
-        .map(|(k, e)| entry_job(&base, k, e).map_err(|err| err.in_file(&shown)))
+        .map(|(k, e)| entry_job(&base, &roots, k, e).map_err(|err| err.in_file(&shown)))
         .collect::<Result<_>>()?;
     Ok((lock, jobs))
 }
 
+/// The folder a lock's entries are relative to.
+fn lock_folder(lockfile: &Path) -> PathBuf {
+    lockfile
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."))
+        .to_path_buf()
+}
+
+/// The folders a lock's entries may name files in: `base::input`'s rule for
+/// every file reached through a key, applied to the lock. Its **project**
+/// (the nearest folder at or above the lock's holding `p3dp.lock` or
+/// `.git`, else the lock's own folder) and the folders `--allow-read`
+/// names; symlinks resolved, `/proc`, `/sys` and `/dev` never. A lock from
+/// elsewhere cannot make `hash --check` read (and an error quote) a file
+/// outside them.
+struct LockRoots {
+    reads: Reads,
+    roots: Vec<PathBuf>,
+}
+
+impl LockRoots {
+    fn new(base: &Path, allow: &[PathBuf]) -> LockRoots {
+        let reads = Reads::default();
+        let mut roots = vec![crate::base::input::project_root(base)];
+        roots.extend(
+            allow
+                .iter()
+                .map(|d| d.canonicalize().unwrap_or_else(|_| d.clone())),
+        );
+        for r in &roots {
+            reads.allow(r);
+        }
+        LockRoots { reads, roots }
+    }
+
+    /// Whether `path` may be read: an existing file by its real path (as
+    /// [`Reads::reach`] decides), a missing one by its lexical path, so
+    /// that the answer tells nothing of files outside.
+    fn admit(&self, path: &Path) -> bool {
+        let dotted;
+        let path = if path.is_relative() {
+            dotted = Path::new(".").join(path);
+            &dotted
+        } else {
+            path
+        };
+        if path.exists() {
+            return self.reads.reach(path, "file").is_ok();
+        }
+        // missing: the real path of its deepest existing folder, and the
+        // rest with no `..` in it
+        let Some((known, real)) = path
+            .ancestors()
+            .find_map(|a| a.canonicalize().ok().map(|c| (a, c)))
+        else {
+            return false;
+        };
+        let rest = path.strip_prefix(known).unwrap_or(Path::new(""));
+        !rest.components().any(|c| c == Component::ParentDir)
+            && self.roots.iter().any(|r| real.join(rest).starts_with(r))
+    }
+
+    /// Refuses the `what` at `path`, named `name` at `place`, unless
+    /// [`LockRoots::admit`]; the error names the entry, nothing else.
+    fn confine(&self, path: &Path, name: &str, what: &str, place: &str) -> Result<()> {
+        if self.admit(path) {
+            return Ok(());
+        }
+        Err(Error::input(
+            place,
+            format!(
+                "the {what} `{}` is outside the folders a lock may name (the lock's project: its folder, or the nearest above it holding p3dp.lock or .git; and those --allow-read adds); expected a file there (it was not read)",
+                one_line(name)
+            ),
+        )
+        .with_help("a lock names the files of its own project: keep it in a folder above them (where p3dp.lock or .git is), or give the same --allow-read DIR to `hash --lock` and `hash --check`"))
+    }
+}
+
 /// The job of entry `k` of a lock file in folder `base`; a missing recipe or
-/// printer is the lock's mistake, and the error names its entry.
-fn entry_job(base: &Path, k: usize, e: &Entry) -> Result<Job> {
+/// printer is the lock's mistake, and the error names its entry. A recipe
+/// or profile outside `roots` is refused before it is opened.
+fn entry_job(base: &Path, roots: &LockRoots, k: usize, e: &Entry) -> Result<Job> {
+    let place = format!("entries[{k}].recipe");
     let recipe = base.join(&e.recipe);
+    roots.confine(&recipe, &e.recipe, "recipe", &place)?;
     if !recipe.exists() {
         return Err(Error::input(
-            format!("entries[{k}].recipe"),
+            place,
             format!(
-                "no recipe file at `{}` ({}); expected a path relative to the lock file",
-                e.recipe,
-                recipe.display()
+                "no recipe file at `{}`; expected a path relative to the lock file",
+                one_line(&e.recipe)
             ),
         ));
     }
     // a FIFO or device named by a lock is refused before it is opened
-    crate::base::input::check_regular(&recipe, "recipe")
-        .map_err(|e| e.under(&format!("entries[{k}].recipe")))?;
+    crate::base::input::check_regular(&recipe, "recipe").map_err(|e| e.under(&place))?;
     let built_in = |p: &str| crate::machine::Printer::built_in(p).is_some();
     if let Some(p) = &e.printer {
+        let place = format!("entries[{k}].printer");
+        if !built_in(p) {
+            roots.confine(&base.join(p), p, "printer profile", &place)?;
+        }
         if !built_in(p) && base.join(p).exists() {
             crate::base::input::check_regular(&base.join(p), "printer profile")
-                .map_err(|e| e.under(&format!("entries[{k}].printer")))?;
+                .map_err(|e| e.under(&place))?;
         }
         if !built_in(p) && !base.join(p).exists() {
             return Err(Error::input(
-                format!("entries[{k}].printer"),
+                place,
                 format!(
-                    "`{p}` is neither a built-in printer ({}) nor a profile file relative to the lock file",
+                    "`{}` is neither a built-in printer ({}) nor a profile file relative to the lock file",
+                    one_line(p),
                     crate::recipe::profile::built_in_names().join(", ")
                 ),
             ));
@@ -374,8 +506,14 @@ fn new_lines(c: &Builds, job: &Job, k: u64, n: u64) -> Vec<String> {
     let Some(text) = c
         .checked_plan(job)
         .ok()
-        .and_then(|p| pipeline::write_with(&p, &options, Vec::new()).ok())
-        .and_then(|(buf, _)| String::from_utf8(buf).ok())
+        .and_then(|mut p| {
+            let job = pipeline::Job {
+                stamp: options,
+                ..pipeline::Job::default()
+            };
+            pipeline::write(&mut p, &job, Vec::new()).ok()
+        })
+        .and_then(|w| String::from_utf8(w.out).ok())
     else {
         return Vec::new();
     };

@@ -118,6 +118,29 @@ impl Builds {
         inputs_of(&self.recipes, self.printer.as_deref())
     }
 
+    /// A checked, hashed build as these options say: the codes allowed,
+    /// and the writing given up as soon as the checks fail (unless forced),
+    /// stamped `stamp`.
+    pub(crate) fn job(
+        &self,
+        stamp: crate::output::gcode::metadata::Options,
+    ) -> crate::app::pipeline::Job<'_> {
+        use crate::app::pipeline::{Job, Stop};
+        let stop = if self.force {
+            Stop::Never
+        } else {
+            Stop::Failing {
+                strict: self.strict,
+            }
+        };
+        Job {
+            check: Some((&self.allow, stop)),
+            stamp,
+            hash: true,
+            draft: false,
+        }
+    }
+
     /// The error of a checked plan whose checks fail (unless forced).
     pub(crate) fn refuse_failing(&self, p: &Plan) -> Result<()> {
         let failing = p.failing(self.strict);

@@ -1,16 +1,20 @@
 //! Math expressions of a recipe, compiled once and evaluated per point or string.
 //!
-//! Parsing is meval's (its tokenizer and shunting-yard turn the text into
-//! reverse Polish notation); we then resolve every name to a variable slot, a
-//! param constant or a function pointer, fold constant sub-expressions, and run
-//! the result on a small fixed stack. Every transcendental function goes
+//! Parsing is one pass (`parse`): the operators the recipe shares with the
+//! slicers' macros (comparisons, `and`/`or`/`not`, `?:`) by
+//! [`crate::base::grammar`]'s table, the arithmetic between them by meval's
+//! shunting-yard (reverse Polish notation); we then resolve every name to a
+//! variable slot, a param constant or a function pointer, fold constant
+//! sub-expressions, and run the result on a small fixed stack. Every transcendental function goes
 //! through the `libm` crate, so a recipe gives bit-identical numbers on every
 //! machine (std's `sin` may call the platform's libm, which differs).
 
-mod lower;
 mod params;
+mod parse;
 
 use meval::tokenizer::{Operation, Token};
+
+use parse::HOLE;
 
 use crate::base::error::Error;
 pub(crate) use params::{short, Kind, Params};
@@ -291,7 +295,6 @@ fn lookup1(name: &str) -> Option<F1> {
         "ceil" => libm::ceil,
         "round" => libm::round,
         "trunc" | "int" => libm::trunc,
-        "__not" => f_not,
         "sign" | "signum" => f_sign,
         "fract" => f_fract,
         "radians" => f_radians,
@@ -307,14 +310,6 @@ fn lookup2(name: &str) -> Option<F2> {
         "pow" => libm::pow,
         "mod" => f_mod,
         "step" => f_step,
-        "__lt" => f_lt,
-        "__le" => f_le,
-        "__gt" => f_gt,
-        "__ge" => f_ge,
-        "__eq" => f_eq,
-        "__ne" => f_ne,
-        "__and" => f_and,
-        "__or" => f_or,
         _ => return None,
     })
 }
@@ -688,27 +683,6 @@ fn lanes_min_max(st: &mut [[f64; LANES]], sp: usize, k: usize, n: usize, min: bo
     sp - (k - 1)
 }
 
-/// meval's error for `src`, `from` mapping the bytes of the text it read
-/// back to those of `src` (see [`lower`]).
-fn describe_parse_error(src: &str, from: &[usize], e: &meval::ParseError) -> String {
-    match e {
-        meval::ParseError::UnexpectedToken(at) => {
-            let at = from.get(*at).copied().unwrap_or(src.len());
-            let rest: String = src.get(at..).unwrap_or("").chars().take(12).collect();
-            format!(
-                "cannot read the expression `{src}`: unexpected `{rest}` at character {}",
-                at + 1
-            )
-        }
-        meval::ParseError::MissingRParen(k) => {
-            format!("cannot read the expression `{src}`: {k} closing parenthesis missing")
-        }
-        meval::ParseError::MissingArgument => {
-            format!("cannot read the expression `{src}`: it ends where a value was expected")
-        }
-    }
-}
-
 fn allowed_names(allowed: &[usize], params: &Params) -> String {
     let mut names: Vec<&str> = allowed.iter().map(|&k| VAR_NAMES[k]).collect();
     names.extend(["pi", "e", "tau", "true", "false"]);
@@ -750,16 +724,7 @@ impl Expr {
         allowed: &[usize],
         names: Option<&[&str]>,
     ) -> Result<Expr, ExprError> {
-        let (text, from) = source_text(src, params, names)?;
-        let tokens = meval::tokenizer::tokenize(&text).map_err(|e| {
-            ExprError::new(ExprErrorKind::Syntax, describe_parse_error(src, &from, &e))
-        })?;
-        let rpn = meval::shunting_yard::to_rpn(&tokens).map_err(|e| {
-            ExprError::new(
-                ExprErrorKind::Syntax,
-                format!("cannot read the expression `{src}`: {e}"),
-            )
-        })?;
+        check_text(src)?;
         let mut c = Compiler {
             src,
             params,
@@ -767,14 +732,13 @@ impl Expr {
             names,
             stack: Vec::new(),
             heights: Vec::new(),
+            holes: Vec::new(),
             used: 0,
             rands: 0,
             data: Vec::new(),
         };
-        for tok in rpn {
-            c.push(tok)?;
-        }
-        c.finish()
+        let root = parse::parse(src, &mut c)?;
+        c.finish(root)
     }
 
     /// Evaluates with the given variable values (for a few points: a pass
@@ -852,14 +816,8 @@ impl Expr {
     }
 }
 
-/// The text meval reads for `src`: refuses one too long or blank, writes
-/// Kanada's `**` as `^`, and (with extra `names`) marks `rand()` and the
-/// calls of no arguments as variables (see [`mark_call`]).
-fn source_text(
-    src: &str,
-    params: &Params,
-    names: Option<&[&str]>,
-) -> Result<(String, Vec<usize>), ExprError> {
+/// Refuses a text too long or blank.
+fn check_text(src: &str) -> Result<(), ExprError> {
     if src.len() > MAX_LEN {
         return Err(ExprError::new(
             ExprErrorKind::TooDeep,
@@ -870,28 +828,18 @@ fn source_text(
             ),
         ));
     }
-    // meval's tokenizer panics on text of only white space (found by fuzz/)
     if src.trim().is_empty() {
         return Err(ExprError::new(
             ExprErrorKind::Syntax,
             "an empty expression; expected a number or an expression",
         ));
     }
-    let lower::Lowered { text, from } = lower::lower(src, params)?;
-    // Kanada's Python recipes write powers as `**`; meval's operator is `^`
-    // (a space after it keeps every byte where it was).
-    let mut text = text.replace("**", "^ ");
-    if let Some(ns) = names {
-        text = mark_rand(&text);
-        for base in ns.iter().filter_map(|n| n.strip_suffix("()")) {
-            text = mark_call(&text, base);
-        }
-    }
-    Ok((text, from))
+    Ok(())
 }
 
-/// The state of [`Expr::compile_inner`] while it turns reverse Polish
-/// tokens into a tree, one token at a time.
+/// The state of [`Expr::compile_inner`]: the names, params and functions
+/// an expression may use, and what the parse has met; it turns each run
+/// of arithmetic, in meval's reverse Polish order, into a tree.
 struct Compiler<'a> {
     /// The expression as written, for error messages.
     src: &'a str,
@@ -905,6 +853,9 @@ struct Compiler<'a> {
     stack: Vec<Node>,
     /// The height of each tree on `stack`, to refuse one nested too deeply.
     heights: Vec<u32>,
+    /// The operands of the current run parsed apart (calls, brackets, list
+    /// reads), which its tokens name `HOLE` and their number.
+    holes: Vec<Option<(Node, u32)>>,
     /// Bit k set when variable slot k is read.
     used: u32,
     /// `rand()` calls met so far.
@@ -914,9 +865,43 @@ struct Compiler<'a> {
 }
 
 impl Compiler<'_> {
+    /// The tree of one run of arithmetic: `rpn`, meval's reverse Polish
+    /// tokens, over the operands `holes` parsed apart; with its height.
+    fn run(&mut self, rpn: Vec<Token>, holes: Vec<(Node, u32)>) -> Result<(Node, u32), ExprError> {
+        self.holes = holes.into_iter().map(Some).collect();
+        for tok in rpn {
+            self.push(tok)?;
+        }
+        if self.stack.len() != 1 {
+            let n = self.stack.len();
+            return Err(ExprError::new(
+                ExprErrorKind::Syntax,
+                format!(
+                    "cannot read the expression `{}`: expected one value, found {n}",
+                    self.src
+                ),
+            ));
+        }
+        let h = self.heights.pop().unwrap_or(1);
+        self.heights.clear();
+        Ok((self.stack.pop().expect("one tree"), h))
+    }
+
     /// Takes one token: checks the depth, builds its node from the operands
     /// on the stack, and pushes it folded.
     fn push(&mut self, tok: Token) -> Result<(), ExprError> {
+        if let Token::Var(name) = &tok {
+            if let Some(k) = name.strip_prefix(HOLE) {
+                let hole = k
+                    .parse::<usize>()
+                    .ok()
+                    .and_then(|k| self.holes.get_mut(k)?.take());
+                let (node, h) = hole.expect("each hole is named once");
+                self.heights.push(h);
+                self.stack.push(node);
+                return Ok(());
+            }
+        }
         self.check_height(&tok)?;
         let node = match tok {
             Token::Number(v) => Node::Num(v),
@@ -954,17 +939,80 @@ impl Compiler<'_> {
         };
         let below = self.heights.len().saturating_sub(takes);
         let height = 1 + self.heights.drain(below..).max().unwrap_or(0);
-        if height > MAX_DEPTH {
-            return Err(ExprError::new(
-                ExprErrorKind::TooDeep,
-                format!(
-                    "the expression `{}…` nests operations and calls more than {MAX_DEPTH} deep; expected a simpler expression",
-                    self.src.chars().take(24).collect::<String>()
-                ),
-            ));
-        }
+        self.check_depth(height)?;
         self.heights.push(height);
         Ok(())
+    }
+
+    /// Refuses a tree `height` nodes high, over [`MAX_DEPTH`].
+    fn check_depth(&self, height: u32) -> Result<(), ExprError> {
+        if height > MAX_DEPTH {
+            return Err(self.too_deep());
+        }
+        Ok(())
+    }
+
+    /// The error of an expression nested too deeply.
+    fn too_deep(&self) -> ExprError {
+        ExprError::new(
+            ExprErrorKind::TooDeep,
+            format!(
+                "the expression `{}…` nests operations and calls more than {MAX_DEPTH} deep; expected a simpler expression",
+                self.src.chars().take(24).collect::<String>()
+            ),
+        )
+    }
+
+    /// A call of no arguments `name()` the caller gives: `rand()` (a fresh
+    /// slot each) or a name `name()` of [`Expr::compile_ext`].
+    fn call0(&mut self, name: &str) -> Option<Node> {
+        let names = self.names?;
+        if let Some(k) = names
+            .iter()
+            .position(|n| n.strip_suffix("()") == Some(name))
+        {
+            return Some(Node::Ext(k as u16));
+        }
+        if name != "rand" {
+            return None;
+        }
+        self.rands += 1;
+        Some(Node::Ext((names.len() + self.rands as usize - 1) as u16))
+    }
+
+    /// Whether `name` is a list param.
+    fn is_list(&self, name: &str) -> bool {
+        self.params.list(name).is_some()
+    }
+
+    /// How many values list param `name` has.
+    fn list_len(&self, name: &str) -> usize {
+        self.params.list(name).map_or(0, <[f64]>::len)
+    }
+
+    /// The number a quoted string at byte `at` stands for: one of the
+    /// declared choices.
+    fn symbol(&self, s: &str, at: usize) -> Result<f64, ExprError> {
+        if let Some(v) = self.params.symbol(s) {
+            return Ok(v);
+        }
+        let known: Vec<String> = self.params.symbols().map(|s| format!("'{s}'")).collect();
+        Err(ExprError::new(
+            ExprErrorKind::Name,
+            if known.is_empty() {
+                format!(
+                    "the string '{s}' in `{}` (character {}) is no choice: this recipe declares no param with `choices`",
+                    self.src,
+                    self.src[..at].chars().count() + 1
+                )
+            } else {
+                format!(
+                    "the string '{s}' in `{}` is not one of the declared choices; expected one of {}",
+                    self.src,
+                    known.join(", ")
+                )
+            },
+        ))
     }
 
     /// The operand on top of the stack.
@@ -980,22 +1028,13 @@ impl Compiler<'_> {
         })
     }
 
-    /// What `name` stands for, first match wins: an extra name, a `rand()`,
-    /// a param shadowing a later variable, an allowed variable, a param,
+    /// What `name` stands for, first match wins: an extra name, a param shadowing a later variable, an allowed variable, a param,
     /// `pi`, `e`.
     fn name(&mut self, name: String) -> Result<Node, ExprError> {
         let (src, params, allowed, names) = (self.src, self.params, self.allowed, self.names);
-        let ext = names.and_then(|ns| {
-            ns.iter().position(|n| match n.strip_suffix("()") {
-                Some(base) => is_mark(&name, base),
-                None => *n == name,
-            })
-        });
+        let ext = names.and_then(|ns| ns.iter().position(|n| *n == name));
         Ok(if let Some(k) = ext {
             Node::Ext(k as u16)
-        } else if names.is_some() && is_rand_mark(&name) {
-            self.rands += 1;
-            Node::Ext((names.unwrap_or(&[]).len() + self.rands as usize - 1) as u16)
         } else if let Some(v) = params
             .get(&name)
             .filter(|_| SHADOWABLE.contains(&name.as_str()))
@@ -1039,9 +1078,6 @@ impl Compiler<'_> {
     /// The call of `name` on the top `nargs` trees of the stack.
     fn call(&mut self, name: String, nargs: Option<usize>) -> Result<Node, ExprError> {
         let k = nargs.unwrap_or(0);
-        if let Some(list) = name.strip_prefix(lower::AT) {
-            return self.list_at(list);
-        }
         let op = function_op(&name, k, self.src)?;
         if self.stack.len() < k {
             return Err(ExprError::new(
@@ -1056,11 +1092,10 @@ impl Compiler<'_> {
         Ok(Node::Call(op, args))
     }
 
-    /// `list[k]` (the pre-pass's `__at_list(k)`, one argument): the value
-    /// when k is known, else the read of the list's values at run time.
-    fn list_at(&mut self, name: &str) -> Result<Node, ExprError> {
+    /// `list[k]`: the value when k is known, else the read of the list's
+    /// values at run time.
+    fn list_at(&mut self, name: &str, k: Node) -> Result<Node, ExprError> {
         let values = self.params.list(name).unwrap_or(&[]);
-        let k = self.pop()?;
         if let Some(k) = k.num() {
             let v = list_at(values, k);
             if v.is_nan() && !values.iter().any(|x| x.is_nan()) {
@@ -1087,20 +1122,10 @@ impl Compiler<'_> {
         Ok(Node::Call(op, vec![k]))
     }
 
-    /// The compiled expression: one tree left, shallow enough for the
+    /// The compiled expression: the tree, shallow enough for the
     /// run-time stack, emitted in reverse Polish order.
-    fn finish(mut self) -> Result<Expr, ExprError> {
+    fn finish(self, root: Node) -> Result<Expr, ExprError> {
         let src = self.src;
-        if self.stack.len() != 1 {
-            return Err(ExprError::new(
-                ExprErrorKind::Syntax,
-                format!(
-                    "cannot read the expression `{src}`: expected one value, found {}",
-                    self.stack.len()
-                ),
-            ));
-        }
-        let root = self.stack.pop().unwrap();
         if root.depth() > STACK {
             return Err(ExprError::new(
                 ExprErrorKind::TooDeep,
@@ -1198,57 +1223,6 @@ fn fold(node: Node) -> Node {
         &[],
         &mut Memo::default(),
     ))
-}
-
-fn is_rand_mark(name: &str) -> bool {
-    is_mark(name, "rand")
-}
-
-/// Whether `name` is the variable a call `base()` became (see [`mark_call`]).
-fn is_mark(name: &str, base: &str) -> bool {
-    name.strip_prefix(base)
-        .is_some_and(|rest| rest.len() >= 2 && rest.bytes().all(|c| c == b'_'))
-}
-
-/// Rewrites each `rand()` (spaces allowed inside) as a variable `rand_…` of
-/// the same length, so error positions stay those of the text as written.
-fn mark_rand(text: &str) -> String {
-    mark_call(text, "rand")
-}
-
-/// Rewrites each call `base()` (spaces allowed inside) as a variable
-/// `base__…` of the same length: meval has no functions of no arguments, and
-/// error positions stay those of the text as written.
-fn mark_call(text: &str, base: &str) -> String {
-    let b = text.as_bytes();
-    let mut out = String::with_capacity(text.len());
-    let (mut k, mut copied) = (0, 0);
-    while k < b.len() {
-        let word_start = k == 0 || !(b[k - 1].is_ascii_alphanumeric() || b[k - 1] == b'_');
-        if word_start && b[k..].starts_with(base.as_bytes()) {
-            let skip = |mut j: usize| {
-                while j < b.len() && b[j] == b' ' {
-                    j += 1;
-                }
-                j
-            };
-            let j = skip(k + base.len());
-            if b.get(j) == Some(&b'(') {
-                let m = skip(j + 1);
-                if b.get(m) == Some(&b')') {
-                    out.push_str(&text[copied..k]);
-                    out.push_str(base);
-                    out.extend(std::iter::repeat_n('_', m + 1 - k - base.len()));
-                    k = m + 1;
-                    copied = k;
-                    continue;
-                }
-            }
-        }
-        k += 1;
-    }
-    out.push_str(&text[copied..]);
-    out
 }
 
 /// Evaluates an expression over params only (a number written as text).

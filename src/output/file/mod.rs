@@ -11,6 +11,7 @@
 
 pub(crate) mod atomic;
 pub(crate) mod hash;
+pub(crate) mod scratch;
 pub(crate) mod stdout;
 pub(crate) mod temp;
 
@@ -19,6 +20,7 @@ use std::path::{Component, Path, PathBuf};
 
 pub(crate) use atomic::{write_atomic, AtomicFile};
 pub(crate) use hash::HashWriter;
+pub(crate) use scratch::Scratch;
 pub(crate) use stdout::{say_fmt, stdout_closed, tell_fmt, Stdout};
 pub(crate) use temp::{remove_temp_files_on_signals, stop_on_signals};
 

@@ -75,26 +75,13 @@ pub(crate) struct Extent {
 }
 
 impl Extent {
-    /// One pass over every part's points.
+    /// The plan's heights (measured once, with its frame).
     pub(crate) fn of(plan: &Plan) -> Extent {
-        let mut top = 0.0f64;
-        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-        for tp in &plan.paths {
-            for p in &tp.points {
-                top = top.max(p.z);
-            }
-            for (k, s) in tp.strings.iter().enumerate() {
-                if !s.travel {
-                    let (a, b) = (tp.points[k].z, tp.points[k + 1].z);
-                    lo = lo.min(a.min(b));
-                    hi = hi.max(a.max(b));
-                }
-            }
-        }
         let dz = plan.recipe.printer.origin[2];
+        let e = &plan.extent;
         Extent {
-            top,
-            extruded: (lo <= hi).then_some((lo + dz, hi + dz)),
+            top: e.top(),
+            extruded: e.drawn.map(|(lo, hi)| (lo + dz, hi + dz)),
         }
     }
 }

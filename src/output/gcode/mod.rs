@@ -13,27 +13,27 @@
 //! reaches that minimum. The move carries the run's filament exactly, and its
 //! speed is set so that it takes the same time as the strings would.
 
-pub(crate) mod flavor;
 pub(crate) mod labels;
 pub(crate) mod metadata;
-pub(crate) mod raw;
+pub(crate) mod sink;
 
-use std::io::{self, Write};
+use std::io::{self, Read, Write};
 
 use glam::DVec3;
 
 use crate::analyse::plan::Plan;
-use crate::analyse::planner::{Estimate, MoveKind, Moves, Progress};
+use crate::analyse::planner::{Estimate, Moves};
 pub(crate) use crate::analyse::stats::MoveStats;
 use crate::base::error::Result;
-use crate::base::format::{fmt_num, hms, units, Chunk};
+use crate::base::format::{fmt_num, hms, units};
+use crate::base::gcode::{Arc, Command, Heater, Move, Object, Setting};
 use crate::base::safe_text::one_line;
 use crate::base::toolpath::{Event, Toolpath};
 use crate::generate::model::Recipe;
+use crate::machine::firmware::write::{E, XYZ};
+use crate::machine::firmware::{self, Dialect};
 use crate::machine::{Extrusion, Printer};
-
-const XYZ: f64 = 1e3;
-const E: f64 = 1e5;
+use sink::{Out, Stream};
 
 /// A feed of `mm_s` mm/s in whole mm/min as written after `F`, at least 1:
 /// `libm::round(mm_s * 60).max(1) as i64` (`as` is monotone and 1 exact).
@@ -58,10 +58,21 @@ pub(crate) struct Head {
     pub draft: bool,
 }
 
+/// The dialect `printer`'s firmware reads.
+pub(crate) fn dialect(printer: &Printer) -> Dialect {
+    let m = printer.model.to_ascii_uppercase();
+    Dialect {
+        flavor: printer.flavor,
+        object_labels: printer.object_labels,
+        prusa_8bit: m.starts_with("MK3") || m.starts_with("MK2"),
+    }
+}
+
 /// Writes the G-code of `plan` to `out`: the header (with `head`'s
 /// thumbnails), the start G-code, every part, the end G-code and the
-/// summary. Every move goes to `moves` as it is written; `estimate` turns
-/// them into the print's times for the summary.
+/// summary. Every command is followed by the firmware's state as it is
+/// written, its motion handed to `moves`; `estimate` turns them into the
+/// print's times for the summary.
 pub(crate) fn write<W: Write, M: Moves>(
     plan: &Plan,
     head: Head,
@@ -69,21 +80,102 @@ pub(crate) fn write<W: Write, M: Moves>(
     moves: M,
     estimate: impl FnOnce(&mut M) -> Estimate,
 ) -> Result<(W, MoveStats)> {
+    let (stream, stats) = emit(plan, head, out, moves, estimate)?;
+    Ok((stream.out.out, stats))
+}
+
+/// The G-code of `plan` formatted into `scratch` (see [`write`]; the
+/// header that needs the print's totals left out) put into `out`: that
+/// header (Bambu's block, from `ahead`), then the text with a progress line
+/// (`M73`) before each offset of `lines` — the way slicers put progress in,
+/// from the planner's times, the text formatted once.
+pub(crate) fn with_progress<W: Write>(
+    plan: &Plan,
+    head: &Head,
+    ahead: &metadata::Ahead,
+    scratch: impl std::io::Read,
+    lines: &[(u64, crate::analyse::planner::Progress)],
+    mut out: W,
+) -> Result<W> {
+    let io = |e: io::Error| {
+        crate::base::error::Error::io_from(&plan.path, format!("cannot write the G-code: {e}"), &e)
+    };
+    if head.options.bambu {
+        let extent = metadata::Extent::of(plan);
+        let layers = metadata::Layers::of(&extent, plan.recipe.printer.nozzle_diameter);
+        let block = metadata::bambu_header(&plan.recipe, ahead, layers.as_ref());
+        out.write_all(block.as_bytes()).map_err(io)?;
+    }
+    let d = dialect(&plan.recipe.printer);
+    let mut text = scratch;
+    // the text in large pieces: each a few reads and one write through
+    let mut buf = vec![0u8; 1 << 20];
+    let mut at = 0u64;
+    let mut line = crate::base::format::Chunk::new();
+    for &(offset, p) in lines {
+        copy_exactly(&mut text, &mut out, offset.saturating_sub(at), &mut buf).map_err(io)?;
+        line.clear();
+        let c = Command::Progress {
+            percent: p.percent,
+            minutes_left: p.minutes_left,
+        };
+        crate::machine::firmware::write::write(d, &c, "", &mut line);
+        out.write_all(line.bytes()).map_err(io)?;
+        at = offset;
+    }
+    loop {
+        let k = text.read(&mut buf).map_err(io)?;
+        if k == 0 {
+            break;
+        }
+        out.write_all(&buf[..k]).map_err(io)?;
+    }
+    out.flush().map_err(io)?;
+    Ok(out)
+}
+
+/// Copies `n` bytes of `from` to `to` through `buf`.
+fn copy_exactly(
+    from: &mut impl Read,
+    to: &mut impl Write,
+    n: u64,
+    buf: &mut [u8],
+) -> io::Result<()> {
+    let mut left = n;
+    while left > 0 {
+        let k = left.min(buf.len() as u64) as usize;
+        from.read_exact(&mut buf[..k])?;
+        to.write_all(&buf[..k])?;
+        left -= k as u64;
+    }
+    Ok(())
+}
+
+/// [`write`], the stream back.
+fn emit<W: Write, M: Moves>(
+    plan: &Plan,
+    head: Head,
+    out: W,
+    moves: M,
+    estimate: impl FnOnce(&mut M) -> Estimate,
+) -> Result<(Stream<W, M>, MoveStats)> {
     let io = |e: io::Error| {
         crate::base::error::Error::io_from(&plan.path, format!("cannot write the G-code: {e}"), &e)
     };
     if !head.draft {
         plan.frame_ok()?;
     }
+    let p = &plan.recipe.printer;
+    let retraction = (units(p.retraction.length, E) as f64 / E, p.retraction.speed);
+    let stream = Stream::new(Out::new(out), dialect(p), moves, retraction);
     let extent = metadata::Extent::of(plan);
-    let mut em = Emitter::new(out, &plan.recipe, moves);
+    let mut em = Emitter::new(stream, &plan.recipe);
     em.thumbnails = head.thumbnails;
     em.options = head.options;
     em.ahead = head.ahead;
-    em.layers = metadata::Layers::of(&extent, plan.recipe.printer.nozzle_diameter);
+    em.layers = metadata::Layers::of(&extent, p.nozzle_diameter);
     em.names = labels::names(plan.paths.iter().map(|t| t.name.as_str()));
-    if plan.recipe.printer.object_labels {
-        let p = &plan.recipe.printer;
+    if p.object_labels {
         em.defines = plan
             .paths
             .iter()
@@ -104,16 +196,17 @@ pub(crate) fn write<W: Write, M: Moves>(
     em.finish(&plan.recipe, &plan.frame.end, estimate)
 }
 
-/// Writes one print: header, start G-code, parts, end G-code, summary.
+/// Turns a plan's strings into commands: the moves, retractions, events
+/// and decorations of one print, into a [`Stream`] (which writes and
+/// follows them).
 pub(crate) struct Emitter<'a, W: Write, M: Moves> {
-    out: W,
+    s: Stream<W, M>,
     printer: &'a Printer,
     /// Filament cross-section area, mm².
     area: f64,
     /// Last written machine position in µm, once known.
     written: Option<[i64; 3]>,
-    /// `written` in mm (zero before it is known), divided once per move
-    /// where it is set, so the divisions overlap the formatting.
+    /// `written` in mm (zero before it is known).
     written_mm: DVec3,
     /// Exact head position, recipe coordinates.
     head: Option<DVec3>,
@@ -122,23 +215,16 @@ pub(crate) struct Emitter<'a, W: Write, M: Moves> {
     /// Last E total written, 1e-5 mm.
     e_units: i64,
     retracted: bool,
+    /// The feed last written, mm/min (-1 before any).
     feed: i64,
-    /// `feed` in mm/s: `feed as f64 / 60.0`, kept rather than divided again
-    /// for each move.
+    /// `feed` in mm/s.
     feed_mm_s: f64,
-    /// The text not yet handed to `out`: lines are formatted straight into
-    /// it, and it goes out whole once full (see [`Chunk`]).
-    buf: Chunk,
-    /// Where the line being formatted starts in `buf`.
-    line_start: usize,
     /// The moves so far.
     pub stats: MoveStats,
     pending: Pending,
     /// Thumbnail blocks written after the header comments (see
     /// `crate::output::preview::thumbnail`); empty for none.
     pub thumbnails: String,
-    /// Every written move, for the print-time estimate.
-    moves: M,
     /// The material's fan: (speed, start z), until it is switched on or a
     /// `fan` event takes over.
     fan: Option<(f64, f64)>,
@@ -157,6 +243,9 @@ pub(crate) struct Emitter<'a, W: Write, M: Moves> {
     /// Klipper's `EXCLUDE_OBJECT_DEFINE` lines, one per part, until the
     /// header is written; empty without `object_labels`.
     defines: Vec<String>,
+    /// The flow factor the firmware applies (`M221`), 1 = 100 %: the
+    /// filament it feeds is the E written times this.
+    flow: f64,
 }
 
 #[derive(Default)]
@@ -170,15 +259,14 @@ struct Pending {
 }
 
 impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
-    /// An emitter writing to `out` for `recipe`'s printer and material, its
-    /// moves (in machine coordinates) handed to `moves` as they are written.
-    pub(crate) fn new(out: W, recipe: &'a Recipe, moves: M) -> Emitter<'a, W, M> {
+    /// An emitter of `recipe`'s commands into `s`.
+    pub(crate) fn new(s: Stream<W, M>, recipe: &'a Recipe) -> Emitter<'a, W, M> {
         let d = recipe
             .material
             .filament_diameter
             .unwrap_or(recipe.printer.filament_diameter);
         Emitter {
-            out,
+            s,
             printer: &recipe.printer,
             area: std::f64::consts::PI * (d / 2.0) * (d / 2.0),
             written: None,
@@ -189,8 +277,6 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
             retracted: false,
             feed: -1,
             feed_mm_s: -1.0 / 60.0,
-            buf: Chunk::new(),
-            line_start: 0,
             stats: MoveStats {
                 bbox_min: DVec3::splat(f64::INFINITY),
                 bbox_max: DVec3::splat(f64::NEG_INFINITY),
@@ -198,7 +284,6 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
             },
             pending: Pending::default(),
             thumbnails: String::new(),
-            moves,
             fan: (recipe.material.fan_speed > 0.0)
                 .then_some((recipe.material.fan_speed, recipe.material.fan_start_z)),
             options: metadata::Options::default(),
@@ -208,44 +293,12 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
             layer_above: f64::NEG_INFINITY,
             names: Vec::new(),
             defines: Vec::new(),
+            flow: 1.0,
         }
     }
 
     fn text(&mut self, s: &str) -> io::Result<()> {
-        self.buf.put(s.as_bytes());
-        if !s.ends_with('\n') && !s.is_empty() {
-            self.buf.push(b'\n');
-        }
-        self.hand_on()
-    }
-
-    /// Writes the buffered text to `out` once there is a chunk of it.
-    #[inline]
-    fn hand_on(&mut self) -> io::Result<()> {
-        if self.buf.full() {
-            self.out.write_all(self.buf.bytes())?;
-            self.buf.clear();
-        }
-        Ok(())
-    }
-
-    /// Starts a line with `head`, after the progress line due, if any.
-    #[inline]
-    fn begin(&mut self, head: &[u8]) {
-        if let Some(p) = self.moves.due() {
-            self.progress(p);
-        }
-        self.line_start = self.buf.len();
-        self.buf.put(head);
-    }
-
-    /// `M73 P… R…`: percent done, minutes left.
-    fn progress(&mut self, p: Progress) {
-        self.buf.put(b"M73 P");
-        self.buf.put_int(i64::from(p.percent));
-        self.buf.put(b" R");
-        self.buf.put_int(p.minutes_left as i64);
-        self.buf.push(b'\n');
+        self.s.text(s)
     }
 
     /// The labels that begin (`start`) or end part `k` (see [`labels`]).
@@ -254,15 +307,12 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
         let Some(name) = self.names.get(k) else {
             return Ok(());
         };
-        let line = match (start, self.printer.object_labels) {
-            (true, true) => format!("EXCLUDE_OBJECT_START NAME={name}\n; printing object {name}"),
-            (true, false) => format!("; printing object {name}"),
-            (false, true) => {
-                format!("; stop printing object {name}\nEXCLUDE_OBJECT_END NAME={name}")
-            }
-            (false, false) => format!("; stop printing object {name}"),
+        let o = if start {
+            Object::Start(name.clone())
+        } else {
+            Object::End(name.clone())
         };
-        self.text(&line)
+        self.s.command(&Command::Object(o), "")
     }
 
     /// Marks a new layer before an extruding move to `to` that rises above
@@ -303,7 +353,11 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
 
     /// Header comments, `start` (the profile's start G-code, expanded and
     /// checked: [`crate::analyse::frame`]) and the extrusion mode.
-    pub(crate) fn start(&mut self, recipe: &Recipe, start: &str) -> Result<()> {
+    pub(crate) fn start(
+        &mut self,
+        recipe: &Recipe,
+        start: &[crate::base::gcode::Verbatim],
+    ) -> Result<()> {
         let io = |e: io::Error| crate::base::error::Error::io_from("output", e.to_string(), &e);
         if let (true, Some(a)) = (self.options.bambu, &self.ahead) {
             let block = metadata::bambu_header(recipe, a, self.layers.as_ref());
@@ -335,63 +389,70 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
             self.text(&format!(
                 "; arcs: G2/G3 within {} mm of the strings ({})",
                 fmt_num(self.printer.arc_tolerance),
-                flavor::arc_note(self.printer.flavor)
+                firmware::arc_note(self.printer.flavor)
             ))
             .map_err(io)?;
         }
-        if let Some(p) = self.moves.due() {
-            self.progress(p);
-        }
-        self.text(start).map_err(io)?;
+        self.s.first_place();
+        self.profile_lines(start).map_err(io)?;
         let mode = match self.printer.extrusion {
-            Extrusion::Absolute => "M82 ; absolute extrusion",
-            Extrusion::Relative => "M83 ; relative extrusion",
+            Extrusion::Absolute => (false, " ; absolute extrusion"),
+            Extrusion::Relative => (true, " ; relative extrusion"),
         };
-        self.text(&format!(
-            "G21 ; millimetres\nG90 ; absolute XYZ\n{mode}\nG92 E0"
-        ))
+        let s = &mut self.s;
+        s.command(&Command::Inches(false), " ; millimetres")
+            .map_err(io)?;
+        s.command(&Command::RelativeXyz(false), " ; absolute XYZ")
+            .map_err(io)?;
+        s.command(&Command::RelativeE(mode.0), mode.1).map_err(io)?;
+        s.command(
+            &Command::SetPosition {
+                axes: [None; 3],
+                e: Some(0.0),
+            },
+            "",
+        )
         .map_err(io)?;
         Ok(())
     }
 
-    #[inline]
-    fn set_feed(&mut self, mm_s: f64) {
-        self.set_feed_units(feed_units(mm_s));
+    /// A profile's lines, as they were read and checked; the flow factor
+    /// they set followed.
+    fn profile_lines(&mut self, lines: &[crate::base::gcode::Verbatim]) -> io::Result<()> {
+        for l in lines {
+            for c in &l.commands {
+                if let Command::Set(Setting::Flow(f)) = c {
+                    self.flow = *f;
+                }
+            }
+            self.s.verbatim(l)?;
+        }
+        Ok(())
     }
 
-    /// Writes ` F<f>` (mm/min) if the feed changes.
+    /// ` F<f>` (mm/min) to write, when the feed changes.
     #[inline]
-    fn set_feed_units(&mut self, f: i64) {
+    fn feed_word(&mut self, f: i64) -> Option<f64> {
         if f != self.feed {
-            self.buf.put(b" F");
-            self.buf.put_int(f);
             self.feed = f;
             self.feed_mm_s = f as f64 / 60.0;
+            Some(f as f64)
+        } else {
+            None
         }
     }
 
-    fn feed_mm_s(&self) -> f64 {
-        self.feed_mm_s
-    }
-
-    /// The last written machine position, mm (what the firmware plans with).
-    fn written_mm(&self) -> DVec3 {
-        self.written_mm
-    }
-
-    /// Starts a move line; returns whether any axis changed.
-    fn axes(&mut self, g: &[u8], to: DVec3, only: [bool; 3]) -> bool {
+    /// The axes of a move to `to` (recipe coordinates) for those of `only`
+    /// that change, and whether any does.
+    #[inline]
+    fn axes(&mut self, to: DVec3, only: [bool; 3]) -> ([Option<f64>; 3], bool) {
         let m = self.printer.to_machine(to);
         let u = [units(m.x, XYZ), units(m.y, XYZ), units(m.z, XYZ)];
-        self.begin(g);
+        let mut words = [None; 3];
         let mut changed = false;
-        for (k, name) in [b" X", b" Y", b" Z"].iter().enumerate() {
-            if !only[k] {
-                continue;
-            }
-            if self.written.is_none_or(|w| w[k] != u[k]) {
-                self.buf.put(*name);
-                self.buf.put_fixed::<3>(u[k]);
+        for k in 0..3 {
+            if only[k] && self.written.is_none_or(|w| w[k] != u[k]) {
+                words[k] = Some(u[k] as f64 / XYZ);
                 changed = true;
             }
         }
@@ -403,40 +464,35 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
         }
         self.written = Some(w);
         self.written_mm = DVec3::new(w[0] as f64, w[1] as f64, w[2] as f64) / XYZ;
-        changed
-    }
-
-    fn end_line(&mut self) -> io::Result<()> {
-        self.buf.push(b'\n');
-        self.hand_on()
+        (words, changed)
     }
 
     fn retract(&mut self) -> io::Result<()> {
-        let r = &self.printer.retraction;
+        let r = self.printer.retraction;
         if r.length <= 0.0 || self.retracted {
             return Ok(());
         }
         let len = units(r.length, E);
-        if self.printer.firmware_retraction {
-            // G10: the firmware's length and speed; E is untouched
-            self.text(flavor::retract(self.printer.flavor))?;
-            self.retracted = true;
-            self.stats.retractions += 1;
-            self.moves.extrude_only(len as f64 / E, r.speed);
-            return Ok(());
-        }
-        self.begin(b"G1 E");
-        match self.printer.extrusion {
-            Extrusion::Absolute => self.buf.put_fixed::<5>(self.e_units - len),
-            Extrusion::Relative => self.buf.put_fixed::<5>(-len),
-        }
-        self.set_feed(r.speed);
-        self.buf.put(b" ; retract");
-        self.end_line()?;
         self.retracted = true;
         self.stats.retractions += 1;
-        self.moves.extrude_only(len as f64 / E, self.feed_mm_s());
-        Ok(())
+        if self.printer.firmware_retraction {
+            // G10: the firmware's length and speed; E is untouched
+            return self
+                .s
+                .command(&Command::FirmwareRetract { undo: false }, " ; retract");
+        }
+        self.s.progress_point()?;
+        let e = match self.printer.extrusion {
+            Extrusion::Absolute => self.e_units - len,
+            Extrusion::Relative => -len,
+        };
+        let feed = self.feed_word(feed_units(r.speed));
+        let m = Move {
+            e: Some(e as f64 / E),
+            feed,
+            ..Move::default()
+        };
+        self.s.command(&Command::Move(m), " ; retract")
     }
 
     #[inline]
@@ -449,25 +505,26 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
 
     /// Writes the unretraction (see [`Emitter::unretract`]).
     fn unretract_now(&mut self) -> io::Result<()> {
-        let r = &self.printer.retraction;
+        let r = self.printer.retraction;
         let len = units(r.length, E);
-        if self.printer.firmware_retraction {
-            self.text(flavor::unretract(self.printer.flavor))?;
-            self.retracted = false;
-            self.moves.extrude_only(len as f64 / E, r.speed);
-            return Ok(());
-        }
-        self.begin(b"G1 E");
-        match self.printer.extrusion {
-            Extrusion::Absolute => self.buf.put_fixed::<5>(self.e_units),
-            Extrusion::Relative => self.buf.put_fixed::<5>(len),
-        }
-        self.set_feed(r.speed);
-        self.buf.put(b" ; unretract");
-        self.end_line()?;
         self.retracted = false;
-        self.moves.extrude_only(len as f64 / E, self.feed_mm_s());
-        Ok(())
+        if self.printer.firmware_retraction {
+            return self
+                .s
+                .command(&Command::FirmwareRetract { undo: true }, " ; unretract");
+        }
+        self.s.progress_point()?;
+        let e = match self.printer.extrusion {
+            Extrusion::Absolute => self.e_units,
+            Extrusion::Relative => len,
+        };
+        let feed = self.feed_word(feed_units(r.speed));
+        let m = Move {
+            e: Some(e as f64 / E),
+            feed,
+            ..Move::default()
+        };
+        self.s.command(&Command::Move(m), " ; unretract")
     }
 
     /// A straight travel move to `to` (G0), retracting first when it is long.
@@ -483,19 +540,23 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
         if from.is_some() && dist >= self.printer.retraction.min_travel {
             self.retract()?;
         }
-        let changed = self.axes(b"G0", target, only);
+        self.s.progress_point()?;
+        let (words, changed) = self.axes(target, only);
         if !changed {
-            self.buf.truncate(self.line_start);
             self.head = Some(target);
             return Ok(());
         }
         let tv = self.travel_feed(from, target, dist);
-        self.set_feed(tv);
-        self.end_line()?;
+        let feed = self.feed_word(feed_units(tv));
+        let m = Move {
+            travel: true,
+            to: words,
+            e: None,
+            feed,
+        };
+        self.s.command(&Command::Move(m), "")?;
         self.stats.travel_moves += 1;
         self.stats.travel_length += dist;
-        let (to_m, f) = (self.written_mm(), self.feed_mm_s());
-        self.moves.move_to(to_m, 0.0, f, MoveKind::Travel);
         self.head = Some(target);
         Ok(())
     }
@@ -524,7 +585,7 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
 
     /// Travel to `to` between parts: up to a safe height (above everything
     /// printed so far by the head's clearance, see
-    /// [`travel::safe_travel_z`]), across, then down, so the
+    /// [`crate::machine::travel::safe_travel_z`]), across, then down, so the
     /// head never crosses what is printed; the collision check models the same.
     pub(crate) fn travel_to(&mut self, to: DVec3) -> io::Result<()> {
         self.flush()?;
@@ -558,8 +619,8 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
         match self.fan {
             Some((speed, z)) if to.z > z => {
                 self.fan = None;
-                let line = flavor::fan(self.printer.flavor, speed);
-                self.text(&format!("{line}: above z = {z} mm"))
+                let c = Command::Set(Setting::Fan { speed });
+                self.s.command(&c, &format!(": above z = {z} mm"))
             }
             _ => Ok(()),
         }
@@ -579,17 +640,19 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
         Ok(())
     }
 
-    /// Adds `filament` mm to the exact E total and writes the E value after
-    /// ` E` in the line: the rounded total (M82) or its step from the last
-    /// written one (M83), so the written values add up to the exact total.
-    fn put_e(&mut self, filament: f64) {
+    /// Adds `filament` mm to the exact E total: the E value to write, the
+    /// rounded total (M82) or its step from the last written one (M83), so
+    /// the written values add up to the exact total.
+    #[inline]
+    fn next_e(&mut self, filament: f64) -> f64 {
         self.e_exact += filament;
         let e_new = units(self.e_exact, E);
-        match self.printer.extrusion {
-            Extrusion::Absolute => self.buf.put_fixed::<5>(e_new),
-            Extrusion::Relative => self.buf.put_fixed::<5>(e_new - self.e_units),
-        }
+        let w = match self.printer.extrusion {
+            Extrusion::Absolute => e_new,
+            Extrusion::Relative => e_new - self.e_units,
+        };
         self.e_units = e_new;
+        w as f64 / E
     }
 
     /// One G1 extruding move to `to` carrying `filament` mm at `v` mm/s.
@@ -599,8 +662,8 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
             // ignores such a line, and a planner would stop the head for
             // it; its filament joins the exact E total, written next
             self.e_exact += filament;
-            self.stats.filament += filament;
-            self.stats.volume += filament * self.area;
+            self.stats.filament += filament * self.flow;
+            self.stats.volume += filament * self.flow * self.area;
             self.head = Some(to);
             return Ok(());
         }
@@ -608,20 +671,21 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
         self.fan_on_above(to)?;
         self.unretract()?;
         let from = self.head.expect("extrusion starts after a travel");
-        // the move's length, feed and time first: their square root and
-        // divisions then run while the line is formatted (the feed is the
-        // one `set_feed_units` leaves, `feed_mm_s` the same division)
         let feed = feed_units(v);
         let f = feed as f64 / 60.0;
         let len = from.distance(to);
         let t = if len > 0.0 { len / f } else { filament / f };
-        self.axes(b"G1", to, [true; 3]);
-        self.buf.put(b" E");
-        self.put_e(filament);
-        self.set_feed_units(feed);
-        self.end_line()?;
-        let to_m = self.written_mm();
-        self.moves.move_to(to_m, filament, f, MoveKind::Extrude);
+        self.s.progress_point()?;
+        let (words, _) = self.axes(to, [true; 3]);
+        let e = self.next_e(filament);
+        let feed = self.feed_word(feed);
+        let m = Move {
+            travel: false,
+            to: words,
+            e: Some(e),
+            feed,
+        };
+        self.s.command(&Command::Move(m), "")?;
         self.count_extrusion(len, filament, t, &[from, to]);
         self.head = Some(to);
         Ok(())
@@ -636,15 +700,17 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
     }
 
     /// Counts one extruding move in the stats: `len` mm through `points`,
-    /// carrying `filament` mm in `t` s.
+    /// carrying `filament` mm (the firmware feeds it times the flow
+    /// factor) in `t` s.
     fn count_extrusion(&mut self, len: f64, filament: f64, t: f64, points: &[DVec3]) {
+        let fed = filament * self.flow;
         let st = &mut self.stats;
         st.extrude_moves += 1;
         st.extrude_length += len;
-        st.filament += filament;
-        st.volume += filament * self.area;
+        st.filament += fed;
+        st.volume += fed * self.area;
         if t > 0.0 {
-            st.max_flow = st.max_flow.max(filament * self.area / t);
+            st.max_flow = st.max_flow.max(fed * self.area / t);
         }
         for p in points {
             st.bbox_min = st.bbox_min.min(*p);
@@ -654,9 +720,7 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
 
     /// One `G2`/`G3` move along `arc` (see [`crate::base::geom::arc`]), replacing strings
     /// `arc.start..arc.end` of `tp`: E is their exact filament, the speed the
-    /// one that keeps their time, I J the centre from the written start. The
-    /// planner sees the arc as chords of at most 1 mm, as Marlin
-    /// (MAX_ARC_SEGMENT_MM) and Klipper (`resolution`) split it.
+    /// one that keeps their time, I J the centre from the written start.
     fn arc_move(&mut self, tp: &Toolpath, arc: &crate::base::geom::arc::Arc) -> io::Result<()> {
         self.layer_at(tp.points[arc.end])?;
         self.fan_on_above(tp.points[arc.end])?;
@@ -673,30 +737,26 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
         } else {
             tp.strings[arc.start].v
         };
-        let start = self.written_mm();
+        let start = self.written_mm;
         let to = tp.points[arc.end];
-        self.axes(if arc.ccw { b"G3" } else { b"G2" }, to, [true; 3]);
+        self.s.progress_point()?;
+        let (words, _) = self.axes(to, [true; 3]);
         let c = self.printer.to_machine(arc.center.extend(0.0));
-        self.buf.put(b" I");
-        self.buf.put_fixed::<3>(units(c.x - start.x, XYZ));
-        self.buf.put(b" J");
-        self.buf.put_fixed::<3>(units(c.y - start.y, XYZ));
-        self.buf.put(b" E");
-        self.put_e(filament);
-        self.set_feed(v);
-        self.end_line()?;
-        let f = self.feed_mm_s();
-        let pieces = libm::ceil(len / 1.0).max(1.0) as usize;
-        for i in 1..=pieces {
-            let p = if i == pieces {
-                self.written_mm()
-            } else {
-                let phi = arc.sweep * i as f64 / pieces as f64;
-                self.printer.to_machine(arc.point_at(phi))
-            };
-            let e = filament / pieces as f64;
-            self.moves.move_to(p, e, f, MoveKind::Extrude);
-        }
+        let ij = [
+            units(c.x - start.x, XYZ) as f64 / XYZ,
+            units(c.y - start.y, XYZ) as f64 / XYZ,
+        ];
+        let e = self.next_e(filament);
+        let feed = self.feed_word(feed_units(v));
+        let a = Arc {
+            ccw: arc.ccw,
+            to: words,
+            ij,
+            e: Some(e),
+            feed,
+        };
+        self.s.command(&Command::Arc(a), "")?;
+        let f = self.feed_mm_s;
         self.count_extrusion(len, filament, len / f, &tp.points[arc.start..=arc.end]);
         self.head = Some(to);
         Ok(())
@@ -726,28 +786,33 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
     /// a retraction, or filament fed in place.
     fn event(&mut self, e: &Event) -> io::Result<()> {
         self.flush()?;
-        match *e {
-            Event::Retract => self.retract(),
-            Event::Extrude { filament, speed } => self.extrude_in_place(filament, speed),
-            _ => {
-                if let Event::Fan { .. } = e {
-                    self.fan = None; // the recipe sets the fan itself from here on
-                }
-                // the head stops for these; a dwell also takes its time
-                match *e {
-                    Event::Dwell { ms } => self.moves.dwell(ms.max(0.0) / 1000.0),
-                    // a recipe's own command (M600) may stop the head too
-                    Event::Pause
-                    | Event::Gcode(_)
-                    | Event::NozzleTemp { wait: true, .. }
-                    | Event::BedTemp { wait: true, .. } => self.moves.stop(),
-                    _ => {}
-                }
-                let line =
-                    flavor::event_line(self.printer.flavor, e).expect("moves are handled above");
-                self.text(&line)
+        let c = match *e {
+            Event::Retract => return self.retract(),
+            Event::Extrude { filament, speed } => return self.extrude_in_place(filament, speed),
+            Event::Dwell { ms } => Command::Dwell { ms },
+            Event::Pause => Command::Pause,
+            Event::NozzleTemp { celsius, wait } => Command::Set(Setting::Temperature {
+                heater: Heater::Nozzle(0),
+                celsius,
+                wait,
+            }),
+            Event::BedTemp { celsius, wait } => Command::Set(Setting::Temperature {
+                heater: Heater::Bed,
+                celsius,
+                wait,
+            }),
+            Event::Fan { speed } => {
+                self.fan = None; // the recipe sets the fan itself from here on
+                Command::Set(Setting::Fan { speed })
             }
-        }
+            Event::Gcode(ref text) => {
+                let commands = firmware::read(self.printer.flavor, text)
+                    .map(|r| r.commands)
+                    .unwrap_or_else(|_| vec![Command::Other(text.to_string())]);
+                return self.s.raw(text, &commands);
+            }
+        };
+        self.s.command(&c, "")
     }
 
     /// `G1 E… F…`: feeds `filament` mm at `speed` mm/s without moving.
@@ -764,24 +829,27 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
                 .max_extrude_only_velocity
                 .unwrap_or(limits.max_velocity),
         );
-        self.begin(b"G1 E");
-        self.put_e(filament);
-        self.set_feed(speed);
-        self.buf.put(b" ; extrude in place");
-        self.end_line()?;
+        self.s.progress_point()?;
+        let e = self.next_e(filament);
+        let feed = self.feed_word(feed_units(speed));
+        let m = Move {
+            e: Some(e),
+            feed,
+            ..Move::default()
+        };
+        self.s.command(&Command::Move(m), " ; extrude in place")?;
+        let fed = filament * self.flow;
         let st = &mut self.stats;
-        st.filament += filament;
-        st.volume += filament * self.area;
+        st.filament += fed;
+        st.volume += fed * self.area;
         // fed in place, it melts as fast as it is fed
-        st.max_flow = st.max_flow.max(speed * self.area);
-        let f = self.feed_mm_s();
-        self.moves.extrude_only(filament, f);
+        st.max_flow = st.max_flow.max(speed * self.flow * self.area);
         Ok(())
     }
 
     /// Writes one part: a comment, a travel to its start, then its strings.
     pub(crate) fn part(&mut self, tp: &Toolpath) -> io::Result<()> {
-        self.moves.begin_part(&tp.name);
+        self.s.begin_part(&tp.name);
         let comment = format!("; part: {} ({} strings)", one_line(&tp.name), tp.len());
         self.flush()?;
         self.text(&comment)?;
@@ -789,7 +857,7 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
         let min = self.printer.min_string_length;
         let mut events = tp.events.iter().peekable();
         let arcs = if self.printer.arcs {
-            let fw = flavor::arc_firmware(self.printer.flavor);
+            let fw = firmware::arc_firmware(self.printer.flavor);
             let mut arcs = crate::base::geom::arc::fit_part(tp, self.printer.arc_tolerance, fw);
             // an arc bulges past its strings by up to the tolerance: one whose
             // sweep leaves the bed stays strings (which the checks held to it)
@@ -862,24 +930,22 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
     pub(crate) fn finish(
         mut self,
         recipe: &Recipe,
-        end: &str,
+        end: &[crate::base::gcode::Verbatim],
         estimate: impl FnOnce(&mut M) -> Estimate,
-    ) -> Result<(W, MoveStats)> {
+    ) -> Result<(Stream<W, M>, MoveStats)> {
         let io = |e: io::Error| crate::base::error::Error::io_from("output", e.to_string(), &e);
         self.flush().map_err(io)?;
         if self.retracted && !self.printer.firmware_retraction {
             // a print that ends retracted took that filament back: the
             // stats count the filament fed, net (what the E values add to)
-            let back = units(self.printer.retraction.length, E) as f64 / E;
+            let back = units(self.printer.retraction.length, E) as f64 / E * self.flow;
             self.stats.filament -= back;
             self.stats.volume -= back * self.area;
         }
-        if let Some(p) = self.moves.done() {
-            self.progress(p);
-        }
-        self.text(end).map_err(io)?;
+        self.s.done().map_err(io)?;
+        self.profile_lines(end).map_err(io)?;
         let limits = self.printer.limits();
-        let est = estimate(&mut self.moves);
+        let est = estimate(&mut self.s.moves);
         self.stats.time = est.total.planned;
         let mut summary = metadata::footer(recipe, &self.stats, self.layers.as_ref());
         for p in &est.parts {
@@ -898,9 +964,7 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
         ));
         self.stats.estimate = est;
         self.text(&summary).map_err(io)?;
-        self.out.write_all(self.buf.bytes()).map_err(io)?;
-        self.buf.clear();
-        self.out.flush().map_err(io)?;
-        Ok((self.out, self.stats))
+        self.s.flush().map_err(io)?;
+        Ok((self.s, self.stats))
     }
 }

@@ -26,6 +26,7 @@ use md5::Digest;
 
 use crate::base::error::{Error, Result};
 use crate::base::safe_text::one_line;
+use crate::base::xml::Writer;
 
 /// What the package says about the print besides its G-code.
 #[derive(Clone, Debug, Default)]
@@ -75,112 +76,191 @@ pub(crate) fn model_id(printer_model: &str) -> String {
     id.to_string()
 }
 
-/// `&`, `<`, `>`, `"` and `'` escaped for an XML attribute.
-fn attr(s: &str) -> String {
-    one_line(s)
-        .replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
-        .replace('\'', "&apos;")
-}
-
-const CONTENT_TYPES: &str = r#"<?xml version="1.0" encoding="UTF-8"?>
-<Types xmlns="http://schemas.openxmlformats.org/package/2006/content-types">
- <Default Extension="rels" ContentType="application/vnd.openxmlformats-package.relationships+xml"/>
- <Default Extension="model" ContentType="application/vnd.ms-package.3dmanufacturing-3dmodel+xml"/>
- <Default Extension="png" ContentType="image/png"/>
- <Default Extension="gcode" ContentType="text/x.gcode"/>
-</Types>
-"#;
-
-const RELS: &str = r#"<?xml version="1.0" encoding="UTF-8"?>
-<Relationships xmlns="http://schemas.openxmlformats.org/package/2006/relationships">
- <Relationship Target="/3D/3dmodel.model" Id="rel-1" Type="http://schemas.microsoft.com/3dmanufacturing/2013/01/3dmodel"/>
- <Relationship Target="/Metadata/plate_1.png" Id="rel-2" Type="http://schemas.openxmlformats.org/package/2006/relationships/metadata/thumbnail"/>
- <Relationship Target="/Metadata/plate_1.png" Id="rel-4" Type="http://schemas.bambulab.com/package/2021/cover-thumbnail-middle"/>
- <Relationship Target="/Metadata/plate_1_small.png" Id="rel-5" Type="http://schemas.bambulab.com/package/2021/cover-thumbnail-small"/>
-</Relationships>
-"#;
-
-const GCODE_RELS: &str = r#"<?xml version="1.0" encoding="UTF-8"?>
-<Relationships xmlns="http://schemas.openxmlformats.org/package/2006/relationships">
- <Relationship Target="/Metadata/plate_1.gcode" Id="rel-1" Type="http://schemas.bambulab.com/package/2021/gcode"/>
-</Relationships>
-"#;
-
-fn model() -> String {
-    format!(
-        r#"<?xml version="1.0" encoding="UTF-8"?>
-<model unit="millimeter" xml:lang="en-US" xmlns="http://schemas.microsoft.com/3dmanufacturing/core/2015/02" xmlns:BambuStudio="http://schemas.bambulab.com/package/2021">
- <metadata name="Application">p3dp-{}</metadata>
- <metadata name="BambuStudio:3mfVersion">1</metadata>
- <resources>
- </resources>
- <build/>
-</model>
-"#,
-        env!("CARGO_PKG_VERSION")
-    )
-}
-
-const MODEL_SETTINGS: &str = r#"<?xml version="1.0" encoding="UTF-8"?>
-<config>
-  <plate>
-    <metadata key="plater_id" value="1"/>
-    <metadata key="plater_name" value=""/>
-    <metadata key="locked" value="false"/>
-    <metadata key="gcode_file" value="Metadata/plate_1.gcode"/>
-    <metadata key="thumbnail_file" value="Metadata/plate_1.png"/>
-    <metadata key="thumbnail_no_light_file" value="Metadata/plate_no_light_1.png"/>
-    <metadata key="top_file" value="Metadata/top_1.png"/>
-    <metadata key="pick_file" value="Metadata/pick_1.png"/>
-    <metadata key="pattern_bbox_file" value="Metadata/plate_1.json"/>
-  </plate>
-</config>
-"#;
-
-/// `Metadata/slice_info.config`.
-fn slice_info(p: &Plate) -> String {
-    let mut s = format!(
-        r#"<?xml version="1.0" encoding="UTF-8"?>
-<config>
-  <header>
-    <header_item key="X-BBL-Client-Type" value="slicer"/>
-    <header_item key="X-BBL-Client-Version" value="p3dp-{}"/>
-  </header>
-  <plate>
-    <metadata key="index" value="1"/>
-    <metadata key="printer_model_id" value="{}"/>
-    <metadata key="nozzle_diameters" value="{}"/>
-    <metadata key="timelapse_type" value="0"/>
-    <metadata key="prediction" value="{}"/>
-    <metadata key="weight" value="{:.2}"/>
-    <metadata key="outside" value="false"/>
-    <metadata key="support_used" value="false"/>
-    <metadata key="label_object_enabled" value="false"/>
-"#,
-        env!("CARGO_PKG_VERSION"),
-        attr(&p.printer_model_id),
-        p.nozzle,
-        libm::round(p.seconds) as u64,
-        p.grams
-    );
-    for (k, (name, _)) in p.parts.iter().enumerate() {
-        s.push_str(&format!(
-            "    <object identify_id=\"{}\" name=\"{}\" skipped=\"false\" />\n",
-            k + 1,
-            attr(name)
-        ));
+/// The package's content types: `[Content_Types].xml`.
+fn content_types() -> Result<String> {
+    let mut w = Writer::new(" ");
+    let ns = "http://schemas.openxmlformats.org/package/2006/content-types";
+    w.open(0, "Types", &[("xmlns", ns)])?;
+    for (ext, ctype) in [
+        (
+            "rels",
+            "application/vnd.openxmlformats-package.relationships+xml",
+        ),
+        (
+            "model",
+            "application/vnd.ms-package.3dmanufacturing-3dmodel+xml",
+        ),
+        ("png", "image/png"),
+        ("gcode", "text/x.gcode"),
+    ] {
+        w.empty(1, "Default", &[("Extension", ext), ("ContentType", ctype)])?;
     }
-    s.push_str(&format!(
-        "    <filament id=\"1\" tray_info_idx=\"\" type=\"{}\" color=\"{}\" used_m=\"{:.2}\" used_g=\"{:.2}\" />\n  </plate>\n</config>\n",
-        attr(&p.filament_type),
-        attr(&p.colour),
-        p.metres,
-        p.grams
-    ));
-    s
+    w.close(0, "Types");
+    Ok(w.finish())
+}
+
+/// A relationships part: each (target, id, type).
+fn relationships(rels: &[(&str, &str, &str)]) -> Result<String> {
+    let mut w = Writer::new(" ");
+    let ns = "http://schemas.openxmlformats.org/package/2006/relationships";
+    w.open(0, "Relationships", &[("xmlns", ns)])?;
+    for (target, id, kind) in rels {
+        w.empty(
+            1,
+            "Relationship",
+            &[("Target", target), ("Id", id), ("Type", kind)],
+        )?;
+    }
+    w.close(0, "Relationships");
+    Ok(w.finish())
+}
+
+/// `_rels/.rels`: the model and the plate's pictures.
+fn rels() -> Result<String> {
+    let bambu = "http://schemas.bambulab.com/package/2021";
+    relationships(&[
+        (
+            "/3D/3dmodel.model",
+            "rel-1",
+            "http://schemas.microsoft.com/3dmanufacturing/2013/01/3dmodel",
+        ),
+        (
+            "/Metadata/plate_1.png",
+            "rel-2",
+            "http://schemas.openxmlformats.org/package/2006/relationships/metadata/thumbnail",
+        ),
+        (
+            "/Metadata/plate_1.png",
+            "rel-4",
+            &format!("{bambu}/cover-thumbnail-middle"),
+        ),
+        (
+            "/Metadata/plate_1_small.png",
+            "rel-5",
+            &format!("{bambu}/cover-thumbnail-small"),
+        ),
+    ])
+}
+
+/// `Metadata/_rels/model_settings.config.rels`: which file is the plate's
+/// G-code.
+fn gcode_rels() -> Result<String> {
+    relationships(&[(
+        "/Metadata/plate_1.gcode",
+        "rel-1",
+        "http://schemas.bambulab.com/package/2021/gcode",
+    )])
+}
+
+/// `3D/3dmodel.model`: no mesh, the G-code is the print.
+fn model() -> Result<String> {
+    let mut w = Writer::new(" ");
+    w.open(
+        0,
+        "model",
+        &[
+            ("unit", "millimeter"),
+            ("xml:lang", "en-US"),
+            (
+                "xmlns",
+                "http://schemas.microsoft.com/3dmanufacturing/core/2015/02",
+            ),
+            (
+                "xmlns:BambuStudio",
+                "http://schemas.bambulab.com/package/2021",
+            ),
+        ],
+    )?;
+    let app = format!("p3dp-{}", env!("CARGO_PKG_VERSION"));
+    w.leaf(1, "metadata", &[("name", "Application")], &app)?;
+    w.leaf(1, "metadata", &[("name", "BambuStudio:3mfVersion")], "1")?;
+    w.open(1, "resources", &[])?;
+    w.close(1, "resources");
+    w.empty(1, "build", &[])?;
+    w.close(0, "model");
+    Ok(w.finish())
+}
+
+/// `Metadata/model_settings.config`: the plate's files.
+fn model_settings() -> Result<String> {
+    let mut w = Writer::new("  ");
+    w.open(0, "config", &[])?;
+    w.open(1, "plate", &[])?;
+    for (key, value) in [
+        ("plater_id", "1"),
+        ("plater_name", ""),
+        ("locked", "false"),
+        ("gcode_file", "Metadata/plate_1.gcode"),
+        ("thumbnail_file", "Metadata/plate_1.png"),
+        ("thumbnail_no_light_file", "Metadata/plate_no_light_1.png"),
+        ("top_file", "Metadata/top_1.png"),
+        ("pick_file", "Metadata/pick_1.png"),
+        ("pattern_bbox_file", "Metadata/plate_1.json"),
+    ] {
+        w.empty(2, "metadata", &[("key", key), ("value", value)])?;
+    }
+    w.close(1, "plate");
+    w.close(0, "config");
+    Ok(w.finish())
+}
+
+/// `Metadata/slice_info.config`: the printer, the estimate, the parts and
+/// the filament. A name XML cannot hold (U+FFFE…) is refused by name.
+fn slice_info(p: &Plate) -> Result<String> {
+    let mut w = Writer::new("  ");
+    let version = format!("p3dp-{}", env!("CARGO_PKG_VERSION"));
+    w.open(0, "config", &[])?;
+    w.open(1, "header", &[])?;
+    for (key, value) in [
+        ("X-BBL-Client-Type", "slicer"),
+        ("X-BBL-Client-Version", version.as_str()),
+    ] {
+        w.empty(2, "header_item", &[("key", key), ("value", value)])?;
+    }
+    w.close(1, "header");
+    w.open(1, "plate", &[])?;
+    let (nozzle, seconds) = (
+        p.nozzle.to_string(),
+        (libm::round(p.seconds) as u64).to_string(),
+    );
+    let weight = format!("{:.2}", p.grams);
+    for (key, value) in [
+        ("index", "1"),
+        ("printer_model_id", p.printer_model_id.as_str()),
+        ("nozzle_diameters", nozzle.as_str()),
+        ("timelapse_type", "0"),
+        ("prediction", seconds.as_str()),
+        ("weight", weight.as_str()),
+        ("outside", "false"),
+        ("support_used", "false"),
+        ("label_object_enabled", "false"),
+    ] {
+        w.empty(2, "metadata", &[("key", key), ("value", value)])?;
+    }
+    for (k, (name, _)) in p.parts.iter().enumerate() {
+        let id = (k + 1).to_string();
+        w.empty(
+            2,
+            "object",
+            &[("identify_id", &id), ("name", name), ("skipped", "false")],
+        )?;
+    }
+    let (metres, grams) = (format!("{:.2}", p.metres), format!("{:.2}", p.grams));
+    w.empty(
+        2,
+        "filament",
+        &[
+            ("id", "1"),
+            ("tray_info_idx", ""),
+            ("type", &p.filament_type),
+            ("color", &p.colour),
+            ("used_m", &metres),
+            ("used_g", &grams),
+        ],
+    )?;
+    w.close(1, "plate");
+    w.close(0, "config");
+    Ok(w.finish())
 }
 
 /// `Metadata/plate_1.json`: the parts' boxes on the bed.
@@ -255,17 +335,30 @@ pub(crate) fn encode(gcode: &[u8], plate: &Plate) -> Result<Vec<u8>> {
         .unix_permissions(0o644);
     let mut z = zip::ZipWriter::new(io::Cursor::new(Vec::new()));
     let md5 = md5_upper(gcode);
-    let (model, info, json) = (model(), slice_info(plate), plate_json(plate));
+    // a name XML cannot hold is the input's fault (exit 2), named
+    let xml = |r: Result<String>| {
+        r.map_err(|e| Error {
+            message: format!("cannot write the .gcode.3mf: {}", e.message),
+            ..e.in_file("-o")
+        })
+    };
+    let (types, rels, gcode_rels) = (xml(content_types())?, xml(rels())?, xml(gcode_rels())?);
+    let (model, settings, info) = (
+        xml(model())?,
+        xml(model_settings())?,
+        xml(slice_info(plate))?,
+    );
+    let json = plate_json(plate);
     let entries: [(&str, &[u8]); 14] = [
-        ("[Content_Types].xml", CONTENT_TYPES.as_bytes()),
-        ("_rels/.rels", RELS.as_bytes()),
+        ("[Content_Types].xml", types.as_bytes()),
+        ("_rels/.rels", rels.as_bytes()),
         ("3D/3dmodel.model", model.as_bytes()),
         ("Metadata/plate_1.gcode", gcode),
         ("Metadata/plate_1.gcode.md5", md5.as_bytes()),
-        ("Metadata/model_settings.config", MODEL_SETTINGS.as_bytes()),
+        ("Metadata/model_settings.config", settings.as_bytes()),
         (
             "Metadata/_rels/model_settings.config.rels",
-            GCODE_RELS.as_bytes(),
+            gcode_rels.as_bytes(),
         ),
         ("Metadata/slice_info.config", info.as_bytes()),
         ("Metadata/plate_1.json", json.as_bytes()),
@@ -324,6 +417,84 @@ mod tests {
         );
         assert!(info.contains(r#"key="prediction" value="600""#));
         assert!(info.contains(r#"name="a &lt;b&gt;""#));
+    }
+
+    fn plate_named(names: &[&str]) -> Plate {
+        Plate {
+            printer_model_id: model_id("X1C"),
+            nozzle: 0.4,
+            seconds: 60.0,
+            filament_type: "PLA".into(),
+            colour: "#FA8F29".into(),
+            parts: names
+                .iter()
+                .map(|n| (n.to_string(), [0.0, 0.0, 1.0, 1.0]))
+                .collect(),
+            ..Plate::default()
+        }
+    }
+
+    /// Every XML entry of a package, parsed by a real XML reader.
+    fn read_xml(bytes: Vec<u8>) -> Vec<(String, String)> {
+        let mut z = zip::ZipArchive::new(io::Cursor::new(bytes)).unwrap();
+        let names: Vec<String> = (0..z.len())
+            .map(|i| z.by_index(i).unwrap().name().unwrap().to_string())
+            .collect();
+        let mut out = Vec::new();
+        for n in names {
+            if n.ends_with(".xml")
+                || n.ends_with(".rels")
+                || n.ends_with(".config")
+                || n.ends_with(".model")
+            {
+                let mut s = String::new();
+                io::Read::read_to_string(&mut z.by_name(&n).unwrap(), &mut s).unwrap();
+                if let Err(e) = roxmltree::Document::parse(&s) {
+                    panic!("{n} is not well-formed XML: {e}\n{s}");
+                }
+                out.push((n, s));
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn hostile_part_names_read_back_whole_from_well_formed_xml() {
+        let names = [
+            "a <b> & \"c\" 'd'",
+            "]]><!-- -->&amp;",
+            "\u{202e}txt.exe \u{fffd} \u{10ffff} 🐢",
+        ];
+        let xml = read_xml(encode(b"G28\n", &plate_named(&names)).unwrap());
+        assert_eq!(xml.len(), 6, "{xml:?}");
+        let info = &xml
+            .iter()
+            .find(|(n, _)| n == "Metadata/slice_info.config")
+            .unwrap()
+            .1;
+        let doc = roxmltree::Document::parse(info).unwrap();
+        let read: Vec<&str> = doc
+            .descendants()
+            .filter(|n| n.has_tag_name("object"))
+            .filter_map(|n| n.attribute("name"))
+            .collect();
+        assert_eq!(read, names);
+    }
+
+    #[test]
+    fn names_xml_forbids_are_refused_by_name_not_written() {
+        for bad in ["a\u{fffe}b", "a\u{ffff}", "x\u{1}y"] {
+            let e = encode(b"G28\n", &plate_named(&["ok", bad])).unwrap_err();
+            assert_eq!(e.exit_code(), 2);
+            assert!(
+                e.message.contains("object name") && e.message.contains("XML 1.0 does not allow"),
+                "{e}"
+            );
+        }
+        let mut p = plate_named(&["ok"]);
+        p.filament_type = "PLA\u{ffff}".into();
+        let e = encode(b"G28\n", &p).unwrap_err();
+        assert!(e.message.contains("filament type"), "{e}");
     }
 
     #[test]

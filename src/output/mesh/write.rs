@@ -13,6 +13,7 @@ use std::path::Path;
 use super::Mesh;
 use crate::analyse::plan::Plan;
 use crate::base::error::{Error, Result};
+use crate::base::xml::Writer;
 use crate::machine::Material;
 use crate::output::file::write_atomic;
 
@@ -160,34 +161,81 @@ pub(crate) fn obj(mesh: &Mesh, w: &mut impl Write) -> io::Result<()> {
     w.flush()
 }
 
-/// Text for an XML attribute value.
-fn xml_escape(s: &str) -> String {
-    let mut out = String::with_capacity(s.len());
-    for ch in s.chars() {
-        match ch {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            '\'' => out.push_str("&apos;"),
-            c => out.push(c),
-        }
+/// `[Content_Types].xml` and `_rels/.rels`: the package's parts.
+fn package_parts() -> Result<(String, String)> {
+    let mut types = Writer::new(" ");
+    let ns = "http://schemas.openxmlformats.org/package/2006/content-types";
+    types.open(0, "Types", &[("xmlns", ns)])?;
+    for (ext, ctype) in [
+        (
+            "rels",
+            "application/vnd.openxmlformats-package.relationships+xml",
+        ),
+        (
+            "model",
+            "application/vnd.ms-package.3dmanufacturing-3dmodel+xml",
+        ),
+    ] {
+        types.empty(1, "Default", &[("Extension", ext), ("ContentType", ctype)])?;
     }
-    out
+    types.close(0, "Types");
+    let mut rels = Writer::new(" ");
+    let ns = "http://schemas.openxmlformats.org/package/2006/relationships";
+    rels.open(0, "Relationships", &[("xmlns", ns)])?;
+    rels.empty(
+        1,
+        "Relationship",
+        &[
+            ("Target", "/3D/3dmodel.model"),
+            ("Id", "rel0"),
+            (
+                "Type",
+                "http://schemas.microsoft.com/3dmanufacturing/2013/01/3dmodel",
+            ),
+        ],
+    )?;
+    rels.close(0, "Relationships");
+    Ok((types.finish(), rels.finish()))
 }
 
-const CONTENT_TYPES: &str = r#"<?xml version="1.0" encoding="UTF-8"?>
-<Types xmlns="http://schemas.openxmlformats.org/package/2006/content-types">
- <Default Extension="rels" ContentType="application/vnd.openxmlformats-package.relationships+xml"/>
- <Default Extension="model" ContentType="application/vnd.ms-package.3dmanufacturing-3dmodel+xml"/>
-</Types>
-"#;
-
-const RELS: &str = r#"<?xml version="1.0" encoding="UTF-8"?>
-<Relationships xmlns="http://schemas.openxmlformats.org/package/2006/relationships">
- <Relationship Target="/3D/3dmodel.model" Id="rel0" Type="http://schemas.microsoft.com/3dmanufacturing/2013/01/3dmodel"/>
-</Relationships>
-"#;
+/// The model's head, up to its first vertex: the material (its name
+/// refused if XML cannot hold it) and the object.
+fn model_head(material: &Material) -> Result<String> {
+    let [r, g, b] = material.color;
+    let colour = format!("#{r:02X}{g:02X}{b:02X}FF");
+    let mut w = Writer::new(" ");
+    w.open(
+        0,
+        "model",
+        &[
+            ("unit", "millimeter"),
+            ("xml:lang", "en-US"),
+            (
+                "xmlns",
+                "http://schemas.microsoft.com/3dmanufacturing/core/2015/02",
+            ),
+        ],
+    )?;
+    w.leaf(1, "metadata", &[("name", "Application")], "p3dp")?;
+    w.open(1, "resources", &[])?;
+    w.open(2, "basematerials", &[("id", "1")])?;
+    w.empty(
+        3,
+        "base",
+        &[("name", &material.name), ("displaycolor", &colour)],
+    )?;
+    w.close(2, "basematerials");
+    let object = [
+        ("id", "2"),
+        ("type", "model"),
+        ("pid", "1"),
+        ("pindex", "0"),
+    ];
+    w.open(2, "object", &object)?;
+    w.open(3, "mesh", &[])?;
+    w.open(4, "vertices", &[])?;
+    Ok(w.finish())
+}
 
 /// Writes a 3MF package: the model's one object coloured by `material`.
 pub(crate) fn three_mf(mesh: &Mesh, material: &Material, w: impl Write + Seek) -> io::Result<()> {
@@ -202,28 +250,16 @@ pub(crate) fn three_mf(mesh: &Mesh, material: &Material, w: impl Write + Seek) -
         .compression_method(zip::CompressionMethod::Deflated)
         .last_modified_time(zip::DateTime::default())
         .unix_permissions(0o644);
+    let xml = |e: Error| io::Error::other(e.message);
+    let (types, rels) = package_parts().map_err(xml)?;
+    let head = model_head(material).map_err(xml)?;
     let mut z = zip::ZipWriter::new(w);
     z.start_file("[Content_Types].xml", opts).map_err(zerr)?;
-    z.write_all(CONTENT_TYPES.as_bytes()).map_err(ioerr)?;
+    z.write_all(types.as_bytes()).map_err(ioerr)?;
     z.start_file("_rels/.rels", opts).map_err(zerr)?;
-    z.write_all(RELS.as_bytes()).map_err(ioerr)?;
+    z.write_all(rels.as_bytes()).map_err(ioerr)?;
     z.start_file("3D/3dmodel.model", opts.large_file(big))
         .map_err(zerr)?;
-    let [r, g, b] = material.color;
-    let head = format!(
-        r##"<?xml version="1.0" encoding="UTF-8"?>
-<model unit="millimeter" xml:lang="en-US" xmlns="http://schemas.microsoft.com/3dmanufacturing/core/2015/02">
- <metadata name="Application">p3dp</metadata>
- <resources>
-  <basematerials id="1">
-   <base name="{}" displaycolor="#{r:02X}{g:02X}{b:02X}FF"/>
-  </basematerials>
-  <object id="2" type="model" pid="1" pindex="0">
-   <mesh>
-    <vertices>
-"##,
-        xml_escape(&material.name)
-    );
     z.write_all(head.as_bytes()).map_err(ioerr)?;
     let mut line = Vec::with_capacity(96);
     for v in &mesh.vertices {
@@ -237,8 +273,10 @@ pub(crate) fn three_mf(mesh: &Mesh, material: &Material, w: impl Write + Seek) -
         line.extend_from_slice(b"/>\n");
         z.write_all(&line).map_err(ioerr)?;
     }
-    z.write_all(b"    </vertices>\n    <triangles>\n")
-        .map_err(ioerr)?;
+    let mut middle = Writer::piece(" ");
+    middle.close(4, "vertices");
+    middle.open(4, "triangles", &[]).map_err(xml)?;
+    z.write_all(middle.finish().as_bytes()).map_err(ioerr)?;
     let mut num = itoa::Buffer::new();
     for t in &mesh.triangles {
         line.clear();
@@ -251,10 +289,16 @@ pub(crate) fn three_mf(mesh: &Mesh, material: &Material, w: impl Write + Seek) -
         line.extend_from_slice(b"/>\n");
         z.write_all(&line).map_err(ioerr)?;
     }
-    z.write_all(
-        b"    </triangles>\n   </mesh>\n  </object>\n </resources>\n <build>\n  <item objectid=\"2\"/>\n </build>\n</model>\n",
-    )
-    .map_err(ioerr)?;
+    let mut tail = Writer::piece(" ");
+    tail.close(4, "triangles");
+    tail.close(3, "mesh");
+    tail.close(2, "object");
+    tail.close(1, "resources");
+    tail.open(1, "build", &[]).map_err(xml)?;
+    tail.empty(2, "item", &[("objectid", "2")]).map_err(xml)?;
+    tail.close(1, "build");
+    tail.close(0, "model");
+    z.write_all(tail.finish().as_bytes()).map_err(ioerr)?;
     let mut w = z.finish().map_err(zerr)?;
     w.flush().map_err(ioerr)
 }
@@ -357,6 +401,31 @@ mod tests {
             .contains(r##"<base name="a&lt;b &amp; &quot;c&quot;" displaycolor="#12ABEFFF"/>"##));
         assert_eq!(model.matches("<vertex ").count(), m.vertices.len());
         assert_eq!(model.matches("<triangle ").count(), m.triangles.len());
+    }
+
+    #[test]
+    fn a_hostile_material_name_reads_back_and_one_xml_forbids_is_refused() {
+        let m = bead();
+        let mut mat = Material::built_in("pla").unwrap();
+        mat.name = "]]><x a='1'/>&amp; \u{202e} 🐢".into();
+        let mut cur = io::Cursor::new(Vec::new());
+        three_mf(&m, &mat, &mut cur).unwrap();
+        let mut z = zip::ZipArchive::new(io::Cursor::new(cur.into_inner())).unwrap();
+        for part in ["[Content_Types].xml", "_rels/.rels", "3D/3dmodel.model"] {
+            let mut text = String::new();
+            io::Read::read_to_string(&mut z.by_name(part).unwrap(), &mut text).unwrap();
+            let doc = roxmltree::Document::parse(&text).unwrap();
+            if part == "3D/3dmodel.model" {
+                let base = doc.descendants().find(|n| n.has_tag_name("base")).unwrap();
+                assert_eq!(base.attribute("name"), Some(mat.name.as_str()));
+                let count = |t: &str| doc.descendants().filter(|n| n.has_tag_name(t)).count();
+                assert_eq!(count("vertex"), m.vertices.len());
+                assert_eq!(count("triangle"), m.triangles.len());
+            }
+        }
+        mat.name = "pla\u{fffe}".into();
+        let e = three_mf(&m, &mat, io::Cursor::new(Vec::new())).unwrap_err();
+        assert!(e.to_string().contains("U+FFFE"), "{e}");
     }
 
     #[test]

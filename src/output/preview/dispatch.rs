@@ -57,20 +57,41 @@ pub(crate) struct Job<'p> {
     opts: Options,
 }
 
-/// What a preview reads of the G-code as it is written: nothing for a PNG
-/// (its header needs the stats alone), the moves for an HTML viewer.
+/// What a preview takes of the G-code's command stream as it is written:
+/// nothing for a PNG (its header needs the stats alone), the moves for an
+/// HTML viewer.
 pub(crate) struct Reader(Option<html::Reader>);
 
-impl std::io::Write for Reader {
-    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        match &mut self.0 {
-            Some(r) => r.write(buf),
-            None => Ok(buf.len()),
+impl crate::analyse::planner::Moves for Reader {
+    fn begin_part(&mut self, name: &str) {
+        if let Some(r) = &mut self.0 {
+            r.begin_part(name);
         }
     }
-
-    fn flush(&mut self) -> std::io::Result<()> {
-        Ok(())
+    fn stop(&mut self) {}
+    fn dwell(&mut self, _seconds: f64) {}
+    fn move_to(
+        &mut self,
+        to: glam::DVec3,
+        e: f64,
+        feed: f64,
+        kind: crate::analyse::planner::MoveKind,
+    ) {
+        if let Some(r) = &mut self.0 {
+            r.move_to(to, e, feed, kind);
+        }
+    }
+    fn extrude_only(&mut self, _length: f64, _feed: f64) {}
+    fn profile_move(
+        &mut self,
+        to: glam::DVec3,
+        e: f64,
+        feed: f64,
+        kind: crate::analyse::planner::MoveKind,
+    ) {
+        if let Some(r) = &mut self.0 {
+            r.profile_move(to, e, feed, kind);
+        }
     }
 }
 

@@ -36,6 +36,6 @@ mod text;
 mod view;
 
 pub(crate) use crate::machine::Size;
-pub(crate) use dispatch::{Finished, Format, Job};
+pub(crate) use dispatch::{Finished, Format, Job, Reader};
 pub(crate) use scene::Scene;
 pub(crate) use view::{colormap, fmt_value, Basis, ColorMode, Options, View};

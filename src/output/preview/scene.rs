@@ -44,13 +44,23 @@ impl<'a> Scene<'a> {
     }
 
     /// [`Scene::new`] but for the spacing of the passes, each path's taken
-    /// as half the nozzle (what a path without neighbouring passes gets):
-    /// for round strokes only (the G-code's thumbnails, drawn on every
-    /// build), whose drawing needs no spacing, and whose cost must not grow
-    /// with how many passes lie in one place ([`pass_spacing`] of a line
-    /// retraced 600 000 times took tens of seconds).
+    /// as half the nozzle (what a path without neighbouring passes gets),
+    /// and for the findings, none flagged: for round strokes only (the
+    /// G-code's thumbnails, drawn on every build), whose drawing needs no
+    /// spacing, and whose cost must not grow with how many passes lie in
+    /// one place ([`pass_spacing`] of a line retraced 600 000 times took
+    /// tens of seconds). A thumbnail is the print as the printer shows it,
+    /// the same whether the checks ran, found something or were allowed:
+    /// the G-code does not wait for the checks.
     pub(crate) fn round(plan: &'a Plan) -> Scene<'a> {
-        Scene::with_flags_spaced(plan, flags(plan), false)
+        let none = plan
+            .paths
+            .iter()
+            .map(|tp| vec![false; tp.strings.len()])
+            .collect();
+        let mut scene = Scene::with_flags_spaced(plan, none, false);
+        scene.marks.clear();
+        scene
     }
 
     /// [`Scene::new`] given which strings the findings concern (as [`flags`]

@@ -30,8 +30,14 @@ use crate::machine::Printer;
 
 /// Evaluates numbers of one recipe: its params, and where images and a
 /// turtle's limits come from.
+/// The check of a recipe's own printer command (`gcode:`, `gcode_at:`) for
+/// the recipe's printer and material: `Err` says why it is refused.
+pub(super) type GcodeCheck<'a> = &'a dyn Fn(&str) -> std::result::Result<(), String>;
+
 struct Ctx<'a> {
     scope: Scope<'a>,
+    /// The check of the recipe's own printer commands.
+    gcode: GcodeCheck<'a>,
     dir: &'a Path,
     /// The load's files read and z-buffers lent.
     cx: &'a Context,
@@ -131,8 +137,10 @@ impl Recipe {
         let turtle = (std::f64::consts::PI * (d / 2.0) * (d / 2.0), max_strings);
         // templates, loops and groups expanded into leaf parts
         let expansion = super::expand::expand(&raw.parts, &library.templates, &params, dir)?;
-        let parts = leaves(&expansion, turtle, (c0, v0), max_strings, cx)?;
-        let groups = groups(&expansion, turtle, cx)?;
+        let check =
+            |t: &str| crate::analyse::check::gcode::command(t, &printer, &material).map(|_| ());
+        let parts = leaves(&expansion, turtle, (c0, v0), max_strings, cx, &check)?;
+        let groups = groups(&expansion, turtle, cx, &check)?;
         let allow: Vec<String> = raw.allow.iter().map(|a| a.code().to_string()).collect();
         let allow_key = key!(raw.allow);
         crate::base::finding::validate_allow(&allow, |i| format!("{allow_key}[{i}]"))?;
@@ -182,6 +190,7 @@ fn leaves(
     (c0, v0): (f64, f64),
     max_strings: u64,
     cx: &Context,
+    gcode: GcodeCheck,
 ) -> Result<Vec<Part>> {
     // the limit holds for all parts together too (YAML aliases, loops)
     let total_limit = max_strings;
@@ -190,6 +199,7 @@ fn leaves(
     for (k, leaf) in expansion.leaves.iter().enumerate() {
         let place = &leaf.place;
         let ctx = Ctx {
+            gcode,
             scope: Scope::new(&leaf.params),
             dir: leaf.dir,
             cx,
@@ -227,10 +237,16 @@ fn leaves(
 }
 
 /// The groups' steps resolved, each with the params where it is written.
-fn groups(expansion: &Expansion, turtle: (f64, u64), cx: &Context) -> Result<Vec<Group>> {
+fn groups(
+    expansion: &Expansion,
+    turtle: (f64, u64),
+    cx: &Context,
+    gcode: GcodeCheck,
+) -> Result<Vec<Group>> {
     let mut groups = Vec::with_capacity(expansion.groups.len());
     for g in &expansion.groups {
         let ctx = Ctx {
+            gcode,
             scope: Scope::new(&g.params),
             dir: g.dir,
             cx,

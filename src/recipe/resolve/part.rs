@@ -72,8 +72,15 @@ fn piece(
         filament_area: ctx.turtle.0,
         max_strings: ctx.turtle.1,
     };
-    let primitive = super::primitive::resolve(&item.primitive, &ctx.scope, &env, ctx.dir, ctx.cx)
-        .map_err(|e| e.under(key))?;
+    let primitive = super::primitive::resolve(
+        &item.primitive,
+        &ctx.scope,
+        &env,
+        ctx.dir,
+        ctx.cx,
+        ctx.gcode,
+    )
+    .map_err(|e| e.under(key))?;
     // a solid's beads are layer_height × line_width: a cross_section the
     // recipe gives for it would be silently ignored, so refuse it
     if let Primitive::Solid(sol) = &primitive {

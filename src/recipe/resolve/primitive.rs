@@ -31,6 +31,7 @@ pub(super) fn resolve(
     env: &Env,
     dir: &Path,
     cx: &Context,
+    gcode: super::GcodeCheck,
 ) -> Result<Primitive> {
     let files = Files {
         dir,
@@ -39,7 +40,7 @@ pub(super) fn resolve(
     };
     let s = scope.under(raw.key());
     Ok(match raw {
-        RawPrimitive::Path(p) => path(p, &s, files, env)?,
+        RawPrimitive::Path(p) => path(p, &s, files, env, gcode)?,
         RawPrimitive::Circle(p) => Primitive::Circle(circle(p, &s)?),
         RawPrimitive::Arc(p) => Primitive::Arc(arc(p, &s)?),
         RawPrimitive::Spiral(p) => Primitive::Spiral(spiral(p, &s, files)?),
@@ -52,7 +53,9 @@ pub(super) fn resolve(
         RawPrimitive::Solid(p) => {
             Primitive::Solid(super::solid::resolve(p, &s, cx.zbuffers.as_ref())?)
         }
-        RawPrimitive::Turtle(t) => Primitive::Turtle(Box::new(super::turtle::resolve(t, &s, env)?)),
+        RawPrimitive::Turtle(t) => {
+            Primitive::Turtle(Box::new(super::turtle::resolve(t, &s, env, gcode)?))
+        }
     })
 }
 
@@ -68,7 +71,13 @@ pub(super) struct Files<'a> {
 }
 
 /// `path:` its commands run (or the SVG drawing read); `s` is under `path`.
-fn path(raw: &RawPath, s: &Scope, files: Files, env: &Env) -> Result<Primitive> {
+fn path(
+    raw: &RawPath,
+    s: &Scope,
+    files: Files,
+    env: &Env,
+    gcode: super::GcodeCheck,
+) -> Result<Primitive> {
     let svg_only = [
         (key!(raw.id), raw.id.is_some()),
         (key!(raw.scale), raw.scale.is_some()),
@@ -110,7 +119,7 @@ fn path(raw: &RawPath, s: &Scope, files: Files, env: &Env) -> Result<Primitive> 
     } else {
         key!(raw.commands)
     };
-    let t = super::turtle::resolve_path(commands, key, s, env)?;
+    let t = super::turtle::resolve_path(commands, key, s, env, gcode)?;
     Ok(Primitive::Turtle(Box::new(t)))
 }
 

@@ -82,7 +82,7 @@ pub(super) fn resolve(ctx: &Ctx, step: &RawStep) -> Result<Step> {
             Step::Place("mirror", about(o, DAffine3::from_scale(flip)))
         }
         RawStep::GcodeAt { z, gcode } => {
-            crate::output::gcode::raw::check(gcode).map_err(|m| s.error("gcode", m))?;
+            (ctx.gcode)(gcode).map_err(|m| s.error("gcode", m))?;
             Step::GcodeAt(s.num(at!(z))?, gcode.trim().into())
         }
     })

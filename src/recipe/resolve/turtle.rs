@@ -22,16 +22,21 @@ use crate::recipe::schema::{RawCommand, RawLsystem, RawProcedure, RawTurtle};
 
 /// Compiles and runs a turtle; `s` is under `turtle`, the key paths of its
 /// errors too.
-pub(super) fn resolve(raw: &RawTurtle, s: &Scope, env: &Env) -> Result<Turtle> {
+pub(super) fn resolve(
+    raw: &RawTurtle,
+    s: &Scope,
+    env: &Env,
+    gcode: super::GcodeCheck,
+) -> Result<Turtle> {
     // the program's places are relative to `turtle` (the interpreter's too)
-    compile(raw, &Scope::new(s.params))
+    compile(raw, &Scope::new(s.params), gcode)
         .and_then(|prog| turtle::run(&prog, env))
         .map_err(|e| e.under(s.here()))
 }
 
 /// The program of `raw` over the recipe's params: its start, seed,
 /// procedures and commands.
-fn compile(raw: &RawTurtle, s: &Scope) -> Result<Program> {
+fn compile(raw: &RawTurtle, s: &Scope, gcode: super::GcodeCheck) -> Result<Program> {
     let start = raw.start.clone().unwrap_or_default();
     let st = s.under(key!(raw.start));
     let pos = st.point_or(at!(start.position), DVec3::ZERO)?;
@@ -44,7 +49,7 @@ fn compile(raw: &RawTurtle, s: &Scope) -> Result<Program> {
         |x| x.fract() == 0.0 && (0.0..=9007199254740992.0).contains(&x),
         "a whole number from 0 to 2^53",
     )? as u64;
-    let compiler = Compiler::new(s.params, &raw.procedures);
+    let compiler = Compiler::new(s.params, &raw.procedures, gcode);
     let procs = compiler.procedures(key!(raw.procedures))?;
     let main = compiler.block(&raw.program, key!(raw.program), &Arc::new(Vec::new()))?;
     Ok(Program {
@@ -59,8 +64,14 @@ fn compile(raw: &RawTurtle, s: &Scope) -> Result<Program> {
 /// Compiles and runs a `path`'s commands (written at `key` under `s`'s
 /// place, `path`): the turtle's language, starting at the origin facing
 /// +x, where a path starts where its first travel goes.
-pub(super) fn resolve_path(cmds: &[RawCommand], key: &str, s: &Scope, env: &Env) -> Result<Turtle> {
-    let compiler = Compiler::new(s.params, &IndexMap::new());
+pub(super) fn resolve_path(
+    cmds: &[RawCommand],
+    key: &str,
+    s: &Scope,
+    env: &Env,
+    gcode: super::GcodeCheck,
+) -> Result<Turtle> {
+    let compiler = Compiler::new(s.params, &IndexMap::new(), gcode);
     compiler
         .block(cmds, key, &Arc::new(Vec::new()))
         .and_then(|main| {
@@ -92,9 +103,22 @@ pub(super) fn resolve_path(cmds: &[RawCommand], key: &str, s: &Scope, env: &Env)
 pub(super) struct Compiler<'a> {
     params: &'a Params,
     procs: IndexMap<String, RawProcedure>,
+    /// The check of the recipe's own printer commands.
+    gcode: super::GcodeCheck<'a>,
 }
 
+/// Most names one scope of a turtle holds (loop counters, procedure
+/// parameters, `let` values): each value compiled sees them all, so a chain
+/// of 12,000 `let` names made 72 million names' worth of scopes (1.5 GB).
+pub(crate) const MAX_NAMES: usize = 256;
+
 fn check_name(name: &str, params: &Params, scope: &[String], place: &str) -> Result<()> {
+    if scope.len() >= MAX_NAMES {
+        return Err(Error::input(
+            place,
+            format!("`{name}` is one name too many: a turtle's scope holds at most {MAX_NAMES} loop counters, parameters and `let` values"),
+        ));
+    }
     let ident = {
         let mut cs = name.chars();
         matches!(cs.next(), Some(c) if c.is_ascii_alphabetic() || c == '_')
@@ -119,10 +143,15 @@ fn check_name(name: &str, params: &Params, scope: &[String], place: &str) -> Res
 
 impl<'a> Compiler<'a> {
     /// A compiler for one turtle's procedures over the recipe's params.
-    pub(super) fn new(params: &'a Params, procs: &IndexMap<String, RawProcedure>) -> Compiler<'a> {
+    pub(super) fn new(
+        params: &'a Params,
+        procs: &IndexMap<String, RawProcedure>,
+        gcode: super::GcodeCheck<'a>,
+    ) -> Compiler<'a> {
         Compiler {
             params,
             procs: procs.clone(),
+            gcode,
         }
     }
 
@@ -228,6 +257,9 @@ impl<'a> Compiler<'a> {
         let mut vals = Vec::with_capacity(lets.len());
         for (name, n) in lets {
             let at = join(&place, name);
+            if s.len() >= MAX_NAMES {
+                check_name(name, self.params, &s, &at)?;
+            }
             let v = self.val(n, &Arc::new(s.clone()), &at)?;
             check_name(name, self.params, &s, &at)?;
             s.push(name.clone());
@@ -409,7 +441,7 @@ impl<'a> Compiler<'a> {
             ),
             RawCommand::Gcode(text) => {
                 let p = at("gcode");
-                crate::output::gcode::raw::check(text).map_err(|m| Error::input(&p, m))?;
+                (self.gcode)(text).map_err(|m| Error::input(&p, m))?;
                 (p, Op::Gcode(text.trim().into()))
             }
             _ => unreachable!("`more` takes the commands it names"),
@@ -678,7 +710,12 @@ mod tests {
         let raw: RawTurtle = crate::recipe::parse_yaml(yaml, "t.yaml")?;
         let mut params = Params::new();
         params.insert("side".into(), 13.7);
-        resolve(&raw, &Scope::new(&params).under("turtle"), env).map(|t| t.path)
+        // a recipe's own commands checked as for generic-220 and PLA
+        let printer = crate::recipe::profile::built_in("generic-220").unwrap();
+        let material = crate::machine::Material::built_in("pla").unwrap();
+        let check =
+            |t: &str| crate::analyse::check::gcode::command(t, &printer, &material).map(|_| ());
+        resolve(&raw, &Scope::new(&params).under("turtle"), env, &check).map(|t| t.path)
     }
 
     fn run(yaml: &str) -> Toolpath {
@@ -890,7 +927,8 @@ mod tests {
         }
         let raw: RawTurtle = crate::recipe::parse_yaml(&yaml(2), "t.yaml").unwrap();
         let params = Params::new();
-        let c = Compiler::new(&params, &raw.procedures);
+        let any = |_: &str| Ok(());
+        let c = Compiler::new(&params, &raw.procedures, &any);
         let prog = c
             .block(&raw.program, "program", &Arc::new(Vec::new()))
             .unwrap();

@@ -23,6 +23,7 @@ pub(crate) enum RawFlavor {
     Klipper,
     Reprap,
     Prusa,
+    Bambu,
 }
 
 /// `extrusion:` absolute (M82) or relative (M83) E values.

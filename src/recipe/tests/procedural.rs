@@ -35,6 +35,35 @@ fn resolve_err(text: &str) -> String {
     }
 }
 
+#[test]
+fn a_turtles_let_chain_is_bounded() {
+    // one `let` of 12,000 names, each from the one before: refused at the
+    // cap, not 1.5 GB of scopes
+    let names: String = (0..12_000)
+        .map(|k| match k {
+            0 => "v0: 1".to_string(),
+            _ => format!(", v{k}: v{} + 1", k - 1),
+        })
+        .collect();
+    let text = format!(
+        "p3dp: 1\nname: t\nparts:\n  - name: p\n    primitive:\n      turtle:\n        program:\n          - let: {{{names}}}\n          - forward: v10\n"
+    );
+    let e = resolve_err(&text);
+    assert!(e.contains("v256") && e.contains("at most 256"), "{e}");
+    // within the cap a chain works
+    let few: String = (0..200)
+        .map(|k| match k {
+            0 => "v0: 1".to_string(),
+            _ => format!(", v{k}: v{} + 1", k - 1),
+        })
+        .collect();
+    let ok = format!(
+        "p3dp: 1\nname: t\nparts:\n  - name: p\n    primitive:\n      turtle:\n        program:\n          - let: {{{few}}}\n          - forward: v199\n"
+    );
+    let r = resolve(&ok);
+    assert_eq!(r.parts.len(), 1);
+}
+
 const TWO_HELICES: &str = "p3dp: 1
 name: two
 parts:

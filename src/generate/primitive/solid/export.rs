@@ -193,8 +193,9 @@ fn path_data(l: &Loop, out: &mut String) {
 /// An SVG drawing of layer `index` of each solid (name, solid): the
 /// section's exact loops filled (holes even-odd), outer loops drawn in
 /// blue and holes in red, the perimeters' centre lines dashed and the
-/// infill region's boundary dotted. `None` when no solid has that layer.
-pub(crate) fn layer_svg(solids: &[(&str, &Solid)], index: u64) -> Option<String> {
+/// infill region's boundary dotted. `None` when no solid has that layer;
+/// an error when a solid's name holds a character XML does not allow.
+pub(crate) fn layer_svg(solids: &[(&str, &Solid)], index: u64) -> Result<Option<String>> {
     let mut drawing = LayerDrawing {
         lo: DVec2::splat(f64::INFINITY),
         hi: DVec2::splat(f64::NEG_INFINITY),
@@ -206,12 +207,12 @@ pub(crate) fn layer_svg(solids: &[(&str, &Solid)], index: u64) -> Option<String>
             continue;
         };
         any = true;
-        drawing.solid(name, &layer);
+        drawing.solid(name, &layer)?;
     }
     if !any {
-        return None;
+        return Ok(None);
     }
-    Some(drawing.svg())
+    Ok(Some(drawing.svg()))
 }
 
 /// The drawing of one layer so far: the body of its SVG and the bounding
@@ -225,19 +226,19 @@ struct LayerDrawing {
 impl LayerDrawing {
     /// One solid's group: a title naming the solid, the layer and its
     /// height, then its section when the layer has one.
-    fn solid(&mut self, name: &str, layer: &Layer) {
+    fn solid(&mut self, name: &str, layer: &Layer) -> Result<()> {
+        // the name as base::xml writes any XML text: refused if XML cannot hold it
+        let name = crate::base::xml::escape("solid name", name)?;
         let _ = write!(
             self.body,
-            "<g id=\"{}\"><title>{} layer {} at z {} mm</title>",
-            xml(name),
-            xml(name),
-            layer.index,
-            layer.z
+            "<g id=\"{name}\"><title>{name} layer {} at z {} mm</title>",
+            layer.index, layer.z
         );
         if let Some(slab) = layer.slab {
             self.slab(slab);
         }
         self.body.push_str("</g>");
+        Ok(())
     }
 
     /// A section: its box added to the drawing's, its loops filled (holes
@@ -318,12 +319,4 @@ impl LayerDrawing {
             self.body
         )
     }
-}
-
-/// Text escaped for XML.
-fn xml(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
 }

@@ -149,7 +149,6 @@ pub(crate) fn draw<'p>(plan: &'p Plan, opts: &Options) -> Drawing<'p> {
 /// The last step of [`read`]: what the viewer shows, from `drawing`, the
 /// G-code `reader` read and the `stats` its writing returned.
 pub(crate) fn finish(drawing: Drawing, mut reader: Reader, stats: &Stats) -> Data {
-    reader.end();
     let mut scene = drawing.scene;
     scene.flagged = std::mem::take(&mut reader.flags);
     Data::new(scene.plan, &scene, reader, stats, &drawing.opts)
@@ -174,12 +173,10 @@ fn filament_area(plan: &Plan) -> f64 {
 /// how many points it carries.
 pub(crate) fn data(
     plan: &Plan,
-    gcode: &str,
+    r: Reader,
     stats: &Stats,
     opts: &Options,
 ) -> (serde_json::Value, usize) {
-    let mut r = reader(plan);
-    r.read_all(gcode.as_bytes());
     let data = finish(draw(plan, opts), r, stats);
     (data.to_value(), data.points())
 }

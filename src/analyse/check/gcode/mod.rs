@@ -1,0 +1,841 @@
+//! G-code p3dp did not write itself, held to the machine's limits as the
+//! firmware will read it: a profile's start and end G-code (expanded) and
+//! a recipe's own commands. Each line goes through the one reader
+//! ([`crate::machine::firmware::read`]: the firmware's own parser rules —
+//! the last of a repeated parameter, `M 104` as `M104`, `M104.1` as
+//! `M104` on Marlin, letters in quotes, a checksum), then through the
+//! firmware's state ([`crate::machine::firmware::State`]) so that a
+//! relative move is checked where it takes the head.
+//!
+//! - Temperatures: every value a line gives a heater (each of a repeated
+//!   word, and `R`, `B` besides `S`) at most the material's and the
+//!   printer's maxima (the material's own temperature may be higher).
+//! - Moves inside the machine's travel envelope (the bed grown by
+//!   `envelope.margin`, never below the bed but for `envelope.below_bed`),
+//!   feeds at most `max_speed`; a repeated axis word whose values differ
+//!   is refused (firmwares differ on which counts); after homing or
+//!   another of the firmware's own moves the position is unknown, and the
+//!   relative moves from it may span no more than the machine is wide.
+//! - Filament: at most [`FEED_MAX`] mm fed or pulled back by one move or
+//!   in place at once (the start G-code's E counted from 0, as a printer
+//!   starts; the end G-code's from the print's total).
+//! - Settings (accelerations, limits, corners, pressure advance, input
+//!   shaping, flow and speed factors) within the machine's limits, which
+//!   the planner and the stats then follow.
+//! - A command that shifts the coordinates, changes the firmware's limits
+//!   or stored settings, updates or restarts it, or one p3dp does not know
+//!   ([`vocabulary`]), is refused by name.
+//!
+//! A recipe's own command ([`Policy::Raw`]) may set, wait, pause and talk,
+//! never move the head or the filament nor change how they are read: p3dp
+//! writes those itself.
+
+pub(crate) mod vocabulary;
+
+use glam::DVec3;
+
+use crate::base::error::{Error, Result};
+use crate::base::format::fmt_num;
+use crate::base::gcode::lex::{Code, Line, Value};
+use crate::base::gcode::{Command, Heater, Setting, Verbatim};
+use crate::generate::model::Recipe;
+use crate::machine::firmware::{self, State};
+use crate::machine::limits::{
+    ACCELERATION_MAX, CHAMBER_TEMP_MAX, CORNER_SPEED_MAX, DWELL_MAX, FEED_MAX,
+    JUNCTION_DEVIATION_MAX, PRESSURE_ADVANCE_MAX, RETRACTION_MAX, SHAPER_FREQUENCY_MAX, SPEED_MAX,
+};
+use crate::machine::{Bed, Extrusion, Flavor, Material, Printer};
+use vocabulary::Kind;
+
+/// Where the head is when the G-code starts.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Start {
+    /// Unknown (the start G-code: the printer was just switched on, or
+    /// finished another print).
+    Unknown,
+    /// At this machine point, E read as the printer's `extrusion` says and
+    /// at this total (the end G-code: the print's last point and filament).
+    At(DVec3, f64),
+}
+
+/// How much a line may do.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Policy {
+    /// A profile's start or end G-code: moves within the envelope, the
+    /// firmware's own motion, settings.
+    Frame,
+    /// A recipe's own command between its strings: settings, waits,
+    /// pauses and messages only.
+    Raw,
+}
+
+/// The limits lines are held to.
+struct Limits {
+    nozzle: (f64, String),
+    bed: f64,
+    /// Fastest feed, mm/s.
+    feed: f64,
+    /// Fastest Z feed, mm/s.
+    z_feed: f64,
+    /// Highest acceleration, mm/s².
+    accel: f64,
+    bed_shape: Bed,
+    margin: f64,
+    below: f64,
+    max_z: f64,
+}
+
+impl Limits {
+    fn of(p: &Printer, m: &Material) -> Limits {
+        let nozzle = if m.max_nozzle_temp <= p.max_nozzle_temp {
+            (
+                m.max_nozzle_temp,
+                format!("the material {}'s max_nozzle_temp", m.name),
+            )
+        } else {
+            (
+                p.max_nozzle_temp,
+                "the printer's max_nozzle_temp".to_string(),
+            )
+        };
+        // the recipe's own temperatures are its checks' business (nozzle-temp
+        // and bed-temp: errors only --force passes); the profile's G-code may
+        // set them, and nothing hotter
+        let nozzle = if m.nozzle_temp > nozzle.0 {
+            (
+                m.nozzle_temp,
+                format!("the material {}'s nozzle_temp", m.name),
+            )
+        } else {
+            nozzle
+        };
+        let l = p.limits();
+        let accel = l
+            .max_acceleration
+            .max(l.travel_acceleration)
+            .max(l.retract_acceleration)
+            .min(ACCELERATION_MAX);
+        Limits {
+            nozzle,
+            bed: p.max_bed_temp.max(m.bed_temp),
+            feed: p.max_speed,
+            z_feed: l.max_z_velocity.unwrap_or(p.max_speed),
+            accel,
+            bed_shape: p.bed,
+            margin: p.envelope.margin,
+            below: p.envelope.below_bed,
+            max_z: p.bed.max_z(),
+        }
+    }
+
+    /// How far the head may travel along each axis: the envelope's widths.
+    fn span(&self) -> [f64; 3] {
+        let (bmin, bmax) = self.bed_shape.extent();
+        [
+            bmax[0] - bmin[0] + 2.0 * self.margin,
+            bmax[1] - bmin[1] + 2.0 * self.margin,
+            self.max_z + self.margin + self.below,
+        ]
+    }
+}
+
+/// The lines' state: the firmware's, and what the checks add to it.
+struct Checker {
+    flavor: Flavor,
+    policy: Policy,
+    lim: Limits,
+    st: State,
+    /// Per axis whose position is unknown: the relative moves' sum since it
+    /// became unknown, and the least and most of that sum so far.
+    drift: [(f64, f64, f64); 3],
+    /// Filament fed in place since the head last moved, mm.
+    in_place: f64,
+}
+
+/// Checks every line of `text` (the expanded `key` of `recipe`'s profile)
+/// from `start`; the first line at fault is an error naming it. The lines
+/// as they will be written, each with what the firmware reads in it.
+pub(crate) fn check(key: &str, text: &str, recipe: &Recipe, start: Start) -> Result<Vec<Verbatim>> {
+    let p = &recipe.printer;
+    let mut c = Checker::new(p.flavor, Policy::Frame, Limits::of(p, &recipe.material));
+    if let Start::At(q, e) = start {
+        c.st = State::at(p.flavor, q.to_array());
+        let relative = p.extrusion == Extrusion::Relative;
+        c.st.apply(&Command::RelativeE(relative));
+        c.st.e = if relative { 0.0 } else { e };
+    }
+    let body = text.strip_suffix('\n').unwrap_or(text);
+    if body.is_empty() {
+        return Ok(Vec::new());
+    }
+    let mut out = Vec::new();
+    for (k, line) in body.split('\n').enumerate() {
+        let place = format!("{key} line {}", k + 1);
+        crate::base::safe_text::check_gcode_line(&place, line)?;
+        let shown = |why: String| Error::input(&place, format!("`{}`: {why}", line.trim()));
+        let read = firmware::read(p.flavor, line).map_err(shown)?;
+        c.line(&read.line, &read.commands).map_err(shown)?;
+        out.push(Verbatim {
+            text: line.to_string(),
+            commands: read.commands,
+        });
+    }
+    Ok(out)
+}
+
+/// Checks a recipe's own command `text` (one line) for printer `p` and
+/// material `m` ([`Policy::Raw`]): what the firmware reads in it, or why
+/// it is refused.
+pub(crate) fn command(
+    text: &str,
+    p: &Printer,
+    m: &Material,
+) -> std::result::Result<Verbatim, String> {
+    if let Some(c) = text.chars().find(|&c| crate::base::safe_text::is_unsafe(c)) {
+        return Err(format!(
+            "the command holds {c:?}; expected one line of printable text (a line break would start a command of its own)"
+        ));
+    }
+    let read = firmware::read(p.flavor, text)?;
+    if read.line.code.is_none() {
+        return Err("an empty command; expected a G-code such as M600".into());
+    }
+    let mut c = Checker::new(p.flavor, Policy::Raw, Limits::of(p, m));
+    c.line(&read.line, &read.commands)?;
+    Ok(Verbatim {
+        text: text.trim().to_string(),
+        commands: read.commands,
+    })
+}
+
+impl Checker {
+    fn new(flavor: Flavor, policy: Policy, lim: Limits) -> Checker {
+        Checker {
+            flavor,
+            policy,
+            lim,
+            // a printer starts at E = 0, and the start G-code that purges
+            // in absolute E (without `G92 E0`) counts on it; whatever a
+            // firmware keeps from a print before, each feed is bounded
+            st: State::new(flavor),
+            drift: [(0.0, 0.0, 0.0); 3],
+            in_place: 0.0,
+        }
+    }
+
+    /// One line: every value it gives checked, then each thing it does.
+    fn line(&mut self, l: &Line, commands: &[Command]) -> std::result::Result<(), String> {
+        let Some(code) = &l.code else { return Ok(()) };
+        self.all_values(code, l)?;
+        if commands.iter().all(|c| matches!(c, Command::Other(_))) {
+            if let Some(c) = commands.first() {
+                return self.other(code, l, c);
+            }
+        }
+        for c in commands {
+            self.command(c, l)?;
+        }
+        Ok(())
+    }
+
+    /// The values the firmware might use, whichever of a repeated word it
+    /// takes: feeds, and every temperature word of a heating command.
+    fn all_values(&self, code: &Code, l: &Line) -> std::result::Result<(), String> {
+        if (0..=3).any(|n| code.is(b'G', n)) {
+            for f in l.numbers("F")? {
+                feed(f, &self.lim)?;
+            }
+            for axis in ["X", "Y", "Z", "E", "I", "J"] {
+                let v = l.numbers(axis)?;
+                if v.windows(2).any(|w| w[0] != w[1]) {
+                    return Err(format!(
+                        "{axis} is given {} times with different values: firmwares differ on which counts; expected it once",
+                        v.len()
+                    ));
+                }
+            }
+        }
+        let heats: &[(&str, Heater)] = match code {
+            c if c.is(b'M', 104) || c.is(b'M', 109) => &[
+                ("S", Heater::Nozzle(0)),
+                ("R", Heater::Nozzle(0)),
+                ("B", Heater::Nozzle(0)),
+            ],
+            c if c.is(b'M', 140) || c.is(b'M', 190) => &[("S", Heater::Bed), ("R", Heater::Bed)],
+            c if c.is(b'M', 141) || c.is(b'M', 191) => {
+                &[("S", Heater::Chamber), ("R", Heater::Chamber)]
+            }
+            c if c.is(b'G', 10) && self.flavor == Flavor::Reprap => {
+                &[("S", Heater::Nozzle(0)), ("R", Heater::Nozzle(0))]
+            }
+            _ => &[],
+        };
+        for (key, h) in heats {
+            for t in l.numbers(key)? {
+                temperature(*h, t, &self.lim)?;
+            }
+        }
+        if let Code::Name(_) = code {
+            self.named_temperatures(l)?;
+        }
+        Ok(())
+    }
+
+    /// A named command's temperature words: any key holding `TEMP`, and
+    /// `BED`, `EXTRUDER`, `HOTEND`, `NOZZLE`, `CHAMBER` with a number (a
+    /// macro's `PRINT_START BED=60 EXTRUDER=215`), Klipper's `TARGET`,
+    /// `MINIMUM`, `MAXIMUM` of the heater its `HEATER`/`SENSOR` names.
+    fn named_temperatures(&self, l: &Line) -> std::result::Result<(), String> {
+        let heater_of = |s: &str| {
+            let s = s.to_ascii_uppercase();
+            if s.contains("BED") {
+                Heater::Bed
+            } else if s.contains("CHAMBER") {
+                Heater::Chamber
+            } else {
+                Heater::Nozzle(0)
+            }
+        };
+        let named = l.word("HEATER").or_else(|| l.word("SENSOR"));
+        for p in &l.params {
+            let k = p.key.as_str();
+            let plain = matches!(k, "BED" | "EXTRUDER" | "HOTEND" | "NOZZLE" | "CHAMBER");
+            let target = matches!(k, "TARGET" | "MINIMUM" | "MAXIMUM") && named.is_some();
+            let temp = k.contains("TEMP");
+            if !(plain || target || temp) {
+                continue;
+            }
+            let heater = if target {
+                heater_of(named.unwrap_or(""))
+            } else {
+                heater_of(k)
+            };
+            match &p.value {
+                Value::Number(t) => temperature(heater, *t, &self.lim)?,
+                Value::Text(t) if temp || target => {
+                    return Err(format!("cannot read `{k}`'s value `{t}` as a temperature"))
+                }
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+
+    /// A line whose command has no typed meaning: what the vocabulary says.
+    fn other(&mut self, code: &Code, l: &Line, c: &Command) -> std::result::Result<(), String> {
+        let shown = code.shown();
+        if (code.is(b'G', 2) || code.is(b'G', 3)) && l.has("R") {
+            return Err("an arc given by its radius (R); p3dp checks arcs given by I and J".into());
+        }
+        if let (Code::Name(_), Policy::Raw) = (code, self.policy) {
+            if self.flavor != Flavor::Klipper {
+                return Err(format!(
+                    "`{shown}` is not a command {} firmware runs; expected an M-code (M600, M117 …) or G4",
+                    self.flavor.display_name()
+                ));
+            }
+        }
+        let Some(kind) = vocabulary::kind(self.flavor, code) else {
+            return Err(format!(
+                "`{shown}` is a command p3dp cannot check on {} firmware; expected moves (G0–G3), dwell (G4), units (G21), modes (G90, G91, M82, M83, G92 E), homing or probing (G28, G29), temperatures, fans, or a command its table of known commands names (docs/printers.md)",
+                self.flavor.display_name()
+            ));
+        };
+        match (kind, self.policy) {
+            (Kind::Refused(why), _) => Err(format!("`{shown}` is refused: it {why}")),
+            (Kind::Inert, _) => Ok(()),
+            (Kind::Heats(keys), Policy::Frame) => {
+                for (key, h) in keys {
+                    // M303 E-1 tunes the bed
+                    let h = if code.is(b'M', 303) && l.number("E")? == Some(-1.0) {
+                        Heater::Bed
+                    } else {
+                        *h
+                    };
+                    for t in l.numbers(key)? {
+                        temperature(h, t, &self.lim)?;
+                    }
+                }
+                if code.is(b'G', 26) {
+                    self.unknown_position();
+                }
+                Ok(())
+            }
+            (Kind::Firmware, Policy::Frame) => {
+                self.st.apply(c);
+                self.unknown_position();
+                Ok(())
+            }
+            (Kind::Firmware, Policy::Raw) if returns_the_head(self.flavor, code) => Ok(()),
+            (Kind::Heats(_), Policy::Raw) => Err(format!(
+                "`{shown}` is refused: it heats on its own between p3dp's strings; expected nozzle_temp or bed_temp, which are checked"
+            )),
+            (Kind::Firmware, Policy::Raw) => Err(format!(
+                "`{shown}` is refused: it moves the head, and p3dp writes the head's moves itself"
+            )),
+        }
+    }
+
+    /// The position, unknown from here on.
+    fn unknown_position(&mut self) {
+        self.st.pos = [None; 3];
+        self.drift = [(0.0, 0.0, 0.0); 3];
+    }
+
+    /// One typed command.
+    fn command(&mut self, c: &Command, l: &Line) -> std::result::Result<(), String> {
+        let raw = self.policy == Policy::Raw;
+        let moves_refused = || {
+            Err::<(), String>(
+                "moves the head or the filament, or changes how they are read: p3dp writes those itself (a recipe's own command may set, wait, pause and talk)".into(),
+            )
+        };
+        match c {
+            Command::Move(_) | Command::Arc(_) if raw => moves_refused(),
+            Command::Move(m) => self.linear(c, m.to),
+            Command::Arc(a) => self.arc(c, a),
+            Command::Dwell { ms } => {
+                if !(ms.is_finite() && *ms <= DWELL_MAX * 1000.0) {
+                    return Err(format!(
+                        "a dwell of {} s; expected at most {DWELL_MAX} s",
+                        fmt_num(ms / 1000.0)
+                    ));
+                }
+                Ok(())
+            }
+            Command::Set(s) => self.setting(s),
+            Command::FirmwareRetract { .. }
+            | Command::RelativeXyz(_)
+            | Command::RelativeE(_)
+            | Command::SetPosition { .. }
+            | Command::Home { .. }
+            | Command::Inches(_)
+                if raw =>
+            {
+                moves_refused()
+            }
+            Command::Tool(n) if raw => Err(format!(
+                "`T{n}` is refused: a tool change moves the head and swaps the filament the checks were made for"
+            )),
+            Command::Inches(true) => Err("G20 switches to inches; p3dp checks millimetres only".into()),
+            Command::SetPosition { axes, .. } => {
+                if let Some(k) = (0..3).find(|&k| axes[k].is_some()) {
+                    let axis = ["X", "Y", "Z"][k];
+                    return Err(if l.params.is_empty() {
+                        "a G92 without words sets every axis to 0 on this firmware: p3dp cannot check the moves after it (G92 E alone is fine)".into()
+                    } else {
+                        format!(
+                            "G92 {axis} redefines the coordinates: p3dp cannot check the moves after it (G92 E alone is fine)"
+                        )
+                    });
+                }
+                self.st.apply(c);
+                Ok(())
+            }
+            Command::Home { axes } => {
+                for (k, &homed) in axes.iter().enumerate() {
+                    if homed {
+                        self.st.pos[k] = None;
+                        self.drift[k] = (0.0, 0.0, 0.0);
+                    }
+                }
+                Ok(())
+            }
+            Command::Tool(_) => {
+                self.unknown_position();
+                Ok(())
+            }
+            Command::RelativeXyz(_) | Command::RelativeE(_) | Command::Inches(false) => {
+                self.st.apply(c);
+                Ok(())
+            }
+            Command::FirmwareRetract { .. }
+            | Command::Progress { .. }
+            | Command::Object(_)
+            | Command::Pause
+            | Command::Comment(_) => Ok(()),
+            Command::Other(_) => Ok(()),
+        }
+    }
+
+    /// A `G0`/`G1`: where it takes the head, each axis inside the
+    /// envelope, and the filament it feeds.
+    fn linear(&mut self, c: &Command, to: [Option<f64>; 3]) -> std::result::Result<(), String> {
+        if self.st.inches {
+            return Err("a move in inches; p3dp checks millimetres only".into());
+        }
+        let before = self.st.pos;
+        let span = self.lim.span();
+        for (k, axis) in ["X", "Y", "Z"].iter().enumerate() {
+            let Some(v) = to[k] else { continue };
+            if !v.is_finite() {
+                return Err(format!("cannot read its {axis} value"));
+            }
+            if self.st.relative_xyz && before[k].is_none() {
+                let d = &mut self.drift[k];
+                d.0 += v;
+                d.1 = d.1.min(d.0);
+                d.2 = d.2.max(d.0);
+                if d.2 - d.1 > span[k] + 1e-9 {
+                    return Err(format!(
+                        "the relative {axis} moves since the position was last known span {} mm, more than the machine is wide ({} mm)",
+                        fmt_num(d.2 - d.1),
+                        fmt_num(span[k])
+                    ));
+                }
+            }
+        }
+        let motion = self.st.apply(c);
+        let firmware::Motion::Line { to, de, .. } = motion else {
+            return Ok(());
+        };
+        for (k, axis) in ["x", "y", "z"].iter().enumerate() {
+            if let Some(v) = to[k] {
+                within(k, axis, v, &self.lim)?;
+            }
+        }
+        self.within_circle(to)?;
+        self.filament(de, to != before)
+    }
+
+    /// Filament fed (or pulled back) by one move: at most [`FEED_MAX`] mm,
+    /// and in place at most that much in a row.
+    fn filament(&mut self, de: f64, moved: bool) -> std::result::Result<(), String> {
+        if !de.is_finite() || de.abs() > FEED_MAX {
+            return Err(format!(
+                "feeds {} mm of filament in one move; expected at most {FEED_MAX} mm",
+                fmt_num(de)
+            ));
+        }
+        if moved {
+            self.in_place = 0.0;
+            return Ok(());
+        }
+        self.in_place += de.max(0.0);
+        if self.in_place > FEED_MAX {
+            return Err(format!(
+                "feeds {} mm of filament in place; expected at most {FEED_MAX} mm without moving",
+                fmt_num(self.in_place)
+            ));
+        }
+        Ok(())
+    }
+
+    /// A round bed: a known XY inside its circle grown by the margin.
+    fn within_circle(&self, to: [Option<f64>; 3]) -> std::result::Result<(), String> {
+        if let (Bed::Circle { diameter, .. }, Some(x), Some(y)) = (self.lim.bed_shape, to[0], to[1])
+        {
+            let r = x.hypot(y);
+            if r > diameter / 2.0 + self.lim.margin + 1e-9 {
+                return Err(format!(
+                    "({x}, {y}) is {} mm from the centre, outside the machine's travel envelope (the bed's radius {} mm grown by envelope.margin {} mm)",
+                    fmt_num(r),
+                    diameter / 2.0,
+                    self.lim.margin
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// `G2`/`G3` with I J: the whole sweep inside the envelope.
+    fn arc(&mut self, c: &Command, a: &crate::base::gcode::Arc) -> std::result::Result<(), String> {
+        let (Some(x0), Some(y0)) = (self.st.pos[0], self.st.pos[1]) else {
+            return Err("an arc from an unknown position; p3dp cannot check where it goes".into());
+        };
+        let mut probe = self.st.clone();
+        let firmware::Motion::Line { to, .. } =
+            probe.apply(&Command::Move(crate::base::gcode::Move {
+                travel: false,
+                to: a.to,
+                e: None,
+                feed: None,
+            }))
+        else {
+            return Ok(());
+        };
+        let (x1, y1) = (to[0].unwrap_or(x0), to[1].unwrap_or(y0));
+        let (i, j) = (a.ij[0], a.ij[1]);
+        let (cx, cy) = (x0 + i, y0 + j);
+        let r = i.hypot(j);
+        let a0 = libm::atan2(y0 - cy, x0 - cx);
+        let tau = std::f64::consts::TAU;
+        // the sweep's size (a full circle when the ends meet) and its end angle
+        let a1 = libm::atan2(y1 - cy, x1 - cx);
+        let mut sweep = if a.ccw { a1 - a0 } else { a0 - a1 }.rem_euclid(tau);
+        if sweep < 1e-12 {
+            sweep = tau;
+        }
+        let a1 = if a.ccw { a0 + sweep } else { a0 - sweep };
+        // the ends and every quarter-turn extreme the sweep passes
+        let quarter = std::f64::consts::FRAC_PI_2;
+        let (lo, hi) = (a0.min(a1), a0.max(a1));
+        let mut pts = vec![(x0, y0), (x1, y1)];
+        let mut q = libm::ceil(lo / quarter);
+        while q * quarter <= hi {
+            let t = q * quarter;
+            pts.push((cx + r * libm::cos(t), cy + r * libm::sin(t)));
+            q += 1.0;
+        }
+        for (x, y) in pts {
+            within(0, "x", x, &self.lim).map_err(|e| format!("the arc's sweep: {e}"))?;
+            within(1, "y", y, &self.lim).map_err(|e| format!("the arc's sweep: {e}"))?;
+            self.within_circle([Some(x), Some(y), None])
+                .map_err(|e| format!("the arc's sweep: {e}"))?;
+        }
+        let before = self.st.pos;
+        let firmware::Motion::Arc { to, de, .. } = self.st.apply(c) else {
+            return Ok(());
+        };
+        if let Some(z) = Some(to[2]) {
+            within(2, "z", z, &self.lim)?;
+        }
+        self.filament(de, to.map(Some) != before)
+    }
+
+    /// A setting's values within the machine's limits.
+    fn setting(&mut self, s: &Setting) -> std::result::Result<(), String> {
+        let lim = &self.lim;
+        let raw = self.policy == Policy::Raw;
+        let within = |what: &str, v: f64, lo: f64, hi: f64, unit: &str| {
+            if v.is_finite() && v >= lo && v <= hi {
+                Ok(())
+            } else {
+                Err(format!(
+                    "{what} of {} {unit}; expected {} to {} {unit}",
+                    fmt_num(v),
+                    fmt_num(lo),
+                    fmt_num(hi)
+                ))
+            }
+        };
+        match *s {
+            Setting::Temperature {
+                heater, celsius, ..
+            } => temperature(heater, celsius, lim),
+            Setting::Fan { speed } => within("a fan speed", speed * 100.0, 0.0, 100.0, "%"),
+            Setting::PressureAdvance { k } => {
+                within("a pressure advance", k, 0.0, PRESSURE_ADVANCE_MAX, "s")
+            }
+            Setting::Acceleration {
+                print,
+                travel,
+                retract,
+            } => {
+                for (what, v) in [("print", print), ("travel", travel), ("retract", retract)] {
+                    if let Some(a) = v {
+                        within(
+                            &format!("a {what} acceleration (the printer's kinematics allow at most {} mm/s²)", fmt_num(lim.accel)),
+                            a,
+                            1.0,
+                            lim.accel,
+                            "mm/s²",
+                        )?;
+                    }
+                }
+                Ok(())
+            }
+            Setting::SpeedLimit { velocity } => within(
+                "a speed limit (the printer's max_speed caps it)",
+                velocity,
+                1.0,
+                lim.feed,
+                "mm/s",
+            ),
+            Setting::SquareCornerVelocity(v) => {
+                within("a square-corner velocity", v, 0.0, CORNER_SPEED_MAX, "mm/s")
+            }
+            Setting::JunctionDeviation(j) => {
+                within("a junction deviation", j, 0.0, JUNCTION_DEVIATION_MAX, "mm")
+            }
+            Setting::Jerk(j) => within("a jerk", j, 0.0, CORNER_SPEED_MAX, "mm/s"),
+            Setting::MinimumCruiseRatio(r) => within("a minimum cruise ratio", r, 0.0, 1.0, ""),
+            Setting::InputShaper {
+                frequency, damping, ..
+            } => {
+                for f in frequency.into_iter().flatten() {
+                    within(
+                        "an input shaper frequency",
+                        f,
+                        0.0,
+                        SHAPER_FREQUENCY_MAX,
+                        "Hz",
+                    )?;
+                }
+                if let Some(d) = damping {
+                    within("a damping ratio", d, 0.0, 1.0, "")?;
+                }
+                Ok(())
+            }
+            Setting::Flow(f) => {
+                let hi = if raw { 1.5 } else { 1.0 };
+                if !(f > 0.0 && f <= hi) {
+                    return Err(format!(
+                        "a flow factor of {} %: the strings would get {} the filament the checks were made for; expected above 0 and at most {} %",
+                        fmt_num(f * 100.0),
+                        if f > 1.0 { "more than" } else { "none of" },
+                        fmt_num(hi * 100.0)
+                    ));
+                }
+                Ok(())
+            }
+            Setting::Speed(f) => {
+                if !(f.is_finite() && f > 0.0 && f <= 1.0) {
+                    return Err(format!(
+                        "a speed factor of {} % would run the moves after it faster than written; expected above 0 and at most 100",
+                        fmt_num(f * 100.0)
+                    ));
+                }
+                Ok(())
+            }
+            Setting::Retraction { length, speed } => {
+                if let Some(l) = length {
+                    within("a retraction length", l, 0.0, RETRACTION_MAX, "mm")?;
+                }
+                if let Some(v) = speed {
+                    within("a retraction speed", v, 0.1, SPEED_MAX, "mm/s")?;
+                }
+                Ok(())
+            }
+            Setting::MaxAcceleration { axes } => {
+                for (k, v) in axes.into_iter().enumerate() {
+                    let Some(a) = v else { continue };
+                    let hi = if k == 3 { ACCELERATION_MAX } else { lim.accel };
+                    within(
+                        &format!("a maximum {} acceleration", ["X", "Y", "Z", "E"][k]),
+                        a,
+                        1.0,
+                        hi,
+                        "mm/s²",
+                    )?;
+                }
+                Ok(())
+            }
+            Setting::MaxFeedrate { axes } => {
+                for (k, v) in axes.into_iter().enumerate() {
+                    let Some(f) = v else { continue };
+                    let hi = match k {
+                        0 | 1 => lim.feed,
+                        2 => lim.z_feed.max(1.0),
+                        _ => SPEED_MAX,
+                    };
+                    if !(f.is_finite() && f > 0.0 && f <= hi + 1e-9) {
+                        return Err(format!(
+                            "sets the {} feed limit to {} mm/s, past the printer's {} {} mm/s",
+                            ["X", "Y", "Z", "E"][k],
+                            fmt_num(f),
+                            if k == 2 { "Z speed" } else { "max_speed" },
+                            fmt_num(hi)
+                        ));
+                    }
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+/// Whether a firmware command returns the head where it found it (a
+/// filament change or a pause parks and comes back): a recipe may ask for it.
+fn returns_the_head(flavor: Flavor, code: &Code) -> bool {
+    match code {
+        Code::Number {
+            letter: b'M',
+            number,
+            ..
+        } => matches!(number, 600 | 601 | 602 | 125),
+        Code::Name(n) => flavor == Flavor::Klipper && matches!(n.as_str(), "RESUME" | "M600"),
+        _ => false,
+    }
+}
+
+/// Heater `h` at `t` °C within the limits.
+fn temperature(h: Heater, t: f64, lim: &Limits) -> std::result::Result<(), String> {
+    match h {
+        Heater::Nozzle(_) => {
+            let (max, what) = &lim.nozzle;
+            if !(t.is_finite() && t >= 0.0) {
+                return Err(format!(
+                    "a nozzle temperature of {t} °C; expected 0 to {max} °C"
+                ));
+            }
+            if t > *max {
+                return Err(format!(
+                    "a nozzle temperature of {t} °C, above the limit {max} °C ({what})"
+                ));
+            }
+            Ok(())
+        }
+        Heater::Bed => {
+            if !(t.is_finite() && t >= 0.0 && t <= lim.bed) {
+                return Err(format!(
+                    "a bed temperature of {t} °C, outside 0 to {} °C (the printer's max_bed_temp, or the material's bed_temp if higher)",
+                    lim.bed
+                ));
+            }
+            Ok(())
+        }
+        Heater::Chamber => {
+            if !(0.0..=CHAMBER_TEMP_MAX).contains(&t) {
+                return Err(format!(
+                    "a chamber temperature of {t} °C, outside 0 to {CHAMBER_TEMP_MAX} °C"
+                ));
+            }
+            Ok(())
+        }
+    }
+}
+
+/// A feed `f` in mm/min at most the printer's `max_speed` (half a mm/min of
+/// rounding allowed).
+fn feed(f: f64, lim: &Limits) -> std::result::Result<(), String> {
+    if !(f.is_finite() && f > 0.0) {
+        return Err(format!("a feed of {f} mm/min; expected a positive number"));
+    }
+    if f > lim.feed * 60.0 + 0.5 {
+        return Err(format!(
+            "F{} is {} mm/s, faster than the printer's max_speed {} mm/s",
+            fmt_num(f),
+            fmt_num(f / 60.0),
+            lim.feed
+        ));
+    }
+    Ok(())
+}
+
+/// Axis `k` (named `axis`) at machine coordinate `v` inside the envelope.
+fn within(k: usize, axis: &str, v: f64, lim: &Limits) -> std::result::Result<(), String> {
+    const EPS: f64 = 1e-9;
+    if !v.is_finite() {
+        return Err(format!("cannot read its {axis} value"));
+    }
+    if k == 2 {
+        if v < -lim.below - EPS {
+            return Err(format!(
+                "z = {} mm is below the bed (the profile allows {} mm below it: envelope.below_bed)",
+                fmt_num(v),
+                lim.below
+            ));
+        }
+        if v > lim.max_z + lim.margin + EPS {
+            return Err(format!(
+                "z = {} mm is above the machine's reach ({} mm: max_z grown by envelope.margin)",
+                fmt_num(v),
+                fmt_num(lim.max_z + lim.margin)
+            ));
+        }
+        return Ok(());
+    }
+    let (bmin, bmax) = lim.bed_shape.extent();
+    let (lo, hi) = (bmin[k] - lim.margin, bmax[k] + lim.margin);
+    if v < lo - EPS || v > hi + EPS {
+        return Err(format!(
+            "{axis} = {} mm is outside the machine's travel envelope ({axis} from {} to {} mm: the bed grown by envelope.margin {} mm)",
+            fmt_num(v),
+            fmt_num(lo),
+            fmt_num(hi),
+            lim.margin
+        ));
+    }
+    Ok(())
+}

@@ -1,0 +1,425 @@
+//! What a command with no typed meaning does, per firmware: the commands
+//! the checks know to leave the head, the filament and the heaters alone,
+//! to move the head within the firmware's own limits, or to heat as their
+//! parameters say — and those refused, with why. A command in none of the
+//! tables is refused as one p3dp cannot check.
+//!
+//! A maker's own command goes here, in the table of the flavours that run
+//! it (Bambu's `M1002` in [`BAMBU`], Prusa's `M862.3` in [`PRUSA`]).
+
+use crate::base::gcode::lex::Code;
+use crate::base::gcode::Heater;
+use crate::machine::Flavor;
+
+/// What a command does, as far as the checks need to know.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Kind {
+    /// Leaves the head, the filament and the heaters alone (messages,
+    /// reports, timers, lights, waits).
+    Inert,
+    /// Moves the head (and maybe the filament) within the firmware's own
+    /// limits: homing, probing, levelling, parking, wiping, loading
+    /// filament, a printer's macro. The position is unknown after it.
+    Firmware,
+    /// Heats: the listed keys are temperatures of the heaters named.
+    Heats(&'static [(&'static str, Heater)]),
+    /// Refused, and why.
+    Refused(&'static str),
+}
+
+use Kind::{Firmware, Heats, Inert, Refused};
+
+const SHIFTS: &str =
+    "shifts the coordinates or the machine's geometry, so p3dp could not check the moves after it";
+const SETTINGS: &str = "rewrites or reloads the firmware's stored settings, which p3dp cannot see";
+const STOPS: &str = "stops or restarts the firmware, or updates it";
+const LIMIT: &str = "changes a safety limit of the firmware";
+const FILES: &str = "starts, changes or deletes files on the printer";
+const EXTRUSION: &str = "changes how E is read (volumetric, steps per mm, direction), so the filament fed would not be what p3dp wrote";
+const MOTION: &str = "moves a motor outside the firmware's planner or limits";
+const PINS: &str = "drives the controller's pins or a tool (a heater could be one of them)";
+
+/// M codes of Marlin and its descendants (Prusa's, Bambu's).
+const MARLIN_M: &[(u32, Kind)] = &[
+    (17, Inert),
+    (18, Inert),
+    (20, Inert),
+    (21, Inert),
+    (22, Inert),
+    (23, Refused(FILES)),
+    (24, Refused(FILES)),
+    (25, Inert),
+    (26, Refused(FILES)),
+    (27, Inert),
+    (28, Refused(FILES)),
+    (29, Refused(FILES)),
+    (30, Refused(FILES)),
+    (31, Inert),
+    (32, Refused(FILES)),
+    (33, Inert),
+    (34, Inert),
+    (42, Refused(PINS)),
+    (43, Refused(PINS)),
+    (48, Firmware),
+    (75, Inert),
+    (76, Inert),
+    (77, Inert),
+    (78, Inert),
+    (80, Inert),
+    (81, Inert),
+    (84, Inert),
+    (85, Inert),
+    (86, Inert),
+    (92, Refused(EXTRUSION)),
+    (100, Inert),
+    (105, Inert),
+    (106, Inert),
+    (107, Inert),
+    (108, Inert),
+    (110, Inert),
+    (111, Inert),
+    (112, Refused(STOPS)),
+    (113, Inert),
+    (114, Inert),
+    (115, Inert),
+    (117, Inert),
+    (118, Inert),
+    (119, Inert),
+    (120, Refused(LIMIT)),
+    (121, Refused(LIMIT)),
+    (122, Inert),
+    (125, Firmware),
+    (143, Refused(LIMIT)),
+    (145, Inert),
+    (
+        149,
+        Refused(
+            "changes the temperature units, so the temperatures after it would be read otherwise",
+        ),
+    ),
+    (150, Inert),
+    (154, Inert),
+    (155, Inert),
+    (163, Refused(EXTRUSION)),
+    (164, Refused(EXTRUSION)),
+    (165, Refused(EXTRUSION)),
+    (200, Refused(EXTRUSION)),
+    (205, Inert),
+    (206, Refused(SHIFTS)),
+    (208, Inert),
+    (209, Inert),
+    (211, Refused(LIMIT)),
+    (217, Inert),
+    (218, Refused(SHIFTS)),
+    (226, Inert),
+    (240, Inert),
+    (250, Inert),
+    (256, Inert),
+    (260, Refused(PINS)),
+    (261, Refused(PINS)),
+    (280, Inert),
+    (281, Inert),
+    (290, Refused(SHIFTS)),
+    (300, Inert),
+    (301, Refused(LIMIT)),
+    (302, Inert),
+    (303, Heats(&[("S", Heater::Nozzle(0))])),
+    (304, Refused(LIMIT)),
+    (350, Refused(EXTRUSION)),
+    (351, Refused(EXTRUSION)),
+    (355, Inert),
+    (400, Inert),
+    (401, Firmware),
+    (402, Firmware),
+    (403, Inert),
+    (410, Refused(STOPS)),
+    (412, Inert),
+    (413, Inert),
+    (420, Inert),
+    (421, Refused(SHIFTS)),
+    (422, Inert),
+    (423, Refused(SHIFTS)),
+    (425, Refused(SHIFTS)),
+    (428, Refused(SHIFTS)),
+    (486, Inert),
+    (500, Refused(SETTINGS)),
+    (501, Refused(SETTINGS)),
+    (502, Refused(SETTINGS)),
+    (503, Inert),
+    (504, Inert),
+    (524, Refused(FILES)),
+    (540, Inert),
+    (569, Refused(EXTRUSION)),
+    (575, Inert),
+    (592, Refused(EXTRUSION)),
+    (600, Firmware),
+    (602, Firmware),
+    (603, Inert),
+    (605, Refused(SHIFTS)),
+    (665, Refused(SHIFTS)),
+    (666, Refused(SHIFTS)),
+    (672, Inert),
+    (701, Firmware),
+    (702, Firmware),
+    (710, Inert),
+    (
+        810,
+        Refused("runs a macro stored in the firmware, which p3dp cannot see"),
+    ),
+    (851, Refused(SHIFTS)),
+    (852, Refused(SHIFTS)),
+    (871, Inert),
+    (876, Inert),
+    (906, Inert),
+    (907, Inert),
+    (911, Inert),
+    (912, Inert),
+    (913, Inert),
+    (914, Inert),
+    (915, Inert),
+    (928, Refused(FILES)),
+    (997, Refused(STOPS)),
+    (999, Refused(STOPS)),
+];
+
+/// G codes of Marlin and its descendants besides the typed ones.
+const MARLIN_G: &[(u32, Kind)] = &[
+    (
+        5,
+        Refused("a Bézier move: p3dp checks lines and arcs, not curves"),
+    ),
+    (12, Firmware),
+    (17, Inert),
+    (18, Inert),
+    (19, Inert),
+    (26, Heats(&[("B", Heater::Bed), ("H", Heater::Nozzle(0))])),
+    (27, Firmware),
+    (29, Firmware),
+    (30, Firmware),
+    (31, Firmware),
+    (32, Firmware),
+    (33, Firmware),
+    (34, Firmware),
+    (35, Firmware),
+    (38, Firmware),
+    (53, Refused(SHIFTS)),
+    (54, Refused(SHIFTS)),
+    (55, Refused(SHIFTS)),
+    (56, Refused(SHIFTS)),
+    (57, Refused(SHIFTS)),
+    (58, Refused(SHIFTS)),
+    (59, Refused(SHIFTS)),
+    (60, Inert),
+    (61, Firmware),
+    (76, Firmware),
+    (80, Firmware),
+    (81, Firmware),
+];
+
+/// Prusa's own codes (the MK3's and the Buddy firmware's).
+const PRUSA: &[(u8, u32, Kind)] = &[
+    (b'M', 555, Inert),
+    (b'M', 860, Inert),
+    (b'M', 861, Inert),
+    (b'M', 862, Inert),
+    (b'M', 864, Inert),
+    (b'M', 1200, Inert),
+    (
+        b'M',
+        1700,
+        Heats(&[("S", Heater::Nozzle(0)), ("B", Heater::Bed)]),
+    ),
+    (b'M', 1977, Inert),
+    (b'G', 64, Firmware),
+    (b'G', 1009, Inert),
+];
+
+/// Bambu's own codes, as Bambu Studio's presets write them.
+const BAMBU: &[(u8, u32, Kind)] = &[
+    (b'M', 620, Firmware),
+    (b'M', 621, Firmware),
+    (b'M', 622, Inert),
+    (b'M', 623, Inert),
+    (b'M', 960, Inert),
+    (b'M', 970, Inert),
+    (b'M', 971, Inert),
+    (b'M', 972, Inert),
+    (b'M', 973, Inert),
+    (b'M', 974, Inert),
+    (b'M', 975, Inert),
+    (b'M', 981, Inert),
+    (b'M', 982, Inert),
+    (b'M', 983, Inert),
+    (b'M', 984, Inert),
+    (b'M', 991, Inert),
+    (b'M', 1002, Inert),
+    (b'M', 1003, Inert),
+    (b'M', 1006, Inert),
+    (b'M', 1007, Inert),
+    (b'G', 29, Firmware),
+    (b'G', 39, Firmware),
+    (b'G', 380, Firmware),
+    (b'G', 392, Inert),
+];
+
+/// RepRapFirmware's codes besides the typed ones and Marlin's it shares.
+const REPRAP: &[(u8, u32, Kind)] = &[
+    (b'M', 3, Refused(PINS)),
+    (b'M', 4, Refused(PINS)),
+    (b'M', 5, Refused(PINS)),
+    (b'M', 98, Firmware),
+    (b'M', 116, Inert),
+    (b'M', 291, Inert),
+    (b'M', 292, Inert),
+    (b'M', 376, Inert),
+    (b'M', 452, Refused(PINS)),
+    (b'M', 453, Refused(PINS)),
+    (b'M', 557, Inert),
+    (b'M', 561, Inert),
+    (
+        b'M',
+        568,
+        Heats(&[("S", Heater::Nozzle(0)), ("R", Heater::Nozzle(0))]),
+    ),
+    (b'M', 671, Inert),
+];
+
+/// Klipper's extended commands and macros refused by name.
+const KLIPPER_REFUSED: &[(&str, &str)] = &[
+    ("SET_GCODE_OFFSET", SHIFTS),
+    ("SET_KINEMATIC_POSITION", SHIFTS),
+    ("SET_SKEW", SHIFTS),
+    ("SKEW_PROFILE", SHIFTS),
+    ("Z_OFFSET_APPLY_PROBE", SETTINGS),
+    ("Z_OFFSET_APPLY_ENDSTOP", SETTINGS),
+    ("SAVE_CONFIG", SETTINGS),
+    ("FORCE_MOVE", MOTION),
+    ("MANUAL_STEPPER", MOTION),
+    ("SET_STEPPER_ENABLE", MOTION),
+    ("SET_EXTRUDER_ROTATION_DISTANCE", EXTRUSION),
+    ("SET_EXTRUDER_STEP_DISTANCE", EXTRUSION),
+    ("SYNC_EXTRUDER_MOTION", EXTRUSION),
+    ("FIRMWARE_RESTART", STOPS),
+    ("RESTART", STOPS),
+    ("M112", STOPS),
+    ("SDCARD_PRINT_FILE", FILES),
+    ("SDCARD_RESET_FILE", FILES),
+];
+
+/// Klipper's commands that leave the head alone.
+const KLIPPER_INERT: &[&str] = &[
+    "M105",
+    "M114",
+    "M115",
+    "M117",
+    "M118",
+    "M400",
+    "M84",
+    "M18",
+    "RESPOND",
+    "SET_DISPLAY_TEXT",
+    "SET_FAN_SPEED",
+    "SET_LED",
+    "SET_PIN",
+    "SET_IDLE_TIMEOUT",
+    "SET_GCODE_VARIABLE",
+    "SAVE_VARIABLE",
+    "SET_TEMPERATURE_FAN_TARGET",
+    "TEMPERATURE_WAIT",
+    "BED_MESH_PROFILE",
+    "BED_MESH_CLEAR",
+    "EXCLUDE_OBJECT_DEFINE",
+    "EXCLUDE_OBJECT",
+    "TIMELAPSE_TAKE_FRAME",
+    "UPDATE_DELAYED_GCODE",
+    "M106",
+    "M107",
+    "M73",
+];
+
+fn find<T: Copy>(table: &[(u32, T)], n: u32) -> Option<T> {
+    table.iter().find(|(c, _)| *c == n).map(|&(_, k)| k)
+}
+
+fn find_lettered(table: &[(u8, u32, Kind)], l: u8, n: u32) -> Option<Kind> {
+    table
+        .iter()
+        .find(|(c, m, _)| *c == l && *m == n)
+        .map(|&(_, _, k)| k)
+}
+
+/// What `code` does on `flavor`'s firmware; `None` for a command the
+/// checks do not know.
+pub(crate) fn kind(flavor: Flavor, code: &Code) -> Option<Kind> {
+    match (flavor, code) {
+        (Flavor::Klipper, Code::Name(n)) => {
+            if let Some((_, why)) = KLIPPER_REFUSED.iter().find(|(k, _)| k == n) {
+                return Some(Refused(why));
+            }
+            if KLIPPER_INERT.contains(&n.as_str()) {
+                return Some(Inert);
+            }
+            // a printer's own macro (PRINT_START, CLEAN_NOZZLE …) or one of
+            // Klipper's levelling commands: it may move anywhere the
+            // firmware allows; its temperature words are checked by name
+            if n.contains('.') {
+                return None;
+            }
+            Some(Firmware)
+        }
+        (Flavor::Klipper, Code::Number { letter, number, .. }) => {
+            let n = format!("{}{number}", *letter as char);
+            if let Some((_, why)) = KLIPPER_REFUSED.iter().find(|(k, _)| *k == n) {
+                return Some(Refused(why));
+            }
+            if KLIPPER_INERT.contains(&n.as_str()) {
+                return Some(Inert);
+            }
+            match (*letter, *number) {
+                (b'G', 29 | 80) => Some(Firmware),
+                _ => None,
+            }
+        }
+        (_, Code::Name(n)) => named_elsewhere(flavor, n),
+        (_, Code::Number { letter, number, .. }) => {
+            let (l, n) = (*letter, *number);
+            let own = match flavor {
+                Flavor::Prusa => find_lettered(PRUSA, l, n),
+                Flavor::Bambu => find_lettered(BAMBU, l, n),
+                Flavor::Reprap => find_lettered(REPRAP, l, n),
+                _ => None,
+            };
+            own.or_else(|| match l {
+                b'M' => find(MARLIN_M, n),
+                b'G' => find(MARLIN_G, n),
+                _ => None,
+            })
+        }
+    }
+}
+
+/// A named command on a firmware that has none: Marlin and its descendants
+/// answer "unknown command" and go on, so it does nothing; but a line that
+/// begins with a parameter is a move under Marlin's `GCODE_MOTION_MODES`,
+/// and RepRapFirmware runs its meta commands (`if`, `while`, `set` …).
+fn named_elsewhere(flavor: Flavor, n: &str) -> Option<Kind> {
+    let b = n.as_bytes();
+    let parameter = b.len() >= 2
+        && matches!(
+            b[0],
+            b'X' | b'Y' | b'Z' | b'E' | b'F' | b'I' | b'J' | b'R' | b'P' | b'Q'
+        )
+        && (b[1].is_ascii_digit() || b[1] == b'.');
+    if parameter {
+        return Some(Refused(
+            "a line that begins with a parameter: Marlin with GCODE_MOTION_MODES runs it as a move",
+        ));
+    }
+    match flavor {
+        Flavor::Reprap if n == "ECHO" => Some(Inert),
+        Flavor::Reprap => Some(Refused(
+            "a RepRapFirmware meta command (conditions, loops, variables): p3dp cannot follow what it runs",
+        )),
+        _ => Some(Inert),
+    }
+}
