@@ -19,6 +19,8 @@ seed printer "$root"/src/machine/printers/*.yaml "$root"/tests/fixtures/printers
 seed lock "$root"/p3dp.lock
 seed image "$root"/maps/* "$root"/tests/bad/*.png
 seed svg "$root"/recipes/*.svg "$root"/tests/bad/svg/*.svg
+seed preset_ini "$root"/tests/fixtures/presets/*.ini "$root"/docs/guide/*.ini
+seed preset_json "$root"/tests/fixtures/presets/*/*.json "$root"/tests/fixtures/presets/*/*/*.json "$root"/tests/fixtures/presets/*/*/*/*.json "$root"/tests/fixtures/presets/*/*/*/*/*.json
 seed include "$root"/recipes/cup.yaml "$root"/recipes/plate.yaml "$root"/tests/fixtures/*.yaml
 # expressions: every quoted string of the recipes, one a file
 mkdir -p "$here/corpus/expr"

@@ -50,10 +50,12 @@ pub mod bgcode {
 }
 
 /// Slicer presets (PrusaSlicer-family `.ini`, OrcaSlicer/Bambu Studio
-/// `.json`) read as p3dp printer profiles.
+/// `.json`) read as p3dp printer profiles and materials.
 pub mod presets {
-    pub use crate::recipe::preset::map::{to_yaml, Imported};
-    pub use crate::recipe::preset::{list, load, Preset, Setting, Source};
+    pub use crate::recipe::preset::map::{import, Imported};
+    pub use crate::recipe::preset::{
+        list, list_of, load, load_filament, Kind, Preset, Setting, Source,
+    };
 }
 
 /// The fuzz targets' entry points (`fuzz/`; the `fuzzing` feature only).

@@ -9,10 +9,13 @@ use glam::DVec3;
 
 use crate::analyse::check::gcode::{self, Start};
 use crate::base::error::{Error, Result};
-use crate::base::gcode::Verbatim;
-use crate::base::slicer_macro::{Value, Vars};
+use crate::base::format::Chunk;
+use crate::base::gcode::{Command, Setting, Verbatim};
+use crate::base::slicer_macro::{Template, Value, Vars};
 use crate::base::toolpath::Toolpath;
 use crate::generate::model::Recipe;
+use crate::machine::firmware::write::{self, Dialect};
+use crate::machine::{Flavor, Printer};
 
 /// A print's start and end G-code, expanded and checked: each line as it
 /// is written, and what its firmware reads in it.
@@ -41,7 +44,8 @@ fn lines(v: &[Verbatim]) -> String {
 }
 
 /// What the strings say about the print for the templates: heights of the
-/// extruding points (recipe z) and the first layer's extent (machine XY).
+/// extruding points (recipe z), the first layer's extent (machine XY), and
+/// the speeds and flows the strings print at.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Extent {
     /// Lowest extruding point's z.
@@ -55,11 +59,18 @@ pub(crate) struct Extent {
     first_max: [f64; 2],
     /// The first extruding string's cross-section, mm².
     first_c: f64,
+    /// The first extruding string's speed, mm/s.
+    first_v: f64,
+    /// The highest volumetric flow of an extruding string, c·v, mm³/s.
+    max_flow: f64,
     /// The last point of the print (recipe coordinates), where the end
     /// G-code starts.
     end_at: Option<DVec3>,
     /// Highest z of any point, travel included, and at least 0.
     top: f64,
+    /// Whether the print ends on a travel long enough to be retracted (the
+    /// writer retracts before it), so the end G-code starts retracted.
+    ends_retracted: bool,
     /// Volume of the extruding strings, mm³ (what E adds up to, times the
     /// filament's area).
     volume: f64,
@@ -90,6 +101,9 @@ pub(crate) fn frame(recipe: &Recipe, ext: &Extent) -> Result<Frame> {
     let mut one = |key: &str, text: &str, end: bool| -> Result<Vec<Verbatim>> {
         let t = p.template(key, text).map_err(|e| e.in_file(&shown))?;
         let vars = variables(recipe, &ext, end);
+        has_values(recipe, &t, &vars, &globals).map_err(|(line, message)| {
+            Error::input(format!("{key} line {line}"), message).in_file(&shown)
+        })?;
         let out = t
             .expand_with(&vars, &mut globals)
             .map_err(|e| Error::input(format!("{key} line {}", e.line), e.message))
@@ -109,10 +123,113 @@ pub(crate) fn frame(recipe: &Recipe, ext: &Extent) -> Result<Frame> {
         };
         gcode::check(key, &out, recipe, from).map_err(|e| e.in_file(&shown))
     };
+    let mut start = emitted_limits(p);
+    start.extend(one("start_gcode", &p.start_gcode, false)?);
     Ok(Frame {
-        start: one("start_gcode", &p.start_gcode, false)?,
+        start,
         end: one("end_gcode", &p.end_gcode, true)?,
     })
+}
+
+/// The firmware's limits written before the start G-code when the profile
+/// says `emit_limits` (PrusaSlicer's `machine_limits_usage = emit_to_gcode`,
+/// OrcaSlicer's `emit_machine_limits_to_gcode`, which write `M201`, `M203`,
+/// `M204`, `M205` there, on Marlin and RepRapFirmware only): typed settings
+/// through the one writer, which the planner then follows as it follows any
+/// setting of the start G-code. `M201 X Y` is the profile's
+/// `axis_acceleration`, else the head's highest acceleration.
+fn emitted_limits(p: &Printer) -> Vec<Verbatim> {
+    if !p.emit_limits || !matches!(p.flavor, Flavor::Marlin | Flavor::Prusa | Flavor::Reprap) {
+        return Vec::new();
+    }
+    let l = p.limits();
+    let head = l.max_acceleration.max(l.travel_acceleration);
+    let [ax, ay] = p.axis_acceleration.unwrap_or([head, head]);
+    let mut settings = vec![
+        Setting::MaxAcceleration {
+            axes: [
+                Some(ax),
+                Some(ay),
+                l.max_z_acceleration,
+                l.max_extrude_only_accel,
+            ],
+        },
+        Setting::MaxFeedrate {
+            axes: [
+                Some(l.max_velocity),
+                Some(l.max_velocity),
+                l.max_z_velocity,
+                l.max_extrude_only_velocity,
+            ],
+        },
+        Setting::Acceleration {
+            print: Some(l.max_acceleration),
+            travel: Some(l.travel_acceleration),
+            retract: Some(l.retract_acceleration),
+        },
+    ];
+    match (p.kinematics.jerk, p.kinematics.junction_deviation) {
+        (Some(j), _) => settings.push(Setting::Jerk(j)),
+        (None, Some(jd)) if p.flavor == Flavor::Marlin => {
+            settings.push(Setting::JunctionDeviation(jd))
+        }
+        _ => {}
+    }
+    // the dialect as the output writes it (output::gcode::dialect)
+    let m = p.model.to_ascii_uppercase();
+    let d = Dialect {
+        flavor: p.flavor,
+        object_labels: p.object_labels,
+        prusa_8bit: m.starts_with("MK3") || m.starts_with("MK2"),
+    };
+    settings
+        .into_iter()
+        .map(|s| {
+            let c = Command::Set(s);
+            let mut out = Chunk::new();
+            write::write(d, &c, "", &mut out);
+            let text = String::from_utf8_lossy(out.bytes()).trim_end().to_string();
+            Verbatim {
+                text,
+                commands: vec![c],
+            }
+        })
+        .collect()
+}
+
+/// Refuses a variable of the template `t` that has no value for this print
+/// (a filament preset's setting where the material comes from none): its
+/// line and a message naming it and where a value may come from. A variable
+/// is refused wherever it stands, a comment line or a branch not taken;
+/// a `global` of a template expanded before (the start G-code's) has one.
+fn has_values(
+    recipe: &Recipe,
+    t: &Template,
+    vars: &Vars,
+    globals: &Vars,
+) -> std::result::Result<(), (usize, String)> {
+    for (name, line) in t.variables() {
+        let base = match name.rsplit_once('_') {
+            Some((b, i)) if i.parse::<usize>().is_ok() => b,
+            _ => name.as_str(),
+        };
+        if vars.contains_key(&name) || vars.contains_key(base) || globals.contains_key(&name) {
+            continue;
+        }
+        let m = &recipe.material;
+        let why = match &m.preset {
+            Some(f) => format!("the filament preset `{}` has no `{name}` either", f.name),
+            None => format!(
+                "it is a filament preset's setting, and the material `{}` comes from none: give one with --filament FILE [--filament-preset NAME]",
+                m.name
+            ),
+        };
+        return Err((
+            line,
+            format!("the variable `{name}` has no value for this print: {why}, or a value under the profile's `gcode_variables:`"),
+        ));
+    }
+    Ok(())
 }
 
 /// The heights and the first layer of `paths`, in one pass over their
@@ -125,11 +242,19 @@ pub(crate) fn extent(recipe: &Recipe, paths: &[Toolpath]) -> Extent {
         first_min: [f64::INFINITY; 2],
         first_max: [f64::NEG_INFINITY; 2],
         first_c: 0.0,
+        first_v: 0.0,
+        max_flow: 0.0,
         end_at: paths.iter().rev().find_map(|t| t.points.last().copied()),
         top: paths
             .iter()
             .flat_map(|t| t.points.iter().map(|p| p.z))
             .fold(0.0, f64::max),
+        ends_retracted: paths.iter().rev().find(|t| !t.is_empty()).is_some_and(|t| {
+            let k = t.len() - 1;
+            let (a, b) = t.ends(k);
+            let r = &recipe.printer.retraction;
+            t.strings[k].travel && r.length > 0.0 && a.distance(b) >= r.min_travel
+        }),
         volume: 0.0,
         drawn: None,
     };
@@ -146,10 +271,12 @@ pub(crate) fn extent(recipe: &Recipe, paths: &[Toolpath]) -> Extent {
             if !extruding(t, k) {
                 continue;
             }
+            let (c, v) = (t.strings[k].c, t.strings[k].v);
             if e.first_c == 0.0 {
-                e.first_c = t.strings[k].c;
+                (e.first_c, e.first_v) = (c, v);
             }
-            e.volume += t.strings[k].c * a.distance(b);
+            e.max_flow = e.max_flow.max(c * v);
+            e.volume += c * a.distance(b);
             e.low = e.low.min(a.z.min(b.z));
             e.high = e.high.max(a.z.max(b.z));
             e.last = b.z;
@@ -189,73 +316,76 @@ fn temp(t: f64) -> Value {
     }
 }
 
-fn list(v: Value) -> Value {
-    Value::List(vec![v])
+/// One value per extruder, `v` for each of `n` (p3dp's one material is
+/// the filament of every extruder, as a slicer's one filament preset is).
+fn each(n: usize, v: Value) -> Value {
+    Value::List(vec![v; n])
 }
 
 fn pair(x: f64, y: f64) -> Value {
     Value::List(vec![Value::Float(x), Value::Float(y)])
 }
 
-/// The variables of [`crate::machine::VARIABLES`] and the profile's own;
-/// `end` for the end G-code (where `layer_z` is the last point's height).
+/// The number in a value.
+fn number(v: &Value) -> Option<f64> {
+    match *v {
+        Value::Int(i) => Some(i as f64),
+        Value::Float(f) | Value::Shown(f, _) => Some(f),
+        _ => None,
+    }
+}
+
+/// A filament preset's value: its first (a slicer's filament values are
+/// per extruder variant; p3dp's one material is the first).
+fn first(v: &Value) -> Value {
+    match v {
+        Value::List(items) => items.first().cloned().unwrap_or(Value::Str(String::new())),
+        v => v.clone(),
+    }
+}
+
+/// The variables of [`crate::machine::VARIABLES`] and
+/// [`crate::machine::material::VARIABLES`], the profile's own
+/// (`gcode_variables`) and a filament preset's settings; `end` for the end
+/// G-code (where `layer_z` is the last point's height). Lists have one value
+/// per extruder of the printer.
 fn variables(recipe: &Recipe, ext: &Extent, end: bool) -> Vars {
     let p = &recipe.printer;
-    let m = &recipe.material;
+    let n = p.extruders.max(1);
     let mut v: Vars = p.gcode_variables.clone();
+    // a filament preset's every setting, under the profile's and p3dp's own
+    if let Some(f) = &recipe.material.preset {
+        for (k, val) in &f.settings {
+            v.entry(k.clone()).or_insert_with(|| each(n, first(val)));
+        }
+    }
     let mut set = |name: &str, value: Value| {
         v.insert(name.to_string(), value);
     };
-    own(recipe, ext, &mut set);
-    for n in [
-        "first_layer_temperature",
-        "temperature",
-        "nozzle_temperature_initial_layer",
-        "nozzle_temperature",
-    ] {
-        set(n, list(temp(m.nozzle_temp)));
-    }
-    for n in [
-        "first_layer_bed_temperature",
-        "bed_temperature",
-        "bed_temperature_initial_layer",
-    ] {
-        set(n, list(temp(m.bed_temp)));
-    }
-    for plate in ["hot", "cool", "eng", "textured"] {
-        set(&format!("{plate}_plate_temp"), list(temp(m.bed_temp)));
-        set(
-            &format!("{plate}_plate_temp_initial_layer"),
-            list(temp(m.bed_temp)),
-        );
-    }
-    set("bed_temperature_initial_layer_single", temp(m.bed_temp));
-    set("filament_type", list(Value::Str(m.name.to_uppercase())));
-    set("filament_settings_id", list(Value::Str(m.name.clone())));
-    set("printer_settings_id", Value::Str(p.name.clone()));
-    set("printer_model", Value::Str(p.model.clone()));
-    for n in [
-        "initial_tool",
-        "initial_extruder",
-        "current_extruder",
-        "total_toolchanges",
-    ] {
-        set(n, Value::Int(0));
-    }
-    set("has_wipe_tower", Value::Bool(false));
-    set(
-        "has_single_extruder_multi_material_priming",
-        Value::Bool(false),
-    );
-    set("input_filename_base", Value::Str(recipe.name.clone()));
-    set("input_filename", Value::Str(recipe.name.clone()));
+    own(recipe, ext, n, &mut set);
+    temperatures(recipe, n, &mut set);
+    tools(recipe, ext, end, n, &mut set);
     layers(recipe, ext, end, &mut set);
-    machine(recipe, &mut set);
-    v
+    machine(recipe, n, &mut set);
+    print(recipe, ext, &mut set);
+    material(recipe, n, &mut set);
+    // a value's text never breaks a line of the G-code (a comment's
+    // included): every line break of any kind is written `\u{…}`
+    v.into_iter().map(|(k, x)| (k, one_line(x))).collect()
+}
+
+/// `v` with every text on one line ([`crate::base::safe_text::one_line`]).
+fn one_line(v: Value) -> Value {
+    match v {
+        Value::Str(s) => Value::Str(crate::base::safe_text::one_line(&s).into_owned()),
+        Value::Shown(x, s) => Value::Shown(x, crate::base::safe_text::one_line(&s).into_owned()),
+        Value::List(l) => Value::List(l.into_iter().map(one_line).collect()),
+        v => v,
+    }
 }
 
 /// p3dp's own placeholders, written as they always were.
-fn own(recipe: &Recipe, ext: &Extent, set: &mut impl FnMut(&str, Value)) {
+fn own(recipe: &Recipe, ext: &Extent, n: usize, set: &mut impl FnMut(&str, Value)) {
     use crate::base::format::fmt_num;
     let (p, m) = (&recipe.printer, &recipe.material);
     let (bx, by) = match p.bed {
@@ -267,10 +397,10 @@ fn own(recipe: &Recipe, ext: &Extent, set: &mut impl FnMut(&str, Value)) {
     set("nozzle_temp", shown(m.nozzle_temp, fmt_num(m.nozzle_temp)));
     set("bed_temp", shown(m.bed_temp, fmt_num(m.bed_temp)));
     let fd = m.filament_diameter.unwrap_or(p.filament_diameter);
-    set("filament_diameter", list(shown(fd, fmt_num(fd))));
+    set("filament_diameter", each(n, shown(fd, fmt_num(fd))));
     set(
         "nozzle_diameter",
-        list(shown(p.nozzle_diameter, fmt_num(p.nozzle_diameter))),
+        each(n, shown(p.nozzle_diameter, fmt_num(p.nozzle_diameter))),
     );
     // positions as the moves write them: fixed point, 3 decimals
     set("bed_x", shown(bx, format!("{bx:.3}")));
@@ -280,17 +410,127 @@ fn own(recipe: &Recipe, ext: &Extent, set: &mut impl FnMut(&str, Value)) {
     set("park_z", shown(park, format!("{park:.3}")));
 }
 
+/// The material's temperatures under every name the slicers use, its type
+/// and name.
+fn temperatures(recipe: &Recipe, n: usize, set: &mut impl FnMut(&str, Value)) {
+    let (p, m) = (&recipe.printer, &recipe.material);
+    for name in [
+        "first_layer_temperature",
+        "temperature",
+        "nozzle_temperature_initial_layer",
+        "nozzle_temperature",
+    ] {
+        set(name, each(n, temp(m.nozzle_temp)));
+    }
+    for name in [
+        "first_layer_bed_temperature",
+        "bed_temperature",
+        "bed_temperature_initial_layer",
+    ] {
+        set(name, each(n, temp(m.bed_temp)));
+    }
+    for plate in ["hot", "cool", "eng", "textured"] {
+        set(&format!("{plate}_plate_temp"), each(n, temp(m.bed_temp)));
+        set(
+            &format!("{plate}_plate_temp_initial_layer"),
+            each(n, temp(m.bed_temp)),
+        );
+    }
+    set("bed_temperature_initial_layer_single", temp(m.bed_temp));
+    // the filament preset's type (PLA, PETG…), else the material's name
+    let kind = match m.setting("filament_type").map(first) {
+        Some(Value::Str(t)) if !t.is_empty() => t,
+        _ => m.name.to_uppercase(),
+    };
+    set("filament_type", each(n, Value::Str(kind)));
+    let id = m.preset.as_ref().map_or(&m.name, |f| &f.name);
+    set("filament_settings_id", each(n, Value::Str(id.clone())));
+    set("filament_preset", each(n, Value::Str(id.clone())));
+    set("printer_settings_id", Value::Str(p.name.clone()));
+    set("printer_preset", Value::Str(p.name.clone()));
+    set("printer_model", Value::Str(p.model.clone()));
+}
+
+/// The tools: p3dp prints with the first (the one the maker's start G-code
+/// selects as `initial_tool`), the others unused.
+fn tools(recipe: &Recipe, ext: &Extent, end: bool, n: usize, set: &mut impl FnMut(&str, Value)) {
+    for name in [
+        "initial_tool",
+        "initial_extruder",
+        "current_extruder",
+        "initial_no_support_extruder",
+        "initial_no_support_tool",
+        "total_toolchanges",
+    ] {
+        set(name, Value::Int(0));
+    }
+    set("num_extruders", Value::Int(n as i64));
+    let tool = recipe.printer.tool;
+    // PrusaSlicer's list is 255 long at least, for templates written for
+    // more tools than the machine has (its GCode.cpp)
+    let used = (0..n.max(255)).map(|k| Value::Bool(k == tool)).collect();
+    set("is_extruder_used", Value::List(used));
+    // Bambu's filaments and nozzles: the print's one filament, on `tool`
+    set(
+        "filament_map",
+        Value::List(vec![Value::Int(tool as i64 + 1)]),
+    );
+    for name in ["first_filaments", "first_non_support_filaments"] {
+        set(name, each(n, Value::Int(0)));
+    }
+    for name in [
+        "initial_filament_id",
+        "initial_no_support_filament_id",
+        "initial_nozzle_id",
+        "initial_no_support_hotend",
+        "first_non_support_hotend",
+        "current_hotend",
+    ] {
+        set(name, Value::Int(0));
+    }
+    let d = recipe.printer.nozzle_diameter;
+    set("nozzle_diameter_at_nozzle_id", each(n, Value::Float(d)));
+    set("has_wipe_tower", Value::Bool(false));
+    set(
+        "has_single_extruder_multi_material_priming",
+        Value::Bool(false),
+    );
+    // the filament taken back where the template runs: none at the start;
+    // at the end, a retraction when the print ends on a long travel
+    let r = &recipe.printer.retraction;
+    let back = if end && ext.ends_retracted {
+        r.length
+    } else {
+        0.0
+    };
+    set("e_retracted", each(n, Value::Float(back)));
+    set("zhop", Value::Float(0.0));
+    set("input_filename_base", Value::Str(recipe.name.clone()));
+    set("input_filename", Value::Str(recipe.name.clone()));
+}
+
 /// The "layer" values: p3dp prints strings, so they describe the strings.
 fn layers(recipe: &Recipe, ext: &Extent, end: bool, set: &mut impl FnMut(&str, Value)) {
     let p = &recipe.printer;
     let h = ext.low.max(0.0);
     set("first_layer_height", Value::Float(h));
+    set("initial_layer_print_height", Value::Float(h));
     set("layer_height", Value::Float(h));
     set(
         "layer_z",
         Value::Float(if end { ext.last.max(0.0) } else { h }),
     );
     set("max_layer_z", Value::Float(ext.high.max(0.0)));
+    set("max_print_z", Value::Float(ext.high.max(0.0)));
+    // the layers a slicer would cut the print's height into at that height
+    let count = if h > 0.0 {
+        libm::ceil(ext.high / h - 1e-9).max(1.0)
+    } else {
+        0.0
+    };
+    set("total_layer_count", Value::Int(count as i64));
+    let num = if end { (count - 1.0).max(0.0) } else { 0.0 };
+    set("layer_num", Value::Int(num as i64));
     let (bmin, bmax) = p.bed.extent();
     let (fmin, fmax) = if ext.first_min[0].is_finite() {
         (ext.first_min, ext.first_max)
@@ -305,15 +545,104 @@ fn layers(recipe: &Recipe, ext: &Extent, end: bool, set: &mut impl FnMut(&str, V
         "first_layer_print_size",
         pair(fmax[0] - fmin[0], fmax[1] - fmin[1]),
     );
+    set(
+        "first_layer_center_no_wipe_tower",
+        pair((fmin[0] + fmax[0]) / 2.0, (fmin[1] + fmax[1]) / 2.0),
+    );
     set("print_bed_min", pair(bmin[0], bmin[1]));
     set("print_bed_max", pair(bmax[0], bmax[1]));
     set("print_bed_size", pair(bmax[0] - bmin[0], bmax[1] - bmin[1]));
+    bed_mesh(recipe, fmin, fmax, set);
+}
+
+/// A point of a profile's `gcode_variables` (OrcaSlicer's `bed_mesh_min`:
+/// `"x,y"`, `"xXy"` or a list of two numbers).
+fn point(v: Option<&Value>) -> Option<[f64; 2]> {
+    match v? {
+        Value::List(l) if l.len() == 2 => Some([number(&l[0])?, number(&l[1])?]),
+        Value::List(l) if l.len() == 1 => point(l.first()),
+        Value::Str(s) => {
+            let (x, y) = s.split_once([',', 'x', 'X'])?;
+            Some([x.trim().parse().ok()?, y.trim().parse().ok()?])
+        }
+        _ => None,
+    }
+}
+
+/// OrcaSlicer's adaptive bed mesh, as its documentation states it: the
+/// first layer's extent grown by `adaptive_bed_mesh_margin` (0) and kept
+/// within `bed_mesh_min`/`bed_mesh_max` (no limit when absent or empty);
+/// per axis, the size over `bed_mesh_probe_distance` (50 mm) rounded up,
+/// plus one, at least 3 points; `lagrange` below 4 points, else `bicubic`.
+fn bed_mesh(recipe: &Recipe, fmin: [f64; 2], fmax: [f64; 2], set: &mut impl FnMut(&str, Value)) {
+    let vars = &recipe.printer.gcode_variables;
+    let margin = vars
+        .get("adaptive_bed_mesh_margin")
+        .and_then(number)
+        .unwrap_or(0.0);
+    let (lo, hi) = match (
+        point(vars.get("bed_mesh_min")),
+        point(vars.get("bed_mesh_max")),
+    ) {
+        (Some(a), Some(b)) if b[0] > a[0] && b[1] > a[1] => (a, b),
+        _ => ([f64::NEG_INFINITY; 2], [f64::INFINITY; 2]),
+    };
+    let dist = point(vars.get("bed_mesh_probe_distance")).unwrap_or([50.0, 50.0]);
+    let mut min = [0.0; 2];
+    let mut max = [0.0; 2];
+    let mut count = [0i64; 2];
+    for k in 0..2 {
+        min[k] = (fmin[k] - margin).clamp(lo[k], hi[k]);
+        max[k] = (fmax[k] + margin).clamp(lo[k], hi[k]);
+        let d = if dist[k] > 0.0 { dist[k] } else { 50.0 };
+        count[k] = (libm::ceil((max[k] - min[k]) / d) as i64 + 1).max(3);
+    }
+    set("adaptive_bed_mesh_min", pair(min[0], min[1]));
+    set("adaptive_bed_mesh_max", pair(max[0], max[1]));
+    set(
+        "bed_mesh_probe_count",
+        Value::List(vec![Value::Int(count[0]), Value::Int(count[1])]),
+    );
+    let algo = if count[0].min(count[1]) < 4 {
+        "lagrange"
+    } else {
+        "bicubic"
+    };
+    set("bed_mesh_algo", Value::Str(algo.into()));
+}
+
+/// The print's widths, speeds, flow and accelerations, from its strings.
+fn print(recipe: &Recipe, ext: &Extent, set: &mut impl FnMut(&str, Value)) {
+    let h = ext.low.max(0.0);
     let width = if h > 0.0 { ext.first_c / h } else { 0.0 };
-    set("extrusion_width", Value::Float(width));
+    for name in [
+        "extrusion_width",
+        "line_width",
+        "external_perimeter_extrusion_width",
+    ] {
+        set(name, Value::Float(width));
+    }
+    for name in [
+        "initial_layer_speed",
+        "external_perimeter_speed",
+        "outer_wall_speed",
+    ] {
+        set(name, Value::Float(ext.first_v));
+    }
+    set("outer_wall_volumetric_speed", Value::Float(ext.max_flow));
+    // p3dp's moves print at the machine's own acceleration
+    let a = recipe.printer.limits().max_acceleration;
+    for name in [
+        "default_acceleration",
+        "outer_wall_acceleration",
+        "initial_layer_acceleration",
+    ] {
+        set(name, Value::Float(a));
+    }
 }
 
 /// The machine's values: heights, speeds, retraction, planner limits.
-fn machine(recipe: &Recipe, set: &mut impl FnMut(&str, Value)) {
+fn machine(recipe: &Recipe, n: usize, set: &mut impl FnMut(&str, Value)) {
     let p = &recipe.printer;
     let f = Value::Float;
     set("max_print_height", f(p.bed.max_z()));
@@ -321,50 +650,181 @@ fn machine(recipe: &Recipe, set: &mut impl FnMut(&str, Value)) {
     set("z_offset", f(p.origin[2]));
     set("travel_speed", f(p.travel_speed));
     let r = &p.retraction;
-    for n in ["retract_length", "retraction_length"] {
-        set(n, list(f(r.length)));
+    for name in ["retract_length", "retraction_length"] {
+        set(name, each(n, f(r.length)));
     }
-    for n in ["retract_speed", "retraction_speed"] {
-        set(n, list(f(r.speed)));
+    for name in ["retract_speed", "retraction_speed"] {
+        set(name, each(n, f(r.speed)));
     }
-    for n in ["retract_lift", "z_hop"] {
-        set(n, list(f(0.0)));
+    for name in ["retract_lift", "z_hop"] {
+        set(name, each(n, f(0.0)));
     }
     let l = p.limits();
     set(
         "machine_max_acceleration_extruding",
-        list(f(l.max_acceleration)),
+        each(n, f(l.max_acceleration)),
     );
     set(
         "machine_max_acceleration_travel",
-        list(f(l.travel_acceleration)),
+        each(n, f(l.travel_acceleration)),
     );
     set(
         "machine_max_acceleration_retracting",
-        list(f(l.retract_acceleration)),
+        each(n, f(l.retract_acceleration)),
     );
-    set("machine_max_feedrate_x", list(f(l.max_velocity)));
-    set("machine_max_feedrate_y", list(f(l.max_velocity)));
+    set("machine_max_feedrate_x", each(n, f(l.max_velocity)));
+    set("machine_max_feedrate_y", each(n, f(l.max_velocity)));
     set(
         "machine_max_feedrate_z",
-        list(f(l.max_z_velocity.unwrap_or(l.max_velocity))),
+        each(n, f(l.max_z_velocity.unwrap_or(l.max_velocity))),
     );
+}
+
+/// The material's values ([`crate::machine::material::VARIABLES`]): the
+/// filament preset's setting where the material came from one, else what
+/// p3dp knows of the material.
+fn material(recipe: &Recipe, n: usize, set: &mut impl FnMut(&str, Value)) {
+    let (p, m) = (&recipe.printer, &recipe.material);
+    let preset = |k: &str| m.setting(k).map(first);
+    let positive = |k: &str| preset(k).as_ref().and_then(number).filter(|v| *v > 0.0);
+    set("chamber_temperature", each(n, temp(m.chamber_temp)));
+    set("overall_chamber_temperature", temp(m.chamber_temp));
+    let or = |k: &str, d: Value| each(n, preset(k).unwrap_or(d));
+    set(
+        "chamber_minimal_temperature",
+        or("chamber_minimal_temperature", Value::Int(0)),
+    );
+    set(
+        "filament_abrasive",
+        or("filament_abrasive", Value::Bool(false)),
+    );
+    set(
+        "filament_notes",
+        or("filament_notes", Value::Str(String::new())),
+    );
+    set("idle_temperature", or("idle_temperature", Value::Int(0)));
+    set(
+        "filament_multitool_ramming",
+        or("filament_multitool_ramming", Value::Bool(false)),
+    );
+    let flow = m.max_volumetric_speed.unwrap_or(p.max_flow);
+    set("filament_max_volumetric_speed", each(n, Value::Float(flow)));
+    set(
+        "nozzle_temperature_range_low",
+        each(n, temp(m.min_nozzle_temp)),
+    );
+    set(
+        "nozzle_temperature_range_high",
+        each(n, temp(m.max_nozzle_temp)),
+    );
+    // Bambu Studio's rule: the flush's own figure, else the range's top
+    // and the filament's flow limit
+    let flush = positive("filament_flush_temp").unwrap_or(m.max_nozzle_temp);
+    set("flush_temperatures", each(n, temp(flush)));
+    let flush_flow = positive("filament_flush_volumetric_speed").unwrap_or(flow);
+    set("flush_volumetric_speeds", each(n, Value::Float(flush_flow)));
+    if let Some(t) = m.vitrification_temp {
+        set("temperature_vitrification", each(n, temp(t)));
+        set("min_vitrification_temperature", temp(t));
+    }
+    let fan = libm::round(m.fan_speed * 100.0);
+    set("fan_max_speed", each(n, temp(fan)));
+    set("max_fan_speed", each(n, temp(fan)));
+    set("filament_density", each(n, Value::Float(m.density)));
+    let vendor = match preset("filament_vendor") {
+        Some(Value::Str(v)) if !v.is_empty() => v,
+        _ => "Generic".to_string(),
+    };
+    set("is_all_bbl_filament", Value::Bool(vendor == "Bambu Lab"));
+    set("filament_vendor", each(n, Value::Str(vendor)));
+    if m.preset.is_some() {
+        // OrcaSlicer's defaults when a filament preset names none
+        set(
+            "enable_pressure_advance",
+            or("enable_pressure_advance", Value::Bool(false)),
+        );
+        set(
+            "pressure_advance",
+            or("pressure_advance", Value::Float(0.02)),
+        );
+    }
+    if let Some(Value::Str(id)) = preset("filament_id") {
+        set("filament_ids", each(n, Value::Str(id)));
+    }
+    let tpu = match preset("filament_type") {
+        Some(Value::Str(t)) => t.eq_ignore_ascii_case("TPU"),
+        _ => m.name.eq_ignore_ascii_case("tpu"),
+    };
+    set("has_tpu_in_first_layer", Value::Bool(tpu));
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    fn recipe(material: &str) -> Recipe {
+        let text = format!("p3dp: 1\nname: t\nmaterial: {material}\nparts:\n  - primitive: {{helix: {{radius: 10, height: 2, pitch: 0.5}}}}\n");
+        let raw: crate::recipe::RawRecipe = crate::recipe::parse_yaml(&text, "t.yaml").unwrap();
+        Recipe::resolve(&raw, &[], None, std::path::Path::new(".")).unwrap()
+    }
+
+    /// Every variable the two tables list has a value (a built-in
+    /// material's), and nothing else is given.
     #[test]
     fn every_listed_variable_has_a_value() {
-        let raw: crate::recipe::RawRecipe =
-            crate::recipe::parse_yaml("p3dp: 1\nname: t\nparts:\n  - primitive: {helix: {radius: 10, height: 2, pitch: 0.5}}\n", "t.yaml").unwrap();
-        let r = Recipe::resolve(&raw, &[], None, std::path::Path::new(".")).unwrap();
+        let r = recipe("pla");
         let ext = extent(&r, &[]);
         let v = variables(&r, &ext, false);
-        for (name, _) in crate::machine::VARIABLES {
+        let listed: Vec<&str> = crate::machine::printer::VARIABLES
+            .iter()
+            .chain(crate::machine::material::VARIABLES)
+            .map(|(n, _)| *n)
+            .collect();
+        for name in &listed {
+            // a filament preset's own, for a material from one
+            if matches!(
+                *name,
+                "enable_pressure_advance" | "pressure_advance" | "filament_ids"
+            ) {
+                continue;
+            }
             assert!(v.contains_key(*name), "{name}");
         }
-        assert_eq!(v.len(), crate::machine::VARIABLES.len());
+        assert_eq!(v.len(), listed.len() - 3);
+        // the tool's list: true for the tool p3dp prints with
+        let Value::List(used) = &v["is_extruder_used"] else {
+            panic!()
+        };
+        assert_eq!(used.len(), 255);
+        assert_eq!(used[0], Value::Bool(true));
+        assert!(used[1..].iter().all(|u| *u == Value::Bool(false)));
+        assert_eq!(
+            v["temperature_vitrification"],
+            Value::List(vec![Value::Int(45)])
+        );
+    }
+
+    /// A variable whose value p3dp cannot know is refused by name, with where
+    /// a value may come from; wherever it stands (a comment line too).
+    #[test]
+    fn a_variable_without_a_value_is_refused_by_name() {
+        let mut r = recipe("{name: mine, density: 1.2, nozzle_temp: 200, bed_temp: 50}");
+        r.printer.start_gcode = "G28\n; softens at [temperature_vitrification]\n".into();
+        let e = frame(&r, &extent(&r, &[])).unwrap_err();
+        assert_eq!(e.place.as_deref(), Some("start_gcode line 2"));
+        assert!(
+            e.message
+                .contains("`temperature_vitrification` has no value for this print")
+                && e.message
+                    .contains("the material `mine` comes from none: give one with --filament"),
+            "{e}"
+        );
+        // the built-in material's figure
+        let mut r = recipe("pla");
+        r.printer.start_gcode = "G28\n; softens at [temperature_vitrification]\n".into();
+        assert!(frame(&r, &extent(&r, &[]))
+            .unwrap()
+            .start_text()
+            .contains("; softens at 45"));
     }
 }

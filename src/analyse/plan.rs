@@ -83,10 +83,35 @@ impl Plan {
         self.recipe.allow.iter().chain(allow).cloned().collect()
     }
 
-    /// Marks the findings of the codes the recipe and `allow` silence.
+    /// Marks the findings of the codes the recipe and `allow` silence (and,
+    /// on a plate, the codes each object's recipe silences in its own parts).
     pub fn silence(&self, findings: &mut Vec<Finding>, allow: &[String]) {
         check::apply_allow(findings, &self.recipe.allow);
         check::apply_allow(findings, allow);
+        for o in self.recipe.objects.iter().filter(|o| !o.allow.is_empty()) {
+            let mine = |f: &Finding| {
+                f.part
+                    .as_deref()
+                    .is_some_and(|n| self.paths[o.paths.clone()].iter().any(|t| t.name == n))
+            };
+            findings.retain(|f| !(o.allow.iter().any(|a| a == f.code) && mine(f)));
+        }
+    }
+
+    /// The objects of the print, each a name and its paths `first..end` in
+    /// print order: a plate's objects, or each path of a recipe on its own
+    /// (the hosts' object labels, a package's object list).
+    pub fn objects(&self) -> Vec<(String, std::ops::Range<usize>)> {
+        if self.recipe.objects.is_empty() {
+            return (0..self.paths.len())
+                .map(|k| (self.paths[k].name.clone(), k..k + 1))
+                .collect();
+        }
+        self.recipe
+            .objects
+            .iter()
+            .map(|o| (o.name.clone(), o.paths.clone()))
+            .collect()
     }
 
     /// Highest point of any part, recipe coordinates.

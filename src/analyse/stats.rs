@@ -64,6 +64,21 @@ pub struct PartStats {
     pub time_lost_s: f64,
 }
 
+/// One object's share of a plate (its parts' together).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ObjectStats {
+    /// The object's name (its parts are `NAME/PART`).
+    pub name: String,
+    /// Strings of its parts (and its skirt).
+    pub strings: usize,
+    /// Planned time of its moves (the travel to it included), s.
+    pub print_time_s: f64,
+    /// Filament its strings extrude, mm.
+    pub filament_length_mm: f64,
+    /// That filament's mass, g.
+    pub filament_mass_g: f64,
+}
+
 /// Everything the spec's `--stats-json` promises, and a little more.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Stats {
@@ -120,6 +135,10 @@ pub struct Stats {
     pub max_flow_mm3_s: f64,
     /// Each part's strings and time.
     pub parts: Vec<PartStats>,
+    /// A plate's objects, in print order: each one's strings, time and
+    /// filament (absent for a recipe).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub objects: Vec<ObjectStats>,
     /// Findings of the checks (warnings and, under `--force`, errors).
     pub warnings: Vec<Finding>,
     /// Where each part (and the skirt) holds on to the bed: contact length,
@@ -155,8 +174,36 @@ impl Stats {
             plan.findings.clone(),
         );
         stats.first_layer = plan.footprints.clone();
+        if !plan.recipe.objects.is_empty() {
+            stats.objects = objects(plan, &stats.parts);
+        }
         stats
     }
+}
+
+/// Each object of a plate: its parts' strings and times added, and the
+/// filament its strings extrude (Σ c·L over the filament's section).
+fn objects(plan: &Plan, parts: &[PartStats]) -> Vec<ObjectStats> {
+    let r = &plan.recipe;
+    let d = r
+        .material
+        .filament_diameter
+        .unwrap_or(r.printer.filament_diameter);
+    let area = std::f64::consts::PI * (d / 2.0) * (d / 2.0);
+    plan.objects()
+        .into_iter()
+        .map(|(name, k)| {
+            let volume: f64 = plan.paths[k.clone()].iter().map(|t| t.volume()).sum();
+            let mine = parts.get(k).unwrap_or_default();
+            ObjectStats {
+                name,
+                strings: mine.iter().map(|p| p.strings).sum(),
+                print_time_s: mine.iter().map(|p| p.print_time_s).sum(),
+                filament_length_mm: volume / area,
+                filament_mass_g: volume / 1000.0 * r.material.density,
+            }
+        })
+        .collect()
 }
 
 impl Stats {
@@ -208,10 +255,29 @@ impl Stats {
             bbox,
             max_flow_mm3_s: m.max_flow,
             parts,
+            objects: Vec::new(),
             warnings: findings,
             solids: solid_stats(recipe),
             first_layer: Vec::new(),
         }
+    }
+
+    /// `  objects, printed one after another:` and a line each (a plate's).
+    fn objects_report(&self) -> String {
+        if self.objects.is_empty() {
+            return String::new();
+        }
+        let mut s = String::from("  objects, printed one after another:\n");
+        for o in &self.objects {
+            s.push_str(&format!(
+                "    {}: {}, filament {:.0} mm, {:.2} g\n",
+                o.name,
+                hms(o.print_time_s),
+                o.filament_length_mm,
+                o.filament_mass_g
+            ));
+        }
+        s
     }
 
     /// `  bed contact: bottom 5653 mm² in 59.8 × 59.5 mm; …` (the first layer's hold).
@@ -240,7 +306,7 @@ impl Stats {
         let b = &self.bbox;
         let size = [0, 1, 2].map(|k| b.max[k] - b.min[k]);
         let mut s = format!(
-            "{} → {output}\n  {} strings in {} part{}; {} extruding and {} travel moves ({} short strings merged)\n  size {:.1} × {:.1} × {:.1} mm\n  filament {:.0} mm, {:.2} g {} ({:.2} cm³); max flow {:.2} mm³/s\n  time {} ({} lost to acceleration and corners, {} to speed limits; at the G-code's speeds {})\n{}{}  {}\n",
+            "{} → {output}\n  {} strings in {} part{}; {} extruding and {} travel moves ({} short strings merged)\n  size {:.1} × {:.1} × {:.1} mm\n  filament {:.0} mm, {:.2} g {} ({:.2} cm³); max flow {:.2} mm³/s\n  time {} ({} lost to acceleration and corners, {} to speed limits; at the G-code's speeds {})\n{}{}{}  {}\n",
             self.recipe,
             self.strings,
             self.parts.len(),
@@ -275,6 +341,7 @@ impl Stats {
             } else {
                 String::new()
             },
+            self.objects_report(),
             self.bed_contact(),
             crate::analyse::check::summary(&self.warnings),
         );

@@ -28,6 +28,8 @@ pub struct Cli {
 pub enum Command {
     /// Write G-code (default ./NAME.gcode) and print a stats report.
     Build(BuildArgs),
+    /// Put several recipes on one bed, arranged and printed one after another (RECIPE*N: N copies); write its G-code as build does.
+    Plate(PlateArgs),
     /// Draw the toolpath: a PNG image, or a self-contained HTML file with a 3D viewer.
     Preview(PreviewArgs),
     /// Write the toolpath as solid beads for a slicer or CAD: FILE.stl, FILE.3mf or FILE.obj.
@@ -85,11 +87,14 @@ pub struct PrintersArgs {
 /// The actions of `p3dp printers`.
 #[derive(Subcommand, Clone, Debug)]
 pub enum PrintersAction {
-    /// List the printer presets of a slicer's file: a PrusaSlicer/SuperSlicer .ini (bundle or exported config) or an OrcaSlicer/Bambu Studio .json.
+    /// List the printer (or, with --filaments, filament) presets of a slicer's file: a PrusaSlicer/SuperSlicer .ini (bundle or exported config) or an OrcaSlicer/Bambu Studio .json.
     List {
         /// The preset file.
         #[arg(value_name = "FILE")]
         file: PathBuf,
+        /// List the file's filament presets (for --filament-preset) instead of its printer presets.
+        #[arg(long)]
+        filaments: bool,
     },
     /// Write a slicer's printer preset as a p3dp printer profile (YAML, to standard output or -o): bed, height, nozzle, flavour, limits, retraction, thumbnails and the maker's start/end G-code.
     Import {
@@ -117,6 +122,12 @@ pub struct RecipeFlags {
     /// Use this printer (built-in name, YAML file, or a slicer's single-preset FILE.ini|FILE.json) instead of the recipe's.
     #[arg(long, value_name = "NAME|FILE")]
     pub printer: Option<String>,
+    /// Use this slicer's filament preset (a PrusaSlicer .ini bundle or exported config, an OrcaSlicer/Bambu Studio .json) instead of the recipe's material: temperatures, diameter, density, flow limit, and the filament's values for the start and end G-code.
+    #[arg(long, value_name = "FILE.ini|FILE.json")]
+    pub filament: Option<PathBuf>,
+    /// The filament preset of a bundle (`p3dp printers list FILE --filaments` lists them).
+    #[arg(long, value_name = "NAME", requires = "filament")]
+    pub filament_preset: Option<String>,
     /// Silence a check for this build: its code, e.g. `bridge`; repeatable.
     #[arg(long = "allow", value_name = "CODE")]
     pub allow: Vec<String>,
@@ -193,6 +204,14 @@ impl RecipeFlags {
                 .map(|s| parse_set(s))
                 .collect::<Result<_>>()?,
             printer: self.printer.clone(),
+            filament: self
+                .filament
+                .as_ref()
+                .map(|f| crate::recipe::preset::Source {
+                    file: f.clone(),
+                    preset: self.filament_preset.clone(),
+                    profiles: None,
+                }),
             allow: self.allow.clone(),
             allow_read: self.allow_read.clone(),
             ..Builds::default()
@@ -227,6 +246,41 @@ pub struct BuildArgs {
     /// The layer --zbuffer-svg draws: 1 for the first on the bed.
     #[arg(long, value_name = "N")]
     pub zbuffer_layer: Option<u64>,
+}
+
+/// Flags of `plate`.
+#[derive(Args, Clone, Debug, Default)]
+pub struct PlateArgs {
+    /// The recipes to put on the bed, in print order: RECIPE, or RECIPE*N for N copies.
+    #[arg(value_name = "RECIPE[*N]", required = true)]
+    pub recipes: Vec<String>,
+    /// The plate's name: the G-code's, and the file's (NAME.gcode).
+    #[arg(long, value_name = "NAME", default_value = "plate")]
+    pub name: String,
+    /// Variants on the plate: NAME=v1,v2,…, NAME=a..b:step or NAME=a..b; every recipe goes on once per combination (each N times); repeatable.
+    #[arg(long = "sweep", value_name = "NAME=VALUES")]
+    pub sweeps: Vec<String>,
+    /// Warnings fail the build too.
+    #[arg(long)]
+    pub strict: bool,
+    /// Write even when checks fail.
+    #[arg(long)]
+    pub force: bool,
+    /// Params (every recipe's), printer and checks.
+    #[command(flatten)]
+    pub recipe: RecipeFlags,
+    /// Threads.
+    #[command(flatten)]
+    pub jobs: JobsFlag,
+    /// Output file (NAME.bgcode: Prusa's binary G-code; NAME.gcode.3mf: Bambu's package); `-` for standard output.
+    #[arg(short, long, value_name = "OUT")]
+    pub output: Option<String>,
+    /// Also write the stats as JSON to FILE.
+    #[arg(long, value_name = "FILE")]
+    pub stats_json: Option<PathBuf>,
+    /// Also write a preview of the plate: FILE.png (an image) or FILE.html (a 3D viewer).
+    #[arg(long, value_name = "FILE")]
+    pub preview: Option<PathBuf>,
 }
 
 /// Flags of `send`.
@@ -376,6 +430,7 @@ fn errors(r: Result<Vec<Error>>) -> Vec<Error> {
 pub fn run(cli: Cli) -> Vec<Error> {
     match cli.command {
         Command::Build(a) => errors(build(&a)),
+        Command::Plate(a) => errors(plate(&a)),
         Command::Preview(a) => errors(preview(&a)),
         Command::Mesh(a) => errors(mesh(&a)),
         Command::Watch(a) => errors(watch(&a).map(|()| Vec::new())),
@@ -444,11 +499,45 @@ fn build(a: &BuildArgs) -> Result<Vec<Error>> {
     }))
 }
 
+fn plate(a: &PlateArgs) -> Result<Vec<Error>> {
+    let builds = Builds {
+        strict: a.strict,
+        force: a.force,
+        ..a.recipe.one(PathBuf::new())?
+    };
+    let opts = command::plate::Options {
+        recipes: a.recipes.clone(),
+        name: a.name.clone(),
+        sweeps: a
+            .sweeps
+            .iter()
+            .map(|s| crate::app::batch::parse_sweep(s))
+            .collect::<Result<_>>()?,
+        build: command::build::Options {
+            builds,
+            output: a.output.clone(),
+            stats_json: a.stats_json.clone(),
+            preview: a.preview.clone(),
+            ..command::build::Options::default()
+        },
+    };
+    Ok(pipeline::run(a.jobs.threads(), || {
+        command::plate::run(&opts)
+    }))
+}
+
 /// `p3dp printers …`: the text for standard output.
 fn printers(action: Option<PrintersAction>) -> Result<String> {
     match action {
         None => Ok(command::printers::list()),
-        Some(PrintersAction::List { file }) => command::printers::presets(&file),
+        Some(PrintersAction::List { file, filaments }) => {
+            let kind = if filaments {
+                crate::recipe::preset::Kind::Filament
+            } else {
+                crate::recipe::preset::Kind::Printer
+            };
+            command::printers::presets(kind, &file)
+        }
         Some(PrintersAction::Import {
             file,
             preset,
@@ -522,6 +611,7 @@ fn watch(a: &WatchArgs) -> Result<()> {
         build: crate::app::prepare::Options {
             sets: b.sets,
             printer: b.printer,
+            filament: b.filament,
             allow: b.allow,
             allow_read: b.allow_read,
         },

@@ -210,3 +210,98 @@ pub fn svg(data: &[u8]) {
         }
     }
 }
+
+/// A fixed parent and template beside a fuzzed `.json` preset, so its
+/// `inherits` and `include` chains are followed.
+const JSON_PARENT: &str = r#"{"type": "machine", "name": "base", "printable_area": ["0x0", "200x0", "200x200", "0x200"], "printable_height": "200", "nozzle_diameter": ["0.4", "0.4"], "machine_start_gcode": "G28 ; [printer_preset]", "machine_end_gcode": "M84"}"#;
+const JSON_TEMPLATE: &str = r#"{"name": "tpl", "machine_start_gcode": "M104 S{nozzle_temperature_initial_layer[initial_no_support_extruder]}\nG28"}"#;
+const JSON_FILAMENT: &str = r#"{"type": "filament", "name": "fil", "nozzle_temperature": ["210"], "hot_plate_temp": ["60"], "filament_density": ["1.24"]}"#;
+
+/// One preset of `kind` loaded: a printer mapped to a profile, its YAML
+/// read back as the same value, loaded as a profile; a filament made a
+/// material. Errors are fine; a panic or a YAML that reads back otherwise
+/// is a finding.
+fn preset_one(kind: crate::recipe::preset::Kind, src: &crate::recipe::preset::Source) {
+    use crate::recipe::preset::{self, map, Kind};
+    let reads = Reads::default();
+    let Ok(p) = preset::load_kind(kind, src, &reads) else {
+        return;
+    };
+    match kind {
+        Kind::Printer => {
+            let Ok(imported) = map::import(&p) else {
+                return;
+            };
+            let yaml = imported.yaml();
+            let back: crate::recipe::schema::RawPrinter = parse_yaml(&yaml, "fuzz.yaml")
+                .unwrap_or_else(|e| panic!("the import's YAML does not load: {e}\n{yaml}"));
+            assert!(
+                back == imported.raw,
+                "the import's YAML reads back otherwise:\n{yaml}"
+            );
+            let _ = crate::recipe::profile::from_raw(back, "fuzz.yaml");
+        }
+        Kind::Filament => {
+            let _ = crate::recipe::resolve::from_filament(src, &reads);
+        }
+    }
+}
+
+/// `.ini` preset text → every printer and filament preset of it (at most
+/// eight of each) loaded, mapped, written and read back.
+pub fn preset_ini(data: &[u8]) {
+    use crate::recipe::preset::{self, Kind, Source};
+    let dir = scratch("preset-ini");
+    let file = dir.join("bundle.ini");
+    if std::fs::write(&file, data).is_err() {
+        return;
+    }
+    for kind in [Kind::Printer, Kind::Filament] {
+        let Ok(names) = preset::list_of(kind, &file, &Reads::default()) else {
+            continue;
+        };
+        for name in names.into_iter().take(8) {
+            let src = Source {
+                file: file.clone(),
+                preset: Some(name),
+                profiles: None,
+            };
+            preset_one(kind, &src);
+        }
+        // a missed name: the did-you-mean search
+        let src = Source {
+            file: file.clone(),
+            preset: Some("no such preset".into()),
+            profiles: None,
+        };
+        preset_one(kind, &src);
+    }
+}
+
+/// `.json` preset text (beside a parent `base`, a template `tpl` and a
+/// filament `fil` it may inherit or include) → loaded as a printer and as a
+/// filament, mapped, written and read back.
+pub fn preset_json(data: &[u8]) {
+    use crate::recipe::preset::{Kind, Source};
+    let dir = scratch("preset-json");
+    let machine = dir.join("machine");
+    let _ = std::fs::create_dir_all(&machine);
+    for (name, text) in [
+        ("base.json", JSON_PARENT),
+        ("tpl.json", JSON_TEMPLATE),
+        ("fil.json", JSON_FILAMENT),
+    ] {
+        let _ = std::fs::write(machine.join(name), text);
+    }
+    let file = machine.join("fuzz.json");
+    if std::fs::write(&file, data).is_err() {
+        return;
+    }
+    let src = Source {
+        file,
+        preset: None,
+        profiles: None,
+    };
+    preset_one(Kind::Printer, &src);
+    preset_one(Kind::Filament, &src);
+}

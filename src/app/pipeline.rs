@@ -687,7 +687,7 @@ impl Moves for Batches<'_> {
         self.push(Call::ExtrudeOnly(length, feed));
     }
     fn setting(&mut self, s: &crate::base::gcode::Setting) {
-        self.push(Call::Setting(*s));
+        self.push(Call::Setting(Box::new(*s)));
     }
 }
 

@@ -17,6 +17,9 @@ pub struct Options {
     pub sets: Vec<(String, String)>,
     /// `--printer NAME|FILE` overrides the recipe's printer.
     pub printer: Option<String>,
+    /// `--filament FILE [--filament-preset NAME]`: a slicer's filament
+    /// preset overrides the recipe's material.
+    pub filament: Option<crate::recipe::preset::Source>,
     /// `--allow CODE`: check codes silenced for this build.
     pub allow: Vec<String>,
     /// `--allow-read DIR`: folders the recipe may read in besides its project.
@@ -40,42 +43,95 @@ pub fn prepare(path: &Path, opts: &Options) -> Result<Plan> {
 /// its lent z-buffers used).
 pub fn prepare_in(path: &Path, opts: &Options, cx: &Context) -> Result<Plan> {
     let shown = path.display().to_string();
+    let printer = command_line(opts, cx)?;
+    let raw = Recipe::read_raw(path, cx)?;
+    if raw.plate.is_some() {
+        // a plate: whole recipes arranged on the bed, printed one after another
+        let spec = crate::recipe::resolve::plate::PlateSpec::from_raw(&raw, path)?;
+        return prepare_plate(&spec, &shown, opts, printer.as_ref(), cx);
+    }
+    let material = filament(opts, cx)?;
+    let given = (printer.as_ref(), material.as_ref());
+    let recipe = Recipe::from_raw_in(&raw, path, &opts.sets, given, cx)?;
+    // each part with its own steps, then the steps of groups; the skirt first
+    let paths = crate::generate::plate::made(&recipe).map_err(|e| e.in_file(&shown))?;
+    Plan::new(shown, recipe, paths)
+}
+
+/// [`prepare_in`] of the plate `spec` the command line describes (`p3dp
+/// plate`), reported as `shown`.
+pub(crate) fn prepare_plate_in(
+    spec: &crate::recipe::resolve::plate::PlateSpec,
+    shown: &str,
+    opts: &Options,
+    cx: &Context,
+) -> Result<Plan> {
+    let printer = command_line(opts, cx)?;
+    prepare_plate(spec, shown, opts, printer.as_ref(), cx)
+}
+
+/// What the command line gives every build: its `--allow` codes checked,
+/// its `--allow-read` folders, and its `--printer` read.
+fn command_line(opts: &Options, cx: &Context) -> Result<Option<Printer>> {
     // the command line's own mistakes name the option, not the recipe
     check::validate_allow(&opts.allow, |i| format!("--allow {}", opts.allow[i]))?;
     for dir in &opts.allow_read {
         cx.reads.allow(dir);
     }
-    let printer = match &opts.printer {
-        Some(spec) => Some({
+    match &opts.printer {
+        Some(spec) => {
             // a profile named on the command line may inherit from its own project
             cx.reads.name(Path::new(spec));
-
-            Printer::resolve(spec, Path::new("."), &cx.reads).map_err(|e| {
-                if e.file.is_none() && e.place.as_deref() == Some("printer") {
-                    Error {
-                        place: Some(format!("--printer {spec}")),
-                        ..e
+            Printer::resolve(spec, Path::new("."), &cx.reads)
+                .map(Some)
+                .map_err(|e| {
+                    if e.file.is_none() && e.place.as_deref() == Some("printer") {
+                        Error {
+                            place: Some(format!("--printer {spec}")),
+                            ..e
+                        }
+                    } else {
+                        e
                     }
-                } else {
-                    e
-                }
-            })?
-        }),
-        None => None,
-    };
-    let recipe = Recipe::load_in(path, &opts.sets, printer.as_ref(), cx)?;
-    // each part with its own steps, then the steps of groups
-    let parts = crate::generate::assembly::make_parts(&recipe).map_err(|e| e.in_file(&shown))?;
-    let mut paths = Vec::with_capacity(parts.len() + 1);
-    if let Some(s) = &recipe.skirt {
-        let cv = (recipe.parts[0].cross_section, recipe.parts[0].speed);
-        let spacing = recipe.printer.nozzle_diameter;
-        match crate::generate::skirt::make(s, &parts, spacing, cv, recipe.max_strings) {
-            Ok(Some(sk)) => paths.push(sk),
-            Ok(None) => {}
-            Err(e) => return Err(e.under("skirt").in_file(&shown)),
+                })
         }
+        None => Ok(None),
     }
-    paths.extend(parts);
-    Plan::new(shown, recipe, paths)
+}
+
+/// The command line's `--filament` preset as the material.
+fn filament(opts: &Options, cx: &Context) -> Result<Option<crate::machine::Material>> {
+    let Some(src) = &opts.filament else {
+        return Ok(None);
+    };
+    cx.reads.name(&src.file);
+    crate::recipe::resolve::from_filament(src, &cx.reads)
+        .map(Some)
+        .map_err(|e| {
+            if e.file.is_none() {
+                e.under("--filament")
+            } else {
+                e
+            }
+        })
+}
+
+/// The plan of a plate (`shown` as reports name it): its objects loaded
+/// with the command line's `--set` and `--printer`, arranged.
+pub(crate) fn prepare_plate(
+    spec: &crate::recipe::resolve::plate::PlateSpec,
+    shown: &str,
+    opts: &Options,
+    printer: Option<&Printer>,
+    cx: &Context,
+) -> Result<Plan> {
+    if opts.filament.is_some() {
+        return Err(Error::input(
+            "--filament",
+            "a plate's objects keep their recipes' materials; expected --filament with a recipe, not a plate",
+        ));
+    }
+    let (recipe, paths) = crate::recipe::resolve::plate::make(spec, &opts.sets, printer, cx)
+        .map_err(|e| e.in_file(shown))?;
+    Plan::new(shown.to_string(), recipe, paths)
 }

@@ -3,7 +3,7 @@
 //! reads it.
 #![allow(dead_code)]
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// The crate root.
@@ -19,13 +19,39 @@ pub(crate) fn recipe(name: &str) -> PathBuf {
 /// A fresh empty temporary folder for one test. The tests of every module
 /// share one process, so a counter keeps two calls apart even when two
 /// modules pick the same name.
-pub(crate) fn tmp(name: &str) -> PathBuf {
+pub(crate) fn tmp(name: &str) -> Tmp {
     static CALLS: AtomicUsize = AtomicUsize::new(0);
     let n = CALLS.fetch_add(1, Ordering::Relaxed);
     let d = std::env::temp_dir().join(format!("p3dp-test-{}-{n}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
-    d
+    Tmp(d)
+}
+
+/// A test's temporary folder, removed with what it holds when the test is
+/// done with it; kept when the test fails, to look at.
+#[derive(Debug)]
+pub(crate) struct Tmp(PathBuf);
+
+impl Drop for Tmp {
+    fn drop(&mut self) {
+        if !std::thread::panicking() {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
+}
+
+impl std::ops::Deref for Tmp {
+    type Target = PathBuf;
+    fn deref(&self) -> &PathBuf {
+        &self.0
+    }
+}
+
+impl AsRef<Path> for Tmp {
+    fn as_ref(&self) -> &Path {
+        &self.0
+    }
 }
 
 /// One move read back from G-code, in machine coordinates: a line (G0/G1)

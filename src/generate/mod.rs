@@ -3,6 +3,7 @@
 
 pub(crate) mod assembly;
 pub(crate) mod model;
+pub(crate) mod plate;
 pub(crate) mod primitive;
 pub(crate) mod skirt;
 pub(crate) mod step;

@@ -374,6 +374,24 @@ pub struct Recipe {
     pub allow: Vec<String>,
     /// Steps of groups of parts, in the order they run (see [`crate::generate::assembly`]).
     pub groups: Vec<Group>,
+    /// A plate's objects, each printed complete before the next (see
+    /// [`crate::generate::plate`]); empty for a recipe, whose every part
+    /// is an object of its own.
+    pub objects: Vec<Object>,
+}
+
+/// One object of a plate: a whole recipe, printed complete before the next.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Object {
+    /// Its name (`pot-2`); its parts are named `pot-2/PART`.
+    pub name: String,
+    /// Its paths in the plan, `first..end`: its skirt (when its recipe has
+    /// one), then its parts.
+    pub paths: std::ops::Range<usize>,
+    /// Its parts in the recipe's `parts`, `first..end`.
+    pub parts: std::ops::Range<usize>,
+    /// Check codes its recipe silences (`allow:`), for its own findings.
+    pub allow: Vec<String>,
 }
 
 /// Default cross-section when a recipe gives none: Kanada's 0.196 mm² (Fig. 9).
@@ -406,6 +424,16 @@ pub struct Group {
 }
 
 impl Recipe {
+    /// Where part `k` is among a plate's paths (after the skirts of its
+    /// object and those before it); `None` for a recipe (whose paths are
+    /// its skirt, if any, then its parts).
+    pub fn plate_path_of(&self, k: usize) -> Option<usize> {
+        self.objects
+            .iter()
+            .find(|o| o.parts.contains(&k))
+            .map(|o| o.paths.end - (o.parts.end - k))
+    }
+
     /// How many strings its parts make, before any is built.
     pub fn string_count(&self) -> u64 {
         self.parts

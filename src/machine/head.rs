@@ -3,7 +3,8 @@
 //! and `checks:` (thresholds of the flow, support and planner checks).
 //!
 //! ```yaml
-//! head: { cone_angle: 40, cone_height: 3, tip_diameter: 1, box: [-25, 25, -25, 25], clearance: 1 }
+//! head: { cone_angle: 40, cone_height: 3, tip_diameter: 1, box: [-25, 25, -25, 25], clearance: 1,
+//!         gantry: { height: 25, y: [-30, 35] } }
 //! checks: { cross_section_max: 2.5, max_bridge: 10, min_move_time: 0.005 }
 //! ```
 
@@ -27,6 +28,24 @@ pub struct Head {
     /// Travel between parts rises this far above the highest filament printed
     /// so far (within max z), mm.
     pub clearance: f64,
+    /// What the head hangs from, when the profile says: from this height
+    /// above the tip, across the whole bed in x (see [`Gantry`]).
+    pub gantry: Option<Gantry>,
+}
+
+/// The gantry (or the x axis' arm, a bed-slinger's): from `height` mm above
+/// the nozzle's tip upwards, it spans the whole bed in x and `y` round the
+/// nozzle in y. A print taller than that, beside the nozzle in x, meets it:
+/// printed one after another, objects taller than `height` over the next
+/// one's first layer must lie outside its band (the makers' slicers:
+/// Bambu Studio's `extruder_clearance_height_to_rod`, PrusaSlicer's
+/// `extruder_clearance_height`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Gantry {
+    /// Height of its lowest edge above the nozzle's tip, mm.
+    pub height: f64,
+    /// Its band in y round the nozzle, `[y_min, y_max]`, mm (machine axes).
+    pub y: [f64; 2],
 }
 
 impl Default for Head {
@@ -37,6 +56,7 @@ impl Default for Head {
             tip_diameter: 1.0,
             head_box: [-10.0, 10.0, -10.0, 10.0],
             clearance: 1.0,
+            gantry: None,
         }
     }
 }
@@ -132,6 +152,15 @@ impl Head {
         if !(self.clearance.is_finite() && self.clearance >= 0.0) {
             return Err(Error::input("head.clearance", "expected a length ≥ 0"));
         }
+        if let Some(g) = self.gantry {
+            positive("head.gantry.height", g.height)?;
+            if !g.y.iter().all(|v| v.is_finite()) || g.y[0] > 0.0 || g.y[1] < 0.0 {
+                return Err(Error::input(
+                    "head.gantry.y",
+                    "expected [y_min, y_max] round the nozzle: y_min ≤ 0 ≤ y_max",
+                ));
+            }
+        }
         Ok(())
     }
 
@@ -143,6 +172,14 @@ impl Head {
     /// Radius of the cone at its top, mm.
     pub fn top_radius(&self) -> f64 {
         self.tip_diameter / 2.0 + self.cone_height * self.tan()
+    }
+
+    /// Where the head reaches round the nozzle, `[x_min, x_max, y_min,
+    /// y_max]`: its box, and the cone's top where it is wider.
+    pub fn reach(&self) -> [f64; 4] {
+        let r = self.top_radius();
+        let b = self.head_box;
+        [b[0].min(-r), b[1].max(r), b[2].min(-r), b[3].max(r)]
     }
 }
 

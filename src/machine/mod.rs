@@ -11,8 +11,8 @@ pub(crate) mod printer;
 pub(crate) mod size;
 pub(crate) mod travel;
 
-pub(crate) use head::{CheckLimits, Head};
+pub(crate) use head::{CheckLimits, Gantry, Head};
 pub(crate) use kinematics::Kinematics;
 pub(crate) use material::{Material, FAN_START_Z};
-pub(crate) use printer::{Bed, Extrusion, Flavor, Printer, Retraction, VARIABLES};
+pub(crate) use printer::{Bed, Extrusion, Flavor, Printer, Retraction};
 pub(crate) use size::Size;

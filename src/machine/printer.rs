@@ -178,15 +178,22 @@ impl Default for Retraction {
 
 /// Where a profile's own start and end G-code may move the head: the bed
 /// grown by `margin` in X and Y (makers purge just outside the bed, Prusa's
-/// MK3S at Y −3) and up to `max_z + margin`, down to `-below_bed` (a probe's
-/// declared offset; 0: never below the bed). p3dp's own moves stay on the
-/// bed whatever this says.
+/// MK3S at Y −3), or on an axis `x`/`y` names the range the head really
+/// reaches (Bambu's A1 purges at X −48.2, Prusa's CORE One parks at Y −9);
+/// up to `max_z + margin`, down to `-below_bed` (a probe's declared offset;
+/// 0: never below the bed). p3dp's own moves stay on the bed whatever this
+/// says.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Envelope {
     /// Reach beyond the bed's edges and above its height, mm.
     pub margin: f64,
     /// Reach below z = 0, mm.
     pub below_bed: f64,
+    /// The head's reach along X, machine mm (lowest, highest), in place of
+    /// the bed grown by `margin`; it holds the bed.
+    pub x: Option<[f64; 2]>,
+    /// The head's reach along Y, as `x`.
+    pub y: Option<[f64; 2]>,
 }
 
 impl Envelope {
@@ -195,6 +202,18 @@ impl Envelope {
     pub const MAX_MARGIN: f64 = 50.0;
     /// Largest `below_bed` a profile may declare, mm.
     pub const MAX_BELOW_BED: f64 = 5.0;
+    /// Farthest a reach `x`/`y` may extend past the bed's edge, mm: a purge
+    /// chute or a park beside the bed.
+    pub const MAX_REACH: f64 = 60.0;
+
+    /// The range the head may reach along axis `k` (0: X, 1: Y) of a bed
+    /// spanning `lo` to `hi` there.
+    pub fn reach(&self, k: usize, lo: f64, hi: f64) -> [f64; 2] {
+        match [self.x, self.y][k] {
+            Some(r) => r,
+            None => [lo - self.margin, hi + self.margin],
+        }
+    }
 }
 
 impl Default for Envelope {
@@ -202,6 +221,8 @@ impl Default for Envelope {
         Envelope {
             margin: 5.0,
             below_bed: 0.0,
+            x: None,
+            y: None,
         }
     }
 }
@@ -231,6 +252,13 @@ pub struct Printer {
     pub filament_diameter: f64,
     /// Absolute or relative E.
     pub extrusion: Extrusion,
+    /// Extruders (or a filament changer's slots) the start and end G-code
+    /// know, the length of the slicers' per-extruder values; p3dp prints
+    /// with `tool`.
+    pub extruders: usize,
+    /// The extruder p3dp prints with, 0-based (0): the one the maker's
+    /// start G-code selects (Bambu's H2D its main, right-hand one, 1).
+    pub tool: usize,
     /// G-code before the print: a template of the slicers' macro language
     /// ([`crate::base::slicer_macro`]) over the variables of [`VARIABLES`]
     /// and `gcode_variables`.
@@ -278,6 +306,19 @@ pub struct Printer {
     /// Write Prusa's binary G-code (`.bgcode`) when the output's name does
     /// not say (PrusaSlicer's `binary_gcode`); off by default.
     pub binary_gcode: bool,
+    /// The start G-code is the maker's own sequence (an imported preset's):
+    /// its nozzle temperatures (flushes, purges, nozzle cleaning hotter than
+    /// the print) are held to `max_nozzle_temp`, and the last one, where
+    /// the print starts, to the material's limit; off by default.
+    pub maker_temperatures: bool,
+    /// Write the firmware's limits of `kinematics` as `M201`, `M203`,
+    /// `M204`, `M205` before the start G-code (PrusaSlicer's
+    /// `machine_limits_usage = emit_to_gcode`); off by default.
+    pub emit_limits: bool,
+    /// The firmware's maximum X and Y accelerations, mm/s² (a slicer's
+    /// `machine_max_acceleration_x`/`_y`), written as `M201 X Y` with
+    /// `emit_limits`; the head's highest acceleration when absent.
+    pub axis_acceleration: Option<[f64; 2]>,
     /// The firmware planner's limits, for the print-time estimate (see
     /// [`super::Kinematics`]).
     pub kinematics: super::kinematics::Kinematics,
@@ -313,6 +354,26 @@ impl Printer {
         positive("bed.max_z", self.bed.max_z())?;
         positive("max_speed", self.max_speed)?;
         positive("max_flow", self.max_flow)?;
+        if !(1..=MAX_EXTRUDERS).contains(&self.extruders) {
+            return Err(Error::input(
+                "extruders",
+                format!(
+                    "{} is not allowed; expected 1 to {MAX_EXTRUDERS}",
+                    self.extruders
+                ),
+            ));
+        }
+        if self.tool >= self.extruders {
+            return Err(Error::input(
+                "tool",
+                format!(
+                    "{} is not allowed; expected an extruder from 0 to {} (`extruders` is {})",
+                    self.tool,
+                    self.extruders - 1,
+                    self.extruders
+                ),
+            ));
+        }
         positive("arc_tolerance", self.arc_tolerance)?;
         super::limits::at_most("arc_tolerance", self.arc_tolerance, MAX_ARC_TOLERANCE, "mm")?;
         match self.bed {
@@ -355,6 +416,15 @@ impl Printer {
         self.checks.validate()?;
         crate::base::safe_text::check("model", &self.model)?;
         self.envelope_ranges()?;
+        for (k, a) in self.axis_acceleration.into_iter().flatten().enumerate() {
+            let max = super::limits::ACCELERATION_MAX;
+            if !(a.is_finite() && a > 0.0 && a <= max) {
+                return Err(Error::input(
+                    format!("axis_acceleration[{k}]"),
+                    format!("{a} mm/s² is not allowed; expected above 0 and at most {max} mm/s²"),
+                ));
+            }
+        }
         for (name, v) in &self.gcode_variables {
             check_variable(name, v)?;
         }
@@ -376,7 +446,28 @@ impl Printer {
             }
         };
         within("margin", e.margin, Envelope::MAX_MARGIN)?;
-        within("below_bed", e.below_bed, Envelope::MAX_BELOW_BED)
+        within("below_bed", e.below_bed, Envelope::MAX_BELOW_BED)?;
+        let (bmin, bmax) = self.bed.extent();
+        for (k, (key, r)) in [("x", e.x), ("y", e.y)].into_iter().enumerate() {
+            let Some([lo, hi]) = r else { continue };
+            let (b0, b1) = (bmin[k], bmax[k]);
+            let m = Envelope::MAX_REACH;
+            if !(lo.is_finite()
+                && hi.is_finite()
+                && lo <= b0
+                && hi >= b1
+                && lo >= b0 - m
+                && hi <= b1 + m)
+            {
+                return Err(Error::input(
+                    format!("envelope.{key}"),
+                    format!(
+                        "[{lo}, {hi}] mm is not allowed; expected a range holding the bed ({b0} to {b1} mm) and reaching at most {m} mm past it"
+                    ),
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// The start or end G-code template under `key`, parsed: no character
@@ -408,10 +499,14 @@ impl Printer {
     }
 
     /// Whether a template may name variable `name` (as itself or, for a
-    /// legacy `[name_N]`, as a list `name` indexed).
+    /// legacy `[name_N]`, as a list `name` indexed): one p3dp gives, one of
+    /// `gcode_variables`, or a filament preset's (refused at the build when
+    /// the material has none).
     fn knows(&self, name: &str) -> bool {
         let known = |n: &str| {
-            VARIABLES.iter().any(|(v, _)| *v == n) || self.gcode_variables.contains_key(n)
+            gives(n)
+                || self.gcode_variables.contains_key(n)
+                || super::material::from_filament_preset(n)
         };
         known(name)
             || name
@@ -499,10 +594,13 @@ impl Printer {
     }
 }
 
-/// Every variable p3dp gives a start or end G-code template, with what it
+/// Every variable p3dp gives a start or end G-code template from the
+/// profile and the print (the material's are
+/// [`super::material::VARIABLES`]), with what it
 /// holds (`crate::analyse::frame` computes them from the recipe, the
 /// profile and the strings built). Lists, as the slicers hold per-extruder
-/// values, have one element: p3dp drives one extruder. p3dp prints strings,
+/// values, have one element per extruder of the profile (`extruders`), the
+/// first the one p3dp prints with. p3dp prints strings,
 /// not layers: the "layer" values describe the strings honestly (the
 /// lowest extruding point's height for `layer_height`, the highest for
 /// `max_layer_z`).
@@ -531,23 +629,49 @@ pub(crate) const VARIABLES: &[(&str, &str)] = &[
     ("eng_plate_temp_initial_layer", "[bed temperature], °C"),
     ("textured_plate_temp", "[bed temperature], °C"),
     ("textured_plate_temp_initial_layer", "[bed temperature], °C"),
-    ("filament_type", "[the material's name in capitals]: PLA, ABS, PETG, …"),
-    ("filament_settings_id", "[the material's name]"),
+    ("filament_type", "[the filament preset's filament_type, else the material's name in capitals]: PLA, ABS, PETG, …"),
+    ("filament_settings_id", "[the filament preset's name, else the material's]"),
     ("printer_settings_id", "the profile's name"),
+    ("printer_preset", "the profile's name"),
     ("printer_model", "the profile's `model`"),
-    ("initial_tool", "0: p3dp drives one extruder"),
+    ("initial_tool", "0: p3dp prints with the first tool, the one the maker's start G-code selects"),
     ("initial_extruder", "0"),
     ("current_extruder", "0"),
+    ("initial_no_support_extruder", "0"),
+    ("initial_no_support_tool", "0"),
+    ("num_extruders", "the profile's `extruders`"),
+    ("is_extruder_used", "[true for the profile's `tool`, false for the others]: 255 long at least, as PrusaSlicer makes it for templates written for more tools"),
+    ("filament_map", "[the profile's `tool` + 1]: the extruder (1-based) of the print's one filament"),
+    ("first_filaments", "[0 for every extruder]: the print's one filament"),
+    ("first_non_support_filaments", "[0 for every extruder]"),
+    ("initial_filament_id", "0: the print's one filament"),
+    ("initial_no_support_filament_id", "0"),
+    ("initial_nozzle_id", "0"),
+    ("initial_no_support_hotend", "0: the first hotend (Bambu's hotend rack)"),
+    ("first_non_support_hotend", "0"),
+    ("current_hotend", "0"),
+    ("nozzle_diameter_at_nozzle_id", "[the nozzle's diameter, for every nozzle], mm"),
     ("has_wipe_tower", "false"),
     ("has_single_extruder_multi_material_priming", "false"),
     ("total_toolchanges", "0"),
+    ("e_retracted", "[filament retracted where the template runs]: 0 at the start; at the end, the retraction length when the print ends on a retracted travel, mm"),
+    ("zhop", "0: the head is not lifted where the template runs, mm"),
     ("first_layer_height", "the lowest extruding point's height above the bed, mm"),
+    ("initial_layer_print_height", "the same, mm"),
     ("layer_height", "the same: the one layer height every print has, mm"),
     ("layer_z", "start: first_layer_height; end: the last extruding point's height, mm"),
     ("max_layer_z", "the highest extruding point's height, mm"),
+    ("max_print_z", "the same, mm"),
+    ("total_layer_count", "max_layer_z over layer_height, rounded up: the layers a slicer would cut the print's height into"),
+    ("layer_num", "start: 0; end: total_layer_count − 1"),
     ("first_layer_print_min", "[x, y]: the least corner of the extruding strings below twice first_layer_height, machine mm"),
     ("first_layer_print_max", "[x, y]: their greatest corner, machine mm"),
     ("first_layer_print_size", "[width, depth] of that extent, mm"),
+    ("first_layer_center_no_wipe_tower", "[x, y]: the centre of that extent, machine mm"),
+    ("adaptive_bed_mesh_min", "[x, y]: OrcaSlicer's adaptive mesh: first_layer_print_min less the profile's adaptive_bed_mesh_margin (0), within its bed_mesh_min/bed_mesh_max, machine mm"),
+    ("adaptive_bed_mesh_max", "[x, y]: first_layer_print_max plus the margin, within the same limits, machine mm"),
+    ("bed_mesh_probe_count", "[x, y]: per axis, the mesh's size over the profile's bed_mesh_probe_distance (50 mm) rounded up, plus one, at least 3"),
+    ("bed_mesh_algo", "`lagrange` below 4 points an axis, else `bicubic`"),
     ("print_bed_min", "[x, y]: the bed's least corner, machine mm"),
     ("print_bed_max", "[x, y]: the bed's greatest corner, machine mm"),
     ("print_bed_size", "[width, depth] of the bed, mm"),
@@ -562,6 +686,15 @@ pub(crate) const VARIABLES: &[(&str, &str)] = &[
     ("retract_lift", "[0]: p3dp lifts for travel between parts, not on retraction"),
     ("z_hop", "[0]"),
     ("extrusion_width", "the first extruding string's cross-section over layer_height, mm"),
+    ("line_width", "the same, mm"),
+    ("external_perimeter_extrusion_width", "the same, mm"),
+    ("initial_layer_speed", "the first extruding string's speed, mm/s"),
+    ("external_perimeter_speed", "the same, mm/s"),
+    ("outer_wall_speed", "the same, mm/s"),
+    ("outer_wall_volumetric_speed", "the highest volumetric flow (cross-section × speed) of the print's extruding strings, mm³/s"),
+    ("default_acceleration", "the acceleration of printing moves, at which p3dp prints every string, mm/s²"),
+    ("outer_wall_acceleration", "the same, mm/s²"),
+    ("initial_layer_acceleration", "the same, mm/s²"),
     ("machine_max_acceleration_extruding", "[acceleration of printing moves], mm/s²"),
     ("machine_max_acceleration_travel", "[acceleration of travel moves], mm/s²"),
     ("machine_max_acceleration_retracting", "[acceleration of retractions], mm/s²"),
@@ -571,6 +704,23 @@ pub(crate) const VARIABLES: &[(&str, &str)] = &[
     ("input_filename_base", "the recipe's name"),
     ("input_filename", "the recipe's name"),
 ];
+
+/// Whether p3dp gives a start or end G-code template the variable `name`
+/// (or, for a legacy `[name_N]`, the list `name`): one of [`VARIABLES`] or
+/// of the material's ([`super::material::VARIABLES`]).
+pub(crate) fn gives(name: &str) -> bool {
+    let listed = |n: &str| {
+        VARIABLES.iter().any(|(v, _)| *v == n)
+            || super::material::VARIABLES.iter().any(|(v, _)| *v == n)
+    };
+    listed(name)
+        || name
+            .rsplit_once('_')
+            .is_some_and(|(b, i)| i.parse::<usize>().is_ok() && listed(b))
+}
+
+/// Most extruders (or filament slots) a profile may declare.
+pub(crate) const MAX_EXTRUDERS: usize = 16;
 
 /// Refuses a `gcode_variables` value that could break a G-code line or is
 /// no finite number.

@@ -142,7 +142,7 @@ fn number(n: &Num, params: &Params, place: &str) -> Result<f64> {
 
 /// A choice param's strings: at least one, each once, names (letters,
 /// digits and `_`), the default among them.
-fn check_choices(c: &RawChoice, place: &str) -> Result<()> {
+pub(crate) fn check_choices(c: &RawChoice, place: &str) -> Result<()> {
     let choices = join(place, key!(RawChoice, choices));
     if c.choices.is_empty() {
         return Err(Error::input(choices, "expected at least one choice"));
@@ -217,6 +217,93 @@ fn split_list(s: &str, place: &str) -> Result<Vec<String>> {
         return Err(Error::input(place, "an empty item; expected [a, b, …]"));
     }
     Ok(items)
+}
+
+/// A number as short as it can be written: `3`, `1.5`, `0.1`.
+pub(crate) fn format_value(v: f64) -> String {
+    let r = libm::round(v * 1e9) / 1e9; // 0.30000000000000004 → 0.3
+    let s = format!("{r}");
+    if s == "-0" {
+        "0".into()
+    } else {
+        s
+    }
+}
+
+/// Most values one `--sweep` may take.
+pub(crate) const MAX_SWEEP_VALUES: u64 = 10_000;
+
+/// Parses `NAME=v1,v2,…`, `NAME=a..b:step` (b included when reached) or
+/// `NAME=a..b` (step 1, as `for:`).
+pub(crate) fn parse_sweep(s: &str) -> Result<(String, Vec<String>)> {
+    let place = format!("--sweep {s}");
+    let (name, spec) = s
+        .split_once('=')
+        .filter(|(n, v)| !n.trim().is_empty() && !v.trim().is_empty())
+        .ok_or_else(|| {
+            Error::input(
+                &place,
+                "expected NAME=v1,v2,… or NAME=a..b:step, e.g. --sweep cycles=3,4,5",
+            )
+        })?;
+    let spec = spec.trim();
+    // a..b steps by 1, as a part's `for: "a..b"` does
+    let range = spec.contains("..").then(|| match spec.split_once(':') {
+        Some((range, step)) => (range.split_once(".."), step),
+        None => (spec.split_once(".."), "1"),
+    });
+    let values = if let Some((range, step)) = range {
+        let (a, b) = range.ok_or_else(|| {
+            Error::input(
+                &place,
+                "a range is written a..b:step, e.g. --sweep pitch=0.3..0.5:0.1",
+            )
+        })?;
+        let num = |t: &str, what: &str| -> Result<f64> {
+            t.trim().parse::<f64>().map_err(|_| {
+                Error::input(
+                    &place,
+                    format!("the {what} `{t}` is not a number; expected a..b:step"),
+                )
+            })
+        };
+        let (a, b, step) = (num(a, "start")?, num(b, "end")?, num(step, "step")?);
+        if step.is_nan() || step <= 0.0 || b < a || !a.is_finite() || !b.is_finite() {
+            return Err(Error::input(&place, "expected start ≤ end and a step > 0")
+                .with_help("a sweep is NAME=v1,v2,… (a list), NAME=a..b:step or NAME=a..b (a range from a up to b, step 1)"));
+        }
+        // as a float first: a tiny step makes more values than u64 holds
+        let steps = libm::floor((b - a) / step + 1e-9);
+        if steps.is_nan() || steps >= MAX_SWEEP_VALUES as f64 {
+            return Err(Error::input(
+                &place,
+                format!(
+                    "{} values; expected at most {MAX_SWEEP_VALUES}",
+                    format_value(steps + 1.0)
+                ),
+            ));
+        }
+        let values: Vec<String> = (0..steps as u64 + 1)
+            .map(|k| format_value(a + step * k as f64))
+            .collect();
+        if let Some(w) = values.windows(2).find(|w| w[0] == w[1]) {
+            return Err(Error::input(
+                &place,
+                format!(
+                    "the step {step} is too small to tell the values apart ({} twice); expected a larger step",
+                    w[0]
+                ),
+            ));
+        }
+        values
+    } else {
+        let vals: Vec<String> = spec.split(',').map(|v| v.trim().to_string()).collect();
+        if vals.iter().any(String::is_empty) {
+            return Err(Error::input(&place, "an empty value; expected v1,v2,…"));
+        }
+        vals
+    };
+    Ok((name.trim().to_string(), values))
 }
 
 /// Parses a `NAME=VALUE` of `--set`.

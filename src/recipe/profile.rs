@@ -130,12 +130,13 @@ impl Printer {
     }
 
     /// A slicer's printer preset (see [`crate::recipe::preset`]) as a
-    /// profile: the YAML `p3dp printers import` writes, loaded; errors name
-    /// the preset file.
+    /// profile: the preset mapped to the profile's raw form (the value `p3dp
+    /// printers import` writes as YAML), loaded and checked as a profile
+    /// file is; errors name the preset file.
     pub fn from_preset(src: &super::preset::Source, reads: &Reads) -> Result<Printer> {
         let preset = super::preset::load(src, reads)?;
-        let imported = super::preset::map::to_yaml(&preset)?;
-        from_imported(&imported.yaml, &preset.file)
+        let imported = super::preset::map::import(&preset)?;
+        from_raw(imported.raw, &preset.file)
     }
 
     /// A built-in name, or else a path (relative paths from `base`): a
@@ -182,11 +183,10 @@ impl Printer {
     }
 }
 
-/// The profile of an imported preset's YAML `text` (see
-/// [`crate::recipe::preset::map`]), read from the preset `file`: loaded and
-/// checked as a profile file is, errors naming the preset file.
-pub(crate) fn from_imported(text: &str, file: &str) -> Result<Printer> {
-    let raw: RawPrinter = parse_yaml(text, file)?;
+/// The profile of a raw form (an imported preset's, see
+/// [`crate::recipe::preset::map`]) read from `file`: checked as a profile
+/// file is, errors naming `file`.
+pub(crate) fn from_raw(raw: RawPrinter, file: &str) -> Result<Printer> {
     let mut p = printer(raw);
     p.source = Some(file.to_string());
     p.validate().map_err(|e| e.in_file(file))?;
@@ -308,6 +308,8 @@ fn printer(raw: RawPrinter) -> Printer {
             RawExtrusion::Absolute => Extrusion::Absolute,
             RawExtrusion::Relative => Extrusion::Relative,
         },
+        extruders: raw.extruders as usize,
+        tool: raw.tool as usize,
         start_gcode: raw.start_gcode,
         end_gcode: raw.end_gcode,
         gcode_variables: raw
@@ -318,6 +320,8 @@ fn printer(raw: RawPrinter) -> Printer {
         envelope: Envelope {
             margin: raw.envelope.margin,
             below_bed: raw.envelope.below_bed,
+            x: raw.envelope.x,
+            y: raw.envelope.y,
         },
         travel_speed: raw.travel_speed,
         retraction: retraction(raw.retraction),
@@ -336,13 +340,17 @@ fn printer(raw: RawPrinter) -> Printer {
             .unwrap_or(matches!(flavor, Flavor::Marlin | Flavor::Prusa)),
         object_labels: raw.object_labels.unwrap_or(flavor == Flavor::Klipper),
         binary_gcode: raw.binary_gcode,
+        maker_temperatures: raw.maker_temperatures,
+        emit_limits: raw.emit_limits,
+        axis_acceleration: raw.axis_acceleration,
         kinematics: kinematics(raw.kinematics),
         head: head(raw.head),
         checks: checks(raw.checks),
     }
 }
 
-fn variable(v: RawVariable) -> Value {
+/// A `gcode_variables` value as a template value.
+pub(crate) fn variable(v: RawVariable) -> Value {
     match v {
         RawVariable::Bool(b) => Value::Bool(b),
         RawVariable::Int(i) => Value::Int(i),
@@ -401,6 +409,10 @@ fn head(h: RawHead) -> Head {
         tip_diameter: h.tip_diameter,
         head_box: h.head_box,
         clearance: h.clearance,
+        gantry: h.gantry.map(|g| crate::machine::Gantry {
+            height: g.height,
+            y: g.y,
+        }),
     }
 }
 

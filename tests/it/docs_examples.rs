@@ -87,7 +87,7 @@ fn pages() -> Vec<String> {
 /// `recipes/` copied (a recipe written there reads `../maps/…`, and a lock
 /// written there names `recipes/…`, which must lie inside its project: the
 /// folder is marked as one by a `.git` folder).
-fn workspace(tag: &str) -> PathBuf {
+fn workspace(tag: &str) -> crate::common::Tmp {
     let dir = tmp(&format!("docs-{tag}"));
     std::fs::create_dir_all(dir.join(".git")).unwrap();
     copy_tree(&root().join("maps"), &dir.join("maps"));

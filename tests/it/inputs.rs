@@ -2,7 +2,7 @@
 //! a key is a regular file inside the recipe's project, read bounded, and
 //! no output of the command may replace any file the build read.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
@@ -11,7 +11,7 @@ use crate::common::*;
 /// A recipe of four parts that reaches every kind of file: an include, a
 /// profile inheriting from another, an SVG, an image; a solid for the
 /// z-buffer. Returns its folder.
-fn project(name: &str) -> PathBuf {
+fn project(name: &str) -> crate::common::Tmp {
     let dir = tmp(name);
     let w = |f: &str, t: &[u8]| std::fs::write(dir.join(f), t).unwrap();
     w("lib.yaml", b"p3dp: 1\nparams: {rr: 8}\n");

@@ -47,7 +47,7 @@ const LAYERS: &[(&str, &[&str])] = &[
     ),
     (
         "generate",
-        &["primitive", "step", "model", "assembly", "skirt"],
+        &["primitive", "step", "model", "assembly", "skirt", "plate"],
     ),
     ("analyse", &["planner", "check", "frame", "plan", "stats"]),
     (

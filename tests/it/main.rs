@@ -37,6 +37,7 @@ mod mesh;
 mod new_user;
 mod olympic;
 mod planner;
+mod plate;
 mod presets;
 mod preview;
 mod procedural;

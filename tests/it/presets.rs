@@ -175,9 +175,9 @@ fn every_debian_printer_preset_builds_a_vase_on_its_bed_or_is_refused_by_name() 
                 preset: Some(name.clone()),
                 profiles: None,
             };
-            let imported = preset::load(&src, &Reads::default()).and_then(|p| map::to_yaml(&p));
+            let imported = preset::load(&src, &Reads::default()).and_then(|p| map::import(&p));
             let yaml = match imported {
-                Ok(i) => i.yaml,
+                Ok(i) => i.yaml(),
                 Err(e) => {
                     let msg = e.to_string();
                     // the file and the key at fault named
@@ -375,7 +375,7 @@ fn mk3s_start_gcode_is_what_prusaslicer_writes() {
     };
     let preset = preset::load(&src, &Reads::default()).unwrap();
     let profile = dir.join("mk3s.yaml");
-    std::fs::write(&profile, map::to_yaml(&preset).unwrap().yaml).unwrap();
+    std::fs::write(&profile, map::import(&preset).unwrap().yaml()).unwrap();
     let (text, _, _) = build_vase(&dir, &profile).unwrap();
     let opts = Options {
         printer: Some(profile.to_str().unwrap().into()),
@@ -425,11 +425,43 @@ fn mk3s_start_gcode_is_what_prusaslicer_writes() {
     );
     let theirs = std::fs::read_to_string(dir.join("ps.gcode")).unwrap();
     let (ours, theirs) = (lines(&ours), lines(&theirs));
+    // machine_limits_usage = emit_to_gcode: the firmware's limits first, each
+    // word the figure PrusaSlicer writes (its text differs: `X8.00`, comments)
+    let limits = ours
+        .iter()
+        .take_while(|l| {
+            ["M201 ", "M203 ", "M204 ", "M205 "]
+                .iter()
+                .any(|c| l.starts_with(c))
+        })
+        .count();
+    assert_eq!(limits, 4, "{ours:?}");
+    let words = |l: &str| -> Vec<(char, f64)> {
+        l.split(';')
+            .next()
+            .unwrap()
+            .split_whitespace()
+            .skip(1)
+            .map(|w| (w.chars().next().unwrap(), w[1..].parse::<f64>().unwrap()))
+            .collect()
+    };
+    for l in &ours[..limits] {
+        let code = l.split_whitespace().next().unwrap();
+        let t = theirs
+            .iter()
+            .find(|t| t.starts_with(&format!("{code} ")) && !t.starts_with("M205 S"))
+            .unwrap_or_else(|| panic!("PrusaSlicer writes no {code}"));
+        let tw = words(t);
+        for w in words(l) {
+            assert!(tw.contains(&w), "{l} against PrusaSlicer's {t}");
+        }
+    }
+    let ours = &ours[limits..];
     let at = theirs
         .iter()
         .position(|l| *l == ours[0])
         .expect("PrusaSlicer's start G-code");
-    assert_eq!(ours, theirs[at..at + ours.len()]);
+    assert_eq!(ours, &theirs[at..at + ours.len()]);
 }
 
 /// A variable p3dp cannot give is refused, naming it and its line, by
@@ -671,4 +703,528 @@ fn an_exported_config_is_a_printer_directly() {
     // the vase about the bed's centre (110, 90), 3 mm high from 0.2
     assert!(g.contains("G0 X118.000 Y90.000 Z0.200"), "{g}");
     assert!(g.contains("G1 Z13.2 F600"), "{g}");
+}
+
+/// `p3dp build RECIPE ARGS…` in `dir`: the G-code written to `v.gcode`, or
+/// the error text (exit 2).
+fn build_with(dir: &Path, args: &[&str]) -> Result<String, String> {
+    let mut all = vec!["build", "vase.yaml", "-o", "v.gcode"];
+    all.extend_from_slice(args);
+    let _ = std::fs::remove_file(dir.join("v.gcode"));
+    let out = p3dp(dir, &all);
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    if out.status.success() {
+        Ok(std::fs::read_to_string(dir.join("v.gcode")).unwrap())
+    } else {
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert!(!dir.join("v.gcode").exists());
+        Err(err)
+    }
+}
+
+fn vase_dir(name: &str) -> crate::common::Tmp {
+    let dir = tmp(name);
+    std::fs::write(dir.join("vase.yaml"), VASE).unwrap();
+    dir
+}
+
+fn path(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// Every line of `g` that is not blank.
+fn has_lines(g: &str, lines: &[&str]) {
+    for l in lines {
+        assert!(
+            g.lines().any(|x| x == *l),
+            "`{l}` missing in:\n{}",
+            &g[..g.len().min(3000)]
+        );
+    }
+}
+
+/// Bambu Studio's presets keep their start and end G-code in template
+/// presets they `include`: the build uses the template's G-code, not the
+/// parent's placeholder, every variable filled from the printer, the
+/// filament preset and the print; an include that cannot be found is
+/// refused by name.
+#[test]
+fn a_bambu_include_is_resolved_or_refused_by_name() {
+    let dir = vase_dir("bambu-include");
+    let b1 = fixture("bbl/machine/Acme B1 0.4 nozzle.json");
+    let pla = fixture("bbl/filament/Acme PLA.json");
+    let g = build_with(&dir, &["--printer", path(&b1), "--filament", path(&pla)]).unwrap();
+    assert!(!g.contains("placeholder"), "the parent's G-code:\n{g}");
+    has_lines(
+        &g,
+        &[
+            ";===== machine: Acme B1 (written for p3dp's tests) =====",
+            "; printer Acme B1 0.4 nozzle, 16 layers",
+            "M140 S60",
+            // the flush at the top of the filament's range (Bambu Studio's
+            // rule), at its flow limit: 18 mm³/s / 2.4053 mm² × 60
+            "M109 S240 ; flush at the range's top",
+            "G1 E5 F449.008",
+            "M104 S215",
+            "M109 S215",
+            "; textured plate",
+            "; soft filament: door open",
+            "; chamber: 0 (minimum 0)",
+            "; range 190-240, 18 mm3/s",
+            ";===== Acme B1 end =====",
+        ],
+    );
+    // the notes' line breaks (a line feed and U+2028) stay inside the comment
+    let notes = g
+        .lines()
+        .find(|l| l.starts_with("; filament notes: "))
+        .unwrap();
+    assert_eq!(
+        notes,
+        "; filament notes: an Acme PLA\\u{a}M104 S999\\u{2028}M140 S999"
+    );
+    assert!(!g
+        .lines()
+        .any(|l| l.starts_with("M104 S999") || l.starts_with("M140 S999")));
+    // the material is the filament preset's
+    assert!(g.contains("Acme PLA"), "{}", &g[g.len() - 2000..]);
+
+    let broken = fixture("bbl/machine/Acme B1 missing template.json");
+    for args in [
+        vec!["printers", "import", path(&broken)],
+        vec![
+            "build",
+            "vase.yaml",
+            "--printer",
+            path(&broken),
+            "-o",
+            "v.gcode",
+        ],
+    ] {
+        let out = p3dp(&dir, &args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert!(
+            err.contains("`Acme B1 missing template` includes `Acme B1 0.4 nozzle template wrapping_detection_gcode`, found in none of"),
+            "{err}"
+        );
+    }
+}
+
+/// Elegoo keeps a preset's parent in a sibling folder (`machine/ECC/` for
+/// `machine/EC/`); its jerk of 20000 is no square-corner velocity (Klipper's
+/// 5 mm/s stands) and its `bed_shape = rectangular` yields to the corners of
+/// `printable_area`.
+#[test]
+fn a_parent_in_a_sibling_folder_and_the_makers_odd_values() {
+    let dir = vase_dir("elegoo-sibling");
+    let e = fixture("elegoo/machine/EC/Acme E 0.4 nozzle.json");
+    let p = import(&e, None, None).unwrap();
+    assert_eq!(p.flavor, Flavor::Klipper);
+    assert_eq!(p.kinematics.square_corner_velocity, Some(5.0));
+    assert_eq!(
+        p.bed,
+        Bed::Rectangle {
+            size: [256.0, 256.0],
+            min: [0.0, 0.0],
+            max_z: 256.0
+        }
+    );
+    let g = build_with(&dir, &["--printer", path(&e)]).unwrap();
+    has_lines(
+        &g,
+        &[
+            "PRINT_START BED=60 HOTEND=215 CHAMBER=0",
+            "; Acme E 0.4 nozzle",
+        ],
+    );
+}
+
+/// `--filament FILE.ini --filament-preset NAME` gives the material (its
+/// temperatures, flow limit) and the filament's variables; without it the
+/// recipe's material gives them, each from a stated source.
+#[test]
+fn a_filament_preset_gives_the_material_and_its_variables() {
+    let dir = vase_dir("filament-ini");
+    let ini = fixture("acme.ini");
+    for (name, out) in [("Acme Mini", "mini.yaml"), ("Acme Mini HF0.6", "hf.yaml")] {
+        let o = p3dp(
+            &dir,
+            &[
+                "printers",
+                "import",
+                path(&ini),
+                "--preset",
+                name,
+                "-o",
+                out,
+            ],
+        );
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let g = build_with(
+        &dir,
+        &[
+            "--printer",
+            "mini.yaml",
+            "--filament",
+            path(&ini),
+            "--filament-preset",
+            "Acme PLA",
+        ],
+    )
+    .unwrap();
+    has_lines(
+        &g,
+        &[
+            "; nozzle check: P0.4 A0 F0",
+            "; Acme Mini for Acme PLA",
+            "; chamber 0, at least 0; idle 100",
+            "M140 S60",
+            "M104 S170",
+            "M109 S210",
+        ],
+    );
+    assert!(g.contains("; filament notes: \"Acme's own PLA.\"\\u{a}M104 S999 ; a second line is text, never G-code"));
+    assert!(!g.lines().any(|l| l.starts_with("M104 S999")));
+    let g = build_with(
+        &dir,
+        &[
+            "--printer",
+            "mini.yaml",
+            "--filament",
+            path(&ini),
+            "--filament-preset",
+            "Acme PLA-CF",
+        ],
+    )
+    .unwrap();
+    has_lines(&g, &["; nozzle check: P0.4 A1 F0", "M109 S230"]);
+    let g = build_with(
+        &dir,
+        &[
+            "--printer",
+            "hf.yaml",
+            "--filament",
+            path(&ini),
+            "--filament-preset",
+            "Acme PLA",
+        ],
+    )
+    .unwrap();
+    has_lines(&g, &["; nozzle check: P0.6 A0 F1"]);
+    // the recipe's own material: PLA at 215/60 °C, not abrasive, no notes
+    let g = build_with(&dir, &["--printer", "mini.yaml"]).unwrap();
+    has_lines(
+        &g,
+        &[
+            "; nozzle check: P0.4 A0 F0",
+            "; Acme Mini for PLA",
+            "; filament notes: ",
+            "; chamber 0, at least 0; idle 0",
+            "M109 S215",
+        ],
+    );
+    // a filament preset not in the file: named, the closest offered
+    let e = build_with(
+        &dir,
+        &[
+            "--printer",
+            "mini.yaml",
+            "--filament",
+            path(&ini),
+            "--filament-preset",
+            "Acme PLA CF",
+        ],
+    )
+    .unwrap_err();
+    assert!(
+        e.contains("no filament preset `Acme PLA CF`") && e.contains("did you mean `Acme PLA-CF`"),
+        "{e}"
+    );
+}
+
+/// The filament preset's figures become p3dp's material: the checks hold
+/// the print to its temperatures and its flow limit.
+#[test]
+fn a_filament_presets_figures_are_the_materials() {
+    let ini = fixture("acme.ini");
+    let src = Source {
+        file: ini.clone(),
+        preset: Some("Acme PLA".into()),
+        profiles: None,
+    };
+    let p = preset::load_filament(&src, &Reads::default()).unwrap();
+    assert_eq!(p.kind, preset::Kind::Filament);
+    assert_eq!(p.text("first_layer_temperature").as_deref(), Some("215"));
+    let json = fixture("bbl/filament/Acme PLA.json");
+    let p = preset::load_filament(
+        &Source {
+            file: json,
+            ..Default::default()
+        },
+        &Reads::default(),
+    )
+    .unwrap();
+    // the parent found in the vendor folder's sub-folder (filament/base/)
+    assert_eq!(
+        p.text("nozzle_temperature_range_high").as_deref(),
+        Some("240")
+    );
+    assert_eq!(p.text("filament_density").as_deref(), Some("1.24"));
+    let out = p3dp(
+        Path::new("."),
+        &["printers", "list", "--filaments", path(&ini)],
+    );
+    assert_eq!(
+        String::from_utf8_lossy(&out.stdout),
+        "Acme PLA\nAcme PLA-CF\n"
+    );
+}
+
+/// A multi-tool machine (a 5-tool changer, a 5-slot filament changer, a
+/// two-nozzle Bambu whose main nozzle is its second) prints with the tool
+/// its maker's start G-code selects, the others left cold.
+#[test]
+fn multi_tool_machines_print_with_the_tool_their_start_gcode_selects() {
+    let dir = vase_dir("multi-tool");
+    let ini = fixture("acme.ini");
+    for (name, out) in [("Acme XL 5T", "xl.yaml"), ("Acme MK MMU3", "mmu.yaml")] {
+        let o = p3dp(
+            &dir,
+            &[
+                "printers",
+                "import",
+                path(&ini),
+                "--preset",
+                name,
+                "-o",
+                out,
+            ],
+        );
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let xl = Printer::from_file(&dir.join("xl.yaml")).unwrap();
+    assert_eq!((xl.extruders, xl.tool), (5, 0));
+    let g = build_with(&dir, &["--printer", "xl.yaml"]).unwrap();
+    has_lines(
+        &g,
+        &[
+            "; 5 tools, Acme XL 5T",
+            "M104 T0 S175",
+            "T0",
+            "M109 T0 S215",
+            "G1 E1.5 F2400",
+        ],
+    );
+    for t in 1..5 {
+        assert!(!g.contains(&format!("M104 T{t}")), "tool {t} heated");
+    }
+    let g = build_with(&dir, &["--printer", "mmu.yaml"]).unwrap();
+    has_lines(
+        &g,
+        &[
+            "; nozzle check: P0.4 A0",
+            "; loading -13 mm, parking 85 mm",
+            "T0",
+        ],
+    );
+    let d2 = fixture("bbl/machine/Acme D2 0.4 nozzle.json");
+    let p = import(&d2, None, None).unwrap();
+    assert_eq!((p.extruders, p.tool), (2, 1));
+    let g = build_with(&dir, &["--printer", path(&d2)]).unwrap();
+    has_lines(
+        &g,
+        &[
+            "M104 S215 T0 ; the main nozzle",
+            "; calibration temperatures 215 and 215",
+            "T0",
+            "; nozzle 0.4 of 2",
+        ],
+    );
+    assert!(!g.contains("M104 T1"), "the second nozzle heated");
+}
+
+/// A preset maps to the profile's own type: what `--printer FILE` builds
+/// with is what `printers import` writes, read back — for every preset of
+/// the fixtures.
+#[test]
+fn an_imported_profile_written_as_yaml_is_the_same_printer() {
+    let dir = tmp("import-round-trip");
+    let ini = fixture("acme.ini");
+    let mut cases: Vec<(PathBuf, Option<String>)> = preset::list(&ini, &Reads::default())
+        .unwrap()
+        .into_iter()
+        .filter(|n| n != "Acme Bad Variable")
+        .map(|n| (ini.clone(), Some(n)))
+        .collect();
+    for f in [
+        "bbl/machine/Acme B1 0.4 nozzle.json",
+        "bbl/machine/Acme D2 0.4 nozzle.json",
+        "elegoo/machine/EC/Acme E 0.4 nozzle.json",
+        "orca/profiles/Acme/machine/Acme One 0.4 nozzle.json",
+    ] {
+        cases.push((fixture(f), None));
+    }
+    for (k, (file, name)) in cases.iter().enumerate() {
+        let mut direct = import(file, name.as_deref(), None).unwrap();
+        let out = dir.join(format!("p{k}.yaml"));
+        let mut args = vec!["printers", "import", path(file), "-o", path(&out)];
+        if let Some(n) = name {
+            args.extend(["--preset", n]);
+        }
+        let o = p3dp(&dir, &args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let mut back = Printer::from_file(&out).unwrap();
+        (direct.source, back.source) = (None, None);
+        assert_eq!(direct, back, "{file:?} {name:?}");
+    }
+}
+
+/// A `.json` chain's files lie in the preset's project or slicer folder:
+/// a parent that is a symlink out of it is refused, as a YAML profile's
+/// `inherits` is.
+#[cfg(unix)]
+#[test]
+fn a_json_parent_linked_out_of_the_project_is_refused() {
+    let dir = tmp("json-symlink");
+    let outside = dir.join("outside");
+    let project = dir.join("project");
+    std::fs::create_dir_all(&outside).unwrap();
+    std::fs::create_dir_all(project.join(".git")).unwrap();
+    std::fs::write(
+        outside.join("secret.json"),
+        r#"{"type": "machine", "name": "base", "printable_area": ["0x0", "200x0", "200x200", "0x200"], "printable_height": "200"}"#,
+    )
+    .unwrap();
+    std::os::unix::fs::symlink(outside.join("secret.json"), project.join("base.json")).unwrap();
+    std::fs::write(
+        project.join("mine.json"),
+        r#"{"type": "machine", "name": "mine", "inherits": "base"}"#,
+    )
+    .unwrap();
+    let out = p3dp(&project, &["printers", "import", "mine.json"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("outside the folders this build may read"),
+        "{err}"
+    );
+    assert!(out.stdout.is_empty());
+}
+
+/// `--profiles` holding thousands of links to one big file: the folder is
+/// scanned once, each real file read once, within a cap on files and bytes.
+#[cfg(unix)]
+#[test]
+fn a_profile_folder_of_links_to_one_big_file_is_scanned_once() {
+    let dir = tmp("json-links");
+    let profiles = dir.join("profiles");
+    std::fs::create_dir_all(profiles.join("machine")).unwrap();
+    // one 15 MB preset, linked 8000 times
+    let big = dir.join("big.json");
+    let pad = "x".repeat(15 << 20);
+    std::fs::write(
+        &big,
+        format!(r#"{{"type": "machine", "name": "big", "printer_notes": "{pad}"}}"#),
+    )
+    .unwrap();
+    for k in 0..8000 {
+        std::os::unix::fs::symlink(&big, profiles.join(format!("machine/l{k:04}.json"))).unwrap();
+    }
+    std::fs::write(
+        dir.join("mine.json"),
+        r#"{"type": "machine", "name": "mine", "inherits": "nowhere", "printable_area": ["0x0", "200x0", "200x200", "0x200"], "printable_height": "200"}"#,
+    )
+    .unwrap();
+    let t = std::time::Instant::now();
+    let out = p3dp(
+        &dir,
+        &["printers", "import", "mine.json", "--profiles", "profiles"],
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("`mine` inherits `nowhere`, found in none of"),
+        "{err}"
+    );
+    assert!(err.contains("stopped at its cap of 4000 files"), "{err}");
+    // unbounded, 8000 parses of 15 MB take minutes
+    assert!(t.elapsed().as_secs_f64() < 30.0, "{:?}", t.elapsed());
+}
+
+/// A Bambu printer's own sequence (a preset written for the tests in its
+/// style): imported as Bambu's firmware, its purge chute and the plate's
+/// bare edge the profile's reach, its flush above the filament's limit
+/// accepted as the maker's, every command read as the firmware reads it;
+/// each of those moved past what the maker wrote is refused by name.
+#[test]
+fn a_bambu_sequence_builds_with_its_reach_and_flush() {
+    let dir = vase_dir("bambu-sequence");
+    let t9 = fixture("bbl/machine/Acme T9 0.4 nozzle.json");
+    let pla = fixture("bbl/filament/Acme PLA.json");
+    let out = p3dp(&dir, &["printers", "import", path(&t9), "-o", "t9.yaml"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let yaml = std::fs::read_to_string(dir.join("t9.yaml")).unwrap();
+    for line in [
+        "flavor: bambu",
+        "envelope: { margin: 5, below_bed: 1.01, x: [-48.2, 261] }",
+        "maker_temperatures: true",
+        "# - envelope.x [-48.2, 261]: where the maker's own G-code takes the head (start_gcode line 16: `G1 X-48.2 Y10 F12000`), past the bed grown by 5 mm",
+        "# - envelope.below_bed 1.01: where the maker's own G-code takes the nozzle below the bed (start_gcode line 20: `G0 X128 Y261 Z-1.01 F1200`)",
+    ] {
+        assert!(yaml.lines().any(|l| l == line), "no `{line}` in\n{yaml}");
+    }
+    let g = build_with(&dir, &["--printer", "t9.yaml", "--filament", path(&pla)]).unwrap();
+    has_lines(
+        &g,
+        &[
+            "G392 S0 ; clog detection off",
+            "M109 S250 ; flush hotter than the filament prints",
+            "G1 X-48.2 Y10 F12000 ; to the purge chute",
+            "G0 X128 Y261 Z-1.01 F1200 ; stop the nozzle on the plate's bare edge",
+            "M109 S215",
+            "G1 X-48.2 F12000 ; park at the chute",
+        ],
+    );
+    // the same preset built directly reads the same
+    let direct = build_with(&dir, &["--printer", path(&t9), "--filament", path(&pla)]).unwrap();
+    assert!(direct.contains("G1 X-48.2 Y10 F12000 ; to the purge chute"));
+
+    let edited = |from: &str, to: &str| {
+        assert!(yaml.contains(from), "{from}");
+        std::fs::write(dir.join("edited.yaml"), yaml.replace(from, to)).unwrap();
+        build_with(
+            &dir,
+            &["--printer", "edited.yaml", "--filament", path(&pla)],
+        )
+        .unwrap_err()
+    };
+    let e = edited("G1 X-48.2 Y10 F12000", "G1 X-60 Y10 F12000");
+    assert!(
+        e.contains("start_gcode line 16: `G1 X-60 Y10 F12000 ; to the purge chute`: x = -60 mm is outside the machine's travel envelope (x from -48.2 to 261 mm: the profile's envelope.x)"),
+        "{e}"
+    );
+    let e = edited("maker_temperatures: true", "maker_temperatures: false");
+    assert!(
+        e.contains("`M109 S250 ; flush hotter than the filament prints`: a nozzle temperature of 250 °C, above the limit"),
+        "{e}"
+    );
+    // the print would start at the flush temperature
+    let e = edited(
+        "M109 S{nozzle_temperature_initial_layer[initial_no_support_extruder]}",
+        "M117 no print temperature",
+    );
+    assert!(
+        e.contains("start_gcode line 15: `M109 S250 ; flush hotter than the filament prints`: the print would start at 250 °C, above the limit"),
+        "{e}"
+    );
+    let e = edited("G29.1 Z-0.04", "G29.1 Z-4");
+    assert!(e.contains("offsets the coordinates by Z -4 mm"), "{e}");
+    let e = edited("M211 R", "M290 X40 Y40 Z2");
+    assert!(e.contains("`M290` is refused"), "{e}");
 }

@@ -41,7 +41,7 @@ fn write(dir: &Path, name: &str, text: &str) {
 
 const HEAD: &str = "p3dp: 1\nname: t\nprinter: generic-220\nmaterial: pla\n";
 
-fn star_dir(name: &str) -> std::path::PathBuf {
+fn star_dir(name: &str) -> crate::common::Tmp {
     let dir = tmp(name);
     let d: Vec<String> = star_svg_points()
         .iter()

@@ -17,7 +17,12 @@
 //!
 //! - within the cone, i.e. closer sideways than tip/2 + min(dz, cone_height)
 //!   · tan(cone_angle) at height dz above the tip: `nozzle-collision`;
-//! - more than `cone_height` above the tip and under the box: `head-collision`.
+//! - more than `cone_height` above the tip and under the box: `head-collision`;
+//! - more than the gantry's `height` above the tip, anywhere across the bed
+//!   in x within the gantry's band in y (`head.gantry`, when the profile
+//!   gives it: what the head hangs from): `head-collision` too. Objects
+//!   printed one after another (a plate, [`crate::generate::plate`]) meet it
+//!   when a finished one taller than that stands beside the next.
 //!
 //! The cone is the nozzle itself: filament more than a nozzle diameter inside
 //! its surface is an error; less deep, the nozzle scrapes it (as on a helix
@@ -226,6 +231,7 @@ struct Walk<'a> {
     delta: f64,
     cone: Tally,
     head: Tally,
+    gantry: Tally,
     /// Strings before this (path, string) are old enough to be met.
     elig: (usize, usize),
     /// Strings before this are in the map.
@@ -332,6 +338,20 @@ impl Walk<'_> {
         if let Some(hit) = boxed {
             self.head.add(p, string, travel, hit, step);
         }
+        if let Some(g) = self.hd.gantry {
+            // the whole bed in x, the band in y
+            let far = 1e12;
+            let hit = self.map.find(
+                DVec2::new(xy.x - far, xy.y + g.y[0]),
+                DVec2::new(xy.x + far, xy.y + g.y[1]),
+                p.z + g.height,
+                xy,
+                |_, _| true,
+            );
+            if let Some(hit) = hit {
+                self.gantry.add(p, string, travel, hit, step);
+            }
+        }
     }
 }
 
@@ -359,9 +379,11 @@ fn walk(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Finding>) {
         head = Some(tp.head());
         let cone = std::mem::take(&mut w.cone);
         let boxed = std::mem::take(&mut w.head);
+        let gantry = std::mem::take(&mut w.gantry);
         let nozzle = printer.nozzle_diameter;
-        report(&w, tp, cone, "nozzle-collision", nozzle, out);
-        report(&w, tp, boxed, "head-collision", nozzle, out);
+        report(&w, tp, cone, Met::Cone, nozzle, out);
+        report(&w, tp, boxed, Met::Box, nozzle, out);
+        report(&w, tp, gantry, Met::Gantry, nozzle, out);
     }
 }
 
@@ -403,6 +425,7 @@ impl<'a> Walk<'a> {
             delta: printer.checks.support_tolerance * printer.nozzle_diameter,
             cone: Tally::default(),
             head: Tally::default(),
+            gantry: Tally::default(),
             elig: (0, 0),
             mapped: (0, 0),
             elig_top: f64::NEG_INFINITY,
@@ -465,30 +488,44 @@ impl<'a> Walk<'a> {
     }
 }
 
-fn report(
-    w: &Walk,
-    tp: &Toolpath,
-    t: Tally,
-    code: &'static str,
-    nozzle: f64,
-    out: &mut Vec<Finding>,
-) {
+/// What of the head met filament.
+#[derive(Clone, Copy, PartialEq)]
+enum Met {
+    /// The nozzle's cone: `nozzle-collision`.
+    Cone,
+    /// The head's box: `head-collision`.
+    Box,
+    /// The gantry: `head-collision`.
+    Gantry,
+}
+
+fn report(w: &Walk, tp: &Toolpath, t: Tally, met: Met, nozzle: f64, out: &mut Vec<Finding>) {
     let Some((at, string, travel, hit)) = t.first else {
         return;
     };
     let hd = w.hd;
-    let cone = code == "nozzle-collision";
-    let what = if cone {
-        format!(
+    let cone = met == Met::Cone;
+    let code = if cone {
+        "nozzle-collision"
+    } else {
+        "head-collision"
+    };
+    let what = match (met, hd.gantry) {
+        (Met::Cone, _) => format!(
             "the nozzle's cone ({}° from the vertical, {} mm high, {} mm tip)",
             hd.cone_angle, hd.cone_height, hd.tip_diameter
-        )
-    } else {
-        let b = hd.head_box;
-        format!(
-            "the head's box (x {}…{}, y {}…{} mm round the nozzle, from {} mm above the tip)",
-            b[0], b[1], b[2], b[3], hd.cone_height
-        )
+        ),
+        (Met::Gantry, Some(g)) => format!(
+            "the gantry (head.gantry: the whole bed's width in x, y {}…{} mm round the nozzle, from {} mm above the tip)",
+            g.y[0], g.y[1], g.height
+        ),
+        _ => {
+            let b = hd.head_box;
+            format!(
+                "the head's box (x {}…{}, y {}…{} mm round the nozzle, from {} mm above the tip)",
+                b[0], b[1], b[2], b[3], hd.cone_height
+            )
+        }
     };
     let doing = match (string, travel) {
         (None, _) => format!("travelling to part `{}`", tp.name),
@@ -567,6 +604,39 @@ mod tests {
         assert!(m
             .find(DVec2::new(6.0, -5.0), DVec2::new(9.0, 5.0), 0.0, p, all)
             .is_none());
+    }
+
+    /// The `head-collision` findings of a tall tower at x = -40, then a low
+    /// ring at x = +40, on `printer`.
+    fn tower_then_ring(printer: &str) -> Vec<Finding> {
+        let text = format!(
+            "p3dp: 1\nname: t\nprinter: {printer}\nparts:\n  - {{name: tower, primitive: {{helix: {{radius: 8, height: 40, pitch: 0.3, center: [-40, 0, 0.2]}}}}}}\n  - {{name: ring, primitive: {{helix: {{radius: 8, height: 2, pitch: 0.3, center: [40, 0, 0.2]}}}}}}\n"
+        );
+        let raw = crate::recipe::parse_yaml(&text, "t.yaml").unwrap();
+        let recipe = Recipe::resolve(&raw, &[], None, std::path::Path::new(".")).unwrap();
+        let parts = crate::generate::assembly::make_parts(&recipe).unwrap();
+        let refs: Vec<&Toolpath> = parts.iter().collect();
+        check(&recipe, &refs)
+            .into_iter()
+            .filter(|f| f.code == "head-collision")
+            .collect()
+    }
+
+    #[test]
+    fn the_gantry_meets_a_taller_part_anywhere_across_the_bed() {
+        // 80 mm apart in x, beyond the box's 30 mm: only the gantry (25 mm
+        // above the tip, the whole bed's width) reaches the 40 mm tower
+        let found = tower_then_ring("bambu-a1-mini");
+        assert_eq!(found.len(), 1, "{found:?}");
+        assert!(
+            found[0].message.contains("the gantry"),
+            "{}",
+            found[0].message
+        );
+        assert_eq!(found[0].part.as_deref(), Some("ring"));
+        assert!(found[0].message.contains("filament of part `tower`"));
+        // a profile without a gantry finds nothing
+        assert!(tower_then_ring("generic-220").is_empty());
     }
 
     #[test]

@@ -76,7 +76,7 @@ pub(crate) fn findings(recipe: &Recipe, paths: &[&Toolpath], out: &mut Vec<Findi
             Some(_) => {}
             None => warn("pattern-range", format!("material `{}`: {range} PLA and ABS only (section 2)", m.name)),
         }
-        if let Some(tp) = paths.get(offset + k) {
+        if let Some(tp) = paths.get(recipe.plate_path_of(k).unwrap_or(offset + k)) {
             modulated(tp, &mut warn);
         }
     }

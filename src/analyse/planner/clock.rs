@@ -72,8 +72,12 @@ pub(crate) struct Marks {
     /// The head's position as the planner knows it.
     pos: Option<DVec3>,
     /// Per block, the offset of the next place after it, as the step from
-    /// the previous block's (the first from 0).
-    steps: Vec<u32>,
+    /// the previous block's (the first from 0), each an unsigned LEB128
+    /// varint: a step is mostly one line, under 128 bytes, so one byte per
+    /// block (the blocks after the last place have none: step 0).
+    steps: Vec<u8>,
+    /// The blocks so far.
+    blocks: usize,
     /// Blocks since the last place, waiting for its offset.
     waiting: usize,
     /// The offset the last block's place was at.
@@ -89,11 +93,10 @@ impl Marks {
     /// A place a progress line may go, at byte `offset` of the G-code.
     pub(crate) fn place(&mut self, offset: u64) {
         if self.waiting > 0 {
-            let step = u32::try_from(offset - self.last).unwrap_or(u32::MAX);
-            let n = self.steps.len();
             // the first waiting block carries the step; the rest are at
             // the same place
-            self.steps[n - self.waiting] = step;
+            leb128(&mut self.steps, offset - self.last);
+            self.steps.resize(self.steps.len() + self.waiting - 1, 0);
             self.last = offset;
             self.waiting = 0;
         }
@@ -117,15 +120,40 @@ impl Marks {
     }
 
     fn event(&mut self, e: Event) {
-        self.events.push((self.steps.len(), 0, e));
+        self.events.push((self.blocks, 0, e));
         self.events_waiting += 1;
     }
 
     /// One block.
     fn block(&mut self) {
-        self.steps.push(0);
+        self.blocks += 1;
         self.waiting += 1;
     }
+}
+
+/// `v` appended as an unsigned LEB128 varint: 7 bits a byte, low first,
+/// the high bit set on every byte but the last.
+fn leb128(out: &mut Vec<u8>, mut v: u64) {
+    while v >= 0x80 {
+        out.push((v as u8) | 0x80);
+        v >>= 7;
+    }
+    out.push(v as u8);
+}
+
+/// The varint [`leb128`] wrote at `*at`, `*at` moved past it; 0 past the end.
+fn unleb128(bytes: &[u8], at: &mut usize) -> u64 {
+    let mut v = 0u64;
+    let mut shift = 0;
+    while let Some(&b) = bytes.get(*at) {
+        *at += 1;
+        v |= u64::from(b & 0x7f) << shift;
+        if b < 0x80 {
+            break;
+        }
+        shift += 7;
+    }
+    v
 }
 
 impl Moves for Marks {
@@ -309,6 +337,7 @@ fn items(marks: &Marks) -> impl Iterator<Item = (Option<Event>, u64)> + '_ {
     let mut events = marks.events.iter().peekable();
     let mut offset = 0u64;
     let mut b = 0usize;
+    let mut at = 0usize;
     std::iter::from_fn(move || {
         if let Some(&&(before, at, e)) = events.peek() {
             if before <= b {
@@ -316,9 +345,11 @@ fn items(marks: &Marks) -> impl Iterator<Item = (Option<Event>, u64)> + '_ {
                 return Some((Some(e), at));
             }
         }
-        let &step = marks.steps.get(b)?;
+        if b == marks.blocks {
+            return None;
+        }
         b += 1;
-        offset += u64::from(step);
+        offset += unleb128(&marks.steps, &mut at);
         Some((None, offset))
     })
 }
@@ -328,6 +359,32 @@ mod tests {
     use super::super::tests::{klipper, long_print, marlin};
     use super::super::Planner;
     use super::*;
+
+    #[test]
+    fn steps_read_back_as_written() {
+        let values = [
+            0u64,
+            1,
+            127,
+            128,
+            300,
+            16_383,
+            16_384,
+            u32::MAX as u64 + 7,
+            u64::MAX,
+        ];
+        let mut bytes = Vec::new();
+        for &v in &values {
+            leb128(&mut bytes, v);
+        }
+        // one byte below 128, two below 2^14
+        assert_eq!(bytes.len(), 1 + 1 + 1 + 2 + 2 + 2 + 3 + 5 + 10);
+        let mut at = 0;
+        for &v in &values {
+            assert_eq!(unleb128(&bytes, &mut at), v);
+        }
+        assert_eq!(unleb128(&bytes, &mut at), 0, "past the end: 0");
+    }
 
     /// The clock as it ran beside the writer: every call in order, a
     /// progress line written at each place when one is due.

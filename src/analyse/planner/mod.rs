@@ -857,8 +857,9 @@ pub(crate) enum Call {
     MoveTo(DVec3, f64, f64, MoveKind),
     /// [`Planner::extrude_only`].
     ExtrudeOnly(f64, f64),
-    /// [`Planner::setting`].
-    Setting(crate::base::gcode::Setting),
+    /// [`Planner::setting`] (boxed: settings are rare, and a call stays
+    /// the size of a move).
+    Setting(Box<crate::base::gcode::Setting>),
 }
 
 impl Moves for Vec<Call> {
@@ -878,7 +879,7 @@ impl Moves for Vec<Call> {
         self.push(Call::ExtrudeOnly(length, feed));
     }
     fn setting(&mut self, s: &crate::base::gcode::Setting) {
-        self.push(Call::Setting(*s));
+        self.push(Call::Setting(Box::new(*s)));
     }
 }
 
@@ -899,6 +900,18 @@ impl Planner {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_recorded_call_is_the_size_of_a_move() {
+        // the batches between the writer and the planner hold millions of
+        // calls: a setting (up to 4 optional values) must not widen them
+        let mv = std::mem::size_of::<(DVec3, f64, f64, MoveKind)>();
+        assert!(
+            std::mem::size_of::<Call>() <= mv + 8,
+            "{}",
+            std::mem::size_of::<Call>()
+        );
+    }
 
     pub(super) fn marlin(accel: f64, jd: f64, vmax: f64) -> Limits {
         Limits {

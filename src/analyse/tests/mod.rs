@@ -3,4 +3,5 @@
 
 mod extruder_turtle;
 mod gcode;
+mod makers;
 mod planner;

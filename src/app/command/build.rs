@@ -5,7 +5,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use super::{job_label, make_parent, non_empty, recipe_name, stage, variant_stem, Builds};
+use super::{job_label, make_parent, non_empty, stage, variant_stem, Builds};
 use crate::analyse::plan::Plan;
 use crate::analyse::stats::Stats;
 use crate::app::batch::{self, Job};
@@ -68,7 +68,7 @@ fn targets(a: &Options, jobs: &[Job]) -> Result<(Vec<Result<Target>>, PathBuf)> 
     let mut out: Vec<Result<Target>> = Vec::with_capacity(jobs.len());
     let mut seen: Vec<(PathBuf, String)> = Vec::new();
     for job in jobs {
-        let t = recipe_name(&job.recipe).map(|name| {
+        let t = a.builds.name_of(job).map(|name| {
             let file = format!("{}.gcode", variant_stem(&name, &job.sweep));
             if dir == Path::new(".") {
                 PathBuf::from(file)

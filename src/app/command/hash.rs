@@ -54,6 +54,13 @@ fn fingerprint(c: &Builds, job: &Job, outs: &[(String, PathBuf)]) -> Result<(Str
 /// `p3dp hash`: prints `SHA256  RECIPE`, the hash of exactly what `build` writes;
 /// with `--lock` writes a lock file, with `--check` verifies one.
 pub(crate) fn run(a: &Options) -> Vec<Error> {
+    if a.builds.filament.is_some() && (a.lock.is_some() || a.check.is_some()) {
+        // a lock entry records the recipe, its --set values and its printer
+        return vec![Error::input(
+            "--filament",
+            "a lock records no filament preset; hash with --filament without --lock or --check",
+        )];
+    }
     if let Some(lockfile) = &a.check {
         return check_lock(a, lockfile);
     }

@@ -8,6 +8,7 @@ pub(crate) mod explain;
 pub(crate) mod hash;
 pub(crate) mod mesh;
 pub(crate) mod new;
+pub(crate) mod plate;
 pub(crate) mod preview;
 pub(crate) mod printers;
 pub(crate) mod send;
@@ -37,6 +38,8 @@ pub(crate) struct Builds {
     pub sweeps: Vec<(String, Vec<String>)>,
     /// `--printer NAME|FILE`.
     pub printer: Option<String>,
+    /// `--filament FILE [--filament-preset NAME]`.
+    pub filament: Option<crate::recipe::preset::Source>,
     /// `--allow CODE`.
     pub allow: Vec<String>,
     /// `--allow-read DIR`.
@@ -45,11 +48,22 @@ pub(crate) struct Builds {
     pub strict: bool,
     /// `--force`: write even when checks fail.
     pub force: bool,
+    /// `p3dp plate`: the plate the command line describes, built as the one
+    /// job (its recipes and sweeps are its entries', not `recipes`).
+    pub plate: Option<std::sync::Arc<crate::recipe::resolve::plate::PlateSpec>>,
 }
 
 impl Builds {
     /// The jobs: every recipe with every combination of the sweeps.
     pub(crate) fn jobs(&self) -> Result<Vec<Job>> {
+        if let Some(spec) = &self.plate {
+            return Ok(vec![Job {
+                recipe: PathBuf::from(&spec.name),
+                sets: self.sets.clone(),
+                sweep: Vec::new(),
+                printer: None,
+            }]);
+        }
         if self.recipes.is_empty() {
             return Err(Error::input(
                 "",
@@ -96,11 +110,15 @@ impl Builds {
         let opts = Options {
             sets: job.sets.clone(),
             printer: self.printer.clone().or_else(|| job.printer.clone()),
+            filament: self.filament.clone(),
             allow: self.allow.clone(),
             allow_read: self.allow_read.clone(),
         };
         let cx = Context::default();
-        let plan = prepare_in(&job.recipe, &opts, &cx);
+        let plan = match &self.plate {
+            Some(spec) => crate::app::prepare::prepare_plate_in(spec, &spec.name, &opts, &cx),
+            None => prepare_in(&job.recipe, &opts, &cx),
+        };
         (plan, cx.reads)
     }
 
@@ -113,9 +131,28 @@ impl Builds {
         Ok(p)
     }
 
-    /// The files a command reads: its recipes and a `--printer` file.
+    /// The files a command reads: its recipes (a plate's entries) and a
+    /// `--printer` file.
     pub(crate) fn inputs(&self) -> Vec<(String, PathBuf)> {
-        inputs_of(&self.recipes, self.printer.as_deref())
+        match &self.plate {
+            Some(spec) => {
+                let recipes: Vec<PathBuf> = spec
+                    .entries
+                    .iter()
+                    .map(|e| spec.dir.join(&e.recipe))
+                    .collect();
+                inputs_of(&recipes, self.printer.as_deref())
+            }
+            None => inputs_of(&self.recipes, self.printer.as_deref()),
+        }
+    }
+
+    /// The name of `job`'s recipe (a plate's own), read without building it.
+    pub(crate) fn name_of(&self, job: &Job) -> Result<String> {
+        match &self.plate {
+            Some(spec) => Ok(spec.name.clone()),
+            None => recipe_name(&job.recipe),
+        }
     }
 
     /// A checked, hashed build as these options say: the codes allowed,

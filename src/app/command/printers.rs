@@ -34,9 +34,10 @@ pub(crate) fn list() -> String {
     out
 }
 
-/// `p3dp printers list FILE`: the printer presets a slicer's file holds, one a line.
-pub(crate) fn presets(file: &std::path::Path) -> Result<String> {
-    let names = preset::list(file, &Reads::default())?;
+/// `p3dp printers list FILE [--filaments]`: the printer (filament) presets
+/// a slicer's file holds, one a line.
+pub(crate) fn presets(kind: preset::Kind, file: &std::path::Path) -> Result<String> {
+    let names = preset::list_of(kind, file, &Reads::default())?;
     let mut out = String::new();
     for n in names {
         out.push_str(&crate::base::safe_text::one_line(&n));
@@ -61,14 +62,15 @@ pub(crate) struct Import {
 pub(crate) fn import(opts: &Import) -> Result<Option<String>> {
     let reads = Reads::default();
     let p = preset::load(&opts.source, &reads)?;
-    let imported = preset::map::to_yaml(&p)?;
+    let imported = preset::map::import(&p)?;
     // the same checks as a build's: the profile loads and validates
-    let printer = crate::recipe::profile::from_imported(&imported.yaml, &p.file)?;
+    let printer = crate::recipe::profile::from_raw(imported.raw.clone(), &p.file)?;
     for note in &imported.notes {
         crate::tell!("note: {}\n", crate::base::safe_text::one_line(note));
     }
+    let yaml = imported.yaml();
     let Some(out) = &opts.output else {
-        return Ok(Some(imported.yaml));
+        return Ok(Some(yaml));
     };
     let inputs: Vec<(String, PathBuf)> = reads
         .files()
@@ -79,7 +81,7 @@ pub(crate) fn import(opts: &Import) -> Result<Option<String>> {
     super::make_parent(out)?;
     crate::output::file::write_atomic(out, |f| {
         use std::io::Write;
-        f.write_all(imported.yaml.as_bytes()).map_err(|e| {
+        f.write_all(yaml.as_bytes()).map_err(|e| {
             Error::io_from(
                 out.display().to_string(),
                 format!("cannot write the profile: {e}"),

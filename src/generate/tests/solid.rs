@@ -22,16 +22,35 @@ use crate::generate::primitive::solid::{Loop, Region, Solid};
 use crate::generate::primitive::Primitive;
 use glam::{DVec2, DVec3};
 
+/// A recipe written into a test's own folder, which goes with it.
+struct RecipeFile {
+    _dir: crate::base::testing::Tmp,
+    path: PathBuf,
+}
+
+impl AsRef<Path> for RecipeFile {
+    fn as_ref(&self) -> &Path {
+        &self.path
+    }
+}
+
+impl std::ops::Deref for RecipeFile {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.path
+    }
+}
+
 /// Writes a one-part recipe whose primitive is `solid: {SOLID}` (YAML flow
 /// text) into a fresh folder and returns its path.
-fn recipe_file(tag: &str, solid: &str) -> PathBuf {
+fn recipe_file(tag: &str, solid: &str) -> RecipeFile {
     let dir = crate::base::testing::tmp(&format!("solid-{tag}"));
     let path = dir.join(format!("{tag}.yaml"));
     let text = format!(
         "p3dp: 1\nname: {tag}\nprinter: generic-220\nmaterial: pla\nparts:\n  - name: solid\n    speed: 40\n    primitive:\n      solid: {solid}\n"
     );
     std::fs::write(&path, text).unwrap();
-    path
+    RecipeFile { _dir: dir, path }
 }
 
 fn load(path: &Path) -> Recipe {

@@ -1,12 +1,14 @@
-//! Object labels: each part named for the host's cancel-object.
+//! Object labels: each object named for the host's cancel-object (a
+//! recipe's objects are its parts; a plate's, its objects: each a whole
+//! recipe, all its parts).
 //!
 //! Every file gets PrusaSlicer's `; printing object NAME` / `; stop
-//! printing object NAME` comments around each part (OctoPrint's Cancel
+//! printing object NAME` comments around each object (OctoPrint's Cancel
 //! Objects and Moonraker's object processing read them); with
 //! `object_labels` (Klipper's default) also Klipper's own commands:
-//! `EXCLUDE_OBJECT_DEFINE NAME=… CENTER=x,y POLYGON=[[x,y],…]` for every part
-//! in the header, its polygon the convex hull of the part's points in
-//! machine XY, and `EXCLUDE_OBJECT_START/END NAME=…` around its moves.
+//! `EXCLUDE_OBJECT_DEFINE NAME=… CENTER=x,y POLYGON=[[x,y],…]` for every
+//! object in the header, its polygon the convex hull of the object's points
+//! in machine XY, and `EXCLUDE_OBJECT_START/END NAME=…` around its moves.
 //!
 //! Klipper reads a command's parameters with `shlex` after cutting the line
 //! at `;`, `#` or `*`, takes `NAME=` case-insensitively and upper-cases it:
@@ -61,11 +63,17 @@ pub(crate) fn names<'a>(parts: impl IntoIterator<Item = &'a str>) -> Vec<String>
 /// highest point (and the leftmost and rightmost points kept whole): one pass
 /// over millions of points, and a hull within one column's width of the
 /// exact one (inside it), which a host draws and picks from.
+#[cfg(test)]
 pub(crate) fn hull(tp: &Toolpath, printer: &Printer) -> Vec<DVec2> {
+    hull_of(std::slice::from_ref(tp), printer)
+}
+
+/// [`hull`] of the points of several parts together (an object's).
+pub(crate) fn hull_of(parts: &[Toolpath], printer: &Printer) -> Vec<DVec2> {
     let o = DVec2::new(printer.origin[0], printer.origin[1]);
-    let pts = &tp.points;
+    let pts = || parts.iter().flat_map(|t| t.points.iter());
     let (mut x0, mut x1) = (f64::INFINITY, f64::NEG_INFINITY);
-    for p in pts {
+    for p in pts() {
         x0 = x0.min(p.x);
         x1 = x1.max(p.x);
     }
@@ -76,7 +84,7 @@ pub(crate) fn hull(tp: &Toolpath, printer: &Printer) -> Vec<DVec2> {
     let scale = (COLUMNS - 1) as f64 / width;
     let mut low = vec![None::<DVec2>; COLUMNS];
     let mut high = vec![None::<DVec2>; COLUMNS];
-    for p in pts {
+    for p in pts() {
         let q = p.truncate();
         let c = (((q.x - x0) * scale) as usize).min(COLUMNS - 1);
         if low[c].is_none_or(|l| q.y < l.y) {

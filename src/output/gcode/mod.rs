@@ -174,13 +174,14 @@ fn emit<W: Write, M: Moves>(
     em.options = head.options;
     em.ahead = head.ahead;
     em.layers = metadata::Layers::of(&extent, p.nozzle_diameter);
-    em.names = labels::names(plan.paths.iter().map(|t| t.name.as_str()));
+    // a plate's objects, else each part: labelled, in print order
+    let objects = plan.objects();
+    em.names = labels::names(objects.iter().map(|(n, _)| n.as_str()));
     if p.object_labels {
-        em.defines = plan
-            .paths
+        em.defines = objects
             .iter()
             .zip(&em.names)
-            .map(|(tp, n)| labels::define(n, &labels::hull(tp, p)))
+            .map(|((_, r), n)| labels::define(n, &labels::hull_of(&plan.paths[r.clone()], p)))
             .collect();
     }
     let fan_events = |t: &Toolpath| t.events.iter().any(|(_, e)| matches!(e, Event::Fan { .. }));
@@ -188,9 +189,11 @@ fn emit<W: Write, M: Moves>(
         em.manual_fan();
     }
     em.start(&plan.recipe, &plan.frame.start)?;
-    for (k, tp) in plan.paths.iter().enumerate() {
+    for (k, (_, r)) in objects.iter().enumerate() {
         em.label(k, true).map_err(io)?;
-        em.part(tp).map_err(io)?;
+        for tp in &plan.paths[r.clone()] {
+            em.part(tp).map_err(io)?;
+        }
         em.label(k, false).map_err(io)?;
     }
     em.finish(&plan.recipe, &plan.frame.end, estimate)

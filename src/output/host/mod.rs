@@ -119,17 +119,18 @@ pub(crate) fn threemf_of(
     let extent = Extent::of(plan);
     let layers = Layers::of(&extent, p.nozzle_diameter);
     let [r, g, b] = recipe.material.color;
+    // a plate's objects (a recipe's parts), each with its box on the bed
     let parts = plan
-        .paths
-        .iter()
-        .map(|tp| {
+        .objects()
+        .into_iter()
+        .map(|(name, k)| {
             let mut bx = [
                 f64::INFINITY,
                 f64::INFINITY,
                 f64::NEG_INFINITY,
                 f64::NEG_INFINITY,
             ];
-            for q in &tp.points {
+            for q in plan.paths[k].iter().flat_map(|t| &t.points) {
                 let m = p.to_machine(*q);
                 bx = [
                     bx[0].min(m.x),
@@ -138,7 +139,7 @@ pub(crate) fn threemf_of(
                     bx[3].max(m.y),
                 ];
             }
-            (tp.name.clone(), bx)
+            (name, bx)
         })
         .collect();
     let plate = threemf::Plate {
@@ -150,6 +151,7 @@ pub(crate) fn threemf_of(
         filament_type: metadata::filament_type(recipe).unwrap_or("").to_string(),
         colour: format!("#{r:02X}{g:02X}{b:02X}"),
         parts,
+        sequential: !recipe.objects.is_empty(),
         layer_height: layers.map_or(0.0, |l| l.height),
         image,
         small,

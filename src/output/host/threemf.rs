@@ -45,8 +45,12 @@ pub(crate) struct Plate {
     pub filament_type: String,
     /// Filament colour, `#RRGGBB`.
     pub colour: String,
-    /// Each part's name and its box on the bed, machine XY (x0, y0, x1, y1).
+    /// Each object's name and its box on the bed, machine XY (x0, y0, x1,
+    /// y1): a plate's objects, a recipe's parts.
     pub parts: Vec<(String, [f64; 4])>,
+    /// The objects are printed one after another (a plate): Bambu's
+    /// `is_seq_print`.
+    pub sequential: bool,
     /// The first layer's height, mm.
     pub layer_height: f64,
     /// The plate's images: 512 px and 128 px PNGs.
@@ -308,7 +312,7 @@ fn plate_json(p: &Plate) -> String {
         "filament_colors": [p.colour],
         "filament_ids": [0],
         "first_extruder": 0,
-        "is_seq_print": false,
+        "is_seq_print": p.sequential,
         "nozzle_diameter": p.nozzle,
         "version": 2,
     })
@@ -390,6 +394,7 @@ mod tests {
             filament_type: "PLA".into(),
             colour: "#FA8F29".into(),
             parts: vec![("a <b>".into(), [1.0, 2.0, 3.0, 4.0])],
+            sequential: false,
             layer_height: 0.2,
             image: vec![1],
             small: vec![2],

@@ -1,5 +1,6 @@
 //! `include:`: other files' params and templates, so a library of parts can
-//! be shared between recipes.
+//! be shared between recipes; and a part's `include:`, a whole recipe as a
+//! part ([`load_part_includes`]).
 //!
 //! Paths are relative to the including file. Included files come first, in
 //! the order listed (each after its own includes); a file included twice is
@@ -8,6 +9,7 @@
 //! naming both.
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use indexmap::IndexMap;
 
@@ -16,7 +18,7 @@ use crate::base::expr::Params;
 use crate::base::input::Reads;
 use crate::recipe::eval::key;
 use crate::recipe::schema::RawParam;
-use crate::recipe::schema::{RawLibrary, RawRecipe, RawTemplate};
+use crate::recipe::schema::{RawLibrary, RawPart, RawRecipe, RawTemplate};
 use crate::recipe::yaml::parse_yaml;
 
 /// Largest file `include:` reads, bytes.
@@ -216,6 +218,174 @@ impl Loader<'_> {
             self.stack.pop();
             lib.add(&raw.params, &raw.templates, Some(&shown), &sub)?;
         }
+        Ok(())
+    }
+}
+
+/// A whole recipe a part includes (`include: pot.yaml` on a part), read once.
+#[derive(Debug)]
+pub(crate) struct Included {
+    /// As written.
+    pub raw: RawRecipe,
+    /// Its params and templates (and those of the files it includes).
+    pub library: Library,
+    /// Its folder (its relative paths start there).
+    pub dir: PathBuf,
+    /// The file as shown in messages.
+    pub shown: String,
+}
+
+/// Every whole recipe the parts include, directly or through templates and
+/// other included recipes, by the path a use names (its folder joined
+/// with the file); a file named twice is read once.
+pub(crate) type Includes = IndexMap<PathBuf, Arc<Included>>;
+
+/// Reads the recipes the parts of `raw` (the recipe at `file`, in `dir`,
+/// with its library `lib`) include as parts, and theirs in turn; a recipe
+/// that includes itself, directly or not, is refused with the chain.
+pub(crate) fn load_part_includes(
+    raw: &RawRecipe,
+    file: Option<&Path>,
+    dir: &Path,
+    lib: &Library,
+    reads: &Reads,
+) -> Result<Includes> {
+    let mut w = PartIncludes {
+        reads,
+        out: Includes::new(),
+        canon: IndexMap::new(),
+        stack: Vec::new(),
+    };
+    if let Some(f) = file {
+        let canon = std::fs::canonicalize(f).unwrap_or_else(|_| f.to_path_buf());
+        w.stack.push((canon, f.display().to_string()));
+    }
+    w.recipe(&raw.parts, dir, lib, None)?;
+    Ok(w.out)
+}
+
+struct PartIncludes<'r> {
+    reads: &'r Reads,
+    out: Includes,
+    /// Each file read, by canonical path.
+    canon: IndexMap<PathBuf, Arc<Included>>,
+    /// The chain of recipes being read: canonical path and shown name.
+    stack: Vec<(PathBuf, String)>,
+}
+
+impl PartIncludes<'_> {
+    /// The includes of a recipe's `parts` (in `dir`) and of its templates.
+    fn recipe(
+        &mut self,
+        parts: &[RawPart],
+        dir: &Path,
+        lib: &Library,
+        from: Option<&str>,
+    ) -> Result<()> {
+        for (k, p) in parts.iter().enumerate() {
+            self.part(p, dir, &format!("{}[{k}]", key!(RawRecipe, parts)), from)?;
+        }
+        for (name, t) in &lib.templates {
+            let place = format!(
+                "{}.{name}.{}",
+                key!(RawRecipe, templates),
+                key!(RawTemplate, part)
+            );
+            let shown = t.file.as_deref().or(from);
+            self.part(&t.raw.part, &t.dir, &place, shown)?;
+        }
+        Ok(())
+    }
+
+    /// The includes of part `p` (at `place` of the file `from`) and its children.
+    fn part(&mut self, p: &RawPart, dir: &Path, place: &str, from: Option<&str>) -> Result<()> {
+        if let Some(inc) = &p.include {
+            self.file(inc, dir, &format!("{place}.{}", key!(p.include)), from)?;
+        }
+        for (k, c) in p.parts.iter().flatten().enumerate() {
+            self.part(c, dir, &format!("{place}.{}[{k}]", key!(p.parts)), from)?;
+        }
+        Ok(())
+    }
+
+    /// Reads the recipe `inc` names (relative to `dir`), once, and its includes.
+    fn file(&mut self, inc: &str, dir: &Path, place: &str, from: Option<&str>) -> Result<()> {
+        let here = |e: Error| match from {
+            Some(f) => e.in_file(f),
+            None => e,
+        };
+        let path = dir.join(inc);
+        if self.out.contains_key(&path) {
+            return Ok(());
+        }
+        let shown = path.display().to_string();
+        let at = |e: Error| {
+            if e.file.is_none() {
+                here(e.under(place))
+            } else {
+                e
+            }
+        };
+        self.reads.reach(&path, "included recipe").map_err(at)?;
+        let canon = std::fs::canonicalize(&path).map_err(|e| {
+            here(Error::input(
+                place,
+                format!("cannot read the included recipe `{inc}` ({shown}): {e}"),
+            ))
+        })?;
+        if let Some(k) = self.stack.iter().position(|(c, _)| *c == canon) {
+            let mut chain: Vec<&str> = self.stack[k..].iter().map(|(_, s)| s.as_str()).collect();
+            chain.push(&shown);
+            return Err(here(Error::input(
+                place,
+                format!(
+                    "include cycle: {}; expected recipes that do not include each other",
+                    chain.join(" → ")
+                ),
+            )));
+        }
+        if let Some(done) = self.canon.get(&canon) {
+            let done = done.clone();
+            self.out.insert(path, done);
+            return Ok(());
+        }
+        if self.canon.len() >= MAX_INCLUDES {
+            return Err(here(Error::input(
+                place,
+                format!("more than {MAX_INCLUDES} included recipes; expected fewer"),
+            )));
+        }
+        let text = self
+            .reads
+            .read_reached(&path, "included recipe", MAX_INCLUDE_BYTES)
+            .map_err(at)?;
+        let raw: RawRecipe = parse_yaml(&text, &shown)?;
+        let mine = |e: Error| e.in_file(&shown);
+        if raw.p3dp != 1 {
+            return Err(mine(Error::input(
+                "p3dp",
+                format!("format version {} is not known; expected 1", raw.p3dp),
+            )));
+        }
+        if raw.plate.is_some() {
+            return Err(here(Error::input(
+                place,
+                format!("`{inc}` is a plate, which is printed on its own; expected a recipe with `parts`"),
+            )));
+        }
+        let sub = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        let library = load_library(&raw, Some(&path), &sub, self.reads)?;
+        self.stack.push((canon.clone(), shown.clone()));
+        self.recipe(&raw.parts, &sub, &library, Some(&shown))?;
+        self.stack.pop();
+        let included = Arc::new(Included {
+            raw,
+            library,
+            dir: sub,
+            shown,
+        });
+        self.canon.insert(canon, included.clone());
+        self.out.insert(path, included);
         Ok(())
     }
 }

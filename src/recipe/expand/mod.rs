@@ -29,12 +29,14 @@
 //! template `ring`'s part in its copy with k = 3, used at `parts[1].parts[0]`.
 
 mod include;
+mod with;
 
 use std::path::Path;
+use std::sync::Arc;
 
 use indexmap::IndexMap;
 
-pub(crate) use include::{load_library, Template};
+pub(crate) use include::{load_library, load_part_includes, Includes, Template};
 
 use crate::base::error::{Error, Result};
 use crate::base::expr::{self, Params};
@@ -65,6 +67,9 @@ pub(crate) struct Leaf<'a> {
     pub name: Option<String>,
     /// The folder of the file that wrote it (relative paths start there).
     pub dir: &'a Path,
+    /// The cross-section and speed of its recipe's `defaults` when it comes
+    /// from a recipe included as a part; `None`: the recipe's own.
+    pub defaults: Option<(f64, f64)>,
 }
 
 /// The steps of a group (or of a template use), to run on leaves `first..end`.
@@ -95,24 +100,32 @@ pub(crate) struct Expansion<'a> {
 }
 
 /// Expands `parts` (written in the folder `dir`) with the recipe's evaluated
-/// `params` and the `templates` of the recipe and its includes.
+/// `params`, the `templates` of the recipe and its includes, and the
+/// recipes its parts include whole (`includes`).
 pub(crate) fn expand<'a>(
     parts: &'a [RawPart],
     templates: &'a IndexMap<String, Template>,
     params: &'a Params,
     dir: &'a Path,
+    includes: &'a Includes,
 ) -> Result<Expansion<'a>> {
     let mut w = Walker {
-        templates,
-        global: params,
+        includes,
         out: Expansion::default(),
     };
     let scope = Scope {
         params: params.clone(),
         suffix: String::new(),
+        prefix: String::new(),
+        copied: false,
         stack: Vec::new(),
         depth: 0,
         dir,
+        lib: Lib {
+            templates,
+            global: Arc::new(params.clone()),
+            defaults: None,
+        },
     };
     for (k, p) in parts.iter().enumerate() {
         w.part(p, &scope, &format!("{}[{k}]", key!(RawRecipe, parts)), None)?;
@@ -120,20 +133,37 @@ pub(crate) fn expand<'a>(
     Ok(w.out)
 }
 
-/// What a part sees: constants, the copy suffix for names, the templates
-/// being expanded (to refuse recursion), the nesting depth, its file's folder.
+/// The templates and params a recipe's parts see: the recipe's, or those of
+/// a recipe included as a part.
+#[derive(Clone)]
+struct Lib<'a> {
+    templates: &'a IndexMap<String, Template>,
+    /// What a template's body sees besides its own params.
+    global: Arc<Params>,
+    /// An included recipe's defaults (cross-section, speed).
+    defaults: Option<(f64, f64)>,
+}
+
+/// What a part sees: constants, the copy suffix and the copies' prefix for
+/// names, whether it is a copy itself, the templates being expanded (to
+/// refuse recursion), the nesting depth, its file's folder, its recipe's
+/// templates and params.
 #[derive(Clone)]
 struct Scope<'a> {
     params: Params,
     suffix: String,
+    /// `pot-2/`: the names of the copies (and included recipes) around.
+    prefix: String,
+    /// This part is one copy of a `for` (its own or a template use's).
+    copied: bool,
     stack: Vec<&'a str>,
     depth: usize,
     dir: &'a Path,
+    lib: Lib<'a>,
 }
 
 struct Walker<'a> {
-    templates: &'a IndexMap<String, Template>,
-    global: &'a Params,
+    includes: &'a Includes,
     out: Expansion<'a>,
 }
 
@@ -150,7 +180,7 @@ impl<'a> Walker<'a> {
         if scope.depth >= MAX_DEPTH {
             return Err(Error::input(
                 place,
-                format!("parts are nested more than {MAX_DEPTH} deep here (groups and template uses); expected a shallower tree"),
+                format!("parts are nested more than {MAX_DEPTH} deep here (groups, template uses and included recipes); expected a shallower tree"),
             ));
         }
         if p.repeat.is_empty() {
@@ -175,19 +205,23 @@ impl<'a> Walker<'a> {
             ));
         }
         // a name with a `{…}` placeholder names the copies itself
-        let carrier = match &p.template {
+        let carrier = match (&p.template, &p.include) {
             _ if name.is_some() => name.as_deref(),
-            Some(t) => p.name.as_deref().or_else(|| {
-                self.templates
+            (Some(t), _) => p.name.as_deref().or_else(|| {
+                scope
+                    .lib
+                    .templates
                     .get(t)
                     .and_then(|tpl| tpl.raw.part.name.as_deref())
             }),
-            None => p.name.as_deref(),
+            (None, Some(_)) => p.name.as_deref().or(Some("")),
+            (None, None) => p.name.as_deref(),
         };
         let suffixed = !carrier.unwrap_or("").contains('{');
         let mut index = vec![0usize; loops.len()];
         for _ in 0..copies {
             let mut s = scope.clone();
+            s.copied = true;
             let mut desc = Vec::with_capacity(loops.len());
             for (j, (var, values)) in loops.iter().enumerate() {
                 let v = values[index[j]];
@@ -210,7 +244,8 @@ impl<'a> Walker<'a> {
         Ok(())
     }
 
-    /// One copy of a part: a template use, a group or a leaf.
+    /// One copy of a part: a template use, an included recipe, a group or a
+    /// leaf; nothing when its `if` is 0.
     fn instance(
         &mut self,
         p: &'a RawPart,
@@ -223,13 +258,22 @@ impl<'a> Walker<'a> {
             Some(d) => format!("{place} ({d})"),
             None => place.to_string(),
         };
+        if let Some(w) = &p.when {
+            // the field `when` is read as `if`
+            if eval(w, &scope.params, &join(&here, "if"))? == 0.0 {
+                return Ok(());
+            }
+        }
         if let Some(t) = &p.template {
-            return self.template_use(p, t, scope, place, &here, copy, name);
+            return self.template_use(p, t, scope, (place, &here), copy, name);
+        }
+        if let Some(inc) = &p.include {
+            return self.include_use(p, inc, scope, (place, &here), copy, name);
         }
         if !p.with.is_empty() {
             return Err(Error::input(
                 join(&here, key!(p.with)),
-                "`with` gives a template's params; expected `template: NAME` beside it",
+                "`with` gives the params of a template or an included recipe; expected `template: NAME` or `include: FILE` beside it",
             ));
         }
         match (&p.primitive, &p.parts) {
@@ -239,14 +283,14 @@ impl<'a> Walker<'a> {
             )),
             (None, None) => Err(Error::input(
                 here,
-                "expected `primitive` (one or a list), `parts` (a group of parts) or `template`",
+                "expected `primitive` (one or a list), `parts` (a group of parts), `template` or `include` (a whole recipe)",
             )),
             (Some(_), None) => self.leaf(p, scope, here, name),
-            (None, Some(children)) => self.group_part(p, children, scope, here),
+            (None, Some(children)) => self.group_part(p, children, scope, here, name),
         }
     }
 
-    /// A leaf part at `here`: its name filled and suffixed, then recorded.
+    /// A leaf part at `here`: its name filled, prefixed and suffixed, then recorded.
     fn leaf(
         &mut self,
         p: &'a RawPart,
@@ -260,8 +304,17 @@ impl<'a> Walker<'a> {
                 Some(n) => Some(fill_name(n, &scope.params, &join(&here, key!(p.name)))?),
                 None => None,
             },
-        }
-        .map(|n| n + &scope.suffix);
+        };
+        let name = match name {
+            Some(n) => Some(format!("{}{n}{}", scope.prefix, scope.suffix)),
+            // an unnamed part of a named copy: `pot-2/part 5`
+            None if !scope.prefix.is_empty() => Some(format!(
+                "{}part {}",
+                scope.prefix,
+                self.out.leaves.len() + 1
+            )),
+            None => None,
+        };
         if let Some(n) = &name {
             check_name(n, &join(&here, key!(p.name)))?;
         }
@@ -277,17 +330,21 @@ impl<'a> Walker<'a> {
             place: here,
             name,
             dir: scope.dir,
+            defaults: scope.lib.defaults,
         });
         Ok(())
     }
 
-    /// A group at `here`: its `children` one level deeper, then its steps.
+    /// A group at `here` (named `name` by a template use, else by itself):
+    /// its `children` one level deeper, then its steps. A named group that
+    /// is a copy names its children `COPY/CHILD`.
     fn group_part(
         &mut self,
         p: &'a RawPart,
         children: &'a [RawPart],
         scope: &Scope<'a>,
         here: String,
+        name: Option<String>,
     ) -> Result<()> {
         for (key, given) in [
             (key!(p.cross_section), p.cross_section.is_some()),
@@ -306,16 +363,25 @@ impl<'a> Walker<'a> {
                 "expected at least one part in a group",
             ));
         }
-        if let Some(n) = &p.name {
-            check_name(
-                &fill_name(n, &scope.params, &join(&here, key!(p.name)))?,
-                &join(&here, key!(p.name)),
-            )?;
+        let name = match name {
+            Some(n) => Some(n),
+            None => match &p.name {
+                Some(n) => Some(fill_name(n, &scope.params, &join(&here, key!(p.name)))?),
+                None => None,
+            },
+        };
+        if let Some(n) = &name {
+            check_name(n, &join(&here, key!(p.name)))?;
         }
-        let inner = Scope {
+        let mut inner = Scope {
             depth: scope.depth + 1,
+            copied: false,
             ..scope.clone()
         };
+        if let (true, Some(n)) = (scope.copied, &name) {
+            inner.prefix = format!("{}{n}{}/", scope.prefix, scope.suffix);
+            inner.suffix.clear();
+        }
         let first = self.out.leaves.len();
         for (j, c) in children.iter().enumerate() {
             let at = format!("{}[{j}]", join(&here, key!(p.parts)));
@@ -326,19 +392,17 @@ impl<'a> Walker<'a> {
     }
 
     /// `template: t` with `with:` values, at `place` (`here` with its copy).
-    #[allow(clippy::too_many_arguments)]
     fn template_use(
         &mut self,
         p: &'a RawPart,
         t: &'a str,
         scope: &Scope<'a>,
-        place: &str,
-        here: &str,
+        (place, here): (&str, &str),
         copy: Option<String>,
         name: Option<String>,
     ) -> Result<()> {
-        only_use_fields(p, here)?;
-        let tpl = self.template(p, t, here)?;
+        only_use_fields(p, here, key!(p.template))?;
+        let tpl = self.template(p, t, scope, here)?;
         if scope.stack.contains(&t) {
             let mut chain: Vec<&str> = scope.stack.clone();
             chain.push(t);
@@ -350,8 +414,8 @@ impl<'a> Walker<'a> {
                 ),
             ));
         }
-        with_known(p, t, tpl, here)?;
-        let params = self.template_params(p, t, tpl, scope, here)?;
+        with_known(p, &format!("template `{t}`"), tpl.raw.params.keys(), here)?;
+        let params = template_params(p, t, tpl, scope, here)?;
         // a name given where the template is used wins over the one inside it
         let name = match (name, &p.name) {
             (Some(n), _) => Some(n),
@@ -370,10 +434,10 @@ impl<'a> Walker<'a> {
         stack.push(t);
         let inner = Scope {
             params,
-            suffix: scope.suffix.clone(),
             stack,
             depth: scope.depth + 1,
             dir: &tpl.dir,
+            ..scope.clone()
         };
         let first = self.out.leaves.len();
         self.part(&tpl.raw.part, &inner, &body, name)?;
@@ -381,10 +445,82 @@ impl<'a> Walker<'a> {
         Ok(())
     }
 
+    /// `include: inc`, a whole recipe as a group, its params from `with:`,
+    /// at `place` (`here` with its copy). Its parts are named `NAME/PART`:
+    /// NAME the use's name (or the recipe's), with the copy's number.
+    fn include_use(
+        &mut self,
+        p: &'a RawPart,
+        inc: &'a str,
+        scope: &Scope<'a>,
+        (place, here): (&str, &str),
+        copy: Option<String>,
+        name: Option<String>,
+    ) -> Result<()> {
+        only_use_fields(p, here, key!(p.include))?;
+        let Some(r) = self.includes.get(&scope.dir.join(inc)) else {
+            return Err(Error::input(
+                join(here, key!(p.include)),
+                format!("the included recipe `{inc}` was not read"),
+            ));
+        };
+        let lib = &r.library;
+        with_known(p, &format!("the recipe `{inc}`"), lib.params.keys(), here)?;
+        let mut sets = Vec::with_capacity(p.with.len());
+        for (k, g) in &p.with {
+            let at = [here, key!(p.with), k].join(".");
+            let target = &lib.params[k].0;
+            sets.push((
+                k.clone(),
+                with::value(g, target, &scope.params, &at)?.text(),
+            ));
+        }
+        let params = lib.eval_params(&sets).map_err(|e| e.in_file(&r.shown))?;
+        let defaults = included_defaults(&r.raw, &params).map_err(|e| e.in_file(&r.shown))?;
+        let name = match (name, &p.name) {
+            (Some(n), _) => n,
+            (None, Some(n)) => fill_name(n, &scope.params, &join(here, key!(p.name)))?,
+            (None, None) => r.raw.name.clone(),
+        };
+        check_name(&name, &join(here, key!(p.name)))?;
+        let body = match &copy {
+            Some(d) => format!("{place} (include {inc}, {d})"),
+            None => format!("{place} (include {inc})"),
+        };
+        let inner = Scope {
+            params: params.clone(),
+            suffix: String::new(),
+            prefix: format!("{}{name}{}/", scope.prefix, scope.suffix),
+            copied: false,
+            stack: Vec::new(),
+            depth: scope.depth + 1,
+            dir: &r.dir,
+            lib: Lib {
+                templates: &lib.templates,
+                global: Arc::new(params),
+                defaults: Some(defaults),
+            },
+        };
+        let first = self.out.leaves.len();
+        for (j, c) in r.raw.parts.iter().enumerate() {
+            let at = format!("{body}.{}[{j}]", key!(RawRecipe, parts));
+            self.part(c, &inner, &at, None)?;
+        }
+        self.group(first, &p.steps, scope, here.to_string());
+        Ok(())
+    }
+
     /// The template `t` a use at `here` names, or an error listing the known ones.
-    fn template(&self, p: &RawPart, t: &str, here: &str) -> Result<&'a Template> {
-        let Some(tpl) = self.templates.get(t) else {
-            let known: Vec<&str> = self.templates.keys().map(String::as_str).collect();
+    fn template(
+        &self,
+        p: &RawPart,
+        t: &str,
+        scope: &Scope<'a>,
+        here: &str,
+    ) -> Result<&'a Template> {
+        let templates = scope.lib.templates;
+        let Some(tpl) = templates.get(t) else {
+            let known: Vec<&str> = templates.keys().map(String::as_str).collect();
             return Err(Error::input(
                 join(here, key!(p.template)),
                 if known.is_empty() {
@@ -398,41 +534,6 @@ impl<'a> Walker<'a> {
             ));
         };
         Ok(tpl)
-    }
-
-    /// The params a use of `tpl` gives its body: the recipe's params, then
-    /// each template param in order, from `with:` (evaluated where the use
-    /// is) or its default (evaluated in the params before it).
-    fn template_params(
-        &self,
-        p: &RawPart,
-        t: &str,
-        tpl: &Template,
-        scope: &Scope<'a>,
-        here: &str,
-    ) -> Result<Params> {
-        // the template's body sees the recipe's params and its own
-        let mut params = self.global.clone();
-        for (pn, default) in &tpl.raw.params {
-            let def_place =
-                [key!(RawRecipe, templates), t, key!(RawTemplate, params), pn].join(".");
-            let in_def = |e: Error| match &tpl.file {
-                Some(f) => e.in_file(f),
-                None => e,
-            };
-            if !is_identifier(pn) || expr::is_reserved(pn) {
-                return Err(in_def(Error::input(
-                    def_place,
-                    format!("`{pn}` cannot name a template param; expected letters, digits and `_`, not a name expressions already use ({})", reserved_names()),
-                )));
-            }
-            let v = match p.with.get(pn) {
-                Some(n) => eval(n, &scope.params, &[here, key!(p.with), pn].join("."))?,
-                None => eval(default, &params, &def_place).map_err(in_def)?,
-            };
-            params.insert(pn.clone(), v);
-        }
-        Ok(params)
     }
 
     /// Records `steps` (when there are any) to run on the leaves from `first` on.
@@ -450,36 +551,93 @@ impl<'a> Walker<'a> {
     }
 }
 
-/// Refuses the fields a template use at `here` cannot have beside `template`.
-fn only_use_fields(p: &RawPart, here: &str) -> Result<()> {
+/// The params a use of `tpl` (template `t`, at `here`) gives its body: the
+/// recipe's params, then each template param in order, from `with:`
+/// (evaluated where the use is) or its default (evaluated in the params
+/// before it).
+fn template_params(
+    p: &RawPart,
+    t: &str,
+    tpl: &Template,
+    scope: &Scope,
+    here: &str,
+) -> Result<Params> {
+    let def_place =
+        |pn: &str| [key!(RawRecipe, templates), t, key!(RawTemplate, params), pn].join(".");
+    let in_def = |e: Error| match &tpl.file {
+        Some(f) => e.in_file(f),
+        None => e,
+    };
+    let mut given = IndexMap::new();
+    for (pn, target) in &tpl.raw.params {
+        if !is_identifier(pn) || expr::is_reserved(pn) {
+            return Err(in_def(Error::input(
+                def_place(pn),
+                format!("`{pn}` cannot name a template param; expected letters, digits and `_`, not a name expressions already use ({})", reserved_names()),
+            )));
+        }
+        if let Some(g) = p.with.get(pn) {
+            let at = [here, key!(p.with), pn].join(".");
+            given.insert(pn.clone(), with::value(g, target, &scope.params, &at)?);
+        }
+    }
+    // the template's body sees the recipe's params and its own
+    with::template_params(&scope.lib.global, &tpl.raw.params, &given, &def_place).map_err(in_def)
+}
+
+/// The cross-section and speed of an included recipe's `defaults`.
+fn included_defaults(raw: &RawRecipe, params: &Params) -> Result<(f64, f64)> {
+    use crate::generate::model::{DEFAULT_CROSS_SECTION, DEFAULT_SPEED};
+    use crate::recipe::eval::{at, Scope};
+    let d = &raw.defaults;
+    let s = Scope::new(params).under(key!(raw.defaults));
+    Ok((
+        s.positive_or(at!(d.cross_section), DEFAULT_CROSS_SECTION)?,
+        s.positive_or(at!(d.speed), DEFAULT_SPEED)?,
+    ))
+}
+
+/// Refuses the fields a use at `here` (of a template, or a recipe
+/// included whole: `what` is `template` or `include`) cannot have beside it.
+fn only_use_fields(p: &RawPart, here: &str, what: &str) -> Result<()> {
     for (key, given) in [
         (key!(p.primitive), p.primitive.is_some()),
         (key!(p.parts), p.parts.is_some()),
         (key!(p.cross_section), p.cross_section.is_some()),
         (key!(p.speed), p.speed.is_some()),
+        (
+            key!(p.include),
+            what != key!(p.include) && p.include.is_some(),
+        ),
     ] {
         if given {
             return Err(Error::input(
                 join(here, key),
-                format!("`{key}` beside `template`; a template use takes only `name`, `with`, `for` and `steps` (steps run after the template's own)"),
+                format!("`{key}` beside `{what}`; a use of a template or an included recipe takes only `name`, `with`, `for`, `if` and `steps` (steps run after its own)"),
             ));
         }
     }
     Ok(())
 }
 
-/// Refuses a `with:` key at `here` that is not a param of the template `t`.
-fn with_known(p: &RawPart, t: &str, tpl: &Template, here: &str) -> Result<()> {
+/// Refuses a `with:` key at `here` that is not one of `known`, the params
+/// of `what` (`template `ring``, `the recipe `pot.yaml``).
+fn with_known<'k>(
+    p: &RawPart,
+    what: &str,
+    known: impl Iterator<Item = &'k String>,
+    here: &str,
+) -> Result<()> {
+    let known: Vec<&str> = known.map(String::as_str).collect();
     for key in p.with.keys() {
-        if !tpl.raw.params.contains_key(key) {
-            let known: Vec<&str> = tpl.raw.params.keys().map(String::as_str).collect();
+        if !known.contains(&key.as_str()) {
             return Err(Error::input(
                 [here, key!(p.with), key].join("."),
                 if known.is_empty() {
-                    format!("template `{t}` has no params")
+                    format!("{what} has no params")
                 } else {
                     format!(
-                        "template `{t}` has no param `{key}`; its params are {}",
+                        "{what} has no param `{key}`; its params are {}",
                         known.join(", ")
                     )
                 },
@@ -522,9 +680,6 @@ fn loop_values<'p>(
         }
         let values = match l {
             RawLoop::List(v) => {
-                if v.is_empty() {
-                    return Err(Error::input(at, "expected at least one value"));
-                }
                 if v.len() > MAX_PARTS {
                     return Err(Error::input(
                         at,
@@ -549,7 +704,8 @@ fn loop_values<'p>(
 }
 
 /// The values of `"a..b"` or `"a..b:step"`: a, a + step, … up to b
-/// included (within 1e-9 of a step, so 0..1:0.1 ends at 1).
+/// included (within 1e-9 of a step, so 0..1:0.1 ends at 1); none when the
+/// step never reaches b (`1..0`).
 fn range(s: &str, params: &Params, place: &str) -> Result<Vec<f64>> {
     let not_range = || {
         Error::input(place, format!("`{s}` is not a range; expected \"a..b\" or \"a..b:step\" (b included), or a list [v1, v2, …]"))
@@ -576,12 +732,9 @@ fn range(s: &str, params: &Params, place: &str) -> Result<Vec<f64>> {
     }
     let span = (b - a) / step;
     if span < -1e-9 {
-        return Err(Error::input(place, format!(
-            "`{s}` is empty: from {} the step {} never reaches {}; expected a step with the sign of b - a",
-            fmt_value(a),
-            fmt_value(step),
-            fmt_value(b)
-        )));
+        // from a the step never reaches b: no values (`1..n` with n = 0
+        // makes no copy, as a part switched off)
+        return Ok(Vec::new());
     }
     let n = libm::floor(span + 1e-9 * span.abs().max(1.0)) + 1.0;
     if !n.is_finite() || n > MAX_PARTS as f64 {
@@ -688,10 +841,8 @@ mod tests {
         assert_eq!(range("0..1:0.1", &p, "for.k").unwrap().len(), 11);
         assert_eq!(range("3..1:-1", &p, "for.k").unwrap(), vec![3.0, 2.0, 1.0]);
         assert_eq!(range("2..2", &p, "for.k").unwrap(), vec![2.0]);
-        assert!(range("3..1", &p, "for.k")
-            .unwrap_err()
-            .message
-            .contains("empty"));
+        assert_eq!(range("3..1", &p, "for.k").unwrap(), Vec::<f64>::new());
+        assert_eq!(range("1..0", &p, "for.k").unwrap(), Vec::<f64>::new());
         assert!(range("0..1:0", &p, "for.k")
             .unwrap_err()
             .message

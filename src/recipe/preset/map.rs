@@ -1,32 +1,47 @@
-//! A slicer preset in p3dp's terms and units: the YAML text of a printer
-//! profile (what `p3dp printers import` writes, readable and editable, and
-//! what `--printer FILE.ini|FILE.json` loads), or a refusal naming the one
-//! thing p3dp cannot do with the preset.
+//! A slicer's printer preset in p3dp's terms and units: the profile's own
+//! raw type ([`RawPrinter`], what a profile's YAML parses into), built
+//! directly — `--printer FILE.ini|FILE.json` loads it as a profile file is
+//! loaded, and `p3dp printers import` writes it as readable YAML
+//! ([`Imported::yaml`], which parses back into the same value) — or a
+//! refusal naming the one thing p3dp cannot do with the preset.
 //!
 //! What comes across: the bed (`bed_shape`/`printable_area`: a rectangle,
 //! offset or not, or a circle on the origin), its height, the nozzle, the
-//! filament diameter where the preset has it, the firmware flavour, the
-//! machine limits (`machine_max_*`, unless `machine_limits_usage` is
-//! `ignore`), the retraction, the thumbnails and their format, the model,
-//! and the start and end G-code (kept in the slicers' macro language, every
-//! variable one p3dp gives or a `gcode_variables` entry with a default the
-//! user sees). Before/after-layer and tool-change hooks are named as
-//! ignored: p3dp prints strings, not layers, with one extruder.
+//! filament diameter where the preset has it, the extruders (a multi-tool
+//! machine prints with its first), the firmware flavour, the machine limits
+//! (`machine_max_*`, unless `machine_limits_usage` is `ignore`), the
+//! retraction, the thumbnails and their format, the model, and the start
+//! and end G-code, kept in the slicers' macro language. Every variable the
+//! G-code reads has a value with a stated source: p3dp's own (the profile,
+//! the print, the material: `crate::machine::VARIABLES` and
+//! `crate::machine::material::VARIABLES`), the preset's own setting of that
+//! name, or a default a slicer would use that the YAML shows under
+//! `gcode_variables:` — or a filament preset's (named at the build with
+//! `--filament`); any other is refused by name. Before/after-layer and
+//! tool-change hooks are named as ignored: p3dp prints strings, not layers,
+//! with one tool.
 
-use std::fmt::Write as _;
+use indexmap::IndexMap;
 
-use super::{Format, Preset};
+use super::{refuse, Format, Kind, Preset};
 use crate::base::error::{Error, Result};
 use crate::base::slicer_macro::Template;
+use crate::recipe::schema::{
+    RawBed, RawExtrusion, RawFlavor, RawKinematics, RawPrinter, RawRetraction, RawVariable,
+};
 
-/// A preset made into a profile: its YAML text and what was left out or
+/// A preset made into a profile: its raw form and what was left out or
 /// assumed, one note each.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Imported {
-    /// The profile, YAML.
-    pub yaml: String,
+    /// The profile, as a profile file's YAML parses into.
+    pub(crate) raw: RawPrinter,
     /// What p3dp ignored or assumed, for the user.
     pub notes: Vec<String>,
+    /// The preset file, as the user named it.
+    pub file: String,
+    /// The preset file's family.
+    pub format: Format,
 }
 
 /// Values only a slicer knows that start and end G-code may use, with the
@@ -59,6 +74,55 @@ pub(crate) const SLICER_DEFAULTS: &[(&str, &str, &str)] = &[
         "\"by object\"",
         "p3dp prints its parts one after another",
     ),
+    ("plate_name", "\"\"", "Bambu's plate name: none given"),
+    (
+        "standby_temperature_delta",
+        "-5",
+        "PrusaSlicer's default; p3dp never parks a tool",
+    ),
+    (
+        "spiral_mode",
+        "false",
+        "no slicer's spiral-vase mode: p3dp prints its strings as written",
+    ),
+    ("wipe_tower", "false", "p3dp prints no wipe tower"),
+    (
+        "long_retraction_when_cut",
+        "false",
+        "Bambu's long retraction when the filament is cut: none, p3dp cuts no filament",
+    ),
+    (
+        "retraction_distance_when_cut",
+        "0",
+        "the same: no retraction at a cut, mm",
+    ),
+    (
+        "long_retraction_when_ec",
+        "false",
+        "Bambu's long retraction at an extruder change: none, p3dp changes no extruder",
+    ),
+    (
+        "retraction_distance_when_ec",
+        "0",
+        "the same: no retraction at an extruder change, mm",
+    ),
+    (
+        "wipe_tower_center_pos_valid",
+        "false",
+        "p3dp prints no wipe tower",
+    ),
+    ("wipe_tower_center_pos_x", "0", "p3dp prints no wipe tower"),
+    ("wipe_tower_center_pos_y", "0", "p3dp prints no wipe tower"),
+    (
+        "hold_chamber_temp_for_flat_print",
+        "false",
+        "Bambu Studio's print option: the chamber is not held warm for a flat print",
+    ),
+    (
+        "nozzle_high_flow",
+        "[false]",
+        "PrusaSlicer's default: a standard-flow nozzle (one value per extruder)",
+    ),
 ];
 
 /// Hooks p3dp does not run, and why.
@@ -71,8 +135,8 @@ const IGNORED: &[(&str, &str)] = &[
     ("layer_gcode", "p3dp prints strings, not layers"),
     ("layer_change_gcode", "p3dp prints strings, not layers"),
     ("time_lapse_gcode", "p3dp prints strings, not layers"),
-    ("toolchange_gcode", "p3dp drives one extruder"),
-    ("change_filament_gcode", "p3dp drives one extruder"),
+    ("toolchange_gcode", "p3dp prints with one tool"),
+    ("change_filament_gcode", "p3dp prints with one tool"),
     ("between_objects_gcode", "p3dp travels between parts itself"),
     (
         "printing_by_object_gcode",
@@ -85,10 +149,17 @@ const IGNORED: &[(&str, &str)] = &[
         "template_custom_gcode",
         "p3dp has no custom G-code per layer",
     ),
+    (
+        "wrapping_detection_gcode",
+        "p3dp prints strings, not layers",
+    ),
 ];
 
+/// Most extruders (or filament slots) a preset may list.
+const MAX_EXTRUDERS: usize = 16;
+
 /// Flavours p3dp writes, from the slicers' `gcode_flavor`.
-fn flavor(p: &Preset) -> Result<(&'static str, Option<String>)> {
+fn flavor(p: &Preset) -> Result<(RawFlavor, Option<String>)> {
     let given = p.text("gcode_flavor");
     // PrusaSlicer's default is RepRap/Sprinter, a Marlin dialect
     let f = given.clone().unwrap_or_else(|| match p.format {
@@ -99,8 +170,23 @@ fn flavor(p: &Preset) -> Result<(&'static str, Option<String>)> {
         .text("printer_notes")
         .is_some_and(|n| n.contains("PRINTER_VENDOR_PRUSA3D"))
         || p.text("printer_model")
-            .is_some_and(|m| m.starts_with("Prusa ") || m.starts_with("Original Prusa"));
-    let marlin = if prusa { "prusa" } else { "marlin" };
+            .is_some_and(|m| m.starts_with("Prusa ") || m.starts_with("Original Prusa"))
+        // Prusa's firmware alone checks the printer's model (the newest
+        // bundle's MK4IS, CORE One notes no longer name the vendor)
+        || p.first_text(&["start_gcode", "machine_start_gcode"])
+            .is_some_and(|(_, g)| g.contains("M862.3 P"));
+    // Bambu Lab's printers run Bambu's own Marlin-like firmware (its
+    // presets say `marlin`): their own commands are read as it reads them
+    let bambu = p
+        .text("printer_model")
+        .is_some_and(|m| m.starts_with("Bambu Lab"));
+    let marlin = if prusa {
+        RawFlavor::Prusa
+    } else if bambu {
+        RawFlavor::Bambu
+    } else {
+        RawFlavor::Marlin
+    };
     let note = |s: &str| Some(s.to_string());
     Ok(match f.as_str() {
         "marlin" | "marlin2" | "marlinlegacy" => (marlin, None),
@@ -108,8 +194,8 @@ fn flavor(p: &Preset) -> Result<(&'static str, Option<String>)> {
             marlin,
             note("gcode_flavor `reprap` (RepRap/Sprinter) is a Marlin dialect: written as Marlin"),
         ),
-        "klipper" => ("klipper", None),
-        "reprapfirmware" => ("reprap", None),
+        "klipper" => (RawFlavor::Klipper, None),
+        "reprapfirmware" => (RawFlavor::Reprap, None),
         other => {
             return Err(refuse(
                 p,
@@ -120,148 +206,18 @@ fn flavor(p: &Preset) -> Result<(&'static str, Option<String>)> {
     })
 }
 
-fn refuse(p: &Preset, key: &str, what: String) -> Error {
-    Error::input(
-        key,
-        format!("preset `{}`: p3dp cannot import {what}", p.name),
-    )
-    .in_file(&p.file)
-}
-
-/// The bed: the profile's `bed:` text, the origin (the bed's centre) and
-/// the XY extent.
-/// The corners of the bed setting `key`, `XxY` each.
-fn corners(p: &Preset, key: &str) -> Result<Vec<(f64, f64)>> {
-    let mut pts = Vec::new();
-    for s in p.list(key).unwrap_or_default() {
-        let parsed = s
-            .split_once(['x', 'X'])
-            .and_then(|(x, y)| Some((x.trim().parse::<f64>().ok()?, y.trim().parse::<f64>().ok()?)))
-            .filter(|(x, y)| x.is_finite() && y.is_finite());
-        match parsed {
-            Some(xy) => pts.push(xy),
-            None => {
-                return Err(
-                    Error::input(key, format!("`{s}` is not a corner; expected XxY"))
-                        .in_file(&p.file),
-                )
-            }
-        }
+/// The preset as a profile, or the refusal naming what p3dp cannot do.
+pub fn import(p: &Preset) -> Result<Imported> {
+    if p.kind != Kind::Printer {
+        return Err(Error::input(
+            "",
+            format!(
+                "preset `{}` is a filament preset; expected a printer preset",
+                p.name
+            ),
+        )
+        .in_file(&p.file));
     }
-    Ok(pts)
-}
-
-fn bed(p: &Preset, max_z: f64) -> Result<(String, [f64; 2])> {
-    let Some((key, _)) = p.first_text(&["bed_shape", "printable_area"]) else {
-        return Err(refuse(
-            p,
-            "bed_shape",
-            "a preset without a bed (no bed_shape or printable_area)".into(),
-        ));
-    };
-    let pts = corners(p, &key)?;
-    let (xs, ys): (Vec<f64>, Vec<f64>) = pts.iter().copied().unzip();
-    let (x0, x1) = (
-        xs.iter().copied().fold(f64::INFINITY, f64::min),
-        xs.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-    );
-    let (y0, y1) = (
-        ys.iter().copied().fold(f64::INFINITY, f64::min),
-        ys.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-    );
-    let on = |v: f64, a: f64, b: f64| (v - a).abs() < 1e-6 || (v - b).abs() < 1e-6;
-    if pts.len() == 4
-        && pts.iter().all(|&(x, y)| on(x, x0, x1) && on(y, y0, y1))
-        && x1 > x0
-        && y1 > y0
-    {
-        let text = format!(
-            "{{ shape: rectangle, size: [{}, {}], min: [{}, {}], max_z: {} }}",
-            n(x1 - x0),
-            n(y1 - y0),
-            n(x0),
-            n(y0),
-            n(max_z)
-        );
-        return Ok((text, [(x0 + x1) / 2.0, (y0 + y1) / 2.0]));
-    }
-    if pts.len() >= 8 {
-        let k = pts.len() as f64;
-        let (cx, cy) = (xs.iter().sum::<f64>() / k, ys.iter().sum::<f64>() / k);
-        let radii: Vec<f64> = pts.iter().map(|&(x, y)| (x - cx).hypot(y - cy)).collect();
-        let r = radii.iter().sum::<f64>() / k;
-        let round = r > 0.0 && radii.iter().all(|q| (q - r).abs() <= 0.005 * r);
-        if round && cx.hypot(cy) <= 0.01 * r {
-            let d = libm::round(2.0 * r * 1000.0) / 1000.0;
-            return Ok((
-                format!(
-                    "{{ shape: circle, diameter: {}, max_z: {} }}",
-                    n(d),
-                    n(max_z)
-                ),
-                [0.0, 0.0],
-            ));
-        }
-        if round {
-            return Err(refuse(
-                p,
-                &key,
-                "a round bed whose centre is not the origin".into(),
-            ));
-        }
-    }
-    Err(refuse(
-        p,
-        &key,
-        format!(
-            "a bed of {} corners that is neither a rectangle nor a circle",
-            pts.len()
-        ),
-    ))
-}
-
-/// A number as YAML: Rust's shortest form that reads back the same.
-fn n(v: f64) -> String {
-    if v == 0.0 {
-        "0".into()
-    } else {
-        format!("{v}")
-    }
-}
-
-/// A string as YAML: JSON's quoting, which YAML reads.
-fn q(s: &str) -> String {
-    serde_json::to_string(s).expect("a string serialises")
-}
-
-/// `key: |2…` a literal block of `text`, every line kept as it is.
-fn block(out: &mut String, key: &str, text: &str) {
-    if text.is_empty() {
-        let _ = writeln!(out, "{key}: \"\"");
-        return;
-    }
-    let trailing = text.len() - text.trim_end_matches('\n').len();
-    let chomp = match trailing {
-        0 => "-",
-        1 => "",
-        _ => "+",
-    };
-    let _ = writeln!(out, "{key}: |2{chomp}");
-    for line in text.trim_end_matches('\n').split('\n') {
-        if line.is_empty() {
-            out.push('\n');
-        } else {
-            let _ = writeln!(out, "  {line}");
-        }
-    }
-    // `|2+` keeps the line breaks after the last line: one is written above
-    for _ in 1..trailing {
-        out.push('\n');
-    }
-}
-
-/// The preset as a profile's YAML, or the refusal naming what p3dp cannot do.
-pub fn to_yaml(p: &Preset) -> Result<Imported> {
     let mut notes = Vec::new();
     if let Some(t) = p
         .text("printer_technology")
@@ -274,8 +230,7 @@ pub fn to_yaml(p: &Preset) -> Result<Imported> {
         ));
     }
     let Some(max_z) = p
-        .number("max_print_height")?
-        .or(p.number("printable_height")?)
+        .first_number(&["max_print_height", "printable_height"])?
         .filter(|z| *z > 0.0)
     else {
         return Err(refuse(
@@ -284,51 +239,65 @@ pub fn to_yaml(p: &Preset) -> Result<Imported> {
             "a preset without a height (max_print_height or printable_height)".into(),
         ));
     };
-    let (bed, centre) = bed(p, max_z)?;
+    let (bed, centre) = super::bed::bed(p, max_z, &mut notes)?;
     let (flavor, flavor_note) = flavor(p)?;
     notes.extend(flavor_note);
-    let mut y = String::new();
-    let _ = writeln!(
-        y,
-        "# Imported by `p3dp printers import` from {} ({}).\n# The figures are the preset's own; the start and end G-code is the maker's,\n# in the slicers' macro language, expanded and checked against the machine's\n# limits at every build. Edit freely.",
-        crate::base::safe_text::one_line(&p.file),
-        p.format.describe()
-    );
-    let _ = writeln!(y, "name: {}", q(&p.name));
-    if let Some(m) = p.text("printer_model").filter(|m| !m.is_empty()) {
-        let _ = writeln!(y, "model: {}", q(&m));
-    }
-    let _ = writeln!(y, "flavor: {flavor}");
-    let _ = writeln!(y, "bed: {bed}");
     let z_offset = p.number("z_offset")?.unwrap_or(0.0);
-    let _ = writeln!(
-        y,
-        "origin: [{}, {}, {}]",
-        n(centre[0]),
-        n(centre[1]),
-        n(z_offset)
+    let (nozzle, filament, extrusion, extruders) = extruder(p, &mut notes)?;
+    let mut raw = RawPrinter::new(
+        p.name.clone(),
+        bed,
+        [centre[0], centre[1], z_offset],
+        nozzle,
+        filament,
     );
-    extruder(p, &mut y, &mut notes)?;
-    retraction(p, &mut y, &mut notes)?;
-    limits(p, flavor, &mut y, &mut notes)?;
-    thumbnails(p, &mut y, &mut notes);
-    gcode(p, &mut y, &mut notes)?;
+    raw.model = p.text("printer_model").unwrap_or_default();
+    raw.flavor = flavor;
+    raw.extrusion = extrusion;
+    raw.extruders = extruders as u32;
+    raw.tool = main_extruder(p, extruders, &mut notes)? as u32;
+    retraction(p, &mut raw, &mut notes)?;
+    limits(p, &mut raw, &mut notes)?;
+    raw.thumbnails = thumbnails(p, &mut notes);
+    gcode(p, &mut raw, extruders, &mut notes)?;
+    // the start G-code is the maker's: its flushes and purges may be hotter
+    // than the print (docs/checks.md)
+    raw.maker_temperatures = true;
+    reach(&mut raw, &mut notes);
     for (key, why) in IGNORED {
         if p.has(key) {
             notes.push(format!("{key} ignored: {why}"));
         }
     }
-    if !notes.is_empty() {
-        y.push_str("# Notes from the import:\n");
-        for note in &notes {
-            let _ = writeln!(y, "# - {}", crate::base::safe_text::one_line(note));
-        }
-    }
-    Ok(Imported { yaml: y, notes })
+    Ok(Imported {
+        raw,
+        notes,
+        file: p.file.clone(),
+        format: p.format,
+    })
 }
 
-/// The nozzle, the filament and the extrusion mode.
-fn extruder(p: &Preset, y: &mut String, notes: &mut Vec<String>) -> Result<()> {
+/// The head's reach beyond a rectangular bed, from the maker's own moves
+/// ([`super::reach`]).
+fn reach(raw: &mut RawPrinter, notes: &mut Vec<String>) {
+    if let RawBed::Rectangle { size, min, .. } = raw.bed {
+        let max = [min[0] + size[0], min[1] + size[1]];
+        let texts = [
+            ("start_gcode", raw.start_gcode.as_str()),
+            ("end_gcode", raw.end_gcode.as_str()),
+        ];
+        let r = super::reach::reach(&texts, min, max, raw.envelope.margin);
+        [raw.envelope.x, raw.envelope.y] = r.xy;
+        if let Some(d) = r.below {
+            raw.envelope.below_bed = d;
+        }
+        notes.extend(r.notes);
+    }
+}
+
+/// The nozzle, the filament, the extrusion mode and the number of
+/// extruders (or filament slots) the per-extruder settings list.
+fn extruder(p: &Preset, notes: &mut Vec<String>) -> Result<(f64, f64, RawExtrusion, usize)> {
     let nozzle = match p.number("nozzle_diameter")? {
         Some(d) => d,
         None => {
@@ -336,41 +305,63 @@ fn extruder(p: &Preset, y: &mut String, notes: &mut Vec<String>) -> Result<()> {
             0.4
         }
     };
-    let _ = writeln!(*y, "nozzle_diameter: {}", n(nozzle));
-    let tools = p.list("nozzle_diameter").map_or(1, |l| l.len());
-    if tools > 1 {
+    let extruders = p.list("nozzle_diameter").map_or(1, |l| l.len().max(1));
+    if extruders > MAX_EXTRUDERS {
+        return Err(refuse(
+            p,
+            "nozzle_diameter",
+            format!("a printer of {extruders} extruders (at most {MAX_EXTRUDERS})"),
+        ));
+    }
+    if extruders > 1 {
         notes.push(format!(
-            "a printer of {tools} extruders or filament slots (nozzle_diameter lists {tools}): p3dp drives the first; G-code that reads another's values is refused at the build"
+            "a printer of {extruders} extruders or filament slots (nozzle_diameter lists {extruders}): p3dp prints with the first, the tool its start G-code selects (initial_tool 0)"
         ));
     }
     let filament = match p.number("filament_diameter")? {
         Some(d) => d,
         None => {
-            notes.push("no filament_diameter in the preset: 1.75 mm (a recipe's material may say otherwise)".into());
+            notes.push("no filament_diameter in the preset: 1.75 mm (a recipe's material or --filament may say otherwise)".into());
             1.75
         }
     };
-    let _ = writeln!(*y, "filament_diameter: {}", n(filament));
     let relative = match p.text("use_relative_e_distances") {
         Some(t) => t == "1" || t.eq_ignore_ascii_case("true"),
         None => p.format == Format::Json,
     };
-    let _ = writeln!(
-        *y,
-        "extrusion: {}",
-        if relative { "relative" } else { "absolute" }
-    );
-    Ok(())
+    let extrusion = if relative {
+        RawExtrusion::Relative
+    } else {
+        RawExtrusion::Absolute
+    };
+    Ok((nozzle, filament, extrusion, extruders))
 }
 
-fn retraction(p: &Preset, y: &mut String, notes: &mut Vec<String>) -> Result<()> {
-    let length = p
-        .number("retract_length")?
-        .or(p.number("retraction_length")?);
-    let speed = p.number("retract_speed")?.or(p.number("retraction_speed")?);
-    let travel = p
-        .number("retract_before_travel")?
-        .or(p.number("retraction_minimum_travel")?);
+/// The extruder p3dp prints with: Bambu Studio's `master_extruder_id`
+/// (1-based; the H2D's right-hand nozzle, its T0), else the first.
+fn main_extruder(p: &Preset, extruders: usize, notes: &mut Vec<String>) -> Result<usize> {
+    let Some(m) = p.number("master_extruder_id")? else {
+        return Ok(0);
+    };
+    if m < 1.0 || m > extruders as f64 || m.fract() != 0.0 {
+        return Err(refuse(
+            p,
+            "master_extruder_id",
+            format!("a main extruder {m} of {extruders}"),
+        ));
+    }
+    if extruders > 1 {
+        notes.push(format!(
+            "p3dp prints with extruder {m} of {extruders}, the main one (master_extruder_id)"
+        ));
+    }
+    Ok(m as usize - 1)
+}
+
+fn retraction(p: &Preset, raw: &mut RawPrinter, notes: &mut Vec<String>) -> Result<()> {
+    let length = p.first_number(&["retract_length", "retraction_length"])?;
+    let speed = p.first_number(&["retract_speed", "retraction_speed"])?;
+    let travel = p.first_number(&["retract_before_travel", "retraction_minimum_travel"])?;
     let Some(length) = length else {
         notes.push("no retraction in the preset: none".into());
         return Ok(());
@@ -382,21 +373,18 @@ fn retraction(p: &Preset, y: &mut String, notes: &mut Vec<String>) -> Result<()>
             35.0
         }
     };
-    let mut r = format!(
-        "retraction: {{ length: {}, speed: {}",
-        n(length.max(0.0)),
-        n(speed)
-    );
+    let mut r = RawRetraction {
+        length: length.max(0.0),
+        speed,
+        ..RawRetraction::default()
+    };
     if let Some(t) = travel {
-        let _ = write!(r, ", min_travel: {}", n(t.max(0.0)));
+        r.min_travel = t.max(0.0);
     }
-    let _ = writeln!(y, "{r} }}");
-    if p.text("use_firmware_retraction").is_some_and(|t| t == "1") {
-        let _ = writeln!(y, "firmware_retraction: true");
-    }
+    raw.retraction = r;
+    raw.firmware_retraction = p.text("use_firmware_retraction").is_some_and(|t| t == "1");
     if let Some(lift) = p
-        .number("retract_lift")?
-        .or(p.number("z_hop")?)
+        .first_number(&["retract_lift", "z_hop"])?
         .filter(|l| *l > 0.0)
     {
         notes.push(format!(
@@ -407,16 +395,26 @@ fn retraction(p: &Preset, y: &mut String, notes: &mut Vec<String>) -> Result<()>
     Ok(())
 }
 
-/// The machine limits: `max_speed` and `kinematics:`.
-fn limits(p: &Preset, flavor: &str, y: &mut String, notes: &mut Vec<String>) -> Result<()> {
+/// A number in a note: Rust's shortest form that reads back the same.
+fn n(v: f64) -> String {
+    if v == 0.0 {
+        "0".into()
+    } else {
+        format!("{v}")
+    }
+}
+
+/// The machine limits: `max_speed`, `travel_speed` and `kinematics:`; a
+/// figure past what a machine can be is left out with a note (p3dp's
+/// default stands), never made into a value the profile would refuse.
+fn limits(p: &Preset, raw: &mut RawPrinter, notes: &mut Vec<String>) -> Result<()> {
+    use crate::machine::limits::{ACCELERATION_MAX, SPEED_MAX};
     let usage = p.text("machine_limits_usage");
     if usage.as_deref() == Some("ignore") {
         notes.push("machine_limits_usage is `ignore`: p3dp's default limits".into());
         return Ok(());
     }
-    if usage.as_deref() == Some("emit_to_gcode") {
-        notes.push("machine_limits_usage is `emit_to_gcode`: the limits are p3dp's for its checks and estimate, but p3dp writes no M201–M205; the firmware keeps its own".into());
-    }
+    emitted(p, usage.as_deref(), raw, notes)?;
     // OrcaSlicer and Bambu Studio call the feed rates machine_max_speed_*
     let pos = |key: &str| -> Result<Option<f64>> {
         let alias = match key.strip_prefix("machine_max_feedrate_") {
@@ -433,60 +431,120 @@ fn limits(p: &Preset, flavor: &str, y: &mut String, notes: &mut Vec<String>) -> 
         pos("machine_max_feedrate_x")?,
         pos("machine_max_feedrate_y")?,
     );
-    let mut k = String::new();
-    let mut put = |key: &str, v: Option<f64>| {
-        if let Some(v) = v {
-            let _ = writeln!(k, "  {key}: {}", n(v));
+    match bounded(notes, "machine_max_feedrate_x/y", vmax, SPEED_MAX, "mm/s") {
+        Some(v) => {
+            raw.max_speed = v;
+            raw.travel_speed = v.min(120.0);
         }
+        None => notes
+            .push("no machine_max_feedrate_x/y in the preset: p3dp's max_speed 300 mm/s".into()),
+    }
+    let mut k = RawKinematics::default();
+    let mut accel = |key: &str| -> Result<Option<f64>> {
+        Ok(bounded(notes, key, pos(key)?, ACCELERATION_MAX, "mm/s²"))
     };
-    let ceiling = crate::machine::limits::SPEED_MAX;
-    if let Some(v) = vmax.filter(|v| *v > ceiling) {
-        notes.push(format!(
-            "machine_max_feedrate_x/y {} mm/s is past p3dp's ceiling of {} mm/s (mm/min meant?): left out, p3dp's max_speed 300 mm/s",
-            n(v),
-            n(ceiling)
-        ));
+    if let Some(a) = accel("machine_max_acceleration_extruding")? {
+        k.max_acceleration = a;
     }
-    if let Some(v) = vmax.filter(|v| *v <= ceiling) {
-        let _ = writeln!(y, "max_speed: {}", n(v));
-        let _ = writeln!(y, "travel_speed: {}", n(v.min(120.0)));
-    } else {
-        notes.push("no machine_max_feedrate_x/y in the preset: p3dp's max_speed 300 mm/s".into());
-    }
-    put(
-        "max_acceleration",
-        pos("machine_max_acceleration_extruding")?,
+    k.travel_acceleration = accel("machine_max_acceleration_travel")?;
+    k.retract_acceleration = accel("machine_max_acceleration_retracting")?;
+    let jerk = bounded(
+        notes,
+        "machine_max_jerk_x/y",
+        min2(pos("machine_max_jerk_x")?, pos("machine_max_jerk_y")?),
+        SPEED_MAX,
+        "mm/s",
     );
-    put(
-        "travel_acceleration",
-        pos("machine_max_acceleration_travel")?,
-    );
-    put(
-        "retract_acceleration",
-        pos("machine_max_acceleration_retracting")?,
-    );
-    let jerk = min2(pos("machine_max_jerk_x")?, pos("machine_max_jerk_y")?);
     let jd = pos("machine_max_junction_deviation")?;
-    if flavor == "klipper" {
-        put("square_corner_velocity", Some(jerk.unwrap_or(5.0)));
+    if raw.flavor == RawFlavor::Klipper {
+        // Klipper's square_corner_velocity is the slicers' jerk; its own
+        // default is 5 mm/s
+        k.square_corner_velocity = Some(jerk.unwrap_or(5.0));
     } else if jd.is_some() {
-        put("junction_deviation", jd);
+        k.junction_deviation = jd;
     } else {
-        put("jerk", jerk);
+        k.jerk = jerk;
     }
-    put("max_z_speed", pos("machine_max_feedrate_z")?);
-    put("max_z_acceleration", pos("machine_max_acceleration_z")?);
-    put("max_extrude_only_velocity", pos("machine_max_feedrate_e")?);
-    put("max_extrude_only_accel", pos("machine_max_acceleration_e")?);
-    if !k.is_empty() {
-        let _ = writeln!(y, "# the firmware's limits (machine_max_*), for the time estimate; p3dp does not\n# write M201–M205: the firmware keeps its own\nkinematics:\n{k}");
+    k.max_z_speed = pos("machine_max_feedrate_z")?;
+    k.max_z_acceleration = pos("machine_max_acceleration_z")?;
+    k.max_extrude_only_velocity = pos("machine_max_feedrate_e")?;
+    k.max_extrude_only_accel = pos("machine_max_acceleration_e")?;
+    raw.kinematics = k;
+    Ok(())
+}
+
+/// PrusaSlicer's `emit_to_gcode`, OrcaSlicer's flag (its default, on, is
+/// taken only where the preset says it): the limits written as `M201`–`M205`
+/// before the start G-code, on Marlin and RepRapFirmware as the slicers
+/// write them, with the preset's per-axis X and Y accelerations.
+fn emitted(
+    p: &Preset,
+    usage: Option<&str>,
+    raw: &mut RawPrinter,
+    notes: &mut Vec<String>,
+) -> Result<()> {
+    use crate::machine::limits::ACCELERATION_MAX;
+    let orca = p
+        .text("emit_machine_limits_to_gcode")
+        .is_some_and(|t| t == "1" || t.eq_ignore_ascii_case("true"));
+    if usage == Some("emit_to_gcode") || orca {
+        let key = if orca {
+            "emit_machine_limits_to_gcode"
+        } else {
+            "machine_limits_usage = emit_to_gcode"
+        };
+        if matches!(
+            raw.flavor,
+            RawFlavor::Marlin | RawFlavor::Prusa | RawFlavor::Reprap
+        ) {
+            raw.emit_limits = true;
+            let mut a = |axis: &str| -> Result<Option<f64>> {
+                let key = format!("machine_max_acceleration_{axis}");
+                Ok(bounded(
+                    notes,
+                    &key,
+                    p.number(&key)?.filter(|v| *v > 0.0),
+                    ACCELERATION_MAX,
+                    "mm/s²",
+                ))
+            };
+            if let (Some(x), Some(y)) = (a("x")?, a("y")?) {
+                raw.axis_acceleration = Some([x, y]);
+            }
+            notes.push(format!("{key}: the limits below are written as M201, M203, M204 and M205 before the start G-code (emit_limits), and the estimate follows them"));
+        } else {
+            notes.push(format!(
+                "{key}: the slicers write no limits for this firmware, nor does p3dp"
+            ));
+        }
     }
     Ok(())
 }
 
-fn thumbnails(p: &Preset, y: &mut String, notes: &mut Vec<String>) {
+/// `v`, or `None` with a note when it is past `max` (p3dp's default stands).
+fn bounded(
+    notes: &mut Vec<String>,
+    key: &str,
+    v: Option<f64>,
+    max: f64,
+    unit: &str,
+) -> Option<f64> {
+    match v {
+        Some(v) if v > max => {
+            notes.push(format!(
+                "{key} {} {unit} is past p3dp's ceiling of {} {unit}: left out, p3dp's default stands",
+                n(v),
+                n(max)
+            ));
+            None
+        }
+        v => v,
+    }
+}
+
+fn thumbnails(p: &Preset, notes: &mut Vec<String>) -> Vec<String> {
     let Some(list) = p.list("thumbnails") else {
-        return;
+        return Vec::new();
     };
     let default = p.text("thumbnails_format").unwrap_or_else(|| "PNG".into());
     let mut out = Vec::new();
@@ -507,23 +565,55 @@ fn thumbnails(p: &Preset, y: &mut String, notes: &mut Vec<String>) {
         }
         out.push(format!("{}/{fmt}", size.trim()));
     }
-    if !out.is_empty() {
-        let _ = writeln!(y, "thumbnails: [{}]", out.join(", "));
+    out
+}
+
+/// Where a template variable's value comes from at the build.
+enum Origin {
+    /// p3dp gives it (the profile, the print, the material).
+    Own,
+    /// A filament preset gives it (`--filament`), else the build refuses it.
+    Filament,
+    /// The preset's own setting of that name.
+    Preset(RawVariable),
+    /// A slicer's default, shown under `gcode_variables:`.
+    Default(&'static (&'static str, &'static str, &'static str)),
+}
+
+/// Where the value of `name` comes from, or `None` when nothing gives it.
+fn origin(p: &Preset, name: &str, extruders: usize) -> Option<Origin> {
+    if crate::machine::printer::gives(name) {
+        return Some(Origin::Own);
     }
+    if let Some(v) = p.values.get(name).and_then(|_| typed(p, name, extruders)) {
+        return Some(Origin::Preset(v));
+    }
+    if let Some(d) = SLICER_DEFAULTS.iter().find(|d| d.0 == name) {
+        return Some(Origin::Default(d));
+    }
+    if crate::machine::material::from_filament_preset(name) {
+        return Some(Origin::Filament);
+    }
+    None
 }
 
 /// The start and end G-code, their variables checked: each one p3dp gives,
-/// or a slicer's value with a default under `gcode_variables:`, or refused.
-fn gcode(p: &Preset, y: &mut String, notes: &mut Vec<String>) -> Result<()> {
-    let mut defaults: Vec<(&str, &str, &str)> = Vec::new();
-    let mut texts = Vec::new();
+/// the preset's own setting or a slicer's default (both under
+/// `gcode_variables:`), a filament preset's, or refused naming it.
+fn gcode(
+    p: &Preset,
+    raw: &mut RawPrinter,
+    extruders: usize,
+    notes: &mut Vec<String>,
+) -> Result<()> {
+    let mut vars: IndexMap<String, RawVariable> = IndexMap::new();
+    let mut filament: Vec<String> = Vec::new();
     for (key, names) in [
         ("start_gcode", ["start_gcode", "machine_start_gcode"]),
         ("end_gcode", ["end_gcode", "machine_end_gcode"]),
     ] {
         let Some((from, text)) = p.first_text(&names) else {
             notes.push(format!("no {key} in the preset"));
-            texts.push((key, String::new()));
             continue;
         };
         let text = text.replace("\r\n", "\n");
@@ -535,16 +625,34 @@ fn gcode(p: &Preset, y: &mut String, notes: &mut Vec<String>) -> Result<()> {
             .in_file(&p.file)
         })?;
         for (name, line) in t.variables() {
-            if known(&name) || defaults.iter().any(|d| d.0 == name) {
+            let base = list_base(&name);
+            if vars.contains_key(base) || filament.iter().any(|f| f == base) {
                 continue;
             }
-            match SLICER_DEFAULTS.iter().find(|d| d.0 == name) {
-                Some(d) => defaults.push(*d),
+            match origin(p, base, extruders) {
+                Some(Origin::Own) => {}
+                Some(Origin::Filament) => filament.push(base.to_string()),
+                Some(Origin::Preset(v)) => {
+                    vars.insert(base.to_string(), v);
+                }
+                Some(Origin::Default((_, value, why))) => {
+                    let v: RawVariable = crate::recipe::yaml::parse_yaml(value, "default")
+                        .expect("the defaults parse");
+                    // a list default holds one value per extruder
+                    let v = match v {
+                        RawVariable::List(l) if l.len() == 1 => {
+                            RawVariable::List(vec![l[0].clone(); extruders])
+                        }
+                        v => v,
+                    };
+                    notes.push(format!("gcode_variables.{base} = {value}: {why}"));
+                    vars.insert(base.to_string(), v);
+                }
                 None => {
                     return Err(Error::input(
                         format!("{from} line {line}"),
                         format!(
-                            "preset `{}`: the variable `{name}` is one p3dp cannot give (its value is a slicer's)",
+                            "preset `{}`: the variable `{name}` is one p3dp cannot give: neither p3dp nor the preset has a value for it (its value is a slicer's)",
                             p.name
                         ),
                     )
@@ -552,47 +660,253 @@ fn gcode(p: &Preset, y: &mut String, notes: &mut Vec<String>) -> Result<()> {
                 }
             }
         }
-        texts.push((key, text));
-    }
-    if !defaults.is_empty() {
-        y.push_str("# values only a slicer knows, used by the G-code below: change them to suit\ngcode_variables:\n");
-        for (name, value, why) in &defaults {
-            let _ = writeln!(y, "  {name}: {value} # {why}");
-            notes.push(format!("gcode_variables.{name} = {value}: {why}"));
+        match key {
+            "start_gcode" => raw.start_gcode = text,
+            _ => raw.end_gcode = text,
         }
     }
-    for (key, text) in texts {
-        block(y, key, &text);
+    if !filament.is_empty() {
+        notes.push(format!(
+            "the G-code reads the filament's {}: a filament preset gives {} (--filament FILE at the build), else the build refuses {}",
+            filament.iter().map(|f| format!("`{f}`")).collect::<Vec<_>>().join(", "),
+            if filament.len() == 1 { "it" } else { "them" },
+            if filament.len() == 1 { "it" } else { "them" },
+        ));
     }
+    // the adaptive bed mesh p3dp computes reads the preset's own limits
+    if raw.start_gcode.contains("adaptive_bed_mesh")
+        || raw.start_gcode.contains("bed_mesh_probe_count")
+    {
+        for k in [
+            "bed_mesh_min",
+            "bed_mesh_max",
+            "bed_mesh_probe_distance",
+            "adaptive_bed_mesh_margin",
+        ] {
+            if let Some(v) = typed(p, k, extruders) {
+                vars.entry(k.to_string()).or_insert(v);
+            }
+        }
+    }
+    raw.gcode_variables = vars;
     Ok(())
 }
 
-/// Whether p3dp gives variable `name` (itself, or `name_N` of a list).
-fn known(name: &str) -> bool {
-    let listed = |n: &str| crate::machine::VARIABLES.iter().any(|(v, _)| *v == n);
-    listed(name)
-        || name
-            .rsplit_once('_')
-            .is_some_and(|(b, i)| i.parse::<usize>().is_ok() && listed(b))
+/// `name` or, for a legacy `[name_N]` whose `name` is a list, `name`.
+fn list_base(name: &str) -> &str {
+    match name.rsplit_once('_') {
+        Some((b, i)) if i.parse::<usize>().is_ok() && !b.is_empty() => b,
+        _ => name,
+    }
+}
+
+/// Settings whose text is a boolean `0`/`1` in both slicers.
+const BOOLS: &[&str] = &[
+    "nozzle_high_flow",
+    "filament_abrasive",
+    "single_extruder_multi_material",
+    "use_firmware_retraction",
+    "use_relative_e_distances",
+    "retract_layer_change",
+    "wipe",
+    "auxiliary_fan",
+    "support_chamber_temp_control",
+    "support_air_filtration",
+    "scan_first_layer",
+    "bbl_calib_mark_logo",
+    "enable_long_retraction_when_cut",
+    "cooling_filter_enabled",
+    "support_cooling_filter",
+    "enable_pressure_advance",
+    "activate_air_filtration",
+    "activate_chamber_temp_control",
+    "filament_multitool_ramming",
+    "filament_long_retractions_when_cut",
+    "long_retractions_when_cut",
+    "is_support_timelapse",
+    "support_object_skip_flush",
+];
+
+/// Settings that are text whatever they hold.
+fn is_text(name: &str) -> bool {
+    name.ends_with("_id")
+        || name.ends_with("_notes")
+        || name.ends_with("_gcode")
+        || name.ends_with("_model")
+        || name.ends_with("_variant")
+        || name.ends_with("_type")
+        || name.ends_with("_vendor")
+        || name.ends_with("_format")
+        || name.ends_with("_name")
+}
+
+/// The preset's setting `name` as a template value: a list where the
+/// slicer has one (a `.json` list; an `.ini` value of one number per
+/// extruder on a machine of several), a boolean for the settings that are
+/// booleans, a number where the text is one, else text on one line (a line
+/// break in a preset's text never reaches the G-code).
+pub(crate) fn typed(p: &Preset, name: &str, extruders: usize) -> Option<RawVariable> {
+    use super::Setting;
+    let one = |s: &str| scalar(name, s);
+    Some(match p.values.get(name)? {
+        Setting::Json(serde_json::Value::Array(a)) => RawVariable::List(
+            a.iter()
+                .map(|v| one(&v.as_str().map_or_else(|| v.to_string(), str::to_string)))
+                .collect(),
+        ),
+        Setting::Json(serde_json::Value::String(s)) => one(s),
+        Setting::Json(serde_json::Value::Bool(b)) => RawVariable::Bool(*b),
+        Setting::Json(serde_json::Value::Number(x)) => one(&x.to_string()),
+        Setting::Json(_) => return None,
+        Setting::Ini(s) => {
+            let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+            let numbers = parts
+                .iter()
+                .all(|x| x.parse::<f64>().is_ok() || *x == "nil");
+            if extruders > 1 && parts.len() == extruders && numbers && !is_text(name) {
+                RawVariable::List(parts.iter().map(|x| one(x)).collect())
+            } else {
+                one(&super::ini::unescape(s))
+            }
+        }
+    })
+}
+
+/// One value of setting `name` from its text.
+fn scalar(name: &str, s: &str) -> RawVariable {
+    let t = s.trim();
+    if BOOLS.contains(&name) && matches!(t, "0" | "1" | "true" | "false") {
+        return RawVariable::Bool(t == "1" || t == "true");
+    }
+    if !is_text(name) {
+        if let Ok(i) = t.parse::<i64>() {
+            return RawVariable::Int(i);
+        }
+        if let Ok(f) = t.parse::<f64>() {
+            if f.is_finite() && t.chars().any(|c| c.is_ascii_digit()) {
+                return RawVariable::Float(f);
+            }
+        }
+    }
+    RawVariable::Str(crate::base::safe_text::one_line(s).into_owned())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    #[test]
-    fn blocks_keep_every_line() {
-        for text in [
-            "G28\nG1 X1\n",
-            "G28",
-            " G28 ; indented\n\n",
-            "\tG4\n\nM84\n\n\n",
-        ] {
-            let mut y = String::new();
-            block(&mut y, "start_gcode", text);
-            let v: std::collections::BTreeMap<String, String> =
-                crate::recipe::yaml::parse_yaml(&y, "p.yaml").unwrap();
-            assert_eq!(v["start_gcode"], text, "{y}");
+    fn preset(format: Format, values: &[(&str, &str)]) -> Preset {
+        use super::super::Setting;
+        Preset {
+            name: "P".into(),
+            file: "p.ini".into(),
+            format,
+            kind: Kind::Printer,
+            values: values
+                .iter()
+                .map(|(k, v)| {
+                    let s = match format {
+                        Format::Ini => Setting::Ini(v.to_string()),
+                        Format::Json => Setting::Json(serde_json::from_str(v).unwrap()),
+                    };
+                    (k.to_string(), s)
+                })
+                .collect(),
         }
+    }
+
+    /// The YAML written is the profile imported: parsed back, the same
+    /// value, key by key (numbers, booleans, texts, lists, G-code blocks).
+    #[test]
+    fn the_yaml_reads_back_as_the_imported_profile() {
+        let p = preset(
+            Format::Ini,
+            &[
+                ("bed_shape", "3x3,228x3,228x228,3x228"),
+                ("max_print_height", "250.5"),
+                ("nozzle_diameter", "0.4,0.4,0.6"),
+                ("gcode_flavor", "klipper"),
+                ("machine_max_feedrate_x", "500"),
+                ("machine_max_feedrate_y", "400"),
+                ("machine_max_acceleration_extruding", "7000"),
+                ("machine_max_jerk_x", "9"),
+                ("retract_length", "0.8"),
+                ("retract_speed", "35"),
+                ("thumbnails", "16x16/QOI, 313x173/QOI, 300x300/PNG"),
+                ("printer_notes", "line one\\nPRINTER_HAS_X"),
+                ("extra_loading_move", "-2"),
+                ("parking_pos_retraction", "92.5"),
+                ("retract_length_toolchange", "1,2,3.5"),
+                ("nozzle_high_flow", "0"),
+                ("start_gcode", "G28 ; [printer_notes]\\nG1 E{extra_loading_move} F{parking_pos_retraction}\\n{if nozzle_high_flow}M221 S90{endif}\\nM104 S[retract_length_toolchange_2] T[initial_tool]\\n"),
+                ("end_gcode", "M84\\n\\n"),
+            ],
+        );
+        let i = import(&p).unwrap();
+        assert_eq!(i.raw.extruders, 3);
+        assert_eq!(
+            i.raw.gcode_variables["printer_notes"],
+            RawVariable::Str("line one\\u{a}PRINTER_HAS_X".into())
+        );
+        assert_eq!(
+            i.raw.gcode_variables["extra_loading_move"],
+            RawVariable::Int(-2)
+        );
+        assert_eq!(
+            i.raw.gcode_variables["parking_pos_retraction"],
+            RawVariable::Float(92.5)
+        );
+        assert_eq!(
+            i.raw.gcode_variables["nozzle_high_flow"],
+            RawVariable::Bool(false)
+        );
+        assert_eq!(
+            i.raw.gcode_variables["retract_length_toolchange"],
+            RawVariable::List(vec![
+                RawVariable::Int(1),
+                RawVariable::Int(2),
+                RawVariable::Float(3.5)
+            ])
+        );
+        let y = i.yaml();
+        let back: RawPrinter = crate::recipe::yaml::parse_yaml(&y, "p.yaml").unwrap();
+        assert_eq!(back, i.raw, "{y}");
+    }
+
+    /// Text YAML cannot carry as it is (C1 controls, U+FFFE, a carriage
+    /// return, U+2028, tabs and quotes) reads back unchanged.
+    /// A polygon bed: p3dp keeps to a rectangle or a circle inside it, every
+    /// corner of which lies inside the maker's bed; a non-convex one (or a
+    /// malformed rectangle) is refused.
+    /// Klipper's square-corner velocity from a jerk no machine has is left
+    /// out (Klipper's 5 mm/s), not written as a value the profile refuses;
+    /// OrcaSlicer's `bed_shape = rectangular` yields to `printable_area`.
+    #[test]
+    fn a_jerk_past_the_ceiling_and_a_rectangular_bed_shape() {
+        let p = preset(
+            Format::Json,
+            &[
+                ("bed_shape", "\"rectangular\""),
+                (
+                    "printable_area",
+                    "[\"0x0\", \"220x0\", \"220x220\", \"0x220\"]",
+                ),
+                ("printable_height", "\"250\""),
+                ("gcode_flavor", "\"klipper\""),
+                ("machine_max_jerk_x", "[\"20000\"]"),
+                ("machine_max_jerk_y", "[\"20000\"]"),
+            ],
+        );
+        let i = import(&p).unwrap();
+        assert_eq!(i.raw.kinematics.square_corner_velocity, Some(5.0));
+        assert!(
+            i.notes
+                .iter()
+                .any(|n| n.contains("machine_max_jerk_x/y 20000 mm/s is past")),
+            "{:?}",
+            i.notes
+        );
+        assert!(matches!(i.raw.bed, RawBed::Rectangle { size, .. } if size == [220.0, 220.0]));
+        crate::recipe::profile::from_raw(i.raw.clone(), "p.json").unwrap();
     }
 }

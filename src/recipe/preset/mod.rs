@@ -1,13 +1,21 @@
-//! Slicer printer presets imported as p3dp printer profiles: PrusaSlicer's
-//! family of `.ini` files ([`ini`]) and OrcaSlicer's and Bambu Studio's
-//! `.json` ones ([`json`]), read through the project's input rules
-//! (bounded, UTF-8, noted in the load's reads), their `inherits` resolved,
-//! and mapped into a profile's terms and units ([`map`]) as the YAML text
-//! `p3dp printers import` writes and `--printer FILE.ini|FILE.json` loads.
+//! Slicer presets imported: PrusaSlicer's family of `.ini` files ([`ini`])
+//! and OrcaSlicer's and Bambu Studio's `.json` ones ([`json`]), read
+//! through the project's input rules (bounded, UTF-8, noted in the load's
+//! reads, a `.json` chain's files held to the folders the build may read),
+//! their `inherits` (and Bambu Studio's `include`) resolved, each preset
+//! once. A printer preset is mapped into a profile's terms and units as the
+//! profile's own raw type ([`map`]): `--printer FILE.ini|FILE.json` builds
+//! with it directly, `p3dp printers import` writes it as YAML. A filament
+//! preset (`--filament FILE [--filament-preset NAME]`) gives the material
+//! and the filament's template variables (see
+//! `crate::recipe::resolve::material`).
 
+mod bed;
 pub(crate) mod ini;
 pub(crate) mod json;
 pub(crate) mod map;
+mod reach;
+mod write;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -34,6 +42,34 @@ impl Format {
     }
 }
 
+/// What a preset describes: a printer (`[printer:NAME]`, `"type":
+/// "machine"`) or a filament (`[filament:NAME]`, `"type": "filament"`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Kind {
+    /// A printer preset.
+    Printer,
+    /// A filament preset.
+    Filament,
+}
+
+impl Kind {
+    /// The kind's name in messages: `printer`, `filament`.
+    pub(crate) fn word(self) -> &'static str {
+        match self {
+            Kind::Printer => "printer",
+            Kind::Filament => "filament",
+        }
+    }
+
+    /// The option that picks a preset of this kind in a bundle.
+    pub(crate) fn option(self) -> &'static str {
+        match self {
+            Kind::Printer => "--preset",
+            Kind::Filament => "--filament-preset",
+        }
+    }
+}
+
 /// One setting as the preset file holds it.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Setting {
@@ -43,7 +79,7 @@ pub enum Setting {
     Json(serde_json::Value),
 }
 
-/// A printer preset, its `inherits` resolved: every key it and its parents set.
+/// A preset, its `inherits` resolved: every key it and its parents set.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Preset {
     /// The preset's name.
@@ -52,6 +88,8 @@ pub struct Preset {
     pub file: String,
     /// The file's family.
     pub format: Format,
+    /// A printer's or a filament's.
+    pub kind: Kind,
     /// Every setting, by key.
     pub values: BTreeMap<String, Setting>,
 }
@@ -63,7 +101,7 @@ impl Preset {
     }
 
     /// A string setting (`.ini` escapes undone; a `.json` list's first element).
-    pub(crate) fn text(&self, key: &str) -> Option<String> {
+    pub fn text(&self, key: &str) -> Option<String> {
         match self.values.get(key)? {
             Setting::Ini(s) => Some(ini::unescape(s)),
             Setting::Json(serde_json::Value::String(s)) => Some(s.clone()),
@@ -89,7 +127,7 @@ impl Preset {
             return Ok(None);
         };
         let t = first.trim().trim_end_matches('%');
-        if t.is_empty() {
+        if t.is_empty() || t == "nil" {
             return Ok(None);
         }
         match t.parse::<f64>() {
@@ -106,6 +144,25 @@ impl Preset {
                 .map(|t| (k.to_string(), t))
         })
     }
+
+    /// The first number of the first of `keys` that is set.
+    pub(crate) fn first_number(&self, keys: &[&str]) -> Result<Option<f64>> {
+        for k in keys {
+            if let Some(v) = self.number(k)? {
+                return Ok(Some(v));
+            }
+        }
+        Ok(None)
+    }
+}
+
+/// The refusal of preset `p` at `key`: p3dp cannot import `what`.
+pub(crate) fn refuse(p: &Preset, key: &str, what: String) -> Error {
+    Error::input(
+        key,
+        format!("preset `{}`: p3dp cannot import {what}", p.name),
+    )
+    .in_file(&p.file)
 }
 
 fn json_text(v: &serde_json::Value) -> String {
@@ -125,7 +182,7 @@ fn split(s: &str) -> Vec<String> {
 pub struct Source {
     /// The preset file.
     pub file: PathBuf,
-    /// `--preset NAME`: the preset of a bundle.
+    /// `--preset NAME` (`--filament-preset NAME`): the preset of a bundle.
     pub preset: Option<String>,
     /// `--profiles DIR`: where `.json` parents (and nothing else) are found.
     pub profiles: Option<PathBuf>,
@@ -157,28 +214,49 @@ fn stem(path: &Path) -> String {
 
 /// The printer presets `file` holds, in its order.
 pub fn list(file: &Path, reads: &Reads) -> Result<Vec<String>> {
+    list_of(Kind::Printer, file, reads)
+}
+
+/// The presets of `kind` that `file` holds, in its order.
+pub fn list_of(kind: Kind, file: &Path, reads: &Reads) -> Result<Vec<String>> {
     let shown = file.display().to_string();
-    let text = reads.read_plain(file, "printer preset")?;
+    let text = reads.read_plain(file, &format!("{} preset", kind.word()))?;
     match format_of(file, &text) {
-        Format::Ini => Ok(ini::parse(&text, &shown)?.names(&stem(file))),
-        Format::Json => Ok(vec![json::name_of(&text, &shown, &stem(file))?]),
+        Format::Ini => Ok(ini::parse(&text, &shown)?.names(kind, &stem(file))),
+        Format::Json => Ok(vec![json::name_of(&text, &shown, &stem(file), kind)?]),
     }
 }
 
-/// The preset `src` names, its `inherits` resolved.
+/// The printer preset `src` names, its `inherits` resolved.
 pub fn load(src: &Source, reads: &Reads) -> Result<Preset> {
+    load_kind(Kind::Printer, src, reads)
+}
+
+/// The filament preset `src` names, its `inherits` resolved.
+pub fn load_filament(src: &Source, reads: &Reads) -> Result<Preset> {
+    load_kind(Kind::Filament, src, reads)
+}
+
+/// The preset of `kind` that `src` names, its `inherits` resolved; the
+/// files a `.json` chain reaches read only inside the folders the build may
+/// read (the preset's project or slicer folder, `--profiles`).
+pub(crate) fn load_kind(kind: Kind, src: &Source, reads: &Reads) -> Result<Preset> {
     let shown = src.file.display().to_string();
-    let text = reads.read_plain(&src.file, "printer preset")?;
+    let text = reads.read_plain(&src.file, &format!("{} preset", kind.word()))?;
     match format_of(&src.file, &text) {
         Format::Ini => {
-            ini::parse(&text, &shown)?.preset(src.preset.as_deref(), &shown, &stem(&src.file))
+            ini::parse(&text, &shown)?.preset(kind, src.preset.as_deref(), &shown, &stem(&src.file))
         }
         Format::Json => {
-            let p = json::preset(&text, &src.file, src.profiles.as_deref(), reads)?;
+            let p = json::preset(&text, &src.file, src.profiles.as_deref(), reads, kind)?;
             match &src.preset {
                 Some(n) if *n != p.name => Err(Error::input(
-                    "--preset",
-                    format!("the file holds the preset `{}`, not `{n}`", p.name),
+                    kind.option(),
+                    format!(
+                        "the file holds the {} preset `{}`, not `{n}`",
+                        kind.word(),
+                        p.name
+                    ),
                 )
                 .in_file(&shown)),
                 _ => Ok(p),
@@ -187,30 +265,69 @@ pub fn load(src: &Source, reads: &Reads) -> Result<Preset> {
     }
 }
 
-/// The message for a preset `name` not in `file`, which holds `names`
-/// (the closest names offered).
-pub(crate) fn no_such(name: &str, names: &[String], file: &str) -> String {
+/// Characters of a name the did-you-mean search compares: the start of a
+/// long name tells it apart, and a bound keeps thousands of long names quick.
+const CLOSE_CHARS: usize = 64;
+
+/// Most names the did-you-mean search looks at.
+const CLOSE_NAMES: usize = 20_000;
+
+/// The message for a `kind` preset `name` not in `file`, which holds
+/// `names` (the closest names offered; the search bounded in names and in
+/// characters a name).
+pub(crate) fn no_such(kind: Kind, name: &str, names: &[String], file: &str) -> String {
+    let cut = |s: &str| {
+        s.chars()
+            .take(CLOSE_CHARS)
+            .collect::<String>()
+            .to_lowercase()
+    };
+    let wanted = cut(name);
     let mut close: Vec<(f64, &String)> = names
         .iter()
-        .map(|n| {
-            (
-                strsim::normalized_levenshtein(&n.to_lowercase(), &name.to_lowercase()),
-                n,
-            )
-        })
+        .take(CLOSE_NAMES)
+        .map(|n| (strsim::normalized_levenshtein(&cut(n), &wanted), n))
         .filter(|(s, _)| *s > 0.5)
         .collect();
     close.sort_by(|a, b| b.0.total_cmp(&a.0));
-    let mut msg = format!("no printer preset `{name}` in {file}");
+    let shown = crate::base::safe_text::one_line(name);
+    let mut msg = format!("no {} preset `{shown}` in {file}", kind.word());
     if !close.is_empty() {
         let shown: Vec<String> = close
             .iter()
             .take(3)
-            .map(|(_, n)| format!("`{n}`"))
+            .map(|(_, n)| format!("`{}`", crate::base::safe_text::one_line(n)))
             .collect();
         msg.push_str(&format!("; did you mean {}?", shown.join(", ")));
     } else {
-        msg.push_str(&format!("; `p3dp printers list {file}` lists its presets"));
+        msg.push_str(&format!(
+            "; `p3dp printers list {file}` lists its printer presets"
+        ));
     }
     msg
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A missed name among thousands of long ones is answered quickly: the
+    /// search compares the first characters of each name only.
+    #[test]
+    fn did_you_mean_is_bounded() {
+        let names: Vec<String> = (0..4000)
+            .map(|k| format!("{k:04} {}", "long preset name ".repeat(60)))
+            .collect();
+        let t = std::time::Instant::now();
+        let msg = no_such(
+            Kind::Printer,
+            &format!("0007 {}", "long preset name ".repeat(59)),
+            &names,
+            "b.ini",
+        );
+        assert!(msg.contains("did you mean `0007 long"), "{}", &msg[..200]);
+        // unbounded, 4000 Levenshtein distances of 1000-character names
+        // take tens of seconds
+        assert!(t.elapsed().as_secs_f64() < 5.0, "{:?}", t.elapsed());
+    }
 }

@@ -10,6 +10,7 @@
 mod material;
 mod part;
 mod pattern;
+pub(crate) mod plate;
 mod primitive;
 mod solid;
 pub(crate) mod step;
@@ -26,7 +27,9 @@ use crate::base::error::{Error, Result};
 use crate::generate::model::{
     Group, Part, Recipe, Skirt, DEFAULT_CROSS_SECTION, DEFAULT_MAX_STRINGS, DEFAULT_SPEED,
 };
-use crate::machine::Printer;
+use crate::machine::{Material, Printer};
+
+pub(crate) use material::from_filament;
 
 /// Evaluates numbers of one recipe: its params, and where images and a
 /// turtle's limits come from.
@@ -70,11 +73,58 @@ impl Recipe {
         printer: Option<&Printer>,
         cx: &Context,
     ) -> Result<Recipe> {
+        Recipe::load_with(path, sets, printer, None, cx)
+    }
+
+    /// [`Recipe::load_in`], `material` (a filament preset's, `--filament`)
+    /// overriding the recipe's material.
+    pub fn load_with(
+        path: &Path,
+        sets: &[(String, String)],
+        printer: Option<&Printer>,
+        material: Option<&Material>,
+        cx: &Context,
+    ) -> Result<Recipe> {
+        let raw = Recipe::read_raw(path, cx)?;
+        Recipe::from_raw_in(&raw, path, sets, (printer, material), cx)
+    }
+
+    /// The recipe file at `path` as written (a recipe or a plate), read in
+    /// the context `cx`.
+    pub(crate) fn read_raw(path: &Path, cx: &Context) -> Result<RawRecipe> {
         let shown = path.display().to_string();
         let text = cx.reads.read_text(path, "recipe")?;
         let raw: RawRecipe = parse_yaml(&text, &shown)?;
+        if raw.parts.is_empty() && raw.plate.is_none() {
+            // neither key: named where the top-level map starts, as a
+            // missing key is
+            #[derive(serde::Deserialize)]
+            struct Parts {
+                #[allow(dead_code)]
+                parts: serde::de::IgnoredAny,
+            }
+            if let Err(e) = parse_yaml::<Parts>(&text, &shown) {
+                return Err(Error {
+                    message: "missing field `parts`; expected `parts` (the parts to print) or `plate` (the recipes a plate puts on the bed)".into(),
+                    ..e
+                });
+            }
+        }
+        Ok(raw)
+    }
+
+    /// [`Recipe::load_in`] of the recipe `raw` read from `path`, with the
+    /// command line's printer and material (`--filament`) if given.
+    pub(crate) fn from_raw_in(
+        raw: &RawRecipe,
+        path: &Path,
+        sets: &[(String, String)],
+        given: (Option<&Printer>, Option<&Material>),
+        cx: &Context,
+    ) -> Result<Recipe> {
+        let shown = path.display().to_string();
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-        Recipe::resolve_in(&raw, sets, printer, &dir, Some(path), cx).map_err(|e| e.in_file(&shown))
+        Recipe::resolve_in(raw, sets, given, &dir, Some(path), cx).map_err(|e| e.in_file(&shown))
     }
 
     /// Resolves a parsed recipe; relative paths are taken from `dir`.
@@ -84,7 +134,7 @@ impl Recipe {
         printer: Option<&Printer>,
         dir: &Path,
     ) -> Result<Recipe> {
-        Recipe::resolve_in(raw, sets, printer, dir, None, &Context::default())
+        Recipe::resolve_in(raw, sets, (printer, None), dir, None, &Context::default())
     }
 
     /// [`Recipe::resolve`] for the recipe read from `file` (so that an
@@ -92,7 +142,7 @@ impl Recipe {
     fn resolve_in(
         raw: &RawRecipe,
         sets: &[(String, String)],
-        printer: Option<&Printer>,
+        (printer, given): (Option<&Printer>, Option<&Material>),
         dir: &Path,
         file: Option<&Path>,
         cx: &Context,
@@ -112,7 +162,15 @@ impl Recipe {
                 Printer::resolve(spec, dir, &cx.reads)?
             }
         };
-        let material = material::resolve(&top.under(key!(raw.material)), raw.material.as_ref())?;
+        let material = match given {
+            Some(m) => m.clone(),
+            None => material::resolve(&top.under(key!(raw.material)), raw.material.as_ref())?,
+        };
+        let mut printer = printer;
+        if let Some(q) = material.max_volumetric_speed {
+            // the filament's own flow limit, where it is below the hot end's
+            printer.max_flow = printer.max_flow.min(q);
+        }
         let defaults = &raw.defaults;
         let ds = top.under(key!(raw.defaults));
         let c0 = ds.positive_or(at!(defaults.cross_section), DEFAULT_CROSS_SECTION)?;
@@ -135,12 +193,22 @@ impl Recipe {
             .filament_diameter
             .unwrap_or(printer.filament_diameter);
         let turtle = (std::f64::consts::PI * (d / 2.0) * (d / 2.0), max_strings);
-        // templates, loops and groups expanded into leaf parts
-        let expansion = super::expand::expand(&raw.parts, &library.templates, &params, dir)?;
+        // templates, loops, groups and recipes included whole expanded into
+        // leaf parts; those that turn out empty (a turtle whose every move
+        // an `if` skips) dropped
+        let includes = super::expand::load_part_includes(raw, file, dir, &library, &cx.reads)?;
+        let expansion =
+            super::expand::expand(&raw.parts, &library.templates, &params, dir, &includes)?;
         let check =
             |t: &str| crate::analyse::check::gcode::command(t, &printer, &material).map(|_| ());
-        let parts = leaves(&expansion, turtle, (c0, v0), max_strings, cx, &check)?;
-        let groups = groups(&expansion, turtle, cx, &check)?;
+        let (parts, kept) = leaves(&expansion, turtle, (c0, v0), max_strings, cx, &check)?;
+        if parts.is_empty() {
+            return Err(Error::input(
+                key!(raw.parts),
+                "every part is switched off (by `if`, an empty `for` or a path that moves nowhere): nothing to print; expected at least one part",
+            ));
+        }
+        let groups = groups(&expansion, &kept, turtle, cx, &check)?;
         let allow: Vec<String> = raw.allow.iter().map(|a| a.code().to_string()).collect();
         let allow_key = key!(raw.allow);
         crate::base::finding::validate_allow(&allow, |i| format!("{allow_key}[{i}]"))?;
@@ -154,6 +222,7 @@ impl Recipe {
             max_strings,
             allow,
             groups,
+            objects: Vec::new(),
         })
     }
 }
@@ -175,6 +244,12 @@ fn check_top(raw: &RawRecipe) -> Result<()> {
         // a block scalar's final line break is no line of its own
         crate::base::safe_text::check(key!(raw.description), d.trim_end_matches(['\n', '\r']))?;
     }
+    if raw.plate.is_some() {
+        return Err(Error::input(
+            key!(raw.plate),
+            "a plate is built on its own (`p3dp build`), not read as a recipe",
+        ));
+    }
     if raw.parts.is_empty() {
         return Err(Error::input(key!(raw.parts), "expected at least one part"));
     }
@@ -182,8 +257,11 @@ fn check_top(raw: &RawRecipe) -> Result<()> {
 }
 
 /// The leaf parts resolved, each with the params in its scope; `c0` and
-/// `v0` are the defaults' cross-section and speed. Each part, and all of
-/// them together, must stay within `max_strings`.
+/// `v0` are the defaults' cross-section and speed (a recipe included as a
+/// part brings its own). Each part, and all of them together, must stay
+/// within `max_strings`. A part whose primitives make no string at all (a
+/// turtle or path whose every move an `if` skips) is left out: with the
+/// parts, for each leaf its index among them (`None`: left out).
 fn leaves(
     expansion: &Expansion,
     turtle: (f64, u64),
@@ -191,11 +269,12 @@ fn leaves(
     max_strings: u64,
     cx: &Context,
     gcode: GcodeCheck,
-) -> Result<Vec<Part>> {
+) -> Result<(Vec<Part>, Vec<Option<usize>>)> {
     // the limit holds for all parts together too (YAML aliases, loops)
     let total_limit = max_strings;
     let mut total = 0u64;
     let mut parts = Vec::with_capacity(expansion.leaves.len());
+    let mut kept = Vec::with_capacity(expansion.leaves.len());
     for (k, leaf) in expansion.leaves.iter().enumerate() {
         let place = &leaf.place;
         let ctx = Ctx {
@@ -206,7 +285,13 @@ fn leaves(
             turtle,
         };
         let raw = leaf.part;
+        let (c0, v0) = leaf.defaults.unwrap_or((c0, v0));
         let mut part = part::resolve(&ctx, raw, c0, v0, k).map_err(|e| e.under(place))?;
+        if part.primitives().all(|p| p.string_count() == 0) {
+            kept.push(None);
+            continue;
+        }
+        kept.push(Some(parts.len()));
         if let Some(name) = &leaf.name {
             part.name.clone_from(name);
         }
@@ -233,18 +318,27 @@ fn leaves(
         }
         parts.push(part);
     }
-    Ok(parts)
+    Ok((parts, kept))
 }
 
-/// The groups' steps resolved, each with the params where it is written.
+/// The groups' steps resolved, each with the params where it is written;
+/// `kept` maps each leaf to its part (see [`leaves`]). A group whose parts
+/// were all left out has nothing to run on.
 fn groups(
     expansion: &Expansion,
+    kept: &[Option<usize>],
     turtle: (f64, u64),
     cx: &Context,
     gcode: GcodeCheck,
 ) -> Result<Vec<Group>> {
     let mut groups = Vec::with_capacity(expansion.groups.len());
     for g in &expansion.groups {
+        // the parts the group's leaves became
+        let mut made = kept[g.first..g.end].iter().flatten();
+        let Some(&first) = made.next() else {
+            continue;
+        };
+        let end = made.last().map_or(first, |&k| k) + 1;
         let ctx = Ctx {
             gcode,
             scope: Scope::new(&g.params),
@@ -258,8 +352,8 @@ fn groups(
             steps.push(step::resolve(&ctx, s).map_err(|e| e.under(&at).under(&g.place))?);
         }
         groups.push(Group {
-            first: g.first,
-            end: g.end,
+            first,
+            end,
             steps,
             place: g.place.clone(),
         });

@@ -11,6 +11,7 @@ mod curve;
 mod num;
 mod param;
 mod part;
+mod plate;
 mod primitive;
 mod profile;
 mod solid;
@@ -26,6 +27,7 @@ use serde::Deserialize;
 pub(crate) use num::{Num, Num3, RawPoint};
 pub(crate) use param::{RawChoice, RawParam};
 pub(crate) use part::{RawBrim, RawLoop, RawPart, RawPrimitiveItem, RawStand};
+pub(crate) use plate::{RawPlateItem, RawSweep};
 pub(crate) use primitive::{
     RawArc, RawCaHelix, RawCircle, RawCylinder, RawDirection, RawHelix, RawInitial, RawLayout,
     RawOutline, RawPath, RawPatternHelix, RawPrimitive, RawRule, RawSpiral,
@@ -148,8 +150,13 @@ pub struct RawRecipe {
     /// Optional skirt.
     #[serde(default)]
     pub skirt: Option<RawSkirt>,
-    /// The parts, printed in order.
+    /// The parts, printed in order (a plate has `plate` instead).
+    #[serde(default)]
     pub parts: Vec<RawPart>,
+    /// What goes on the bed, instead of `parts`: whole recipes, each
+    /// printed complete, one after another (see `docs/recipe.md`, Plates).
+    #[serde(default)]
+    pub plate: Option<Vec<RawPlateItem>>,
     /// Most strings one part may have (default 50 million).
     #[serde(default)]
     pub max_strings: Option<Num>,
@@ -168,10 +175,11 @@ pub struct RawRecipe {
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawTemplate {
-    /// The params and their defaults, in order; a default may use the
+    /// The params and their defaults, in order, as a recipe's params are
+    /// (numbers, true/false, lists, choices); a default may use the
     /// recipe's params and the template params before it.
-    #[serde(default)]
-    pub params: IndexMap<String, Num>,
+    #[serde(default, deserialize_with = "unique_map")]
+    pub params: IndexMap<String, RawParam>,
     /// The part (or group) it makes.
     pub part: RawPart,
 }
@@ -203,6 +211,8 @@ pub(crate) struct RawLibrary {
     pub max_strings: Option<IgnoredAny>,
     #[serde(default)]
     pub allow: Option<IgnoredAny>,
+    #[serde(default)]
+    pub plate: Option<IgnoredAny>,
     /// Params, in order.
     #[serde(default, deserialize_with = "unique_map")]
     pub params: IndexMap<String, RawParam>,
@@ -220,6 +230,11 @@ pub(crate) struct RawLibrary {
 pub(crate) fn json_schema() -> serde_json::Value {
     let mut s = serde_json::to_value(schemars::schema_for!(RawRecipe)).unwrap_or_default();
     if let Some(o) = s.as_object_mut() {
+        // a recipe has `parts`, a plate `plate`: one of them
+        o.insert(
+            "oneOf".into(),
+            serde_json::json!([{"required": ["parts"]}, {"required": ["plate"]}]),
+        );
         o.insert("title".into(), "p3dp recipe (format version 1)".into());
         o.insert(
             "description".into(),

@@ -10,6 +10,7 @@ use serde::de::{self, DeserializeSeed, Deserializer, IgnoredAny, MapAccess, SeqA
 use serde::Deserialize;
 
 use super::num::Num;
+use super::param::RawParam;
 use super::primitive::RawPrimitive;
 use super::step::RawStep;
 
@@ -44,12 +45,21 @@ pub struct RawPart {
     /// A template to use instead of `primitive` or `parts`.
     #[serde(default)]
     pub template: Option<String>,
-    /// The template's params for this use.
+    /// A whole recipe file whose parts this part is (a group), instead of
+    /// `primitive`, `parts` or `template`.
     #[serde(default)]
-    pub with: IndexMap<String, Num>,
+    pub include: Option<String>,
+    /// The template's (or the included recipe's) params for this use: a
+    /// number or expression, true or false, a list, or one of a choice's
+    /// strings.
+    #[serde(default)]
+    pub with: IndexMap<String, RawParam>,
     /// Repeat the part once per value of each name (`for:` in a recipe).
     #[serde(default, rename = "for")]
     pub repeat: IndexMap<String, RawLoop>,
+    /// The part is made only when this is non-zero (`if:` in a recipe).
+    #[serde(default, rename = "if")]
+    pub when: Option<Num>,
 }
 
 /// `brim:` of a part: loops on the bed round its first contact.

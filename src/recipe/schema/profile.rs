@@ -117,6 +117,14 @@ pub(crate) struct RawPrinter {
     /// Absolute or relative E.
     #[serde(default)]
     pub extrusion: RawExtrusion,
+    /// Extruders (or a filament changer's slots) the start and end G-code
+    /// know: the length of the slicers' per-extruder values (1); p3dp prints
+    /// with the first.
+    #[serde(default = "d_extruders")]
+    pub extruders: u32,
+    /// The extruder p3dp prints with, 0-based (0).
+    #[serde(default)]
+    pub tool: u32,
     /// G-code before the print, with placeholders.
     #[serde(default)]
     pub start_gcode: String,
@@ -172,6 +180,19 @@ pub(crate) struct RawPrinter {
     /// Binary G-code (`.bgcode`) unless the output's name says otherwise (off).
     #[serde(default)]
     pub binary_gcode: bool,
+    /// The start G-code is the maker's own sequence: its nozzle
+    /// temperatures held to the printer's limit, the one the print starts
+    /// at to the material's (off).
+    #[serde(default)]
+    pub maker_temperatures: bool,
+    /// Write the firmware's limits (`kinematics`) as `M201`–`M205` before
+    /// the start G-code, as PrusaSlicer's `emit_to_gcode` (off).
+    #[serde(default)]
+    pub emit_limits: bool,
+    /// The firmware's maximum X and Y accelerations, mm/s², written as
+    /// `M201 X Y` with `emit_limits` (none).
+    #[serde(default)]
+    pub axis_acceleration: Option<[f64; 2]>,
     /// The firmware planner's limits.
     #[serde(default)]
     pub kinematics: RawKinematics,
@@ -207,6 +228,10 @@ pub(crate) enum RawVariable {
 pub(crate) struct RawEnvelope {
     pub margin: f64,
     pub below_bed: f64,
+    /// `[lowest, highest]` machine X the head reaches.
+    pub x: Option<[f64; 2]>,
+    /// `[lowest, highest]` machine Y the head reaches.
+    pub y: Option<[f64; 2]>,
 }
 
 impl Default for RawEnvelope {
@@ -215,10 +240,64 @@ impl Default for RawEnvelope {
         RawEnvelope {
             margin: e.margin,
             below_bed: e.below_bed,
+            x: e.x,
+            y: e.y,
         }
     }
 }
 
+impl RawPrinter {
+    /// A profile of the given required keys, every other key its default
+    /// (what a file naming only those keys parses into).
+    pub(crate) fn new(
+        name: String,
+        bed: RawBed,
+        origin: [f64; 3],
+        nozzle_diameter: f64,
+        filament_diameter: f64,
+    ) -> RawPrinter {
+        RawPrinter {
+            name,
+            model: String::new(),
+            flavor: RawFlavor::default(),
+            bed,
+            origin,
+            nozzle_diameter,
+            filament_diameter,
+            extrusion: RawExtrusion::default(),
+            extruders: d_extruders(),
+            tool: 0,
+            start_gcode: String::new(),
+            end_gcode: String::new(),
+            gcode_variables: indexmap::IndexMap::new(),
+            envelope: RawEnvelope::default(),
+            travel_speed: d_travel(),
+            retraction: RawRetraction::default(),
+            firmware_retraction: false,
+            max_nozzle_temp: d_max_nozzle(),
+            max_bed_temp: d_max_bed(),
+            max_speed: d_max_speed(),
+            max_flow: d_max_flow(),
+            min_string_length: d_min_string(),
+            arcs: false,
+            arc_tolerance: d_arc_tolerance(),
+            thumbnails: Vec::new(),
+            progress: None,
+            object_labels: None,
+            binary_gcode: false,
+            maker_temperatures: false,
+            emit_limits: false,
+            axis_acceleration: None,
+            kinematics: RawKinematics::default(),
+            head: RawHead::default(),
+            checks: RawCheckLimits::default(),
+        }
+    }
+}
+
+fn d_extruders() -> u32 {
+    1
+}
 fn d_travel() -> f64 {
     120.0
 }
@@ -330,6 +409,17 @@ pub(crate) struct RawHead {
     #[serde(rename = "box")]
     pub head_box: [f64; 4],
     pub clearance: f64,
+    pub gantry: Option<RawGantry>,
+}
+
+/// `head.gantry:` from `height` above the tip, the whole bed in x, `y`
+/// round the nozzle.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub(crate) struct RawGantry {
+    pub height: f64,
+    pub y: [f64; 2],
 }
 
 impl Default for RawHead {
@@ -341,6 +431,7 @@ impl Default for RawHead {
             tip_diameter: h.tip_diameter,
             head_box: h.head_box,
             clearance: h.clearance,
+            gantry: None,
         }
     }
 }
@@ -389,6 +480,27 @@ impl Default for RawCheckLimits {
 mod tests {
     use super::*;
     use crate::recipe::yaml::parse_yaml;
+
+    /// `RawPrinter::new` is what a file of the required keys parses into.
+    #[test]
+    fn new_is_the_defaults_of_a_file() {
+        let p: RawPrinter = parse_yaml(
+            "name: d\nbed: {shape: circle, diameter: 280, max_z: 300}\norigin: [0,0,0]\nnozzle_diameter: 0.4\nfilament_diameter: 1.75\n",
+            "d.yaml",
+        )
+        .unwrap();
+        let new = RawPrinter::new(
+            "d".into(),
+            RawBed::Circle {
+                diameter: 280.0,
+                max_z: 300.0,
+            },
+            [0.0; 3],
+            0.4,
+            1.75,
+        );
+        assert_eq!(p, new);
+    }
 
     #[test]
     fn round_bed_and_unknown_keys() {

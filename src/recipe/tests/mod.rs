@@ -2,3 +2,4 @@
 
 mod procedural;
 mod recipe_doc;
+mod switches;

@@ -283,7 +283,9 @@ parts:
         "{with: {a: 1}, primitive: {circle: {radius: 3}}}",
     ));
     assert!(
-        e.contains("parts[0].parts[0].with: `with` gives a template's params"),
+        e.contains(
+            "parts[0].parts[0].with: `with` gives the params of a template or an included recipe"
+        ),
         "{e}"
     );
 }
@@ -400,7 +402,7 @@ fn lamp_shade_tiers_follow_their_templates_profile() {
     let parts = make_parts(&recipe).unwrap();
     for (t, tp) in parts.iter().enumerate().skip(1) {
         let with = |k: &str| match &uses[t].with[k] {
-            crate::recipe::schema::Num::Value(v) => *v,
+            crate::recipe::schema::RawParam::Num(crate::recipe::schema::Num::Value(v)) => *v,
             other => panic!("{other:?}"),
         };
         let (r0, r1, h, z0, lobes) = (with("r0"), with("r1"), with("h"), with("z0"), with("lobes"));

@@ -77,6 +77,12 @@ fn loader_names() -> Vec<(String, String)> {
     );
     add("part", listed(&part("{__probe__: 1}")));
     add(
+        "plate entry",
+        listed(&format!(
+            "{HEAD}plate: [{{recipe: a.yaml, __probe__: 1}}]\n"
+        )),
+    );
+    add(
         "for",
         listed(&part(
             "{for: {k: {__probe__: 1}}, primitive: {circle: {radius: 1}}}",
@@ -153,6 +159,9 @@ fn the_probe_finds_the_loader_s_keys() {
     let names = loader_names();
     let has = |place: &str, n: &str| names.iter().any(|(p, k)| p == place && k == n);
     assert!(has("top level", "parts"), "{names:?}");
+    assert!(has("top level", "plate"), "{names:?}");
+    assert!(has("plate entry", "copies"), "{names:?}");
+    assert!(has("part", "if"), "{names:?}");
     assert!(has("primitive helix", "pitch"), "{names:?}");
     assert!(has("step", "modulate_map"), "{names:?}");
     assert!(has("turtle commands", "forward"), "{names:?}");

@@ -80,6 +80,8 @@ struct Limits {
     /// Highest acceleration, mm/s².
     accel: f64,
     bed_shape: Bed,
+    /// X and Y the head may reach, machine mm.
+    reach: [[f64; 2]; 2],
     margin: f64,
     below: f64,
     max_z: f64,
@@ -122,6 +124,10 @@ impl Limits {
             z_feed: l.max_z_velocity.unwrap_or(p.max_speed),
             accel,
             bed_shape: p.bed,
+            reach: {
+                let (bmin, bmax) = p.bed.extent();
+                [0, 1].map(|k| p.envelope.reach(k, bmin[k], bmax[k]))
+            },
             margin: p.envelope.margin,
             below: p.envelope.below_bed,
             max_z: p.bed.max_z(),
@@ -130,10 +136,10 @@ impl Limits {
 
     /// How far the head may travel along each axis: the envelope's widths.
     fn span(&self) -> [f64; 3] {
-        let (bmin, bmax) = self.bed_shape.extent();
+        let [x, y] = self.reach;
         [
-            bmax[0] - bmin[0] + 2.0 * self.margin,
-            bmax[1] - bmin[1] + 2.0 * self.margin,
+            x[1] - x[0],
+            y[1] - y[0],
             self.max_z + self.margin + self.below,
         ]
     }
@@ -157,7 +163,19 @@ struct Checker {
 /// as they will be written, each with what the firmware reads in it.
 pub(crate) fn check(key: &str, text: &str, recipe: &Recipe, start: Start) -> Result<Vec<Verbatim>> {
     let p = &recipe.printer;
-    let mut c = Checker::new(p.flavor, Policy::Frame, Limits::of(p, &recipe.material));
+    let mut lim = Limits::of(p, &recipe.material);
+    // the maker's own start sequence may flush and purge hotter than the
+    // print, up to what the hot end takes; the print starts within the
+    // material's limit (checked after the last line)
+    let material = lim.nozzle.clone();
+    let maker = p.maker_temperatures && matches!(start, Start::Unknown);
+    if maker && p.max_nozzle_temp > lim.nozzle.0 {
+        lim.nozzle = (
+            p.max_nozzle_temp,
+            "the printer's max_nozzle_temp (the maker's own sequence: maker_temperatures)".into(),
+        );
+    }
+    let mut c = Checker::new(p.flavor, Policy::Frame, lim);
     if let Start::At(q, e) = start {
         c.st = State::at(p.flavor, q.to_array());
         let relative = p.extrusion == Extrusion::Relative;
@@ -169,16 +187,41 @@ pub(crate) fn check(key: &str, text: &str, recipe: &Recipe, start: Start) -> Res
         return Ok(Vec::new());
     }
     let mut out = Vec::new();
+    let mut last_nozzle = None;
     for (k, line) in body.split('\n').enumerate() {
         let place = format!("{key} line {}", k + 1);
         crate::base::safe_text::check_gcode_line(&place, line)?;
         let shown = |why: String| Error::input(&place, format!("`{}`: {why}", line.trim()));
         let read = firmware::read(p.flavor, line).map_err(shown)?;
         c.line(&read.line, &read.commands).map_err(shown)?;
+        for cmd in &read.commands {
+            if let Command::Set(Setting::Temperature {
+                heater: Heater::Nozzle(_),
+                celsius,
+                ..
+            }) = cmd
+            {
+                last_nozzle = Some((*celsius, k, line));
+            }
+        }
         out.push(Verbatim {
             text: line.to_string(),
             commands: read.commands,
         });
+    }
+    if let (true, Some((t, k, line))) = (maker, last_nozzle) {
+        if t > material.0 {
+            return Err(Error::input(
+                format!("{key} line {}", k + 1),
+                format!(
+                    "`{}`: the print would start at {} °C, above the limit {} °C ({}); the maker's sequence may flush hotter, but must leave the nozzle where the material prints",
+                    line.trim(),
+                    fmt_num(t),
+                    fmt_num(material.0),
+                    material.1
+                ),
+            ));
+        }
     }
     Ok(out)
 }
@@ -275,7 +318,7 @@ impl Checker {
                 temperature(*h, t, &self.lim)?;
             }
         }
-        if let Code::Name(_) = code {
+        if matches!(code, Code::Name(_)) || self.flavor == Flavor::Klipper {
             self.named_temperatures(l)?;
         }
         Ok(())
@@ -312,8 +355,21 @@ impl Checker {
             };
             match &p.value {
                 Value::Number(t) => temperature(heater, *t, &self.lim)?,
+                // one per extruder, as an IDEX macro takes them (`215,215`);
+                // a numbered macro's `bedTemp=60` read as Klipper splits a
+                // traditional command's words (`BEDTEMP` `=60`)
                 Value::Text(t) if temp || target => {
-                    return Err(format!("cannot read `{k}`'s value `{t}` as a temperature"))
+                    let each: Option<Vec<f64>> = t
+                        .trim_start_matches('=')
+                        .split(',')
+                        .map(|v| v.trim().parse::<f64>().ok())
+                        .collect();
+                    let Some(each) = each else {
+                        return Err(format!("cannot read `{k}`'s value `{t}` as a temperature"));
+                    };
+                    for t in each {
+                        temperature(heater, t, &self.lim)?;
+                    }
                 }
                 _ => {}
             }
@@ -343,7 +399,31 @@ impl Checker {
         };
         match (kind, self.policy) {
             (Kind::Refused(why), _) => Err(format!("`{shown}` is refused: it {why}")),
-            (Kind::Inert, _) => Ok(()),
+            (Kind::FrameOnly(why), Policy::Raw) => Err(format!("`{shown}` is refused: it {why}")),
+            (Kind::Inert | Kind::FrameOnly(_), _) => Ok(()),
+            (Kind::Trim(key, max), _) => {
+                for v in l.numbers(key)? {
+                    if !(v.is_finite() && v.abs() <= max) {
+                        return Err(format!(
+                            "`{shown}` offsets the coordinates by {key} {} mm; expected at most {} mm either way (a plate's trim)",
+                            fmt_num(v),
+                            fmt_num(max)
+                        ));
+                    }
+                }
+                Ok(())
+            }
+            (Kind::MovesAndHeats(keys), Policy::Frame) => {
+                for (key, h) in keys {
+                    for t in l.numbers(key)? {
+                        temperature(*h, t, &self.lim)?;
+                    }
+                }
+                self.firmware_reach(l)?;
+                self.st.apply(c);
+                self.unknown_position();
+                Ok(())
+            }
             (Kind::Heats(keys), Policy::Frame) => {
                 for (key, h) in keys {
                     // M303 E-1 tunes the bed
@@ -362,18 +442,34 @@ impl Checker {
                 Ok(())
             }
             (Kind::Firmware, Policy::Frame) => {
+                self.firmware_reach(l)?;
                 self.st.apply(c);
                 self.unknown_position();
                 Ok(())
             }
             (Kind::Firmware, Policy::Raw) if returns_the_head(self.flavor, code) => Ok(()),
-            (Kind::Heats(_), Policy::Raw) => Err(format!(
+            (Kind::Heats(_) | Kind::MovesAndHeats(_), Policy::Raw) => Err(format!(
                 "`{shown}` is refused: it heats on its own between p3dp's strings; expected nozzle_temp or bed_temp, which are checked"
             )),
             (Kind::Firmware, Policy::Raw) => Err(format!(
                 "`{shown}` is refused: it moves the head, and p3dp writes the head's moves itself"
             )),
         }
+    }
+
+    /// A firmware motion's `X` and `Y` words in absolute mode: where it
+    /// takes the head (a park, a purge's start, a probed area's corner, a
+    /// filament change's travel point), each inside the envelope.
+    fn firmware_reach(&self, l: &Line) -> std::result::Result<(), String> {
+        if self.st.relative_xyz {
+            return Ok(());
+        }
+        for (k, axis) in ["X", "Y"].iter().enumerate() {
+            for v in l.numbers(axis)? {
+                within(k, &axis.to_ascii_lowercase(), v, &self.lim)?;
+            }
+        }
+        Ok(())
     }
 
     /// The position, unknown from here on.
@@ -826,15 +922,19 @@ fn within(k: usize, axis: &str, v: f64, lim: &Limits) -> std::result::Result<(),
         }
         return Ok(());
     }
-    let (bmin, bmax) = lim.bed_shape.extent();
-    let (lo, hi) = (bmin[k] - lim.margin, bmax[k] + lim.margin);
+    let [lo, hi] = lim.reach[k];
     if v < lo - EPS || v > hi + EPS {
+        let (bmin, bmax) = lim.bed_shape.extent();
+        let why = if [bmin[k] - lim.margin, bmax[k] + lim.margin] == [lo, hi] {
+            format!("the bed grown by envelope.margin {} mm", lim.margin)
+        } else {
+            format!("the profile's envelope.{axis}")
+        };
         return Err(format!(
-            "{axis} = {} mm is outside the machine's travel envelope ({axis} from {} to {} mm: the bed grown by envelope.margin {} mm)",
+            "{axis} = {} mm is outside the machine's travel envelope ({axis} from {} to {} mm: {why})",
             fmt_num(v),
             fmt_num(lo),
             fmt_num(hi),
-            lim.margin
         ));
     }
     Ok(())

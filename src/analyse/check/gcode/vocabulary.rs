@@ -12,7 +12,7 @@ use crate::base::gcode::Heater;
 use crate::machine::Flavor;
 
 /// What a command does, as far as the checks need to know.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) enum Kind {
     /// Leaves the head, the filament and the heaters alone (messages,
     /// reports, timers, lights, waits).
@@ -23,11 +23,22 @@ pub(crate) enum Kind {
     Firmware,
     /// Heats: the listed keys are temperatures of the heaters named.
     Heats(&'static [(&'static str, Heater)]),
+    /// Moves the head within the firmware's own limits (as [`Kind::Firmware`])
+    /// and heats: the listed keys are temperatures (a maker's nozzle wipe or
+    /// flush at a temperature it names).
+    MovesAndHeats(&'static [(&'static str, Heater)]),
+    /// Offsets the coordinates by the key's value, at most the given mm
+    /// either way (Bambu's z trim for a plate's thickness): more is refused.
+    Trim(&'static str, f64),
+    /// Accepted in a profile's own start and end G-code, whose every move
+    /// p3dp checks itself, and refused in a recipe's command: why it is
+    /// refused there.
+    FrameOnly(&'static str),
     /// Refused, and why.
     Refused(&'static str),
 }
 
-use Kind::{Firmware, Heats, Inert, Refused};
+use Kind::{Firmware, FrameOnly, Heats, Inert, MovesAndHeats, Refused, Trim};
 
 const SHIFTS: &str =
     "shifts the coordinates or the machine's geometry, so p3dp could not check the moves after it";
@@ -214,6 +225,10 @@ const MARLIN_G: &[(u32, Kind)] = &[
     (76, Firmware),
     (80, Firmware),
     (81, Firmware),
+    // homing to the axes' minimum and maximum endstops (Sailfish, the
+    // firmware of Dremel's and FlashForge's printers; Marlin skips them)
+    (161, Firmware),
+    (162, Firmware),
 ];
 
 /// Prusa's own codes (the MK3's and the Buddy firmware's).
@@ -230,36 +245,171 @@ const PRUSA: &[(u8, u32, Kind)] = &[
         Heats(&[("S", Heater::Nozzle(0)), ("B", Heater::Bed)]),
     ),
     (b'M', 1977, Inert),
+    // the drivers' mode: stealthChop or spreadCycle ("set stealthchop for
+    // X Y"); Prusa's firmware reads no direction or steps from it
+    (b'M', 569, Inert),
+    // filament stuck detection on and off (the XL's)
+    (b'M', 591, Inert),
+    // the heatbreak fan's target temperature ("reset heatbreak target
+    // temp"): the fan cools the heatbreak to it, no heater heats
+    (b'M', 142, Inert),
+    // a register of the MMU (its pulley's current)
+    (b'M', 708, Inert),
     (b'G', 64, Firmware),
     (b'G', 1009, Inert),
 ];
 
-/// Bambu's own codes, as Bambu Studio's presets write them.
+const NOZZLE_T: &[(&str, Heater)] = &[("T", Heater::Nozzle(0))];
+
+/// Bambu's own codes, as Bambu Studio's presets write them (their meaning
+/// from the comments the presets carry beside them; a subcode not in
+/// [`BAMBU_SUB`] is read as its code). Bambu publishes no reference: a code
+/// whose effect the presets do not say is not here, so it is refused as
+/// one p3dp cannot check (`M290`, which Marlin reads as babystepping).
 const BAMBU: &[(u8, u32, Kind)] = &[
+    // a purge line at the firmware's own place and flow
+    (b'G', 130, Firmware),
+    // nozzle wipes and the purge chute ("wipe mouth", "move to garbage
+    // can"), `T` the nozzle's temperature meanwhile
+    (b'G', 150, MovesAndHeats(NOZZLE_T)),
+    // "plug the heat nozzle" (the H2D's idle nozzle)
+    (b'G', 151, Firmware),
+    // a homing variant ("G2814 Z0.32")
+    (b'G', 2814, Firmware),
+    // levelling: probing the plate's area, ABL on and off
+    (b'G', 29, Firmware),
+    // probing and collision detection ("G380 is same as G38"; "detect
+    // obstacles at the bottom of the heated bed")
+    (b'G', 380, Firmware),
+    (b'G', 3811, Firmware),
+    // calibrations at a nozzle temperature (`T`, `U`)
+    (
+        b'G',
+        383,
+        MovesAndHeats(&[("T", Heater::Nozzle(0)), ("U", Heater::Nozzle(0))]),
+    ),
+    (b'G', 387, Firmware),
+    (b'G', 389, Firmware),
+    // nozzle-clumping ("nozzle wrapped") detection by probing
+    (b'G', 39, Firmware),
+    (b'G', 390, Firmware),
+    // clog detection off
+    (b'G', 392, Inert),
+    // "push/pop soft endstop status", "turn off soft endstop": the
+    // firmware's own limit, which p3dp's envelope check stands in for in
+    // the profile's G-code
+    (
+        b'M',
+        211,
+        FrameOnly("switches the firmware's soft endstops, which a recipe's command may not"),
+    ),
+    // "save cali data": the calibration the start G-code just measured
+    (
+        b'M',
+        500,
+        FrameOnly("stores the firmware's settings, which a recipe's command may not"),
+    ),
+    // the AMS's filament change: the block M620 … M621 (every line of it
+    // checked), its travel points (`X`, `Y` checked) and cut
     (b'M', 620, Firmware),
     (b'M', 621, Firmware),
+    // conditional blocks: M1002 sets a flag, M622 J runs the lines up to
+    // M623 if it matches; p3dp checks every line of the block as if it ran
     (b'M', 622, Inert),
     (b'M', 623, Inert),
+    // timelapse and AMS bookkeeping around a change (`M628`, `M629`)
+    (b'M', 628, Inert),
+    (b'M', 629, Inert),
+    (b'M', 630, Inert),
+    // the H2's toolhead rack (`M640`–`M641`): swaps hot ends
+    (b'M', 640, Firmware),
+    (b'M', 641, Firmware),
+    // "turn off cutter pos comp"
+    (b'M', 481, Inert),
+    // chamber and gear warning temperatures (warnings only), the air duct
+    (b'M', 142, Inert),
+    (b'M', 145, Inert),
+    // lights, the camera and the lidar, scans and their registration
     (b'M', 960, Inert),
-    (b'M', 970, Inert),
+    (b'M', 963, Inert),
+    (b'M', 964, Inert),
+    (b'M', 969, Inert),
     (b'M', 971, Inert),
     (b'M', 972, Inert),
     (b'M', 973, Inert),
+    (b'M', 976, Inert),
+    (b'M', 977, Inert),
+    // resonance measurement of the axes ("mech mode fast check") and
+    // vibration suppression: the head shakes in place
+    (b'M', 970, Inert),
     (b'M', 974, Inert),
     (b'M', 975, Inert),
+    // a timelapse frame at a parking place (`X`, `Y` checked)
+    (b'M', 9711, Firmware),
+    // "end timelapse at safe pos", "notify layer change"
+    (b'M', 991, Inert),
+    // flow-dynamics calibration: it extrudes while it moves
+    (b'M', 980, Inert),
     (b'M', 981, Inert),
     (b'M', 982, Inert),
-    (b'M', 983, Inert),
-    (b'M', 984, Inert),
-    (b'M', 991, Inert),
+    (b'M', 983, Firmware),
+    (b'M', 9833, Firmware),
+    (b'M', 984, Firmware),
+    (b'M', 985, Inert),
+    // the nozzle camera's detection state
+    (b'M', 993, Inert),
+    // messages, flags and sounds (`gcode_claim_action`, `judge_flag`,
+    // the buzzer), mass estimation, detections switched on and off
     (b'M', 1002, Inert),
     (b'M', 1003, Inert),
+    (b'M', 1004, Inert),
     (b'M', 1006, Inert),
     (b'M', 1007, Inert),
-    (b'G', 29, Firmware),
-    (b'G', 39, Firmware),
-    (b'G', 380, Firmware),
-    (b'G', 392, Inert),
+    (b'M', 1009, Inert),
+    (b'M', 1010, Inert),
+    (b'M', 1012, Inert),
+    (b'M', 1015, Inert),
+    (b'M', 1026, Inert),
+    (b'M', 1028, Inert),
+    // "action before has done 200s insulation": waits
+    (b'M', 1030, Inert),
+];
+
+/// Bambu's subcodes that do otherwise than their code.
+const BAMBU_SUB: &[(u8, u32, u32, Kind)] = &[
+    // the z trim for a plate ("clear z-trim value first", "-0.04 for
+    // Textured PEI Plate"): a few hundredths of a mm
+    (b'G', 29, 1, Trim("Z", 0.5)),
+    // ABL on and off
+    (b'G', 29, 2, Inert),
+    // the flush at the filament's flush temperature (`T`)
+    (b'M', 620, 10, MovesAndHeats(NOZZLE_T)),
+    // the wipe tower's interface purge at a temperature (`T`)
+    (b'M', 620, 13, MovesAndHeats(NOZZLE_T)),
+    // the wipe tower's place for later
+    (b'M', 620, 14, Inert),
+    // the pre-cooling target before the tower (`C`, `P`)
+    (
+        b'M',
+        620,
+        15,
+        Heats(&[("C", Heater::Nozzle(0)), ("P", Heater::Nozzle(0))]),
+    ),
+    // each nozzle's first-layer temperature (`S`)
+    (b'M', 620, 17, Heats(&[("S", Heater::Nozzle(0))])),
+    // detections switched on (runout purge, tangle, air printing)
+    (b'M', 620, 22, Inert),
+    (b'M', 620, 3, Inert),
+    (b'M', 620, 6, Inert),
+    // M622.1 S: the default of a flag for older firmware
+    (b'M', 622, 1, Inert),
+    // "turn on/off deformation compensation", its mode
+    (b'M', 983, 1, Inert),
+    (b'M', 983, 4, Inert),
+    // "reset acc magnitude", "reset left time magnitude": factors back to 1
+    (b'M', 201, 2, Inert),
+    (b'M', 204, 2, Inert),
+    (b'M', 73, 2, Inert),
 ];
 
 /// RepRapFirmware's codes besides the typed ones and Marlin's it shares.
@@ -377,12 +527,35 @@ pub(crate) fn kind(flavor: Flavor, code: &Code) -> Option<Kind> {
             }
             match (*letter, *number) {
                 (b'G', 29 | 80) => Some(Firmware),
+                // a printer's macro of that name (Klipper runs no M141):
+                // the chamber heater its `S` names
+                (b'M', 141 | 191) => Some(MovesAndHeats(&[("S", Heater::Chamber)])),
+                // any other code stock Klipper skips is a printer's macro
+                // (`G30`, `G31`, `M900` of a Kobra's config), as a named
+                // one: it may move where the firmware allows, its
+                // temperature words checked by name
+                (b'G' | b'M', _) => Some(Firmware),
                 _ => None,
             }
         }
         (_, Code::Name(n)) => named_elsewhere(flavor, n),
-        (_, Code::Number { letter, number, .. }) => {
+        (
+            _,
+            Code::Number {
+                letter,
+                number,
+                sub,
+            },
+        ) => {
             let (l, n) = (*letter, *number);
+            if let (Flavor::Bambu, Some(sub)) = (flavor, sub) {
+                let own = BAMBU_SUB
+                    .iter()
+                    .find(|(c, m, u, _)| *c == l && *m == n && u == sub);
+                if let Some(&(_, _, _, k)) = own {
+                    return Some(k);
+                }
+            }
             let own = match flavor {
                 Flavor::Prusa => find_lettered(PRUSA, l, n),
                 Flavor::Bambu => find_lettered(BAMBU, l, n),

@@ -68,7 +68,9 @@ pub(crate) fn run(prog: &interp::Program, env: &Env) -> Result<Turtle> {
     // the interpreter keeps its own stack of tasks (blocks, calls, L-system
     // derivations) on the heap, so it runs here, on the caller's thread
     let path = prog.run(env.cross_section, env.speed, env.filament_area, limits)?;
-    if path.strings.iter().all(|s| s.travel) {
+    // a program that makes no move at all (every move behind an `if` that
+    // is 0) makes no part: the part is left out, as one switched off
+    if !path.strings.is_empty() && path.strings.iter().all(|s| s.travel) {
         return Err(Error::input(
             "program",
             "the program extrudes nothing; expected at least one move with the pen down",

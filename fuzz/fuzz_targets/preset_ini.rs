@@ -1,0 +1,6 @@
+//! Slicer preset text (a PrusaSlicer-family .ini bundle) → every preset loaded, mapped to a profile, its YAML read back.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|data: &[u8]| p3dp::fuzzing::preset_ini(data));
