@@ -179,8 +179,7 @@ pub(crate) fn checked(plan: &Plan, allow: &[String]) -> (Vec<Finding>, Vec<Footp
 pub fn write<W: Write>(plan: &mut Plan, job: &Job, out: W) -> Result<Written<W>> {
     let out = Hashing::new(out, job.hash);
     let (out, moves) = match job.check {
-        // thumbnails mark the findings: the checks come first
-        Some((allow, stop)) if !parallel() || !plan.recipe.printer.thumbnails.is_empty() => {
+        Some((allow, stop)) if !parallel() => {
             check(plan, allow);
             if let Stop::Failing { strict } = stop {
                 if !plan.failing(strict).is_empty() {
@@ -302,6 +301,9 @@ fn checked_beside<W: Write>(
     });
     let failed = AtomicBool::new(false);
     let (queue, feed, failed) = (&queue, &feed, &failed);
+    // drawn before the checks' side begins: it plans until the writer's
+    // side ends the feed, which a refused thumbnail would never do
+    let thumbnails = crate::output::preview::thumbnail::blocks(this)?;
     let written = rayon::in_place_scope(|s| {
         // the checks' side: every task it can take, planning between them;
         // then, unless they refuse the build, the planning that is left
@@ -316,7 +318,7 @@ fn checked_beside<W: Write>(
                 feed.plan_to_end();
             }
         });
-        let written = written_beside(this, job, two_passes, feed, failed, out);
+        let written = written_beside(this, job, two_passes, feed, failed, thumbnails, out);
         if written.is_ok() {
             // the checks not yet taken (the other side may not have begun)
             while queue.run_next() {}
@@ -338,10 +340,12 @@ fn written_beside<W: Write>(
     progress: bool,
     feed: &Feed,
     failed: &AtomicBool,
+    thumbnails: String,
     out: W,
 ) -> Result<(W, MoveStats)> {
     let head = Head {
         options: job.stamp,
+        thumbnails,
         ..Head::default()
     };
     if progress {

@@ -41,6 +41,7 @@ pub const CODES: &[(&str, &str)] = &[
     ("flow", "c·v above the hot end's max_flow (warning; error past checks.flow_hard_max × max_flow)"),
     ("over-extrusion", "a cross-section far above what the nozzle lays (warning; error past the hard limit)"),
     ("thin-string", "a cross-section so small the string breaks (warning; error past the hard limit)"),
+    ("klipper-extrusion", "a move a Klipper printer refuses: a cross-section past its extruder's max_extrude_cross_section (4 × nozzle² by default), or an extrude-only move past max_extrude_only_distance (error)"),
     ("starvation", "runs of moves shorter in time than the planner's minimum segment time (warning)"),
     ("unsupported", "filament with neither the bed nor earlier filament under it (error)"),
     ("first-layer", "the nozzle closer to the bed than checks.first_layer_min × its diameter (warning); each part's bed contact is in the report and the stats' first_layer"),
@@ -99,11 +100,26 @@ pub(crate) fn validate_allow(codes: &[String], place: impl Fn(usize) -> String) 
     Ok(())
 }
 
-/// Removes the findings whose code is in `allow` (silenced for this build).
+/// What an error of an allowed code says: `allow` did not silence it.
+pub(crate) const ALLOWED_ERROR: &str =
+    "; `allow` silences warnings and notes only: an error stays one, and only --force writes past it";
+
+/// Removes the warnings and notes whose code is in `allow` (silenced for
+/// this build). An error stays (as `p3dp explain` and docs/checks.md say):
+/// only `--force` writes past it; its message says why it was not silenced.
 pub(crate) fn apply_allow(findings: &mut Vec<Finding>, allow: &[String]) {
-    if !allow.is_empty() {
-        findings.retain(|f| !allow.iter().any(|a| a == f.code));
+    if allow.is_empty() {
+        return;
     }
+    findings.retain_mut(|f| {
+        if !allow.iter().any(|a| a == f.code) {
+            return true;
+        }
+        if f.severity == Severity::Error && !f.message.ends_with(ALLOWED_ERROR) {
+            f.message.push_str(ALLOWED_ERROR);
+        }
+        f.severity == Severity::Error
+    });
 }
 
 /// `3 warnings, 0 errors` (and `, 2 notes` when there are infos).

@@ -13,6 +13,10 @@ pub(crate) const MARLIN_MIN_SEGMENT_TIME: f64 = 0.02;
 pub(crate) const KLIPPER_MINIMUM_CRUISE_RATIO: f64 = 0.5;
 /// Klipper's default `instantaneous_corner_velocity` of `[extruder]`, mm/s.
 pub(crate) const KLIPPER_INSTANTANEOUS_CORNER_VELOCITY: f64 = 1.0;
+/// Klipper's default `max_extrude_only_distance` of `[extruder]`, mm of filament.
+pub(crate) const KLIPPER_MAX_EXTRUDE_ONLY_DISTANCE: f64 = 50.0;
+/// Klipper's default `max_extrude_cross_section`, × nozzle diameter².
+pub(crate) const KLIPPER_CROSS_SECTION_FACTOR: f64 = 4.0;
 /// Marlin's default `BLOCK_BUFFER_SIZE` (moves).
 pub(crate) const MARLIN_BLOCK_BUFFER_SIZE: u32 = 16;
 /// Assumed rate at which Marlin reads, parses and plans G-code lines from SD
@@ -64,6 +68,13 @@ pub struct Kinematics {
     /// Klipper's `[extruder] max_extrude_only_accel`, mm/s² of filament;
     /// Klipper's default with square-corner velocity, none with junction deviation.
     pub max_extrude_only_accel: Option<f64>,
+    /// Klipper's `[extruder] max_extrude_cross_section`, mm²: the largest
+    /// cross-section of a move Klipper runs (4 × nozzle² when absent); a
+    /// Klipper printer refuses a move past it (the `klipper-extrusion` check).
+    pub max_extrude_cross_section: Option<f64>,
+    /// Klipper's `[extruder] max_extrude_only_distance`, mm of filament: the
+    /// longest extrude-only move Klipper runs (50 when absent).
+    pub max_extrude_only_distance: Option<f64>,
     /// Hold every move to at least `min_segment_time` (the old, pessimistic
     /// model) instead of Marlin's buffer-draining slowdown; off by default.
     pub min_segment_time_floor: bool,
@@ -91,6 +102,8 @@ impl Default for Kinematics {
             instantaneous_corner_velocity: None,
             max_extrude_only_velocity: None,
             max_extrude_only_accel: None,
+            max_extrude_cross_section: None,
+            max_extrude_only_distance: None,
             min_segment_time_floor: false,
             block_buffer_size: None,
             command_rate: None,
@@ -144,6 +157,16 @@ impl Kinematics {
             false,
         )?;
         check("max_extrude_only_accel", self.max_extrude_only_accel, false)?;
+        check(
+            "max_extrude_cross_section",
+            self.max_extrude_cross_section,
+            false,
+        )?;
+        check(
+            "max_extrude_only_distance",
+            self.max_extrude_only_distance,
+            true,
+        )?;
         check("command_rate", self.command_rate, false)?;
         if self.block_buffer_size.is_some_and(|n| n < 2) {
             return Err(Error::input(
@@ -230,11 +253,40 @@ impl Kinematics {
     }
 }
 
+/// What Klipper's `[extruder]` refuses (klippy/kinematics/extruder.py,
+/// `check_move`): a move with X or Y whose cross-section, E × the
+/// filament's area / the move's XYZ length, passes `max_cross_section`
+/// (unless it feeds at most nozzle × `max_cross_section` / area of
+/// filament, "a tiny amount"); an extrude-only move (no X, no Y) of more
+/// than `max_only_distance` of filament.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct KlipperExtruder {
+    /// `max_extrude_cross_section`, mm².
+    pub max_cross_section: f64,
+    /// `max_extrude_only_distance`, mm of filament.
+    pub max_only_distance: f64,
+}
+
+impl Kinematics {
+    /// Klipper's extruder limits for `nozzle_diameter`: the profile's, else
+    /// Klipper's defaults (4 × nozzle², 50 mm).
+    pub fn klipper_extruder(&self, nozzle_diameter: f64) -> KlipperExtruder {
+        KlipperExtruder {
+            max_cross_section: self
+                .max_extrude_cross_section
+                .unwrap_or(KLIPPER_CROSS_SECTION_FACTOR * nozzle_diameter * nozzle_diameter),
+            max_only_distance: self
+                .max_extrude_only_distance
+                .unwrap_or(KLIPPER_MAX_EXTRUDE_ONLY_DISTANCE),
+        }
+    }
+}
+
 /// Klipper's default extrude-only ratio: a cross-section of 4·nozzle² over the
 /// filament's area (`[extruder] max_extrude_cross_section`).
 pub(crate) fn extrude_ratio(nozzle_diameter: f64, filament_diameter: f64) -> f64 {
     let area = std::f64::consts::PI * 0.25 * filament_diameter * filament_diameter;
-    4.0 * nozzle_diameter * nozzle_diameter / area
+    KLIPPER_CROSS_SECTION_FACTOR * nozzle_diameter * nozzle_diameter / area
 }
 
 /// The limits the planner uses (written into the stats JSON as `planner`).

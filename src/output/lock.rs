@@ -4,7 +4,9 @@
 //! the lock file), its `--set` values, the `--printer` it was built for, and
 //! the SHA-256 of its G-code, with a
 //! fingerprint of the G-code's lines: the hashes of at most 512 consecutive
-//! blocks of lines (one line per block when the output is that short).
+//! blocks of lines (one line per block when the output is that short), the
+//! thumbnails' lines left out (a changed print changes its pictures first:
+//! the fingerprint finds where its moves changed).
 //! `p3dp hash --check p3dp.lock` rebuilds every entry (each read only inside
 //! the lock's project, as any file a key reaches) and shows only those that
 //! changed: the old and new SHA-256 whole, the first differing block and
@@ -119,13 +121,62 @@ impl Lock {
 /// Most blocks one fingerprint has.
 pub(crate) const MAX_BLOCKS: u64 = 512;
 
-/// A writer that keeps a 64-bit FNV-1a hash of every line passing through.
+/// A writer that keeps a 64-bit FNV-1a hash of every line passing through,
+/// but the lines of thumbnail blocks ([`Thumbnails`]).
 #[derive(Default)]
 pub(crate) struct LineHashes {
     /// Hash of each complete line.
     pub lines: Vec<u64>,
     current: u64,
     open: bool,
+    /// The current line's first bytes, enough to tell a thumbnail's.
+    head: Vec<u8>,
+    thumbnails: Thumbnails,
+}
+
+/// Whether G-code lines, read in order, belong to a thumbnail block:
+/// `; thumbnail begin WxH LEN` (or `thumbnail_QOI`, `thumbnail_JPG`), its
+/// base64 lines, `; thumbnail end` and the `;` after it (PrusaSlicer's
+/// form), so that G-code with thumbnails has the lines of G-code without.
+#[derive(Default)]
+pub(crate) struct Thumbnails {
+    inside: bool,
+    ended: bool,
+}
+
+impl Thumbnails {
+    /// The longest line start [`Thumbnails::part`] reads, bytes.
+    pub(crate) const HEAD: usize = 24;
+
+    /// Whether `line` (without its line break; only its first [`HEAD`]
+    /// bytes are needed) is part of a thumbnail block, the lines before it
+    /// given.
+    ///
+    /// [`HEAD`]: Thumbnails::HEAD
+    pub(crate) fn part(&mut self, line: &[u8]) -> bool {
+        let tagged = |rest: &[u8]| {
+            [&b"; thumbnail"[..], b"; thumbnail_QOI", b"; thumbnail_JPG"]
+                .iter()
+                .any(|t| line.strip_prefix(*t).is_some_and(|r| r.starts_with(rest)))
+        };
+        let line = line.strip_suffix(b"\r").unwrap_or(line);
+        if self.inside {
+            let end = [
+                &b"; thumbnail end"[..],
+                b"; thumbnail_QOI end",
+                b"; thumbnail_JPG end",
+            ];
+            if end.contains(&line) {
+                (self.inside, self.ended) = (false, true);
+            }
+            return true;
+        }
+        if std::mem::take(&mut self.ended) && line == b";" {
+            return true;
+        }
+        self.inside = tagged(b" begin ");
+        self.inside
+    }
 }
 
 const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
@@ -137,11 +188,16 @@ impl Write for LineHashes {
             if !self.open {
                 self.current = FNV_OFFSET;
                 self.open = true;
+                self.head.clear();
             }
             self.current = (self.current ^ b as u64).wrapping_mul(FNV_PRIME);
             if b == b'\n' {
-                self.lines.push(self.current);
+                if !self.thumbnails.part(&self.head) {
+                    self.lines.push(self.current);
+                }
                 self.open = false;
+            } else if self.head.len() < Thumbnails::HEAD {
+                self.head.push(b);
             }
         }
         Ok(buf.len())
@@ -214,5 +270,29 @@ mod tests {
         let k = first_difference(&old, &b.blocks(bl)).unwrap();
         assert_eq!(k, 350); // lines 700 and 701 (0-based)
         assert_eq!(first_difference(&old, &a.blocks(bl)), None);
+    }
+
+    #[test]
+    fn thumbnails_are_left_out_of_the_fingerprint() {
+        let gcode = |pic: &str, x: &str| {
+            format!("; generated\n; thumbnail begin 2x2 {}\n; {pic}\n; thumbnail end\n;\n; thumbnail_QOI begin 1x1 4\n; abcd\n; thumbnail_QOI end\n;\nG28\nG1 X{x}\n", pic.len())
+        };
+        let hashes = |text: &str| {
+            let mut h = LineHashes::default();
+            for chunk in text.as_bytes().chunks(5) {
+                h.write_all(chunk).unwrap();
+            }
+            h
+        };
+        let a = hashes(&gcode("iVBORw0KGgo", "1"));
+        // the lines kept: `; generated`, G28, G1
+        assert_eq!(a.count(), 3);
+        let old = a.blocks(1).join(" ");
+        // another picture, longer: the same fingerprint
+        let b = hashes(&gcode("iVBORw0KGgoAAAANSUhEUgAA\n; AAAB", "1"));
+        assert_eq!(first_difference(&old, &b.blocks(1)), None);
+        // a move changed: found where it is among the lines kept
+        let c = hashes(&gcode("iVBORw0KGgoXX", "2"));
+        assert_eq!(first_difference(&old, &c.blocks(1)), Some(2));
     }
 }

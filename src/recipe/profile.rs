@@ -395,6 +395,8 @@ fn kinematics(k: RawKinematics) -> Kinematics {
         instantaneous_corner_velocity: k.instantaneous_corner_velocity,
         max_extrude_only_velocity: k.max_extrude_only_velocity,
         max_extrude_only_accel: k.max_extrude_only_accel,
+        max_extrude_cross_section: k.max_extrude_cross_section,
+        max_extrude_only_distance: k.max_extrude_only_distance,
         min_segment_time_floor: k.min_segment_time_floor,
         block_buffer_size: k.block_buffer_size,
         command_rate: k.command_rate,

@@ -413,6 +413,134 @@ fn gcode_3mf_holds_its_g_code_md5_and_bambu_markers() {
     assert_eq!(v["warnings"], serde_json::json!([]), "{v}");
 }
 
+/// The built-ins' own thumbnails (issue 39), read by the printers' software:
+/// Prusa's `gcode-metadata` (PrusaLink, Prusa Connect) in the MK4S's and
+/// the CORE One's G-code, libbgcode in their `.bgcode`, each in the sizes
+/// and formats PrusaSlicer's preset writes.
+#[test]
+fn prusa_hosts_read_the_built_ins_thumbnails() {
+    let dir = tmp("hosts-prusa-thumbs");
+    let want = ["16x16_QOI", "313x173_QOI", "380x285_PNG", "480x240_QOI"];
+    let blocks = [[16, 16, 2], [313, 173, 2], [480, 240, 2], [380, 285, 0]];
+    for (printer, model) in [("prusa-mk4s", "MK4S"), ("prusa-core-one", "COREONE")] {
+        build(&dir, Path::new(printer), &format!("{printer}.gcode"));
+        build(&dir, Path::new(printer), &format!("{printer}.bgcode"));
+        let Some(py) = python("Prusa's gcode-metadata and libbgcode") else {
+            return;
+        };
+        let script = "import sys, json, gcode_metadata as g, pybgcode as b\n\
+            m = g.get_metadata(sys.argv[1], save_cache=False)\n\
+            f = b.open(sys.argv[2], 'rb'); th = [[t['meta'].width, t['meta'].height, int(t['meta'].format)] for t in b.read_thumbnails(f)]; b.close(f)\n\
+            print(json.dumps({'model': m.data.get('printer_model'), 'thumbnails': sorted(m.thumbnails), 'bgcode': th}))";
+        let gcode = dir.join(format!("{printer}.gcode"));
+        let bgcode = dir.join(format!("{printer}.bgcode"));
+        let out = run_python(
+            &py,
+            &[
+                "-c",
+                script,
+                gcode.to_str().unwrap(),
+                bgcode.to_str().unwrap(),
+            ],
+        );
+        let v: Value = serde_json::from_str(&out).unwrap_or_else(|e| panic!("{e}: {out}"));
+        assert_eq!(v["model"], model, "{printer}: {v}");
+        assert_eq!(v["thumbnails"], serde_json::json!(want), "{printer}: {v}");
+        assert_eq!(v["bgcode"], serde_json::json!(blocks), "{printer}: {v}");
+    }
+}
+
+/// Moonraker (Mainsail, Fluidd) reads the Klipper built-ins' own thumbnails:
+/// Creality Print's 96 and 300 px for the K1 and the Ender-3 V3,
+/// OrcaSlicer's 48 and 300 px for the Voron.
+#[test]
+fn moonraker_reads_the_klipper_built_ins_thumbnails() {
+    let Some(py) = python("Moonraker's metadata extractor") else {
+        return;
+    };
+    let site = run_python(
+        &py,
+        &["-c", "import importlib.util as u; print(u.find_spec('moonraker').submodule_search_locations[0])"],
+    );
+    let script = PathBuf::from(site.trim()).join("components/file_manager/metadata.py");
+    let dir = tmp("hosts-moonraker-built-ins");
+    for (printer, sizes) in [
+        ("creality-k1", [96, 300]),
+        ("ender3-v3", [96, 300]),
+        ("voron-350", [48, 300]),
+    ] {
+        let file = format!("{printer}.gcode");
+        build(&dir, Path::new(printer), &file);
+        let args = [
+            script.to_str().unwrap(),
+            "-p",
+            dir.to_str().unwrap(),
+            "-f",
+            &file,
+        ];
+        let out = run_python(&py, &args);
+        let v: Value = serde_json::from_str(&out).unwrap_or_else(|e| panic!("{e}: {out}"));
+        let thumbs = v["metadata"]["thumbnails"].as_array().unwrap();
+        for px in sizes {
+            let found = thumbs.iter().any(|t| t["width"] == px && t["height"] == px);
+            assert!(found, "{printer}: no {px} px thumbnail in {v}");
+        }
+        for th in thumbs {
+            let f = dir.join(th["relative_path"].as_str().unwrap());
+            let img = image::open(&f).unwrap_or_else(|e| panic!("{printer}: {e}"));
+            assert_eq!(
+                (u64::from(img.width()), u64::from(img.height())),
+                (
+                    th["width"].as_u64().unwrap(),
+                    th["height"].as_u64().unwrap()
+                )
+            );
+        }
+    }
+}
+
+/// A Bambu built-in's `.gcode.3mf` carries the plate pictures Bambu Studio
+/// writes (512 px, and 128 px for the printer's list) and its G-code no
+/// thumbnail, as Bambu Studio's for a Bambu printer; bambox finds it valid.
+#[test]
+fn a_bambu_built_in_s_package_carries_bambu_studio_s_pictures() {
+    let dir = tmp("hosts-bambu-built-in");
+    build(&dir, Path::new("bambu-x1c"), "v.gcode.3mf");
+    let bytes = std::fs::read(dir.join("v.gcode.3mf")).unwrap();
+    let mut z = zip::ZipArchive::new(std::io::Cursor::new(bytes)).unwrap();
+    let mut read = |n: &str| {
+        let mut s = Vec::new();
+        z.by_name(n).unwrap().read_to_end(&mut s).unwrap();
+        s
+    };
+    for (name, px) in [
+        ("Metadata/plate_1.png", 512),
+        ("Metadata/plate_1_small.png", 128),
+    ] {
+        let img =
+            image::load_from_memory_with_format(&read(name), image::ImageFormat::Png).unwrap();
+        assert_eq!((img.width(), img.height()), (px, px), "{name}");
+    }
+    let gcode = String::from_utf8(read("Metadata/plate_1.gcode")).unwrap();
+    assert!(
+        !gcode.contains("; thumbnail"),
+        "Bambu Studio writes none in the G-code"
+    );
+    let Some(py) = python("bambox's validator") else {
+        return;
+    };
+    let out = Command::new(py.with_file_name("bambox"))
+        .args(["validate", "--strict", "--json"])
+        .arg(dir.join("v.gcode.3mf"))
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    let json = &text[text.find('{').unwrap_or(0)..];
+    let v: Value = serde_json::from_str(json).unwrap_or_else(|e| panic!("{e}: {text}"));
+    assert_eq!(v["valid"], true, "{v}");
+    assert_eq!(v["warnings"], serde_json::json!([]), "{v}");
+}
+
 /// The E values of relative-E G-code after its start G-code (from the
 /// first part on), added up.
 fn net_e_of_parts(text: &str) -> f64 {

@@ -316,7 +316,8 @@ fn the_built_in_list_and_the_printers_command() {
     }
     let delta = Printer::built_in("rostock-max").unwrap();
     assert_eq!(delta.origin, [0.0, 0.0, 0.0]);
-    assert!(matches!(delta.bed, Bed::Circle { diameter, .. } if diameter == 280.0));
+    // SeeMeCNC's M665 B135: a printable radius of 135 mm
+    assert!(matches!(delta.bed, Bed::Circle { diameter, .. } if diameter == 270.0));
 }
 
 #[test]
@@ -770,4 +771,262 @@ fn a_recipe_that_sets_the_fan_gets_no_automatic_fan() {
     );
     assert_eq!(fan_lines[0], "M107 ; fan off for the first moves");
     assert_eq!(fan_lines[1], "M106 S255 ; fan");
+}
+
+// ------------------------------------------------ the makers' own figures
+
+/// A one-string recipe on `printer`: a string of cross-section `c` mm² at
+/// `v` mm/s from `from` to `to` (recipe mm), in a material printing at
+/// `nozzle` and `bed` °C (allowed up to 320 °C).
+fn one_string(c: f64, v: f64, from: [f64; 3], to: [f64; 3], nozzle: f64, bed: f64) -> String {
+    format!(
+        "p3dp: 1\nname: figure\nmaterial: {{name: pla, density: 1.24, nozzle_temp: {nozzle}, bed_temp: {bed}, max_nozzle_temp: 320}}\nparts:\n  - name: s\n    cross_section: {c}\n    speed: {v}\n    primitive:\n      path:\n        commands:\n          - {{move: {from:?}}}\n          - {{draw: {to:?}}}\n"
+    )
+}
+
+/// The codes `p3dp check` finds in `yaml` built for `printer` (the `[code]`
+/// of each finding in its report).
+fn check_codes(yaml: &str, printer: &str, tag: &str) -> Vec<String> {
+    let dir = tmp(&format!("machines-figure-{tag}"));
+    std::fs::write(dir.join("r.yaml"), yaml).unwrap();
+    let out = p3dp(&dir, &["check", "r.yaml", "--printer", printer]);
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(
+        matches!(out.status.code(), Some(0 | 1)),
+        "{tag}: {text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+    text.lines()
+        .filter_map(|l| Some(l.split_once('[')?.1.split_once(']')?.0.to_string()))
+        .collect()
+}
+
+/// (printer, what, c mm², v mm/s, (from, to) recipe mm, nozzle °C, bed °C,
+/// code, whether the check finds it).
+type FigureCase<'a> = (
+    &'a str,
+    &'a str,
+    f64,
+    f64,
+    ([f64; 3], [f64; 3]),
+    f64,
+    f64,
+    &'a str,
+    bool,
+);
+
+/// Each corrected figure of a built-in that a check reads (bed, height,
+/// speed, temperatures, flow), on both sides of the maker's value: the side
+/// between the old figure and the maker's is refused or passed as the
+/// maker's figure says (each of these cases failed with the old figure).
+#[test]
+fn the_checks_hold_each_built_in_to_its_makers_figure() {
+    let z = |h: f64| ([0.0, 0.0, 0.2], [0.5, 0.0, h]);
+    let x = |r: f64| ([r - 1.0, 0.0, 0.2], [r, 0.0, 0.2]);
+    let flat = ([-5.0, 0.0, 0.2], [5.0, 0.0, 0.2]);
+    // (printer, what, c, v, (from, to), nozzle °C, bed °C, code, found)
+    #[rustfmt::skip]
+    let cases: &[FigureCase] = &[
+        // printable_height 250 (was 256): a 252 mm part is refused
+        ("bambu-x1c", "z 252", 0.1, 20.0, z(252.0), 210.0, 60.0, "above-max-z", true),
+        ("bambu-x1c", "z 249", 0.1, 20.0, z(249.0), 210.0, 60.0, "above-max-z", false),
+        ("bambu-p1s", "z 252", 0.1, 20.0, z(252.0), 210.0, 60.0, "above-max-z", true),
+        ("bambu-p1s", "z 249", 0.1, 20.0, z(249.0), 210.0, 60.0, "above-max-z", false),
+        // Voron's stepper_z position_max 330 (was 340)
+        ("voron-350", "z 335", 0.1, 20.0, z(335.0), 210.0, 60.0, "above-max-z", true),
+        ("voron-350", "z 329", 0.1, 20.0, z(329.0), 210.0, 60.0, "above-max-z", false),
+        // SeeMeCNC's M665 B135: a radius of 135 (was 140)
+        ("rostock-max", "r 137", 0.1, 20.0, x(137.0), 210.0, 60.0, "out-of-bed", true),
+        ("rostock-max", "r 134", 0.1, 20.0, x(134.0), 210.0, 60.0, "out-of-bed", false),
+        // max speed: CORE One 350 (was 400), K1 800 (was 600), MINI 400 (was
+        // 180), Ender-3 500 (was 150), Rostock 250 (was 200)
+        ("prusa-core-one", "380 mm/s", 0.02, 380.0, flat, 210.0, 60.0, "speed", true),
+        ("prusa-core-one", "349 mm/s", 0.02, 349.0, flat, 210.0, 60.0, "speed", false),
+        ("creality-k1", "790 mm/s", 0.02, 790.0, flat, 210.0, 60.0, "speed", false),
+        ("creality-k1", "810 mm/s", 0.02, 810.0, flat, 210.0, 60.0, "speed", true),
+        ("prusa-mini", "390 mm/s", 0.02, 390.0, flat, 210.0, 60.0, "speed", false),
+        ("prusa-mini", "410 mm/s", 0.02, 410.0, flat, 210.0, 60.0, "speed", true),
+        ("ender3", "490 mm/s", 0.016, 490.0, flat, 210.0, 60.0, "speed", false),
+        ("ender3", "510 mm/s", 0.016, 510.0, flat, 210.0, 60.0, "speed", true),
+        ("rostock-max", "240 mm/s", 0.02, 240.0, flat, 210.0, 60.0, "speed", false),
+        ("rostock-max", "260 mm/s", 0.02, 260.0, flat, 210.0, 60.0, "speed", true),
+        // bed: CORE One 115 (was 120), Ender-3 115 (was 100)
+        ("prusa-core-one", "bed 118", 0.1, 20.0, flat, 210.0, 118.0, "bed-temp", true),
+        ("prusa-core-one", "bed 115", 0.1, 20.0, flat, 210.0, 115.0, "bed-temp", false),
+        ("ender3", "bed 112", 0.1, 20.0, flat, 210.0, 112.0, "bed-temp", false),
+        ("ender3", "bed 117", 0.1, 20.0, flat, 210.0, 117.0, "bed-temp", true),
+        // nozzle: the Voron's [extruder] max_temp 270 (was 300)
+        ("voron-350", "nozzle 275", 0.1, 20.0, flat, 275.0, 60.0, "nozzle-temp", true),
+        ("voron-350", "nozzle 265", 0.1, 20.0, flat, 265.0, 60.0, "nozzle-temp", false),
+        // flow (c·v): Bambu 21 (was 32 and 28), K1 23 (was 32), Ender-3 V3
+        // 23 (was 24), MINI 14 (was 10), MK3S 15 (was 11)
+        ("bambu-x1c", "25 mm³/s", 0.1, 250.0, flat, 210.0, 60.0, "flow", true),
+        ("bambu-x1c", "20 mm³/s", 0.1, 200.0, flat, 210.0, 60.0, "flow", false),
+        ("bambu-a1", "25 mm³/s", 0.1, 250.0, flat, 210.0, 60.0, "flow", true),
+        ("bambu-a1-mini", "25 mm³/s", 0.1, 250.0, flat, 210.0, 60.0, "flow", true),
+        ("creality-k1", "25 mm³/s", 0.1, 250.0, flat, 210.0, 60.0, "flow", true),
+        ("ender3-v3", "23.5 mm³/s", 0.1, 235.0, flat, 210.0, 60.0, "flow", true),
+        ("prusa-mini", "13 mm³/s", 0.1, 130.0, flat, 210.0, 60.0, "flow", false),
+        ("prusa-mk3s", "14 mm³/s", 0.1, 140.0, flat, 210.0, 60.0, "flow", false),
+    ];
+    for (k, &(printer, what, c, v, (from, to), nozzle, bed, code, found)) in
+        cases.iter().enumerate()
+    {
+        let codes = check_codes(
+            &one_string(c, v, from, to, nozzle, bed),
+            printer,
+            &format!("{k}"),
+        );
+        assert_eq!(
+            codes.iter().any(|c| c == code),
+            found,
+            "{printer}, {what}: `{code}` {} in {codes:?}",
+            if found { "expected" } else { "not expected" }
+        );
+    }
+}
+
+/// The stats and the G-code of a short print built for `printer`: two
+/// strings on the bed, `gap` mm of travel apart.
+fn two_strings(printer: &str, gap: f64) -> (serde_json::Value, String) {
+    let dir = tmp(&format!("machines-two-{printer}-{gap}"));
+    let yaml = format!(
+        "p3dp: 1\nname: two\nmaterial: pla\ndefaults: {{cross_section: 0.1, speed: 12}}\nparts:\n  - name: a\n    primitive:\n      path:\n        commands:\n          - {{move: [-20, 0, 0.2]}}\n          - {{draw: [-10, 0, 0.2]}}\n          - {{move: [{}, 0, 0.2]}}\n          - {{draw: [{}, 0, 0.2]}}\n",
+        -10.0 + gap,
+        gap
+    );
+    std::fs::write(dir.join("r.yaml"), yaml).unwrap();
+    let out = p3dp(
+        &dir,
+        &[
+            "build",
+            "r.yaml",
+            "--printer",
+            printer,
+            "-o",
+            "r.gcode",
+            "--stats-json",
+            "r.json",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{printer}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stats = serde_json::from_slice(&std::fs::read(dir.join("r.json")).unwrap()).unwrap();
+    let text = std::fs::read_to_string(dir.join("r.gcode")).unwrap();
+    let _ = std::fs::remove_dir_all(&dir);
+    (stats, text)
+}
+
+/// The number after letter `c` in G-code line `l`.
+fn word(l: &str, c: char) -> Option<f64> {
+    l.split(';')
+        .next()?
+        .split_whitespace()
+        .find(|w| w.starts_with(c))?[1..]
+        .parse()
+        .ok()
+}
+
+/// The parts' retractions: (length, F mm/min) of the first, from its
+/// `; retract` line and the `; unretract` after it (absolute E: their
+/// difference), and how many there are.
+fn retractions(text: &str) -> (Option<(f64, f64)>, usize) {
+    let from = text.find("; part: ").unwrap_or(0);
+    let lines: Vec<&str> = text[from..].lines().collect();
+    let n = lines.iter().filter(|l| l.ends_with("; retract")).count();
+    let Some(k) = lines.iter().position(|l| l.ends_with("; retract")) else {
+        return (None, 0);
+    };
+    let re = word(lines[k], 'E').unwrap();
+    let back = lines[k..]
+        .iter()
+        .find(|l| l.ends_with("; unretract"))
+        .unwrap();
+    let ue = word(back, 'E').unwrap();
+    // the writer's own mode line, after the start G-code's
+    let len = if text.lines().any(|l| l == "M83 ; relative extrusion") {
+        -re
+    } else {
+        ue - re
+    };
+    (Some((len, word(lines[k], 'F').unwrap())), n)
+}
+
+/// (printer, [(planner key, value)], retraction (mm, F mm/min), travel F
+/// mm/min, relative E).
+type WriterCase<'a> = (&'a str, &'a [(&'a str, f64)], (f64, f64), f64, bool);
+
+/// The planner's figures (what the estimate used, the stats' `planner`),
+/// the retraction and the travel feed (the G-code's) and the E mode of
+/// each built-in, as its maker's presets and firmware give them (each
+/// printer had at least one of them different before).
+#[test]
+fn the_planner_and_the_writer_take_each_built_in_s_makers_figures() {
+    let jd = |jerk: f64, accel: f64| 0.4 * jerk * jerk / accel;
+    // (printer, [(planner key, value)], retraction (mm, F mm/min), travel
+    // F mm/min, relative E)
+    #[rustfmt::skip]
+    let cases: &[WriterCase] = &[
+        ("bambu-x1c", &[("max_acceleration", 20000.0), ("travel_acceleration", 9000.0), ("retract_acceleration", 5000.0), ("junction_deviation", jd(9.0, 20000.0)), ("max_z_velocity", 20.0), ("max_z_acceleration", 500.0)], (0.8, 1800.0), 30000.0, true),
+        ("bambu-p1s", &[("travel_acceleration", 9000.0), ("junction_deviation", jd(9.0, 20000.0))], (0.8, 1800.0), 30000.0, true),
+        ("bambu-a1", &[("max_acceleration", 12000.0), ("travel_acceleration", 9000.0), ("junction_deviation", jd(9.0, 12000.0)), ("max_z_velocity", 30.0), ("max_z_acceleration", 1500.0)], (0.8, 1800.0), 30000.0, true),
+        ("bambu-a1-mini", &[("max_acceleration", 20000.0), ("travel_acceleration", 9000.0), ("max_z_velocity", 30.0), ("max_z_acceleration", 1500.0)], (0.8, 1800.0), 30000.0, true),
+        ("prusa-core-one", &[("max_velocity", 350.0), ("max_acceleration", 7000.0), ("travel_acceleration", 7000.0), ("retract_acceleration", 2500.0), ("junction_deviation", 0.01), ("max_z_velocity", 12.0), ("max_z_acceleration", 400.0)], (0.7, 2700.0), 21000.0, true),
+        ("prusa-mk4s", &[("max_acceleration", 4000.0), ("travel_acceleration", 4000.0), ("retract_acceleration", 2500.0), ("max_z_velocity", 40.0), ("max_z_acceleration", 200.0)], (0.7, 2100.0), 18000.0, true),
+        ("prusa-mk4", &[("max_acceleration", 4000.0), ("travel_acceleration", 4000.0), ("retract_acceleration", 2500.0), ("max_z_velocity", 40.0)], (0.7, 2100.0), 18000.0, true),
+        ("prusa-mini", &[("max_velocity", 400.0), ("max_acceleration", 4000.0), ("travel_acceleration", 4000.0), ("retract_acceleration", 1250.0), ("junction_deviation", jd(8.0, 4000.0))], (2.5, 4200.0), 24000.0, true),
+        ("prusa-mk3s", &[("junction_deviation", jd(8.0, 1250.0))], (0.8, 2100.0), 10800.0, true),
+        ("creality-k1", &[("max_velocity", 800.0), ("minimum_cruise_ratio", 0.0), ("max_z_velocity", 20.0), ("max_z_acceleration", 300.0)], (0.8, 2400.0), 30000.0, true),
+        ("ender3-v3", &[("max_velocity", 600.0), ("max_z_velocity", 500.0), ("max_z_acceleration", 500.0)], (0.8, 2400.0), 30000.0, true),
+        ("ender3", &[("max_velocity", 500.0), ("max_acceleration", 500.0), ("junction_deviation", 0.08)], (6.0, 2400.0), 7200.0, true),
+        ("voron-350", &[("max_velocity", 300.0), ("max_acceleration", 3000.0), ("minimum_cruise_ratio", 0.5)], (0.8, 1800.0), 18000.0, true),
+        ("rostock-max", &[("max_velocity", 250.0), ("max_acceleration", 3400.0), ("junction_deviation", jd(8.333, 3400.0)), ("max_z_velocity", 250.0), ("max_z_acceleration", 3400.0)], (3.0, 2400.0), 9000.0, false),
+    ];
+    for &(printer, planner, (len, f), travel, relative) in cases {
+        let (stats, text) = two_strings(printer, 20.0);
+        for &(key, want) in planner {
+            let got = stats["planner"][key].as_f64().unwrap_or(f64::NAN);
+            assert!(
+                (got - want).abs() <= 1e-9 * want.abs().max(1.0),
+                "{printer}: planner {key} {got}, want {want}"
+            );
+        }
+        let (first, _) = retractions(&text);
+        let (rl, rf) = first.unwrap_or_else(|| panic!("{printer}: no retraction"));
+        assert!(
+            (rl - len).abs() < 1e-9 && rf == f,
+            "{printer}: retraction {rl} mm at F{rf}, want {len} at F{f}"
+        );
+        let g0 = text
+            .lines()
+            .skip_while(|l| !l.ends_with("; retract"))
+            .find(|l| l.starts_with("G0 X"))
+            .unwrap_or_else(|| panic!("{printer}: no travel after the retraction"));
+        assert_eq!(word(g0, 'F'), Some(travel), "{printer}: {g0}");
+        // the writer's E mode (a start G-code may set M83 for its purge)
+        assert_eq!(
+            text.lines().any(|l| l == "M83 ; relative extrusion"),
+            relative,
+            "{printer}: M83"
+        );
+        assert_eq!(
+            text.lines().any(|l| l == "M82 ; absolute extrusion"),
+            !relative,
+            "{printer}: M82"
+        );
+    }
+}
+
+/// Prusa's retract_before_travel 1.5 (was 1): a 1.2 mm travel is no longer
+/// retracted on the MK4S, the CORE One, the MK4 and the MINI; a 1.8 mm one is.
+#[test]
+fn prusa_retracts_only_before_travel_of_1_5_mm() {
+    for printer in ["prusa-mk4s", "prusa-core-one", "prusa-mk4", "prusa-mini"] {
+        assert_eq!(retractions(&two_strings(printer, 1.2).1).1, 0, "{printer}");
+        assert_eq!(retractions(&two_strings(printer, 1.8).1).1, 1, "{printer}");
+    }
 }

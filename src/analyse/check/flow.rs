@@ -3,7 +3,8 @@
 //! Warnings past `checks.cross_section_max` / `_min` (× nozzle²), errors past
 //! the hard limits; a declared hair (`hair:`) is thin on purpose and never
 //! `thin-string` (it may still be `over-extrusion`). The volumetric flow c·v is checked in [`super::run`]'s
-//! `flow` (the hot end's `max_flow`).
+//! `flow` (the hot end's `max_flow`); [`klipper_moves`] holds a Klipper
+//! printer's strings to its extruder's own limits.
 
 use super::{fmt_p, Finding, Severity};
 use crate::base::toolpath::Toolpath;
@@ -114,5 +115,104 @@ pub(crate) fn cross_sections(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Findi
             t.extreme
         );
         out.push(t.finding(tp, "thin-string", &what));
+    }
+}
+
+/// The moves of one path a Klipper printer refuses (`klipper-extrusion`,
+/// an error): Klipper's `[extruder]` stops the print at the first move
+/// whose cross-section passes `max_extrude_cross_section` and at an
+/// extrude-only move longer than `max_extrude_only_distance`
+/// (klippy/kinematics/extruder.py, `check_move`). Klipper's cross-section
+/// is the move's E over its XYZ length times the filament area of its own
+/// config (the profile's `filament_diameter`); a move feeding at most
+/// nozzle × `max_extrude_cross_section` / that area passes ("a tiny
+/// amount"), and a move without X or Y is extrude-only: its E is held to
+/// the distance instead. Strings are checked one by one, before the
+/// writer merges short ones: a merged move's cross-section is the mean of
+/// its strings', so this is Klipper's rule or stricter.
+pub(crate) fn klipper_moves(recipe: &Recipe, tp: &Toolpath, out: &mut Vec<Finding>) {
+    let p = &recipe.printer;
+    if p.flavor != crate::machine::Flavor::Klipper {
+        return;
+    }
+    let lim = p.kinematics.klipper_extruder(p.nozzle_diameter);
+    let klipper_area = std::f64::consts::PI * 0.25 * p.filament_diameter * p.filament_diameter;
+    // E = c·L / a (a: the material's filament area, what the writer
+    // divides by); Klipper reads area = E / L × A (A: its own)
+    let area = super::support::filament_area(recipe);
+    let tiny = p.nozzle_diameter * lim.max_cross_section / klipper_area;
+    // G-code carries 3 decimals: a move under half a micrometre in X and
+    // in Y is written without them
+    const NO_XY: f64 = 5e-4;
+    let mut wide: Option<(usize, usize, f64)> = None;
+    let mut long: Option<(usize, usize, f64)> = None;
+    // (first string, count, the first's cross-section or filament)
+    let tally = |slot: &mut Option<(usize, usize, f64)>, k: usize, v: f64| {
+        slot.get_or_insert((k, 0, v)).1 += 1;
+    };
+    for (k, s) in tp.strings.iter().enumerate() {
+        if s.travel || !(s.c.is_finite() && s.c > 0.0) {
+            continue;
+        }
+        let (a, b) = (tp.points[k], tp.points[k + 1]);
+        let len = a.distance(b);
+        let e = s.c * len / area;
+        if (b.x - a.x).abs() < NO_XY && (b.y - a.y).abs() < NO_XY {
+            if e > lim.max_only_distance {
+                tally(&mut long, k, e);
+            }
+        } else if s.c * klipper_area / area > lim.max_cross_section && e > tiny {
+            tally(&mut wide, k, s.c * klipper_area / area);
+        }
+    }
+    for (k, ev) in &tp.events {
+        if let crate::base::toolpath::Event::Extrude { filament, .. } = *ev {
+            if filament.abs() > lim.max_only_distance {
+                tally(&mut long, *k, filament.abs());
+            }
+        }
+    }
+    let mut report = |(k, n, _): (usize, usize, f64), what: String, klipper: String| {
+        // an in-place feed comes before string k, which may be none
+        let m = if k < tp.len() {
+            tp.midpoint(k)
+        } else {
+            tp.points[k.min(tp.points.len() - 1)]
+        };
+        out.push(Finding {
+            code: "klipper-extrusion",
+            severity: Severity::Error,
+            message: format!(
+                "part `{}` has {n} move{} Klipper refuses: {what}; the first, string {k} at {}, {klipper}",
+                tp.name,
+                if n == 1 { "" } else { "s" },
+                fmt_p(m)
+            ),
+            part: Some(tp.name.clone()),
+            string: Some(k),
+            at: Some(m.to_array()),
+            strings: Vec::new(),
+        });
+    };
+    if let Some(w) = wide {
+        let max = lim.max_cross_section;
+        report(
+            w,
+            format!(
+                "a cross-section above the extruder's max_extrude_cross_section of {max:.3} mm²"
+            ),
+            format!(
+                "stops the print: `Move exceeds maximum extrusion ({:.3}mm^2 vs {max:.3}mm^2)`",
+                w.2
+            ),
+        );
+    }
+    if let Some(l) = long {
+        let max = lim.max_only_distance;
+        report(
+            l,
+            format!("an extrude-only move (no X, no Y) of more than the extruder's max_extrude_only_distance of {max:.3} mm of filament"),
+            format!("stops the print: `Extrude only move too long ({:.3}mm vs {max:.3}mm)`", l.2),
+        );
     }
 }

@@ -129,6 +129,7 @@ pub(crate) fn cheap(recipe: &Recipe, paths: &[&Toolpath], allowed: &[String]) ->
         sane &= machine_limits(recipe, tp, &mut out);
         strings(recipe, tp, &mut out);
         flow::cross_sections(recipe, tp, &mut out);
+        flow::klipper_moves(recipe, tp, &mut out);
         out.extend(events(recipe, tp));
         out.extend(settings(recipe, tp));
     }

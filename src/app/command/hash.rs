@@ -256,23 +256,29 @@ fn check_lock(a: &Options, lockfile: &Path) -> Vec<Error> {
                 let new = lines.blocks(entry.block_lines);
                 let place = match lock::first_difference(&entry.blocks, &new) {
                     Some(k) => {
-                        let first = k as u64 * entry.block_lines;
                         let all = new_lines(c, job, 0, u64::MAX);
-                        let block: Vec<String> = all
-                            .iter()
-                            .skip(first as usize)
-                            .take(entry.block_lines as usize)
-                            .cloned()
+                        // the fingerprint's lines (no thumbnail's), numbered as in the file
+                        let mut pictures = lock::Thumbnails::default();
+                        let kept: Vec<usize> = (0..all.len())
+                            .filter(|&i| !pictures.part(all[i].as_bytes()))
                             .collect();
-                        let text = block.first().map_or("(end of file)", String::as_str);
-                        let at = part_at(&all, first as usize);
+                        let from = k * entry.block_lines as usize;
+                        let block: Vec<(usize, &str)> = kept
+                            .iter()
+                            .skip(from)
+                            .take(entry.block_lines as usize)
+                            .map(|&i| (i + 1, all[i].as_str()))
+                            .collect();
+                        let first = kept.get(from).copied().unwrap_or(all.len());
+                        let at = part_at(&all, first);
                         if entry.block_lines == 1 {
+                            let text = block.first().map_or("(end of file)", |l| l.1);
                             format!("{at}first differing line {}: `{text}`", first + 1)
                         } else {
-                            format!("{at}{}", changed_block(first, entry.block_lines, &block))
+                            format!("{at}{}", changed_block(first as u64 + 1, entry.block_lines, &block))
                         }
                     }
-                    None => "the lines hash alike block by block (a hash collision?)".into(),
+                    None => "the lines hash alike block by block, thumbnails left out: its thumbnails changed (or the hashes collide)".into(),
                 };
                 // only what changed is shown, with both whole hashes
                 changed += 1;
@@ -525,16 +531,20 @@ fn new_lines(c: &Builds, job: &Job, k: u64, n: u64) -> Vec<String> {
         .collect()
 }
 
-/// Where a block of `n` lines from line `first` (0-based) changed: the lock
-/// keeps one hash per block, so the changed line is one of them; a short
-/// block is quoted whole, a long one by its first and last lines and the
-/// `; param` comments between them (where a changed param shows).
-fn changed_block(first: u64, n: u64, block: &[String]) -> String {
-    let range = format!("lines {}–{}", first + 1, first + n);
+/// Where a block of `n` lines from line `first` (1-based, the file's)
+/// changed: the lock keeps one hash per block, so the changed line is one
+/// of them; a short block is quoted whole, a long one by its first and last
+/// lines and the `; param` comments between them (where a changed param
+/// shows). `block` holds the block's lines with their numbers in the file.
+fn changed_block(first: u64, n: u64, block: &[(usize, &str)]) -> String {
+    let range = match block.last() {
+        Some(&(last, _)) if block.len() as u64 == n => format!("lines {first}–{last}"),
+        _ => format!("lines {first}–{}", first + n - 1),
+    };
     if block.is_empty() {
         return format!("first difference in {range}, now past the end of the file");
     }
-    let quote = |k: usize| format!("{}: `{}`", first + 1 + k as u64, block[k]);
+    let quote = |k: usize| format!("{}: `{}`", block[k].0, block[k].1);
     let picked: Vec<String> = if block.len() <= 4 {
         (0..block.len()).map(quote).collect()
     } else {
@@ -542,7 +552,7 @@ fn changed_block(first: u64, n: u64, block: &[String]) -> String {
         let mut v = vec![quote(0)];
         v.extend(
             (1..last)
-                .filter(|&k| block[k].starts_with("; param "))
+                .filter(|&k| block[k].1.starts_with("; param "))
                 .map(quote),
         );
         v.extend(["…".to_string(), quote(last)]);

@@ -43,14 +43,46 @@ impl<'a> Scene<'a> {
         Scene::with_flags(plan, Vec::new())
     }
 
+    /// [`Scene::new`] but for the spacing of the passes, each path's taken
+    /// as half the nozzle (what a path without neighbouring passes gets),
+    /// and for the findings, none flagged: for round strokes only (the
+    /// G-code's thumbnails, drawn on every build), whose drawing needs no
+    /// spacing, and whose cost must not grow with how many passes lie in
+    /// one place ([`pass_spacing`] of a line retraced 600 000 times took
+    /// tens of seconds). A thumbnail is the print as the printer shows it,
+    /// the same whether the checks ran, found something or were allowed:
+    /// the G-code does not wait for the checks.
+    pub(crate) fn round(plan: &'a Plan) -> Scene<'a> {
+        let none = plan
+            .paths
+            .iter()
+            .map(|tp| vec![false; tp.strings.len()])
+            .collect();
+        let mut scene = Scene::with_flags_spaced(plan, none, false);
+        scene.marks.clear();
+        scene
+    }
+
     /// [`Scene::new`] given which strings the findings concern (as [`flags`]
     /// finds them).
     fn with_flags(plan: &'a Plan, flagged: Vec<Vec<bool>>) -> Scene<'a> {
+        Scene::with_flags_spaced(plan, flagged, true)
+    }
+
+    /// [`Scene::with_flags`], each path's pass spacing measured when
+    /// `spaced` ([`pass_spacing`]), else half the nozzle.
+    fn with_flags_spaced(plan: &'a Plan, flagged: Vec<Vec<bool>>, spaced: bool) -> Scene<'a> {
         let fallback = plan.recipe.printer.nozzle_diameter / 2.0;
         let spacing: Vec<f64> = plan
             .paths
             .iter()
-            .map(|tp| pass_spacing(&tp.points).unwrap_or(fallback))
+            .map(|tp| {
+                if spaced {
+                    pass_spacing(&tp.points).unwrap_or(fallback)
+                } else {
+                    fallback
+                }
+            })
             .collect();
         Scene {
             plan,

@@ -62,7 +62,11 @@ pub(crate) fn images(plan: &Plan) -> Result<Vec<(ThumbSpec, Vec<u8>)>> {
         return Ok(Vec::new());
     }
     let specs = thumbnails(list).map_err(|e| e.in_file(&plan.recipe.printer.name))?;
-    let scene = Scene::new(plan);
+    // a picture's work grows with the model's extent, as a preview's: a
+    // model metres away is refused before it is drawn
+    crate::analyse::check::within_reach(&plan.recipe, &plan.paths, "thumbnail")
+        .map_err(|e| e.in_file(&plan.path))?;
+    let scene = Scene::round(plan);
     Ok(specs
         .into_iter()
         .map(|t| {
@@ -110,7 +114,7 @@ pub(crate) fn encode(pm: &tiny_skia::Pixmap, format: ImageFormat) -> Vec<u8> {
 
 /// A PNG thumbnail of `plan`, `width` × `height` pixels.
 pub(crate) fn png_of(plan: &Plan, width: u32, height: u32) -> Vec<u8> {
-    let pm = png::thumbnail(&Scene::new(plan), Size { width, height });
+    let pm = png::thumbnail(&Scene::round(plan), Size { width, height });
     png::encode(&pm, true)
 }
 

@@ -360,6 +360,10 @@ pub(crate) struct RawKinematics {
     #[serde(default)]
     pub max_extrude_only_accel: Option<f64>,
     #[serde(default)]
+    pub max_extrude_cross_section: Option<f64>,
+    #[serde(default)]
+    pub max_extrude_only_distance: Option<f64>,
+    #[serde(default)]
     pub min_segment_time_floor: bool,
     #[serde(default)]
     pub block_buffer_size: Option<u32>,
@@ -389,6 +393,8 @@ impl Default for RawKinematics {
             instantaneous_corner_velocity: k.instantaneous_corner_velocity,
             max_extrude_only_velocity: k.max_extrude_only_velocity,
             max_extrude_only_accel: k.max_extrude_only_accel,
+            max_extrude_cross_section: k.max_extrude_cross_section,
+            max_extrude_only_distance: k.max_extrude_only_distance,
             min_segment_time_floor: k.min_segment_time_floor,
             block_buffer_size: k.block_buffer_size,
             command_rate: k.command_rate,

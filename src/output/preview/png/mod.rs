@@ -224,30 +224,57 @@ fn layout(scene: &Scene, opts: &Options) -> ([f64; 4], bool, u32) {
 }
 
 /// A G-code thumbnail: the model alone in filament colour, iso view, on a
-/// transparent background.
+/// transparent background, its strings round tubes (`scene` as
+/// [`Scene::round`] reads it).
 pub(crate) fn thumbnail(scene: &Scene, size: Size) -> Pixmap {
     let mut pm = Pixmap::new(size.width, size.height).expect("sizes are 1..=8192");
     let (w, h) = (size.width as f64, size.height as f64);
     let pad = (w.min(h) * 0.04).max(0.5);
     let rect = [pad, pad, w - pad, h - pad];
-    // one piece per path, every neighbour searched in full: the thumbnails
-    // as they were first drawn (their bytes are part of the G-code, and so
-    // of its hash)
+    // a thumbnail is drawn on every build (thumbnails are on by default):
+    // pieces of PIECE strings shared over the pool as the preview's, and
+    // round strokes with no neighbouring pass looked for, whose search took
+    // minutes on a line retraced 600 000 times; the same strokes on any
+    // number of threads
     let model = Model::new(
         scene,
         super::View::Iso,
         ColorMode::Plain,
         rect,
-        usize::MAX,
+        PIECE,
         false,
-        1,
-    );
-    let (frame, bbox) = (model.frame, model.bbox);
+        par::width(),
+    )
+    .round();
     let mut items = model.strokes(|it| *it);
     sort(&mut items);
+    let items = once(items);
     paint_strokes(&mut pm, &items, scene, ColorMode::Plain, 1.0);
-    marks(&mut pm, scene, &frame, bbox, ColorMode::Plain, rect);
+    // no marks: a thumbnail is the print as the printer's screen shows it,
+    // not the turtles' draw_turtle markers (which never reach the G-code)
     pm
+}
+
+/// Each stroke painted once: of strokes alike in all that is drawn of them
+/// (ends, depth, width, shading, kind), only the last in painting order,
+/// the one that shows, is kept: a line retraced 600 000 times is a stroke
+/// each way, not 600 000 (whose painting took tens of seconds).
+fn once(items: Vec<Item>) -> Vec<Item> {
+    let key = |it: &Item| {
+        (
+            [it.a.0, it.a.1, it.b.0, it.b.1, it.width].map(f32::to_bits),
+            [it.depth, it.diffuse, it.spec].map(f64::to_bits),
+            it.kind,
+        )
+    };
+    let mut seen = std::collections::HashSet::with_capacity(items.len());
+    let mut kept: Vec<Item> = items
+        .into_iter()
+        .rev()
+        .filter(|it| seen.insert(key(it)))
+        .collect();
+    kept.reverse();
+    kept
 }
 
 /// Painter's algorithm: far (small depth) first; the sort is stable, so
@@ -260,7 +287,10 @@ fn sort(items: &mut [Item]) {
 /// PNG bytes of `pm`: RGB, or RGBA with `alpha` (colours un-premultiplied),
 /// compressed as hard as the encoder can (the G-code thumbnails).
 pub(crate) fn encode(pm: &Pixmap, alpha: bool) -> Vec<u8> {
-    encode_with(pm, alpha, image::codecs::png::CompressionType::Best)
+    // zlib's default level, as PrusaSlicer and Bambu Studio compress their
+    // thumbnails (MZ_DEFAULT_LEVEL): the best took most of the time of a
+    // thumbnail, and thumbnails are made on every build
+    encode_with(pm, alpha, image::codecs::png::CompressionType::Default)
 }
 
 /// [`encode`] with a quicker compression: the PNG previews (a flat

@@ -52,6 +52,9 @@ pub(super) struct Model<'s, 'p> {
     /// Whether a stroke's neighbouring pass is followed from the last
     /// stroke's ([`Grid::follow_other`]) rather than searched in full.
     follow: bool,
+    /// Whether a stroke's neighbouring pass is looked for at all (else
+    /// every lit stroke is a round tube, [`Model::round`]).
+    neighbours: bool,
 }
 
 /// A run of strings of one path drawn as one stroke: strings `first..end`,
@@ -130,7 +133,17 @@ impl<'s, 'p> Model<'s, 'p> {
             grids,
             pieces,
             follow,
+            neighbours: true,
         }
+    }
+
+    /// The model with every lit stroke a round tube, no neighbouring pass
+    /// looked for: a search whose cost does not grow with how many passes
+    /// lie in one place (a line retraced 600 000 times took minutes), for
+    /// the G-code's thumbnails, drawn on every build.
+    pub(super) fn round(mut self) -> Self {
+        self.neighbours = false;
+        self
     }
 
     /// `f` of every stroke, in print order, in one vector. The pieces'
@@ -288,6 +301,9 @@ impl<'s, 'p> Model<'s, 'p> {
         tangent: DVec3,
         follow: &mut Follow,
     ) -> (f64, Option<(DVec3, DVec3, f64)>) {
+        if !self.neighbours {
+            return (round_diameter(run.c), None);
+        }
         let grid = &self.grids[pi];
         let guess = follow.hint.map(|(at, j)| j + (run.first - at));
         let sm = (grid.arc(run.first) + grid.arc(run.end)) / 2.0;
