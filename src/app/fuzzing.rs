@@ -305,3 +305,37 @@ pub fn preset_json(data: &[u8]) {
     preset_one(Kind::Printer, &src);
     preset_one(Kind::Filament, &src);
 }
+
+/// A G-code line → read as each firmware reads it (no panic, whatever the
+/// bytes); every command read is written back by the one writer as one
+/// line the same firmware reads again into the same commands.
+pub fn gcode_line(data: &[u8]) {
+    use crate::machine::firmware::{read, write};
+    use crate::machine::Flavor;
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    for flavor in Flavor::ALL {
+        let Ok(r) = read::read(flavor, text) else {
+            continue;
+        };
+        let d = write::Dialect {
+            flavor,
+            object_labels: false,
+            prusa_8bit: false,
+        };
+        for c in &r.commands {
+            if write::refusal(d, c).is_some() {
+                continue;
+            }
+            let mut chunk = crate::base::format::Chunk::new();
+            write::write(d, c, "", &mut chunk);
+            let written = std::str::from_utf8(chunk.bytes()).expect("the writer writes ASCII");
+            let line = written.strip_suffix('\n').unwrap_or(written);
+            assert!(!line.contains(['\n', '\r']), "one line: {written:?}");
+            let again = read::read(flavor, line)
+                .unwrap_or_else(|e| panic!("{flavor:?}: {line:?} written, not read: {e}"));
+            assert_eq!(again.commands.len(), 1, "{flavor:?}: {text:?} → {line:?}");
+        }
+    }
+}
