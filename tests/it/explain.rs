@@ -124,3 +124,15 @@ fn without_a_code_every_code_in_a_line() {
         );
     }
 }
+
+#[test]
+fn head_collision_names_the_head_keys_a_profile_has() {
+    // a profile's head takes `box` and `gantry` (schema/profile.rs), not
+    // the field's name inside p3dp
+    let dir = tmp("explain-head");
+    let o = p3dp(&dir, &["explain", "head-collision"]);
+    assert!(o.status.success());
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("`head.box`"), "{text}");
+    assert!(!text.contains("head_box"), "{text}");
+}
