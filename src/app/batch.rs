@@ -49,19 +49,7 @@ pub(crate) fn expand(
     sets: &[(String, String)],
     sweeps: &[(String, Vec<String>)],
 ) -> Vec<Job> {
-    let mut combos: Vec<Vec<(String, String)>> = vec![Vec::new()];
-    for (name, values) in sweeps {
-        combos = combos
-            .into_iter()
-            .flat_map(|c| {
-                values.iter().map(move |v| {
-                    let mut c = c.clone();
-                    c.push((name.clone(), v.clone()));
-                    c
-                })
-            })
-            .collect();
-    }
+    let combos = crate::recipe::resolve::plate::variants(sweeps);
     recipes
         .iter()
         .flat_map(|r| {

@@ -349,7 +349,7 @@ fn load_objects(
 
 /// Every combination of the sweeps' values (the first sweep outermost), as
 /// `--set` values; one empty combination without sweeps.
-fn variants(sweeps: &[(String, Vec<String>)]) -> Vec<Vec<(String, String)>> {
+pub(crate) fn variants(sweeps: &[(String, Vec<String>)]) -> Vec<Vec<(String, String)>> {
     let mut combos: Vec<Vec<(String, String)>> = vec![Vec::new()];
     for (name, values) in sweeps {
         combos = combos
