@@ -225,9 +225,19 @@ pub(crate) fn stage_recipe(
     Ok(file)
 }
 
-/// A scratch folder of this process for the staged recipes.
-pub(crate) fn scratch() -> PathBuf {
-    std::env::temp_dir().join(format!("p3dp-calibrate-{}", std::process::id()))
+/// A scratch folder of its own for one call's staged recipe, removed when
+/// dropped (two calls in one process, as tests make, never share one).
+fn scratch() -> Result<tempfile::TempDir> {
+    tempfile::Builder::new()
+        .prefix("p3dp-calibrate-")
+        .tempdir()
+        .map_err(|e| {
+            Error::io_from(
+                std::env::temp_dir().display().to_string(),
+                format!("cannot make a scratch folder for the test's recipe: {e}"),
+                &e,
+            )
+        })
 }
 
 /// What `calibrate TEST` takes: the test, the material, and `build`'s
@@ -244,24 +254,25 @@ pub(crate) struct Options {
 /// `p3dp calibrate TEST`: the test's recipe built as `build` builds it.
 pub(crate) fn run(o: &Options) -> Vec<Error> {
     match prepare(o) {
-        Ok((opts, dir)) => {
-            let errors = build::run(&opts);
-            let _ = std::fs::remove_dir_all(dir);
-            errors
-        }
+        Ok((opts, _dir)) => build::run(&opts),
         Err(e) => vec![e],
     }
 }
 
 /// `build`'s options for the test: its recipe staged, its params set.
-fn prepare(o: &Options) -> Result<(build::Options, PathBuf)> {
+fn prepare(o: &Options) -> Result<(build::Options, tempfile::TempDir)> {
     let t = test(&o.test)?;
     let mut opts = o.build.clone();
     let printer = printer(opts.builds.printer.as_deref(), t)?;
     let material = o.material.as_deref().unwrap_or("pla");
     opts.builds.sets = sets(t, material, printer.nozzle_diameter, &opts.builds.sets);
-    let dir = scratch();
-    let file = stage_recipe(t, recipe_for(t, &printer).0, o.material.as_deref(), &dir)?;
+    let dir = scratch()?;
+    let file = stage_recipe(
+        t,
+        recipe_for(t, &printer).0,
+        o.material.as_deref(),
+        dir.path(),
+    )?;
     opts.builds.recipes = vec![file];
     Ok((opts, dir))
 }
@@ -340,7 +351,7 @@ pub(crate) fn apply(a: &Apply) -> Result<String> {
             ..build::Options::default()
         },
     };
-    let (opts, dir) = prepare(&o)?;
+    let (opts, _dir) = prepare(&o)?;
     let plan = crate::app::prepare::prepare(
         &opts.builds.recipes[0],
         &crate::app::prepare::Options {
@@ -349,7 +360,6 @@ pub(crate) fn apply(a: &Apply) -> Result<String> {
             ..Default::default()
         },
     );
-    let _ = std::fs::remove_dir_all(&dir);
     let plan = plan?;
     let bands = crate::analyse::stats::bands(&plan.paths);
     let band = bands
