@@ -209,6 +209,14 @@ pub(crate) fn lex(grammar: Grammar, line: &str) -> Result<Line<'_>, String> {
     if code.is_empty() {
         return Ok(out);
     }
+    if skip_line_number(code) != code {
+        // each firmware skips one line number; the second is read as a
+        // command `N…` that none has (Marlin and Klipper answer "unknown
+        // command"), and no line written for it reads back as it
+        return Err(format!(
+            "`{code}` starts with a second line number; expected at most one `N<number>` before the command"
+        ));
+    }
     match grammar {
         Grammar::Klipper => klipper(code, &mut out)?,
         Grammar::Marlin | Grammar::Reprap => marlin(code, grammar == Grammar::Reprap, &mut out)?,

@@ -121,6 +121,13 @@ fn unreadable_lines_are_errors_never_panics() {
     assert!(read(Flavor::Klipper, "G1 X５").is_err());
     assert!(read(Flavor::Marlin, "G1 X1 ; é").is_ok());
     assert!(read(Flavor::Marlin, &"G1 X1 ".repeat(2000)).is_err());
+    // every firmware skips one line number; after it, `N90` is a command
+    // none has, which no written line reads back as (found by the fuzzer)
+    for f in Flavor::ALL {
+        let e = read(f, "N10  N90 M1G").unwrap_err();
+        assert!(e.contains("second line number"), "{f:?}: {e}");
+        assert_eq!(one(f, "N10 M400").len(), 1, "{f:?}");
+    }
 }
 
 /// The settings a calibration writes, each flavour.

@@ -196,7 +196,7 @@ impl Finished {
         let shown = self.out.display().to_string();
         match self.made {
             Made::Png(r, opts) => {
-                let bytes = png::encode_fast(&r.pixmap, false);
+                let bytes = png::encode(&r.pixmap, false);
                 let (x, y) = r.frame.pixel(DVec3::ZERO);
                 (bytes, format!(
                     "preview → {shown}: {} × {} px, {} view, colour {}, scale {:.4} px/mm, recipe (0, 0, 0) at pixel ({x:.2}, {y:.2})",

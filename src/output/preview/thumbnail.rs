@@ -66,13 +66,12 @@ pub(crate) fn images(plan: &Plan) -> Result<Vec<(ThumbSpec, Vec<u8>)>> {
     // model metres away is refused before it is drawn
     crate::analyse::check::within_reach(&plan.recipe, &plan.paths, "thumbnail")
         .map_err(|e| e.in_file(&plan.path))?;
-    let scene = Scene::round(plan);
+    let sizes: Vec<Size> = specs.iter().map(|t| t.size).collect();
+    let pixmaps = png::thumbnails(&Scene::round(plan), &sizes);
     Ok(specs
         .into_iter()
-        .map(|t| {
-            let pm = png::thumbnail(&scene, t.size);
-            (t, encode(&pm, t.format))
-        })
+        .zip(pixmaps)
+        .map(|(t, pm)| (t, encode(&pm, t.format)))
         .collect())
 }
 
@@ -114,8 +113,8 @@ pub(crate) fn encode(pm: &tiny_skia::Pixmap, format: ImageFormat) -> Vec<u8> {
 
 /// A PNG thumbnail of `plan`, `width` × `height` pixels.
 pub(crate) fn png_of(plan: &Plan, width: u32, height: u32) -> Vec<u8> {
-    let pm = png::thumbnail(&Scene::round(plan), Size { width, height });
-    png::encode(&pm, true)
+    let pm = png::thumbnails(&Scene::round(plan), &[Size { width, height }]);
+    png::encode(&pm[0], true)
 }
 
 /// The thumbnail blocks `plan`'s printer asks for (empty when none).

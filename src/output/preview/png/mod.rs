@@ -6,8 +6,8 @@
 //! rasteriser (`raster`): a stroke is a capsule of its width, a pixel
 //! takes the share of it a box filter gives, blended in integers rounded the
 //! same way everywhere, in bands of rows that the pool shares out with the
-//! same bytes on any number of threads. tiny-skia draws the rest: the
-//! G-code thumbnails' strokes, the turtles' markers, the findings' rings
+//! same bytes on any number of threads; the G-code thumbnails are painted
+//! by it too. tiny-skia draws the rest: the turtles' markers, the findings' rings
 //! and the legend's colour bar; the text is the previews' own 8 × 8 font.
 //!
 //! Shading. A string is a thin tube: lit from a light L fixed to the view, the
@@ -30,8 +30,8 @@ use glam::DVec3;
 use tiny_skia::Pixmap;
 
 use self::decor::{header, legend, legend_width, marks};
-use self::model::{Item, Model, Palette};
-use self::raster::{paint_bands, paint_strokes, Px};
+use self::model::{Item, Model, Palette, Passes};
+use self::raster::{paint_bands, Px};
 use super::{Basis, ColorMode, Options, Scene, Size};
 use crate::analyse::plan::Plan;
 use crate::analyse::stats::Stats;
@@ -165,7 +165,7 @@ pub(crate) fn draw<'p>(plan: &'p Plan, opts: &Options) -> Drawing<'p> {
         opts.color,
         rect,
         PIECE,
-        true,
+        Passes::Followed,
         par::width(),
     );
     let (frame, bbox) = (model.frame, model.bbox);
@@ -223,36 +223,91 @@ fn layout(scene: &Scene, opts: &Options) -> ([f64; 4], bool, u32) {
     (rect, decorate, ts)
 }
 
-/// A G-code thumbnail: the model alone in filament colour, iso view, on a
-/// transparent background, its strings round tubes (`scene` as
-/// [`Scene::round`] reads it).
-pub(crate) fn thumbnail(scene: &Scene, size: Size) -> Pixmap {
-    let mut pm = Pixmap::new(size.width, size.height).expect("sizes are 1..=8192");
-    let (w, h) = (size.width as f64, size.height as f64);
-    let pad = (w.min(h) * 0.04).max(0.5);
-    let rect = [pad, pad, w - pad, h - pad];
-    // a thumbnail is drawn on every build (thumbnails are on by default):
-    // pieces of PIECE strings shared over the pool as the preview's, and
-    // round strokes with no neighbouring pass looked for, whose search took
-    // minutes on a line retraced 600 000 times; the same strokes on any
-    // number of threads
+/// The G-code thumbnails of `scene` (as [`Scene::round`] reads it), one per
+/// size: the model alone in filament colour, iso view, on a transparent
+/// background, its strings round tubes at least 1 px wide.
+///
+/// The strokes are collected once, fitted to the largest size (pieces of
+/// [`PIECE`] strings shared over the pool as the preview's, no neighbouring
+/// pass looked for), sorted far to near and kept [`once`]; each size takes
+/// them scaled about the image's centre (a frame fitted to the same box
+/// differs only in its scale, p' = c' + (s'/s)(p − c)) and paints them with
+/// the preview's rasteriser in bands ([`paint_bands`]): the same bytes on
+/// any number of threads.
+pub(crate) fn thumbnails(scene: &Scene, sizes: &[Size]) -> Vec<Pixmap> {
+    let Some(&big) = sizes
+        .iter()
+        .max_by_key(|s| u64::from(s.width) * u64::from(s.height))
+    else {
+        return Vec::new();
+    };
+    let rect = |s: Size| {
+        let (w, h) = (f64::from(s.width), f64::from(s.height));
+        let pad = (w.min(h) * 0.04).max(0.5);
+        [pad, pad, w - pad, h - pad]
+    };
     let model = Model::new(
         scene,
         super::View::Iso,
         ColorMode::Plain,
-        rect,
+        rect(big),
         PIECE,
-        false,
+        Passes::Round,
         par::width(),
-    )
-    .round();
+    );
+    let (frame, (lo, hi)) = (model.frame, model.screen);
     let mut items = model.strokes(|it| *it);
+    drop(model);
     sort(&mut items);
     let items = once(items);
-    paint_strokes(&mut pm, &items, scene, ColorMode::Plain, 1.0);
-    // no marks: a thumbnail is the print as the printer's screen shows it,
-    // not the turtles' draw_turtle markers (which never reach the G-code)
-    pm
+    let pal = Palette::new(&items, scene, ColorMode::Plain);
+    // a travel faint and grey, 1 px (no marks: a thumbnail is the print as
+    // the printer's screen shows it, not the turtles' draw_turtle markers)
+    let colours: Vec<([u8; 3], u8)> = items
+        .iter()
+        .map(|it| match it.kind {
+            1 => ([150, 155, 165], 90),
+            _ => (pal.rgb(it), 255),
+        })
+        .collect();
+    sizes
+        .iter()
+        .map(|&size| {
+            let to = Frame::fit_box(frame.basis, lo, hi, rect(size), scene.pad());
+            let k = if frame.scale > 0.0 {
+                to.scale / frame.scale
+            } else {
+                0.0
+            };
+            let at = |p: (f32, f32)| {
+                let x = to.pixel_centre.0 + k * (f64::from(p.0) - frame.pixel_centre.0);
+                let y = to.pixel_centre.1 + k * (f64::from(p.1) - frame.pixel_centre.1);
+                (x as f32, y as f32)
+            };
+            let strokes: Vec<Px> = items
+                .iter()
+                .zip(&colours)
+                .map(|(it, &(rgb, alpha))| {
+                    let width = match it.kind {
+                        1 => 1.0,
+                        _ => (f64::from(it.width) * k).max(1.0) as f32,
+                    };
+                    Px {
+                        a: at(it.a),
+                        b: at(it.b),
+                        depth: it.depth as f32,
+                        r: 0.5 * width,
+                        rgb,
+                        alpha,
+                        seq: 0,
+                    }
+                })
+                .collect();
+            let mut pm = Pixmap::new(size.width, size.height).expect("sizes are 1..=8192");
+            paint_bands(&mut pm, &strokes);
+            pm
+        })
+        .collect()
 }
 
 /// Each stroke painted once: of strokes alike in all that is drawn of them
@@ -285,21 +340,11 @@ fn sort(items: &mut [Item]) {
 }
 
 /// PNG bytes of `pm`: RGB, or RGBA with `alpha` (colours un-premultiplied),
-/// compressed as hard as the encoder can (the G-code thumbnails).
+/// compressed quickly (fdeflate, `CompressionType::Fast`): zlib's default
+/// level took most of a thumbnail's time, and thumbnails are made on every
+/// build, for a file about a tenth smaller; a flat background and smooth
+/// shading compress well even so.
 pub(crate) fn encode(pm: &Pixmap, alpha: bool) -> Vec<u8> {
-    // zlib's default level, as PrusaSlicer and Bambu Studio compress their
-    // thumbnails (MZ_DEFAULT_LEVEL): the best took most of the time of a
-    // thumbnail, and thumbnails are made on every build
-    encode_with(pm, alpha, image::codecs::png::CompressionType::Default)
-}
-
-/// [`encode`] with a quicker compression: the PNG previews (a flat
-/// background and smooth shading compress well even so).
-pub(crate) fn encode_fast(pm: &Pixmap, alpha: bool) -> Vec<u8> {
-    encode_with(pm, alpha, image::codecs::png::CompressionType::Fast)
-}
-
-fn encode_with(pm: &Pixmap, alpha: bool, level: image::codecs::png::CompressionType) -> Vec<u8> {
     use image::ImageEncoder;
     let n = if alpha { 4 } else { 3 };
     let mut data = Vec::with_capacity(pm.pixels().len() * n);
@@ -316,8 +361,8 @@ fn encode_with(pm: &Pixmap, alpha: bool, level: image::codecs::png::CompressionT
     } else {
         image::ExtendedColorType::Rgb8
     };
-    use image::codecs::png::{FilterType, PngEncoder};
-    PngEncoder::new_with_quality(&mut out, level, FilterType::Adaptive)
+    use image::codecs::png::{CompressionType, FilterType, PngEncoder};
+    PngEncoder::new_with_quality(&mut out, CompressionType::Fast, FilterType::Adaptive)
         .write_image(&data, pm.width(), pm.height(), kind)
         .expect("PNG encoding into memory does not fail");
     out

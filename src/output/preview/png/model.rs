@@ -45,16 +45,31 @@ pub(super) struct Model<'s, 'p> {
     pub(super) bbox: (DVec3, DVec3),
     /// Their lowest and highest depth.
     depths: (f64, f64),
-    /// Per path, its strings in a grid (to find the neighbouring pass).
+    /// The lowest and highest screen-plane point (u, w) of the extruding
+    /// points ([`Frame::fit_box`]'s).
+    pub(super) screen: ((f64, f64), (f64, f64)),
+    /// Per path, its strings in a grid (to find the neighbouring pass);
+    /// none with [`Passes::Round`].
     grids: Vec<Grid<'p>>,
     /// (path, first string, end) of each piece.
     pieces: Vec<(usize, usize, usize)>,
-    /// Whether a stroke's neighbouring pass is followed from the last
-    /// stroke's ([`Grid::follow_other`]) rather than searched in full.
-    follow: bool,
-    /// Whether a stroke's neighbouring pass is looked for at all (else
-    /// every lit stroke is a round tube, [`Model::round`]).
+    /// Whether a stroke's neighbouring pass is looked for (followed from
+    /// the last stroke's, [`Grid::follow_other`]); else every lit stroke is
+    /// a round tube.
     neighbours: bool,
+}
+
+/// How wide a lit stroke is drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Passes {
+    /// As wide as the flat tube its neighbouring pass makes it, that pass
+    /// followed from the last stroke's (the PNG preview).
+    Followed,
+    /// A round tube, no neighbouring pass looked for: a cost that does not
+    /// grow with how many passes lie in one place (a line retraced 600 000
+    /// times took minutes), for the G-code's thumbnails, drawn on every
+    /// build.
+    Round,
 }
 
 /// A run of strings of one path drawn as one stroke: strings `first..end`,
@@ -80,15 +95,16 @@ struct Follow {
 
 impl<'s, 'p> Model<'s, 'p> {
     /// Fits `scene` into `rect` seen from `view`; pieces of `piece` strings;
-    /// neighbouring passes followed or not (`follow`); each path's grid
-    /// built in `parts` ([`Grid::for_surface_on`]).
+    /// each lit stroke as wide as its neighbouring passes make it
+    /// ([`Passes::Followed`], each path's grid built in `parts`,
+    /// [`Grid::for_surface_on`]) or a round tube ([`Passes::Round`]).
     pub(super) fn new(
         scene: &'s Scene<'p>,
         view: View,
         mode: ColorMode,
         rect: [f64; 4],
         piece: usize,
-        follow: bool,
+        passes: Passes,
         parts: usize,
     ) -> Model<'s, 'p> {
         let basis = view.basis();
@@ -106,13 +122,18 @@ impl<'s, 'p> Model<'s, 'p> {
             hi = hi.max(p);
         });
         let frame = Frame::fit_box(basis, lo2, hi2, rect, scene.pad());
-        let grids: Vec<Grid> = scene
-            .plan
-            .paths
-            .iter()
-            .zip(&scene.spacing)
-            .map(|(tp, &h)| Grid::for_surface_on(&tp.points, h, parts))
-            .collect();
+        let neighbours = passes == Passes::Followed;
+        let grids: Vec<Grid> = if neighbours {
+            scene
+                .plan
+                .paths
+                .iter()
+                .zip(&scene.spacing)
+                .map(|(tp, &h)| Grid::for_surface_on(&tp.points, h, parts))
+                .collect()
+        } else {
+            Vec::new()
+        };
         let mut pieces = Vec::new();
         for (pi, tp) in scene.plan.paths.iter().enumerate() {
             let mut k = 0;
@@ -129,21 +150,12 @@ impl<'s, 'p> Model<'s, 'p> {
             // the light comes from the upper left, in front: fixed to the view
             light: (-0.6 * basis.right + 0.5 * basis.up + 0.6 * basis.toward).normalize(),
             bbox: (lo, hi),
+            screen: (lo2, hi2),
             depths,
             grids,
             pieces,
-            follow,
-            neighbours: true,
+            neighbours,
         }
-    }
-
-    /// The model with every lit stroke a round tube, no neighbouring pass
-    /// looked for: a search whose cost does not grow with how many passes
-    /// lie in one place (a line retraced 600 000 times took minutes), for
-    /// the G-code's thumbnails, drawn on every build.
-    pub(super) fn round(mut self) -> Self {
-        self.neighbours = false;
-        self
     }
 
     /// `f` of every stroke, in print order, in one vector. The pieces'
@@ -307,7 +319,7 @@ impl<'s, 'p> Model<'s, 'p> {
         let grid = &self.grids[pi];
         let guess = follow.hint.map(|(at, j)| j + (run.first - at));
         let sm = (grid.arc(run.first) + grid.arc(run.end)) / 2.0;
-        let followed = self.follow && !follow.lit.is_multiple_of(REFRESH);
+        let followed = !follow.lit.is_multiple_of(REFRESH);
         follow.lit += 1;
         let found = grid.local_near(a, b, sm, guess, followed);
         follow.hint = found.map(|(_, j)| (run.first, j));

@@ -1,12 +1,10 @@
-//! Painting the strokes: the preview's own rasteriser of capsules in bands
-//! of rows ([`paint_bands`]), and tiny-skia's strokes for the thumbnails
-//! ([`paint_strokes`]).
+//! Painting the strokes: the previews' own rasteriser of capsules in bands
+//! of rows ([`paint_bands`]), for the PNG preview and the G-code
+//! thumbnails.
 
-use tiny_skia::{LineCap, Paint, PathBuilder, Pixmap, Stroke, Transform};
+use tiny_skia::Pixmap;
 
-use super::model::{Item, Palette};
 use crate::base::par;
-use crate::output::preview::{ColorMode, Scene};
 
 /// Rows of pixels per band when the strokes are painted (a band is one
 /// piece of work).
@@ -27,47 +25,8 @@ pub(super) struct Px {
     pub(super) seq: u32,
 }
 
-/// Paints the (sorted) strokes as tiny-skia's anti-aliased round-capped
-/// strokes, at least `min_px` wide: the G-code thumbnails.
-pub(super) fn paint_strokes(
-    pm: &mut Pixmap,
-    items: &[Item],
-    scene: &Scene,
-    mode: ColorMode,
-    min_px: f32,
-) {
-    let pal = Palette::new(items, scene, mode);
-    let mut paint = Paint {
-        anti_alias: true,
-        ..Paint::default()
-    };
-    let mut stroke = Stroke {
-        line_cap: LineCap::Round,
-        ..Stroke::default()
-    };
-    let mut pb = PathBuilder::new();
-    for it in items {
-        if it.kind == 1 {
-            paint.set_color_rgba8(150, 155, 165, 90);
-            stroke.width = min_px.max(1.0);
-        } else {
-            let [r, g, b] = pal.rgb(it);
-            paint.set_color_rgba8(r, g, b, 255);
-            stroke.width = it.width.max(min_px);
-        }
-        pb.move_to(it.a.0, it.a.1);
-        pb.line_to(it.b.0, it.b.1);
-        let Some(path) = pb.finish() else {
-            pb = PathBuilder::new();
-            continue;
-        };
-        pm.stroke_path(&path, &paint, &stroke, Transform::identity(), None);
-        pb = path.clear();
-    }
-}
-
-/// Paints the (sorted) strokes into an opaque image in bands of [`BAND`]
-/// rows, each band taken by whichever thread of the pool is free
+/// Paints the (sorted) strokes into an image (opaque, or transparent where
+/// nothing is drawn: the thumbnails) in bands of [`BAND`] rows, each band taken by whichever thread of the pool is free
 /// ([`par::each`]).
 ///
 /// A stroke is a capsule: the points within r (half its width) of segment
@@ -138,8 +97,8 @@ fn prefetch<T>(x: &T) {
     let _ = x;
 }
 
-/// Blends stroke `px` into rows `y0..y1` of an opaque premultiplied RGBA
-/// image `width` pixels wide, held in `band` (see [`paint_bands`]).
+/// Blends stroke `px` into rows `y0..y1` of a premultiplied RGBA image
+/// `width` pixels wide, held in `band` (see [`paint_bands`]).
 fn capsule(band: &mut [u8], width: usize, y0: usize, y1: usize, px: &Px) {
     let (a, b, r) = (px.a, px.b, px.r);
     if !(r.is_finite() && a.0.is_finite() && a.1.is_finite() && b.0.is_finite() && b.1.is_finite())
@@ -181,13 +140,16 @@ fn capsule(band: &mut [u8], width: usize, y0: usize, y1: usize, px: &Px) {
             if k == 0 {
                 continue;
             }
-            let p = &mut row[4 * x..4 * x + 3];
+            let p = &mut row[4 * x..4 * x + 4];
             if k == 255 {
                 // (s·255 + 127) / 255 = s
-                p.copy_from_slice(&px_rgb);
+                p[..3].copy_from_slice(&px_rgb);
+                p[3] = 255;
                 continue;
             }
-            for (c, s) in p.iter_mut().zip(src) {
+            // premultiplied over: the colour and the alpha (255 on an opaque
+            // image stays 255) each dst + (src − dst)·k/255
+            for (c, s) in p.iter_mut().zip(src.into_iter().chain([255])) {
                 *c = ((s * k + u32::from(*c) * (255 - k) + 127) / 255) as u8;
             }
         }
