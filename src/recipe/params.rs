@@ -6,7 +6,7 @@ use indexmap::IndexMap;
 use crate::base::error::{Error, Result};
 use crate::base::expr::{self, Kind, Params};
 use crate::recipe::eval::{finite, join, key};
-use crate::recipe::schema::{Num, RawChoice, RawParam, RawRecipe};
+use crate::recipe::schema::{Num, RawChoice, RawEach, RawLoop, RawParam, RawRecipe};
 
 pub(crate) fn is_identifier(s: &str) -> bool {
     let mut cs = s.chars();
@@ -80,6 +80,16 @@ pub(crate) fn eval_params(
                 };
                 params.insert_list(name, values);
             }
+            RawParam::Each(e) => {
+                let values = match &set {
+                    Some((s, at)) => split_list(s, at)?
+                        .iter()
+                        .map(|t| expr::eval_const(t, &params).map_err(|e| e.at(at)))
+                        .collect::<Result<Vec<f64>>>()?,
+                    None => each(e, &params, &place)?,
+                };
+                params.insert_list(name, values);
+            }
             RawParam::Choice(c) => {
                 let s = choice(c, name, &set)?;
                 let v = params.symbol(&s).expect("the choices were declared");
@@ -90,6 +100,95 @@ pub(crate) fn eval_params(
     }
     unknown_sets(raw, sets)?;
     Ok(params)
+}
+
+/// Most values of a list made by a loop.
+pub(crate) const MAX_EACH: usize = 100_000;
+
+/// The values of a list made by a loop (`{for: {k: RANGE}, value: EXPR}`,
+/// written at `place`): EXPR over `params` and `k`, for each value of `k`.
+pub(crate) fn each(e: &RawEach, params: &Params, place: &str) -> Result<Vec<f64>> {
+    let at = join(place, "for");
+    let mut names = e.each.iter();
+    let (Some((var, l)), None) = (names.next(), names.next()) else {
+        return Err(Error::input(
+            at,
+            "expected one name and its values, e.g. {k: \"0..3\"}",
+        ));
+    };
+    if !is_identifier(var) || expr::is_reserved(var) {
+        return Err(Error::input(
+            join(&at, var),
+            format!("`{var}` cannot name a loop variable; expected letters, digits and `_`, not a name expressions already use"),
+        ));
+    }
+    let ks = match l {
+        RawLoop::Range(s) => range(s, params, &join(&at, var), MAX_EACH, "values in a list")?,
+        RawLoop::List(v) => v
+            .iter()
+            .enumerate()
+            .map(|(k, n)| number(n, params, &format!("{}[{k}]", join(&at, var))))
+            .collect::<Result<Vec<f64>>>()?,
+    };
+    let mut inner = params.clone();
+    let value = join(place, "value");
+    ks.iter()
+        .map(|&k| {
+            inner.insert(var.clone(), k);
+            number(&e.value, &inner, &value)
+        })
+        .collect()
+}
+
+/// The values of `"a..b"` or `"a..b:step"`: a, a + step, … up to b
+/// included (within 1e-9 of a step, so 0..1:0.1 ends at 1); none when the
+/// step never reaches b (`1..0`).
+///
+/// At most `max` values (`what` names the limit in the error).
+pub(crate) fn range(
+    s: &str,
+    params: &Params,
+    place: &str,
+    max: usize,
+    what: &str,
+) -> Result<Vec<f64>> {
+    let not_range = || {
+        Error::input(place, format!("`{s}` is not a range; expected \"a..b\" or \"a..b:step\" (b included), or a list [v1, v2, …]"))
+    };
+    let (a, rest) = s.split_once("..").ok_or_else(not_range)?;
+    let (b, step) = match rest.split_once(':') {
+        Some((b, st)) => (b, Some(st)),
+        None => (rest, None),
+    };
+    if a.trim().is_empty() || b.trim().is_empty() {
+        return Err(not_range());
+    }
+    let a = expr::eval_const(a, params).map_err(|e| e.at(place))?;
+    let b = expr::eval_const(b, params).map_err(|e| e.at(place))?;
+    let step = match step {
+        Some(st) => expr::eval_const(st, params).map_err(|e| e.at(place))?,
+        None => 1.0,
+    };
+    if step == 0.0 {
+        return Err(Error::input(
+            place,
+            format!("the step of `{s}` is 0; expected a step that moves from a to b"),
+        ));
+    }
+    let span = (b - a) / step;
+    if span < -1e-9 {
+        // from a the step never reaches b: no values (`1..n` with n = 0
+        // makes no copy, as a part switched off)
+        return Ok(Vec::new());
+    }
+    let n = libm::floor(span + 1e-9 * span.abs().max(1.0)) + 1.0;
+    if !n.is_finite() || n > max as f64 {
+        return Err(Error::input(place, format!(
+            "`{s}` has {} values, more than the limit of {max} {what}; expected a shorter range or a larger step",
+            if n.is_finite() { format!("{n}") } else { "endless".into() }
+        )));
+    }
+    Ok((0..n as usize).map(|k| a + k as f64 * step).collect())
 }
 
 /// The string a choice param is: `set` (its `--set` text and place), which
@@ -353,6 +452,40 @@ mod tests {
         .unwrap();
         assert_eq!(p["m"], 2.0 + 20.0 + 1.0);
         assert_eq!(p.list("fr"), Some(&[1.0, 3.0][..]));
+    }
+
+    #[test]
+    fn a_list_made_by_a_loop_and_its_sums() {
+        let yaml = "a: [10, 20, 30]\nsq: {for: {k: \"0..3\"}, value: \"k^2\"}\nrun: {for: {k: \"0..3\"}, value: \"sum(a, 0, k - 1)\"}\nback: {for: {k: [2, 0]}, value: \"a[k]\"}\ntot: \"sum(sq) + sum(a, 1, 2) + sum(a, 2, 1)\"\n";
+        let p = eval(yaml, &[]).unwrap();
+        assert_eq!(p.list("sq"), Some(&[0.0, 1.0, 4.0, 9.0][..]));
+        // the partial sums: the points a walk of steps a reaches
+        assert_eq!(p.list("run"), Some(&[0.0, 10.0, 30.0, 60.0][..]));
+        assert_eq!(p.list("back"), Some(&[30.0, 10.0][..]));
+        assert_eq!(p["tot"], 14.0 + 50.0);
+        // the loop's name is the loop's alone
+        assert!(!p.contains_key("k"));
+        // --set gives it as any list
+        let p = eval(yaml, &[("sq", "[1, 2]")]).unwrap();
+        assert_eq!(p["tot"], 3.0 + 50.0);
+    }
+
+    #[test]
+    fn a_bad_loop_list_or_sum_is_named() {
+        let e = eval("l: {for: {k: \"0..2\"}, value: \"q\"}\n", &[]).unwrap_err();
+        assert_eq!(e.place.as_deref(), Some("params.l.value"), "{e}");
+        let e = eval("l: {for: {k: \"0..2\", j: [1]}, value: 1}\n", &[]).unwrap_err();
+        assert!(e.message.contains("one name"), "{e}");
+        let e = parse_yaml::<IndexMap<String, RawParam>>(
+            "l: {for: {k: \"0..2\"}, value: 1, default: 2}\n",
+            "t",
+        )
+        .unwrap_err();
+        assert!(e.message.contains("a list made by a loop"), "{e}");
+        let e = eval("l: [1, 2]\ntot: \"sum(l, 0, 2)\"\n", &[]).unwrap_err();
+        assert!(e.message.contains("indices 0 to 1"), "{e}");
+        let e = eval("l: 3\ntot: \"sum(l)\"\n", &[]).unwrap_err();
+        assert!(e.message.contains("the name of a list param"), "{e}");
     }
 
     #[test]

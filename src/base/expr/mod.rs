@@ -424,9 +424,10 @@ fn lookup3(name: &str) -> Option<F3> {
 /// Every function name an expression may call, for error messages.
 pub(crate) const FUNCTIONS: &str =
     "sin cos tan asin acos atan atan2(y,x) sinh cosh tanh asinh acosh atanh \
-sqrt cbrt exp ln log log10 log2 pow(a,b) abs sign floor ceil round trunc fract \
+sqrt cbrt exp ln log log10 log2 pow(a,b) abs sign signum floor ceil round trunc fract \
 mod(a,b) int min(a,b,…) max(a,b,…) clamp(x,lo,hi) step(edge,x) smoothstep(e0,e1,x) \
-mix(a,b,t) if(c,a,b) hypot(x,y) radians degrees eca(rule,width,row,col) len(list)";
+mix(a,b,t) lerp(a,b,t) if(c,a,b) hypot(x,y) radians degrees eca(rule,width,row,col) len(list) \
+sum(list[,a,b])";
 
 #[derive(Clone, Debug)]
 enum Node {
@@ -985,6 +986,13 @@ impl Compiler<'_> {
         self.params.list(name).is_some()
     }
 
+    /// The values of list param `name`.
+    fn list_values(&self, name: &str) -> Vec<f64> {
+        self.params
+            .list(name)
+            .map_or_else(Vec::new, <[f64]>::to_vec)
+    }
+
     /// How many values list param `name` has.
     fn list_len(&self, name: &str) -> usize {
         self.params.list(name).map_or(0, <[f64]>::len)
@@ -1354,6 +1362,34 @@ mod tests {
         assert!(e.message.contains("is a list"), "{e}");
         let e = Expr::compile("part_type == 'threaded_tube'", &p, &[]).unwrap_err();
         assert!(e.message.contains("'wing_nut', 'wing_bolt'"), "{e}");
+    }
+
+    #[test]
+    fn every_function_is_in_the_list_errors_give() {
+        // the names the lookups match, read from this file's source
+        let src = include_str!("mod.rs");
+        let listed: Vec<&str> = FUNCTIONS
+            .split_whitespace()
+            .map(|f| f.split('(').next().unwrap())
+            .collect();
+        let mut found = 0;
+        for body in src.split("\nfn lookup").skip(1) {
+            let body = &body[..body.find("\n}\n").unwrap()];
+            for arm in body.lines().filter(|l| l.trim_start().starts_with('"')) {
+                for name in arm.split("=>").next().unwrap().split('|') {
+                    let name = name.trim().trim_matches('"');
+                    if name.is_empty() || name == "_" {
+                        continue;
+                    }
+                    found += 1;
+                    assert!(listed.contains(&name), "`{name}` is not in FUNCTIONS");
+                }
+            }
+        }
+        assert!(found > 30, "{found} names found");
+        for extra in ["min", "max", "len", "sum", "lerp"] {
+            assert!(listed.contains(&extra), "{extra}");
+        }
     }
 
     #[test]

@@ -337,6 +337,9 @@ impl Parser<'_, '_> {
                 "`len` takes the name of a list param, as `len(name)`",
             ));
         }
+        if name == "sum" {
+            return self.sum(at, open);
+        }
         let mut args = Vec::new();
         if self.tok().tok == Tok::Close {
             self.k += 1;
@@ -355,6 +358,48 @@ impl Parser<'_, '_> {
         let heights: Vec<u32> = args.iter().map(|a| a.1).collect();
         let node = Node::Call(op, args.into_iter().map(|a| a.0).collect());
         self.node(node, &heights)
+    }
+
+    /// `sum(list)` or `sum(list, a, b)` at `at`, after its `(` at `open`:
+    /// the list param's values k = a..b (b included; 0 when b < a), summed
+    /// in order. The bounds must be known when the expression is read
+    /// (numbers, params, a list param's loop name), so the sum is a number.
+    fn sum(&mut self, at: usize, open: usize) -> Result<Tall, ExprError> {
+        let usage = "`sum` takes the name of a list param and, optionally, the first and last index: `sum(name)`, `sum(name, a, b)`";
+        let t = self.tok().clone();
+        let list = self.src[t.start..t.end].to_string();
+        if t.tok != Tok::Ident || !self.c.is_list(&list) {
+            return Err(syntax(self.src, at, usage));
+        }
+        self.k += 1;
+        let values = self.c.list_values(&list);
+        let (a, b) = if self.tok().tok == Tok::Comma {
+            self.k += 1;
+            let a = self.nested(open)?;
+            if self.tok().tok != Tok::Comma {
+                return Err(syntax(self.src, at, usage));
+            }
+            self.k += 1;
+            let b = self.nested(open)?;
+            let (Some(a), Some(b)) = (a.0.num(), b.0.num()) else {
+                return Err(syntax(
+                    self.src,
+                    at,
+                    "`sum(name, a, b)`'s a and b must be known before the print (numbers or params), not values of the path",
+                ));
+            };
+            (a, b)
+        } else {
+            (0.0, values.len() as f64 - 1.0)
+        };
+        self.expect(Tok::Close)?;
+        Ok((
+            Node::Num(
+                sum_of(&values, a, b)
+                    .map_err(|m| syntax(self.src, at, &format!("`{list}`: {m}")))?,
+            ),
+            1,
+        ))
     }
 
     /// `list[k]` at `at`, its `[` next.
@@ -470,6 +515,29 @@ impl Host for Parser<'_, '_> {
             ),
         }
     }
+}
+
+/// The sum of `values[a..=b]` in order (0 when b < a): a and b whole
+/// numbers, within the list when the range is not empty.
+fn sum_of(values: &[f64], a: f64, b: f64) -> Result<f64, String> {
+    if a.fract() != 0.0 || b.fract() != 0.0 {
+        return Err(format!(
+            "the first and last index must be whole numbers, not {a} and {b}"
+        ));
+    }
+    if b < a {
+        return Ok(0.0);
+    }
+    let n = values.len() as f64;
+    if a < 0.0 || b >= n {
+        return Err(format!(
+            "the list has {} value{}: indices 0 to {}, not {a} to {b}",
+            values.len(),
+            if values.len() == 1 { "" } else { "s" },
+            n - 1.0
+        ));
+    }
+    Ok(values[a as usize..=b as usize].iter().sum())
 }
 
 #[cfg(test)]

@@ -703,47 +703,10 @@ fn loop_values<'p>(
     Ok(out)
 }
 
-/// The values of `"a..b"` or `"a..b:step"`: a, a + step, … up to b
-/// included (within 1e-9 of a step, so 0..1:0.1 ends at 1); none when the
-/// step never reaches b (`1..0`).
+/// The values of a `for` range (see [`params::range`]), at most
+/// [`MAX_PARTS`].
 fn range(s: &str, params: &Params, place: &str) -> Result<Vec<f64>> {
-    let not_range = || {
-        Error::input(place, format!("`{s}` is not a range; expected \"a..b\" or \"a..b:step\" (b included), or a list [v1, v2, …]"))
-    };
-    let (a, rest) = s.split_once("..").ok_or_else(not_range)?;
-    let (b, step) = match rest.split_once(':') {
-        Some((b, st)) => (b, Some(st)),
-        None => (rest, None),
-    };
-    if a.trim().is_empty() || b.trim().is_empty() {
-        return Err(not_range());
-    }
-    let a = expr::eval_const(a, params).map_err(|e| e.at(place))?;
-    let b = expr::eval_const(b, params).map_err(|e| e.at(place))?;
-    let step = match step {
-        Some(st) => expr::eval_const(st, params).map_err(|e| e.at(place))?,
-        None => 1.0,
-    };
-    if step == 0.0 {
-        return Err(Error::input(
-            place,
-            format!("the step of `{s}` is 0; expected a step that moves from a to b"),
-        ));
-    }
-    let span = (b - a) / step;
-    if span < -1e-9 {
-        // from a the step never reaches b: no values (`1..n` with n = 0
-        // makes no copy, as a part switched off)
-        return Ok(Vec::new());
-    }
-    let n = libm::floor(span + 1e-9 * span.abs().max(1.0)) + 1.0;
-    if !n.is_finite() || n > MAX_PARTS as f64 {
-        return Err(Error::input(place, format!(
-            "`{s}` has {} values, more than the limit of {MAX_PARTS} parts in a recipe; expected a shorter range or a larger step",
-            if n.is_finite() { format!("{n}") } else { "endless".into() }
-        )));
-    }
-    Ok((0..n as usize).map(|k| a + k as f64 * step).collect())
+    crate::recipe::params::range(s, params, place, MAX_PARTS, "parts in a recipe")
 }
 
 /// A number of a template's `with:` or a loop's list, evaluated in `params`.

@@ -59,7 +59,7 @@ pub(crate) fn value(
             place,
             format!("expected one of the choices {}", c.choices.join(", ")),
         )),
-        (RawParam::List(_), RawParam::List(items)) => items
+        (RawParam::List(_) | RawParam::Each(_), RawParam::List(items)) => items
             .iter()
             .enumerate()
             .map(|(k, n)| {
@@ -69,14 +69,18 @@ pub(crate) fn value(
             })
             .collect::<Result<Vec<f64>>>()
             .map(Given::List),
-        (RawParam::List(_), RawParam::Num(Num::Expr(s))) => match caller.list(s.trim()) {
-            Some(v) => Ok(Given::List(v.to_vec())),
-            None => Err(Error::input(
-                place,
-                format!("`{s}` is not a list; expected [a, b, …] or the name of a list param"),
-            )),
-        },
-        (RawParam::List(_), _) => Err(Error::input(place, "expected a list [a, b, …]")),
+        (RawParam::List(_) | RawParam::Each(_), RawParam::Num(Num::Expr(s))) => {
+            match caller.list(s.trim()) {
+                Some(v) => Ok(Given::List(v.to_vec())),
+                None => Err(Error::input(
+                    place,
+                    format!("`{s}` is not a list; expected [a, b, …] or the name of a list param"),
+                )),
+            }
+        }
+        (RawParam::List(_) | RawParam::Each(_), _) => {
+            Err(Error::input(place, "expected a list [a, b, …]"))
+        }
         (RawParam::Bool(_), RawParam::Bool(b)) => Ok(Given::Bool(*b)),
         (RawParam::Bool(_), RawParam::Num(n)) => {
             // a caller's true/false param passed on: 1 or 0
@@ -173,6 +177,13 @@ pub(crate) fn template_params(
                                 .and_then(|v| crate::recipe::eval::finite(v, &at))
                         })
                         .collect::<Result<Vec<f64>>>()?,
+                };
+                params.insert_list(name, v);
+            }
+            RawParam::Each(e) => {
+                let v = match mine {
+                    Some(Given::List(v)) => v.clone(),
+                    _ => crate::recipe::params::each(e, &params, &place)?,
                 };
                 params.insert_list(name, v);
             }

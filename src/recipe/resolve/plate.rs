@@ -229,10 +229,10 @@ fn set_text(v: &RawParam, place: &str) -> Result<String> {
             let v: Vec<String> = items.iter().map(num_text).collect();
             format!("[{}]", v.join(", "))
         }
-        RawParam::Choice(_) => {
+        RawParam::Choice(_) | RawParam::Each(_) => {
             return Err(Error::input(
                 place,
-                "expected a value (a number or expression, true or false, a list, or a choice's string), not a choice's declaration",
+                "expected a value (a number or expression, true or false, a list, or a choice's string), not a choice's or a loop's declaration",
             ))
         }
     })

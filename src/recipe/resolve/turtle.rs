@@ -354,16 +354,18 @@ impl<'a> Compiler<'a> {
         Ok(Cmd { place, op })
     }
 
-    /// A point: `[x, y, z]`, or some of them with the others the head's
-    /// (compiled as `x`, `y`, `z`).
+    /// A point: `[x, y, z]`, some of them with the others the head's
+    /// (compiled as `x`, `y`, `z`), or a polar point (its coordinates'
+    /// expressions, see [`RawPoint::coords`]).
     fn point(&self, p: &RawPoint, scope: &Arc<Vec<String>>, place: &str) -> Result<[Val; 3]> {
         let names = ["x", "y", "z"];
         let c = p.coords();
         let mut out = Vec::with_capacity(3);
-        for k in 0..3 {
-            let (n, at) = match (c[k], p) {
-                (Some(n), RawPoint::Full(_)) => (n.clone(), format!("{place}[{k}]")),
-                (Some(n), RawPoint::Partial { .. }) => (n.clone(), join(place, names[k])),
+        for (k, n) in c.into_iter().enumerate() {
+            let (n, at) = match (n, p) {
+                (Some(n), RawPoint::Full(_)) => (n, format!("{place}[{k}]")),
+                (Some(n), RawPoint::Partial { .. }) => (n, join(place, names[k])),
+                (Some(n), RawPoint::Polar { .. }) => (n, join(place, "polar")),
                 (None, _) => (Num::Expr(names[k].into()), place.to_string()),
             };
             out.push(self.val(&n, scope, &at)?);
@@ -841,6 +843,46 @@ mod tests {
         // goto keeps the heading: backward goes back along +x
         assert_eq!(b.points[1], fwd);
         assert!((b.points[2] - fwd + DVec3::new(5.0, 0.0, 0.0)).length() < 1e-12);
+    }
+
+    #[test]
+    fn a_polar_point_is_fullcontrol_s_polar_to_point() {
+        use std::f64::consts::{PI, TAU};
+        // FullControl's polar_to_point(centre, r, a): (cx + r cos a, cy + r sin a, cz)
+        let t = run("program:\n  - goto: {polar: [1, 2, 0.3], radius: 10, angle: \"pi/6\"}\n  - for: {k: \"0..3\"}\n    do:\n      - move: {polar: [\"k\", 0, z], radius: \"side\", angle: \"k*tau/4\"}\n  - arc: {center: {polar: [0, 0, 0], radius: 5, angle: pi}, radius: 1, sweep: pi, segments: 2}\n");
+        let want = DVec3::new(
+            1.0 + 10.0 * libm::cos(PI / 6.0),
+            2.0 + 10.0 * libm::sin(PI / 6.0),
+            0.3,
+        );
+        assert!((t.points[1] - want).length() < 1e-12, "{:?}", t.points[1]);
+        for k in 0..4 {
+            let a = k as f64 * TAU / 4.0;
+            let p = DVec3::new(k as f64 + 13.7 * libm::cos(a), 13.7 * libm::sin(a), 0.3);
+            assert!(
+                (t.points[2 + k] - p).length() < 1e-12,
+                "{k}: {:?}",
+                t.points[2 + k]
+            );
+        }
+        // the arc's centre (-5, 0), its start (the default) +x: from (-4, 0) to (-6, 0)
+        assert!((t.points[6] - DVec3::new(-4.0, 0.0, 0.0)).length() < 1e-12);
+        assert!((t.head() - DVec3::new(-6.0, 0.0, 0.0)).length() < 1e-12);
+        // all three or none, and not with x, y, z
+        for bad in [
+            "{polar: [0, 0, 0], radius: 1}",
+            "{polar: [0, 0, 0], radius: 1, angle: 0, z: 2}",
+            "{radius: 1, angle: 0}",
+        ] {
+            let e = run_with(&format!("program:\n  - goto: {bad}\n"), &env()).unwrap_err();
+            assert!(e.message.contains("a polar point is"), "{bad}: {e}");
+        }
+        let e = err("program:\n  - goto: {polar: [0, 0, 0], radius: q, angle: 0}\n");
+        assert_eq!(
+            e.place.as_deref(),
+            Some("turtle.program[0].goto.polar"),
+            "{e}"
+        );
     }
 
     #[test]

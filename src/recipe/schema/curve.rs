@@ -17,7 +17,8 @@ pub struct RawArcCmd {
     pub center: RawPoint,
     /// mm, at the first point.
     pub radius: Num,
-    /// Angle of the first point, radians from +x, counter-clockwise.
+    /// Angle of the first point, radians from +x, counter-clockwise (0).
+    #[serde(default = "zero")]
     pub start: Num,
     /// Angle from the first point to the last, radians (negative: clockwise;
     /// `tau`: a full circle).
@@ -70,4 +71,9 @@ pub struct RawRectangle {
     /// Along y first (false when absent).
     #[serde(default)]
     pub clockwise: Option<bool>,
+}
+
+/// An arc's default start: +x.
+fn zero() -> Num {
+    Num::Value(0.0)
 }

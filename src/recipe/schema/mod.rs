@@ -25,7 +25,7 @@ use serde::de::{self, Deserializer, IgnoredAny, MapAccess, Visitor};
 use serde::Deserialize;
 
 pub(crate) use num::{Num, Num3, RawPoint};
-pub(crate) use param::{RawChoice, RawParam};
+pub(crate) use param::{RawChoice, RawEach, RawParam};
 pub(crate) use part::{RawBrim, RawLoop, RawPart, RawPrimitiveItem, RawStand};
 pub(crate) use plate::{RawPlateItem, RawSweep};
 pub(crate) use primitive::{

@@ -65,9 +65,10 @@ impl schemars::JsonSchema for Num {
     }
 }
 
-/// A point of a program's command: `[x, y, z]`, or a map of some of `x`,
+/// A point of a program's command: `[x, y, z]`, a map of some of `x`,
 /// `y`, `z` whose missing coordinates stay where the head is (FullControl's
-/// `Point(z=…)`).
+/// `Point(z=…)`), or `{polar: [cx, cy, cz], radius, angle}` (FullControl's
+/// `polar_to_point`).
 #[derive(Clone, Debug, PartialEq)]
 pub enum RawPoint {
     /// `[x, y, z]`.
@@ -80,6 +81,16 @@ pub enum RawPoint {
         y: Option<Num>,
         /// z, mm.
         z: Option<Num>,
+    },
+    /// `{polar: [cx, cy, cz], radius: r, angle: a}`: (cx + r·cos a,
+    /// cy + r·sin a, cz), a in radians counter-clockwise from +x.
+    Polar {
+        /// The centre.
+        center: Num3,
+        /// The distance from it, mm.
+        radius: Num,
+        /// Radians from +x, counter-clockwise seen from above.
+        angle: Num,
     },
 }
 
@@ -96,15 +107,45 @@ struct PartialPoint {
     /// z, mm (the head's when absent).
     #[serde(default)]
     z: Option<Num>,
+    /// The centre of a point given by `radius` and `angle` (instead of x, y, z).
+    #[serde(default)]
+    polar: Option<Num3>,
+    /// The polar point's distance from `polar`, mm.
+    #[serde(default)]
+    radius: Option<Num>,
+    /// The polar point's angle, radians counter-clockwise from +x.
+    #[serde(default)]
+    angle: Option<Num>,
 }
 
 impl RawPoint {
-    /// The three coordinates, `None` for those that stay.
-    pub fn coords(&self) -> [Option<&Num>; 3] {
+    /// The three coordinates, `None` for those that stay; a polar point's
+    /// as expressions (`cx + (r)*cos(a)`, `cy + (r)*sin(a)`, `cz`).
+    pub fn coords(&self) -> [Option<Num>; 3] {
         match self {
-            RawPoint::Full([x, y, z]) => [Some(x), Some(y), Some(z)],
-            RawPoint::Partial { x, y, z } => [x.as_ref(), y.as_ref(), z.as_ref()],
+            RawPoint::Full([x, y, z]) => [Some(x.clone()), Some(y.clone()), Some(z.clone())],
+            RawPoint::Partial { x, y, z } => [x.clone(), y.clone(), z.clone()],
+            RawPoint::Polar {
+                center: [cx, cy, cz],
+                radius,
+                angle,
+            } => {
+                let (cx, cy, r, a) = (text(cx), text(cy), text(radius), text(angle));
+                [
+                    Some(Num::Expr(format!("{cx} + {r}*cos({a})"))),
+                    Some(Num::Expr(format!("{cy} + {r}*sin({a})"))),
+                    Some(cz.clone()),
+                ]
+            }
         }
+    }
+}
+
+/// A number or expression as a bracketed expression text.
+fn text(n: &Num) -> String {
+    match n {
+        Num::Value(v) => format!("({v})"),
+        Num::Expr(s) => format!("({s})"),
     }
 }
 
@@ -114,7 +155,7 @@ impl<'de> Deserialize<'de> for RawPoint {
         impl<'de> Visitor<'de> for V {
             type Value = RawPoint;
             fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-                f.write_str("a point [x, y, z], or a map of some of x, y, z")
+                f.write_str("a point [x, y, z], a map of some of x, y, z, or {polar: [cx, cy, cz], radius, angle}")
             }
             fn visit_seq<A: de::SeqAccess<'de>>(
                 self,
@@ -127,7 +168,23 @@ impl<'de> Deserialize<'de> for RawPoint {
                 m: A,
             ) -> std::result::Result<RawPoint, A::Error> {
                 let p = PartialPoint::deserialize(de::value::MapAccessDeserializer::new(m))?;
-                if p.x.is_none() && p.y.is_none() && p.z.is_none() {
+                let xyz = p.x.is_some() || p.y.is_some() || p.z.is_some();
+                match (xyz, p.polar, p.radius, p.angle) {
+                    (false, Some(center), Some(radius), Some(angle)) => {
+                        return Ok(RawPoint::Polar {
+                            center,
+                            radius,
+                            angle,
+                        })
+                    }
+                    (_, None, None, None) => {}
+                    _ => {
+                        return Err(de::Error::custom(
+                            "a polar point is {polar: [cx, cy, cz], radius: r, angle: a} (all three, no x, y, z); expected that or some of x, y, z",
+                        ))
+                    }
+                }
+                if !xyz {
                     return Err(de::Error::custom(
                         "an empty point; expected at least one of x, y, z",
                     ));
@@ -151,7 +208,7 @@ impl schemars::JsonSchema for RawPoint {
         let num = g.subschema_for::<Num>();
         let partial = g.subschema_for::<PartialPoint>();
         schemars::json_schema!({
-            "description": "A point [x, y, z], or a map of some of x, y, z (the others stay where the head is).",
+            "description": "A point [x, y, z], a map of some of x, y, z (the others stay where the head is), or {polar: [cx, cy, cz], radius: r, angle: a} (radians from +x).",
             "anyOf": [{"type": "array", "items": num, "minItems": 3, "maxItems": 3}, partial]
         })
     }

@@ -1,12 +1,16 @@
-//! A param as written: a number or expression, a boolean, a list, or a
-//! choice among strings (FullControl's `part_type = 'wing_nut'`).
+//! A param as written: a number or expression, a boolean, a list (written
+//! out, or made by a loop), or a choice among strings (FullControl's
+//! `part_type = 'wing_nut'`).
 
 use std::fmt;
 
 use serde::de::{self, Deserializer, MapAccess, SeqAccess, Visitor};
 use serde::Deserialize;
 
+use indexmap::IndexMap;
+
 use super::num::Num;
+use super::part::RawLoop;
 
 /// One param of `params:`.
 #[derive(Clone, Debug, PartialEq)]
@@ -19,6 +23,32 @@ pub enum RawParam {
     List(Vec<Num>),
     /// One of a declared set of strings.
     Choice(RawChoice),
+    /// A list made by a loop: `{for: {k: "0..3"}, value: "k^2"}`.
+    Each(RawEach),
+}
+
+/// `{for: {k: RANGE}, value: EXPR}`: a list param holding EXPR's value for
+/// each value of `k` (a range `"a..b"`/`"a..b:step"` or a list), over the
+/// params before it and `k`.
+#[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RawEach {
+    /// One name and its values.
+    #[serde(rename = "for")]
+    pub each: IndexMap<String, RawLoop>,
+    /// Each element's value.
+    pub value: Num,
+}
+
+/// A param written as a map: a choice's or a loop's keys.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawMapParam {
+    choices: Option<Vec<String>>,
+    default: Option<String>,
+    #[serde(rename = "for")]
+    each: Option<IndexMap<String, RawLoop>>,
+    value: Option<Num>,
 }
 
 /// `{choices: [a, b, c], default: b}`: a param that is one of these strings.
@@ -37,7 +67,7 @@ impl<'de> Deserialize<'de> for RawParam {
         impl<'de> Visitor<'de> for V {
             type Value = RawParam;
             fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-                f.write_str("a number, an expression string, true or false, a list [a, b, …] or {choices: [a, b], default: a}")
+                f.write_str("a number, an expression string, true or false, a list [a, b, …], {for: {k: \"0..3\"}, value: EXPR} or {choices: [a, b], default: a}")
             }
             fn visit_bool<E: de::Error>(self, v: bool) -> Result<RawParam, E> {
                 Ok(RawParam::Bool(v))
@@ -62,8 +92,24 @@ impl<'de> Deserialize<'de> for RawParam {
                 Ok(RawParam::List(v))
             }
             fn visit_map<A: MapAccess<'de>>(self, m: A) -> Result<RawParam, A::Error> {
-                RawChoice::deserialize(de::value::MapAccessDeserializer::new(m))
-                    .map(RawParam::Choice)
+                let raw = RawMapParam::deserialize(de::value::MapAccessDeserializer::new(m))?;
+                match raw {
+                    RawMapParam {
+                        choices: Some(choices),
+                        default: Some(default),
+                        each: None,
+                        value: None,
+                    } => Ok(RawParam::Choice(RawChoice { choices, default })),
+                    RawMapParam {
+                        choices: None,
+                        default: None,
+                        each: Some(each),
+                        value: Some(value),
+                    } => Ok(RawParam::Each(RawEach { each, value })),
+                    _ => Err(de::Error::custom(
+                        "expected {choices: [a, b], default: a} (a choice) or {for: {k: \"0..3\"}, value: EXPR} (a list made by a loop)",
+                    )),
+                }
             }
         }
         d.deserialize_any(V)
@@ -77,9 +123,10 @@ impl schemars::JsonSchema for RawParam {
     fn json_schema(g: &mut schemars::SchemaGenerator) -> schemars::Schema {
         let num = g.subschema_for::<Num>();
         let choice = g.subschema_for::<RawChoice>();
+        let each = g.subschema_for::<RawEach>();
         schemars::json_schema!({
-            "description": "A number or an expression over the params before it; true or false; a list of numbers [a, b, …] (read as name[k], len(name)); or {choices: [a, b], default: a}, one of a set of strings (compared as name == 'a').",
-            "anyOf": [num, {"type": "boolean"}, {"type": "array", "items": num}, choice]
+            "description": "A number or an expression over the params before it; true or false; a list of numbers [a, b, …] (read as name[k], len(name), sum(name)), or one made by a loop {for: {k: \"0..3\"}, value: EXPR}; or {choices: [a, b], default: a}, one of a set of strings (compared as name == 'a').",
+            "anyOf": [num, {"type": "boolean"}, {"type": "array", "items": num}, each, choice]
         })
     }
 }
