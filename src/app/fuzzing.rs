@@ -319,9 +319,12 @@ pub fn gcode_line(data: &[u8]) {
         let Ok(r) = read::read(flavor, text) else {
             continue;
         };
+        // object labels on where the firmware has them (Klipper's
+        // EXCLUDE_OBJECT): a label read is written as the command, not as
+        // the comment written when they are off
         let d = write::Dialect {
             flavor,
-            object_labels: false,
+            object_labels: flavor == Flavor::Klipper,
             prusa_8bit: false,
         };
         for c in &r.commands {

@@ -214,6 +214,10 @@ fn object(d: Dialect, o: &Object, out: &mut Chunk) {
             format!("EXCLUDE_OBJECT_START NAME={n}\n; printing object {n}")
         }
         (Object::Start(n), false) => format!("; printing object {n}"),
+        // without a name Klipper ends the object being printed
+        (Object::End(n), true) if n.is_empty() => {
+            "; stop printing object\nEXCLUDE_OBJECT_END".to_string()
+        }
         (Object::End(n), true) => {
             format!("; stop printing object {n}\nEXCLUDE_OBJECT_END NAME={n}")
         }
