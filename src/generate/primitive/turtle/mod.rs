@@ -66,8 +66,7 @@ impl Turtle {
                 place: Some(place), ..
             } = e
             {
-                let p = Error::input(place.as_ref(), "").under(prefix);
-                *place = p.place.unwrap_or_default().into();
+                *place = crate::base::error::place_under(prefix, place).into();
             }
         }
     }
