@@ -104,11 +104,14 @@ fn one_setting_per_line_at_its_first_extruding_move_in_every_flavour() {
                         assert!(pending.1.is_none(), "{flavor:?}: two accelerations: {line}");
                         pending.1 = Some(a);
                     }
-                    Command::Move(m) if m.e.is_some_and(|e| e > 0.0) && m.to[0].is_some() => {
-                        if pending != (None, None) {
-                            seen.push(pending);
-                            pending = (None, None);
-                        }
+                    Command::Move(m)
+                        if m.e.is_some_and(|e| e > 0.0)
+                            && m.to[0].is_some()
+                            && pending != (None, None) =>
+                    {
+                        // the line's first extruding move
+                        seen.push(pending);
+                        pending = (None, None);
                     }
                     _ => {}
                 }

@@ -1074,8 +1074,13 @@ impl<'a> Run<'a> {
     /// each (as the firmware sets them: print and travel acceleration in
     /// one …), each naming its key path for the `setting` check.
     fn printer(&mut self, named: &Named<Val>, vals: &mut Vec<f64>, place: &str) -> Result<()> {
-        let settings =
-            named.lower(|key, v| self.eval(v, vals, &format!("{place}.{}", key.name())))?;
+        let settings = named.lower(|key, v| {
+            // the key's place made only when its value fails
+            self.eval(v, vals, place).map_err(|mut e| {
+                e.place = Some(format!("{place}.{}", key.name()));
+                e
+            })
+        })?;
         for (setting, key) in settings {
             let at = self.out.is_some().then(|| format!("{place}.{key}").into());
             let e = Event::Set {
