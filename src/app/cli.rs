@@ -551,6 +551,7 @@ fn build(a: &BuildArgs) -> Result<Vec<Error>> {
         zbuffer: a.zbuffer.clone(),
         zbuffer_svg: a.zbuffer_svg.clone(),
         zbuffer_layer: a.zbuffer_layer,
+        shown: None,
     };
     Ok(pipeline::run(a.batch.jobs.threads(), || {
         command::build::run(&opts)
@@ -615,6 +616,7 @@ fn calibrate(a: CalibrateArgs) -> Result<Vec<Error>> {
             zbuffer: b.zbuffer.clone(),
             zbuffer_svg: b.zbuffer_svg.clone(),
             zbuffer_layer: b.zbuffer_layer,
+            shown: None,
         },
     };
     Ok(pipeline::run(b.batch.jobs.threads(), || {

@@ -109,8 +109,7 @@ impl Error {
     pub fn under(mut self, prefix: &str) -> Error {
         self.place = Some(match self.place.take() {
             None => prefix.to_string(),
-            Some(p) if p.starts_with('[') => format!("{prefix}{p}"),
-            Some(p) => format!("{prefix}.{p}"),
+            Some(p) => place_under(prefix, &p),
         });
         self
     }
@@ -121,6 +120,16 @@ impl Error {
             Kind::Check => 1,
             Kind::Input | Kind::Io => 2,
         }
+    }
+}
+
+/// Key path `place` under `prefix`: `prefix.place`, or `prefix[0]…` when
+/// `place` begins with an index.
+pub(crate) fn place_under(prefix: &str, place: &str) -> String {
+    if place.starts_with('[') {
+        format!("{prefix}{place}")
+    } else {
+        format!("{prefix}.{place}")
     }
 }
 

@@ -76,6 +76,11 @@ pub enum Event {
         setting: crate::base::gcode::Setting,
         /// The band it begins, if any.
         band: Option<Band>,
+        /// The key path of the value it was made from, when its maker
+        /// knows it (a turtle's or path's `set` command:
+        /// `parts[0].primitive.turtle.program[2].set.pressure_advance`),
+        /// for the `setting` check to name.
+        place: Option<std::sync::Arc<str>>,
     },
 }
 

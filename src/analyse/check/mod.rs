@@ -248,27 +248,37 @@ pub(crate) fn events(recipe: &Recipe, tp: &Toolpath) -> Vec<Finding> {
     out
 }
 
-/// A part's `set` steps' settings (`setting`): each one the printer's
-/// firmware has a command for, each value within the material's and the
-/// machine's limits; one finding per part, naming the first at fault, its
-/// band and how many are.
+/// A part's settings from `set` steps and commands (`setting`): each one
+/// the printer's firmware has a command for, each value within the
+/// material's and the machine's limits; one finding per part, naming the
+/// first at fault, its band or the key path of its command, and how many
+/// are.
 pub(crate) fn settings(recipe: &Recipe, tp: &Toolpath) -> Vec<Finding> {
     let (m, p) = (&recipe.material, &recipe.printer);
-    let faults: Vec<(usize, Option<u32>, String)> = tp
+    type Fault<'a> = (usize, Option<u32>, Option<&'a str>, String);
+    let faults: Vec<Fault> = tp
         .events
         .iter()
         .filter_map(|(k, e)| match e {
-            crate::base::toolpath::Event::Set { setting, band } => gcode::setting(setting, p, m)
+            crate::base::toolpath::Event::Set {
+                setting,
+                band,
+                place,
+            } => gcode::setting(setting, p, m)
                 .err()
-                .map(|why| (*k, band.map(|b| b.index), why)),
+                .map(|why| (*k, band.map(|b| b.index), place.as_deref(), why)),
             _ => None,
         })
         .collect();
-    let Some((k, band, why)) = faults.first() else {
+    let Some((k, band, place, why)) = faults.first() else {
         return Vec::new();
     };
     let at = tp.points[(*k + 1).min(tp.points.len() - 1)];
     let band = band.map_or(String::new(), |b| format!(" (band {b})"));
+    let band = match place {
+        Some(place) => format!("{band}, set by `{place}`,"),
+        None => band,
+    };
     vec![Finding {
         code: "setting",
         severity: Severity::Error,

@@ -36,6 +36,10 @@ pub(crate) struct Options {
     pub zbuffer_svg: Option<PathBuf>,
     /// `--zbuffer-layer N`.
     pub zbuffer_layer: Option<u64>,
+    /// The name the report, the stats and the messages after loading give
+    /// the recipe instead of its path (`calibration test temperature`: the
+    /// recipe `p3dp calibrate` staged, a file the user never wrote).
+    pub shown: Option<String>,
 }
 
 #[derive(Clone, Debug)]
@@ -259,6 +263,9 @@ fn build_job(
         return Err(e);
     }
     let mut p = p?;
+    if let Some(name) = &a.shown {
+        p.path.clone_from(name);
+    }
     if let Target::File(f, true) = &target {
         if p.recipe.printer.binary_gcode {
             target = Target::File(f.with_extension("bgcode"), true);

@@ -274,6 +274,8 @@ fn prepare(o: &Options) -> Result<(build::Options, tempfile::TempDir)> {
         dir.path(),
     )?;
     opts.builds.recipes = vec![file];
+    // the report names the test, not the staged file
+    opts.shown = Some(format!("calibration test {}", t.name));
     Ok((opts, dir))
 }
 

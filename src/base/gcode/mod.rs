@@ -10,6 +10,7 @@
 //! firmware's way first).
 
 pub(crate) mod lex;
+pub(crate) mod named;
 
 /// A heater.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -844,7 +844,7 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
                     .unwrap_or_else(|_| vec![Command::Other(text.to_string())]);
                 return self.s.raw(text, &commands);
             }
-            Event::Set { setting, band } => return self.set(setting, band),
+            Event::Set { setting, band, .. } => return self.set(setting, band),
         };
         self.s.command(&c, "")
     }

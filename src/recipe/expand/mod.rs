@@ -755,26 +755,26 @@ fn eval(n: &Num, params: &Params, place: &str) -> Result<f64> {
 /// `name` with each `{EXPR}` replaced by the expression's value in `params`
 /// (integers without decimals, others with up to 6).
 pub(crate) fn fill_name(name: &str, params: &Params, place: &str) -> Result<String> {
+    use crate::base::format::{pieces, Piece};
+    let pieces = pieces(name).map_err(|_| {
+        Error::input(
+            place,
+            format!(
+                "the name {name:?} has a `{{` without its `}}`; expected `{{EXPR}}`, e.g. `ring-{{k}}`"
+            ),
+        )
+    })?;
     let mut out = String::with_capacity(name.len());
-    let mut rest = name;
-    while let Some(open) = rest.find('{') {
-        out.push_str(&rest[..open]);
-        let after = &rest[open + 1..];
-        let close = after.find('}').ok_or_else(|| {
-            Error::input(
-                place,
-                format!(
-                    "the name {name:?} has a `{{` without its `}}`; expected `{{EXPR}}`, e.g. `ring-{{k}}`"
-                ),
-            )
-        })?;
-        let src = &after[..close];
-        let v = expr::eval_const(src, params)
-            .map_err(|m| Error::input(place, format!("in the name {name:?}: {m}")))?;
-        out.push_str(&fmt_value(v));
-        rest = &after[close + 1..];
+    for p in pieces {
+        match p {
+            Piece::Text(t) => out.push_str(t),
+            Piece::Expr(src) => {
+                let v = expr::eval_const(src, params)
+                    .map_err(|m| Error::input(place, format!("in the name {name:?}: {m}")))?;
+                out.push_str(&fmt_value(v));
+            }
+        }
     }
-    out.push_str(rest);
     Ok(out)
 }
 
@@ -785,19 +785,7 @@ pub(crate) fn check_name(name: &str, place: &str) -> Result<()> {
 
 /// A value in a name or a place: integers without decimals, others with up
 /// to 6, never `-0`.
-pub(crate) fn fmt_value(v: f64) -> String {
-    if v.fract() == 0.0 && v.abs() < 1e15 {
-        format!("{}", v as i64)
-    } else {
-        let s = format!("{v:.6}");
-        let s = s.trim_end_matches('0').trim_end_matches('.');
-        if s == "-0" {
-            "0".into()
-        } else {
-            s.to_string()
-        }
-    }
-}
+pub(crate) use crate::base::format::fmt_value;
 
 fn reserved_names() -> String {
     let mut v: Vec<&str> = expr::VAR_NAMES

@@ -287,6 +287,10 @@ fn leaves(
         let raw = leaf.part;
         let (c0, v0) = leaf.defaults.unwrap_or((c0, v0));
         let mut part = part::resolve(&ctx, raw, c0, v0, k).map_err(|e| e.under(place))?;
+        part::settings_under(&mut part.primitive, place);
+        for piece in &mut part.more {
+            part::settings_under(&mut piece.primitive, place);
+        }
         if part.primitives().all(|p| p.string_count() == 0) {
             kept.push(None);
             continue;

@@ -10,6 +10,7 @@ use serde::Deserialize;
 use super::curve::{RawArcCmd, RawBezier, RawLine, RawRectangle};
 use super::num::{Num, Num3, RawPoint};
 use super::part::RawLoop;
+use super::step::RawSet;
 
 /// `turtle:` as written.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
@@ -105,8 +106,12 @@ pub enum RawCommand {
         volume: Num,
         feed: Option<Num>,
     },
-    /// `gcode: "M600"`: a printer command written as it is, here.
+    /// `gcode: "M600"`: a printer command written here, each `{expr}` in
+    /// it replaced by the expression's value.
     Gcode(String),
+    /// `set: {pressure_advance: …, …}`: the printer's settings here, as a
+    /// `set` step's (without its bands).
+    Set(Box<RawSet>),
     SetHeading {
         heading: Num3,
         up: Option<Num3>,
@@ -165,7 +170,7 @@ pub(super) const SCALAR: &[&str] = &[
 /// Every command, for error messages.
 pub(super) const COMMANDS: &str = "forward, backward, lift, goto, move, draw, yaw, pitch, roll, left, right, \
 set_heading, pen_up, pen_down, extrude_rate, cross_section, speed, extrude, extrude_volume, dwell, pause, \
-nozzle_temp, bed_temp, fan, gcode, push, pop, draw_turtle, repeat, for, let, if, call, lsystem, hair, \
+nozzle_temp, bed_temp, fan, gcode, set, push, pop, draw_turtle, repeat, for, let, if, call, lsystem, hair, \
 arc, bezier, line, rectangle";
 
 impl schemars::JsonSchema for RawCommand {
@@ -212,6 +217,7 @@ struct Keys {
     line: Option<RawLine>,
     rectangle: Option<RawRectangle>,
     text: Option<String>,
+    settings: Option<RawSet>,
     name: Option<String>,
     lsystem: Option<RawLsystem>,
     var: Option<String>,
@@ -295,6 +301,10 @@ impl<'de> Visitor<'de> for CommandVisitor {
                     set(&mut k.cmd, "gcode")?;
                     k.text = Some(m.next_value()?);
                 }
+                "set" => {
+                    set(&mut k.cmd, "set")?;
+                    k.settings = Some(m.next_value()?);
+                }
                 "arc" => {
                     set(&mut k.cmd, "arc")?;
                     k.arc = Some(m.next_value()?);
@@ -376,6 +386,7 @@ impl Keys {
             },
             "let" => RawCommand::Let(self.lets.unwrap()),
             "gcode" => RawCommand::Gcode(self.text.unwrap()),
+            "set" => RawCommand::Set(Box::new(self.settings.unwrap())),
             "arc" => RawCommand::Arc(Box::new(self.arc.unwrap())),
             "bezier" => RawCommand::Bezier(Box::new(self.bezier.unwrap())),
             "line" => RawCommand::Line(Box::new(self.line.unwrap())),

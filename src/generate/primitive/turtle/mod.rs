@@ -56,18 +56,34 @@ impl Turtle {
     pub fn build(&self) -> Toolpath {
         self.path.clone()
     }
+
+    /// Puts the key paths its settings name under `prefix`, as
+    /// [`Error::under`] does with an error's place (the program's places
+    /// are relative to `turtle` or to a path's commands).
+    pub(crate) fn place_under(&mut self, prefix: &str) {
+        for (_, e) in &mut self.path.events {
+            if let crate::base::toolpath::Event::Set {
+                place: Some(place), ..
+            } = e
+            {
+                *place = crate::base::error::place_under(prefix, place).into();
+            }
+        }
+    }
 }
 
 /// Runs a compiled program from `env` (the part's cross-section and speed,
-/// the recipe's limits); errors name key paths relative to `turtle`.
-pub(crate) fn run(prog: &interp::Program, env: &Env) -> Result<Turtle> {
+/// the recipe's limits), `check` holding the `gcode` lines it makes to the
+/// printer; errors name key paths relative to `turtle`.
+pub(crate) fn run(prog: &interp::Program, env: &Env, check: interp::Check) -> Result<Turtle> {
     let limits = interp::Limits {
         max_strings: env.max_strings,
         max_steps: env.max_strings.saturating_mul(8).saturating_add(1_000_000),
     };
     // the interpreter keeps its own stack of tasks (blocks, calls, L-system
     // derivations) on the heap, so it runs here, on the caller's thread
-    let path = prog.run(env.cross_section, env.speed, env.filament_area, limits)?;
+    let cvs = (env.cross_section, env.speed, env.filament_area);
+    let path = prog.run(cvs, limits, check)?;
     // a program that makes no move at all (every move behind an `if` that
     // is 0) makes no part: the part is left out, as one switched off
     if !path.strings.is_empty() && path.strings.iter().all(|s| s.travel) {
