@@ -39,7 +39,7 @@ pub(crate) type Checked = (Vec<Finding>, Vec<check::first_layer::Footprint>);
 impl Plan {
     /// A plan of `paths` (skirt first) of `recipe`, read from `path`, its
     /// checks not yet run; the profile's start and end G-code expanded and
-    /// checked now (see [`crate::analyse::frame`]): an error if unsafe,
+    /// checked now (see `analyse::frame`): an error if unsafe,
     /// kept in `frame_error` (see [`Plan::frame_ok`]).
     pub fn new(path: String, recipe: Recipe, paths: Vec<Toolpath>) -> Result<Plan> {
         let extent = crate::analyse::frame::extent(&recipe, &paths);
@@ -68,7 +68,7 @@ impl Plan {
         }
     }
 
-    /// Every check, one after the other (see [`check::run`]), `allow` (the
+    /// Every check, one after the other (see `check::run`), `allow` (the
     /// command line's `--allow`) silencing codes beside the recipe's own;
     /// the plan is not changed.
     pub fn checks(&self, allow: &[String]) -> Checked {

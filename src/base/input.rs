@@ -83,7 +83,7 @@ impl Reads {
     }
 
     /// Notes a file the user named (on the command line, or a lock entry):
-    /// the files it reaches may lie anywhere in its project ([`project_root`]).
+    /// the files it reaches may lie anywhere in its project (`project_root`).
     pub fn name(&self, path: &Path) {
         let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
         self.allow(&project_root(dir.unwrap_or(Path::new("."))));
@@ -98,7 +98,7 @@ impl Reads {
         }
     }
 
-    /// [`read_text`] of a file the user named: noted, its project allowed; a
+    /// `read_text` of a file the user named: noted, its project allowed; a
     /// FIFO or device is read as it is (`p3dp check /dev/stdin`), bounded.
     pub fn read_text(&self, path: &Path, what: &str) -> Result<String> {
         self.note(path);
@@ -106,7 +106,7 @@ impl Reads {
         read_text(path, what)
     }
 
-    /// [`read_plain`] of a slicer's preset file: noted, and refused unless
+    /// `read_plain` of a slicer's preset file: noted, and refused unless
     /// it is a regular file (a preset and its parents are files).
     pub fn read_plain(&self, path: &Path, what: &str) -> Result<String> {
         self.note(path);
@@ -153,14 +153,14 @@ impl Reads {
     }
 
     /// Opens a file reached through a key: [`Reads::reach`], then
-    /// [`open_regular`].
+    /// `open_regular`.
     pub fn open_reached(&self, path: &Path, what: &str) -> Result<std::fs::File> {
         self.reach(path, what)?;
         open_regular(path, what)
     }
 
     /// The text of a file reached through a key ([`Reads::open_reached`]),
-    /// bounded by `limit` bytes, checked as [`read_text`] checks.
+    /// bounded by `limit` bytes, checked as `read_text` checks.
     pub fn read_reached(&self, path: &Path, what: &str, limit: u64) -> Result<String> {
         let file = self.open_reached(path, what)?;
         let text = text_of(file, path, what, limit, false)?;

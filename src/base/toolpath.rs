@@ -219,7 +219,7 @@ impl Toolpath {
     }
 
     /// Adds a declared hair to `p`: an extruding string of cross-section `c`
-    /// that is meant to hang in the air (see [`Strand::hair`]).
+    /// that is meant to hang in the air (see `Strand::hair`).
     pub fn hair(&mut self, p: DVec3, c: f64, v: f64) {
         self.push_turns();
         self.points.push(p);

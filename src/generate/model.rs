@@ -372,10 +372,10 @@ pub struct Recipe {
     pub max_strings: u64,
     /// Check codes the recipe silences (`allow:`).
     pub allow: Vec<String>,
-    /// Steps of groups of parts, in the order they run (see [`crate::generate::assembly`]).
+    /// Steps of groups of parts, in the order they run (see `generate::assembly`).
     pub groups: Vec<Group>,
     /// A plate's objects, each printed complete before the next (see
-    /// [`crate::generate::plate`]); empty for a recipe, whose every part
+    /// `generate::plate`); empty for a recipe, whose every part
     /// is an object of its own.
     pub objects: Vec<Object>,
 }

@@ -260,7 +260,7 @@ pub struct Printer {
     /// start G-code selects (Bambu's H2D its main, right-hand one, 1).
     pub tool: usize,
     /// G-code before the print: a template of the slicers' macro language
-    /// ([`crate::base::slicer_macro`]) over the variables of [`VARIABLES`]
+    /// (`base::slicer_macro`) over the variables of `VARIABLES`
     /// and `gcode_variables`.
     pub start_gcode: String,
     /// G-code after the print, a template over the same variables.
@@ -289,13 +289,13 @@ pub struct Printer {
     /// (Kanada's `draw` does the same near a globe's poles), mm.
     pub min_string_length: f64,
     /// Fit `G2`/`G3` arcs to runs of strings on a circle or helix (see
-    /// [`crate::base::geom::arc`]); off by default.
+    /// `base::geom::arc`); off by default.
     pub arcs: bool,
     /// Largest distance between an arc and the strings it replaces, mm.
     pub arc_tolerance: f64,
     /// Thumbnails to embed in the G-code, as `WxH` (PNG) or `WxH/FORMAT`
     /// (`PNG`, `QOI`, `JPG`) entries, PrusaSlicer's `thumbnails` (see
-    /// [`super::size::thumbnails`]); none by default.
+    /// `machine::size::thumbnails`); none by default.
     pub thumbnails: Vec<String>,
     /// Write `M73` progress (percent done, minutes left) from the planner's
     /// time: on by default for Marlin and Prusa, whose screens show it.
@@ -323,13 +323,13 @@ pub struct Printer {
     /// the firmware keeps its own).
     pub pressure_advance: Option<f64>,
     /// The firmware planner's limits, for the print-time estimate (see
-    /// [`super::Kinematics`]).
+    /// `Kinematics`).
     pub kinematics: super::kinematics::Kinematics,
     /// The print head's geometry for the collision check and the travel
-    /// height between parts (see [`super::Head`]).
+    /// height between parts (see `Head`).
     pub head: super::head::Head,
     /// Thresholds of the flow, support and planner checks (see
-    /// [`super::CheckLimits`]).
+    /// `CheckLimits`).
     pub checks: super::head::CheckLimits,
 }
 
@@ -486,7 +486,7 @@ impl Printer {
 
     /// The start or end G-code template under `key`, parsed: no character
     /// that breaks a line but `\n`, no syntax error, and no variable
-    /// neither p3dp ([`VARIABLES`]) nor `gcode_variables` gives; errors
+    /// neither p3dp (`VARIABLES`) nor `gcode_variables` gives; errors
     /// name the key and the template's line.
     pub fn template(&self, key: &str, text: &str) -> Result<Template> {
         let at = |line: usize, message: String| Error::input(format!("{key} line {line}"), message);

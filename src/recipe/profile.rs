@@ -95,7 +95,7 @@ impl Printer {
 
     /// A profile from a YAML file. With `inherits: NAME|FILE` the file's keys
     /// override those of a built-in profile or another file (maps merged key
-    /// by key, see [`Tree::merge`]); a file without it is parsed on its own.
+    /// by key, see `Tree::merge`); a file without it is parsed on its own.
     pub fn from_file(path: &Path) -> Result<Printer> {
         let reads = Reads::default();
         reads.name(path);
@@ -129,7 +129,7 @@ impl Printer {
         Ok(p)
     }
 
-    /// A slicer's printer preset (see [`crate::recipe::preset`]) as a
+    /// A slicer's printer preset (see `recipe::preset`) as a
     /// profile: the preset mapped to the profile's raw form (the value `p3dp
     /// printers import` writes as YAML), loaded and checked as a profile
     /// file is; errors name the preset file.
