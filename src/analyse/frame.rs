@@ -20,25 +20,27 @@ use crate::machine::{Flavor, Printer};
 /// A print's start and end G-code, expanded and checked: each line as it
 /// is written, and what its firmware reads in it.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct Frame {
+pub(crate) struct Frame {
     /// Before the first part.
-    pub start: Vec<Verbatim>,
+    pub(crate) start: Vec<Verbatim>,
     /// After the last part.
-    pub end: Vec<Verbatim>,
+    pub(crate) end: Vec<Verbatim>,
 }
 
+#[cfg(any(test, feature = "testing"))]
 impl Frame {
     /// The start G-code as it is written, a line feed after each line.
-    pub fn start_text(&self) -> String {
+    pub(crate) fn start_text(&self) -> String {
         lines(&self.start)
     }
 
     /// The end G-code as it is written, a line feed after each line.
-    pub fn end_text(&self) -> String {
+    pub(crate) fn end_text(&self) -> String {
         lines(&self.end)
     }
 }
 
+#[cfg(any(test, feature = "testing"))]
 fn lines(v: &[Verbatim]) -> String {
     v.iter().map(|l| format!("{}\n", l.text)).collect()
 }

@@ -359,7 +359,11 @@ fn written_beside<W: Write>(
 /// A preview of `plan` for `out` (PNG or HTML by its extension): the
 /// G-code written as a draft for its stats (and, for a viewer, its moves)
 /// beside the drawing when the pool allows; the same preview either way.
-pub fn preview(plan: &Plan, out: &Path, opts: &preview::Options) -> Result<preview::Finished> {
+pub(crate) fn preview(
+    plan: &Plan,
+    out: &Path,
+    opts: &preview::Options,
+) -> Result<preview::Finished> {
     crate::analyse::check::within_reach(&plan.recipe, &plan.paths, "preview")
         .map_err(|e| e.in_file(&plan.path))?;
     let job = preview::Job::new(plan, out, opts)?;

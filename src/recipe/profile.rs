@@ -96,6 +96,7 @@ impl Printer {
     /// A profile from a YAML file. With `inherits: NAME|FILE` the file's keys
     /// override those of a built-in profile or another file (maps merged key
     /// by key, see `Tree::merge`); a file without it is parsed on its own.
+    #[cfg(any(test, feature = "testing"))]
     pub fn from_file(path: &Path) -> Result<Printer> {
         let reads = Reads::default();
         reads.name(path);
@@ -104,7 +105,7 @@ impl Printer {
 
     /// [`Printer::from_file`], every file read noted in `reads` and read
     /// only inside its roots ([`Reads::reach`]).
-    pub fn from_file_in(path: &Path, reads: &Reads) -> Result<Printer> {
+    pub(crate) fn from_file_in(path: &Path, reads: &Reads) -> Result<Printer> {
         let shown = path.display().to_string();
         let text = reads.read_reached(path, "printer profile", MAX_TEXT_BYTES)?;
         let tree = Tree::parse(&text, &shown)?;
@@ -142,7 +143,7 @@ impl Printer {
     /// A built-in name, or else a path (relative paths from `base`): a
     /// profile's YAML, or a slicer's `.ini` or `.json` printer preset; every
     /// file read noted in `reads`.
-    pub fn resolve(spec: &str, base: &Path, reads: &Reads) -> Result<Printer> {
+    pub(crate) fn resolve(spec: &str, base: &Path, reads: &Reads) -> Result<Printer> {
         if let Some(p) = Printer::built_in(spec) {
             return Ok(p);
         }

@@ -7,9 +7,9 @@
 use std::path::PathBuf;
 
 use glam::DVec3;
-use p3dp::make_parts;
-use p3dp::Recipe;
-use p3dp::Toolpath;
+use p3dp::testing::make_parts;
+use p3dp::testing::Recipe;
+use p3dp::testing::Toolpath;
 
 pub(crate) fn load(name: &str) -> Recipe {
     load_with(name, &[])

@@ -9,10 +9,11 @@ use std::path::PathBuf;
 
 use crate::common::{p3dp, recipe, root, tmp, Move};
 use glam::DVec3;
-use p3dp::printers as built_in_names;
+use p3dp::testing::printers as built_in_names;
+use p3dp::testing::Insides;
+use p3dp::testing::{Bed, Printer};
+use p3dp::testing::{Event, Toolpath};
 use p3dp::{plan, Options};
-use p3dp::{Bed, Printer};
-use p3dp::{Event, Toolpath};
 
 const PROFILES: [&str; 15] = [
     "generic-220",
@@ -507,17 +508,17 @@ fn events_and_firmware_retraction_in_each_dialect() {
         }
         tp.event(Event::Fan { speed: 0.0 });
         tp.name = "events".into();
-        pl.paths = vec![tp];
+        *pl.paths_mut() = vec![tp];
         let job = p3dp::pipeline::Job::default();
         let bytes = p3dp::pipeline::write(&mut pl, &job, Vec::new())
             .unwrap()
             .out;
         let text = String::from_utf8(bytes).unwrap();
-        check_dialect(&text, pl.recipe.printer.flavor.name());
+        check_dialect(&text, pl.recipe().printer.flavor.name());
         for want in [pause, heat, fan] {
             assert!(text.contains(want), "{printer}: no `{want}` in\n{text}");
         }
-        let fw = pl.recipe.printer.firmware_retraction;
+        let fw = pl.recipe().printer.firmware_retraction;
         assert_eq!(text.contains("G10 ; retract"), fw, "{printer}");
         assert_eq!(text.contains("G11 ; unretract"), fw, "{printer}");
         if fw {
@@ -578,14 +579,10 @@ fn arcs_follow_the_strings(recipe_name: &str, profile: &str) -> (usize, usize) {
         &opts(fixture(profile).to_str().unwrap()),
     )
     .unwrap();
-    let printer = &arcs.recipe.printer.clone();
+    let printer = &arcs.recipe().printer.clone();
     assert!(printer.arcs);
-    let plain_printer = Printer {
-        arcs: false,
-        ..printer.clone()
-    };
     let mut plain = arcs.clone();
-    plain.recipe.printer = plain_printer;
+    plain.recipe_mut().printer.arcs = false;
     let job = p3dp::pipeline::Job::default();
     let a = p3dp::pipeline::write(&mut arcs, &job, Vec::new()).unwrap();
     let p = p3dp::pipeline::write(&mut plain, &job, Vec::new()).unwrap();
@@ -613,7 +610,7 @@ fn arcs_follow_the_strings(recipe_name: &str, profile: &str) -> (usize, usize) {
     // near the first string from the previous sample's on: passes of a
     // helix lie far more than the tolerance apart); µm rounding of the
     // written ends and centre adds a little
-    let segs = strings(&arcs.paths, printer);
+    let segs = strings(arcs.paths(), printer);
     let tol = printer.arc_tolerance + 0.003;
     let mut cur = 0;
     let mut n_arcs = 0;

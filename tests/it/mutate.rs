@@ -22,7 +22,7 @@ use std::path::{Path, PathBuf};
 
 use crate::common::*;
 use p3dp::{plan, Options};
-use p3dp::Recipe;
+use p3dp::testing::Recipe;
 
 /// xorshift64*: a small seeded generator, so a failure can be replayed.
 struct Rng(u64);

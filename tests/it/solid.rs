@@ -3,7 +3,7 @@
 //! in `internals::solid`.
 
 use crate::common;
-use p3dp::Recipe;
+use p3dp::testing::Recipe;
 
 #[test]
 fn a_solid_refuses_a_cross_section_it_would_ignore() {

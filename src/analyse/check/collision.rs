@@ -70,18 +70,18 @@ pub(crate) struct HeightMap {
     tnx: usize,
     tz: Vec<f64>,
     /// Highest filament mapped, mm.
-    pub top: f64,
+    pub(crate) top: f64,
 }
 
 /// A square of the map holding filament above a threshold.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Hit {
     /// The highest filament over the square.
-    pub at: DVec3,
+    pub(crate) at: DVec3,
     /// Distance from the query point to it, sideways, mm.
-    pub side: f64,
+    pub(crate) side: f64,
     /// (path, string) of that filament.
-    pub src: (u32, u32),
+    pub(crate) src: (u32, u32),
 }
 
 impl HeightMap {

@@ -18,11 +18,11 @@ use crate::recipe::{parse_set, parse_yaml};
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Options {
     /// The recipes and how each is built.
-    pub builds: Builds,
+    pub(crate) builds: Builds,
     /// `--lock FILE`: write the hashes there.
-    pub lock: Option<PathBuf>,
+    pub(crate) lock: Option<PathBuf>,
     /// `--check FILE`: rebuild every entry of this lock file.
-    pub check: Option<PathBuf>,
+    pub(crate) check: Option<PathBuf>,
 }
 
 /// Builds a job on `threads` into nothing but its hash and line fingerprint.

@@ -50,9 +50,9 @@ pub(crate) fn presets(kind: preset::Kind, file: &std::path::Path) -> Result<Stri
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Import {
     /// Where the preset is.
-    pub source: Source,
+    pub(crate) source: Source,
     /// `-o OUT.yaml`; standard output when `None`.
-    pub output: Option<PathBuf>,
+    pub(crate) output: Option<PathBuf>,
 }
 
 /// `p3dp printers import FILE`: the preset as a p3dp printer profile

@@ -16,7 +16,7 @@ use crate::base::toolpath::{Band, Event, Toolpath};
 
 /// A setting a `set` step may give a value to.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Key {
+pub(crate) enum Key {
     /// The nozzle's target, °C.
     NozzleTemperature,
     /// The part-cooling fan, 0 to 1.
@@ -49,7 +49,7 @@ pub enum Key {
 
 impl Key {
     /// The key of `name` as a recipe writes it.
-    pub fn of(name: &str) -> Option<Key> {
+    pub(crate) fn of(name: &str) -> Option<Key> {
         Some(match name {
             "nozzle_temperature" => Key::NozzleTemperature,
             "fan" => Key::Fan,
@@ -72,7 +72,7 @@ impl Key {
 
 /// Where a `set` step's bands are.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Bands {
+pub(crate) enum Bands {
     /// Height bands `every` mm tall from `from`.
     Height {
         /// Where band 0 begins, mm.
@@ -88,16 +88,16 @@ pub enum Bands {
 
 /// A `set` step resolved.
 #[derive(Clone, Debug)]
-pub struct Set {
+pub(crate) struct Set {
     /// Its bands.
-    pub bands: Bands,
+    pub(crate) bands: Bands,
     /// Each setting's value: an expression of x, y, z (variables) and
     /// `band` (extra slot 0).
-    pub values: Vec<(Key, Expr)>,
+    pub(crate) values: Vec<(Key, Expr)>,
     /// Wait for the nozzle temperature.
-    pub wait: bool,
+    pub(crate) wait: bool,
     /// The input shaper's kind, if set.
-    pub shaper: Option<Shaper>,
+    pub(crate) shaper: Option<Shaper>,
 }
 
 /// The variables a `set` value may read.
@@ -109,7 +109,12 @@ impl Set {
     /// The settings at `vars` in band `band`, merged as the firmware sets
     /// them (print and travel acceleration in one, the shaper's values in
     /// one …), and the first value given (the band's).
-    pub fn settings(&self, vars: &Vars, band: u32, memo: &mut Memo) -> Result<(Vec<Setting>, f64)> {
+    pub(crate) fn settings(
+        &self,
+        vars: &Vars,
+        band: u32,
+        memo: &mut Memo,
+    ) -> Result<(Vec<Setting>, f64)> {
         let mut out: Vec<Setting> = Vec::new();
         let mut first = None;
         for (key, e) in &self.values {
@@ -144,7 +149,7 @@ impl Set {
 
     /// Puts the settings into `tp` before the first extruding string of
     /// each band (after the events already there).
-    pub fn apply(&self, tp: &mut Toolpath) -> Result<()> {
+    pub(crate) fn apply(&self, tp: &mut Toolpath) -> Result<()> {
         let mut memo = Memo::default();
         let mut new: Vec<(usize, Event)> = Vec::new();
         let top = (0..tp.len())

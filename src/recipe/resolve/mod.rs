@@ -57,6 +57,7 @@ impl<'a> std::ops::Deref for Ctx<'a> {
 
 impl Recipe {
     /// Reads and resolves a recipe file. `printer` overrides the recipe's printer.
+    #[cfg(any(test, feature = "testing"))]
     pub fn load(
         path: &Path,
         sets: &[(String, String)],
@@ -78,7 +79,7 @@ impl Recipe {
 
     /// [`Recipe::load_in`], `material` (a filament preset's, `--filament`)
     /// overriding the recipe's material.
-    pub fn load_with(
+    pub(crate) fn load_with(
         path: &Path,
         sets: &[(String, String)],
         printer: Option<&Printer>,
@@ -128,7 +129,8 @@ impl Recipe {
     }
 
     /// Resolves a parsed recipe; relative paths are taken from `dir`.
-    pub fn resolve(
+    #[cfg(any(test, feature = "testing"))]
+    pub(crate) fn resolve(
         raw: &RawRecipe,
         sets: &[(String, String)],
         printer: Option<&Printer>,
