@@ -1,7 +1,9 @@
 //! The sphere (`recipes/sphere.yaml`, 59k points) and the 2,000,000-string
 //! vase (`benches/vase-2m.yaml`) built through the release binary as a user
 //! runs it, a fresh process per run: wall, CPU and peak memory per thread
-//! budget; every run of a case must write the same bytes.
+//! budget; every run of a case must write the same bytes. Then a batch:
+//! `check --sweep` of 10,000 variants of a 2 mm helix
+//! (`benches/sweep-helix.yaml`).
 //!
 //!     cargo bench --bench cli
 //!     P3DP_BASELINE=/path/to/older/p3dp cargo bench --bench cli
@@ -60,5 +62,16 @@ fn main() {
             },
         );
     }
+    // a batch: 10,000 variants of a 2 mm helix checked (target: 20 s on
+    // 2 cores, issue 42)
+    let sweep = root.join("benches/sweep-helix.yaml");
+    common::compare(
+        "check --sweep b=1..10000",
+        &["check", sweep.to_str().unwrap(), "--sweep", "b=1..10000"],
+        &dir,
+        3,
+        || {},
+        |_| {},
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -3,6 +3,7 @@
 //! the notebook, for the same parameters.
 //!
 //! The reference is made at test time by `tests/fullcontrol/fc_gcode.py`
+//! (and kept for the next run, keyed by its inputs: [`fullcontrol_gcode`])
 //! (FullControl's notebook run with the printer `generic`, no primer, the
 //! extruder on from the start): `P3DP_FC_PYTHON` is a Python with the
 //! `fullcontrol` package, `P3DP_FC_MODELS` the folder of the notebooks
@@ -200,6 +201,52 @@ fn reference() -> Option<(PathBuf, PathBuf)> {
     }
 }
 
+/// FullControl's G-code of `notebook` run with `json`, made by Python the
+/// first time and kept in the tests' scratch folder of the target directory
+/// (`CARGO_TARGET_TMPDIR`) under the SHA-256 of everything that makes it —
+/// the Python's path, the notebook's bytes, the script's bytes, the JSON —
+/// so a warm `cargo test` runs FullControl only for what changed (a fresh
+/// clone, as CI's, runs it every time).
+fn fullcontrol_gcode(py: &std::path::Path, notebook: &std::path::Path, json: &str) -> String {
+    use sha2::Digest;
+    let script = root().join("tests/fullcontrol/fc_gcode.py");
+    let mut h = sha2::Sha256::new();
+    for part in [
+        py.display().to_string().into_bytes(),
+        std::fs::read(notebook).expect("the notebook"),
+        std::fs::read(&script).expect("fc_gcode.py"),
+        json.as_bytes().to_vec(),
+    ] {
+        h.update((part.len() as u64).to_le_bytes());
+        h.update(&part);
+    }
+    let key: String = h.finalize().iter().map(|b| format!("{b:02x}")).collect();
+    let cache = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("fullcontrol");
+    let file = cache.join(format!("{key}.gcode"));
+    if let Ok(text) = std::fs::read_to_string(&file) {
+        return text;
+    }
+    let out = Command::new(py)
+        .arg(&script)
+        .arg(notebook)
+        .arg(json)
+        .output()
+        .expect("run python");
+    assert!(
+        out.status.success(),
+        "{} {json}: {}",
+        notebook.display(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    // written whole then renamed: a test run stopped midway leaves no half
+    std::fs::create_dir_all(&cache).unwrap();
+    let part = cache.join(format!("{key}.{}.part", std::process::id()));
+    std::fs::write(&part, &text).unwrap();
+    std::fs::rename(&part, &file).unwrap();
+    text
+}
+
 /// Builds `recipes/fullcontrol/MODEL.yaml` with `sets` and runs the notebook
 /// with `json` (the same values), and compares them.
 fn check(model: &str, json: &str, sets: &[&str]) {
@@ -207,18 +254,7 @@ fn check(model: &str, json: &str, sets: &[&str]) {
         return;
     };
     let what = format!("{model} {json}");
-    let out = Command::new(&py)
-        .arg(root().join("tests/fullcontrol/fc_gcode.py"))
-        .arg(models.join(format!("{model}.ipynb")))
-        .arg(json)
-        .output()
-        .expect("run python");
-    assert!(
-        out.status.success(),
-        "{what}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let theirs = String::from_utf8(out.stdout).unwrap();
+    let theirs = fullcontrol_gcode(&py, &models.join(format!("{model}.ipynb")), json);
     let dir = tmp(model);
     let recipe = root().join(format!("recipes/fullcontrol/{model}.yaml"));
     let mut args = vec!["build".to_string(), recipe.display().to_string()];
