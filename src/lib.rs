@@ -77,12 +77,18 @@ pub mod testing {
     pub use crate::machine::printer::{Bed, Flavor, Printer};
     pub use crate::recipe::context::Context;
     pub use crate::recipe::profile::built_in_names as printers;
+    pub use crate::recipe::{load as load_recipe, load_in as load_recipe_in};
     pub use crate::Plan;
 
     /// Prusa's binary G-code read back: the blocks of a `.bgcode` file, each
     /// checksum checked.
     pub mod bgcode {
         pub use crate::output::host::bgcode::{decode, Block};
+    }
+
+    /// Printer profiles: built in, from a file, from a slicer's preset.
+    pub mod profile {
+        pub use crate::recipe::profile::{built_in, from_file, from_preset};
     }
 
     /// Slicer presets (PrusaSlicer-family `.ini`, OrcaSlicer/Bambu Studio

@@ -767,7 +767,7 @@ mod tests {
     fn recipe(material: &str) -> Recipe {
         let text = format!("p3dp: 1\nname: t\nmaterial: {material}\nparts:\n  - primitive: {{helix: {{radius: 10, height: 2, pitch: 0.5}}}}\n");
         let raw: crate::recipe::RawRecipe = crate::recipe::parse_yaml(&text, "t.yaml").unwrap();
-        Recipe::resolve(&raw, &[], None, std::path::Path::new(".")).unwrap()
+        crate::recipe::resolve(&raw, &[], None, std::path::Path::new(".")).unwrap()
     }
 
     /// Every variable the two tables list has a value (a built-in

@@ -62,7 +62,10 @@ impl Default for Head {
 }
 
 /// Thresholds of the flow, support and planner checks (printer key `checks:`).
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// A profile's `checks:` deserialises straight into it (`recipe::schema`'s
+/// `RawPrinter`), each absent key [`CheckLimits::default`]'s.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize)]
+#[serde(deny_unknown_fields, default, expecting = "struct CheckLimits")]
 pub(crate) struct CheckLimits {
     /// `over-extrusion` warning above this × nozzle² of cross-section.
     pub(crate) cross_section_max: f64,

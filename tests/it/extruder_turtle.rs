@@ -23,7 +23,7 @@ pub(crate) fn load_with(name: &str, sets: &[(&str, &str)]) -> Recipe {
         .iter()
         .map(|(k, v)| (k.to_string(), v.to_string()))
         .collect();
-    Recipe::load(&path, &sets, None).unwrap_or_else(|e| panic!("{name}: {e}"))
+    p3dp::testing::load_recipe(&path, &sets, None).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
 pub(crate) fn param(recipe: &Recipe, name: &str) -> f64 {

@@ -59,7 +59,7 @@ fn import(file: &Path, name: Option<&str>, profiles: Option<&Path>) -> p3dp::Res
         preset: name.map(str::to_string),
         profiles: profiles.map(Path::to_path_buf),
     };
-    Printer::from_preset(&src, &Reads::default())
+    p3dp::testing::profile::from_preset(&src, &Reads::default())
 }
 
 /// The vase built on `profile` (a profile's YAML file) in `dir`: its
@@ -1002,7 +1002,7 @@ fn multi_tool_machines_print_with_the_tool_their_start_gcode_selects() {
         );
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     }
-    let xl = Printer::from_file(&dir.join("xl.yaml")).unwrap();
+    let xl = p3dp::testing::profile::from_file(&dir.join("xl.yaml")).unwrap();
     assert_eq!((xl.extruders, xl.tool), (5, 0));
     let g = build_with(&dir, &["--printer", "xl.yaml"]).unwrap();
     has_lines(
@@ -1073,7 +1073,7 @@ fn an_imported_profile_written_as_yaml_is_the_same_printer() {
         }
         let o = p3dp(&dir, &args);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        let mut back = Printer::from_file(&out).unwrap();
+        let mut back = p3dp::testing::profile::from_file(&out).unwrap();
         (direct.source, back.source) = (None, None);
         assert_eq!(direct, back, "{file:?} {name:?}");
     }

@@ -613,7 +613,7 @@ mod tests {
             "p3dp: 1\nname: t\nprinter: {printer}\nparts:\n  - {{name: tower, primitive: {{helix: {{radius: 8, height: 40, pitch: 0.3, center: [-40, 0, 0.2]}}}}}}\n  - {{name: ring, primitive: {{helix: {{radius: 8, height: 2, pitch: 0.3, center: [40, 0, 0.2]}}}}}}\n"
         );
         let raw = crate::recipe::parse_yaml(&text, "t.yaml").unwrap();
-        let recipe = Recipe::resolve(&raw, &[], None, std::path::Path::new(".")).unwrap();
+        let recipe = crate::recipe::resolve(&raw, &[], None, std::path::Path::new(".")).unwrap();
         let parts = crate::generate::assembly::make_parts(&recipe).unwrap();
         let refs: Vec<&Toolpath> = parts.iter().collect();
         check(&recipe, &refs)

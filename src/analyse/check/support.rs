@@ -771,7 +771,7 @@ mod tests {
 
     /// A recipe of the default printer (the paths are given by the tests).
     fn recipe() -> Recipe {
-        crate::generate::model::Recipe::resolve(
+        crate::recipe::resolve(
             &crate::recipe::parse_yaml(
                 "p3dp: 1\nname: t\nparts:\n  - primitive: {circle: {radius: 1}}\n",
                 "t.yaml",

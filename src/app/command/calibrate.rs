@@ -296,7 +296,7 @@ fn printer(printer: Option<&str>, t: &Test) -> Result<crate::machine::Printer> {
     };
     let reads = crate::base::input::Reads::default();
     reads.allow(Path::new("."));
-    crate::machine::Printer::resolve(&spec, Path::new("."), &reads)
+    crate::recipe::profile::resolve(&spec, Path::new("."), &reads)
 }
 
 /// Which band `apply` reads: its index, or the height it holds.

@@ -299,7 +299,7 @@ pub(crate) fn inputs_of(recipes: &[PathBuf], printer: Option<&str>) -> Vec<(Stri
         .map(|r| ("the recipe".to_string(), r.clone()))
         .collect();
     if let Some(p) = printer {
-        if crate::machine::Printer::built_in(p).is_none() {
+        if crate::recipe::profile::built_in(p).is_none() {
             v.push(("the --printer profile".to_string(), PathBuf::from(p)));
         }
     }

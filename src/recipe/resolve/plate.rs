@@ -282,15 +282,16 @@ pub(crate) fn make(
 /// first object's recipe's, else the default.
 fn plate_printer(spec: &PlateSpec, cx: &Context) -> Result<Printer> {
     if let Some(p) = &spec.printer {
-        return Printer::resolve(p, &spec.dir, &cx.reads);
+        return crate::recipe::profile::resolve(p, &spec.dir, &cx.reads);
     }
     let first = &spec.entries[0];
     let path = spec.dir.join(&first.recipe);
     reach(spec, first, &path, cx)?;
-    let raw = Recipe::read_raw(&path, cx)?;
+    let raw = super::read_raw(&path, cx)?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let p = raw.printer.as_deref().unwrap_or("generic-220");
-    Printer::resolve(p, &dir, &cx.reads).map_err(|e| e.in_file(&path.display().to_string()))
+    crate::recipe::profile::resolve(p, &dir, &cx.reads)
+        .map_err(|e| e.in_file(&path.display().to_string()))
 }
 
 /// Refuses a recipe a plate file names outside the folders it may read
@@ -332,7 +333,7 @@ fn load_objects(
             let mut s = e.sets.clone();
             s.extend(variant);
             s.extend(sets.iter().cloned());
-            let recipe = Recipe::load_in(&path, &s, Some(printer), cx)?;
+            let recipe = super::load_in(&path, &s, Some(printer), cx)?;
             let paths = arrange::made(&recipe).map_err(|err| err.in_file(&shown))?;
             let (recipe, paths) = (std::sync::Arc::new(recipe), std::sync::Arc::new(paths));
             for _ in 0..e.copies {

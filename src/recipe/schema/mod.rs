@@ -33,8 +33,7 @@ pub(crate) use primitive::{
     RawLayout, RawOutline, RawPath, RawPatternHelix, RawPrimitive, RawRule, RawSpiral,
 };
 pub(crate) use profile::{
-    RawBed, RawCheckLimits, RawExtrusion, RawFlavor, RawHead, RawKinematics, RawPrinter,
-    RawRetraction, RawVariable,
+    RawBed, RawExtrusion, RawFlavor, RawHead, RawKinematics, RawPrinter, RawRetraction, RawVariable,
 };
 pub(crate) use solid::{RawFeature, RawInfill, RawOp, RawPattern, RawSolid};
 pub(crate) use step::{RawAxis, RawDeform, RawKeep, RawSet, RawStep};

@@ -205,7 +205,7 @@ pub(crate) struct RawPrinter {
     pub(crate) head: RawHead,
     /// Thresholds of the flow, support and planner checks.
     #[serde(default)]
-    pub(crate) checks: RawCheckLimits,
+    pub(crate) checks: CheckLimits,
 }
 
 /// A value under `gcode_variables:`: a boolean, a number, a string or a
@@ -295,7 +295,7 @@ impl RawPrinter {
             pressure_advance: None,
             kinematics: RawKinematics::default(),
             head: RawHead::default(),
-            checks: RawCheckLimits::default(),
+            checks: CheckLimits::default(),
         }
     }
 }
@@ -437,46 +437,6 @@ impl Default for RawHead {
             head_box: h.head_box,
             clearance: h.clearance,
             gantry: None,
-        }
-    }
-}
-
-/// `checks:` thresholds of the flow, support and planner checks; each
-/// absent key is [`CheckLimits::default`]'s.
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields, default, expecting = "struct CheckLimits")]
-#[allow(missing_docs)]
-pub(crate) struct RawCheckLimits {
-    pub(crate) cross_section_max: f64,
-    pub(crate) cross_section_hard_max: f64,
-    pub(crate) cross_section_min: f64,
-    pub(crate) cross_section_hard_min: f64,
-    pub(crate) flow_hard_max: f64,
-    pub(crate) max_bridge: f64,
-    pub(crate) support_tolerance: f64,
-    pub(crate) min_move_time: f64,
-    pub(crate) planner_buffer: u32,
-    pub(crate) first_layer_min: f64,
-    pub(crate) min_contact_per_height: f64,
-    pub(crate) min_contact_per_gram: f64,
-}
-
-impl Default for RawCheckLimits {
-    fn default() -> Self {
-        let c = CheckLimits::default();
-        RawCheckLimits {
-            cross_section_max: c.cross_section_max,
-            cross_section_hard_max: c.cross_section_hard_max,
-            cross_section_min: c.cross_section_min,
-            cross_section_hard_min: c.cross_section_hard_min,
-            flow_hard_max: c.flow_hard_max,
-            max_bridge: c.max_bridge,
-            support_tolerance: c.support_tolerance,
-            min_move_time: c.min_move_time,
-            planner_buffer: c.planner_buffer,
-            first_layer_min: c.first_layer_min,
-            min_contact_per_height: c.min_contact_per_height,
-            min_contact_per_gram: c.min_contact_per_gram,
         }
     }
 }
