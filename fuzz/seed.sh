@@ -22,6 +22,12 @@ seed svg "$root"/recipes/*.svg "$root"/tests/bad/svg/*.svg
 seed preset_ini "$root"/tests/fixtures/presets/*.ini "$root"/docs/guide/*.ini
 seed preset_json "$root"/tests/fixtures/presets/*/*.json "$root"/tests/fixtures/presets/*/*/*.json "$root"/tests/fixtures/presets/*/*/*/*.json "$root"/tests/fixtures/presets/*/*/*/*/*.json
 seed include "$root"/recipes/cup.yaml "$root"/recipes/plate.yaml "$root"/tests/fixtures/*.yaml
+# G-code lines: every line of the built-ins' recorded start G-code, one a file
+mkdir -p "$here/corpus/gcode_line"
+cat "$root"/tests/fixtures/printers/start/*.gcode | sort -u | while IFS= read -r l; do
+  printf '%s' "$l" > "$here/corpus/gcode_line/$(printf '%s' "$l" | cksum | cut -d' ' -f1)"
+done
+if [ -d "$here/findings/gcode_line" ]; then cp "$here/findings/gcode_line"/* "$here/corpus/gcode_line/" 2>/dev/null || true; fi
 # expressions: every quoted string of the recipes, one a file
 mkdir -p "$here/corpus/expr"
 grep -ho '"[^"]*"' "$root"/recipes/*.yaml | sed 's/^"//; s/"$//' | sort -u | while IFS= read -r e; do

@@ -514,6 +514,22 @@ fn klipper<'a>(code: &'a str, out: &mut Line<'a>) -> Result<(), String> {
     let e1 = run(0);
     let e2 = next_key(e1);
     let name = &up[..e1];
+    if name == "N" {
+        // a line number, whatever follows the `N` up to the next letters
+        // (gcode.py: `parts[1] == 'N'` makes the command parts[3] + parts[4]);
+        // a second one would be a command `N…` Klipper does not have
+        let rest = code[e2..].trim_start_matches([' ', '\t']);
+        if rest.is_empty() || rest.starts_with('*') {
+            return Ok(());
+        }
+        let at = up.len() - rest.len();
+        if &up[at..run(at)] == "N" {
+            return Err(format!(
+                "`{code}` starts with a second line number; expected at most one `N<number>` before the command"
+            ));
+        }
+        return klipper(rest, out);
+    }
     let num = up[e1..e2].trim();
     let traditional = name.len() == 1 && num.starts_with(|c: char| c.is_ascii_digit());
     if !traditional {

@@ -128,6 +128,13 @@ fn unreadable_lines_are_errors_never_panics() {
         assert!(e.contains("second line number"), "{f:?}: {e}");
         assert_eq!(one(f, "N10 M400").len(), 1, "{f:?}");
     }
+    // Klipper's line number is an `N` and whatever follows it up to the
+    // next letters (found by the fuzzer: `N 11 08NG` is the command `NG`)
+    let k = Flavor::Klipper;
+    assert_eq!(one(k, "N 11 08G4 P5").len(), 1);
+    assert_eq!(one(k, "N 11 08NG"), [Command::Other("NG".into())]);
+    assert!(read(k, "N 1 N 2 G1 X5").is_err());
+    assert!(one(k, "N 7").is_empty());
 }
 
 /// The settings a calibration writes, each flavour.

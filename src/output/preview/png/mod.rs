@@ -1,11 +1,12 @@
-//! The PNG preview: the strings as anti-aliased strokes, painted far to
-//! near so that the front of a sphere hides its back, shaded, with the
+//! The PNG preview: the strings as anti-aliased strokes, the near ones
+//! hiding the far (the front of a sphere hides its back), shaded, with the
 //! recipe's name, its key stats and a colour legend in the corners.
 //!
 //! Rasterising. The preview's strokes are painted by this module's own
 //! rasteriser (`raster`): a stroke is a capsule of its width, a pixel
-//! takes the share of it a box filter gives, blended in integers rounded the
-//! same way everywhere, in bands of rows that the pool shares out with the
+//! takes the share of it a box filter gives, each stroke laid under the
+//! nearer ones in integers rounded the same way everywhere (a pixel already
+//! opaque costs nothing more), in bands of rows that the pool shares out with the
 //! same bytes on any number of threads; the G-code thumbnails are painted
 //! by it too. tiny-skia draws the rest: the turtles' markers, the findings' rings
 //! and the legend's colour bar; the text is the previews' own 8 × 8 font.
@@ -30,8 +31,8 @@ use glam::DVec3;
 use tiny_skia::Pixmap;
 
 use self::decor::{header, legend, legend_width, marks};
-use self::model::{Item, Model, Palette, Passes};
-use self::raster::{paint_bands, Px};
+use self::model::{Model, Palette, Passes};
+use self::raster::{over, paint_bands, Px};
 use super::{Basis, ColorMode, Options, Scene, Size};
 use crate::analyse::plan::Plan;
 use crate::analyse::stats::Stats;
@@ -153,7 +154,8 @@ pub(crate) fn finish(drawing: Drawing, stats: &Stats) -> Rendered {
 /// before the next: the strokes are collected in pieces of [`PIECE`]
 /// strings, coloured as they are collected, the pieces' strokes kept in
 /// print order ([`Model::strokes`]); sorted far to near ([`sort_far_first`]);
-/// then painted in bands of [`BAND`] rows ([`paint_bands`]). Every pixel
+/// then painted near to far in bands of [`BAND`] rows ([`paint_bands`])
+/// and laid over the background ([`over`]). Every pixel
 /// sees the same strokes in the same order however the work is split, so
 /// the image is the same on any number of threads.
 pub(crate) fn draw<'p>(plan: &'p Plan, opts: &Options) -> Drawing<'p> {
@@ -174,13 +176,8 @@ pub(crate) fn draw<'p>(plan: &'p Plan, opts: &Options) -> Drawing<'p> {
     drop(model);
     sort_far_first(&mut strokes);
     let mut pixmap = Pixmap::new(opts.size.width, opts.size.height).expect("sizes are 1..=8192");
-    pixmap.fill(tiny_skia::Color::from_rgba8(
-        BACKGROUND[0],
-        BACKGROUND[1],
-        BACKGROUND[2],
-        255,
-    ));
     paint_bands(&mut pixmap, &strokes);
+    over(&mut pixmap, BACKGROUND);
     drop(strokes);
     marks(&mut pixmap, &scene, &frame, bbox, opts.color, rect);
     Drawing {
@@ -229,11 +226,11 @@ fn layout(scene: &Scene, opts: &Options) -> ([f64; 4], bool, u32) {
 ///
 /// The strokes are collected once, fitted to the largest size (pieces of
 /// [`PIECE`] strings shared over the pool as the preview's, no neighbouring
-/// pass looked for), sorted far to near and kept [`once`]; each size takes
-/// them scaled about the image's centre (a frame fitted to the same box
-/// differs only in its scale, p' = c' + (s'/s)(p − c)) and paints them with
-/// the preview's rasteriser in bands ([`paint_bands`]): the same bytes on
-/// any number of threads.
+/// pass looked for), coloured, sorted far to near ([`sort_far_first`]) and
+/// kept [`once`]; each size takes them scaled about the image's centre (a
+/// frame fitted to the same box differs only in its scale, p' = c' +
+/// (s'/s)(p − c)) and paints them with the preview's rasteriser in bands
+/// ([`paint_bands`]): the same bytes on any number of threads.
 pub(crate) fn thumbnails(scene: &Scene, sizes: &[Size]) -> Vec<Pixmap> {
     let Some(&big) = sizes
         .iter()
@@ -256,20 +253,26 @@ pub(crate) fn thumbnails(scene: &Scene, sizes: &[Size]) -> Vec<Pixmap> {
         par::width(),
     );
     let (frame, (lo, hi)) = (model.frame, model.screen);
-    let mut items = model.strokes(|it| *it);
+    let pal = Palette::of_model(&model, ColorMode::Plain);
+    // a lit string in filament colour, `r` half its width at the largest
+    // size; a travel faint and grey, 1 px at every size (alpha 90 marks it).
+    // No marks: a thumbnail is the print as the printer's screen shows it,
+    // not the turtles' draw_turtle markers
+    let mut strokes = model.strokes(|it| match it.kind {
+        1 => Px {
+            rgb: [150, 155, 165],
+            alpha: 90,
+            r: 0.5,
+            ..pal.px(it)
+        },
+        _ => Px {
+            r: 0.5 * it.width,
+            ..pal.px(it)
+        },
+    });
     drop(model);
-    sort(&mut items);
-    let items = once(items);
-    let pal = Palette::new(&items, scene, ColorMode::Plain);
-    // a travel faint and grey, 1 px (no marks: a thumbnail is the print as
-    // the printer's screen shows it, not the turtles' draw_turtle markers)
-    let colours: Vec<([u8; 3], u8)> = items
-        .iter()
-        .map(|it| match it.kind {
-            1 => ([150, 155, 165], 90),
-            _ => (pal.rgb(it), 255),
-        })
-        .collect();
+    sort_far_first(&mut strokes);
+    let strokes = once(strokes);
     sizes
         .iter()
         .map(|&size| {
@@ -284,59 +287,60 @@ pub(crate) fn thumbnails(scene: &Scene, sizes: &[Size]) -> Vec<Pixmap> {
                 let y = to.pixel_centre.1 + k * (f64::from(p.1) - frame.pixel_centre.1);
                 (x as f32, y as f32)
             };
-            let strokes: Vec<Px> = items
+            let sized: Vec<Px> = strokes
                 .iter()
-                .zip(&colours)
-                .map(|(it, &(rgb, alpha))| {
-                    let width = match it.kind {
-                        1 => 1.0,
-                        _ => (f64::from(it.width) * k).max(1.0) as f32,
-                    };
-                    Px {
-                        a: at(it.a),
-                        b: at(it.b),
-                        depth: it.depth as f32,
-                        r: 0.5 * width,
-                        rgb,
-                        alpha,
-                        seq: 0,
-                    }
+                .map(|p| Px {
+                    a: at(p.a),
+                    b: at(p.b),
+                    r: match p.alpha {
+                        255 => (f64::from(p.r) * k).max(0.5) as f32,
+                        _ => 0.5,
+                    },
+                    ..*p
                 })
                 .collect();
             let mut pm = Pixmap::new(size.width, size.height).expect("sizes are 1..=8192");
-            paint_bands(&mut pm, &strokes);
+            paint_bands(&mut pm, &sized);
             pm
         })
         .collect()
 }
 
 /// Each stroke painted once: of strokes alike in all that is drawn of them
-/// (ends, depth, width, shading, kind), only the last in painting order,
+/// (ends, width, depth, colour, opacity), only the last in painting order,
 /// the one that shows, is kept: a line retraced 600 000 times is a stroke
-/// each way, not 600 000 (whose painting took tens of seconds).
-fn once(items: Vec<Item>) -> Vec<Item> {
-    let key = |it: &Item| {
+/// each way, not 600 000 (whose painting took tens of seconds). Strokes
+/// alike have one depth, so they lie together in the sorted `strokes`: only
+/// a run of equal depths is searched.
+fn once(strokes: Vec<Px>) -> Vec<Px> {
+    let key = |p: &Px| {
         (
-            [it.a.0, it.a.1, it.b.0, it.b.1, it.width].map(f32::to_bits),
-            [it.depth, it.diffuse, it.spec].map(f64::to_bits),
-            it.kind,
+            [p.a.0, p.a.1, p.b.0, p.b.1, p.r].map(f32::to_bits),
+            p.rgb,
+            p.alpha,
         )
     };
-    let mut seen = std::collections::HashSet::with_capacity(items.len());
-    let mut kept: Vec<Item> = items
-        .into_iter()
-        .rev()
-        .filter(|it| seen.insert(key(it)))
-        .collect();
-    kept.reverse();
+    let mut kept = Vec::with_capacity(strokes.len());
+    let mut seen = std::collections::HashSet::new();
+    let mut i = 0;
+    while i < strokes.len() {
+        let depth = strokes[i].depth.to_bits();
+        let end = i + strokes[i..]
+            .iter()
+            .take_while(|p| p.depth.to_bits() == depth)
+            .count();
+        if end - i == 1 {
+            kept.push(strokes[i]);
+        } else {
+            // the last of each alike, kept in painting order
+            seen.clear();
+            let from = kept.len();
+            kept.extend(strokes[i..end].iter().rev().filter(|p| seen.insert(key(p))));
+            kept[from..].reverse();
+        }
+        i = end;
+    }
     kept
-}
-
-/// Painter's algorithm: far (small depth) first; the sort is stable, so
-/// strings at equal depth keep print order and the result is deterministic
-/// (the PNG preview's strokes are sorted the same way).
-fn sort(items: &mut [Item]) {
-    items.sort_by(|a, b| a.depth.total_cmp(&b.depth));
 }
 
 /// PNG bytes of `pm`: RGB, or RGBA with `alpha` (colours un-premultiplied),

@@ -355,24 +355,6 @@ pub(super) struct Palette {
 }
 
 impl Palette {
-    pub(super) fn new(items: &[Item], scene: &Scene, mode: ColorMode) -> Palette {
-        let (lo, hi) = scene.range(mode);
-        let (dmin, dmax) = items
-            .iter()
-            .filter(|i| i.kind != 1)
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), i| {
-                (a.min(i.depth), b.max(i.depth))
-            });
-        let dspan = if dmax > dmin { dmax - dmin } else { 1.0 };
-        Palette {
-            mode,
-            lo,
-            hi,
-            dmin,
-            dspan,
-        }
-    }
-
     /// The palette of the preview's strokes: the value range of `mode`, the
     /// depth range of the model's extruding points.
     pub(super) fn of_model(model: &Model, mode: ColorMode) -> Palette {

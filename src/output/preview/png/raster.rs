@@ -25,18 +25,26 @@ pub(super) struct Px {
     pub(super) seq: u32,
 }
 
-/// Paints the (sorted) strokes into an image (opaque, or transparent where
-/// nothing is drawn: the thumbnails) in bands of [`BAND`] rows, each band taken by whichever thread of the pool is free
-/// ([`par::each`]).
+/// Paints the strokes (sorted far to near) into a transparent image in
+/// bands of [`BAND`] rows, each band taken by whichever thread of the pool
+/// is free ([`par::each`]).
 ///
 /// A stroke is a capsule: the points within r (half its width) of segment
 /// a–b. A pixel is covered by the overlap of its width with the capsule
 /// across the line through its centre at distance d: min(d + ½, r) −
 /// max(d − ½, −r), clamped to [0, 1] (a box filter; 1 inside, 0 beyond
-/// r + ½), and takes the stroke's colour in that share times its opacity
-/// (over: dst + (src − dst)·α, in integers rounded the same way everywhere).
-/// Each band paints every stroke that reaches it, in order, so a pixel's
-/// result does not depend on how the image is cut into bands.
+/// r + ½), and takes the stroke's colour in that share times its opacity.
+///
+/// Near to far: each stroke goes *under* what is painted already
+/// (premultiplied, dst += src·α·(1 − dst_α), in integers rounded the same
+/// way everywhere), which gives the picture painting far to near over it
+/// gives (Porter and Duff's over is associative), but a pixel already
+/// opaque is passed over before its distance is measured, and a band whose
+/// pixels are all opaque stops: the hidden back of a dense model costs
+/// next to nothing. Each band paints every stroke that reaches it, in
+/// order, so a pixel's result does not depend on how the image is cut into
+/// bands. The caller lays the result over its background ([`over`]), or
+/// keeps it transparent (the thumbnails).
 pub(super) fn paint_bands(pm: &mut Pixmap, strokes: &[Px]) {
     let (width, height) = (pm.width() as usize, pm.height() as usize);
     let bins = bins(strokes, height);
@@ -49,15 +57,31 @@ pub(super) fn paint_bands(pm: &mut Pixmap, strokes: &[Px]) {
         .collect();
     par::each(&mut bands, |(bin, y0, band)| {
         let y1 = *y0 + band.len() / (4 * width);
-        for (j, &i) in bin.iter().enumerate() {
+        let mut clear = band.len() / 4;
+        for (j, &i) in bin.iter().rev().enumerate() {
             // a band's strokes lie scattered in the depth order: each was a
             // cache miss when fetched only as it was painted
-            if let Some(&ahead) = bin.get(j + PREFETCH) {
+            if let Some(&ahead) = bin.len().checked_sub(j + PREFETCH + 1).map(|k| &bin[k]) {
                 prefetch(&strokes[ahead as usize]);
             }
-            capsule(band, width, *y0, y1, &strokes[i as usize]);
+            clear -= capsule(band, width, *y0, y1, &strokes[i as usize]);
+            if clear == 0 {
+                break; // every pixel of the band is opaque
+            }
         }
     });
+}
+
+/// `pm` (premultiplied, as [`paint_bands`] leaves it) laid over an opaque
+/// `background`: c + bg·(1 − α) per channel, then opaque.
+pub(super) fn over(pm: &mut Pixmap, background: [u8; 3]) {
+    for p in pm.data_mut().chunks_exact_mut(4) {
+        let rem = 255 - u32::from(p[3]);
+        for (c, bg) in p.iter_mut().zip(background) {
+            *c += ((u32::from(bg) * rem + 127) / 255) as u8;
+        }
+        p[3] = 255;
+    }
 }
 
 /// Per band of [`BAND`] rows of an image `height` rows tall, the strokes
@@ -97,13 +121,14 @@ fn prefetch<T>(x: &T) {
     let _ = x;
 }
 
-/// Blends stroke `px` into rows `y0..y1` of a premultiplied RGBA image
-/// `width` pixels wide, held in `band` (see [`paint_bands`]).
-fn capsule(band: &mut [u8], width: usize, y0: usize, y1: usize, px: &Px) {
+/// Lays stroke `px` under what rows `y0..y1` of a premultiplied RGBA
+/// image `width` pixels wide, held in `band`, already hold (see
+/// [`paint_bands`]); returns how many of its pixels it made opaque.
+fn capsule(band: &mut [u8], width: usize, y0: usize, y1: usize, px: &Px) -> usize {
     let (a, b, r) = (px.a, px.b, px.r);
     if !(r.is_finite() && a.0.is_finite() && a.1.is_finite() && b.0.is_finite() && b.1.is_finite())
     {
-        return;
+        return 0;
     }
     let alpha = f32::from(px.alpha);
     let ext = r + 0.5;
@@ -112,21 +137,25 @@ fn capsule(band: &mut [u8], width: usize, y0: usize, y1: usize, px: &Px) {
     let left = (a.0.min(b.0) - ext).floor().max(0.0);
     let right = (a.0.max(b.0) + ext).ceil().min(width as f32);
     if top >= bottom || left >= right {
-        return;
+        return 0;
     }
     let (dx, dy) = (b.0 - a.0, b.1 - a.1);
     let l2 = dx * dx + dy * dy;
     let inv = if l2 > 0.0 { 1.0 / l2 } else { 0.0 };
     let src = px.rgb.map(u32::from);
-    let px_rgb = px.rgb;
     // beyond r + ½ a pixel has no share (min(d + ½, r) ≤ r ≤ max(d − ½, −r));
     // tested on the square distance, a little beyond (the square rounded
     // in f32 stays below it), to skip the square root there
     let far = (ext * 1.001 + 1e-3) * (ext * 1.001 + 1e-3);
+    let mut filled = 0;
     for y in top as usize..bottom as usize {
         let py = y as f32 + 0.5 - a.1;
         let row = &mut band[(y - y0) * width * 4..(y - y0 + 1) * width * 4];
         for x in left as usize..right as usize {
+            let p = &mut row[4 * x..4 * x + 4];
+            if p[3] == 255 {
+                continue; // hidden by what is nearer
+            }
             let px = x as f32 + 0.5 - a.0;
             let t = ((px * dx + py * dy) * inv).clamp(0.0, 1.0);
             let (ex, ey) = (px - t * dx, py - t * dy);
@@ -140,18 +169,14 @@ fn capsule(band: &mut [u8], width: usize, y0: usize, y1: usize, px: &Px) {
             if k == 0 {
                 continue;
             }
-            let p = &mut row[4 * x..4 * x + 4];
-            if k == 255 {
-                // (s·255 + 127) / 255 = s
-                p[..3].copy_from_slice(&px_rgb);
-                p[3] = 255;
-                continue;
+            // under: the share k of what still shows, w = k·(255 − α)
+            let w = k * (255 - u32::from(p[3]));
+            for (c, s) in p.iter_mut().zip(src) {
+                *c += ((s * w + 32_512) / 65_025) as u8;
             }
-            // premultiplied over: the colour and the alpha (255 on an opaque
-            // image stays 255) each dst + (src − dst)·k/255
-            for (c, s) in p.iter_mut().zip(src.into_iter().chain([255])) {
-                *c = ((s * k + u32::from(*c) * (255 - k) + 127) / 255) as u8;
-            }
+            p[3] += ((w + 127) / 255) as u8;
+            filled += usize::from(p[3] == 255);
         }
     }
+    filled
 }
