@@ -92,6 +92,7 @@ pub(crate) fn within_reach(
 /// of the parts, independent of each other ([`Costly`] lists them), so the
 /// application may run them side by side; [`merge`] puts their findings in
 /// one fixed order; each message ends with [`see`].
+#[cfg(any(test, feature = "testing"))]
 pub(crate) fn run(
     recipe: &Recipe,
     paths: &[&Toolpath],
@@ -109,12 +110,12 @@ pub(crate) fn run(
 /// the pattern helix's parameters.
 pub(crate) struct Cheap {
     /// Their findings, in order.
-    pub findings: Vec<Finding>,
+    pub(crate) findings: Vec<Finding>,
     /// The pattern helix's, put last when merged.
-    pub pattern: Vec<Finding>,
+    pub(crate) pattern: Vec<Finding>,
     /// Whether the costly checks may run: no error that is not allowed, and
     /// every point finite and within reach of the geometry.
-    pub geometric: bool,
+    pub(crate) geometric: bool,
 }
 
 /// The cheap checks of `paths`; `allowed` are the codes silenced (an error
@@ -154,15 +155,15 @@ pub(crate) fn cheap(recipe: &Recipe, paths: &[&Toolpath], allowed: &[String]) ->
 #[derive(Default)]
 pub(crate) struct Costly {
     /// Runs of moves too short for the firmware's planner.
-    pub starvation: Vec<Finding>,
+    pub(crate) starvation: Vec<Finding>,
     /// The first layer's hold on the bed.
-    pub first_layer: Vec<Finding>,
+    pub(crate) first_layer: Vec<Finding>,
     /// Strings that rest on nothing, and bridges.
-    pub support: Vec<Finding>,
+    pub(crate) support: Vec<Finding>,
     /// The head meeting printed filament.
-    pub collision: Vec<Finding>,
+    pub(crate) collision: Vec<Finding>,
     /// Each part's footprint on the bed.
-    pub footprints: Vec<first_layer::Footprint>,
+    pub(crate) footprints: Vec<first_layer::Footprint>,
 }
 
 /// Every finding in the one fixed order (the cheap checks', starvation,

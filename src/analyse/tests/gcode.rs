@@ -14,7 +14,7 @@ fn recipe_for(printer: &str) -> Recipe {
         "t.yaml",
     )
     .unwrap();
-    Recipe::resolve(&raw, &[], None, std::path::Path::new(".")).unwrap()
+    crate::recipe::resolve(&raw, &[], None, std::path::Path::new(".")).unwrap()
 }
 
 fn recipe() -> Recipe {

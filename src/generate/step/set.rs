@@ -17,7 +17,7 @@ use crate::base::toolpath::{Band, Event, Toolpath};
 
 /// Where a `set` step's bands are.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Bands {
+pub(crate) enum Bands {
     /// Height bands `every` mm tall from `from`.
     Height {
         /// Where band 0 begins, mm.
@@ -33,9 +33,9 @@ pub enum Bands {
 
 /// A `set` step resolved.
 #[derive(Clone, Debug)]
-pub struct Set {
+pub(crate) struct Set {
     /// Its bands.
-    pub bands: Bands,
+    pub(crate) bands: Bands,
     /// The settings: each value an expression of x, y, z (variables) and
     /// `band` (extra slot 0).
     pub(crate) named: Named<Expr>,
@@ -50,7 +50,12 @@ impl Set {
     /// The settings at `vars` in band `band`, merged as the firmware sets
     /// them (print and travel acceleration in one, the shaper's values in
     /// one …), and the first value given (the band's).
-    pub fn settings(&self, vars: &Vars, band: u32, memo: &mut Memo) -> Result<(Vec<Setting>, f64)> {
+    pub(crate) fn settings(
+        &self,
+        vars: &Vars,
+        band: u32,
+        memo: &mut Memo,
+    ) -> Result<(Vec<Setting>, f64)> {
         let mut first = None;
         let out = self.named.lower(|_, e| {
             let v = e.eval_ext(vars, &[f64::from(band)], memo);
@@ -77,7 +82,7 @@ impl Set {
 
     /// Puts the settings into `tp` before the first extruding string of
     /// each band (after the events already there).
-    pub fn apply(&self, tp: &mut Toolpath) -> Result<()> {
+    pub(crate) fn apply(&self, tp: &mut Toolpath) -> Result<()> {
         let mut memo = Memo::default();
         let mut new: Vec<(usize, Event)> = Vec::new();
         let top = (0..tp.len())

@@ -763,7 +763,6 @@ fn scalar(w: &str, v: Val) -> Op {
 mod tests {
     use super::*;
     use crate::base::toolpath::{Event, Toolpath};
-    use crate::generate::model::Recipe;
     use crate::generate::primitive::Primitive;
 
     fn env() -> Env {
@@ -1286,7 +1285,7 @@ mod tests {
     fn temperature_events_are_checked() {
         let text = "p3dp: 1\nname: t\nparts:\n  - primitive:\n      turtle:\n        program:\n          - {nozzle_temp: 300}\n          - {forward: 10}\n          - {bed_temp: 60}\n          - {bed_temp: 150}\n          - {forward: 10}\n";
         let raw: crate::recipe::RawRecipe = crate::recipe::parse_yaml(text, "t.yaml").unwrap();
-        let r = Recipe::resolve(&raw, &[], None, std::path::Path::new(".")).unwrap();
+        let r = crate::recipe::resolve(&raw, &[], None, std::path::Path::new(".")).unwrap();
         let Primitive::Turtle(t) = &r.parts[0].primitive else {
             panic!()
         };

@@ -15,60 +15,60 @@ use super::step::RawSet;
 /// `turtle:` as written.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct RawTurtle {
+pub(crate) struct RawTurtle {
     /// Start position and frame.
     #[serde(default)]
-    pub start: Option<RawStart>,
+    pub(crate) start: Option<RawStart>,
     /// Seed of `rand()` (0 when absent).
     #[serde(default)]
-    pub seed: Option<Num>,
+    pub(crate) seed: Option<Num>,
     /// Named procedures with parameters, run by `call`.
     #[serde(default)]
-    pub procedures: IndexMap<String, RawProcedure>,
+    pub(crate) procedures: IndexMap<String, RawProcedure>,
     /// The commands, run in order.
-    pub program: Vec<RawCommand>,
+    pub(crate) program: Vec<RawCommand>,
 }
 
 /// `start:` of a turtle.
 #[derive(Clone, Debug, Default, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct RawStart {
+pub(crate) struct RawStart {
     /// Where the turtle starts ([0, 0, 0]).
     #[serde(default)]
-    pub position: Option<Num3>,
+    pub(crate) position: Option<Num3>,
     /// Which way it faces ([1, 0, 0]).
     #[serde(default)]
-    pub heading: Option<Num3>,
+    pub(crate) heading: Option<Num3>,
     /// Its up axis ([0, 0, 1]), made perpendicular to the heading.
     #[serde(default)]
-    pub up: Option<Num3>,
+    pub(crate) up: Option<Num3>,
 }
 
 /// A procedure: parameter names and a body.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct RawProcedure {
+pub(crate) struct RawProcedure {
     /// Parameter names, bound in order to a call's `args`.
     #[serde(default)]
-    pub params: Vec<String>,
+    pub(crate) params: Vec<String>,
     /// The commands.
     #[serde(rename = "do")]
-    pub body: Vec<RawCommand>,
+    pub(crate) body: Vec<RawCommand>,
 }
 
 /// `lsystem:` as written.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct RawLsystem {
+pub(crate) struct RawLsystem {
     /// The starting word.
-    pub axiom: String,
+    pub(crate) axiom: String,
     /// Rewriting rules: one symbol → its replacement, applied to every symbol at once.
     #[serde(default)]
-    pub rules: IndexMap<String, String>,
+    pub(crate) rules: IndexMap<String, String>,
     /// How many times the rules are applied (may use loop counters).
-    pub iterations: Num,
+    pub(crate) iterations: Num,
     /// What each symbol of the final word does.
-    pub commands: IndexMap<String, Vec<RawCommand>>,
+    pub(crate) commands: IndexMap<String, Vec<RawCommand>>,
 }
 
 /// One command as written: a one-key map (`{forward: 10}`) with, for a few
@@ -76,7 +76,7 @@ pub struct RawLsystem {
 /// `wait`), or a bare word (`pen_up`).
 #[derive(Clone, Debug, PartialEq)]
 #[allow(missing_docs)]
-pub enum RawCommand {
+pub(crate) enum RawCommand {
     /// A command without a value: `pen_up`, `pen_down`, `pause`, `push`, `pop`, `draw_turtle`.
     Bare(&'static str),
     /// A command with one number: movement, turns, settings, events.

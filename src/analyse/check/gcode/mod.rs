@@ -563,8 +563,7 @@ impl Checker {
             Command::FirmwareRetract { .. }
             | Command::Progress { .. }
             | Command::Object(_)
-            | Command::Pause
-            | Command::Comment(_) => Ok(()),
+            | Command::Pause => Ok(()),
             Command::Other(_) => Ok(()),
         }
     }

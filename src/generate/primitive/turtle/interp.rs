@@ -33,9 +33,9 @@ pub(crate) const DEFAULT_HAIR_RATE: f64 = 0.01;
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Limits {
     /// Most strings plus events (the recipe's `max_strings`).
-    pub max_strings: u64,
+    pub(crate) max_strings: u64,
     /// Most steps (commands run and L-system symbols visited).
-    pub max_steps: u64,
+    pub(crate) max_steps: u64,
 }
 
 /// The check of a recipe's own printer command for its printer and
@@ -47,19 +47,19 @@ pub(crate) type Check<'a> = &'a dyn Fn(&str) -> std::result::Result<(), String>;
 #[derive(Clone, Debug)]
 pub(crate) struct Program {
     /// The start frame.
-    pub start: Frame,
+    pub(crate) start: Frame,
     /// Seed of `rand()`.
-    pub seed: u64,
+    pub(crate) seed: u64,
     /// The commands.
-    pub main: Vec<Cmd>,
+    pub(crate) main: Vec<Cmd>,
     /// The procedures, by number.
-    pub procs: Vec<Proc>,
+    pub(crate) procs: Vec<Proc>,
     /// A `path`'s commands rather than a turtle's: the path starts where
     /// its first movement goes when that travels (a `move`, a movement
     /// with the pen up) or is a curve's first point, instead of drawing or
     /// travelling there from `start`; a `pen_up` before anything is drawn
     /// retracts nothing.
-    pub path: bool,
+    pub(crate) path: bool,
 }
 
 /// The state of one run.
@@ -142,9 +142,9 @@ impl ForValues {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct Counts {
     /// Strings made.
-    pub strings: u64,
+    pub(crate) strings: u64,
     /// Events made.
-    pub events: u64,
+    pub(crate) events: u64,
 }
 
 impl Program {

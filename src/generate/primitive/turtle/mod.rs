@@ -30,30 +30,30 @@ use crate::base::toolpath::Toolpath;
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Env {
     /// The part's cross-section, mm² (until the program sets one).
-    pub cross_section: f64,
+    pub(crate) cross_section: f64,
     /// The part's speed, mm/s (until the program sets one).
-    pub speed: f64,
+    pub(crate) speed: f64,
     /// Filament cross-section area, mm² (turns `extrude_rate` into mm²).
-    pub filament_area: f64,
+    pub(crate) filament_area: f64,
     /// The recipe's `max_strings`: most strings plus events.
-    pub max_strings: u64,
+    pub(crate) max_strings: u64,
 }
 
 /// A turtle's program, already run: its strings and events.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Turtle {
+pub(crate) struct Turtle {
     /// The strings and events the program made.
-    pub path: Toolpath,
+    pub(crate) path: Toolpath,
 }
 
 impl Turtle {
     /// How many strings it made.
-    pub fn string_count(&self) -> u64 {
+    pub(crate) fn string_count(&self) -> u64 {
         self.path.len() as u64
     }
 
     /// Its strings (the part's c and v were applied when it ran).
-    pub fn build(&self) -> Toolpath {
+    pub(crate) fn build(&self) -> Toolpath {
         self.path.clone()
     }
 

@@ -13,12 +13,12 @@ use crate::base::gcode::named::Named;
 #[derive(Clone, Debug)]
 pub(crate) struct Val {
     /// The expression.
-    pub expr: Expr,
+    pub(crate) expr: Expr,
     /// Names of the loop counters and procedure parameters in scope, in slot order.
-    pub scope: Arc<Vec<String>>,
+    pub(crate) scope: Arc<Vec<String>>,
     /// Whether it reads the turtle's state ([`STATE`]), in the slots after
     /// the scope's.
-    pub reads_state: bool,
+    pub(crate) reads_state: bool,
 }
 
 /// The turtle's state an expression may read, as functions of no arguments
@@ -187,16 +187,16 @@ pub(crate) enum Curve {
 #[derive(Clone, Debug)]
 pub(crate) struct Cmd {
     /// Key path, e.g. `program[3].do[1].forward`.
-    pub place: String,
+    pub(crate) place: String,
     /// What it does.
-    pub op: Op,
+    pub(crate) op: Op,
 }
 
 /// A compiled procedure.
 #[derive(Clone, Debug)]
 pub(crate) struct Proc {
     /// Its name.
-    pub name: String,
+    pub(crate) name: String,
     /// Its body (its parameters are the first slots).
-    pub body: Vec<Cmd>,
+    pub(crate) body: Vec<Cmd>,
 }
