@@ -17,6 +17,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use p3dp::pipeline::{self, Threads};
+use p3dp::testing::Insides;
 
 fn peak_rss_mb() -> Option<f64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
@@ -43,7 +44,7 @@ fn main() {
         let t0 = Instant::now();
         let stats = pipeline::run(threads, || {
             let mut plan = p3dp::prepare(&recipe, &opts).expect("plan");
-            strings = plan.paths.iter().map(|p| p.len()).sum::<usize>();
+            strings = plan.paths().iter().map(|p| p.len()).sum::<usize>();
             let file = std::fs::File::create(&out).expect("temp file");
             let job = pipeline::Job {
                 check: Some((&[], pipeline::Stop::Never)),

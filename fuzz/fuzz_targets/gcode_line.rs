@@ -4,4 +4,4 @@
 
 use libfuzzer_sys::fuzz_target;
 
-fuzz_target!(|data: &[u8]| p3dp::fuzzing::gcode_line(data));
+fuzz_target!(|data: &[u8]| p3dp::testing::fuzz::gcode_line(data));

@@ -4,4 +4,4 @@
 
 use libfuzzer_sys::fuzz_target;
 
-fuzz_target!(|data: &[u8]| p3dp::fuzzing::image(data));
+fuzz_target!(|data: &[u8]| p3dp::testing::fuzz::image(data));

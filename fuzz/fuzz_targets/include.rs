@@ -6,4 +6,4 @@
 
 use libfuzzer_sys::fuzz_target;
 
-fuzz_target!(|data: &[u8]| p3dp::fuzzing::include(data));
+fuzz_target!(|data: &[u8]| p3dp::testing::fuzz::include(data));

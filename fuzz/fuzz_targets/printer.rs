@@ -3,4 +3,4 @@
 
 use libfuzzer_sys::fuzz_target;
 
-fuzz_target!(|data: &[u8]| p3dp::fuzzing::printer(data));
+fuzz_target!(|data: &[u8]| p3dp::testing::fuzz::printer(data));

@@ -3,7 +3,7 @@
 
 use libfuzzer_sys::fuzz_target;
 
-fuzz_target!(|data: &[u8]| p3dp::fuzzing::recipe(
+fuzz_target!(|data: &[u8]| p3dp::testing::fuzz::recipe(
     data,
     &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../recipes")
 ));

@@ -20,25 +20,27 @@ use crate::machine::{Flavor, Printer};
 /// A print's start and end G-code, expanded and checked: each line as it
 /// is written, and what its firmware reads in it.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct Frame {
+pub(crate) struct Frame {
     /// Before the first part.
-    pub start: Vec<Verbatim>,
+    pub(crate) start: Vec<Verbatim>,
     /// After the last part.
-    pub end: Vec<Verbatim>,
+    pub(crate) end: Vec<Verbatim>,
 }
 
+#[cfg(any(test, feature = "testing"))]
 impl Frame {
     /// The start G-code as it is written, a line feed after each line.
-    pub fn start_text(&self) -> String {
+    pub(crate) fn start_text(&self) -> String {
         lines(&self.start)
     }
 
     /// The end G-code as it is written, a line feed after each line.
-    pub fn end_text(&self) -> String {
+    pub(crate) fn end_text(&self) -> String {
         lines(&self.end)
     }
 }
 
+#[cfg(any(test, feature = "testing"))]
 fn lines(v: &[Verbatim]) -> String {
     v.iter().map(|l| format!("{}\n", l.text)).collect()
 }
@@ -765,7 +767,7 @@ mod tests {
     fn recipe(material: &str) -> Recipe {
         let text = format!("p3dp: 1\nname: t\nmaterial: {material}\nparts:\n  - primitive: {{helix: {{radius: 10, height: 2, pitch: 0.5}}}}\n");
         let raw: crate::recipe::RawRecipe = crate::recipe::parse_yaml(&text, "t.yaml").unwrap();
-        Recipe::resolve(&raw, &[], None, std::path::Path::new(".")).unwrap()
+        crate::recipe::resolve(&raw, &[], None, std::path::Path::new(".")).unwrap()
     }
 
     /// Every variable the two tables list has a value (a built-in

@@ -13,35 +13,31 @@ pub struct Plan {
     /// The recipe file as given.
     pub path: String,
     /// The resolved recipe.
-    pub recipe: Recipe,
+    pub(crate) recipe: Recipe,
     /// Skirt, then parts, in print order.
-    pub paths: Vec<Toolpath>,
+    pub(crate) paths: Vec<Toolpath>,
     /// What the checks found.
     pub findings: Vec<Finding>,
     /// Each part's hold on the bed, as the first-layer check measured it.
-    pub footprints: Vec<check::first_layer::Footprint>,
+    pub(crate) footprints: Vec<check::first_layer::Footprint>,
     /// The start and end G-code, expanded and checked: what the writer writes.
-    pub frame: Frame,
+    pub(crate) frame: Frame,
     /// Why the start or end G-code is unsafe or cannot be expanded, if it
     /// is: raised by [`Plan::frame_ok`] when the G-code is written or the
     /// checks pass, so that the recipe's own findings come first (a
     /// material hotter than the printer allows is its check's finding
     /// before it is the start G-code's `M104`).
-    pub frame_error: Option<crate::base::error::Error>,
+    pub(crate) frame_error: Option<crate::base::error::Error>,
     /// The heights and the first layer of the strings, measured once.
     pub(crate) extent: crate::analyse::frame::Extent,
 }
 
-/// What the checks of a plan found: its findings (those `allow`ed already
-/// marked) and the parts' footprints.
-pub(crate) type Checked = (Vec<Finding>, Vec<check::first_layer::Footprint>);
-
 impl Plan {
     /// A plan of `paths` (skirt first) of `recipe`, read from `path`, its
     /// checks not yet run; the profile's start and end G-code expanded and
-    /// checked now (see [`crate::analyse::frame`]): an error if unsafe,
+    /// checked now (see `analyse::frame`): an error if unsafe,
     /// kept in `frame_error` (see [`Plan::frame_ok`]).
-    pub fn new(path: String, recipe: Recipe, paths: Vec<Toolpath>) -> Result<Plan> {
+    pub(crate) fn new(path: String, recipe: Recipe, paths: Vec<Toolpath>) -> Result<Plan> {
         let extent = crate::analyse::frame::extent(&recipe, &paths);
         let (frame, frame_error) = match crate::analyse::frame::frame(&recipe, &extent) {
             Ok(f) => (f, None),
@@ -61,31 +57,21 @@ impl Plan {
 
     /// The start and end G-code's error, if any: nothing may be written
     /// from a plan whose frame failed.
-    pub fn frame_ok(&self) -> Result<()> {
+    pub(crate) fn frame_ok(&self) -> Result<()> {
         match &self.frame_error {
             Some(e) => Err(e.clone()),
             None => Ok(()),
         }
     }
 
-    /// Every check, one after the other (see [`check::run`]), `allow` (the
-    /// command line's `--allow`) silencing codes beside the recipe's own;
-    /// the plan is not changed.
-    pub fn checks(&self, allow: &[String]) -> Checked {
-        let refs: Vec<&Toolpath> = self.paths.iter().collect();
-        let (mut findings, footprints) = check::run(&self.recipe, &refs, &self.allowed(allow));
-        self.silence(&mut findings, allow);
-        (findings, footprints)
-    }
-
     /// The codes silenced: the recipe's `allow`, then the command line's.
-    pub fn allowed(&self, allow: &[String]) -> Vec<String> {
+    pub(crate) fn allowed(&self, allow: &[String]) -> Vec<String> {
         self.recipe.allow.iter().chain(allow).cloned().collect()
     }
 
     /// Marks the findings of the codes the recipe and `allow` silence (and,
     /// on a plate, the codes each object's recipe silences in its own parts).
-    pub fn silence(&self, findings: &mut Vec<Finding>, allow: &[String]) {
+    pub(crate) fn silence(&self, findings: &mut Vec<Finding>, allow: &[String]) {
         check::apply_allow(findings, &self.recipe.allow);
         check::apply_allow(findings, allow);
         for o in self.recipe.objects.iter().filter(|o| !o.allow.is_empty()) {
@@ -101,7 +87,7 @@ impl Plan {
     /// The objects of the print, each a name and its paths `first..end` in
     /// print order: a plate's objects, or each path of a recipe on its own
     /// (the hosts' object labels, a package's object list).
-    pub fn objects(&self) -> Vec<(String, std::ops::Range<usize>)> {
+    pub(crate) fn objects(&self) -> Vec<(String, std::ops::Range<usize>)> {
         if self.recipe.objects.is_empty() {
             return (0..self.paths.len())
                 .map(|k| (self.paths[k].name.clone(), k..k + 1))
@@ -112,14 +98,6 @@ impl Plan {
             .iter()
             .map(|o| (o.name.clone(), o.paths.clone()))
             .collect()
-    }
-
-    /// Highest point of any part, recipe coordinates.
-    pub fn top_z(&self) -> f64 {
-        self.paths
-            .iter()
-            .flat_map(|t| t.points.iter().map(|p| p.z))
-            .fold(0.0, f64::max)
     }
 
     /// The findings that fail the build: errors, and warnings when `strict`.

@@ -12,34 +12,34 @@ use crate::generate::primitive::Primitive;
 
 /// What the written moves add up to; the stats report is made from it.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct MoveStats {
+pub(crate) struct MoveStats {
     /// G1 moves that extrude.
-    pub extrude_moves: u64,
+    pub(crate) extrude_moves: u64,
     /// G0 moves.
-    pub travel_moves: u64,
+    pub(crate) travel_moves: u64,
     /// Length of extruding moves, mm.
-    pub extrude_length: f64,
+    pub(crate) extrude_length: f64,
     /// Length of travel moves, mm (the first move from home is not counted).
-    pub travel_length: f64,
+    pub(crate) travel_length: f64,
     /// Filament fed, mm (exact, before rounding).
-    pub filament: f64,
+    pub(crate) filament: f64,
     /// Extruded volume, mm³.
-    pub volume: f64,
+    pub(crate) volume: f64,
     /// Estimated printing time, s: the planner's (see [`crate::analyse::planner`]).
-    pub time: f64,
+    pub(crate) time: f64,
     /// The planner's estimate in full: planned, ideal and nominal times of
     /// the print and of each part.
-    pub estimate: crate::analyse::planner::Estimate,
+    pub(crate) estimate: crate::analyse::planner::Estimate,
     /// Lowest corner of the extruding moves, recipe coordinates.
-    pub bbox_min: DVec3,
+    pub(crate) bbox_min: DVec3,
     /// Highest corner of the extruding moves, recipe coordinates.
-    pub bbox_max: DVec3,
+    pub(crate) bbox_max: DVec3,
     /// Highest volumetric flow of any extruding move, mm³/s.
-    pub max_flow: f64,
+    pub(crate) max_flow: f64,
     /// Strings that were merged into longer moves.
-    pub merged_strings: u64,
+    pub(crate) merged_strings: u64,
     /// Retractions made.
-    pub retractions: u64,
+    pub(crate) retractions: u64,
 }
 
 /// Corners of the bounding box of the extruding moves, recipe coordinates.
@@ -198,7 +198,7 @@ pub(crate) fn bands(paths: &[crate::base::toolpath::Toolpath]) -> Vec<BandStats>
 impl Stats {
     /// The stats of `plan`'s G-code, written with `moves`, its SHA-256 hex
     /// `digest` (empty when not hashed) and size in bytes.
-    pub fn of(plan: &Plan, moves: &MoveStats, digest: String, bytes: u64) -> Stats {
+    pub(crate) fn of(plan: &Plan, moves: &MoveStats, digest: String, bytes: u64) -> Stats {
         let parts = plan
             .paths
             .iter()
@@ -256,7 +256,7 @@ fn objects(plan: &Plan, parts: &[PartStats]) -> Vec<ObjectStats> {
 impl Stats {
     /// Assembles the stats of one build.
     #[allow(clippy::too_many_arguments)]
-    pub fn new(
+    pub(crate) fn new(
         recipe_path: &str,
         recipe: &Recipe,
         m: &MoveStats,
@@ -371,7 +371,7 @@ impl Stats {
     }
 
     /// The short human report printed after a build.
-    pub fn report(&self, output: &str) -> String {
+    pub(crate) fn report(&self, output: &str) -> String {
         let b = &self.bbox;
         let size = [0, 1, 2].map(|k| b.max[k] - b.min[k]);
         let mut s = format!(

@@ -12,14 +12,14 @@ pub(crate) use crate::recipe::params::parse_sweep;
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct Job {
     /// The recipe file.
-    pub recipe: PathBuf,
+    pub(crate) recipe: PathBuf,
     /// `--set` overrides, sweep values last.
-    pub sets: Vec<(String, String)>,
+    pub(crate) sets: Vec<(String, String)>,
     /// This variant's sweep values, in `--sweep` order.
-    pub sweep: Vec<(String, String)>,
+    pub(crate) sweep: Vec<(String, String)>,
     /// The printer it is built for in place of the recipe's (a lock entry's);
     /// `--printer` overrides it.
-    pub printer: Option<String>,
+    pub(crate) printer: Option<String>,
 }
 
 /// Most builds one command may make: recipes × the product of the sweeps.

@@ -20,12 +20,12 @@ use crate::recipe::parse_set;
 pub struct Cli {
     /// The command to run.
     #[command(subcommand)]
-    pub command: Command,
+    pub(crate) command: Command,
 }
 
 /// The commands.
 #[derive(Subcommand, Debug)]
-pub enum Command {
+pub(crate) enum Command {
     /// Write G-code (default ./NAME.gcode) and print a stats report.
     Build(BuildArgs),
     /// Build a calibration print of the gallery for a printer and material (`--list`), or write the value read off one into a profile (`calibrate apply`).
@@ -80,15 +80,15 @@ pub enum Command {
 
 /// `p3dp printers [list FILE | import FILE …]`.
 #[derive(Args, Clone, Debug, Default)]
-pub struct PrintersArgs {
+pub(crate) struct PrintersArgs {
     /// What to do; without it, list the built-in profiles.
     #[command(subcommand)]
-    pub action: Option<PrintersAction>,
+    pub(crate) action: Option<PrintersAction>,
 }
 
 /// The actions of `p3dp printers`.
 #[derive(Subcommand, Clone, Debug)]
-pub enum PrintersAction {
+pub(crate) enum PrintersAction {
     /// List the printer (or, with --filaments, filament) presets of a slicer's file: a PrusaSlicer/SuperSlicer .ini (bundle or exported config) or an OrcaSlicer/Bambu Studio .json.
     List {
         /// The preset file.
@@ -117,33 +117,33 @@ pub enum PrintersAction {
 
 /// What every build takes: params, the printer, the checks silenced.
 #[derive(Args, Clone, Debug, Default)]
-pub struct RecipeFlags {
+pub(crate) struct RecipeFlags {
     /// Override a param: NAME=VALUE (VALUE may be an expression); repeatable.
     #[arg(long = "set", value_name = "NAME=VALUE")]
-    pub sets: Vec<String>,
+    pub(crate) sets: Vec<String>,
     /// Use this printer (built-in name, YAML file, or a slicer's single-preset FILE.ini|FILE.json) instead of the recipe's.
     #[arg(long, value_name = "NAME|FILE")]
-    pub printer: Option<String>,
+    pub(crate) printer: Option<String>,
     /// Use this slicer's filament preset (a PrusaSlicer .ini bundle or exported config, an OrcaSlicer/Bambu Studio .json) instead of the recipe's material: temperatures, diameter, density, flow limit, and the filament's values for the start and end G-code.
     #[arg(long, value_name = "FILE.ini|FILE.json")]
-    pub filament: Option<PathBuf>,
+    pub(crate) filament: Option<PathBuf>,
     /// The filament preset of a bundle (`p3dp printers list FILE --filaments` lists them).
     #[arg(long, value_name = "NAME", requires = "filament")]
-    pub filament_preset: Option<String>,
+    pub(crate) filament_preset: Option<String>,
     /// Silence a check for this build: its code, e.g. `bridge`; repeatable.
     #[arg(long = "allow", value_name = "CODE")]
-    pub allow: Vec<String>,
+    pub(crate) allow: Vec<String>,
     /// Let the recipe read files below DIR too (it reads only below its project: the folder holding p3dp.lock or .git, else its own); repeatable.
     #[arg(long = "allow-read", value_name = "DIR")]
-    pub allow_read: Vec<PathBuf>,
+    pub(crate) allow_read: Vec<PathBuf>,
 }
 
 /// The thread budget.
 #[derive(Args, Clone, Copy, Debug, Default)]
-pub struct JobsFlag {
+pub(crate) struct JobsFlag {
     /// At most N threads in all (default: one per core; at most 4 per core are used); the output is the same on any number.
     #[arg(short = 'j', long = "jobs", value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
-    pub jobs: Option<u16>,
+    pub(crate) jobs: Option<u16>,
 }
 
 impl JobsFlag {
@@ -156,25 +156,25 @@ impl JobsFlag {
 
 /// The flags of the commands that build many recipes and sweeps.
 #[derive(Args, Clone, Debug, Default)]
-pub struct BatchFlags {
+pub(crate) struct BatchFlags {
     /// Recipe files (YAML).
     #[arg(value_name = "RECIPE")]
-    pub recipes: Vec<PathBuf>,
+    pub(crate) recipes: Vec<PathBuf>,
     /// Build every combination of values: NAME=v1,v2,…, NAME=a..b:step or NAME=a..b (step 1); repeatable.
     #[arg(long = "sweep", value_name = "NAME=VALUES")]
-    pub sweeps: Vec<String>,
+    pub(crate) sweeps: Vec<String>,
     /// Warnings fail the build too.
     #[arg(long)]
-    pub strict: bool,
+    pub(crate) strict: bool,
     /// Write even when checks fail.
     #[arg(long)]
-    pub force: bool,
+    pub(crate) force: bool,
     /// Params, printer and checks.
     #[command(flatten)]
-    pub recipe: RecipeFlags,
+    pub(crate) recipe: RecipeFlags,
     /// Threads.
     #[command(flatten)]
-    pub jobs: JobsFlag,
+    pub(crate) jobs: JobsFlag,
 }
 
 impl BatchFlags {
@@ -223,57 +223,57 @@ impl RecipeFlags {
 
 /// Flags of `build`.
 #[derive(Args, Clone, Debug, Default)]
-pub struct BuildArgs {
+pub(crate) struct BuildArgs {
     /// Shared flags.
     #[command(flatten)]
-    pub batch: BatchFlags,
+    pub(crate) batch: BatchFlags,
     /// Output file (NAME.bgcode: Prusa's binary G-code; NAME.gcode.3mf: Bambu's package); a folder with several recipes; `-` for standard output.
     #[arg(short, long, value_name = "OUT")]
-    pub output: Option<String>,
+    pub(crate) output: Option<String>,
     /// Also write the stats as JSON to FILE.
     #[arg(long, value_name = "FILE")]
-    pub stats_json: Option<PathBuf>,
+    pub(crate) stats_json: Option<PathBuf>,
     /// Also write the cell array of the recipe's ca_helix as a PNG: one row per layer, filled cells dark.
     #[arg(long, value_name = "FILE")]
-    pub pattern: Option<PathBuf>,
+    pub(crate) pattern: Option<PathBuf>,
     /// Also write a preview of the build: FILE.png (an image) or FILE.html (a 3D viewer).
     #[arg(long, value_name = "FILE")]
-    pub preview: Option<PathBuf>,
+    pub(crate) preview: Option<PathBuf>,
     /// Also write the z-buffer of the recipe's solid parts as JSON: each section's loops of lines and arcs, each layer's section.
     #[arg(long, value_name = "FILE")]
-    pub zbuffer: Option<PathBuf>,
+    pub(crate) zbuffer: Option<PathBuf>,
     /// Also draw one layer of the solid parts' z-buffer (--zbuffer-layer, default 1) as SVG: exact loops, perimeters, infill boundary.
     #[arg(long, value_name = "FILE")]
-    pub zbuffer_svg: Option<PathBuf>,
+    pub(crate) zbuffer_svg: Option<PathBuf>,
     /// The layer --zbuffer-svg draws: 1 for the first on the bed.
     #[arg(long, value_name = "N")]
-    pub zbuffer_layer: Option<u64>,
+    pub(crate) zbuffer_layer: Option<u64>,
 }
 
 /// Flags of `calibrate`.
 #[derive(Args, Clone, Debug, Default)]
 #[command(args_conflicts_with_subcommands = true)]
-pub struct CalibrateArgs {
+pub(crate) struct CalibrateArgs {
     /// `apply`: write a band's value into a profile.
     #[command(subcommand)]
-    pub action: Option<CalibrateAction>,
+    pub(crate) action: Option<CalibrateAction>,
     /// List the tests.
     #[arg(long)]
-    pub list: bool,
+    pub(crate) list: bool,
     /// The test (see --list).
     #[arg(value_name = "TEST")]
-    pub test: Option<String>,
+    pub(crate) test: Option<String>,
     /// The material (a built-in's name; its range of values by default).
     #[arg(long, value_name = "NAME")]
-    pub material: Option<String>,
+    pub(crate) material: Option<String>,
     /// `build`'s flags (--set start=… end=… step=…, --printer, -o, --stats-json, --preview …).
     #[command(flatten)]
-    pub build: BuildArgs,
+    pub(crate) build: BuildArgs,
 }
 
 /// `calibrate apply`.
 #[derive(clap::Subcommand, Clone, Debug)]
-pub enum CalibrateAction {
+pub(crate) enum CalibrateAction {
     /// Write the value of a band of a printed test into a profile that inherits the printer.
     Apply {
         /// The test.
@@ -307,76 +307,76 @@ pub enum CalibrateAction {
 
 /// Flags of `plate`.
 #[derive(Args, Clone, Debug, Default)]
-pub struct PlateArgs {
+pub(crate) struct PlateArgs {
     /// The recipes to put on the bed, in print order: RECIPE, or RECIPE*N for N copies.
     #[arg(value_name = "RECIPE[*N]", required = true)]
-    pub recipes: Vec<String>,
+    pub(crate) recipes: Vec<String>,
     /// The plate's name: the G-code's, and the file's (NAME.gcode).
     #[arg(long, value_name = "NAME", default_value = "plate")]
-    pub name: String,
+    pub(crate) name: String,
     /// Variants on the plate: NAME=v1,v2,…, NAME=a..b:step or NAME=a..b; every recipe goes on once per combination (each N times); repeatable.
     #[arg(long = "sweep", value_name = "NAME=VALUES")]
-    pub sweeps: Vec<String>,
+    pub(crate) sweeps: Vec<String>,
     /// Warnings fail the build too.
     #[arg(long)]
-    pub strict: bool,
+    pub(crate) strict: bool,
     /// Write even when checks fail.
     #[arg(long)]
-    pub force: bool,
+    pub(crate) force: bool,
     /// Params (every recipe's), printer and checks.
     #[command(flatten)]
-    pub recipe: RecipeFlags,
+    pub(crate) recipe: RecipeFlags,
     /// Threads.
     #[command(flatten)]
-    pub jobs: JobsFlag,
+    pub(crate) jobs: JobsFlag,
     /// Output file (NAME.bgcode: Prusa's binary G-code; NAME.gcode.3mf: Bambu's package); `-` for standard output.
     #[arg(short, long, value_name = "OUT")]
-    pub output: Option<String>,
+    pub(crate) output: Option<String>,
     /// Also write the stats as JSON to FILE.
     #[arg(long, value_name = "FILE")]
-    pub stats_json: Option<PathBuf>,
+    pub(crate) stats_json: Option<PathBuf>,
     /// Also write a preview of the plate: FILE.png (an image) or FILE.html (a 3D viewer).
     #[arg(long, value_name = "FILE")]
-    pub preview: Option<PathBuf>,
+    pub(crate) preview: Option<PathBuf>,
 }
 
 /// Flags of `send`.
 #[derive(Args, Clone, Debug, Default)]
-pub struct SendArgs {
+pub(crate) struct SendArgs {
     /// The files to upload (G-code, .bgcode, .gcode.3mf), in order.
     #[arg(value_name = "FILE", required = true)]
-    pub files: Vec<PathBuf>,
+    pub(crate) files: Vec<PathBuf>,
     /// The host's base URL: http://HOST[:PORT] (Moonraker's port is usually 7125); the API key goes in P3DP_API_KEY.
     #[arg(long, value_name = "URL")]
-    pub to: String,
+    pub(crate) to: String,
     /// Start printing the last file once it is uploaded.
     #[arg(long)]
-    pub print: bool,
+    pub(crate) print: bool,
     /// The host's software, when asking it does not tell.
     #[arg(long, value_name = "HOST", value_parser = ["moonraker", "octoprint", "prusalink"])]
-    pub host: Option<String>,
+    pub(crate) host: Option<String>,
     /// Seconds the host may stay silent (connecting, each write of the upload, its answer), 1 to 3600.
     #[arg(long, value_name = "S", default_value_t = 60)]
-    pub timeout: u64,
+    pub(crate) timeout: u64,
 }
 
 /// Flags of `hash`.
 #[derive(Args, Clone, Debug, Default)]
-pub struct HashArgs {
+pub(crate) struct HashArgs {
     /// Shared flags.
     #[command(flatten)]
-    pub batch: BatchFlags,
+    pub(crate) batch: BatchFlags,
     /// Write the hashes (with recipe paths and --set values) to a lock file; an existing lock keeps its other entries.
     #[arg(long, value_name = "FILE", conflicts_with = "check")]
-    pub lock: Option<PathBuf>,
+    pub(crate) lock: Option<PathBuf>,
     /// Rebuild every entry of a lock file; exit 1 naming each that changed.
     #[arg(long, value_name = "FILE")]
-    pub check: Option<PathBuf>,
+    pub(crate) check: Option<PathBuf>,
 }
 
 /// Where a preview looks from.
 #[derive(ValueEnum, Clone, Copy, Debug, Default)]
-pub enum ViewArg {
+pub(crate) enum ViewArg {
     /// From above, a corner: the default.
     #[default]
     Iso,
@@ -390,7 +390,7 @@ pub enum ViewArg {
 
 /// What a preview's colours show.
 #[derive(ValueEnum, Clone, Copy, Debug, Default)]
-pub enum ColorArg {
+pub(crate) enum ColorArg {
     /// Speed, mm/s: the default.
     #[default]
     Speed,
@@ -413,68 +413,68 @@ fn size(s: &str) -> std::result::Result<Size, String> {
 
 /// Flags of `preview`.
 #[derive(Args, Clone, Debug, Default)]
-pub struct PreviewArgs {
+pub(crate) struct PreviewArgs {
     /// Recipe file (YAML).
     #[arg(value_name = "RECIPE")]
-    pub recipe: PathBuf,
+    pub(crate) recipe: PathBuf,
     /// Params, printer and checks.
     #[command(flatten)]
-    pub flags: RecipeFlags,
+    pub(crate) flags: RecipeFlags,
     /// Output: FILE.png or FILE.html (default ./NAME.png).
     #[arg(short, long, value_name = "FILE")]
-    pub output: Option<PathBuf>,
+    pub(crate) output: Option<PathBuf>,
     /// Where to look from (the viewer starts there).
     #[arg(long, value_name = "VIEW", value_enum, default_value_t)]
-    pub view: ViewArg,
+    pub(crate) view: ViewArg,
     /// What the colours show.
     #[arg(long, value_name = "MODE", value_enum, default_value_t)]
-    pub color: ColorArg,
+    pub(crate) color: ColorArg,
     /// Image size WIDTHxHEIGHT in pixels (PNG; default 1200x900).
     #[arg(long, value_name = "WxH", value_parser = size)]
-    pub size: Option<Size>,
+    pub(crate) size: Option<Size>,
     /// The model alone: no name, stats or legend (PNG).
     #[arg(long)]
-    pub bare: bool,
+    pub(crate) bare: bool,
     /// Threads.
     #[command(flatten)]
-    pub jobs: JobsFlag,
+    pub(crate) jobs: JobsFlag,
 }
 
 /// Flags of `mesh`.
 #[derive(Args, Clone, Debug, Default)]
-pub struct MeshArgs {
+pub(crate) struct MeshArgs {
     /// Recipe file (YAML).
     #[arg(value_name = "RECIPE")]
-    pub recipe: PathBuf,
+    pub(crate) recipe: PathBuf,
     /// Params, printer and checks.
     #[command(flatten)]
-    pub flags: RecipeFlags,
+    pub(crate) flags: RecipeFlags,
     /// Output: FILE.stl (binary), FILE.3mf (with the filament colour) or FILE.obj (default ./NAME.stl).
     #[arg(short, long, value_name = "FILE")]
-    pub output: Option<PathBuf>,
+    pub(crate) output: Option<PathBuf>,
     /// Threads.
     #[command(flatten)]
-    pub jobs: JobsFlag,
+    pub(crate) jobs: JobsFlag,
 }
 
 /// Flags of `watch`.
 #[derive(Args, Clone, Debug, Default)]
-pub struct WatchArgs {
+pub(crate) struct WatchArgs {
     /// Recipe file (YAML).
     #[arg(value_name = "RECIPE")]
-    pub recipe: PathBuf,
+    pub(crate) recipe: PathBuf,
     /// Params, printer and checks.
     #[command(flatten)]
-    pub flags: RecipeFlags,
+    pub(crate) flags: RecipeFlags,
     /// Threads of each build.
     #[command(flatten)]
-    pub jobs: JobsFlag,
+    pub(crate) jobs: JobsFlag,
     /// The port on 127.0.0.1 (loopback only) to serve on; 0 takes any free one.
     #[arg(long, value_name = "N", default_value_t = crate::app::watch::DEFAULT_PORT)]
-    pub port: u16,
+    pub(crate) port: u16,
     /// Open the page in the system's web browser.
     #[arg(long)]
-    pub open: bool,
+    pub(crate) open: bool,
 }
 
 /// The errors of one command's plain options, or what running it met.
@@ -551,6 +551,7 @@ fn build(a: &BuildArgs) -> Result<Vec<Error>> {
         zbuffer: a.zbuffer.clone(),
         zbuffer_svg: a.zbuffer_svg.clone(),
         zbuffer_layer: a.zbuffer_layer,
+        shown: None,
     };
     Ok(pipeline::run(a.batch.jobs.threads(), || {
         command::build::run(&opts)
@@ -615,6 +616,7 @@ fn calibrate(a: CalibrateArgs) -> Result<Vec<Error>> {
             zbuffer: b.zbuffer.clone(),
             zbuffer_svg: b.zbuffer_svg.clone(),
             zbuffer_layer: b.zbuffer_layer,
+            shown: None,
         },
     };
     Ok(pipeline::run(b.batch.jobs.threads(), || {

@@ -17,11 +17,11 @@ use crate::base::error::{Error, Kind};
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct Span {
     /// Line, 1-based.
-    pub line: usize,
+    pub(crate) line: usize,
     /// First byte of the span in the line.
-    pub start: usize,
+    pub(crate) start: usize,
     /// One past its last byte.
-    pub end: usize,
+    pub(crate) end: usize,
 }
 
 /// Whether standard error takes colour: a terminal, and `NO_COLOR` unset.

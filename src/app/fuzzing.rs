@@ -11,7 +11,7 @@ use crate::base::input::{check_nesting, decode, Reads, MAX_IMAGE_PIXELS};
 use crate::base::slicer_macro::{Template, Value, Vars};
 use crate::base::svg::{parse, Options, Outline};
 use crate::base::toolpath::Toolpath;
-use crate::generate::model::{make_part, Recipe};
+use crate::generate::model::make_part;
 use crate::output::lock::{first_difference, LineHashes, Lock};
 use crate::recipe::schema::Num;
 use crate::recipe::{parse_yaml, RawRecipe};
@@ -30,7 +30,7 @@ fn scratch(target: &str) -> PathBuf {
 /// Recipe text → load and resolve (relative paths from `recipes`), then
 /// build and check it when small.
 pub fn recipe(data: &[u8], recipes: &Path) {
-    // as Recipe::load reads a file: UTF-8 without a BOM, nesting capped
+    // as recipe::load reads a file: UTF-8 without a BOM, nesting capped
     let Ok(text) = decode(data.to_vec()) else {
         return;
     };
@@ -45,7 +45,7 @@ pub fn recipe(data: &[u8], recipes: &Path) {
         max_strings: raw.max_strings.or(Some(Num::Value(200_000.0))),
         ..raw
     };
-    let Ok(recipe) = Recipe::resolve(&raw, &[], None, recipes) else {
+    let Ok(recipe) = crate::recipe::resolve(&raw, &[], None, recipes) else {
         return;
     };
     if recipe.string_count() > BUILD_STRINGS {
@@ -74,7 +74,7 @@ pub fn include(data: &[u8]) {
     {
         return;
     }
-    let _ = Recipe::load(&recipe, &[], None);
+    let _ = crate::recipe::load(&recipe, &[], None);
 }
 
 /// Expression text → compiled and evaluated at ordinary and extreme values.
@@ -189,7 +189,7 @@ pub fn printer(data: &[u8]) {
     if std::fs::write(&file, data).is_err() {
         return;
     }
-    let _ = crate::machine::printer::Printer::from_file(&file);
+    let _ = crate::recipe::profile::from_file(&file);
 }
 
 /// SVG text → an outline, sampled.
@@ -319,9 +319,12 @@ pub fn gcode_line(data: &[u8]) {
         let Ok(r) = read::read(flavor, text) else {
             continue;
         };
+        // object labels on where the firmware has them (Klipper's
+        // EXCLUDE_OBJECT): a label read is written as the command, not as
+        // the comment written when they are off
         let d = write::Dialect {
             flavor,
-            object_labels: false,
+            object_labels: flavor == Flavor::Klipper,
             prusa_8bit: false,
         };
         for c in &r.commands {

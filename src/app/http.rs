@@ -31,11 +31,11 @@ pub(crate) const MAX_CONNECTIONS: usize = 64;
 /// A request as the handler sees it.
 pub(crate) struct Request {
     /// `GET`, `POST`…
-    pub method: String,
+    pub(crate) method: String,
     /// The path, without its query.
-    pub path: String,
+    pub(crate) path: String,
     /// The `Host` header, lower case ("" when there is none).
-    pub host: String,
+    pub(crate) host: String,
 }
 
 /// What the handler does with a request.

@@ -13,5 +13,5 @@ pub(crate) mod watch;
 #[cfg(test)]
 pub(crate) mod testing;
 
-#[cfg(feature = "fuzzing")]
+#[cfg(feature = "testing")]
 pub mod fuzzing;

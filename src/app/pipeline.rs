@@ -4,15 +4,15 @@
 //! code's own data parallelism (`base::par`: a helix's points, a deform's
 //! chunks, the previews' bands) and everything scheduled here share it, and
 //! no other thread computes. The stages of a build are plain functions —
-//! the checks ([`crate::analyse::check::tasks`]: which tasks there are and
+//! the checks (`analyse::check::tasks`: which tasks there are and
 //! how their findings merge is theirs to say), the emitter
-//! ([`crate::output::gcode`]: the plan's strings into typed commands, each
+//! (`output::gcode`: the plan's strings into typed commands, each
 //! written once and followed by the firmware's state) and the planner
-//! ([`Planner`]: moves into times). This module runs them side by side and
+//! (`Planner`: moves into times). This module runs them side by side and
 //! puts their results together in one fixed order, so the bytes never
 //! depend on the threads.
 //!
-//! [`write`] is the one entry of a build: a [`Job`] says whether to check
+//! [`write()`] is the one entry of a build: a [`Job`] says whether to check
 //! (and when to give up: [`Stop`]), how the G-code is stamped, and whether
 //! it is hashed. On two threads or more, this thread writes while a second
 //! takes the checks one task at a time, planning the moves recorded so far
@@ -21,7 +21,7 @@
 //! progress lines (`M73`, Bambu's header) needs the print's time before its
 //! first line: its commands are followed once without being formatted (the
 //! moves alone, planned as they come), then written once with a
-//! [`Clock`] reading the planned times.
+//! `Clock` reading the planned times.
 
 use std::collections::VecDeque;
 use std::io::{self, Write};
@@ -117,7 +117,7 @@ pub enum Stop {
     },
 }
 
-/// What a build does besides writing (see [`write`]).
+/// What a build does besides writing (see [`write()`]).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Job<'a> {
     /// Run the checks first or beside the writing, silencing these codes
@@ -359,7 +359,11 @@ fn written_beside<W: Write>(
 /// A preview of `plan` for `out` (PNG or HTML by its extension): the
 /// G-code written as a draft for its stats (and, for a viewer, its moves)
 /// beside the drawing when the pool allows; the same preview either way.
-pub fn preview(plan: &Plan, out: &Path, opts: &preview::Options) -> Result<preview::Finished> {
+pub(crate) fn preview(
+    plan: &Plan,
+    out: &Path,
+    opts: &preview::Options,
+) -> Result<preview::Finished> {
     crate::analyse::check::within_reach(&plan.recipe, &plan.paths, "preview")
         .map_err(|e| e.in_file(&plan.path))?;
     let job = preview::Job::new(plan, out, opts)?;

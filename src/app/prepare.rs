@@ -6,7 +6,6 @@ use std::path::Path;
 use crate::analyse::check;
 use crate::analyse::plan::Plan;
 use crate::base::error::{Error, Result};
-use crate::generate::model::Recipe;
 use crate::machine::Printer;
 use crate::recipe::context::Context;
 
@@ -44,7 +43,7 @@ pub fn prepare(path: &Path, opts: &Options) -> Result<Plan> {
 pub fn prepare_in(path: &Path, opts: &Options, cx: &Context) -> Result<Plan> {
     let shown = path.display().to_string();
     let printer = command_line(opts, cx)?;
-    let raw = Recipe::read_raw(path, cx)?;
+    let raw = crate::recipe::read_raw(path, cx)?;
     if raw.plate.is_some() {
         // a plate: whole recipes arranged on the bed, printed one after another
         let spec = crate::recipe::resolve::plate::PlateSpec::from_raw(&raw, path)?;
@@ -52,7 +51,7 @@ pub fn prepare_in(path: &Path, opts: &Options, cx: &Context) -> Result<Plan> {
     }
     let material = filament(opts, cx)?;
     let given = (printer.as_ref(), material.as_ref());
-    let recipe = Recipe::from_raw_in(&raw, path, &opts.sets, given, cx)?;
+    let recipe = crate::recipe::from_raw_in(&raw, path, &opts.sets, given, cx)?;
     // each part with its own steps, then the steps of groups; the skirt first
     let paths = crate::generate::plate::made_in(&recipe, cx.parts.as_ref())
         .map_err(|e| e.in_file(&shown))?;
@@ -83,7 +82,7 @@ fn command_line(opts: &Options, cx: &Context) -> Result<Option<Printer>> {
         Some(spec) => {
             // a profile named on the command line may inherit from its own project
             cx.reads.name(Path::new(spec));
-            Printer::resolve(spec, Path::new("."), &cx.reads)
+            crate::recipe::profile::resolve(spec, Path::new("."), &cx.reads)
                 .map(Some)
                 .map_err(|e| {
                     if e.file.is_none() && e.place.as_deref() == Some("printer") {

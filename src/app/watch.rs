@@ -68,15 +68,15 @@ const MAX_STREAMS: usize = 32;
 #[derive(Clone, Debug)]
 pub(crate) struct Options {
     /// The recipe file.
-    pub recipe: PathBuf,
+    pub(crate) recipe: PathBuf,
     /// `--set`, `--printer`, `--allow` of each build.
-    pub build: BuildOptions,
+    pub(crate) build: BuildOptions,
     /// `-j`: the threads of each build.
-    pub threads: crate::app::pipeline::Threads,
+    pub(crate) threads: crate::app::pipeline::Threads,
     /// `--port`: 0 takes any free port.
-    pub port: u16,
+    pub(crate) port: u16,
     /// `--open`: open the page in the system's browser.
-    pub open: bool,
+    pub(crate) open: bool,
 }
 
 /// The newest model and the newest failure, as the pages are told them.

@@ -44,7 +44,7 @@ pub type Result<T, E = Error> = std::result::Result<T, E>;
 
 impl Error {
     /// An input error at a key path (file filled in later by [`Error::in_file`]).
-    pub fn input(place: impl Into<String>, message: impl Into<String>) -> Error {
+    pub(crate) fn input(place: impl Into<String>, message: impl Into<String>) -> Error {
         let place = place.into();
         Error {
             kind: Kind::Input,
@@ -58,7 +58,7 @@ impl Error {
     }
 
     /// An I/O error about a file.
-    pub fn io(file: impl Into<String>, message: impl Into<String>) -> Error {
+    pub(crate) fn io(file: impl Into<String>, message: impl Into<String>) -> Error {
         Error {
             kind: Kind::Io,
             file: Some(file.into()),
@@ -71,7 +71,7 @@ impl Error {
     }
 
     /// A failed printability check.
-    pub fn check(file: impl Into<String>, message: impl Into<String>) -> Error {
+    pub(crate) fn check(file: impl Into<String>, message: impl Into<String>) -> Error {
         Error {
             kind: Kind::Check,
             file: Some(file.into()),
@@ -84,7 +84,11 @@ impl Error {
     }
 
     /// An I/O error about a file, caused by `e` (whose kind it keeps).
-    pub fn io_from(file: impl Into<String>, message: impl Into<String>, e: &io::Error) -> Error {
+    pub(crate) fn io_from(
+        file: impl Into<String>,
+        message: impl Into<String>,
+        e: &io::Error,
+    ) -> Error {
         Error {
             io_kind: Some(e.kind()),
             ..Error::io(file, message)
@@ -92,13 +96,13 @@ impl Error {
     }
 
     /// Adds a `help:` hint (replacing any earlier one).
-    pub fn with_help(mut self, help: impl Into<String>) -> Error {
+    pub(crate) fn with_help(mut self, help: impl Into<String>) -> Error {
         self.help = Some(help.into().into_boxed_str());
         self
     }
 
     /// Sets the file when none is set yet.
-    pub fn in_file(mut self, file: &str) -> Error {
+    pub(crate) fn in_file(mut self, file: &str) -> Error {
         if self.file.is_none() {
             self.file = Some(file.to_string());
         }
@@ -106,11 +110,10 @@ impl Error {
     }
 
     /// Prefixes the key path with `prefix` (e.g. `parts[0]`).
-    pub fn under(mut self, prefix: &str) -> Error {
+    pub(crate) fn under(mut self, prefix: &str) -> Error {
         self.place = Some(match self.place.take() {
             None => prefix.to_string(),
-            Some(p) if p.starts_with('[') => format!("{prefix}{p}"),
-            Some(p) => format!("{prefix}.{p}"),
+            Some(p) => place_under(prefix, &p),
         });
         self
     }
@@ -121,6 +124,16 @@ impl Error {
             Kind::Check => 1,
             Kind::Input | Kind::Io => 2,
         }
+    }
+}
+
+/// Key path `place` under `prefix`: `prefix.place`, or `prefix[0]…` when
+/// `place` begins with an index.
+pub(crate) fn place_under(prefix: &str, place: &str) -> String {
+    if place.starts_with('[') {
+        format!("{prefix}{place}")
+    } else {
+        format!("{prefix}.{place}")
     }
 }
 

@@ -37,7 +37,7 @@ pub const CODES: &[(&str, &str)] = &[
     ("nozzle-temp", "the nozzle temperature is above the material's or printer's limit (error)"),
     ("bed-temp", "the bed temperature is above the printer's limit (error)"),
     ("speed", "a string runs faster than the printer's max_speed (error)"),
-    ("setting", "a `set` step's setting the printer's firmware has no command for, or a value past the material's or machine's limits (error)"),
+    ("setting", "a `set` step's or command's setting the printer's firmware has no command for, or a value past the material's or machine's limits (error)"),
     ("flow", "c·v above the hot end's max_flow (warning; error past checks.flow_hard_max × max_flow)"),
     ("over-extrusion", "a cross-section far above what the nozzle lays (warning; error past the hard limit)"),
     ("thin-string", "a cross-section so small the string breaks (warning; error past the hard limit)"),

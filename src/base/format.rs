@@ -228,6 +228,57 @@ pub(crate) fn fmt_num(v: f64) -> String {
     }
 }
 
+/// A value put into a name or a recipe's printer command (`{expr}`):
+/// integers without decimals, others with up to 6, never `-0`.
+pub(crate) fn fmt_value(v: f64) -> String {
+    if v.fract() == 0.0 && v.abs() < 1e15 {
+        format!("{}", v as i64)
+    } else {
+        let s = format!("{v:.6}");
+        let s = s.trim_end_matches('0').trim_end_matches('.');
+        if s == "-0" {
+            "0".into()
+        } else {
+            s.to_string()
+        }
+    }
+}
+
+/// A piece of a text with values in braces (a name such as `ring-{k}`, a
+/// printer command such as `M900 K{0.01*k}`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Piece<'a> {
+    /// Text as it is.
+    Text(&'a str),
+    /// An expression's source, between its braces.
+    Expr(&'a str),
+}
+
+/// `text` cut into text and `{expr}`s: a `{` always opens an expression
+/// and the next `}` closes it, as in the slicers' macro language of the
+/// start and end G-code (neither has an escape: a recipe's expressions
+/// are numbers, so no value holds a brace). `Err` for a `{` without its
+/// `}`, saying so.
+pub(crate) fn pieces(text: &str) -> std::result::Result<Vec<Piece<'_>>, String> {
+    let mut out = Vec::new();
+    let mut rest = text;
+    while let Some(open) = rest.find('{') {
+        if open > 0 {
+            out.push(Piece::Text(&rest[..open]));
+        }
+        let after = &rest[open + 1..];
+        let close = after
+            .find('}')
+            .ok_or_else(|| format!("{text:?} has a `{{` without its `}}`; expected `{{EXPR}}`"))?;
+        out.push(Piece::Expr(&after[..close]));
+        rest = &after[close + 1..];
+    }
+    if !rest.is_empty() {
+        out.push(Piece::Text(rest));
+    }
+    Ok(out)
+}
+
 /// Seconds as `1h 2m 3s` (the form slicers write).
 pub(crate) fn hms(t: f64) -> String {
     let s = libm::round(t) as u64;
@@ -244,6 +295,32 @@ pub(crate) fn hms(t: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn braces_cut_text_into_text_and_expressions() {
+        assert_eq!(
+            pieces("M900 K{0.01*k} ; {k}").unwrap(),
+            vec![
+                Piece::Text("M900 K"),
+                Piece::Expr("0.01*k"),
+                Piece::Text(" ; "),
+                Piece::Expr("k"),
+            ]
+        );
+        assert_eq!(pieces("M600").unwrap(), vec![Piece::Text("M600")]);
+        assert_eq!(pieces("").unwrap(), vec![]);
+        // a `}` alone is text; a `{` alone is an error naming the text
+        assert_eq!(pieces("a}b").unwrap(), vec![Piece::Text("a}b")]);
+        let e = pieces("M117 {k").unwrap_err();
+        assert!(
+            e.contains("\"M117 {k\"") && e.contains("without its `}`"),
+            "{e}"
+        );
+        assert_eq!(fmt_value(0.0125), "0.0125");
+        assert_eq!(fmt_value(3.0), "3");
+        assert_eq!(fmt_value(-1e-9), "0");
+        assert_eq!(fmt_value(1.0 / 3.0), "0.333333");
+    }
 
     /// The formatter before [`Chunk`]: libm's round, then itoa's digits.
     fn reference(v: f64, d: u32) -> String {

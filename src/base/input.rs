@@ -75,7 +75,7 @@ const NEVER_READ: [&str; 3] = ["/proc", "/sys", "/dev"];
 
 impl Reads {
     /// Notes that `path` is read, or tried.
-    pub fn note(&self, path: &Path) {
+    pub(crate) fn note(&self, path: &Path) {
         let mut list = self.files.lock().unwrap_or_else(|e| e.into_inner());
         if !list.iter().any(|p| p == path) {
             list.push(path.to_path_buf());
@@ -83,14 +83,14 @@ impl Reads {
     }
 
     /// Notes a file the user named (on the command line, or a lock entry):
-    /// the files it reaches may lie anywhere in its project ([`project_root`]).
-    pub fn name(&self, path: &Path) {
+    /// the files it reaches may lie anywhere in its project (`project_root`).
+    pub(crate) fn name(&self, path: &Path) {
         let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
         self.allow(&project_root(dir.unwrap_or(Path::new("."))));
     }
 
     /// Lets the files reached read anything below `dir` too.
-    pub fn allow(&self, dir: &Path) {
+    pub(crate) fn allow(&self, dir: &Path) {
         let dir = dir.canonicalize().unwrap_or_else(|_| dir.to_path_buf());
         let mut roots = self.roots.lock().unwrap_or_else(|e| e.into_inner());
         if !roots.contains(&dir) {
@@ -98,17 +98,17 @@ impl Reads {
         }
     }
 
-    /// [`read_text`] of a file the user named: noted, its project allowed; a
+    /// `read_text` of a file the user named: noted, its project allowed; a
     /// FIFO or device is read as it is (`p3dp check /dev/stdin`), bounded.
-    pub fn read_text(&self, path: &Path, what: &str) -> Result<String> {
+    pub(crate) fn read_text(&self, path: &Path, what: &str) -> Result<String> {
         self.note(path);
         self.name(path);
         read_text(path, what)
     }
 
-    /// [`read_plain`] of a slicer's preset file: noted, and refused unless
+    /// `read_plain` of a slicer's preset file: noted, and refused unless
     /// it is a regular file (a preset and its parents are files).
-    pub fn read_plain(&self, path: &Path, what: &str) -> Result<String> {
+    pub(crate) fn read_plain(&self, path: &Path, what: &str) -> Result<String> {
         self.note(path);
         let file = open_regular(path, what)?;
         text_of(file, path, what, MAX_TEXT_BYTES, true)
@@ -118,7 +118,7 @@ impl Reads {
     /// `inherits:`, an image…), may be read: noted, then refused unless it
     /// lies inside a root (symlinks resolved) and outside `/proc`, `/sys`
     /// and `/dev`. A missing file passes (its reader says it is missing).
-    pub fn reach(&self, path: &Path, what: &str) -> Result<()> {
+    pub(crate) fn reach(&self, path: &Path, what: &str) -> Result<()> {
         self.note(path);
         let Ok(real) = path.canonicalize() else {
             return Ok(());
@@ -153,15 +153,15 @@ impl Reads {
     }
 
     /// Opens a file reached through a key: [`Reads::reach`], then
-    /// [`open_regular`].
-    pub fn open_reached(&self, path: &Path, what: &str) -> Result<std::fs::File> {
+    /// `open_regular`.
+    pub(crate) fn open_reached(&self, path: &Path, what: &str) -> Result<std::fs::File> {
         self.reach(path, what)?;
         open_regular(path, what)
     }
 
     /// The text of a file reached through a key ([`Reads::open_reached`]),
-    /// bounded by `limit` bytes, checked as [`read_text`] checks.
-    pub fn read_reached(&self, path: &Path, what: &str, limit: u64) -> Result<String> {
+    /// bounded by `limit` bytes, checked as `read_text` checks.
+    pub(crate) fn read_reached(&self, path: &Path, what: &str, limit: u64) -> Result<String> {
         let file = self.open_reached(path, what)?;
         let text = text_of(file, path, what, limit, false)?;
         check_nesting(&text).map_err(|e| e.in_file(&path.display().to_string()))?;

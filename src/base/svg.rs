@@ -44,27 +44,27 @@ pub(crate) const DEFAULT_TOLERANCE: f64 = 0.01;
 
 /// One subpath of a drawing: mm, y up, scaled.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Subpath {
+pub(crate) struct Subpath {
     /// The flattened points, in drawing order (a closed one does not repeat
     /// its first point at the end).
-    pub points: Vec<DVec2>,
+    pub(crate) points: Vec<DVec2>,
     /// Ends with `Z` (or comes back to its first point).
-    pub closed: bool,
+    pub(crate) closed: bool,
     /// The id of the SVG element it came from ("" when it has none).
-    pub element: String,
+    pub(crate) element: String,
 }
 
 /// What to take from a drawing and how.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct Options<'a> {
     /// Only the element with this id (and what it contains).
-    pub id: Option<&'a str>,
+    pub(crate) id: Option<&'a str>,
     /// Factor on the drawn size.
-    pub scale: f64,
+    pub(crate) scale: f64,
     /// Largest distance of a flattened chord from its curve, mm (after `scale`).
-    pub tolerance: f64,
+    pub(crate) tolerance: f64,
     /// Most points all subpaths together may have.
-    pub max_points: u64,
+    pub(crate) max_points: u64,
 }
 
 /// Reads and flattens the SVG file at `path`; errors name the file as
@@ -647,14 +647,14 @@ pub(crate) fn cubic(p0: DVec2, p1: DVec2, p2: DVec2, p3: DVec2, tol: f64) -> Vec
 /// theta = 0 from the centroid first leaves it (at its first point when the
 /// ray misses it).
 #[derive(Clone, Debug, PartialEq)]
-pub struct Outline {
+pub(crate) struct Outline {
     /// The vertices, centroid at the origin (the first is not repeated).
-    pub points: Vec<DVec2>,
+    pub(crate) points: Vec<DVec2>,
     /// Arc length from the start to vertex j, mm; one more entry: the total.
-    pub at: Vec<f64>,
+    pub(crate) at: Vec<f64>,
     /// Arc fractions s of the corners (vertices turning by more than
     /// [`CORNER_DEGREES`]), so a turn can pass through them exactly.
-    pub corners: Vec<f64>,
+    pub(crate) corners: Vec<f64>,
 }
 
 /// A vertex turning by more than this many degrees is a corner.
@@ -663,7 +663,7 @@ pub(crate) const CORNER_DEGREES: f64 = 20.0;
 impl Outline {
     /// The one closed subpath of `subpaths` as an outline; an error sentence
     /// when there is none, more than one, or it encloses no area.
-    pub fn from_subpaths(subpaths: &[Subpath]) -> std::result::Result<Outline, String> {
+    pub(crate) fn from_subpaths(subpaths: &[Subpath]) -> std::result::Result<Outline, String> {
         let closed: Vec<&Subpath> = subpaths
             .iter()
             .filter(|s| s.closed && s.points.len() >= 3)
@@ -712,7 +712,7 @@ impl Outline {
     }
 
     /// The closed polygon `pts` as an outline.
-    pub fn new(pts: &[DVec2]) -> std::result::Result<Outline, String> {
+    pub(crate) fn new(pts: &[DVec2]) -> std::result::Result<Outline, String> {
         // area and centroid of the polygon (shoelace): A = ½Σ cross(p_j, p_j+1),
         // C = Σ (p_j + p_j+1)·cross(p_j, p_j+1) / (6A); taken about the first
         // point, for precision far from the origin
@@ -788,17 +788,17 @@ impl Outline {
     }
 
     /// The outline's length, mm.
-    pub fn length(&self) -> f64 {
+    pub(crate) fn length(&self) -> f64 {
         *self.at.last().unwrap()
     }
 
     /// The farthest distance of the outline from its centroid, mm.
-    pub fn max_radius(&self) -> f64 {
+    pub(crate) fn max_radius(&self) -> f64 {
         self.points.iter().map(|p| p.length()).fold(0.0, f64::max)
     }
 
     /// The point at arc fraction `s` (0..1, taken mod 1), centroid at the origin.
-    pub fn point_at(&self, s: f64) -> DVec2 {
+    pub(crate) fn point_at(&self, s: f64) -> DVec2 {
         let s = s - libm::floor(s);
         let d = s * self.length();
         // the last vertex j with at[j] ≤ d
@@ -815,7 +815,7 @@ impl Outline {
 
     /// The arc fractions of one turn of `segments` strings: k/segments for
     /// k < segments, and every corner, in order (each once).
-    pub fn fractions(&self, segments: u32) -> Vec<f64> {
+    pub(crate) fn fractions(&self, segments: u32) -> Vec<f64> {
         let mut f: Vec<f64> = (0..segments).map(|k| k as f64 / segments as f64).collect();
         // a corner closer than a thousandth of a step to a sample replaces nothing
         let eps = 1e-3 / segments as f64;

@@ -21,7 +21,7 @@ pub struct Strand {
     /// A declared hair (a turtle's `hair:`): a thin string pulled from a blob
     /// into the air on purpose, which the `unsupported`, `thin-string` and
     /// `nozzle-collision` checks pass over (and nothing else does).
-    pub hair: bool,
+    pub(crate) hair: bool,
 }
 
 /// Something the printer does between two strings that is not a move
@@ -76,6 +76,11 @@ pub enum Event {
         setting: crate::base::gcode::Setting,
         /// The band it begins, if any.
         band: Option<Band>,
+        /// The key path of the value it was made from, when its maker
+        /// knows it (a turtle's or path's `set` command:
+        /// `parts[0].primitive.turtle.program[2].set.pressure_advance`),
+        /// for the `setting` check to name.
+        place: Option<std::sync::Arc<str>>,
     },
 }
 
@@ -95,13 +100,13 @@ pub struct Band {
 /// (ExtruderTurtle's `draw_Turtle()`): drawn in the previews as a small
 /// triangle pointing along the heading, never written to the G-code.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Marker {
+pub(crate) struct Marker {
     /// The turtle's position, recipe coordinates, mm.
-    pub pos: DVec3,
+    pub(crate) pos: DVec3,
     /// Its heading (unit).
-    pub heading: DVec3,
+    pub(crate) heading: DVec3,
     /// Its up axis (unit), the triangle's normal.
-    pub up: DVec3,
+    pub(crate) up: DVec3,
 }
 
 /// A part: a polyline of points and the strings between them.
@@ -115,9 +120,9 @@ pub struct Toolpath {
     pub strings: Vec<Strand>,
     /// Events in order of their string index: `(k, e)` happens before
     /// string k (k = n: after the last string).
-    pub events: Vec<(usize, Event)>,
+    pub(crate) events: Vec<(usize, Event)>,
     /// Turtle markers for the previews (`draw_turtle`), in program order.
-    pub markers: Vec<Marker>,
+    pub(crate) markers: Vec<Marker>,
     /// Per point, when a primitive of the part follows an `outline:`: turns
     /// along the outline, u = k + s on turn k at arc fraction s (so it grows
     /// along the part and interpolates linearly); expressions see
@@ -142,7 +147,7 @@ impl Toolpath {
     /// A part through `points` (at least one) whose strings all extrude with
     /// cross-section `c` at speed `v`: the same as `new(first)` then `draw`
     /// to each of the rest, without a push per string.
-    pub fn uniform(points: Vec<DVec3>, c: f64, v: f64) -> Toolpath {
+    pub(crate) fn uniform(points: Vec<DVec3>, c: f64, v: f64) -> Toolpath {
         assert!(!points.is_empty(), "a part starts somewhere");
         let strand = Strand {
             c,
@@ -162,7 +167,7 @@ impl Toolpath {
     }
 
     /// An empty part with room for `n` strings.
-    pub fn with_capacity(start: DVec3, n: usize) -> Toolpath {
+    pub(crate) fn with_capacity(start: DVec3, n: usize) -> Toolpath {
         let mut points = Vec::with_capacity(n + 1);
         points.push(start);
         Toolpath {
@@ -188,18 +193,9 @@ impl Toolpath {
         }
     }
 
-    /// The `s` of point k: the arc fraction along the outline (0 with no outline).
-    #[inline]
-    pub fn s_at_point(&self, k: usize) -> f64 {
-        match &self.turns {
-            Some(u) => frac(u[k]),
-            None => 0.0,
-        }
-    }
-
     /// The `s` of string k's midpoint (0 with no outline).
     #[inline]
-    pub fn s_at_string(&self, k: usize) -> f64 {
+    pub(crate) fn s_at_string(&self, k: usize) -> f64 {
         match &self.turns {
             Some(u) => frac(0.5 * (u[k] + u[k + 1])),
             None => 0.0,
@@ -219,8 +215,8 @@ impl Toolpath {
     }
 
     /// Adds a declared hair to `p`: an extruding string of cross-section `c`
-    /// that is meant to hang in the air (see [`Strand::hair`]).
-    pub fn hair(&mut self, p: DVec3, c: f64, v: f64) {
+    /// that is meant to hang in the air (see `Strand::hair`).
+    pub(crate) fn hair(&mut self, p: DVec3, c: f64, v: f64) {
         self.push_turns();
         self.points.push(p);
         self.strings.push(Strand {
@@ -229,11 +225,6 @@ impl Toolpath {
             travel: false,
             hair: true,
         });
-    }
-
-    /// How many strings are declared hairs.
-    pub fn hair_count(&self) -> usize {
-        self.strings.iter().filter(|s| s.hair).count()
     }
 
     /// Adds a travel string to `p` (the papers' `move`).
@@ -269,13 +260,13 @@ impl Toolpath {
     }
 
     /// Length of string k, mm.
-    pub fn length(&self, k: usize) -> f64 {
+    pub(crate) fn length(&self, k: usize) -> f64 {
         let (a, b) = self.ends(k);
         a.distance(b)
     }
 
     /// Midpoint of string k, where its c and v expressions are evaluated.
-    pub fn midpoint(&self, k: usize) -> DVec3 {
+    pub(crate) fn midpoint(&self, k: usize) -> DVec3 {
         let (a, b) = self.ends(k);
         (a + b) * 0.5
     }
@@ -289,7 +280,7 @@ impl Toolpath {
     }
 
     /// Appends `other`, joining with a travel move when it starts elsewhere.
-    pub fn append(&mut self, other: &Toolpath, travel_speed: f64) {
+    pub(crate) fn append(&mut self, other: &Toolpath, travel_speed: f64) {
         let start = other.points[0];
         if self.head() != start {
             self.travel(start, travel_speed);
@@ -314,7 +305,7 @@ impl Toolpath {
     /// `before.append(self)` with this one's name, made in this path's
     /// buffers (a brim or stand ahead of a 2M-string part copied all of it
     /// into new memory).
-    pub fn prepend(&mut self, mut before: Toolpath, travel_speed: f64) {
+    pub(crate) fn prepend(&mut self, mut before: Toolpath, travel_speed: f64) {
         let start = self.points[0];
         if before.head() != start {
             before.travel(start, travel_speed);

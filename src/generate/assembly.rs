@@ -26,6 +26,7 @@ pub(crate) fn total_limit(recipe: &Recipe) -> u64 {
 }
 
 /// Makes every part with its own steps, then runs the group steps.
+#[cfg(any(test, feature = "testing"))]
 pub fn make_parts(recipe: &Recipe) -> Result<Vec<Toolpath>> {
     make_parts_in(recipe, None)
 }
@@ -219,7 +220,7 @@ fn split(all: Toolpath) -> Vec<Toolpath> {
 /// form as `Debug` writes it (every field, floats in their shortest exact
 /// form) and of the strings its steps may make.
 #[derive(Debug, Default)]
-pub struct Parts(std::sync::Mutex<Kept>);
+pub(crate) struct Parts(std::sync::Mutex<Kept>);
 
 /// The inside of [`Parts`].
 #[derive(Debug, Default)]
@@ -234,11 +235,11 @@ struct Kept {
 
 /// What a build did with the parts kept ([`Parts::finish`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct PartsMade {
+pub(crate) struct PartsMade {
     /// Parts made anew.
-    pub made: usize,
+    pub(crate) made: usize,
     /// All the parts of the build.
-    pub parts: usize,
+    pub(crate) parts: usize,
 }
 
 impl Parts {
@@ -272,7 +273,7 @@ impl Parts {
     /// Ends a build: the parts it made are those kept for the next (a
     /// build that `failed` part way keeps the ones before too); how many it
     /// made anew, of how many it took.
-    pub fn finish(&self, failed: bool) -> PartsMade {
+    pub(crate) fn finish(&self, failed: bool) -> PartsMade {
         let mut kept = self.lock();
         let next = std::mem::take(&mut kept.next);
         let made = PartsMade {

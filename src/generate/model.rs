@@ -14,51 +14,51 @@ pub(crate) const DEFAULT_MAX_STRINGS: u64 = 50_000_000;
 
 /// `skirt:` resolved.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Skirt {
+pub(crate) struct Skirt {
     /// mm outside the parts' footprint.
-    pub distance: f64,
+    pub(crate) distance: f64,
     /// Number of loops.
-    pub loops: u32,
+    pub(crate) loops: u32,
 }
 
 /// A part resolved: numbers evaluated, expressions compiled.
 #[derive(Clone, Debug)]
-pub struct Part {
+pub(crate) struct Part {
     /// Name for reports (`part 1` when the recipe gives none).
-    pub name: String,
+    pub(crate) name: String,
     /// Cross-section, mm².
-    pub cross_section: f64,
+    pub(crate) cross_section: f64,
     /// Speed, mm/s.
-    pub speed: f64,
+    pub(crate) speed: f64,
     /// The primitive (the first, when the part has several).
-    pub primitive: Primitive,
+    pub(crate) primitive: Primitive,
     /// The steps.
-    pub steps: Vec<Step>,
+    pub(crate) steps: Vec<Step>,
     /// The primitives after the first, in order (see [`crate::generate::assembly`]).
-    pub more: Vec<Piece>,
+    pub(crate) more: Vec<Piece>,
     /// Where the part is written, through templates and loops
     /// (`parts[1].parts[0] (template ring, k = 3)`), for error places.
-    pub place: String,
+    pub(crate) place: String,
     /// Loops on the bed round its first contact, printed first.
-    pub brim: Option<Brim>,
+    pub(crate) brim: Option<Brim>,
     /// A short printed tube round its first contact, printed first (before
     /// the brim, which then goes round the stand).
-    pub stand: Option<Stand>,
+    pub(crate) stand: Option<Stand>,
 }
 
 /// A part's brim: `loops` closed circles on the bed round the part's first
 /// contact, from the outside in, then the part (a remedy for a part that
 /// stands on a small contact, as Kanada's sphere and globe on their poles).
 #[derive(Clone, Debug, PartialEq)]
-pub struct Brim {
+pub(crate) struct Brim {
     /// Number of loops.
-    pub loops: u32,
+    pub(crate) loops: u32,
     /// Width of a loop and the step between loops, mm.
-    pub line_width: f64,
+    pub(crate) line_width: f64,
     /// Height of the loops (their nozzle height over the bed), mm.
-    pub layer_height: f64,
+    pub(crate) layer_height: f64,
     /// Speed, mm/s.
-    pub speed: f64,
+    pub(crate) speed: f64,
 }
 
 impl Brim {
@@ -71,14 +71,15 @@ impl Brim {
     /// innermost 0.9 × line_width outside the farthest contact point (its
     /// bead overlaps the part's), each next one line_width further out,
     /// printed outermost first so the head ends inside, next to the part.
-    pub fn around(&self, tp: &Toolpath) -> Toolpath {
+    #[cfg(test)]
+    pub(crate) fn around(&self, tp: &Toolpath) -> Toolpath {
         let mut out = tp.clone();
         self.put_round(&mut out);
         out
     }
 
     /// [`Brim::around`] in place: the loops put ahead of `tp`'s strings.
-    pub fn put_round(&self, tp: &mut Toolpath) {
+    pub(crate) fn put_round(&self, tp: &mut Toolpath) {
         if tp.is_empty() || self.loops == 0 {
             return;
         }
@@ -149,19 +150,19 @@ fn first_contact(tp: &Toolpath, layer: f64) -> (glam::DVec2, f64) {
 /// widens the part's hold on the bed, and a part that flares out over it
 /// (a sphere from its pole) lays its strings on the tube's top.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Stand {
+pub(crate) struct Stand {
     /// Radius of the outermost wall's centre line, mm.
-    pub radius: f64,
+    pub(crate) radius: f64,
     /// Number of walls, `line_width` apart, from `radius` inwards.
-    pub walls: u32,
+    pub(crate) walls: u32,
     /// Height, mm (whole layers); `None`: as tall as the part leaves room for.
-    pub height: Option<f64>,
+    pub(crate) height: Option<f64>,
     /// Width of a wall, mm.
-    pub line_width: f64,
+    pub(crate) line_width: f64,
     /// Height of a layer (the first layer's nozzle height), mm.
-    pub layer_height: f64,
+    pub(crate) layer_height: f64,
     /// Speed, mm/s.
-    pub speed: f64,
+    pub(crate) speed: f64,
 }
 
 impl Stand {
@@ -181,7 +182,7 @@ impl Stand {
     /// lays its strings just over the tube's top, a little higher the
     /// steeper it rises. The layers are whole: n = ⌊top / layer_height⌋ (with
     /// a micron's tolerance for the rounding of the division).
-    pub fn layers(&self, tp: &Toolpath, tip_radius: f64) -> Result<(glam::DVec2, u32)> {
+    pub(crate) fn layers(&self, tp: &Toolpath, tip_radius: f64) -> Result<(glam::DVec2, u32)> {
         let (centre, _) = first_contact(tp, self.layer_height);
         let (lo, hi) = self.band(tip_radius)?;
         let over = lowest_over(tp, centre, lo, hi);
@@ -292,7 +293,7 @@ impl Stand {
     /// the stand: layer k (1..=n) at nozzle height k·layer_height, each its
     /// walls as closed circles from the outermost in, a travel up to the next
     /// layer's outer wall, then the part from the stand's last point.
-    pub fn under(&self, tp: &Toolpath, tip_radius: f64, budget: u64) -> Result<Toolpath> {
+    pub(crate) fn under(&self, tp: &Toolpath, tip_radius: f64, budget: u64) -> Result<Toolpath> {
         if tp.is_empty() {
             return Ok(tp.clone());
         }
@@ -357,41 +358,41 @@ fn lowest_over(tp: &Toolpath, centre: glam::DVec2, lo: f64, hi: f64) -> f64 {
 #[derive(Clone, Debug)]
 pub struct Recipe {
     /// Recipe name.
-    pub name: String,
+    pub(crate) name: String,
     /// Param values after `--set`.
     pub params: Params,
     /// Printer profile.
     pub printer: Printer,
     /// Material.
-    pub material: Material,
+    pub(crate) material: Material,
     /// Optional skirt.
-    pub skirt: Option<Skirt>,
+    pub(crate) skirt: Option<Skirt>,
     /// Parts in print order.
-    pub parts: Vec<Part>,
+    pub(crate) parts: Vec<Part>,
     /// Most strings one part may have.
-    pub max_strings: u64,
+    pub(crate) max_strings: u64,
     /// Check codes the recipe silences (`allow:`).
-    pub allow: Vec<String>,
-    /// Steps of groups of parts, in the order they run (see [`crate::generate::assembly`]).
-    pub groups: Vec<Group>,
+    pub(crate) allow: Vec<String>,
+    /// Steps of groups of parts, in the order they run (see `generate::assembly`).
+    pub(crate) groups: Vec<Group>,
     /// A plate's objects, each printed complete before the next (see
-    /// [`crate::generate::plate`]); empty for a recipe, whose every part
+    /// `generate::plate`); empty for a recipe, whose every part
     /// is an object of its own.
-    pub objects: Vec<Object>,
+    pub(crate) objects: Vec<Object>,
 }
 
 /// One object of a plate: a whole recipe, printed complete before the next.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Object {
+pub(crate) struct Object {
     /// Its name (`pot-2`); its parts are named `pot-2/PART`.
-    pub name: String,
+    pub(crate) name: String,
     /// Its paths in the plan, `first..end`: its skirt (when its recipe has
     /// one), then its parts.
-    pub paths: std::ops::Range<usize>,
+    pub(crate) paths: std::ops::Range<usize>,
     /// Its parts in the recipe's `parts`, `first..end`.
-    pub parts: std::ops::Range<usize>,
+    pub(crate) parts: std::ops::Range<usize>,
     /// Check codes its recipe silences (`allow:`), for its own findings.
-    pub allow: Vec<String>,
+    pub(crate) allow: Vec<String>,
 }
 
 /// Default cross-section when a recipe gives none: Kanada's 0.196 mm² (Fig. 9).
@@ -401,33 +402,33 @@ pub(crate) const DEFAULT_SPEED: f64 = 40.0;
 
 /// A primitive after the first of a part, with its cross-section and speed.
 #[derive(Clone, Debug)]
-pub struct Piece {
+pub(crate) struct Piece {
     /// The primitive.
-    pub primitive: Primitive,
+    pub(crate) primitive: Primitive,
     /// Cross-section of its strings where it sets none, mm².
-    pub cross_section: f64,
+    pub(crate) cross_section: f64,
     /// Speed of its strings where it sets none, mm/s.
-    pub speed: f64,
+    pub(crate) speed: f64,
 }
 
 /// The steps of a group, run on parts `first..end` of the recipe as one set.
 #[derive(Clone, Debug)]
-pub struct Group {
+pub(crate) struct Group {
     /// First part of the group.
-    pub first: usize,
+    pub(crate) first: usize,
     /// One past its last part.
-    pub end: usize,
+    pub(crate) end: usize,
     /// The steps, in order.
-    pub steps: Vec<Step>,
+    pub(crate) steps: Vec<Step>,
     /// Where the group is written (through templates and loops), for errors.
-    pub place: String,
+    pub(crate) place: String,
 }
 
 impl Recipe {
     /// Where part `k` is among a plate's paths (after the skirts of its
     /// object and those before it); `None` for a recipe (whose paths are
     /// its skirt, if any, then its parts).
-    pub fn plate_path_of(&self, k: usize) -> Option<usize> {
+    pub(crate) fn plate_path_of(&self, k: usize) -> Option<usize> {
         self.objects
             .iter()
             .find(|o| o.parts.contains(&k))
@@ -435,7 +436,8 @@ impl Recipe {
     }
 
     /// How many strings its parts make, before any is built.
-    pub fn string_count(&self) -> u64 {
+    #[cfg(any(test, feature = "testing"))]
+    pub(crate) fn string_count(&self) -> u64 {
         self.parts
             .iter()
             .map(Part::string_count)
@@ -445,13 +447,13 @@ impl Recipe {
 
 impl Part {
     /// The part's primitives in order: `primitive`, then `more`.
-    pub fn primitives(&self) -> impl Iterator<Item = &Primitive> {
+    pub(crate) fn primitives(&self) -> impl Iterator<Item = &Primitive> {
         std::iter::once(&self.primitive).chain(self.more.iter().map(|p| &p.primitive))
     }
 
     /// How many strings its primitives make, counting a joining travel
     /// between each two.
-    pub fn string_count(&self) -> u64 {
+    pub(crate) fn string_count(&self) -> u64 {
         self.primitives()
             .map(Primitive::string_count)
             .fold(self.more.len() as u64, u64::saturating_add)
@@ -459,7 +461,7 @@ impl Part {
 
     /// Builds the primitives in order, joined by travel strings where one
     /// ends away from the next one's start.
-    pub fn build_primitives(&self) -> Toolpath {
+    pub(crate) fn build_primitives(&self) -> Toolpath {
         let mut tp = self.primitive.build(self.cross_section, self.speed);
         for p in &self.more {
             let next = p.primitive.build(p.cross_section, p.speed);
@@ -472,6 +474,7 @@ impl Part {
 /// Makes a part's strings (without its brim, which
 /// [`crate::generate::assembly::make_parts`] adds last): its primitives, then each of its own steps in
 /// order (a group's steps are [`crate::generate::assembly::make_parts`]'s).
+#[cfg(any(test, feature = "testing"))]
 pub fn make_part(recipe: &Recipe, k: usize) -> Result<Toolpath> {
     make_part_within(recipe, k, recipe.max_strings)
 }

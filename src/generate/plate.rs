@@ -45,13 +45,13 @@ pub(crate) const MARGIN: f64 = 2.0;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Shadow {
     /// Front-left corner (lowest x and y), mm.
-    pub lo: DVec2,
+    pub(crate) lo: DVec2,
     /// Back-right corner, mm.
-    pub hi: DVec2,
+    pub(crate) hi: DVec2,
     /// Highest extruding point, mm.
-    pub top: f64,
+    pub(crate) top: f64,
     /// Lowest point the nozzle reaches, mm.
-    pub bottom: f64,
+    pub(crate) bottom: f64,
 }
 
 impl Shadow {
@@ -205,9 +205,9 @@ impl Area {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Item {
     /// What it occupies.
-    pub shadow: Shadow,
+    pub(crate) shadow: Shadow,
     /// Its fixed place, if any.
-    pub at: Option<DVec2>,
+    pub(crate) at: Option<DVec2>,
 }
 
 /// Why a plate cannot be arranged: the object concerned (its index) and

@@ -14,23 +14,23 @@ use crate::base::error::{Error, Result};
 /// a cone round the nozzle from its tip up to `cone_height`, and above that a
 /// box (heater block, fan duct, carriage) reaching `box` round the nozzle.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Head {
+pub(crate) struct Head {
     /// Half-angle of the nozzle's cone from the vertical axis, degrees (0 a
     /// needle, 90 a flat plate at the tip).
-    pub cone_angle: f64,
+    pub(crate) cone_angle: f64,
     /// Height of the cone above the nozzle tip, mm; the box starts there.
-    pub cone_height: f64,
+    pub(crate) cone_height: f64,
     /// Diameter of the flat face at the nozzle's tip, mm.
-    pub tip_diameter: f64,
+    pub(crate) tip_diameter: f64,
     /// The box round the nozzle, `[x_min, x_max, y_min, y_max]` in mm relative
     /// to the nozzle (machine axes), from `cone_height` above the tip upwards.
-    pub head_box: [f64; 4],
+    pub(crate) head_box: [f64; 4],
     /// Travel between parts rises this far above the highest filament printed
     /// so far (within max z), mm.
-    pub clearance: f64,
+    pub(crate) clearance: f64,
     /// What the head hangs from, when the profile says: from this height
     /// above the tip, across the whole bed in x (see [`Gantry`]).
-    pub gantry: Option<Gantry>,
+    pub(crate) gantry: Option<Gantry>,
 }
 
 /// The gantry (or the x axis' arm, a bed-slinger's): from `height` mm above
@@ -41,11 +41,11 @@ pub struct Head {
 /// Bambu Studio's `extruder_clearance_height_to_rod`, PrusaSlicer's
 /// `extruder_clearance_height`).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Gantry {
+pub(crate) struct Gantry {
     /// Height of its lowest edge above the nozzle's tip, mm.
-    pub height: f64,
+    pub(crate) height: f64,
     /// Its band in y round the nozzle, `[y_min, y_max]`, mm (machine axes).
-    pub y: [f64; 2],
+    pub(crate) y: [f64; 2],
 }
 
 impl Default for Head {
@@ -62,38 +62,41 @@ impl Default for Head {
 }
 
 /// Thresholds of the flow, support and planner checks (printer key `checks:`).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CheckLimits {
+/// A profile's `checks:` deserialises straight into it (`recipe::schema`'s
+/// `RawPrinter`), each absent key [`CheckLimits::default`]'s.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize)]
+#[serde(deny_unknown_fields, default, expecting = "struct CheckLimits")]
+pub(crate) struct CheckLimits {
     /// `over-extrusion` warning above this × nozzle² of cross-section.
-    pub cross_section_max: f64,
+    pub(crate) cross_section_max: f64,
     /// `over-extrusion` error above this × nozzle².
-    pub cross_section_hard_max: f64,
+    pub(crate) cross_section_hard_max: f64,
     /// `thin-string` warning below this × nozzle².
-    pub cross_section_min: f64,
+    pub(crate) cross_section_min: f64,
     /// `thin-string` error below this × nozzle².
-    pub cross_section_hard_min: f64,
+    pub(crate) cross_section_hard_min: f64,
     /// `flow` is an error above this × `max_flow`.
-    pub flow_hard_max: f64,
+    pub(crate) flow_hard_max: f64,
     /// Longest bridge reported as a note, mm; longer ones are warnings.
-    pub max_bridge: f64,
+    pub(crate) max_bridge: f64,
     /// Strings touch when their centre lines are closer than this × the mean
     /// of their widths (a string's width: the round bead of its cross-section,
     /// at least the nozzle); the bed holds a string this × its width high.
-    pub support_tolerance: f64,
+    pub(crate) support_tolerance: f64,
     /// Shortest move the firmware keeps up with, s: about the time it takes
     /// to receive and plan one G-code line (5 ms on an 8-bit Marlin fed over
     /// USB). Runs of shorter moves drain the planner's buffer, and the
     /// firmware then stretches moves towards `kinematics.min_segment_time`.
-    pub min_move_time: f64,
+    pub(crate) min_move_time: f64,
     /// Moves the planner buffers: shorter runs of short moves are absorbed.
-    pub planner_buffer: u32,
+    pub(crate) planner_buffer: u32,
     /// A `first-layer` warning where the nozzle lays filament closer to the
     /// bed than this × the nozzle's diameter.
-    pub first_layer_min: f64,
+    pub(crate) first_layer_min: f64,
     /// `small-contact`: bed contact a part needs per mm of its height, mm²/mm.
-    pub min_contact_per_height: f64,
+    pub(crate) min_contact_per_height: f64,
     /// `small-contact`: bed contact a part needs per gram of its filament, mm²/g.
-    pub min_contact_per_gram: f64,
+    pub(crate) min_contact_per_gram: f64,
 }
 
 impl Default for CheckLimits {
@@ -129,7 +132,7 @@ pub(crate) fn positive(key: &str, v: f64) -> Result<()> {
 
 impl Head {
     /// Checks the keys (a printer profile's `head:`).
-    pub fn validate(&self) -> Result<()> {
+    pub(crate) fn validate(&self) -> Result<()> {
         if !(self.cone_angle.is_finite() && (0.0..90.0).contains(&self.cone_angle)) {
             return Err(Error::input(
                 "head.cone_angle",
@@ -165,18 +168,18 @@ impl Head {
     }
 
     /// tan of the cone's half-angle.
-    pub fn tan(&self) -> f64 {
+    pub(crate) fn tan(&self) -> f64 {
         libm::tan(self.cone_angle.to_radians())
     }
 
     /// Radius of the cone at its top, mm.
-    pub fn top_radius(&self) -> f64 {
+    pub(crate) fn top_radius(&self) -> f64 {
         self.tip_diameter / 2.0 + self.cone_height * self.tan()
     }
 
     /// Where the head reaches round the nozzle, `[x_min, x_max, y_min,
     /// y_max]`: its box, and the cone's top where it is wider.
-    pub fn reach(&self) -> [f64; 4] {
+    pub(crate) fn reach(&self) -> [f64; 4] {
         let r = self.top_radius();
         let b = self.head_box;
         [b[0].min(-r), b[1].max(r), b[2].min(-r), b[3].max(r)]
@@ -185,7 +188,7 @@ impl Head {
 
 impl CheckLimits {
     /// Checks the keys (a printer profile's `checks:`).
-    pub fn validate(&self) -> Result<()> {
+    pub(crate) fn validate(&self) -> Result<()> {
         for (k, v) in [
             ("checks.cross_section_max", self.cross_section_max),
             ("checks.cross_section_hard_max", self.cross_section_hard_max),

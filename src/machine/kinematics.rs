@@ -29,16 +29,16 @@ pub(crate) const MARLIN_COMMAND_RATE: f64 = 500.0;
 #[derive(Clone, Debug, PartialEq)]
 pub struct Kinematics {
     /// Highest head speed, mm/s; the profile's `max_speed` when absent.
-    pub max_velocity: Option<f64>,
+    pub(crate) max_velocity: Option<f64>,
     /// Acceleration of printing moves, mm/s² (Marlin's `M204 P`, Klipper's `max_accel`).
     pub max_acceleration: f64,
     /// Acceleration of travel moves, mm/s² (Marlin's `M204 T`); `max_acceleration` when absent.
     pub travel_acceleration: Option<f64>,
     /// Acceleration of E-only moves (retractions), mm/s² of filament
     /// (Marlin's `M204 R`); `max_acceleration` when absent.
-    pub retract_acceleration: Option<f64>,
+    pub(crate) retract_acceleration: Option<f64>,
     /// Marlin's junction deviation, mm (`M205 J`).
-    pub junction_deviation: Option<f64>,
+    pub(crate) junction_deviation: Option<f64>,
     /// Marlin's classic jerk of X and Y, mm/s (`M205 X`, a slicer's
     /// `machine_max_jerk_x`): without `junction_deviation`, the planner
     /// works with Marlin's own conversion of it, 0.4·jerk²/max_acceleration
@@ -48,41 +48,41 @@ pub struct Kinematics {
     pub square_corner_velocity: Option<f64>,
     /// Shortest time a move may take, s (Marlin's `M205 B`, in s here); 0.02
     /// with junction deviation, 0 with square-corner velocity (Klipper has none).
-    pub min_segment_time: Option<f64>,
+    pub(crate) min_segment_time: Option<f64>,
     /// Klipper's `minimum_cruise_ratio`: the share of a move that must cruise;
     /// 0.5 with square-corner velocity, 0 with junction deviation (Marlin has none).
-    pub minimum_cruise_ratio: Option<f64>,
+    pub(crate) minimum_cruise_ratio: Option<f64>,
     /// Highest speed of the Z axis, mm/s (Marlin's `M203 Z`, Klipper's
     /// `max_z_velocity`); none when absent.
-    pub max_z_speed: Option<f64>,
+    pub(crate) max_z_speed: Option<f64>,
     /// Highest acceleration of the Z axis, mm/s² (Marlin's `M201 Z`,
     /// Klipper's `max_z_accel`); none when absent.
-    pub max_z_acceleration: Option<f64>,
+    pub(crate) max_z_acceleration: Option<f64>,
     /// Klipper's `[extruder] instantaneous_corner_velocity`, mm/s of filament:
     /// the largest instant change of E speed at a junction; 1 with
     /// square-corner velocity, none with junction deviation.
-    pub instantaneous_corner_velocity: Option<f64>,
+    pub(crate) instantaneous_corner_velocity: Option<f64>,
     /// Klipper's `[extruder] max_extrude_only_velocity`, mm/s of filament;
     /// Klipper's default with square-corner velocity, none with junction deviation.
-    pub max_extrude_only_velocity: Option<f64>,
+    pub(crate) max_extrude_only_velocity: Option<f64>,
     /// Klipper's `[extruder] max_extrude_only_accel`, mm/s² of filament;
     /// Klipper's default with square-corner velocity, none with junction deviation.
-    pub max_extrude_only_accel: Option<f64>,
+    pub(crate) max_extrude_only_accel: Option<f64>,
     /// Klipper's `[extruder] max_extrude_cross_section`, mm²: the largest
     /// cross-section of a move Klipper runs (4 × nozzle² when absent); a
     /// Klipper printer refuses a move past it (the `klipper-extrusion` check).
-    pub max_extrude_cross_section: Option<f64>,
+    pub(crate) max_extrude_cross_section: Option<f64>,
     /// Klipper's `[extruder] max_extrude_only_distance`, mm of filament: the
     /// longest extrude-only move Klipper runs (50 when absent).
-    pub max_extrude_only_distance: Option<f64>,
+    pub(crate) max_extrude_only_distance: Option<f64>,
     /// Hold every move to at least `min_segment_time` (the old, pessimistic
     /// model) instead of Marlin's buffer-draining slowdown; off by default.
-    pub min_segment_time_floor: bool,
+    pub(crate) min_segment_time_floor: bool,
     /// Marlin's `BLOCK_BUFFER_SIZE`, moves (16 by default).
-    pub block_buffer_size: Option<u32>,
+    pub(crate) block_buffer_size: Option<u32>,
     /// Lines per second the firmware reads, parses and plans from SD (500 by
     /// default, an assumption): what refills Marlin's buffer.
-    pub command_rate: Option<f64>,
+    pub(crate) command_rate: Option<f64>,
 }
 
 impl Default for Kinematics {
@@ -116,7 +116,7 @@ pub(crate) const MAX_MIN_SEGMENT_TIME: f64 = 1.0;
 
 impl Kinematics {
     /// Checks the values; errors name the key under `kinematics.`.
-    pub fn validate(&self) -> Result<()> {
+    pub(crate) fn validate(&self) -> Result<()> {
         let check = |key: &str, v: Option<f64>, zero_ok: bool| -> Result<()> {
             match v {
                 Some(v) if !v.is_finite() || v < 0.0 || (v == 0.0 && !zero_ok) => {
@@ -197,7 +197,7 @@ impl Kinematics {
     /// The limits with every default filled in; `max_speed` is the profile's,
     /// `extrude_ratio` Klipper's `max_extrude_cross_section` over the
     /// filament's area (4·nozzle² / area by default, see [`extrude_ratio`]).
-    pub fn limits(&self, max_speed: f64, extrude_ratio: f64) -> Limits {
+    pub(crate) fn limits(&self, max_speed: f64, extrude_ratio: f64) -> Limits {
         let klipper = self.square_corner_velocity.is_some();
         let accel = self.max_acceleration;
         let max_velocity = self.max_velocity.unwrap_or(max_speed);
@@ -260,17 +260,17 @@ impl Kinematics {
 /// filament, "a tiny amount"); an extrude-only move (no X, no Y) of more
 /// than `max_only_distance` of filament.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct KlipperExtruder {
+pub(crate) struct KlipperExtruder {
     /// `max_extrude_cross_section`, mm².
-    pub max_cross_section: f64,
+    pub(crate) max_cross_section: f64,
     /// `max_extrude_only_distance`, mm of filament.
-    pub max_only_distance: f64,
+    pub(crate) max_only_distance: f64,
 }
 
 impl Kinematics {
     /// Klipper's extruder limits for `nozzle_diameter`: the profile's, else
     /// Klipper's defaults (4 × nozzle², 50 mm).
-    pub fn klipper_extruder(&self, nozzle_diameter: f64) -> KlipperExtruder {
+    pub(crate) fn klipper_extruder(&self, nozzle_diameter: f64) -> KlipperExtruder {
         KlipperExtruder {
             max_cross_section: self
                 .max_extrude_cross_section
@@ -335,7 +335,7 @@ pub struct Limits {
 
 impl Limits {
     /// One line for reports: `Marlin junction deviation 0.013 mm, 1000 mm/s², …`.
-    pub fn describe(&self) -> String {
+    pub(crate) fn describe(&self) -> String {
         let junction = match (self.junction_deviation, self.square_corner_velocity) {
             (_, Some(v)) => format!("square-corner velocity {v} mm/s"),
             (Some(d), None) => format!("junction deviation {d} mm"),

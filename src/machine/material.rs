@@ -8,50 +8,50 @@ use crate::base::slicer_macro::Value;
 
 /// A filament material.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Material {
+pub(crate) struct Material {
     /// Name for reports.
-    pub name: String,
+    pub(crate) name: String,
     /// Filament diameter, mm; the printer's when `None`.
-    pub filament_diameter: Option<f64>,
+    pub(crate) filament_diameter: Option<f64>,
     /// Density, g/cm³.
-    pub density: f64,
+    pub(crate) density: f64,
     /// Printing temperature, °C.
-    pub nozzle_temp: f64,
+    pub(crate) nozzle_temp: f64,
     /// Bed temperature, °C.
-    pub bed_temp: f64,
+    pub(crate) bed_temp: f64,
     /// Hottest safe nozzle for this material, °C.
-    pub max_nozzle_temp: f64,
+    pub(crate) max_nozzle_temp: f64,
     /// Part-cooling fan once the print is above `fan_start_z`, 0 (off) to 1.
-    pub fan_speed: f64,
+    pub(crate) fan_speed: f64,
     /// Height (recipe z, mm) above which the fan turns on: the first layers
     /// stick better warm.
-    pub fan_start_z: f64,
+    pub(crate) fan_start_z: f64,
     /// Filament colour, sRGB (the 3MF mesh's material colour).
-    pub color: [u8; 3],
+    pub(crate) color: [u8; 3],
     /// Coolest nozzle the material prints at, °C: the low end of its range.
-    pub min_nozzle_temp: f64,
+    pub(crate) min_nozzle_temp: f64,
     /// The filament's own volumetric flow limit, mm³/s, when known (a
     /// filament preset's `filament_max_volumetric_speed`).
-    pub max_volumetric_speed: Option<f64>,
+    pub(crate) max_volumetric_speed: Option<f64>,
     /// Chamber temperature the material asks for, °C; 0 for none.
-    pub chamber_temp: f64,
+    pub(crate) chamber_temp: f64,
     /// Where the material softens (the slicers' `temperature_vitrification`),
     /// °C, when known.
-    pub vitrification_temp: Option<f64>,
+    pub(crate) vitrification_temp: Option<f64>,
     /// The slicer's filament preset it came from, if any.
-    pub preset: Option<FilamentPreset>,
+    pub(crate) preset: Option<FilamentPreset>,
 }
 
 /// A slicer's filament preset behind a material: its name, its file and
 /// every setting as a template value (text on one line).
 #[derive(Clone, Debug, PartialEq)]
-pub struct FilamentPreset {
+pub(crate) struct FilamentPreset {
     /// The preset's name.
-    pub name: String,
+    pub(crate) name: String,
     /// The preset file, as the user named it.
-    pub file: String,
+    pub(crate) file: String,
     /// Every setting, by the slicer's key.
-    pub settings: BTreeMap<String, Value>,
+    pub(crate) settings: BTreeMap<String, Value>,
 }
 
 /// The colour of a material that names none: the orange the previews draw
@@ -64,7 +64,7 @@ pub(crate) const FAN_START_Z: f64 = 0.5;
 
 impl Material {
     /// A built-in material: `pla`, `abs` or `petg`.
-    pub fn built_in(name: &str) -> Option<Material> {
+    pub(crate) fn built_in(name: &str) -> Option<Material> {
         // PLA wants full cooling, PETG some (it sticks to itself less when
         // cold), ABS none (it warps and splits between layers)
         // the coolest nozzle and the softening point: the low end of the
@@ -95,7 +95,7 @@ impl Material {
     }
 
     /// The filament preset's setting `key`, if the material came from one.
-    pub fn setting(&self, key: &str) -> Option<&Value> {
+    pub(crate) fn setting(&self, key: &str) -> Option<&Value> {
         self.preset.as_ref()?.settings.get(key)
     }
 }

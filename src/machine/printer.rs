@@ -28,7 +28,8 @@ pub enum Flavor {
 
 impl Flavor {
     /// Every flavour, in the order `p3dp printers` and the docs list them.
-    pub const ALL: [Flavor; 5] = [
+    #[cfg(any(test, feature = "testing"))]
+    pub(crate) const ALL: [Flavor; 5] = [
         Flavor::Marlin,
         Flavor::Prusa,
         Flavor::Klipper,
@@ -63,7 +64,7 @@ impl Flavor {
 
 /// Absolute (M82) or relative (M83) E values.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum Extrusion {
+pub(crate) enum Extrusion {
     /// M82: E is the total filament fed so far.
     #[default]
     Absolute,
@@ -104,13 +105,13 @@ impl Bed {
     }
 
     /// Whether machine point `p` is over the bed (XY only).
-    pub fn contains_xy(&self, p: DVec3) -> bool {
+    pub(crate) fn contains_xy(&self, p: DVec3) -> bool {
         self.contains_xy_within(p, 0.0)
     }
 
     /// Whether machine point `p` is over the bed grown by `margin` mm on
     /// every side (XY only).
-    pub fn contains_xy_within(&self, p: DVec3, margin: f64) -> bool {
+    pub(crate) fn contains_xy_within(&self, p: DVec3, margin: f64) -> bool {
         const EPS: f64 = 1e-9;
         let m = margin + EPS;
         match *self {
@@ -126,7 +127,7 @@ impl Bed {
 
     /// The bed's XY extent, machine coordinates: (min, max) corners (a
     /// round bed's bounding square).
-    pub fn extent(&self) -> ([f64; 2], [f64; 2]) {
+    pub(crate) fn extent(&self) -> ([f64; 2], [f64; 2]) {
         match *self {
             Bed::Rectangle { size, min, .. } => (min, [min[0] + size[0], min[1] + size[1]]),
             Bed::Circle { diameter, .. } => {
@@ -163,7 +164,7 @@ pub struct Retraction {
     /// Retraction speed, mm/s of filament.
     pub speed: f64,
     /// Travel moves shorter than this are not retracted, mm.
-    pub min_travel: f64,
+    pub(crate) min_travel: f64,
 }
 
 impl Default for Retraction {
@@ -184,31 +185,31 @@ impl Default for Retraction {
 /// 0: never below the bed). p3dp's own moves stay on the bed whatever this
 /// says.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Envelope {
+pub(crate) struct Envelope {
     /// Reach beyond the bed's edges and above its height, mm.
-    pub margin: f64,
+    pub(crate) margin: f64,
     /// Reach below z = 0, mm.
-    pub below_bed: f64,
+    pub(crate) below_bed: f64,
     /// The head's reach along X, machine mm (lowest, highest), in place of
     /// the bed grown by `margin`; it holds the bed.
-    pub x: Option<[f64; 2]>,
+    pub(crate) x: Option<[f64; 2]>,
     /// The head's reach along Y, as `x`.
-    pub y: Option<[f64; 2]>,
+    pub(crate) y: Option<[f64; 2]>,
 }
 
 impl Envelope {
     /// Largest `margin` a profile may declare, mm: a purge line beside the
     /// bed, never a move metres away.
-    pub const MAX_MARGIN: f64 = 50.0;
+    pub(crate) const MAX_MARGIN: f64 = 50.0;
     /// Largest `below_bed` a profile may declare, mm.
-    pub const MAX_BELOW_BED: f64 = 5.0;
+    pub(crate) const MAX_BELOW_BED: f64 = 5.0;
     /// Farthest a reach `x`/`y` may extend past the bed's edge, mm: a purge
     /// chute or a park beside the bed.
-    pub const MAX_REACH: f64 = 60.0;
+    pub(crate) const MAX_REACH: f64 = 60.0;
 
     /// The range the head may reach along axis `k` (0: X, 1: Y) of a bed
     /// spanning `lo` to `hi` there.
-    pub fn reach(&self, k: usize, lo: f64, hi: f64) -> [f64; 2] {
+    pub(crate) fn reach(&self, k: usize, lo: f64, hi: f64) -> [f64; 2] {
         match [self.x, self.y][k] {
             Some(r) => r,
             None => [lo - self.margin, hi + self.margin],
@@ -251,7 +252,7 @@ pub struct Printer {
     /// Filament diameter, mm (a material may override it).
     pub filament_diameter: f64,
     /// Absolute or relative E.
-    pub extrusion: Extrusion,
+    pub(crate) extrusion: Extrusion,
     /// Extruders (or a filament changer's slots) the start and end G-code
     /// know, the length of the slicers' per-extruder values; p3dp prints
     /// with `tool`.
@@ -260,18 +261,18 @@ pub struct Printer {
     /// start G-code selects (Bambu's H2D its main, right-hand one, 1).
     pub tool: usize,
     /// G-code before the print: a template of the slicers' macro language
-    /// ([`crate::base::slicer_macro`]) over the variables of [`VARIABLES`]
+    /// (`base::slicer_macro`) over the variables of `VARIABLES`
     /// and `gcode_variables`.
     pub start_gcode: String,
     /// G-code after the print, a template over the same variables.
-    pub end_gcode: String,
+    pub(crate) end_gcode: String,
     /// Values of template variables only a slicer knows (a print preset's
     /// name, a Bambu bed type), by name.
-    pub gcode_variables: BTreeMap<String, Value>,
+    pub(crate) gcode_variables: BTreeMap<String, Value>,
     /// Where the start and end G-code may move the head.
-    pub envelope: Envelope,
+    pub(crate) envelope: Envelope,
     /// Head speed of travel moves, mm/s.
-    pub travel_speed: f64,
+    pub(crate) travel_speed: f64,
     /// Retraction before long travel moves.
     pub retraction: Retraction,
     /// Retract with the firmware's `G10`/`G11` (its own length and speed,
@@ -287,50 +288,50 @@ pub struct Printer {
     pub max_flow: f64,
     /// Runs of extruding strings shorter than this are merged into one move
     /// (Kanada's `draw` does the same near a globe's poles), mm.
-    pub min_string_length: f64,
+    pub(crate) min_string_length: f64,
     /// Fit `G2`/`G3` arcs to runs of strings on a circle or helix (see
-    /// [`crate::base::geom::arc`]); off by default.
+    /// `base::geom::arc`); off by default.
     pub arcs: bool,
     /// Largest distance between an arc and the strings it replaces, mm.
     pub arc_tolerance: f64,
     /// Thumbnails to embed in the G-code, as `WxH` (PNG) or `WxH/FORMAT`
     /// (`PNG`, `QOI`, `JPG`) entries, PrusaSlicer's `thumbnails` (see
-    /// [`super::size::thumbnails`]); none by default.
+    /// `machine::size::thumbnails`); none by default.
     pub thumbnails: Vec<String>,
     /// Write `M73` progress (percent done, minutes left) from the planner's
     /// time: on by default for Marlin and Prusa, whose screens show it.
-    pub progress: bool,
+    pub(crate) progress: bool,
     /// Label each part for the host's cancel-object (Klipper's
     /// `EXCLUDE_OBJECT_DEFINE/START/END`); on by default for Klipper.
-    pub object_labels: bool,
+    pub(crate) object_labels: bool,
     /// Write Prusa's binary G-code (`.bgcode`) when the output's name does
     /// not say (PrusaSlicer's `binary_gcode`); off by default.
-    pub binary_gcode: bool,
+    pub(crate) binary_gcode: bool,
     /// The start G-code is the maker's own sequence (an imported preset's):
     /// its nozzle temperatures (flushes, purges, nozzle cleaning hotter than
     /// the print) are held to `max_nozzle_temp`, and the last one, where
     /// the print starts, to the material's limit; off by default.
-    pub maker_temperatures: bool,
+    pub(crate) maker_temperatures: bool,
     /// Write the firmware's limits of `kinematics` as `M201`, `M203`,
     /// `M204`, `M205` before the start G-code (PrusaSlicer's
     /// `machine_limits_usage = emit_to_gcode`); off by default.
-    pub emit_limits: bool,
+    pub(crate) emit_limits: bool,
     /// The firmware's maximum X and Y accelerations, mm/s² (a slicer's
     /// `machine_max_acceleration_x`/`_y`), written as `M201 X Y` with
     /// `emit_limits`; the head's highest acceleration when absent.
-    pub axis_acceleration: Option<[f64; 2]>,
+    pub(crate) axis_acceleration: Option<[f64; 2]>,
     /// Pressure (linear) advance written after the start G-code, s (none:
     /// the firmware keeps its own).
-    pub pressure_advance: Option<f64>,
+    pub(crate) pressure_advance: Option<f64>,
     /// The firmware planner's limits, for the print-time estimate (see
-    /// [`super::Kinematics`]).
+    /// `Kinematics`).
     pub kinematics: super::kinematics::Kinematics,
     /// The print head's geometry for the collision check and the travel
-    /// height between parts (see [`super::Head`]).
-    pub head: super::head::Head,
+    /// height between parts (see `Head`).
+    pub(crate) head: super::head::Head,
     /// Thresholds of the flow, support and planner checks (see
-    /// [`super::CheckLimits`]).
-    pub checks: super::head::CheckLimits,
+    /// `CheckLimits`).
+    pub(crate) checks: super::head::CheckLimits,
 }
 
 /// Largest `arc_tolerance`, mm: an arc strays from its strings by up to
@@ -340,7 +341,7 @@ pub(crate) const MAX_ARC_TOLERANCE: f64 = 0.5;
 impl Printer {
     /// The planner's limits: the profile's `kinematics:` with every default
     /// filled in (Klipper's extrude-only limits from the nozzle and filament).
-    pub fn limits(&self) -> super::kinematics::Limits {
+    pub(crate) fn limits(&self) -> super::kinematics::Limits {
         self.kinematics.limits(
             self.max_speed,
             super::kinematics::extrude_ratio(self.nozzle_diameter, self.filament_diameter),
@@ -348,7 +349,7 @@ impl Printer {
     }
 
     /// Checks every value; errors name the key.
-    pub fn validate(&self) -> Result<()> {
+    pub(crate) fn validate(&self) -> Result<()> {
         crate::base::safe_text::check("name", &self.name)?;
         let positive = super::head::positive;
         positive("nozzle_diameter", self.nozzle_diameter)?;
@@ -486,9 +487,9 @@ impl Printer {
 
     /// The start or end G-code template under `key`, parsed: no character
     /// that breaks a line but `\n`, no syntax error, and no variable
-    /// neither p3dp ([`VARIABLES`]) nor `gcode_variables` gives; errors
+    /// neither p3dp (`VARIABLES`) nor `gcode_variables` gives; errors
     /// name the key and the template's line.
-    pub fn template(&self, key: &str, text: &str) -> Result<Template> {
+    pub(crate) fn template(&self, key: &str, text: &str) -> Result<Template> {
         let at = |line: usize, message: String| Error::input(format!("{key} line {line}"), message);
         for (k, l) in text.split('\n').enumerate() {
             crate::base::safe_text::check_gcode_line("", l).map_err(|e| at(k + 1, e.message))?;

@@ -4,11 +4,11 @@ use crate::base::error::{Error, Result};
 
 /// An image size in pixels.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Size {
+pub(crate) struct Size {
     /// Width, px.
-    pub width: u32,
+    pub(crate) width: u32,
     /// Height, px.
-    pub height: u32,
+    pub(crate) height: u32,
 }
 
 impl Default for Size {
@@ -22,10 +22,10 @@ impl Default for Size {
 
 impl Size {
     /// Largest side accepted, px.
-    pub const MAX: u32 = 8192;
+    pub(crate) const MAX: u32 = 8192;
 
     /// Parses `WxH`, e.g. `1200x900`; `what` names the place for errors.
-    pub fn parse(s: &str, what: &str) -> Result<Size> {
+    pub(crate) fn parse(s: &str, what: &str) -> Result<Size> {
         let bad = || {
             Error::input(
                 what,
@@ -67,9 +67,9 @@ impl ImageFormat {}
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct Thumbnail {
     /// Size in pixels.
-    pub size: Size,
+    pub(crate) size: Size,
     /// Image format.
-    pub format: ImageFormat,
+    pub(crate) format: ImageFormat,
 }
 
 /// The thumbnails a profile's `thumbnails` list asks for: each entry

@@ -28,7 +28,7 @@ mod tests {
 
     #[test]
     fn travel_between_parts_rises_over_the_print() {
-        let p = Printer::built_in("generic-220").unwrap();
+        let p = crate::recipe::profile::built_in("generic-220").unwrap();
         let a = DVec3::new(0.0, 0.0, 0.2);
         let b = DVec3::new(30.0, 0.0, 0.2);
         assert_eq!(safe_travel_z(&p, a, b, 12.0), Some(13.0));

@@ -23,9 +23,9 @@ use crate::base::error::{Error, Result};
 #[serde(deny_unknown_fields)]
 pub(crate) struct Lock {
     /// Format version: 1.
-    pub p3dp_lock: u32,
+    pub(crate) p3dp_lock: u32,
     /// One entry per recipe and parameter set.
-    pub entries: Vec<Entry>,
+    pub(crate) entries: Vec<Entry>,
 }
 
 /// One locked build.
@@ -33,22 +33,22 @@ pub(crate) struct Lock {
 #[serde(deny_unknown_fields)]
 pub(crate) struct Entry {
     /// Recipe path, relative to the lock file, `/`-separated.
-    pub recipe: String,
+    pub(crate) recipe: String,
     /// `--set` values, `NAME=VALUE`, in order.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub set: Vec<String>,
+    pub(crate) set: Vec<String>,
     /// The `--printer` it was built for: a built-in name, or a profile file
     /// relative to the lock file, `/`-separated; the recipe's own when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub printer: Option<String>,
+    pub(crate) printer: Option<String>,
     /// SHA-256 of the G-code.
-    pub sha256: String,
+    pub(crate) sha256: String,
     /// Lines of G-code.
-    pub lines: u64,
+    pub(crate) lines: u64,
     /// Lines per block of the fingerprint.
-    pub block_lines: u64,
+    pub(crate) block_lines: u64,
     /// Hash of each block, 8 hex digits each, space-separated.
-    pub blocks: String,
+    pub(crate) blocks: String,
 }
 
 /// Most lines a locked G-code may have: far more than any build writes,
@@ -126,7 +126,7 @@ pub(crate) const MAX_BLOCKS: u64 = 512;
 #[derive(Default)]
 pub(crate) struct LineHashes {
     /// Hash of each complete line.
-    pub lines: Vec<u64>,
+    pub(crate) lines: Vec<u64>,
     current: u64,
     open: bool,
     /// The current line's first bytes, enough to tell a thumbnail's.

@@ -15,8 +15,8 @@ pub struct Context {
     pub reads: Reads,
     /// The z-buffers of the build before, for its solids to start from
     /// (`p3dp watch`).
-    pub zbuffers: Option<Reusing>,
+    pub(crate) zbuffers: Option<Reusing>,
     /// The parts of the build before, each taken back when its inputs are
     /// unchanged (`p3dp watch`).
-    pub parts: Option<Parts>,
+    pub(crate) parts: Option<Parts>,
 }

@@ -17,9 +17,9 @@ use crate::recipe::schema::{Num, Num3};
 #[derive(Debug)]
 pub(crate) struct At<'v, T> {
     /// The value.
-    pub value: &'v T,
+    pub(crate) value: &'v T,
     /// Its key in the map that holds it.
-    pub key: &'static str,
+    pub(crate) key: &'static str,
 }
 
 impl<T> Clone for At<'_, T> {
@@ -101,7 +101,7 @@ pub(crate) fn join(prefix: &str, key: &str) -> String {
 #[derive(Clone, Debug)]
 pub(crate) struct Scope<'a> {
     /// The params (and template or loop values) expressions may use.
-    pub params: &'a Params,
+    pub(crate) params: &'a Params,
     /// The key path the keys it is given are under; empty at the top.
     path: String,
 }

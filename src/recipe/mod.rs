@@ -4,7 +4,7 @@
 //! Loading is two stages. [`yaml::parse_yaml`] reads the text into the raw
 //! schema ([`schema`]: `Raw*` types, every number still a
 //! number-or-expression), reporting the line and key path of any syntax
-//! error, unknown key or wrong type. Then [`Recipe::resolve`] evaluates params
+//! error, unknown key or wrong type. Then [`recipe::resolve`] evaluates params
 //! (with `--set` overrides), every number, compiles step expressions and
 //! loads images, naming the key path of any problem; the result is a
 //! [`crate::generate::model::Recipe`].
@@ -28,6 +28,12 @@ pub(crate) mod schema;
 pub(crate) mod yaml;
 
 pub(crate) use params::parse_set;
+#[cfg(any(test, feature = "testing"))]
+pub use resolve::load;
+pub use resolve::load_in;
+#[cfg(any(test, feature = "testing"))]
+pub(crate) use resolve::resolve;
+pub(crate) use resolve::{from_raw_in, read_raw};
 pub(crate) use schema::RawRecipe;
 pub(crate) use yaml::parse_yaml;
 

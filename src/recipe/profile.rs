@@ -6,14 +6,13 @@ use crate::base::input::{Reads, MAX_TEXT_BYTES};
 use std::path::Path;
 
 use super::schema::{
-    RawBed, RawCheckLimits, RawExtrusion, RawFlavor, RawHead, RawKinematics, RawPrinter,
-    RawRetraction, RawVariable,
+    RawBed, RawExtrusion, RawFlavor, RawHead, RawKinematics, RawPrinter, RawRetraction, RawVariable,
 };
 use super::yaml::{parse_yaml, Tree};
 use crate::base::error::{Error, Result};
 use crate::base::slicer_macro::Value;
 use crate::machine::printer::Envelope;
-use crate::machine::{Bed, CheckLimits, Extrusion, Flavor, Head, Kinematics, Printer, Retraction};
+use crate::machine::{Bed, Extrusion, Flavor, Head, Kinematics, Printer, Retraction};
 
 const BUILT_IN: &[(&str, &str)] = &[
     (
@@ -81,106 +80,99 @@ pub fn built_in_names() -> Vec<&'static str> {
 }
 
 /// A built-in profile by name.
-pub(crate) fn built_in(name: &str) -> Option<Printer> {
+pub fn built_in(name: &str) -> Option<Printer> {
     let (_, text) = BUILT_IN.iter().find(|(n, _)| *n == name)?;
     let p: RawPrinter = parse_yaml(text, name).expect("built-in profiles parse");
     Some(printer(p))
 }
 
-impl Printer {
-    /// A built-in profile by name.
-    pub fn built_in(name: &str) -> Option<Printer> {
-        built_in(name)
-    }
+/// A profile from a YAML file. With `inherits: NAME|FILE` the file's keys
+/// override those of a built-in profile or another file (maps merged key
+/// by key, see `Tree::merge`); a file without it is parsed on its own.
+#[cfg(any(test, feature = "testing"))]
+pub fn from_file(path: &Path) -> Result<Printer> {
+    let reads = Reads::default();
+    reads.name(path);
+    from_file_in(path, &reads)
+}
 
-    /// A profile from a YAML file. With `inherits: NAME|FILE` the file's keys
-    /// override those of a built-in profile or another file (maps merged key
-    /// by key, see [`Tree::merge`]); a file without it is parsed on its own.
-    pub fn from_file(path: &Path) -> Result<Printer> {
-        let reads = Reads::default();
-        reads.name(path);
-        Printer::from_file_in(path, &reads)
-    }
-
-    /// [`Printer::from_file`], every file read noted in `reads` and read
-    /// only inside its roots ([`Reads::reach`]).
-    pub fn from_file_in(path: &Path, reads: &Reads) -> Result<Printer> {
-        let shown = path.display().to_string();
-        let text = reads.read_reached(path, "printer profile", MAX_TEXT_BYTES)?;
-        let tree = Tree::parse(&text, &shown)?;
-        let raw: RawPrinter = if tree.has("inherits") {
-            let named = tree.has("name");
-            let mut seen = vec![path.canonicalize().unwrap_or_else(|_| path.to_path_buf())];
-            let mut merged =
-                inherit(tree, path, &mut seen, reads).map_err(|e| e.in_file(&shown))?;
-            if !named {
-                // a profile named after its file, not after its base
-                if let Some(stem) = path.file_stem() {
-                    merged.set_str("name", stem.to_string_lossy().into_owned());
-                }
+/// [`from_file`], every file read noted in `reads` and read
+/// only inside its roots ([`Reads::reach`]).
+pub(crate) fn from_file_in(path: &Path, reads: &Reads) -> Result<Printer> {
+    let shown = path.display().to_string();
+    let text = reads.read_reached(path, "printer profile", MAX_TEXT_BYTES)?;
+    let tree = Tree::parse(&text, &shown)?;
+    let raw: RawPrinter = if tree.has("inherits") {
+        let named = tree.has("name");
+        let mut seen = vec![path.canonicalize().unwrap_or_else(|_| path.to_path_buf())];
+        let mut merged = inherit(tree, path, &mut seen, reads).map_err(|e| e.in_file(&shown))?;
+        if !named {
+            // a profile named after its file, not after its base
+            if let Some(stem) = path.file_stem() {
+                merged.set_str("name", stem.to_string_lossy().into_owned());
             }
-            merged.read(&shown)?
-        } else {
-            parse_yaml(&text, &shown)?
-        };
-        let mut p = printer(raw);
-        p.source = Some(shown.clone());
-        p.validate().map_err(|e| e.in_file(&shown))?;
-        Ok(p)
-    }
+        }
+        merged.read(&shown)?
+    } else {
+        parse_yaml(&text, &shown)?
+    };
+    let mut p = printer(raw);
+    p.source = Some(shown.clone());
+    p.validate().map_err(|e| e.in_file(&shown))?;
+    Ok(p)
+}
 
-    /// A slicer's printer preset (see [`crate::recipe::preset`]) as a
-    /// profile: the preset mapped to the profile's raw form (the value `p3dp
-    /// printers import` writes as YAML), loaded and checked as a profile
-    /// file is; errors name the preset file.
-    pub fn from_preset(src: &super::preset::Source, reads: &Reads) -> Result<Printer> {
-        let preset = super::preset::load(src, reads)?;
-        let imported = super::preset::map::import(&preset)?;
-        from_raw(imported.raw, &preset.file)
-    }
+/// A slicer's printer preset (see `recipe::preset`) as a
+/// profile: the preset mapped to the profile's raw form (the value `p3dp
+/// printers import` writes as YAML), loaded and checked as a profile
+/// file is; errors name the preset file.
+pub fn from_preset(src: &super::preset::Source, reads: &Reads) -> Result<Printer> {
+    let preset = super::preset::load(src, reads)?;
+    let imported = super::preset::map::import(&preset)?;
+    from_raw(imported.raw, &preset.file)
+}
 
-    /// A built-in name, or else a path (relative paths from `base`): a
-    /// profile's YAML, or a slicer's `.ini` or `.json` printer preset; every
-    /// file read noted in `reads`.
-    pub fn resolve(spec: &str, base: &Path, reads: &Reads) -> Result<Printer> {
-        if let Some(p) = Printer::built_in(spec) {
-            return Ok(p);
-        }
-        if !names_a_file(spec) {
-            return Err(unknown_printer("printer", spec));
-        }
-        // relative to the recipe's folder, or to the working one for --printer
-        let path = if base == Path::new(".") || base.as_os_str().is_empty() {
-            Path::new(spec).to_path_buf()
-        } else {
-            base.join(spec)
-        };
-        reads
-            .reach(&path, "printer profile")
-            .map_err(|e| e.under("printer"))?;
-        if !path.exists() {
-            let at = if path == Path::new(spec) {
-                String::new()
-            } else {
-                format!(" ({})", path.display())
-            };
-            return Err(Error::input(
-                "printer",
-                format!(
-                    "no printer profile at `{spec}`{at}; built-in printers are {}",
-                    built_in_names().join(", ")
-                ),
-            ));
-        }
-        if super::preset::is_preset_file(spec) {
-            let src = super::preset::Source {
-                file: path,
-                ..Default::default()
-            };
-            return Printer::from_preset(&src, reads);
-        }
-        Printer::from_file_in(&path, reads)
+/// A built-in name, or else a path (relative paths from `base`): a
+/// profile's YAML, or a slicer's `.ini` or `.json` printer preset; every
+/// file read noted in `reads`.
+pub(crate) fn resolve(spec: &str, base: &Path, reads: &Reads) -> Result<Printer> {
+    if let Some(p) = built_in(spec) {
+        return Ok(p);
     }
+    if !names_a_file(spec) {
+        return Err(unknown_printer("printer", spec));
+    }
+    // relative to the recipe's folder, or to the working one for --printer
+    let path = if base == Path::new(".") || base.as_os_str().is_empty() {
+        Path::new(spec).to_path_buf()
+    } else {
+        base.join(spec)
+    };
+    reads
+        .reach(&path, "printer profile")
+        .map_err(|e| e.under("printer"))?;
+    if !path.exists() {
+        let at = if path == Path::new(spec) {
+            String::new()
+        } else {
+            format!(" ({})", path.display())
+        };
+        return Err(Error::input(
+            "printer",
+            format!(
+                "no printer profile at `{spec}`{at}; built-in printers are {}",
+                built_in_names().join(", ")
+            ),
+        ));
+    }
+    if super::preset::is_preset_file(spec) {
+        let src = super::preset::Source {
+            file: path,
+            ..Default::default()
+        };
+        return from_preset(&src, reads);
+    }
+    from_file_in(&path, reads)
 }
 
 /// The profile of a raw form (an imported preset's, see
@@ -346,7 +338,7 @@ fn printer(raw: RawPrinter) -> Printer {
         pressure_advance: raw.pressure_advance,
         kinematics: kinematics(raw.kinematics),
         head: head(raw.head),
-        checks: checks(raw.checks),
+        checks: raw.checks,
     }
 }
 
@@ -417,26 +409,35 @@ fn head(h: RawHead) -> Head {
     }
 }
 
-fn checks(c: RawCheckLimits) -> CheckLimits {
-    CheckLimits {
-        cross_section_max: c.cross_section_max,
-        cross_section_hard_max: c.cross_section_hard_max,
-        cross_section_min: c.cross_section_min,
-        cross_section_hard_min: c.cross_section_hard_min,
-        flow_hard_max: c.flow_hard_max,
-        max_bridge: c.max_bridge,
-        support_tolerance: c.support_tolerance,
-        min_move_time: c.min_move_time,
-        planner_buffer: c.planner_buffer,
-        first_layer_min: c.first_layer_min,
-        min_contact_per_height: c.min_contact_per_height,
-        min_contact_per_gram: c.min_contact_per_gram,
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_profiles_checks_deserialise_into_check_limits_key_by_key() {
+        let file = |checks: &str| {
+            format!("name: p\nbed: {{shape: circle, diameter: 280, max_z: 300}}\norigin: [0,0,0]\nnozzle_diameter: 0.4\nfilament_diameter: 1.75\nchecks: {checks}\n")
+        };
+        // an absent key keeps CheckLimits::default's value
+        let raw: RawPrinter =
+            parse_yaml(&file("{ max_bridge: 4, planner_buffer: 8 }"), "p.yaml").unwrap();
+        let want = crate::machine::CheckLimits {
+            max_bridge: 4.0,
+            planner_buffer: 8,
+            ..Default::default()
+        };
+        assert_eq!(raw.checks, want);
+        assert_eq!(printer(raw).checks, want);
+        // a misspelt key is refused under `checks`, the real names offered
+        let e = parse_yaml::<RawPrinter>(&file("{ max_brige: 4 }"), "p.yaml").unwrap_err();
+        assert_eq!(e.place.as_deref(), Some("checks.max_brige"), "{e}");
+        assert!(e.message.contains("unknown field `max_brige`"), "{e}");
+        assert!(e.message.contains("`max_bridge`"), "{e}");
+        // a value out of range is named by its key path when checked
+        let raw: RawPrinter = parse_yaml(&file("{ support_tolerance: -1 }"), "p.yaml").unwrap();
+        let e = printer(raw).validate().unwrap_err();
+        assert_eq!(e.place.as_deref(), Some("checks.support_tolerance"), "{e}");
+    }
 
     #[test]
     fn flavor_names_round_trip() {

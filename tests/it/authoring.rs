@@ -111,7 +111,7 @@ fn a_sweep_range_without_a_step_steps_by_one_as_for_does() {
 #[test]
 fn every_starter_builds_clean_on_the_default_printer() {
     let dir = tmp("authoring-new");
-    let kinds: Vec<&str> = p3dp::cli::STARTERS.iter().map(|(k, _)| *k).collect();
+    let kinds: Vec<&str> = p3dp::testing::STARTERS.iter().map(|(k, _)| *k).collect();
     assert!(kinds.len() >= 5, "{kinds:?}");
     for kind in kinds {
         let name = format!("my-{kind}");

@@ -151,6 +151,59 @@ fn any_range_and_step_gives_its_bands_in_the_stats() {
     }
 }
 
+/// The report, the stats and a refusal name the test, never the recipe
+/// `calibrate` staged in a temporary folder (a file the user never wrote).
+#[test]
+fn the_report_names_the_test_not_the_staged_recipe() {
+    let dir = tmp("calibrate-shown");
+    let out = p3dp(
+        &dir,
+        &[
+            "calibrate",
+            "pressure-advance-line",
+            "-o",
+            "pa.gcode",
+            "--stats-json",
+            "pa.json",
+        ],
+    );
+    let report = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(
+        report.lines().next(),
+        Some("calibration test pressure-advance-line → pa.gcode"),
+        "{report}"
+    );
+    assert!(!report.contains("p3dp-calibrate-"), "{report}");
+    assert_eq!(
+        stats(&dir, "pa.json")["recipe"],
+        "calibration test pressure-advance-line"
+    );
+    // a refusal after loading names the test too
+    let out = p3dp(
+        &dir,
+        &[
+            "calibrate",
+            "temperature",
+            "--set",
+            "start=400",
+            "-o",
+            "t.gcode",
+        ],
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.starts_with("error: calibration test temperature: "),
+        "{err}"
+    );
+    assert!(!err.contains("p3dp-calibrate-"), "{err}");
+}
+
 /// `apply` writes band N's value into a profile inheriting the printer, and
 /// a build of another recipe with that profile writes it at the start.
 #[test]

@@ -1,6 +1,7 @@
 //! The command-line contract of the spec: build, hash, --set, -o, --stats-json.
 
 use crate::common::*;
+use p3dp::testing::Insides;
 use sha2::{Digest, Sha256};
 
 fn sha256(bytes: &[u8]) -> String {
@@ -116,7 +117,7 @@ fn stats_json_has_every_field_of_the_spec() {
     // the globe's 0.2 mm-long polar strings were merged, filament untouched
     assert!(s["merged_strings"].as_u64().unwrap() > 1000);
     let plan = p3dp::plan(&recipe("globe.yaml"), &Default::default()).unwrap();
-    let exact: f64 = plan.paths.iter().map(|t| t.volume()).sum::<f64>() / area;
+    let exact: f64 = plan.paths().iter().map(|t| t.volume()).sum::<f64>() / area;
     assert!(
         ((fed - exact) / exact).abs() < 1e-6,
         "fed {fed}, strings {exact}"

@@ -7,9 +7,9 @@
 use std::path::PathBuf;
 
 use glam::DVec3;
-use p3dp::make_parts;
-use p3dp::Recipe;
-use p3dp::Toolpath;
+use p3dp::testing::make_parts;
+use p3dp::testing::Recipe;
+use p3dp::testing::Toolpath;
 
 pub(crate) fn load(name: &str) -> Recipe {
     load_with(name, &[])
@@ -23,7 +23,7 @@ pub(crate) fn load_with(name: &str, sets: &[(&str, &str)]) -> Recipe {
         .iter()
         .map(|(k, v)| (k.to_string(), v.to_string()))
         .collect();
-    Recipe::load(&path, &sets, None).unwrap_or_else(|e| panic!("{name}: {e}"))
+    p3dp::testing::load_recipe(&path, &sets, None).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
 pub(crate) fn param(recipe: &Recipe, name: &str) -> f64 {

@@ -7,8 +7,9 @@ use std::path::PathBuf;
 
 use glam::DVec3;
 use p3dp::plan;
+use p3dp::testing::Insides;
+use p3dp::testing::Toolpath;
 use p3dp::Severity;
-use p3dp::Toolpath;
 
 /// Every recipe of the gallery.
 const GALLERY: [&str; 8] = [
@@ -48,7 +49,7 @@ fn every_gallery_recipe_plans_cleanly_and_starts_on_the_bed() {
         // and no warning either (flow under the hot end's limit)
         assert!(plan.findings.is_empty(), "{name}: {:?}", plan.findings);
         let lowest = plan
-            .paths
+            .paths()
             .iter()
             .flat_map(extruding_points)
             .map(|p| p.z)
@@ -57,7 +58,7 @@ fn every_gallery_recipe_plans_cleanly_and_starts_on_the_bed() {
             (0.0..=0.5).contains(&lowest),
             "{name}: lowest extruding point at z = {lowest}"
         );
-        for tp in &plan.paths {
+        for tp in plan.paths() {
             assert!(tp.len() < 300_000, "{name}: {} has {}", tp.name, tp.len());
             for s in tp.strings.iter().filter(|s| !s.travel) {
                 assert!(

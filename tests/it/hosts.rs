@@ -295,7 +295,7 @@ fn bgcode_blocks_read_back_to_the_same_commands() {
         ascii.len()
     );
     // our reader, from the specification: every checksum and block
-    let blocks = ::p3dp::bgcode::decode(&binary).expect("a valid .bgcode");
+    let blocks = ::p3dp::testing::bgcode::decode(&binary).expect("a valid .bgcode");
     let kinds: Vec<u16> = blocks.iter().map(|b| b.kind).collect();
     assert_eq!(
         kinds[..7],

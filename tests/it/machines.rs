@@ -9,10 +9,11 @@ use std::path::PathBuf;
 
 use crate::common::{p3dp, recipe, root, tmp, Move};
 use glam::DVec3;
-use p3dp::printers as built_in_names;
+use p3dp::testing::printers as built_in_names;
+use p3dp::testing::Insides;
+use p3dp::testing::{Bed, Printer};
+use p3dp::testing::{Event, Toolpath};
 use p3dp::{plan, Options};
-use p3dp::{Bed, Printer};
-use p3dp::{Event, Toolpath};
 
 const PROFILES: [&str; 15] = [
     "generic-220",
@@ -295,7 +296,7 @@ fn the_built_in_list_and_the_printers_command() {
     assert!(out.status.success());
     let text = String::from_utf8(out.stdout).unwrap();
     for name in PROFILES {
-        let p = Printer::built_in(name).unwrap();
+        let p = p3dp::testing::profile::built_in(name).unwrap();
         let line = text
             .lines()
             .find(|l| l.split_whitespace().next() == Some(name))
@@ -309,12 +310,12 @@ fn the_built_in_list_and_the_printers_command() {
     for name in PROFILES {
         let f = dir.join(format!("{name}-user.yaml"));
         std::fs::write(&f, format!("inherits: {name}\n")).unwrap();
-        let p = Printer::from_file(&f).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let p = p3dp::testing::profile::from_file(&f).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert_eq!(p.name, format!("{name}-user"));
         assert_eq!(p.nozzle_diameter, 0.4);
         assert_eq!(p.filament_diameter, 1.75);
     }
-    let delta = Printer::built_in("rostock-max").unwrap();
+    let delta = p3dp::testing::profile::built_in("rostock-max").unwrap();
     assert_eq!(delta.origin, [0.0, 0.0, 0.0]);
     // SeeMeCNC's M665 B135: a printable radius of 135 mm
     assert!(matches!(delta.bed, Bed::Circle { diameter, .. } if diameter == 270.0));
@@ -323,7 +324,7 @@ fn the_built_in_list_and_the_printers_command() {
 #[test]
 fn every_built_in_profile_builds_the_globe_and_the_cup_inside_its_volume() {
     for name in PROFILES {
-        let printer = Printer::built_in(name).unwrap();
+        let printer = p3dp::testing::profile::built_in(name).unwrap();
         for r in ["globe.yaml", "cup.yaml"] {
             let text = build(r, name);
             assert!(text.contains(&format!("; printer: {name} ")), "{name}");
@@ -378,7 +379,7 @@ fn corner_and_centre_origins_place_the_recipe_alike() {
 
 #[test]
 fn user_profiles_inherit_and_override() {
-    let p = Printer::from_file(&fixture("child-user.yaml")).unwrap();
+    let p = p3dp::testing::profile::from_file(&fixture("child-user.yaml")).unwrap();
     // from the child, the file it inherits, and prusa-mk4 under both
     assert_eq!(p.name, "child-user");
     assert_eq!(p.retraction.length, 1.5);
@@ -391,14 +392,14 @@ fn user_profiles_inherit_and_override() {
     assert_eq!(p.nozzle_diameter, 0.6);
     assert_eq!(p.max_flow, 22.0);
     assert_eq!(p.flavor.name(), "prusa");
-    let mk4 = Printer::built_in("prusa-mk4").unwrap();
+    let mk4 = p3dp::testing::profile::built_in("prusa-mk4").unwrap();
     assert_eq!(p.start_gcode, mk4.start_gcode);
     assert_eq!(p.bed, mk4.bed);
 
-    let named = Printer::from_file(&fixture("base-user.yaml")).unwrap();
+    let named = p3dp::testing::profile::from_file(&fixture("base-user.yaml")).unwrap();
     assert_eq!(named.name, "my-mk4");
 
-    let round = Printer::from_file(&fixture("round-over-rectangle.yaml")).unwrap();
+    let round = p3dp::testing::profile::from_file(&fixture("round-over-rectangle.yaml")).unwrap();
     assert_eq!(
         round.bed,
         Bed::Circle {
@@ -433,7 +434,7 @@ fn bad_user_profiles_exit_2_naming_the_key() {
         assert!(err.contains(file), "{file}: {err}");
         assert!(!dir.join("x.gcode").exists());
     }
-    let e = Printer::from_file(&fixture("bad-key.yaml")).unwrap_err();
+    let e = p3dp::testing::profile::from_file(&fixture("bad-key.yaml")).unwrap_err();
     assert_eq!(e.place.as_deref(), Some("retraction.lenght"), "{e}");
     // a --printer that names nothing is the option's mistake, not the recipe's
     for (spec, want) in [
@@ -507,17 +508,17 @@ fn events_and_firmware_retraction_in_each_dialect() {
         }
         tp.event(Event::Fan { speed: 0.0 });
         tp.name = "events".into();
-        pl.paths = vec![tp];
+        *pl.paths_mut() = vec![tp];
         let job = p3dp::pipeline::Job::default();
         let bytes = p3dp::pipeline::write(&mut pl, &job, Vec::new())
             .unwrap()
             .out;
         let text = String::from_utf8(bytes).unwrap();
-        check_dialect(&text, pl.recipe.printer.flavor.name());
+        check_dialect(&text, pl.recipe().printer.flavor.name());
         for want in [pause, heat, fan] {
             assert!(text.contains(want), "{printer}: no `{want}` in\n{text}");
         }
-        let fw = pl.recipe.printer.firmware_retraction;
+        let fw = pl.recipe().printer.firmware_retraction;
         assert_eq!(text.contains("G10 ; retract"), fw, "{printer}");
         assert_eq!(text.contains("G11 ; unretract"), fw, "{printer}");
         if fw {
@@ -578,14 +579,10 @@ fn arcs_follow_the_strings(recipe_name: &str, profile: &str) -> (usize, usize) {
         &opts(fixture(profile).to_str().unwrap()),
     )
     .unwrap();
-    let printer = &arcs.recipe.printer.clone();
+    let printer = &arcs.recipe().printer.clone();
     assert!(printer.arcs);
-    let plain_printer = Printer {
-        arcs: false,
-        ..printer.clone()
-    };
     let mut plain = arcs.clone();
-    plain.recipe.printer = plain_printer;
+    plain.recipe_mut().printer.arcs = false;
     let job = p3dp::pipeline::Job::default();
     let a = p3dp::pipeline::write(&mut arcs, &job, Vec::new()).unwrap();
     let p = p3dp::pipeline::write(&mut plain, &job, Vec::new()).unwrap();
@@ -613,7 +610,7 @@ fn arcs_follow_the_strings(recipe_name: &str, profile: &str) -> (usize, usize) {
     // near the first string from the previous sample's on: passes of a
     // helix lie far more than the tolerance apart); µm rounding of the
     // written ends and centre adds a little
-    let segs = strings(&arcs.paths, printer);
+    let segs = strings(arcs.paths(), printer);
     let tol = printer.arc_tolerance + 0.003;
     let mut cur = 0;
     let mut n_arcs = 0;
@@ -664,7 +661,10 @@ fn arcs_shrink_the_globe_and_the_cup_and_follow_their_strings() {
 #[test]
 fn arcs_are_off_by_default_and_deterministic() {
     for name in PROFILES {
-        assert!(!Printer::built_in(name).unwrap().arcs, "{name}");
+        assert!(
+            !p3dp::testing::profile::built_in(name).unwrap().arcs,
+            "{name}"
+        );
     }
     let a = build("globe.yaml", fixture("arcs.yaml").to_str().unwrap());
     let b = build("globe.yaml", fixture("arcs.yaml").to_str().unwrap());

@@ -22,7 +22,7 @@ use std::path::{Path, PathBuf};
 
 use crate::common::*;
 use p3dp::{plan, Options};
-use p3dp::Recipe;
+use p3dp::testing::Recipe;
 
 /// xorshift64*: a small seeded generator, so a failure can be replayed.
 struct Rng(u64);
@@ -199,7 +199,7 @@ const BUILD_EVERY: usize = 25;
 /// What went wrong with one mutant, if anything.
 fn try_mutant(path: &Path, build: bool) -> Result<Option<p3dp::Error>, String> {
     let shown = path.display().to_string();
-    let loaded = catch_unwind(AssertUnwindSafe(|| Recipe::load(path, &[], None)))
+    let loaded = catch_unwind(AssertUnwindSafe(|| p3dp::testing::load_recipe(path, &[], None)))
         .map_err(|_| "panicked while loading".to_string())?;
     let err = match loaded {
         Err(e) => Some(e),

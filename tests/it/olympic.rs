@@ -13,6 +13,7 @@ use std::f64::consts::PI;
 
 use crate::common::*;
 use glam::{DVec2, DVec3};
+use p3dp::testing::Insides;
 use p3dp::Plan;
 use p3dp::Severity;
 
@@ -207,9 +208,9 @@ fn load(sets: &[(&str, &str)]) -> Pieces {
         ..Default::default()
     };
     let plan = p3dp::plan(&recipe("olympic-rings.yaml"), &opts).unwrap_or_else(|e| panic!("{e}"));
-    let layer = plan.recipe.params["layer"];
+    let layer = plan.recipe().params["layer"];
     let mut parts = Vec::new();
-    for (k, tp) in plan.paths.iter().enumerate() {
+    for (k, tp) in plan.paths().iter().enumerate() {
         if tp.name == "skirt" {
             assert_eq!(k, 0, "the skirt comes first");
             continue;
@@ -227,7 +228,7 @@ fn load(sets: &[(&str, &str)]) -> Pieces {
     }
     let mut fil = Vec::new();
     for (piece, &(k, ring, _)) in parts.iter().enumerate() {
-        let tp = &plan.paths[k];
+        let tp = &plan.paths()[k];
         let (mut run, mut along, mut in_run) = (0, 0.0, false);
         for j in 0..tp.len() {
             let s = tp.strings[j];
@@ -266,16 +267,16 @@ fn load(sets: &[(&str, &str)]) -> Pieces {
 
 impl Pieces {
     fn name(&self, piece: usize) -> &str {
-        &self.plan.paths[self.parts[piece].0].name
+        &self.plan.paths()[self.parts[piece].0].name
     }
 
     fn param(&self, name: &str) -> f64 {
-        self.plan.recipe.params[name]
+        self.plan.recipe().params[name]
     }
 
     /// The points of a piece's first run of extruding strings: its bottom layer.
     fn bottom(&self, piece: usize) -> Vec<DVec3> {
-        let tp = &self.plan.paths[self.parts[piece].0];
+        let tp = &self.plan.paths()[self.parts[piece].0];
         let first = (0..tp.len())
             .find(|&j| !tp.strings[j].travel)
             .expect("a piece extrudes");
@@ -530,7 +531,7 @@ fn builds_without_errors() {
         assert!(errors.is_empty(), "{}: {errors:#?}", p.sets);
         assert!(!build_gcode(sets, &format!("build-{c}")).is_empty());
 
-        assert_eq!(p.plan.recipe.printer.nozzle_diameter, NOZZLE);
+        assert_eq!(p.plan.recipe().printer.nozzle_diameter, NOZZLE);
         // five rings in 16 pieces; sections, speeds and the first layer in range
         assert_eq!(p.parts.len(), 16);
         let z_min = p
@@ -540,7 +541,7 @@ fn builds_without_errors() {
             .fold(f64::MAX, f64::min);
         assert!((0.2..=0.4).contains(&z_min), "lowest filament at {z_min}");
         for &(k, _, _) in &p.parts {
-            let tp = &p.plan.paths[k];
+            let tp = &p.plan.paths()[k];
             for s in tp.strings.iter().filter(|s| !s.travel) {
                 assert!((0.1..=0.25).contains(&s.c), "{}: c = {}", tp.name, s.c);
                 assert!((10.0..=40.0).contains(&s.v), "{}: v = {}", tp.name, s.v);

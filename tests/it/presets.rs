@@ -13,11 +13,12 @@
 use std::path::{Path, PathBuf};
 
 use crate::common::{p3dp, root, tmp};
-use p3dp::presets as map;
-use p3dp::presets::{self as preset, Source};
-use p3dp::Reads;
+use p3dp::testing::presets as map;
+use p3dp::testing::presets::{self as preset, Source};
+use p3dp::testing::Insides;
+use p3dp::testing::Reads;
+use p3dp::testing::{Bed, Flavor, Printer};
 use p3dp::{plan, Options};
-use p3dp::{Bed, Flavor, Printer};
 
 /// Debian's PrusaSlicer vendor bundles.
 const BUNDLES: &str = "/usr/share/PrusaSlicer/profiles";
@@ -58,7 +59,7 @@ fn import(file: &Path, name: Option<&str>, profiles: Option<&Path>) -> p3dp::Res
         preset: name.map(str::to_string),
         profiles: profiles.map(Path::to_path_buf),
     };
-    Printer::from_preset(&src, &Reads::default())
+    p3dp::testing::profile::from_preset(&src, &Reads::default())
 }
 
 /// The vase built on `profile` (a profile's YAML file) in `dir`: its
@@ -73,10 +74,10 @@ fn build_vase(dir: &Path, profile: &Path) -> p3dp::Result<(String, Printer, Stri
         ..Default::default()
     };
     let mut plan = plan(&recipe, &opts)?;
-    plan.recipe.printer.thumbnails.clear();
+    plan.recipe_mut().printer.thumbnails.clear();
     let bytes = p3dp::pipeline::write(&mut plan, &p3dp::pipeline::Job::default(), Vec::new())?.out;
     let text = String::from_utf8(bytes).unwrap();
-    Ok((text, plan.recipe.printer.clone(), plan.frame.end_text()))
+    Ok((text, plan.recipe().printer.clone(), plan.end_gcode()))
 }
 
 /// Every move p3dp writes itself (after the start G-code and before the
@@ -381,10 +382,7 @@ fn mk3s_start_gcode_is_what_prusaslicer_writes() {
         printer: Some(profile.to_str().unwrap().into()),
         ..Default::default()
     };
-    let ours = plan(&dir.join("vase.yaml"), &opts)
-        .unwrap()
-        .frame
-        .start_text();
+    let ours = plan(&dir.join("vase.yaml"), &opts).unwrap().start_gcode();
     assert!(text.contains(&ours));
     assert!(ours.contains("M862.3 P \"MK3S\""), "{ours}");
     assert!(
@@ -1004,7 +1002,7 @@ fn multi_tool_machines_print_with_the_tool_their_start_gcode_selects() {
         );
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     }
-    let xl = Printer::from_file(&dir.join("xl.yaml")).unwrap();
+    let xl = p3dp::testing::profile::from_file(&dir.join("xl.yaml")).unwrap();
     assert_eq!((xl.extruders, xl.tool), (5, 0));
     let g = build_with(&dir, &["--printer", "xl.yaml"]).unwrap();
     has_lines(
@@ -1075,7 +1073,7 @@ fn an_imported_profile_written_as_yaml_is_the_same_printer() {
         }
         let o = p3dp(&dir, &args);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        let mut back = Printer::from_file(&out).unwrap();
+        let mut back = p3dp::testing::profile::from_file(&out).unwrap();
         (direct.source, back.source) = (None, None);
         assert_eq!(direct, back, "{file:?} {name:?}");
     }

@@ -1,6 +1,7 @@
 //! The empty sphere of Kanada's Fig. 9, built by the real binary and read back.
 
 use crate::common::*;
+use p3dp::testing::Insides;
 
 fn build_sphere(dir: &std::path::Path) -> String {
     let out = p3dp(
@@ -65,7 +66,7 @@ fn summed_e_equals_c_times_l_over_filament_area() {
     // Σ c·L / (pi (d/2)²) over the strings, from the library, against the E the G-code feeds
     let plan = p3dp::plan(&recipe("sphere.yaml"), &Default::default()).unwrap();
     let area = std::f64::consts::PI * (1.75f64 / 2.0).powi(2);
-    let expected: f64 = plan.paths.iter().map(|t| t.volume()).sum::<f64>() / area;
+    let expected: f64 = plan.paths().iter().map(|t| t.volume()).sum::<f64>() / area;
     let dir = tmp("sphere-e");
     let g = parse(&build_sphere(&dir));
     let fed: f64 = g.moves.iter().map(|m| m.de).sum();

@@ -5,8 +5,7 @@
 
 use crate::common::*;
 use glam::{DVec2, DVec3};
-use p3dp::Recipe;
-use p3dp::Toolpath;
+use p3dp::testing::Toolpath;
 use std::path::Path;
 
 /// Distance from `p` to the segment a–b.
@@ -60,8 +59,8 @@ fn star_dir(name: &str) -> crate::common::Tmp {
 
 fn part(dir: &Path, recipe: &str, k: usize) -> Toolpath {
     write(dir, "r.yaml", recipe);
-    let r = Recipe::load(&dir.join("r.yaml"), &[], None).unwrap();
-    p3dp::make_part(&r, k).unwrap()
+    let r = p3dp::testing::load_recipe(&dir.join("r.yaml"), &[], None).unwrap();
+    p3dp::testing::make_part(&r, k).unwrap()
 }
 
 /// The exact star as the helix places it: y flipped, its area centroid (the
@@ -240,8 +239,8 @@ fn the_svg_file_is_recorded_for_watch() {
         "r.yaml",
         &format!("{HEAD}parts:\n  - name: w\n    primitive:\n      helix: {{ outline: {{ svg: star.svg }}, height: 1, pitch: 0.5 }}\n"),
     );
-    let cx = p3dp::Context::default();
-    Recipe::load_in(&dir.join("r.yaml"), &[], None, &cx).unwrap();
+    let cx = p3dp::testing::Context::default();
+    p3dp::testing::load_recipe_in(&dir.join("r.yaml"), &[], None, &cx).unwrap();
     let files = cx.reads.files();
     assert!(files.contains(&dir.join("star.svg")), "{files:?}");
 }
@@ -386,8 +385,8 @@ fn bad_svgs_are_refused_naming_the_file_and_the_element() {
 
 #[test]
 fn the_drawing_recipe_plots_every_shape() {
-    let r = Recipe::load(&recipe("svg-drawing.yaml"), &[], None).unwrap();
-    let tp = p3dp::make_part(&r, 0).unwrap();
+    let r = p3dp::testing::load_recipe(&recipe("svg-drawing.yaml"), &[], None).unwrap();
+    let tp = p3dp::testing::make_part(&r, 0).unwrap();
     // one travel to each subpath after the first: house (3 shapes), sun (circle
     // and 4 rays), hill, 5 pickets
     let travels = tp.strings.iter().filter(|s| s.travel).count();

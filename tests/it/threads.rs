@@ -4,6 +4,7 @@
 
 use crate::common::*;
 use p3dp::pipeline::{self, Threads};
+use p3dp::testing::Insides;
 use p3dp::{plan, prepare};
 
 /// A scaled-down `benches/vase-2m.yaml`: 60 turns of 1000 strings, so the
@@ -37,7 +38,7 @@ fn the_vase_is_the_same_bytes_on_1_2_and_4_threads() {
     let build = |n: usize| {
         pipeline::run(Threads::new(n), || {
             let mut p = plan(&path, &Default::default()).unwrap();
-            assert!(p.paths.iter().map(|t| t.len()).sum::<usize>() > 50_000);
+            assert!(p.paths().iter().map(|t| t.len()).sum::<usize>() > 50_000);
             let mut out = Vec::new();
             let stats = pipeline::write(&mut p, &hashed(None), &mut out)
                 .unwrap()
@@ -183,7 +184,7 @@ fn the_checks_find_the_same_whichever_thread_runs_them() {
                 let mut out = Vec::new();
                 let job = hashed(Some(pipeline::Stop::Never));
                 pipeline::write(&mut p, &job, &mut out).unwrap();
-                (p.findings, p.footprints, out)
+                (p.findings.clone(), p.footprints().to_vec(), out)
             })
         };
         let one = run(1);

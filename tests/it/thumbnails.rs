@@ -190,7 +190,11 @@ fn every_built_in_writes_its_makers_thumbnails() {
         ("creality-k1", &creality),
         ("ender3-v3", &creality),
     ];
-    assert_eq!(want.len(), p3dp::printers().len(), "every built-in");
+    assert_eq!(
+        want.len(),
+        p3dp::testing::printers().len(),
+        "every built-in"
+    );
     let dir = tmp("thumbnails-built-ins");
     let ring = dir.join("ring.yaml");
     let yaml = "p3dp: 1\nname: ring\nmaterial: pla\nparts:\n  - primitive: {helix: {radius: 15, height: 3, pitch: 0.3, center: [0, 0, 0.3]}}\n";

@@ -326,8 +326,8 @@ parts:
     let recipe = dir.join("recipe.yaml");
     std::fs::write(&recipe, text("map.png")).unwrap();
     let opts = p3dp::Options::default();
-    let cx = p3dp::Context::default();
-    let built = p3dp::prepare_in(&recipe, &opts, &cx);
+    let cx = p3dp::testing::Context::default();
+    let built = p3dp::testing::prepare_in(&recipe, &opts, &cx);
     let files = cx.reads.files();
     if let Err(e) = built {
         panic!("{e}");
@@ -345,8 +345,8 @@ parts:
     }
     // a missing image fails the build, and is followed: making it is a change
     std::fs::write(&recipe, text("later.png")).unwrap();
-    let cx = p3dp::Context::default();
-    let built = p3dp::prepare_in(&recipe, &opts, &cx);
+    let cx = p3dp::testing::Context::default();
+    let built = p3dp::testing::prepare_in(&recipe, &opts, &cx);
     let files = cx.reads.files();
     assert!(built.is_err());
     assert!(files.iter().any(|f| f.ends_with("later.png")), "{files:?}");

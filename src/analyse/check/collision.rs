@@ -70,18 +70,18 @@ pub(crate) struct HeightMap {
     tnx: usize,
     tz: Vec<f64>,
     /// Highest filament mapped, mm.
-    pub top: f64,
+    pub(crate) top: f64,
 }
 
 /// A square of the map holding filament above a threshold.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Hit {
     /// The highest filament over the square.
-    pub at: DVec3,
+    pub(crate) at: DVec3,
     /// Distance from the query point to it, sideways, mm.
-    pub side: f64,
+    pub(crate) side: f64,
     /// (path, string) of that filament.
-    pub src: (u32, u32),
+    pub(crate) src: (u32, u32),
 }
 
 impl HeightMap {
@@ -613,7 +613,7 @@ mod tests {
             "p3dp: 1\nname: t\nprinter: {printer}\nparts:\n  - {{name: tower, primitive: {{helix: {{radius: 8, height: 40, pitch: 0.3, center: [-40, 0, 0.2]}}}}}}\n  - {{name: ring, primitive: {{helix: {{radius: 8, height: 2, pitch: 0.3, center: [40, 0, 0.2]}}}}}}\n"
         );
         let raw = crate::recipe::parse_yaml(&text, "t.yaml").unwrap();
-        let recipe = Recipe::resolve(&raw, &[], None, std::path::Path::new(".")).unwrap();
+        let recipe = crate::recipe::resolve(&raw, &[], None, std::path::Path::new(".")).unwrap();
         let parts = crate::generate::assembly::make_parts(&recipe).unwrap();
         let refs: Vec<&Toolpath> = parts.iter().collect();
         check(&recipe, &refs)

@@ -92,6 +92,7 @@ pub(crate) fn within_reach(
 /// of the parts, independent of each other ([`Costly`] lists them), so the
 /// application may run them side by side; [`merge`] puts their findings in
 /// one fixed order; each message ends with [`see`].
+#[cfg(any(test, feature = "testing"))]
 pub(crate) fn run(
     recipe: &Recipe,
     paths: &[&Toolpath],
@@ -109,12 +110,12 @@ pub(crate) fn run(
 /// the pattern helix's parameters.
 pub(crate) struct Cheap {
     /// Their findings, in order.
-    pub findings: Vec<Finding>,
+    pub(crate) findings: Vec<Finding>,
     /// The pattern helix's, put last when merged.
-    pub pattern: Vec<Finding>,
+    pub(crate) pattern: Vec<Finding>,
     /// Whether the costly checks may run: no error that is not allowed, and
     /// every point finite and within reach of the geometry.
-    pub geometric: bool,
+    pub(crate) geometric: bool,
 }
 
 /// The cheap checks of `paths`; `allowed` are the codes silenced (an error
@@ -154,15 +155,15 @@ pub(crate) fn cheap(recipe: &Recipe, paths: &[&Toolpath], allowed: &[String]) ->
 #[derive(Default)]
 pub(crate) struct Costly {
     /// Runs of moves too short for the firmware's planner.
-    pub starvation: Vec<Finding>,
+    pub(crate) starvation: Vec<Finding>,
     /// The first layer's hold on the bed.
-    pub first_layer: Vec<Finding>,
+    pub(crate) first_layer: Vec<Finding>,
     /// Strings that rest on nothing, and bridges.
-    pub support: Vec<Finding>,
+    pub(crate) support: Vec<Finding>,
     /// The head meeting printed filament.
-    pub collision: Vec<Finding>,
+    pub(crate) collision: Vec<Finding>,
     /// Each part's footprint on the bed.
-    pub footprints: Vec<first_layer::Footprint>,
+    pub(crate) footprints: Vec<first_layer::Footprint>,
 }
 
 /// Every finding in the one fixed order (the cheap checks', starvation,
@@ -248,27 +249,37 @@ pub(crate) fn events(recipe: &Recipe, tp: &Toolpath) -> Vec<Finding> {
     out
 }
 
-/// A part's `set` steps' settings (`setting`): each one the printer's
-/// firmware has a command for, each value within the material's and the
-/// machine's limits; one finding per part, naming the first at fault, its
-/// band and how many are.
+/// A part's settings from `set` steps and commands (`setting`): each one
+/// the printer's firmware has a command for, each value within the
+/// material's and the machine's limits; one finding per part, naming the
+/// first at fault, its band or the key path of its command, and how many
+/// are.
 pub(crate) fn settings(recipe: &Recipe, tp: &Toolpath) -> Vec<Finding> {
     let (m, p) = (&recipe.material, &recipe.printer);
-    let faults: Vec<(usize, Option<u32>, String)> = tp
+    type Fault<'a> = (usize, Option<u32>, Option<&'a str>, String);
+    let faults: Vec<Fault> = tp
         .events
         .iter()
         .filter_map(|(k, e)| match e {
-            crate::base::toolpath::Event::Set { setting, band } => gcode::setting(setting, p, m)
+            crate::base::toolpath::Event::Set {
+                setting,
+                band,
+                place,
+            } => gcode::setting(setting, p, m)
                 .err()
-                .map(|why| (*k, band.map(|b| b.index), why)),
+                .map(|why| (*k, band.map(|b| b.index), place.as_deref(), why)),
             _ => None,
         })
         .collect();
-    let Some((k, band, why)) = faults.first() else {
+    let Some((k, band, place, why)) = faults.first() else {
         return Vec::new();
     };
     let at = tp.points[(*k + 1).min(tp.points.len() - 1)];
     let band = band.map_or(String::new(), |b| format!(" (band {b})"));
+    let band = match place {
+        Some(place) => format!("{band}, set by `{place}`,"),
+        None => band,
+    };
     vec![Finding {
         code: "setting",
         severity: Severity::Error,

@@ -87,7 +87,7 @@ const GAP_BUDGET: usize = 20_000;
 /// The extruding strings of all paths in print order, and the grid over them.
 pub(crate) struct Deposits<'a> {
     /// The paths, in print order.
-    pub paths: &'a [&'a Toolpath],
+    pub(crate) paths: &'a [&'a Toolpath],
     /// (path, string) of each extruding string of nonzero length, in print
     /// order ([`Deposits::id`]); none kept when they are the strings of
     /// the first path in order (one part: 16 MB for 2M strings).
@@ -95,16 +95,16 @@ pub(crate) struct Deposits<'a> {
     /// How many deposits there are.
     count: usize,
     /// Per path, the path length before each point, mm.
-    pub arc: Vec<Vec<f64>>,
+    pub(crate) arc: Vec<Vec<f64>>,
     /// The grid over `ids[..built]`, made when a search first needs it and
     /// remade (at least twice as large) when a search needs later deposits.
     grid: std::cell::RefCell<(SegGrid, usize)>,
     /// Side of the grid's cubes, mm.
     cell: f64,
     /// Widest string, mm.
-    pub w_max: f64,
+    pub(crate) w_max: f64,
     /// Nozzle diameter, mm (the narrowest string).
-    pub nozzle: f64,
+    pub(crate) nozzle: f64,
 }
 
 impl<'a> Deposits<'a> {
@@ -771,7 +771,7 @@ mod tests {
 
     /// A recipe of the default printer (the paths are given by the tests).
     fn recipe() -> Recipe {
-        crate::generate::model::Recipe::resolve(
+        crate::recipe::resolve(
             &crate::recipe::parse_yaml(
                 "p3dp: 1\nname: t\nparts:\n  - primitive: {circle: {radius: 1}}\n",
                 "t.yaml",

@@ -47,9 +47,9 @@ impl Timeline {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct Progress {
     /// Whole percent of the print's planned time done, 0 to 100.
-    pub percent: u32,
+    pub(crate) percent: u32,
     /// Planned minutes left, rounded to the nearest minute.
-    pub minutes_left: u64,
+    pub(crate) minutes_left: u64,
 }
 
 /// Something between blocks that moves the clock (see [`Marks`]).

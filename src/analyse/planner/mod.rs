@@ -71,48 +71,48 @@ pub(crate) enum MoveKind {
 
 /// Times of a print or of one part, s.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Times {
+pub(crate) struct Times {
     /// Planned: with acceleration, junction speeds and speed limits.
-    pub planned: f64,
+    pub(crate) planned: f64,
     /// Σ L / F: the time the G-code asks for, as if every move ran at its F.
-    pub ideal: f64,
+    pub(crate) ideal: f64,
     /// Σ L / v_nom: F capped by `max_velocity` and `min_segment_time`, no acceleration.
-    pub nominal: f64,
+    pub(crate) nominal: f64,
 }
 
 impl Times {
     /// Time lost to acceleration, deceleration and corners: planned − nominal.
-    pub fn lost_to_acceleration(&self) -> f64 {
+    pub(crate) fn lost_to_acceleration(&self) -> f64 {
         self.planned - self.nominal
     }
 
     /// Time lost to the speed limits: nominal − ideal.
-    pub fn lost_to_speed_limits(&self) -> f64 {
+    pub(crate) fn lost_to_speed_limits(&self) -> f64 {
         self.nominal - self.ideal
     }
 
     /// All time lost against the G-code's speeds: planned − ideal.
-    pub fn lost(&self) -> f64 {
+    pub(crate) fn lost(&self) -> f64 {
         self.planned - self.ideal
     }
 }
 
 /// One part's times.
 #[derive(Clone, Debug, PartialEq)]
-pub struct PartTimes {
+pub(crate) struct PartTimes {
     /// Part name.
-    pub name: String,
+    pub(crate) name: String,
     /// Its times, s.
-    pub times: Times,
+    pub(crate) times: Times,
 }
 
 /// The planner's answer: the whole print's times, and each part's.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct Estimate {
+pub(crate) struct Estimate {
     /// All moves.
-    pub total: Times,
+    pub(crate) total: Times,
     /// Each part begun with [`Planner::begin_part`], in order.
-    pub parts: Vec<PartTimes>,
+    pub(crate) parts: Vec<PartTimes>,
 }
 
 /// One move, as the passes need it (32 bytes: 2M moves take 64 MB).
@@ -777,7 +777,7 @@ impl<T: Moves + ?Sized> Moves for &mut T {
 }
 
 /// Two consumers of the same moves, in turn.
-pub(crate) struct Both<A, B>(pub A, pub B);
+pub(crate) struct Both<A, B>(pub(crate) A, pub(crate) B);
 
 impl<A: Moves, B: Moves> Moves for Both<A, B> {
     fn begin_part(&mut self, name: &str) {

@@ -14,7 +14,7 @@ fn recipe_for(printer: &str) -> Recipe {
         "t.yaml",
     )
     .unwrap();
-    Recipe::resolve(&raw, &[], None, std::path::Path::new(".")).unwrap()
+    crate::recipe::resolve(&raw, &[], None, std::path::Path::new(".")).unwrap()
 }
 
 fn recipe() -> Recipe {
@@ -221,4 +221,21 @@ fn a_recipes_own_command_may_set_and_wait_never_move() {
         &k.material,
     )
     .unwrap();
+    // motors off mid-print loses the head's position: refused in a recipe's
+    // command on every firmware, still an end G-code's own
+    for printer in [
+        "prusa-mk3s",
+        "voron-350",
+        "bambu-x1c",
+        "rostock-max",
+        "generic-220",
+    ] {
+        let r = recipe_for(printer);
+        for t in ["M84", "M18", "M84 X Y"] {
+            let e = command(t, &r.printer, &r.material).unwrap_err();
+            assert!(e.contains("turns the motors off"), "{printer} {t}: {e}");
+        }
+        check("end_gcode", "M104 S0\nM84\n", &r, Start::Unknown)
+            .unwrap_or_else(|e| panic!("{printer}: {e}"));
+    }
 }

@@ -14,7 +14,7 @@ fn on(flavor: Flavor) -> Recipe {
         "t.yaml",
     )
     .unwrap();
-    let mut r = Recipe::resolve(&raw, &[], None, std::path::Path::new(".")).unwrap();
+    let mut r = crate::recipe::resolve(&raw, &[], None, std::path::Path::new(".")).unwrap();
     r.printer.flavor = flavor;
     r
 }

@@ -41,7 +41,7 @@ fn close(got: f64, want: f64, rel: f64) {
 #[test]
 fn globe_estimate_is_the_written_moves_planned() {
     let (gcode, s) = build("globe.yaml", None);
-    let printer = Printer::built_in("generic-220").unwrap();
+    let printer = crate::recipe::profile::built_in("generic-220").unwrap();
     let again = replan(&gcode, &printer);
     close(again.total.planned, s.print_time_s, 1e-9);
     close(again.total.ideal, s.print_time_ideal_s, 1e-9);
@@ -109,7 +109,7 @@ fn klipper_profile_uses_square_corner_velocity() {
     assert!(json["planner"].get("junction_deviation").is_none());
     assert_eq!(json["planner"]["minimum_cruise_ratio"], 0.5);
     assert_eq!(json["planner"]["min_segment_time"], 0.0);
-    let printer = Printer::from_file(&path).unwrap();
+    let printer = crate::recipe::profile::from_file(&path).unwrap();
     close(replan(&gcode, &printer).total.planned, s.print_time_s, 1e-9);
     assert!(s.print_time_s >= s.print_time_ideal_s);
     // a bad value is named
@@ -120,7 +120,9 @@ fn klipper_profile_uses_square_corner_velocity() {
             .replace("max_acceleration: 3000", "max_acceleration: -3"),
     )
     .unwrap();
-    let e = Printer::from_file(&path).unwrap_err().to_string();
+    let e = crate::recipe::profile::from_file(&path)
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("kinematics.max_acceleration"), "{e}");
 }
 

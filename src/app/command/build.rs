@@ -21,21 +21,25 @@ use crate::output::host::Package;
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Options {
     /// The recipes and how each is built.
-    pub builds: Builds,
+    pub(crate) builds: Builds,
     /// `-o`: a file; a folder with several recipes; `-` for standard output.
-    pub output: Option<String>,
+    pub(crate) output: Option<String>,
     /// `--stats-json FILE`.
-    pub stats_json: Option<PathBuf>,
+    pub(crate) stats_json: Option<PathBuf>,
     /// `--pattern FILE`.
-    pub pattern: Option<PathBuf>,
+    pub(crate) pattern: Option<PathBuf>,
     /// `--preview FILE`.
-    pub preview: Option<PathBuf>,
+    pub(crate) preview: Option<PathBuf>,
     /// `--zbuffer FILE`.
-    pub zbuffer: Option<PathBuf>,
+    pub(crate) zbuffer: Option<PathBuf>,
     /// `--zbuffer-svg FILE`.
-    pub zbuffer_svg: Option<PathBuf>,
+    pub(crate) zbuffer_svg: Option<PathBuf>,
     /// `--zbuffer-layer N`.
-    pub zbuffer_layer: Option<u64>,
+    pub(crate) zbuffer_layer: Option<u64>,
+    /// The name the report, the stats and the messages after loading give
+    /// the recipe instead of its path (`calibration test temperature`: the
+    /// recipe `p3dp calibrate` staged, a file the user never wrote).
+    pub(crate) shown: Option<String>,
 }
 
 #[derive(Clone, Debug)]
@@ -259,6 +263,9 @@ fn build_job(
         return Err(e);
     }
     let mut p = p?;
+    if let Some(name) = &a.shown {
+        p.path.clone_from(name);
+    }
     if let Target::File(f, true) = &target {
         if p.recipe.printer.binary_gcode {
             target = Target::File(f.with_extension("bgcode"), true);

@@ -12,17 +12,17 @@ use crate::base::error::{Error, Result};
 /// per material (`start`, `end`, `step`), and the profile key `apply` writes.
 pub(crate) struct Test {
     /// The name on the command line.
-    pub name: &'static str,
+    pub(crate) name: &'static str,
     /// What it tunes, for `--list`.
-    pub what: &'static str,
+    pub(crate) what: &'static str,
     /// The recipe's text.
-    pub recipe: &'static str,
+    pub(crate) recipe: &'static str,
     /// `(material, [start, end, step])`; the first is the default.
-    pub ranges: &'static [(&'static str, [f64; 3])],
+    pub(crate) ranges: &'static [(&'static str, [f64; 3])],
     /// The profile key `apply` writes, if any.
-    pub key: Option<&'static str>,
+    pub(crate) key: Option<&'static str>,
     /// The recipe and key for a Klipper printer, when they differ.
-    pub klipper: Option<(&'static str, &'static str)>,
+    pub(crate) klipper: Option<(&'static str, &'static str)>,
 }
 
 macro_rules! gallery_file {
@@ -244,11 +244,11 @@ fn scratch() -> Result<tempfile::TempDir> {
 /// options (their recipe is the test's, staged).
 pub(crate) struct Options {
     /// The test's name.
-    pub test: String,
+    pub(crate) test: String,
     /// `--material`.
-    pub material: Option<String>,
+    pub(crate) material: Option<String>,
     /// `build`'s options; `builds.recipes` is filled here.
-    pub build: build::Options,
+    pub(crate) build: build::Options,
 }
 
 /// `p3dp calibrate TEST`: the test's recipe built as `build` builds it.
@@ -274,6 +274,8 @@ fn prepare(o: &Options) -> Result<(build::Options, tempfile::TempDir)> {
         dir.path(),
     )?;
     opts.builds.recipes = vec![file];
+    // the report names the test, not the staged file
+    opts.shown = Some(format!("calibration test {}", t.name));
     Ok((opts, dir))
 }
 
@@ -296,7 +298,7 @@ fn printer(printer: Option<&str>, t: &Test) -> Result<crate::machine::Printer> {
     };
     let reads = crate::base::input::Reads::default();
     reads.allow(Path::new("."));
-    crate::machine::Printer::resolve(&spec, Path::new("."), &reads)
+    crate::recipe::profile::resolve(&spec, Path::new("."), &reads)
 }
 
 /// Which band `apply` reads: its index, or the height it holds.
@@ -311,17 +313,17 @@ pub(crate) enum Pick {
 /// What `calibrate apply` takes.
 pub(crate) struct Apply {
     /// The test's name.
-    pub test: String,
+    pub(crate) test: String,
     /// The band.
-    pub pick: Pick,
+    pub(crate) pick: Pick,
     /// `--printer`.
-    pub printer: Option<String>,
+    pub(crate) printer: Option<String>,
     /// `--material`.
-    pub material: Option<String>,
+    pub(crate) material: Option<String>,
     /// `--set`, as the print was built.
-    pub sets: Vec<(String, String)>,
+    pub(crate) sets: Vec<(String, String)>,
     /// `-o`: the profile written.
-    pub output: PathBuf,
+    pub(crate) output: PathBuf,
 }
 
 /// `p3dp calibrate apply`: the band's value written into a profile that

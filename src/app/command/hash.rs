@@ -18,11 +18,11 @@ use crate::recipe::{parse_set, parse_yaml};
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Options {
     /// The recipes and how each is built.
-    pub builds: Builds,
+    pub(crate) builds: Builds,
     /// `--lock FILE`: write the hashes there.
-    pub lock: Option<PathBuf>,
+    pub(crate) lock: Option<PathBuf>,
     /// `--check FILE`: rebuild every entry of this lock file.
-    pub check: Option<PathBuf>,
+    pub(crate) check: Option<PathBuf>,
 }
 
 /// Builds a job on `threads` into nothing but its hash and line fingerprint.
@@ -143,7 +143,7 @@ fn lockable(lockfile: &Path, c: &Builds, jobs: &[Job]) -> Result<()> {
     let printer = c
         .printer
         .as_deref()
-        .filter(|p| crate::machine::Printer::built_in(p).is_none());
+        .filter(|p| crate::recipe::profile::built_in(p).is_none());
     for job in jobs {
         let shown = job.recipe.display().to_string();
         roots.confine(&job.recipe, &shown, "recipe", "--lock")?;
@@ -220,7 +220,7 @@ fn lock_entry(
         recipe: relative_to_lock(lockfile, &job.recipe),
         set: job.sets.iter().map(|(n, v)| format!("{n}={v}")).collect(),
         printer: printer.map(|p| {
-            if crate::machine::Printer::built_in(p).is_some() {
+            if crate::recipe::profile::built_in(p).is_some() {
                 p.to_string()
             } else {
                 relative_to_lock(lockfile, Path::new(p))
@@ -438,7 +438,7 @@ fn entry_job(base: &Path, roots: &LockRoots, k: usize, e: &Entry) -> Result<Job>
     }
     // a FIFO or device named by a lock is refused before it is opened
     crate::base::input::check_regular(&recipe, "recipe").map_err(|e| e.under(&place))?;
-    let built_in = |p: &str| crate::machine::Printer::built_in(p).is_some();
+    let built_in = |p: &str| crate::recipe::profile::built_in(p).is_some();
     if let Some(p) = &e.printer {
         let place = format!("entries[{k}].printer");
         if !built_in(p) {

@@ -10,9 +10,9 @@ use crate::base::error::{Error, Result};
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Options {
     /// The one recipe and how it is built.
-    pub builds: Builds,
+    pub(crate) builds: Builds,
     /// `-o FILE.stl|FILE.3mf|FILE.obj` (default ./NAME.stl).
-    pub output: Option<PathBuf>,
+    pub(crate) output: Option<PathBuf>,
 }
 
 /// Writes the mesh; the errors met.

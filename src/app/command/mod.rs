@@ -32,26 +32,26 @@ use crate::recipe::{parse_yaml, RawRecipe};
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Builds {
     /// Recipe files.
-    pub recipes: Vec<PathBuf>,
+    pub(crate) recipes: Vec<PathBuf>,
     /// `--set NAME=VALUE`, in order.
-    pub sets: Vec<(String, String)>,
+    pub(crate) sets: Vec<(String, String)>,
     /// `--sweep NAME=VALUES`: each name and its values.
-    pub sweeps: Vec<(String, Vec<String>)>,
+    pub(crate) sweeps: Vec<(String, Vec<String>)>,
     /// `--printer NAME|FILE`.
-    pub printer: Option<String>,
+    pub(crate) printer: Option<String>,
     /// `--filament FILE [--filament-preset NAME]`.
-    pub filament: Option<crate::recipe::preset::Source>,
+    pub(crate) filament: Option<crate::recipe::preset::Source>,
     /// `--allow CODE`.
-    pub allow: Vec<String>,
+    pub(crate) allow: Vec<String>,
     /// `--allow-read DIR`.
-    pub allow_read: Vec<PathBuf>,
+    pub(crate) allow_read: Vec<PathBuf>,
     /// `--strict`: warnings fail the build too.
-    pub strict: bool,
+    pub(crate) strict: bool,
     /// `--force`: write even when checks fail.
-    pub force: bool,
+    pub(crate) force: bool,
     /// `p3dp plate`: the plate the command line describes, built as the one
     /// job (its recipes and sweeps are its entries', not `recipes`).
-    pub plate: Option<std::sync::Arc<crate::recipe::resolve::plate::PlateSpec>>,
+    pub(crate) plate: Option<std::sync::Arc<crate::recipe::resolve::plate::PlateSpec>>,
 }
 
 impl Builds {
@@ -299,7 +299,7 @@ pub(crate) fn inputs_of(recipes: &[PathBuf], printer: Option<&str>) -> Vec<(Stri
         .map(|r| ("the recipe".to_string(), r.clone()))
         .collect();
     if let Some(p) = printer {
-        if crate::machine::Printer::built_in(p).is_none() {
+        if crate::recipe::profile::built_in(p).is_none() {
             v.push(("the --printer profile".to_string(), PathBuf::from(p)));
         }
     }

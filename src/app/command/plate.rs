@@ -14,13 +14,13 @@ use crate::recipe::resolve::plate::{PlateEntry, PlateSpec, MAX_COPIES};
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Options {
     /// `RECIPE` or `RECIPE*N`, in order.
-    pub recipes: Vec<String>,
+    pub(crate) recipes: Vec<String>,
     /// `--name`: the plate's.
-    pub name: String,
+    pub(crate) name: String,
     /// `--sweep NAME=VALUES`: variants on the plate, for every recipe.
-    pub sweeps: Vec<(String, Vec<String>)>,
+    pub(crate) sweeps: Vec<(String, Vec<String>)>,
     /// How it is built and written (its `builds` hold `--set`, `--printer`…).
-    pub build: super::build::Options,
+    pub(crate) build: super::build::Options,
 }
 
 /// The plate the command line describes.

@@ -14,17 +14,17 @@ use crate::output::preview::{ColorMode, View};
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Options {
     /// The one recipe and how it is built.
-    pub builds: Builds,
+    pub(crate) builds: Builds,
     /// `-o FILE.png|FILE.html` (default ./NAME.png).
-    pub output: Option<PathBuf>,
+    pub(crate) output: Option<PathBuf>,
     /// `--view`.
-    pub view: View,
+    pub(crate) view: View,
     /// `--color`.
-    pub color: ColorMode,
+    pub(crate) color: ColorMode,
     /// `--size WxH`.
-    pub size: Size,
+    pub(crate) size: Size,
     /// `--bare`: the model alone.
-    pub bare: bool,
+    pub(crate) bare: bool,
 }
 
 /// Draws the preview; the errors met.

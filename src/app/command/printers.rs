@@ -11,14 +11,13 @@ use crate::recipe::preset::{self, Source};
 /// origin of recipe (0, 0, 0), nozzle and filament), under a header line.
 pub(crate) fn list() -> String {
     use crate::base::format::fmt_num;
-    use crate::machine::Printer;
     use crate::recipe::profile::built_in_names;
     let mut out = format!(
         "{:<14} {:<8} {:<26} {:<14} {:<7} {}\n",
         "NAME", "FLAVOUR", "BED", "ORIGIN", "NOZZLE", "FILAMENT"
     );
     for name in built_in_names() {
-        let p = Printer::built_in(name).expect("built-in profiles parse");
+        let p = crate::recipe::profile::built_in(name).expect("built-in profiles parse");
         let origin = p.origin.map(fmt_num).join(", ");
         out.push_str(&format!(
             "{:<14} {:<8} {:<26} {:<14} {:<7} {}\n",
@@ -50,9 +49,9 @@ pub(crate) fn presets(kind: preset::Kind, file: &std::path::Path) -> Result<Stri
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Import {
     /// Where the preset is.
-    pub source: Source,
+    pub(crate) source: Source,
     /// `-o OUT.yaml`; standard output when `None`.
-    pub output: Option<PathBuf>,
+    pub(crate) output: Option<PathBuf>,
 }
 
 /// `p3dp printers import FILE`: the preset as a p3dp printer profile

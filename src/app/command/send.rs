@@ -17,15 +17,15 @@ pub(crate) const KEY_VAR: &str = "P3DP_API_KEY";
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Options {
     /// The files, in order.
-    pub files: Vec<PathBuf>,
+    pub(crate) files: Vec<PathBuf>,
     /// The host's base URL.
-    pub to: String,
+    pub(crate) to: String,
     /// Start printing the (last) file once it is there.
-    pub print: bool,
+    pub(crate) print: bool,
     /// The host, when not found by asking it.
-    pub host: Option<String>,
+    pub(crate) host: Option<String>,
     /// Seconds the host may stay silent.
-    pub timeout: u64,
+    pub(crate) timeout: u64,
 }
 
 /// Sends every file; one error per file that did not arrive (the others

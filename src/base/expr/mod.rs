@@ -21,7 +21,7 @@ pub(crate) use params::{short, Kind, Params};
 
 /// What is wrong with an expression, for a caller that must tell.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ExprErrorKind {
+pub(crate) enum ExprErrorKind {
     /// The text does not parse.
     Syntax,
     /// A name is unknown or not available here (the message lists those that are).
@@ -37,11 +37,11 @@ pub enum ExprErrorKind {
 /// An expression that cannot be compiled or evaluated: a sentence naming it
 /// and what is wrong with it.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub struct ExprError {
+pub(crate) struct ExprError {
     /// What kind of problem.
-    pub kind: ExprErrorKind,
+    pub(crate) kind: ExprErrorKind,
     /// The sentence.
-    pub message: String,
+    pub(crate) message: String,
 }
 
 impl ExprError {
@@ -54,7 +54,7 @@ impl ExprError {
     }
 
     /// The input error at key path `place` (empty for none).
-    pub fn at(self, place: impl Into<String>) -> Error {
+    pub(crate) fn at(self, place: impl Into<String>) -> Error {
         Error::input(place, self.message)
     }
 }
@@ -156,7 +156,7 @@ enum Op {
 
 /// A compiled expression.
 #[derive(Clone, Debug)]
-pub struct Expr {
+pub(crate) struct Expr {
     src: String,
     ops: Vec<Op>,
     /// The values of the list params it reads ([`Op::At`]).
@@ -333,7 +333,7 @@ struct EcaCache {
 /// points: the rows of the automaton `eca` has computed. Only a shortcut:
 /// every value is the same with a fresh one.
 #[derive(Clone, Debug, Default)]
-pub struct Memo {
+pub(crate) struct Memo {
     eca: Option<EcaCache>,
 }
 
@@ -366,7 +366,7 @@ pub(crate) fn eca(rule: f64, width: f64, row: f64, col: f64) -> f64 {
 
 impl Memo {
     /// [`eca`], going on from the rows this memo has kept.
-    pub fn eca(&mut self, rule: f64, width: f64, row: f64, col: f64) -> f64 {
+    pub(crate) fn eca(&mut self, rule: f64, width: f64, row: f64, col: f64) -> f64 {
         let whole = |x: f64, hi: f64| x.fract() == 0.0 && (0.0..=hi).contains(&x);
         if !whole(rule, 255.0) || !whole(width, 64.0) || width < 1.0 || !whole(row, 1e6) {
             return f64::NAN;
@@ -570,14 +570,14 @@ pub(crate) const LANES: usize = 64;
 /// The working state of [`Expr::eval_many_in`] over many points: its stack
 /// (one value per point in each slot) and what the evaluations remember
 /// between points ([`Memo`]).
-pub struct Lanes {
+pub(crate) struct Lanes {
     stack: Box<[[f64; LANES]; STACK]>,
     memo: Memo,
 }
 
 impl Lanes {
     /// A stack for [`Expr::eval_many_in`].
-    pub fn new() -> Lanes {
+    pub(crate) fn new() -> Lanes {
         Lanes {
             stack: Box::new([[0.0; LANES]; STACK]),
             memo: Memo::default(),
@@ -700,7 +700,11 @@ impl Expr {
     /// Compiles `src`, resolving params to constants and only the `allowed`
     /// variable slots (see [`var`]) to variables. The error is a sentence
     /// naming the expression and what is wrong with it.
-    pub fn compile(src: &str, params: &Params, allowed: &[usize]) -> Result<Expr, ExprError> {
+    pub(crate) fn compile(
+        src: &str,
+        params: &Params,
+        allowed: &[usize],
+    ) -> Result<Expr, ExprError> {
         Expr::compile_inner(src, params, allowed, None)
     }
 
@@ -710,7 +714,7 @@ impl Expr {
     /// and `rand()` allowed: name k reads extra slot k, and the j-th `rand()`
     /// of the text reads slot `names.len() + j`, which the caller fills with a
     /// fresh random number before each [`Expr::eval_ext`] (see [`Expr::rands`]).
-    pub fn compile_ext(
+    pub(crate) fn compile_ext(
         src: &str,
         params: &Params,
         allowed: &[usize],
@@ -745,13 +749,13 @@ impl Expr {
     /// Evaluates with the given variable values (for a few points: a pass
     /// over many keeps one [`Memo`] for all, see [`Expr::eval_in`]).
     #[inline]
-    pub fn eval(&self, vars: &Vars) -> f64 {
+    pub(crate) fn eval(&self, vars: &Vars) -> f64 {
         run(&self.ops, &self.data, vars, &[], &mut Memo::default())
     }
 
     /// [`Expr::eval`] going on from what `memo` kept of the points before.
     #[inline]
-    pub fn eval_in(&self, vars: &Vars, memo: &mut Memo) -> f64 {
+    pub(crate) fn eval_in(&self, vars: &Vars, memo: &mut Memo) -> f64 {
         run(&self.ops, &self.data, vars, &[], memo)
     }
 
@@ -760,14 +764,15 @@ impl Expr {
     /// [`LANES`] points (a loop per instruction instead of one dispatch per
     /// instruction and point); each point sees exactly the operations of
     /// [`Expr::eval`], in the same order.
-    pub fn eval_many(&self, vars: &[Vars], out: &mut [f64]) {
+    #[cfg(test)]
+    pub(crate) fn eval_many(&self, vars: &[Vars], out: &mut [f64]) {
         let mut lanes = Lanes::new();
         self.eval_many_in(vars, out, &mut lanes);
     }
 
     /// [`Expr::eval_many`] on the stack `lanes` (made once for many calls:
     /// it is 16 KiB, more to clear than a few points are to evaluate).
-    pub fn eval_many_in(&self, vars: &[Vars], out: &mut [f64], lanes: &mut Lanes) {
+    pub(crate) fn eval_many_in(&self, vars: &[Vars], out: &mut [f64], lanes: &mut Lanes) {
         assert_eq!(vars.len(), out.len(), "one result per point");
         for (v, o) in vars.chunks(LANES).zip(out.chunks_mut(LANES)) {
             run_lanes(&self.ops, &self.data, v, o, lanes);
@@ -777,17 +782,17 @@ impl Expr {
     /// Evaluates an expression of [`Expr::compile_ext`]: `ext` holds the
     /// named extra values, then [`Expr::rands`] random numbers.
     #[inline]
-    pub fn eval_ext(&self, vars: &Vars, ext: &[f64], memo: &mut Memo) -> f64 {
+    pub(crate) fn eval_ext(&self, vars: &Vars, ext: &[f64], memo: &mut Memo) -> f64 {
         run(&self.ops, &self.data, vars, ext, memo)
     }
 
     /// How many `rand()` calls the expression makes per evaluation.
-    pub fn rands(&self) -> usize {
+    pub(crate) fn rands(&self) -> usize {
         self.rands as usize
     }
 
     /// The value when the expression uses no variable.
-    pub fn constant(&self) -> Option<f64> {
+    pub(crate) fn constant(&self) -> Option<f64> {
         match self.ops.as_slice() {
             [Op::Num(v)] => Some(*v),
             _ => None,
@@ -795,24 +800,24 @@ impl Expr {
     }
 
     /// Whether the expression reads extra slot `k` of [`Expr::compile_ext`].
-    pub fn uses_ext(&self, k: usize) -> bool {
+    pub(crate) fn uses_ext(&self, k: usize) -> bool {
         self.ops
             .iter()
             .any(|o| matches!(o, Op::Ext(s) if *s as usize == k))
     }
 
     /// Whether the expression reads variable slot `k`.
-    pub fn uses(&self, k: usize) -> bool {
+    pub(crate) fn uses(&self, k: usize) -> bool {
         self.used & (1 << k) != 0
     }
 
     /// Whether the expression is exactly variable `k` (an identity mapping).
-    pub fn is_var(&self, k: usize) -> bool {
+    pub(crate) fn is_var(&self, k: usize) -> bool {
         matches!(self.ops.as_slice(), [Op::Var(s)] if *s as usize == k)
     }
 
     /// The source text as written in the recipe.
-    pub fn src(&self) -> &str {
+    pub(crate) fn src(&self) -> &str {
         &self.src
     }
 }

@@ -22,7 +22,7 @@ pub struct Params {
 
 /// What a param that is not a plain number is.
 #[derive(Clone, Debug, PartialEq)]
-pub enum Kind {
+pub(crate) enum Kind {
     /// One of the strings of a choice param.
     Choice(String),
     /// `true` or `false` (1 or 0 in expressions).
@@ -46,13 +46,13 @@ impl DerefMut for Params {
 
 impl Params {
     /// No params.
-    pub fn new() -> Params {
+    pub(crate) fn new() -> Params {
         Params::default()
     }
 
     /// Declares the strings of every choice param: each gets the number of
     /// its first place in `strings` (the same string, the same number).
-    pub fn set_symbols<'a>(&mut self, strings: impl IntoIterator<Item = &'a str>) {
+    pub(crate) fn set_symbols<'a>(&mut self, strings: impl IntoIterator<Item = &'a str>) {
         let mut m = IndexMap::new();
         for s in strings {
             let k = m.len() as f64;
@@ -62,57 +62,49 @@ impl Params {
     }
 
     /// The number a quoted string stands for, if it is a declared choice.
-    pub fn symbol(&self, s: &str) -> Option<f64> {
+    pub(crate) fn symbol(&self, s: &str) -> Option<f64> {
         self.symbols.get(s).copied()
     }
 
     /// The declared choice strings, in order.
-    pub fn symbols(&self) -> impl Iterator<Item = &str> {
+    pub(crate) fn symbols(&self) -> impl Iterator<Item = &str> {
         self.symbols.keys().map(String::as_str)
     }
 
-    /// The string whose number is `v`, if one is.
-    pub fn symbol_of(&self, v: f64) -> Option<&str> {
-        self.symbols
-            .iter()
-            .find(|(_, &n)| n == v)
-            .map(|(s, _)| s.as_str())
-    }
-
     /// Adds a list param.
-    pub fn insert_list(&mut self, name: &str, values: Vec<f64>) {
+    pub(crate) fn insert_list(&mut self, name: &str, values: Vec<f64>) {
         self.kinds.insert(name.to_string(), Kind::List);
         self.lists.insert(name.to_string(), Arc::new(values));
     }
 
     /// The values of list param `name`.
-    pub fn list(&self, name: &str) -> Option<&[f64]> {
+    pub(crate) fn list(&self, name: &str) -> Option<&[f64]> {
         self.lists.get(name).map(|v| v.as_slice())
     }
 
     /// The names of the list params.
-    pub fn list_names(&self) -> impl Iterator<Item = &str> {
+    pub(crate) fn list_names(&self) -> impl Iterator<Item = &str> {
         self.lists.keys().map(String::as_str)
     }
 
     /// Whether `name` is a param of any kind (a number or a list).
-    pub fn has(&self, name: &str) -> bool {
+    pub(crate) fn has(&self, name: &str) -> bool {
         self.values.contains_key(name) || self.lists.contains_key(name)
     }
 
     /// Marks number param `name` as a choice or a boolean.
-    pub fn set_kind(&mut self, name: &str, kind: Kind) {
+    pub(crate) fn set_kind(&mut self, name: &str, kind: Kind) {
         self.kinds.insert(name.to_string(), kind);
     }
 
     /// What param `name` is when it is not a plain number.
-    pub fn kind(&self, name: &str) -> Option<&Kind> {
+    pub(crate) fn kind(&self, name: &str) -> Option<&Kind> {
         self.kinds.get(name)
     }
 
     /// Param `name` as a person reads it, when it is not a plain number: a
     /// choice's string, `true` or `false`, a list `[a, b]`.
-    pub fn text(&self, name: &str) -> Option<String> {
+    pub(crate) fn text(&self, name: &str) -> Option<String> {
         Some(match self.kinds.get(name)? {
             Kind::Choice(s) => s.clone(),
             Kind::Bool(b) => b.to_string(),
@@ -122,14 +114,14 @@ impl Params {
 
     /// Param `name` as a person reads it: [`Params::text`], or the number
     /// written short.
-    pub fn show(&self, name: &str) -> Option<String> {
+    pub(crate) fn show(&self, name: &str) -> Option<String> {
         self.text(name)
             .or_else(|| self.values.get(name).map(|&v| short(v)))
     }
 
     /// Every param as JSON, in order: numbers, then lists; a choice as its
     /// string, a boolean as `true`/`false`.
-    pub fn to_json(&self) -> IndexMap<String, serde_json::Value> {
+    pub(crate) fn to_json(&self) -> IndexMap<String, serde_json::Value> {
         let mut m = IndexMap::new();
         for (k, &v) in &self.values {
             let j = match self.kinds.get(k) {

@@ -95,23 +95,23 @@ pub(crate) enum Value<'a> {
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct Param<'a> {
     /// The key.
-    pub key: String,
+    pub(crate) key: String,
     /// The value.
-    pub value: Value<'a>,
+    pub(crate) value: Value<'a>,
 }
 
 /// A line of G-code, cut (see the module comment).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub(crate) struct Line<'a> {
     /// The command; `None` for a blank or comment-only line.
-    pub code: Option<Code>,
+    pub(crate) code: Option<Code>,
     /// Every parameter, in order, repeated ones included.
-    pub params: Vec<Param<'a>>,
+    pub(crate) params: Vec<Param<'a>>,
     /// The text argument of a command that takes the rest of the line
     /// (`M117 Printing…`), or a line's raw words after a named command.
-    pub text: Option<&'a str>,
+    pub(crate) text: Option<&'a str>,
     /// The comment after `;`, if any.
-    pub comment: Option<&'a str>,
+    pub(crate) comment: Option<&'a str>,
 }
 
 impl<'a> Line<'a> {

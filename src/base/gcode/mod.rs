@@ -10,6 +10,7 @@
 //! firmware's way first).
 
 pub(crate) mod lex;
+pub(crate) mod named;
 
 /// A heater.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -53,7 +54,7 @@ pub enum Shaper {
 
 impl Shaper {
     /// Every kind, in the order the docs list them.
-    pub const ALL: [Shaper; 6] = [
+    pub(crate) const ALL: [Shaper; 6] = [
         Shaper::Zv,
         Shaper::Mzv,
         Shaper::Zvd,
@@ -64,7 +65,7 @@ impl Shaper {
 
     /// Its name as Klipper and RepRapFirmware write it: `zv`, `mzv`, `zvd`,
     /// `ei`, `2hump_ei`, `3hump_ei`.
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Shaper::Zv => "zv",
             Shaper::Mzv => "mzv",
@@ -76,7 +77,7 @@ impl Shaper {
     }
 
     /// The kind of `name` (any case), if any.
-    pub fn parse(name: &str) -> Option<Shaper> {
+    pub(crate) fn parse(name: &str) -> Option<Shaper> {
         Shaper::ALL
             .into_iter()
             .find(|s| s.name().eq_ignore_ascii_case(name.trim()))
@@ -166,46 +167,38 @@ pub enum Setting {
 /// A straight move (`G0`/`G1`) in machine coordinates, as written: an axis
 /// or E or F that is `None` is not written (the firmware keeps its value).
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
-pub struct Move {
+pub(crate) struct Move {
     /// `G0` (a travel), not `G1`.
-    pub travel: bool,
+    pub(crate) travel: bool,
     /// X, Y, Z, mm.
-    pub to: [Option<f64>; 3],
+    pub(crate) to: [Option<f64>; 3],
     /// E, mm of filament (a total or a step, as the extrusion mode says).
-    pub e: Option<f64>,
+    pub(crate) e: Option<f64>,
     /// F, mm/min.
-    pub feed: Option<f64>,
+    pub(crate) feed: Option<f64>,
 }
 
 /// An arc (`G2` clockwise, `G3` counter-clockwise) to `to`, its centre
 /// `ij` from the start.
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
-pub struct Arc {
+pub(crate) struct Arc {
     /// Counter-clockwise (`G3`).
-    pub ccw: bool,
+    pub(crate) ccw: bool,
     /// X, Y, Z, mm.
-    pub to: [Option<f64>; 3],
+    pub(crate) to: [Option<f64>; 3],
     /// The centre, offset from the start, mm (I, J).
-    pub ij: [f64; 2],
+    pub(crate) ij: [f64; 2],
     /// E, mm of filament.
-    pub e: Option<f64>,
+    pub(crate) e: Option<f64>,
     /// F, mm/min.
-    pub feed: Option<f64>,
+    pub(crate) feed: Option<f64>,
 }
 
-/// A host's cancel-object label (Klipper's `EXCLUDE_OBJECT_*`, and the
-/// `; printing object` comments slicers write).
+/// A host's cancel-object label (Klipper's `EXCLUDE_OBJECT_START`/`_END`,
+/// and the `; printing object` comments slicers write); the objects'
+/// `EXCLUDE_OBJECT_DEFINE` lines are the header's (`output::gcode::labels`).
 #[derive(Clone, Debug, PartialEq)]
-pub enum Object {
-    /// `EXCLUDE_OBJECT_DEFINE`: an object's name, centre and outline.
-    Define {
-        /// The label.
-        name: String,
-        /// Its centre, machine XY.
-        center: [f64; 2],
-        /// Its outline, machine XY.
-        polygon: Vec<[f64; 2]>,
-    },
+pub(crate) enum Object {
     /// The object's moves begin.
     Start(String),
     /// The object's moves end.
@@ -214,7 +207,7 @@ pub enum Object {
 
 /// One command of the printer's language (see the module comment).
 #[derive(Clone, Debug, PartialEq)]
-pub enum Command {
+pub(crate) enum Command {
     /// A straight move.
     Move(Move),
     /// An arc.
@@ -262,8 +255,6 @@ pub enum Command {
     Pause,
     /// Select a tool (`T<n>`).
     Tool(u32),
-    /// A comment line, its text after `; `.
-    Comment(String),
     /// A command without a typed meaning: its code as written (`M600`,
     /// `BED_MESH_CALIBRATE`); the checks decide whether it may run.
     Other(String),
@@ -273,9 +264,9 @@ pub enum Command {
 /// G-code, a recipe's own command): its text, written as it is, and what
 /// the firmware reads in it.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct Verbatim {
+pub(crate) struct Verbatim {
     /// The line, without its line feed.
-    pub text: String,
+    pub(crate) text: String,
     /// What it does (see `machine::firmware::read`).
-    pub commands: Vec<Command>,
+    pub(crate) commands: Vec<Command>,
 }

@@ -44,10 +44,10 @@ pub(crate) const MIN_RADIUS: f64 = 0.3;
 pub(crate) struct Firmware {
     /// Longest chord, mm (Marlin's MAX_ARC_SEGMENT_MM, Klipper's
     /// `[gcode_arcs] resolution`).
-    pub max_chord: f64,
+    pub(crate) max_chord: f64,
     /// At least this many chords a full turn (Marlin's MIN_CIRCLE_SEGMENTS;
     /// 0 for no minimum).
-    pub min_circle_segments: u32,
+    pub(crate) min_circle_segments: u32,
 }
 
 impl Firmware {
@@ -74,23 +74,23 @@ pub(crate) const RATE_TOLERANCE: f64 = 1.01;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Arc {
     /// Index of the first point.
-    pub start: usize,
+    pub(crate) start: usize,
     /// Index of the last point (the arc replaces strings `start..end`).
-    pub end: usize,
+    pub(crate) end: usize,
     /// Centre, XY.
-    pub center: DVec2,
+    pub(crate) center: DVec2,
     /// Radius, mm.
-    pub radius: f64,
+    pub(crate) radius: f64,
     /// Counter-clockwise seen from above (`G3`); clockwise is `G2`.
-    pub ccw: bool,
+    pub(crate) ccw: bool,
     /// Angle of the start point round the centre, radians.
-    pub theta0: f64,
+    pub(crate) theta0: f64,
     /// Angle swept, radians (> 0).
-    pub sweep: f64,
+    pub(crate) sweep: f64,
     /// Height at the start, mm.
-    pub z0: f64,
+    pub(crate) z0: f64,
     /// Height at the end, mm.
-    pub z1: f64,
+    pub(crate) z1: f64,
 }
 
 impl Arc {

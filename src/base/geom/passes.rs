@@ -241,9 +241,9 @@ pub(crate) const HINT_REACH: usize = 2;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Local {
     /// Unit normal of the surface (either side).
-    pub normal: DVec3,
+    pub(crate) normal: DVec3,
     /// Distance across to the neighbouring pass, mm.
-    pub spacing: f64,
+    pub(crate) spacing: f64,
 }
 
 /// The farthest [`pass_spacing`] looks for another pass, mm.

@@ -35,24 +35,24 @@ pub(crate) fn on_circle(c: DVec2, r: f64, phi: f64) -> DVec2 {
 /// The end points are kept as given (not recomputed from the angles), so two
 /// pieces that meet share exactly the same coordinates.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Arc {
+pub(crate) struct Arc {
     /// Centre.
-    pub c: DVec2,
+    pub(crate) c: DVec2,
     /// Radius, > 0.
-    pub r: f64,
+    pub(crate) r: f64,
     /// Angle of the start point, radians.
-    pub a0: f64,
+    pub(crate) a0: f64,
     /// Signed angle turned from start to end, radians.
-    pub sweep: f64,
+    pub(crate) sweep: f64,
     /// Start point.
-    pub p0: DVec2,
+    pub(crate) p0: DVec2,
     /// End point.
-    pub p1: DVec2,
+    pub(crate) p1: DVec2,
 }
 
 impl Arc {
     /// A whole circle from angle 0, counter-clockwise or clockwise.
-    pub fn circle(c: DVec2, r: f64, ccw: bool) -> Arc {
+    pub(crate) fn circle(c: DVec2, r: f64, ccw: bool) -> Arc {
         let p = c + DVec2::new(r, 0.0);
         Arc {
             c,
@@ -66,7 +66,7 @@ impl Arc {
 
     /// +1 for counter-clockwise, -1 for clockwise.
     #[inline]
-    pub fn dir(&self) -> f64 {
+    pub(crate) fn dir(&self) -> f64 {
         if self.sweep >= 0.0 {
             1.0
         } else {
@@ -76,13 +76,13 @@ impl Arc {
 
     /// Whether this is a whole circle.
     #[inline]
-    pub fn is_full(&self) -> bool {
+    pub(crate) fn is_full(&self) -> bool {
         self.sweep.abs() >= TAU
     }
 
     /// How far (radians, in the arc's direction, in [0, 2π)) angle `phi` lies
     /// from the start; within `tol` of a whole turn counts as 0.
-    pub fn offset_of(&self, phi: f64, tol: f64) -> f64 {
+    pub(crate) fn offset_of(&self, phi: f64, tol: f64) -> f64 {
         let t = ((phi - self.a0) * self.dir()).rem_euclid(TAU);
         if TAU - t <= tol {
             0.0
@@ -93,14 +93,14 @@ impl Arc {
 
     /// The point `theta` radians along the arc from its start.
     #[inline]
-    pub fn at(&self, theta: f64) -> DVec2 {
+    pub(crate) fn at(&self, theta: f64) -> DVec2 {
         on_circle(self.c, self.r, self.a0 + self.dir() * theta)
     }
 }
 
 /// One piece of a boundary loop.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Piece {
+pub(crate) enum Piece {
     /// A segment from the first point to the second.
     Line(DVec2, DVec2),
     /// A circular arc.
@@ -110,7 +110,7 @@ pub enum Piece {
 impl Piece {
     /// Start point.
     #[inline]
-    pub fn start(&self) -> DVec2 {
+    pub(crate) fn start(&self) -> DVec2 {
         match self {
             Piece::Line(a, _) => *a,
             Piece::Arc(k) => k.p0,
@@ -119,7 +119,7 @@ impl Piece {
 
     /// End point.
     #[inline]
-    pub fn end(&self) -> DVec2 {
+    pub(crate) fn end(&self) -> DVec2 {
         match self {
             Piece::Line(_, b) => *b,
             Piece::Arc(k) => k.p1,
@@ -127,12 +127,12 @@ impl Piece {
     }
 
     /// Whether this is a whole circle (a loop by itself).
-    pub fn is_full(&self) -> bool {
+    pub(crate) fn is_full(&self) -> bool {
         matches!(self, Piece::Arc(k) if k.is_full())
     }
 
     /// The same piece run the other way.
-    pub fn reversed(&self) -> Piece {
+    pub(crate) fn reversed(&self) -> Piece {
         match *self {
             Piece::Line(a, b) => Piece::Line(b, a),
             Piece::Arc(k) => Piece::Arc(Arc {
@@ -147,7 +147,7 @@ impl Piece {
 
     /// The same piece with its end points replaced (by the shared vertex
     /// coordinates they were snapped to).
-    pub fn with_ends(&self, a: DVec2, b: DVec2) -> Piece {
+    pub(crate) fn with_ends(&self, a: DVec2, b: DVec2) -> Piece {
         match *self {
             Piece::Line(..) => Piece::Line(a, b),
             Piece::Arc(k) => Piece::Arc(Arc { p0: a, p1: b, ..k }),
@@ -155,7 +155,7 @@ impl Piece {
     }
 
     /// Length, mm.
-    pub fn length(&self) -> f64 {
+    pub(crate) fn length(&self) -> f64 {
         match self {
             Piece::Line(a, b) => a.distance(*b),
             Piece::Arc(k) => k.r * k.sweep.abs(),
@@ -163,7 +163,7 @@ impl Piece {
     }
 
     /// The point halfway along.
-    pub fn midpoint(&self) -> DVec2 {
+    pub(crate) fn midpoint(&self) -> DVec2 {
         match self {
             Piece::Line(a, b) => (*a + *b) * 0.5,
             Piece::Arc(k) => k.at(0.5 * k.sweep.abs()),
@@ -177,7 +177,7 @@ impl Piece {
     }
 
     /// Unit direction of travel at the start.
-    pub fn tangent_start(&self) -> DVec2 {
+    pub(crate) fn tangent_start(&self) -> DVec2 {
         match self {
             Piece::Line(a, b) => (*b - *a).normalize_or_zero(),
             Piece::Arc(k) => Self::arc_tangent(k, 0.0),
@@ -185,7 +185,7 @@ impl Piece {
     }
 
     /// Unit direction of travel at the end.
-    pub fn tangent_end(&self) -> DVec2 {
+    pub(crate) fn tangent_end(&self) -> DVec2 {
         match self {
             Piece::Line(a, b) => (*b - *a).normalize_or_zero(),
             Piece::Arc(k) => Self::arc_tangent(k, k.sweep.abs()),
@@ -193,7 +193,7 @@ impl Piece {
     }
 
     /// Unit direction of travel halfway along.
-    pub fn tangent_mid(&self) -> DVec2 {
+    pub(crate) fn tangent_mid(&self) -> DVec2 {
         match self {
             Piece::Line(a, b) => (*b - *a).normalize_or_zero(),
             Piece::Arc(k) => Self::arc_tangent(k, 0.5 * k.sweep.abs()),
@@ -201,7 +201,7 @@ impl Piece {
     }
 
     /// Signed curvature: 0 for a line, +1/r turning left, -1/r turning right.
-    pub fn curvature(&self) -> f64 {
+    pub(crate) fn curvature(&self) -> f64 {
         match self {
             Piece::Line(..) => 0.0,
             Piece::Arc(k) => k.dir() / k.r,
@@ -214,7 +214,7 @@ impl Piece {
     /// of its chord plus twice the circular segment between chord and arc,
     /// r²(Δ − sin Δ) with Δ the signed sweep. Both are exact formulas, so the
     /// area of a loop of lines and arcs is exact up to rounding.
-    pub fn area2(&self) -> f64 {
+    pub(crate) fn area2(&self) -> f64 {
         match self {
             Piece::Line(a, b) => cross(*a, *b),
             Piece::Arc(k) => cross(k.p0, k.p1) + k.r * k.r * (k.sweep - libm::sin(k.sweep)),
@@ -222,7 +222,7 @@ impl Piece {
     }
 
     /// Distance from `p` to the piece.
-    pub fn distance(&self, p: DVec2) -> f64 {
+    pub(crate) fn distance(&self, p: DVec2) -> f64 {
         match self {
             Piece::Line(a, b) => {
                 let d = *b - *a;
@@ -251,7 +251,7 @@ impl Piece {
     }
 
     /// Bounding box `[min, max]` (of the whole circle for an arc), grown by `pad`.
-    pub fn bbox(&self, pad: f64) -> [DVec2; 2] {
+    pub(crate) fn bbox(&self, pad: f64) -> [DVec2; 2] {
         let (lo, hi) = match self {
             Piece::Line(a, b) => (a.min(*b), a.max(*b)),
             Piece::Arc(k) => (k.c - DVec2::splat(k.r), k.c + DVec2::splat(k.r)),
@@ -262,7 +262,7 @@ impl Piece {
     /// The parameter of `x` (a point on the piece's line or circle): 0..1
     /// along a segment, 0..|sweep| radians along an arc; `None` when `x` lies
     /// more than `eps` beyond the piece's ends.
-    pub fn locate(&self, x: DVec2, eps: f64) -> Option<f64> {
+    pub(crate) fn locate(&self, x: DVec2, eps: f64) -> Option<f64> {
         match self {
             Piece::Line(a, b) => {
                 if x == *a {
@@ -293,7 +293,7 @@ impl Piece {
     }
 
     /// The part of the piece from parameter `s0` (at point `x0`) to `s1` (at `x1`).
-    pub fn sub(&self, s0: f64, x0: DVec2, s1: f64, x1: DVec2) -> Piece {
+    pub(crate) fn sub(&self, s0: f64, x0: DVec2, s1: f64, x1: DVec2) -> Piece {
         match self {
             Piece::Line(..) => Piece::Line(x0, x1),
             Piece::Arc(k) => Piece::Arc(Arc {
@@ -307,7 +307,7 @@ impl Piece {
     }
 
     /// Parameter tolerance matching a distance `eps`.
-    pub fn param_tol(&self, eps: f64) -> f64 {
+    pub(crate) fn param_tol(&self, eps: f64) -> f64 {
         match self {
             Piece::Line(a, b) => eps / a.distance(*b).max(eps),
             Piece::Arc(k) => eps / k.r,
@@ -315,23 +315,10 @@ impl Piece {
     }
 
     /// Parameter of the end.
-    pub fn end_param(&self) -> f64 {
+    pub(crate) fn end_param(&self) -> f64 {
         match self {
             Piece::Line(..) => 1.0,
             Piece::Arc(k) => k.sweep.abs(),
-        }
-    }
-
-    /// The piece moved by `d`.
-    pub fn translated(&self, d: DVec2) -> Piece {
-        match *self {
-            Piece::Line(a, b) => Piece::Line(a + d, b + d),
-            Piece::Arc(k) => Piece::Arc(Arc {
-                c: k.c + d,
-                p0: k.p0 + d,
-                p1: k.p1 + d,
-                ..k
-            }),
         }
     }
 }

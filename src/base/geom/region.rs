@@ -17,26 +17,26 @@ use super::piece::{cross, intersect, perp, split, Arc, Piece};
 
 /// A closed loop of pieces, the region on its left.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct Loop {
+pub(crate) struct Loop {
     /// The pieces in order; each ends where the next starts.
-    pub pieces: Vec<Piece>,
+    pub(crate) pieces: Vec<Piece>,
 }
 
 impl Loop {
     /// Signed area: positive for an outer loop (counter-clockwise), negative
     /// for a hole (clockwise).
-    pub fn area(&self) -> f64 {
+    pub(crate) fn area(&self) -> f64 {
         self.pieces.iter().map(Piece::area2).sum::<f64>() * 0.5
     }
 
     /// Length, mm.
-    pub fn length(&self) -> f64 {
+    pub(crate) fn length(&self) -> f64 {
         self.pieces.iter().map(Piece::length).sum()
     }
 
     /// The loop as a closed polyline (last point = first point), each arc cut
     /// into chords that stray at most `tol` from it (see [`super::piece::chords`]).
-    pub fn discretise(&self, tol: f64) -> Vec<DVec2> {
+    pub(crate) fn discretise(&self, tol: f64) -> Vec<DVec2> {
         let mut pts = Vec::new();
         for p in &self.pieces {
             pts.push(p.start());
@@ -54,7 +54,7 @@ impl Loop {
     }
 
     /// Whether `p` lies inside this loop alone (crossing parity).
-    pub fn encloses(&self, p: DVec2) -> bool {
+    pub(crate) fn encloses(&self, p: DVec2) -> bool {
         let n = DVec2::new(0.0, 1.0);
         let monos = monotone(std::slice::from_ref(self), n);
         crossings(&monos, n, p.y)
@@ -68,24 +68,24 @@ impl Loop {
 
 /// A region: outer loops counter-clockwise, holes clockwise, none crossing.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct Region {
+pub(crate) struct Region {
     /// The loops.
-    pub loops: Vec<Loop>,
+    pub(crate) loops: Vec<Loop>,
 }
 
 impl Region {
     /// Area, mm² (outer loops minus holes).
-    pub fn area(&self) -> f64 {
+    pub(crate) fn area(&self) -> f64 {
         self.loops.iter().map(Loop::area).sum()
     }
 
     /// Whether the region is empty.
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.loops.is_empty()
     }
 
     /// Whether `p` lies inside (crossing parity over all loops).
-    pub fn contains(&self, p: DVec2) -> bool {
+    pub(crate) fn contains(&self, p: DVec2) -> bool {
         let n = DVec2::new(0.0, 1.0);
         let monos = monotone(&self.loops, n);
         crossings(&monos, n, p.y)
@@ -97,14 +97,14 @@ impl Region {
     }
 
     /// Distance tolerance for this region's geometry: 1e-9 of its size.
-    pub fn eps(&self) -> f64 {
+    pub(crate) fn eps(&self) -> f64 {
         eps_for(self.loops.iter().flat_map(|l| l.pieces.iter()))
     }
 
     /// The connected pieces, in the order their outer loops were found: each
     /// outer loop with the holes inside it (a hole belongs to the smallest
     /// outer loop around it).
-    pub fn islands(&self) -> Vec<Region> {
+    pub(crate) fn islands(&self) -> Vec<Region> {
         let outers: Vec<(usize, f64)> = self
             .loops
             .iter()
@@ -131,19 +131,6 @@ impl Region {
             }
         }
         out
-    }
-
-    /// The region moved by `d`.
-    pub fn translated(&self, d: DVec2) -> Region {
-        Region {
-            loops: self
-                .loops
-                .iter()
-                .map(|l| Loop {
-                    pieces: l.pieces.iter().map(|p| p.translated(d)).collect(),
-                })
-                .collect(),
-        }
     }
 }
 
@@ -368,11 +355,11 @@ fn sharpest_left(
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Mono {
     /// The piece.
-    pub piece: Piece,
+    pub(crate) piece: Piece,
     /// f at the start.
-    pub f0: f64,
+    pub(crate) f0: f64,
     /// f at the end.
-    pub f1: f64,
+    pub(crate) f1: f64,
 }
 
 /// The loops' pieces cut where f(p) = p·n (n a unit vector) is extreme, so
@@ -482,7 +469,7 @@ fn arc_crossing(k: &Arc, n: DVec2, u: DVec2, s: f64) -> f64 {
 
 /// A feature's cross-section in one horizontal plane.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Shape {
+pub(crate) enum Shape {
     /// An axis-aligned rectangle.
     Rect {
         /// Lowest corner.
@@ -501,7 +488,7 @@ pub enum Shape {
 
 /// How a feature combines with the features before it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Op {
+pub(crate) enum Op {
     /// Adds material.
     Union,
     /// Removes material.
@@ -512,7 +499,7 @@ pub enum Op {
 
 impl Shape {
     /// Its boundary, counter-clockwise (inside on the left).
-    pub fn boundary(&self) -> Vec<Piece> {
+    pub(crate) fn boundary(&self) -> Vec<Piece> {
         match *self {
             Shape::Rect { min, max } => {
                 let c = [min, DVec2::new(max.x, min.y), max, DVec2::new(min.x, max.y)];

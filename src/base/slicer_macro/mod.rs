@@ -55,7 +55,7 @@ use std::collections::BTreeMap;
 
 /// A variable's or an expression's value.
 #[derive(Clone, Debug, PartialEq)]
-pub enum Value {
+pub(crate) enum Value {
     /// `true` or `false` (a legacy `[name]` writes `1` or `0`, as slicers do).
     Bool(bool),
     /// An integer.
@@ -81,13 +81,13 @@ pub(crate) type Vars = BTreeMap<String, Value>;
 /// Why a template could not be expanded: its 1-based line and column and
 /// what went wrong.
 #[derive(Clone, Debug, PartialEq)]
-pub struct MacroError {
+pub(crate) struct MacroError {
     /// Line of the template, 1-based.
-    pub line: usize,
+    pub(crate) line: usize,
     /// Column of the line, in characters, 1-based.
-    pub column: usize,
+    pub(crate) column: usize,
     /// What went wrong, naming the variable or construct, and the column.
-    pub message: String,
+    pub(crate) message: String,
 }
 
 impl MacroError {
@@ -124,7 +124,7 @@ impl Value {
     }
 
     /// The value as `{…}` writes it.
-    pub fn text(&self) -> String {
+    pub(crate) fn text(&self) -> String {
         match self {
             Value::Bool(b) => b.to_string(),
             Value::Int(i) => i.to_string(),
@@ -181,7 +181,7 @@ pub(crate) fn fmt_g(x: f64) -> String {
 
 /// A parsed template.
 #[derive(Clone, Debug)]
-pub struct Template {
+pub(crate) struct Template {
     nodes: Vec<parse::Node>,
     /// The `/patterns/` of the template, compiled once each.
     patterns: Vec<regex::Regex>,
@@ -200,7 +200,7 @@ fn fnv1a(text: &str) -> u64 {
 
 impl Template {
     /// Parses `text`; a syntax error names its line and column.
-    pub fn parse(text: &str) -> Result<Template, MacroError> {
+    pub(crate) fn parse(text: &str) -> Result<Template, MacroError> {
         let lines = lex::Lines::new(text);
         let mut p = parse::Parser::new(text, &lines);
         let (nodes, end) = p.block()?;
@@ -218,14 +218,19 @@ impl Template {
     }
 
     /// The text with every construct expanded from `vars`.
-    pub fn expand(&self, vars: &Vars) -> Result<String, MacroError> {
+    #[cfg(any(test, feature = "testing"))]
+    pub(crate) fn expand(&self, vars: &Vars) -> Result<String, MacroError> {
         self.expand_with(vars, &mut Vars::new())
     }
 
     /// [`Template::expand`] with the `global` variables of the templates
     /// expanded before it (a start G-code's, for its end G-code), which it
     /// may read and add to.
-    pub fn expand_with(&self, vars: &Vars, globals: &mut Vars) -> Result<String, MacroError> {
+    pub(crate) fn expand_with(
+        &self,
+        vars: &Vars,
+        globals: &mut Vars,
+    ) -> Result<String, MacroError> {
         let mut run = eval::Run::new(self, vars, globals);
         run.nodes(&self.nodes)?;
         Ok(run.out)
@@ -233,7 +238,7 @@ impl Template {
 
     /// The names the template's `global` statements make (a later template
     /// expanded with the same globals may read them).
-    pub fn globals(&self) -> Vec<String> {
+    pub(crate) fn globals(&self) -> Vec<String> {
         fn walk(nodes: &[parse::Node], out: &mut Vec<String>) {
             for n in nodes {
                 match n {
@@ -256,7 +261,7 @@ impl Template {
     /// Every variable the template reads from outside, in any branch, with
     /// the line of its first use, in order of appearance (those its own
     /// `local` and `global` statements make are its own).
-    pub fn variables(&self) -> Vec<(String, usize)> {
+    pub(crate) fn variables(&self) -> Vec<(String, usize)> {
         let mut own = std::collections::HashSet::new();
         own_names(&self.nodes, &mut own);
         let mut out: Vec<(String, usize)> = Vec::new();

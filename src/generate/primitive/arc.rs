@@ -10,30 +10,30 @@ use crate::base::toolpath::Toolpath;
 /// An arc from angle `start` to `end` (radians, counter-clockwise when
 /// `end > start`), rising by `rise` from start to end.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Arc {
+pub(crate) struct Arc {
     /// Radius, mm.
-    pub radius: f64,
+    pub(crate) radius: f64,
     /// Centre; the arc starts at height `center.z`.
-    pub center: DVec3,
+    pub(crate) center: DVec3,
     /// Start angle, radians.
-    pub start: f64,
+    pub(crate) start: f64,
     /// End angle, radians.
-    pub end: f64,
+    pub(crate) end: f64,
     /// Strings per full turn.
-    pub segments: u32,
+    pub(crate) segments: u32,
     /// Rise from start to end, mm.
-    pub rise: f64,
+    pub(crate) rise: f64,
 }
 
 impl Arc {
     /// `round(|end - start| / 2·pi · segments)`, at least 1.
-    pub fn string_count(&self) -> u64 {
+    pub(crate) fn string_count(&self) -> u64 {
         let turns = (self.end - self.start).abs() / std::f64::consts::TAU;
         libm::round(turns * self.segments as f64).max(1.0) as u64
     }
 
     /// Makes the strings; the end points sit exactly at `start` and `end`.
-    pub fn build(&self, c: f64, v: f64) -> Toolpath {
+    pub(crate) fn build(&self, c: f64, v: f64) -> Toolpath {
         let n = self.string_count();
         let at = |k: u64| {
             let s = k as f64 / n as f64;

@@ -65,7 +65,7 @@ use crate::base::toolpath::Toolpath;
 
 /// Which of the paper's rules decides a cell.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Rule {
+pub(crate) enum Rule {
     /// Fig. 5: straight up at p0, else on the next cell (i + 1) at p1.
     Basic,
     /// Section 4.2: on i − 1, else on i + 1 at p1, else straight up at p0 using C.
@@ -74,7 +74,7 @@ pub enum Rule {
 
 /// How the cells' turns are laid out: one helix, or one circle per layer.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Layout {
+pub(crate) enum Layout {
     /// One helix, the paper's method (section 2): a cell's neighbours below
     /// run on across the seam into the turn being printed.
     #[default]
@@ -88,7 +88,7 @@ pub enum Layout {
 
 /// The first turn of the automaton.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Initial {
+pub(crate) enum Initial {
     /// All filled.
     Ones,
     /// Each cell empty with probability `noise`.
@@ -101,7 +101,7 @@ pub enum Initial {
 /// What one cell holds: empty, or filled and on what it was stacked.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(u8)]
-pub enum Cell {
+pub(crate) enum Cell {
     /// No chunk: the head travels.
     Empty,
     /// Filled as part of the initial layer.
@@ -116,71 +116,67 @@ pub enum Cell {
 
 impl Cell {
     /// Whether the cell holds a chunk.
-    pub fn filled(self) -> bool {
+    pub(crate) fn filled(self) -> bool {
         self != Cell::Empty
     }
 }
 
 /// The automaton's parameters (section 3.1, Fig. 5; section 4.2).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Automaton {
+pub(crate) struct Automaton {
     /// Cells (arcs) per turn, the paper's N.
-    pub cells: u32,
+    pub(crate) cells: u32,
     /// Turns, the initial one included.
-    pub layers: u32,
+    pub(crate) layers: u32,
     /// Basic or split-and-merge.
-    pub rule: Rule,
+    pub(crate) rule: Rule,
     /// A helix or layered circles.
-    pub layout: Layout,
+    pub(crate) layout: Layout,
     /// Probability of stacking straight up.
-    pub p0: f64,
+    pub(crate) p0: f64,
     /// Probability of stacking on a neighbour below.
-    pub p1: f64,
+    pub(crate) p1: f64,
     /// C: filament used by a straight stack (split_merge), 0 < C < 1.
-    pub consume: f64,
+    pub(crate) consume: f64,
     /// Filament extruded per cell step, 0 < e1 < 1.
-    pub e1: f64,
+    pub(crate) e1: f64,
     /// The first turn.
-    pub initial: Initial,
+    pub(crate) initial: Initial,
     /// Seed of the generator.
-    pub seed: u64,
+    pub(crate) seed: u64,
 }
 
 /// Split, merge and extinction counts of a pattern (see [`Pattern::events`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Events {
+#[cfg(test)]
+pub(crate) struct Events {
     /// A stripe piece touching two or more separate pieces above it (each extra one counts).
-    pub splits: usize,
+    pub(crate) splits: usize,
     /// A stripe piece touching two or more separate pieces below it (each extra one counts).
-    pub merges: usize,
+    pub(crate) merges: usize,
     /// A stripe piece with nothing above it (below the top turn).
-    pub extinctions: usize,
+    pub(crate) extinctions: usize,
 }
 
 /// The cell array: `layers` turns of `cells` cells, turn 0 first.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Pattern {
+pub(crate) struct Pattern {
     /// Cells per turn.
-    pub cells: usize,
+    pub(crate) cells: usize,
     /// Turns.
-    pub layers: usize,
+    pub(crate) layers: usize,
     /// Cell i is at position i mod cells of turn i / cells.
-    pub cell: Vec<Cell>,
+    pub(crate) cell: Vec<Cell>,
 }
 
 impl Automaton {
     /// Cells in all (= strings of the G-code).
-    pub fn len(&self) -> u64 {
+    pub(crate) fn len(&self) -> u64 {
         self.cells as u64 * self.layers as u64
     }
 
-    /// Whether there are no cells (never, once resolved).
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
     /// Runs Fig. 5's loop (or section 4.2's rule) over the whole helix.
-    pub fn run(&self) -> Pattern {
+    pub(crate) fn run(&self) -> Pattern {
         let n = self.cells as usize;
         let total = self.len() as usize;
         let mut rng = SplitMix64::new(self.seed);
@@ -248,12 +244,13 @@ impl Automaton {
 
 impl Pattern {
     /// Whether cell `i` holds a chunk.
-    pub fn filled(&self, i: usize) -> bool {
+    #[cfg(test)]
+    pub(crate) fn filled(&self, i: usize) -> bool {
         self.cell[i].filled()
     }
 
     /// The cells of turn `l`.
-    pub fn row(&self, l: usize) -> &[Cell] {
+    pub(crate) fn row(&self, l: usize) -> &[Cell] {
         &self.cell[l * self.cells..(l + 1) * self.cells]
     }
 
@@ -272,7 +269,8 @@ impl Pattern {
     /// apart, so each stands on one chunk only: the basic rule gives no
     /// splits and no merges, only extinctions (the paper: "the original
     /// algorithm … never generates such patterns").
-    pub fn events(&self) -> Events {
+    #[cfg(test)]
+    pub(crate) fn events(&self) -> Events {
         let n = self.cells;
         let total = self.cell.len();
         let mut run = vec![u32::MAX; total];
@@ -329,7 +327,7 @@ impl Pattern {
     /// counter-clockwise seen from above, so left to right seen from outside);
     /// filled cells black, empty ones white. Errors have no place (the caller
     /// names the option).
-    pub fn to_png(&self) -> Result<Vec<u8>> {
+    pub(crate) fn to_png(&self) -> Result<Vec<u8>> {
         let mut px = Vec::with_capacity(self.cell.len());
         for l in (0..self.layers).rev() {
             px.extend(
@@ -349,21 +347,21 @@ impl Pattern {
 
 /// A helix of `model.layers` turns whose arcs are the automaton's cells.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CaHelix {
+pub(crate) struct CaHelix {
     /// Radius, mm.
-    pub radius: f64,
+    pub(crate) radius: f64,
     /// Rise per turn, mm.
-    pub layer_height: f64,
+    pub(crate) layer_height: f64,
     /// Centre; the first cell starts at height `center.z`.
-    pub center: DVec3,
+    pub(crate) center: DVec3,
     /// The automaton.
-    pub model: Automaton,
+    pub(crate) model: Automaton,
 }
 
 impl CaHelix {
     /// One string per cell (turns × cells per turn), and for layered
     /// circles one layer change between layers.
-    pub fn string_count(&self) -> u64 {
+    pub(crate) fn string_count(&self) -> u64 {
         match self.model.layout {
             Layout::Helix => self.model.len(),
             Layout::Layers => self.model.len() + self.model.layers as u64 - 1,
@@ -372,12 +370,12 @@ impl CaHelix {
 
     /// Runs the automaton; filled cells become arcs extruded at `c` and `v`,
     /// empty ones travel moves, so that the G-code draws the pattern.
-    pub fn build(&self, c: f64, v: f64) -> Toolpath {
+    pub(crate) fn build(&self, c: f64, v: f64) -> Toolpath {
         self.toolpath(&self.model.run(), c, v)
     }
 
     /// The toolpath of an already computed pattern.
-    pub fn toolpath(&self, pattern: &Pattern, c: f64, v: f64) -> Toolpath {
+    pub(crate) fn toolpath(&self, pattern: &Pattern, c: f64, v: f64) -> Toolpath {
         let n = self.model.cells;
         let layered = self.model.layout == Layout::Layers;
         // the end of cell k − 1: on a helix it rises with every cell; on

@@ -7,23 +7,23 @@ use crate::base::toolpath::Toolpath;
 
 /// One closed circle at height `center.z`, starting at angle 0, counter-clockwise.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Circle {
+pub(crate) struct Circle {
     /// Radius, mm.
-    pub radius: f64,
+    pub(crate) radius: f64,
     /// Centre.
-    pub center: DVec3,
+    pub(crate) center: DVec3,
     /// Number of strings.
-    pub segments: u32,
+    pub(crate) segments: u32,
 }
 
 impl Circle {
     /// Number of strings: `segments`.
-    pub fn string_count(&self) -> u64 {
+    pub(crate) fn string_count(&self) -> u64 {
         self.segments as u64
     }
 
     /// Makes the strings; the last point is exactly the first.
-    pub fn build(&self, c: f64, v: f64) -> Toolpath {
+    pub(crate) fn build(&self, c: f64, v: f64) -> Toolpath {
         let at = |k: u64| {
             let (x, y) = on_circle(self.radius, k, self.segments);
             self.center + DVec3::new(x, y, 0.0)

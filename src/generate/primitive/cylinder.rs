@@ -11,26 +11,26 @@ use crate::base::toolpath::Toolpath;
 /// Flat spirals every `vpitch`, `hpitch` apart, alternately outward and
 /// inward, so each layer starts where the last one ended, one `vpitch` up.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Cylinder {
+pub(crate) struct Cylinder {
     /// Radius, mm (with an outline: its farthest distance from its centroid).
-    pub radius: f64,
+    pub(crate) radius: f64,
     /// Height, mm.
-    pub height: f64,
+    pub(crate) height: f64,
     /// Distance between layers, mm.
-    pub vpitch: f64,
+    pub(crate) vpitch: f64,
     /// Distance between the turns of a layer's spiral, mm.
-    pub hpitch: f64,
+    pub(crate) hpitch: f64,
     /// Centre of the bottom layer.
-    pub center: DVec3,
+    pub(crate) center: DVec3,
     /// Strings per turn.
-    pub segments: u32,
+    pub(crate) segments: u32,
     /// A closed outline in place of the circle (each layer a spiral of it).
-    pub outline: Option<Arc<Outline>>,
+    pub(crate) outline: Option<Arc<Outline>>,
 }
 
 impl Cylinder {
     /// Number of layers: `round(height / vpitch)`, at least 1.
-    pub fn layers(&self) -> u64 {
+    pub(crate) fn layers(&self) -> u64 {
         libm::round(self.height / self.vpitch).max(1.0) as u64
     }
 
@@ -51,7 +51,7 @@ impl Cylinder {
     }
 
     /// Spiral strings of every layer plus one vertical step between layers.
-    pub fn string_count(&self) -> u64 {
+    pub(crate) fn string_count(&self) -> u64 {
         // saturating: a huge height must reach the string limit, not wrap
         let l = self.layers();
         l.saturating_mul(self.layer(0).string_count())
@@ -60,7 +60,7 @@ impl Cylinder {
 
     /// Makes the layers; the step up between two layers is a travel string
     /// (a Z move that extrudes nothing).
-    pub fn build(&self, c: f64, v: f64) -> Toolpath {
+    pub(crate) fn build(&self, c: f64, v: f64) -> Toolpath {
         let mut t = self.layer(0).build(c, v);
         t.strings.reserve(self.string_count() as usize - t.len());
         for j in 1..self.layers() {

@@ -11,25 +11,25 @@ use crate::base::toolpath::Toolpath;
 
 /// A helix rising continuously from `center.z` to `center.z + height`.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Helix {
+pub(crate) struct Helix {
     /// Radius, mm (with an outline: its farthest distance from its centroid).
-    pub radius: f64,
+    pub(crate) radius: f64,
     /// Total rise, mm.
-    pub height: f64,
+    pub(crate) height: f64,
     /// Vertical rise per turn, mm.
-    pub pitch: f64,
+    pub(crate) pitch: f64,
     /// Centre of the bottom.
-    pub center: DVec3,
+    pub(crate) center: DVec3,
     /// Strings per turn.
-    pub segments: u32,
+    pub(crate) segments: u32,
     /// A closed outline in place of the circle, centroid at the origin.
-    pub outline: Option<Arc<Outline>>,
+    pub(crate) outline: Option<Arc<Outline>>,
 }
 
 impl Helix {
     /// `round(height / pitch * segments)`, as the spec says (with an
     /// outline, segments plus the outline's corners per turn).
-    pub fn string_count(&self) -> u64 {
+    pub(crate) fn string_count(&self) -> u64 {
         let m = match &self.outline {
             Some(o) => o.fractions(self.segments).len(),
             None => self.segments as usize,
@@ -53,7 +53,7 @@ impl Helix {
     /// Point k is at angle 2·pi·k/segments and height `height·k/n`, so the
     /// angle steps are uniform and the last point sits exactly at `height`.
     /// The points are computed in chunks, each the same whatever the split.
-    pub fn build(&self, c: f64, v: f64) -> Toolpath {
+    pub(crate) fn build(&self, c: f64, v: f64) -> Toolpath {
         if let Some(o) = &self.outline {
             return self.build_outline(o, c, v);
         }

@@ -63,19 +63,19 @@ pub(crate) const CHARSET: &str = "0-9, `-`, `.`, a space and A b C d E F G H I J
 
 /// A label: its text laid `layers` times from `center.z` up.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Label {
+pub(crate) struct Label {
     /// The text (every character one [`segments`] knows).
-    pub text: String,
+    pub(crate) text: String,
     /// The middle of the label's bottom edge; z the first layer's height.
-    pub center: DVec3,
+    pub(crate) center: DVec3,
     /// A glyph's height, mm.
-    pub height: f64,
+    pub(crate) height: f64,
     /// Layers of strokes.
-    pub layers: u32,
+    pub(crate) layers: u32,
     /// Between layers, mm.
-    pub layer_height: f64,
+    pub(crate) layer_height: f64,
     /// The text's direction, radians counter-clockwise from +x.
-    pub angle: f64,
+    pub(crate) angle: f64,
 }
 
 /// A stroke's ends on a glyph box of width w and height h: a … g.
@@ -106,7 +106,7 @@ impl Label {
 
     /// The strokes of one layer, in the label's own frame (x along the
     /// text from its left end, y up the glyphs), in drawing order.
-    pub fn strokes(&self) -> Vec<[DVec2; 2]> {
+    pub(crate) fn strokes(&self) -> Vec<[DVec2; 2]> {
         let (w, h) = (self.width(), self.height);
         let mut out = Vec::new();
         for (j, ch) in self.text.chars().enumerate() {
@@ -129,13 +129,13 @@ impl Label {
     }
 
     /// Strings of one layer: at most two per stroke (a travel and a draw).
-    pub fn string_count(&self) -> u64 {
+    pub(crate) fn string_count(&self) -> u64 {
         2 * self.strokes().len() as u64 * u64::from(self.layers)
     }
 
     /// Makes the strings: each layer's strokes, a stroke that starts where
     /// the one before ended drawn on without a travel.
-    pub fn build(&self, c: f64, v: f64) -> Toolpath {
+    pub(crate) fn build(&self, c: f64, v: f64) -> Toolpath {
         let strokes = self.strokes();
         let n = self.text.chars().count() as f64;
         let span = (n * self.advance() - 0.4 * self.height).max(0.0);

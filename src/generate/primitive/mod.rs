@@ -39,7 +39,7 @@ use crate::base::toolpath::Toolpath;
 
 /// A primitive with every value resolved to a number.
 #[derive(Clone, Debug, PartialEq)]
-pub enum Primitive {
+pub(crate) enum Primitive {
     /// The papers' low-level API: move, draw, cross_section, speed.
     Path(Vec<PathCmd>),
     /// One closed circle.
@@ -66,7 +66,7 @@ pub enum Primitive {
 
 impl Primitive {
     /// How many strings `build` will make.
-    pub fn string_count(&self) -> u64 {
+    pub(crate) fn string_count(&self) -> u64 {
         match self {
             Primitive::Path(cmds) => path::string_count(cmds),
             Primitive::Circle(p) => p.string_count(),
@@ -86,7 +86,7 @@ impl Primitive {
     /// primitive sets none of its own.
     /// A primitive that splits its points (a helix) makes the same strings
     /// whatever the threads.
-    pub fn build(&self, c: f64, v: f64) -> Toolpath {
+    pub(crate) fn build(&self, c: f64, v: f64) -> Toolpath {
         match self {
             Primitive::Path(cmds) => path::build(cmds, c, v),
             Primitive::Circle(p) => p.build(c, v),

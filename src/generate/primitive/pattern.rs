@@ -30,44 +30,44 @@ pub(crate) const FIRST_LAYER: FirstLayer = FirstLayer {
 
 /// Cross-section and speed of the first turn.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FirstLayer {
+pub(crate) struct FirstLayer {
     /// mm².
-    pub cross_section: f64,
+    pub(crate) cross_section: f64,
     /// mm/s.
-    pub speed: f64,
+    pub(crate) speed: f64,
 }
 
 /// A constant-flow helix of `layers` turns of `segments` strings.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PatternHelix {
+pub(crate) struct PatternHelix {
     /// Radius, mm.
-    pub radius: f64,
+    pub(crate) radius: f64,
     /// Turns, the first one included.
-    pub layers: u32,
+    pub(crate) layers: u32,
     /// Rise per turn, mm.
-    pub layer_height: f64,
+    pub(crate) layer_height: f64,
     /// Strings per turn.
-    pub segments: u32,
+    pub(crate) segments: u32,
     /// Cross-section after the first turn, mm²; the part's when `None`.
-    pub cross_section: Option<f64>,
+    pub(crate) cross_section: Option<f64>,
     /// Head speed after the first turn, mm/s; the part's when `None`.
-    pub speed: Option<f64>,
+    pub(crate) speed: Option<f64>,
     /// The first turn.
-    pub first_layer: FirstLayer,
+    pub(crate) first_layer: FirstLayer,
     /// Centre; the helix starts at height `center.z`.
-    pub center: DVec3,
+    pub(crate) center: DVec3,
 }
 
 impl PatternHelix {
     /// `layers × segments`.
-    pub fn string_count(&self) -> u64 {
+    pub(crate) fn string_count(&self) -> u64 {
         self.layers as u64 * self.segments as u64
     }
 
     /// Point k at angle 2·pi·k/segments and height `layer_height·k/segments`:
     /// the first `segments` strings at the first layer's c and v, every later
     /// one at exactly `c` and `v` (the primitive's own, else the part's).
-    pub fn build(&self, c: f64, v: f64) -> Toolpath {
+    pub(crate) fn build(&self, c: f64, v: f64) -> Toolpath {
         let (c, v) = (self.cross_section.unwrap_or(c), self.speed.unwrap_or(v));
         let n = self.string_count();
         let seg = self.segments as u64;

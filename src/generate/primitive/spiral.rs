@@ -10,7 +10,7 @@ use crate::base::toolpath::Toolpath;
 
 /// Which way a spiral runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Direction {
+pub(crate) enum Direction {
     /// From `inner_radius` out to `radius`, ending at angle 0.
     Outward,
     /// The outward spiral reversed: from `radius` at angle 0 in to `inner_radius`.
@@ -20,32 +20,32 @@ pub enum Direction {
 /// A flat spiral whose outer end sits at angle 0, where a helix of the same
 /// radius starts, so that the helix continues it without a seam.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Spiral {
+pub(crate) struct Spiral {
     /// Outer radius, mm (with an outline: its farthest distance from its centroid).
-    pub radius: f64,
+    pub(crate) radius: f64,
     /// Horizontal distance between turns, mm.
-    pub pitch: f64,
+    pub(crate) pitch: f64,
     /// Centre.
-    pub center: DVec3,
+    pub(crate) center: DVec3,
     /// Strings per turn.
-    pub segments: u32,
+    pub(crate) segments: u32,
     /// Where the spiral starts (outward), mm.
-    pub inner_radius: f64,
+    pub(crate) inner_radius: f64,
     /// Outward or inward.
-    pub direction: Direction,
+    pub(crate) direction: Direction,
     /// A closed outline in place of the circle, centroid at the origin.
-    pub outline: Option<Arc<Outline>>,
+    pub(crate) outline: Option<Arc<Outline>>,
 }
 
 impl Spiral {
     /// Number of turns, (radius - inner_radius) / pitch.
-    pub fn turns(&self) -> f64 {
+    pub(crate) fn turns(&self) -> f64 {
         (self.radius - self.inner_radius) / self.pitch
     }
 
     /// `round(turns · segments)`, at least 1 (with an outline, segments
     /// plus the outline's corners per turn).
-    pub fn string_count(&self) -> u64 {
+    pub(crate) fn string_count(&self) -> u64 {
         let m = match &self.outline {
             Some(o) => o.fractions(self.segments).len(),
             None => self.segments as usize,
@@ -78,7 +78,7 @@ impl Spiral {
 
     /// r(s) = inner + (radius − inner)·s and angle 2·pi·turns·(s − 1) for
     /// s = k/n: r grows by `pitch` a turn and the outer end is at angle 0.
-    pub fn build(&self, c: f64, v: f64) -> Toolpath {
+    pub(crate) fn build(&self, c: f64, v: f64) -> Toolpath {
         if let Some(o) = &self.outline {
             return self.build_outline(o, c, v);
         }

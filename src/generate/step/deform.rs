@@ -10,15 +10,15 @@ use crate::base::toolpath::{frac, Toolpath};
 
 /// A deformation: new positions and/or new cross-sections and speeds.
 #[derive(Clone, Debug)]
-pub struct Deform {
+pub(crate) struct Deform {
     /// In cylinder coordinates (r, theta, z) rather than (x, y, z).
-    pub cylinder: bool,
+    pub(crate) cylinder: bool,
     /// The three position expressions.
-    pub position: Option<[Expr; 3]>,
+    pub(crate) position: Option<[Expr; 3]>,
     /// New cross-section, per string (sees `c`).
-    pub cross_section: Option<Expr>,
+    pub(crate) cross_section: Option<Expr>,
     /// New speed, per string (sees `v`).
-    pub speed: Option<Expr>,
+    pub(crate) speed: Option<Expr>,
 }
 
 impl Deform {
@@ -33,7 +33,7 @@ impl Deform {
 
     /// Applies the deformation: c and v first, at the old midpoints, then the
     /// points; in chunks (the output is the same for any number of threads).
-    pub fn apply(&self, tp: &mut Toolpath) -> Result<()> {
+    pub(crate) fn apply(&self, tp: &mut Toolpath) -> Result<()> {
         if self.cross_section.is_some() || self.speed.is_some() {
             self.apply_strings(tp)?;
         }

@@ -23,7 +23,7 @@ use crate::base::toolpath::{angle, polar, radius, Toolpath};
 
 /// What `modulate_*` keeps when it scales the cross-section.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Keep {
+pub(crate) enum Keep {
     /// Speed is divided by the factor, so the flow c·v stays constant.
     Flow,
     /// Speed is unchanged.
@@ -32,7 +32,7 @@ pub enum Keep {
 
 /// A step with its expressions compiled.
 #[derive(Clone, Debug)]
-pub enum Step {
+pub(crate) enum Step {
     /// Deformation in Cartesian coordinates.
     DeformXyz(Deform),
     /// Deformation in cylinder coordinates.
@@ -57,7 +57,7 @@ pub enum Step {
 
 impl Step {
     /// The step's key in a recipe, for error places.
-    pub fn key(&self) -> &'static str {
+    pub(crate) fn key(&self) -> &'static str {
         match self {
             Step::DeformXyz(_) => "deform_xyz",
             Step::DeformCylinder(_) => "deform_cylinder",
@@ -72,7 +72,7 @@ impl Step {
     }
 
     /// Whether one of the step's expressions reads variable slot `k`.
-    pub fn uses(&self, k: usize) -> bool {
+    pub(crate) fn uses(&self, k: usize) -> bool {
         match self {
             Step::DeformXyz(d) | Step::DeformCylinder(d) => d
                 .position
@@ -83,14 +83,14 @@ impl Step {
                 .any(|e| e.uses(k)),
             Step::ModulateCylinder(m) => m.factor.uses(k),
             Step::ModulateMap(m) => m.u.uses(k) || m.v.uses(k),
-            Step::Set(s) => s.values.iter().any(|(_, e)| e.uses(k)),
+            Step::Set(s) => s.named.values.iter().any(|(_, e)| e.uses(k)),
             Step::Subdivide(_) | Step::Translate(_) | Step::Place(..) | Step::GcodeAt(..) => false,
         }
     }
 
     /// Applies the step in place (the same result whatever the threads).
     /// `max_strings` bounds what `subdivide` may make.
-    pub fn apply(&self, tp: &mut Toolpath, max_strings: u64) -> Result<()> {
+    pub(crate) fn apply(&self, tp: &mut Toolpath, max_strings: u64) -> Result<()> {
         if tp.turns.is_none() && self.uses(var::S) {
             return Err(Error::input(
                 "",

@@ -12,28 +12,28 @@ use crate::base::toolpath::Toolpath;
 
 /// Cross-section multiplied by an expression of the midpoint.
 #[derive(Clone, Debug)]
-pub struct Modulate {
+pub(crate) struct Modulate {
     /// The factor fm.
-    pub factor: Expr,
+    pub(crate) factor: Expr,
     /// What stays constant.
-    pub keep: Keep,
+    pub(crate) keep: Keep,
 }
 
 /// A grey-level image, values 0 (black) to 1 (white).
 #[derive(Clone, Debug, PartialEq)]
-pub struct Bitmap {
+pub(crate) struct Bitmap {
     /// Width in pixels.
-    pub width: usize,
+    pub(crate) width: usize,
     /// Height in pixels.
-    pub height: usize,
+    pub(crate) height: usize,
     /// Row-major luminance, 0..1, row 0 at the top.
-    pub pixels: Vec<f32>,
+    pub(crate) pixels: Vec<f32>,
 }
 
 impl Bitmap {
     /// The pixel at image coordinates (u, v) in 0..1, u left→right, v
     /// top→bottom, clamped to the image (nearest pixel, no blending).
-    pub fn at(&self, u: f64, v: f64) -> f32 {
+    pub(crate) fn at(&self, u: f64, v: f64) -> f32 {
         let col = ((u * self.width as f64).floor().max(0.0) as usize).min(self.width - 1);
         let row = ((v * self.height as f64).floor().max(0.0) as usize).min(self.height - 1);
         self.pixels[row * self.width + col]
@@ -44,7 +44,7 @@ impl Bitmap {
     /// `text` in one line of 8 × 8 glyphs (the `font8x8` crate's), one light
     /// column between letters and a light border of one pixel all round, so
     /// that looking up outside the text (clamped to the edge) finds background.
-    pub fn from_text(text: &str) -> Result<Bitmap> {
+    pub(crate) fn from_text(text: &str) -> Result<Bitmap> {
         use font8x8::UnicodeFonts;
         if text.is_empty() {
             return Err(Error::input(
@@ -95,21 +95,21 @@ impl Bitmap {
 
 /// Cross-section multiplied by `dark` or `light` as the image says.
 #[derive(Clone, Debug)]
-pub struct ModulateMap {
+pub(crate) struct ModulateMap {
     /// The image.
-    pub image: Bitmap,
+    pub(crate) image: Bitmap,
     /// u coordinate expression.
-    pub u: Expr,
+    pub(crate) u: Expr,
     /// v coordinate expression.
-    pub v: Expr,
+    pub(crate) v: Expr,
     /// Factor where the pixel is darker than `threshold`.
-    pub dark: f64,
+    pub(crate) dark: f64,
     /// Factor elsewhere.
-    pub light: f64,
+    pub(crate) light: f64,
     /// Luminance threshold, 0..1.
-    pub threshold: f64,
+    pub(crate) threshold: f64,
     /// What stays constant.
-    pub keep: Keep,
+    pub(crate) keep: Keep,
 }
 
 fn scale(tp: &mut Toolpath, k: usize, f: f64, keep: Keep) {
@@ -122,7 +122,7 @@ fn scale(tp: &mut Toolpath, k: usize, f: f64, keep: Keep) {
 
 impl Modulate {
     /// Scales every extruding string.
-    pub fn apply(&self, tp: &mut Toolpath) -> Result<()> {
+    pub(crate) fn apply(&self, tp: &mut Toolpath) -> Result<()> {
         let n = tp.len();
         let mut memo = Memo::default();
         for k in 0..n {
@@ -164,7 +164,7 @@ fn check_factor(e: &Expr, f: f64, k: usize, m: DVec3) -> Result<()> {
 
 impl ModulateMap {
     /// Looks up each extruding string's midpoint in the image and scales it.
-    pub fn apply(&self, tp: &mut Toolpath) -> Result<()> {
+    pub(crate) fn apply(&self, tp: &mut Toolpath) -> Result<()> {
         let n = tp.len();
         let mut memo = Memo::default();
         for k in 0..n {

@@ -11,68 +11,13 @@
 
 use crate::base::error::{Error, Result};
 use crate::base::expr::{var, Expr, Memo, Vars};
-use crate::base::gcode::{Heater, Setting, Shaper};
+use crate::base::gcode::named::Named;
+use crate::base::gcode::Setting;
 use crate::base::toolpath::{Band, Event, Toolpath};
-
-/// A setting a `set` step may give a value to.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Key {
-    /// The nozzle's target, °C.
-    NozzleTemperature,
-    /// The part-cooling fan, 0 to 1.
-    Fan,
-    /// Pressure (linear) advance, s.
-    PressureAdvance,
-    /// p3dp's retraction length, mm.
-    RetractionLength,
-    /// p3dp's retraction speed, mm/s.
-    RetractionSpeed,
-    /// Print acceleration, mm/s².
-    Acceleration,
-    /// Travel acceleration, mm/s².
-    TravelAcceleration,
-    /// The head's speed limit, mm/s.
-    SpeedLimit,
-    /// Klipper's square-corner velocity, mm/s.
-    SquareCornerVelocity,
-    /// Marlin's junction deviation, mm.
-    JunctionDeviation,
-    /// Classic jerk, mm/s.
-    Jerk,
-    /// Input shaper frequency (both axes), Hz.
-    ShaperFrequency,
-    /// Input shaper damping ratio.
-    ShaperDamping,
-    /// Flow factor, 1 = 100 %.
-    Flow,
-}
-
-impl Key {
-    /// The key of `name` as a recipe writes it.
-    pub fn of(name: &str) -> Option<Key> {
-        Some(match name {
-            "nozzle_temperature" => Key::NozzleTemperature,
-            "fan" => Key::Fan,
-            "pressure_advance" => Key::PressureAdvance,
-            "retraction_length" => Key::RetractionLength,
-            "retraction_speed" => Key::RetractionSpeed,
-            "acceleration" => Key::Acceleration,
-            "travel_acceleration" => Key::TravelAcceleration,
-            "speed_limit" => Key::SpeedLimit,
-            "square_corner_velocity" => Key::SquareCornerVelocity,
-            "junction_deviation" => Key::JunctionDeviation,
-            "jerk" => Key::Jerk,
-            "input_shaper_frequency" => Key::ShaperFrequency,
-            "input_shaper_damping" => Key::ShaperDamping,
-            "flow" => Key::Flow,
-            _ => return None,
-        })
-    }
-}
 
 /// Where a `set` step's bands are.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Bands {
+pub(crate) enum Bands {
     /// Height bands `every` mm tall from `from`.
     Height {
         /// Where band 0 begins, mm.
@@ -88,16 +33,12 @@ pub enum Bands {
 
 /// A `set` step resolved.
 #[derive(Clone, Debug)]
-pub struct Set {
+pub(crate) struct Set {
     /// Its bands.
-    pub bands: Bands,
-    /// Each setting's value: an expression of x, y, z (variables) and
+    pub(crate) bands: Bands,
+    /// The settings: each value an expression of x, y, z (variables) and
     /// `band` (extra slot 0).
-    pub values: Vec<(Key, Expr)>,
-    /// Wait for the nozzle temperature.
-    pub wait: bool,
-    /// The input shaper's kind, if set.
-    pub shaper: Option<Shaper>,
+    pub(crate) named: Named<Expr>,
 }
 
 /// The variables a `set` value may read.
@@ -109,10 +50,14 @@ impl Set {
     /// The settings at `vars` in band `band`, merged as the firmware sets
     /// them (print and travel acceleration in one, the shaper's values in
     /// one …), and the first value given (the band's).
-    pub fn settings(&self, vars: &Vars, band: u32, memo: &mut Memo) -> Result<(Vec<Setting>, f64)> {
-        let mut out: Vec<Setting> = Vec::new();
+    pub(crate) fn settings(
+        &self,
+        vars: &Vars,
+        band: u32,
+        memo: &mut Memo,
+    ) -> Result<(Vec<Setting>, f64)> {
         let mut first = None;
-        for (key, e) in &self.values {
+        let out = self.named.lower(|_, e| {
             let v = e.eval_ext(vars, &[f64::from(band)], memo);
             if !v.is_finite() {
                 return Err(Error::input(
@@ -127,24 +72,17 @@ impl Set {
                 ));
             }
             first.get_or_insert(v);
-            merge(&mut out, setting(*key, v, self.wait));
-        }
-        if let Some(kind) = self.shaper {
-            merge(
-                &mut out,
-                Setting::InputShaper {
-                    frequency: [None; 2],
-                    damping: None,
-                    kind: Some(kind),
-                },
-            );
-        }
-        Ok((out, first.unwrap_or(0.0)))
+            Ok(v)
+        })?;
+        Ok((
+            out.into_iter().map(|(s, _)| s).collect(),
+            first.unwrap_or(0.0),
+        ))
     }
 
     /// Puts the settings into `tp` before the first extruding string of
     /// each band (after the events already there).
-    pub fn apply(&self, tp: &mut Toolpath) -> Result<()> {
+    pub(crate) fn apply(&self, tp: &mut Toolpath) -> Result<()> {
         let mut memo = Memo::default();
         let mut new: Vec<(usize, Event)> = Vec::new();
         let top = (0..tp.len())
@@ -190,7 +128,14 @@ impl Set {
             });
             for (j, s) in settings.into_iter().enumerate() {
                 let band = if j == 0 { mark } else { None };
-                new.push((k, Event::Set { setting: s, band }));
+                new.push((
+                    k,
+                    Event::Set {
+                        setting: s,
+                        band,
+                        place: None,
+                    },
+                ));
             }
             if !matches!(self.bands, Bands::Height { .. }) {
                 break;
@@ -199,105 +144,6 @@ impl Set {
         merge_events(tp, new);
         Ok(())
     }
-}
-
-/// The setting `key` at value `v`.
-fn setting(key: Key, v: f64, wait: bool) -> Setting {
-    match key {
-        Key::NozzleTemperature => Setting::Temperature {
-            heater: Heater::Nozzle(0),
-            celsius: v,
-            wait,
-        },
-        Key::Fan => Setting::Fan { speed: v },
-        Key::PressureAdvance => Setting::PressureAdvance { k: v },
-        Key::RetractionLength => Setting::Retraction {
-            length: Some(v),
-            speed: None,
-        },
-        Key::RetractionSpeed => Setting::Retraction {
-            length: None,
-            speed: Some(v),
-        },
-        Key::Acceleration => Setting::Acceleration {
-            print: Some(v),
-            travel: None,
-            retract: None,
-        },
-        Key::TravelAcceleration => Setting::Acceleration {
-            print: None,
-            travel: Some(v),
-            retract: None,
-        },
-        Key::SpeedLimit => Setting::SpeedLimit { velocity: v },
-        Key::SquareCornerVelocity => Setting::SquareCornerVelocity(v),
-        Key::JunctionDeviation => Setting::JunctionDeviation(v),
-        Key::Jerk => Setting::Jerk(v),
-        Key::ShaperFrequency => Setting::InputShaper {
-            frequency: [Some(v); 2],
-            damping: None,
-            kind: None,
-        },
-        Key::ShaperDamping => Setting::InputShaper {
-            frequency: [None; 2],
-            damping: Some(v),
-            kind: None,
-        },
-        Key::Flow => Setting::Flow(v),
-    }
-}
-
-/// Adds `s` to `out`, into the setting of its kind already there when the
-/// firmware sets both in one command (accelerations, retraction, shaper).
-fn merge(out: &mut Vec<Setting>, s: Setting) {
-    for o in out.iter_mut() {
-        match (o, s) {
-            (
-                Setting::Acceleration { print, travel, .. },
-                Setting::Acceleration {
-                    print: p,
-                    travel: t,
-                    ..
-                },
-            ) => {
-                *print = p.or(*print);
-                *travel = t.or(*travel);
-                return;
-            }
-            (
-                Setting::Retraction { length, speed },
-                Setting::Retraction {
-                    length: l,
-                    speed: v,
-                },
-            ) => {
-                *length = l.or(*length);
-                *speed = v.or(*speed);
-                return;
-            }
-            (
-                Setting::InputShaper {
-                    frequency,
-                    damping,
-                    kind,
-                },
-                Setting::InputShaper {
-                    frequency: f,
-                    damping: d,
-                    kind: k,
-                },
-            ) => {
-                for a in 0..2 {
-                    frequency[a] = f[a].or(frequency[a]);
-                }
-                *damping = d.or(*damping);
-                *kind = k.or(*kind);
-                return;
-            }
-            _ => {}
-        }
-    }
-    out.push(s);
 }
 
 /// `new` (sorted by string index) merged into `tp`'s events: each after
@@ -323,6 +169,8 @@ fn merge_events(tp: &mut Toolpath, new: Vec<(usize, Event)>) {
 mod tests {
     use super::*;
     use crate::base::expr::Params;
+    use crate::base::gcode::named::Key;
+    use crate::base::gcode::Heater;
     use crate::base::toolpath::Strand;
     use glam::DVec3;
 
@@ -348,12 +196,14 @@ mod tests {
     fn set(bands: Bands, src: &str) -> Set {
         Set {
             bands,
-            values: vec![(
-                Key::NozzleTemperature,
-                Expr::compile_ext(src, &Params::new(), VARS, NAMES).unwrap(),
-            )],
-            wait: false,
-            shaper: None,
+            named: Named {
+                values: vec![(
+                    Key::NozzleTemperature,
+                    Expr::compile_ext(src, &Params::new(), VARS, NAMES).unwrap(),
+                )],
+                wait: false,
+                shaper: None,
+            },
         }
     }
 
@@ -440,7 +290,8 @@ mod tests {
                     index: 4,
                     value: 204.0,
                     z: None
-                })
+                }),
+                place: None,
             }
         );
     }

@@ -12,13 +12,12 @@
 //! `generate::step::Bitmap::from_text`. Home: beside `generate::step::modulate`.
 
 use crate::base::testing::*;
-use crate::generate::model::Recipe;
 use crate::generate::step::Bitmap;
 
 const TEXT: &str = "PROCEDURAL 3D PRINTING  ";
 
 fn letter_strings() -> (crate::base::toolpath::Toolpath, Vec<bool>, f64) {
-    let mut recipe = Recipe::load(&recipe("bowl.yaml"), &[], None).unwrap();
+    let mut recipe = crate::recipe::load(&recipe("bowl.yaml"), &[], None).unwrap();
     let repeat = recipe.params["repeat"];
     let fin = crate::generate::model::make_part(&recipe, 0).unwrap();
     assert_eq!(recipe.parts[0].steps.pop().unwrap().key(), "modulate_map");

@@ -319,7 +319,7 @@ fn load(name: &str, sets: &[(&str, &str)]) -> Recipe {
         .iter()
         .map(|(k, v)| (k.to_string(), v.to_string()))
         .collect();
-    Recipe::load(&recipe(name), &sets, None).unwrap_or_else(|e| panic!("{name}: {e}"))
+    crate::recipe::load(&recipe(name), &sets, None).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
 fn ca_of(r: &Recipe) -> CaHelix {

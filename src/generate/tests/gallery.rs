@@ -29,7 +29,7 @@ fn load(name: &str, sets: &[(&str, &str)]) -> Recipe {
         .iter()
         .map(|(k, v)| (k.to_string(), v.to_string()))
         .collect();
-    Recipe::load(&path(name), &sets, None).unwrap_or_else(|e| panic!("{name}: {e}"))
+    crate::recipe::load(&path(name), &sets, None).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
 fn param(recipe: &Recipe, name: &str) -> f64 {

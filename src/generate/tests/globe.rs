@@ -10,7 +10,6 @@
 
 use crate::base::testing::*;
 use crate::base::toolpath::Toolpath;
-use crate::generate::model::Recipe;
 
 const SEA: f64 = 0.65;
 
@@ -24,7 +23,7 @@ struct Globe {
 }
 
 fn globe() -> Globe {
-    let mut recipe = Recipe::load(&recipe("globe.yaml"), &[], None).unwrap();
+    let mut recipe = crate::recipe::load(&recipe("globe.yaml"), &[], None).unwrap();
     let fin = crate::generate::model::make_part(&recipe, 0).unwrap();
     let last = recipe.parts[0].steps.pop().unwrap();
     assert_eq!(last.key(), "modulate_map");
@@ -247,7 +246,7 @@ fn the_starter_globe_reads_from_outside() {
         .and_then(|t| t.split('"').next())
         .expect("the starter letters a text")
         .to_string();
-    let mut recipe = Recipe::load(&file, &[], None).unwrap();
+    let mut recipe = crate::recipe::load(&file, &[], None).unwrap();
     let fin = crate::generate::model::make_part(&recipe, 0).unwrap();
     let last = recipe.parts[0].steps.pop().unwrap();
     assert_eq!(last.key(), "modulate_map");

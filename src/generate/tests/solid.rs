@@ -54,7 +54,7 @@ fn recipe_file(tag: &str, solid: &str) -> RecipeFile {
 }
 
 fn load(path: &Path) -> Recipe {
-    Recipe::load(path, &[], None).unwrap_or_else(|e| panic!("{e}"))
+    crate::recipe::load(path, &[], None).unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn solid_of(recipe: &Recipe, k: usize) -> &Solid {
@@ -425,7 +425,7 @@ fn string_counts_are_exact_before_building() {
         .unwrap()
         .replace("material: pla\n", "material: pla\nmax_strings: 1000\n");
     std::fs::write(&path, text).unwrap();
-    let e = Recipe::load(&path, &[], None).unwrap_err();
+    let e = crate::recipe::load(&path, &[], None).unwrap_err();
     assert_eq!(e.place.as_deref(), Some("parts[0].primitive"));
     assert!(e.message.contains("more than the limit of 1000"), "{e}");
 }
@@ -1106,7 +1106,7 @@ fn a_kept_z_buffer_re_slices_only_the_edited_feature() {
             zbuffers: Some(Reusing::new(cache)),
             ..Context::default()
         };
-        let r = Recipe::load_in(path, &[], None, &cx).unwrap_or_else(|e| panic!("{e}"));
+        let r = crate::recipe::load_in(path, &[], None, &cx).unwrap_or_else(|e| panic!("{e}"));
         (r, cx.zbuffers.map(Reusing::finish).unwrap_or_default())
     };
     let path = recipe_file("kept", BOX_WITH_HOLE);

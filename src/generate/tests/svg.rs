@@ -5,12 +5,11 @@
 //! Home: beside `generate::primitive::outline`.
 
 use crate::base::testing::*;
-use crate::generate::model::Recipe;
 use glam::DVec2;
 
 #[test]
 fn the_star_vase_follows_its_outline_in_every_turn() {
-    let r = Recipe::load(&recipe("star-vase.yaml"), &[], None).unwrap();
+    let r = crate::recipe::load(&recipe("star-vase.yaml"), &[], None).unwrap();
     // without its steps the wall is the outline, turn after turn
     let mut bare = r.clone();
     bare.parts[1].steps.clear();

@@ -24,10 +24,10 @@ use crate::machine::printer::Flavor;
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct Read<'a> {
     /// The line, cut.
-    pub line: Line<'a>,
+    pub(crate) line: Line<'a>,
     /// What it does, in order (most lines do one thing; `SET_VELOCITY_LIMIT`
     /// or `M205 X J` set several; a comment or blank line nothing).
-    pub commands: Vec<Command>,
+    pub(crate) commands: Vec<Command>,
 }
 
 /// The parser whose rules `flavor`'s firmware follows.

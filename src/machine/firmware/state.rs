@@ -58,17 +58,17 @@ pub(crate) enum Motion {
 pub(crate) struct State {
     flavor: Flavor,
     /// Machine position per axis, when known.
-    pub pos: [Option<f64>; 3],
+    pub(crate) pos: [Option<f64>; 3],
     /// `G91`: XYZ relative.
-    pub relative_xyz: bool,
+    pub(crate) relative_xyz: bool,
     /// `M83` (and under Marlin, `G91`): E relative.
     relative_e: bool,
     /// E as the firmware counts it, mm.
-    pub e: f64,
+    pub(crate) e: f64,
     /// The feed in force, mm/min.
-    pub feed: Option<f64>,
+    pub(crate) feed: Option<f64>,
     /// `G20`: inches.
-    pub inches: bool,
+    pub(crate) inches: bool,
 }
 
 impl State {

@@ -327,3 +327,27 @@ fn moves_are_fixed_point_and_round_once() {
     k.apply(&Command::RelativeXyz(false));
     assert!(k.e_relative());
 }
+
+#[test]
+fn klipper_object_labels_read_back_as_written() {
+    use crate::base::gcode::Object;
+    let d = Dialect {
+        flavor: Flavor::Klipper,
+        object_labels: true,
+        prusa_8bit: false,
+    };
+    // without a NAME Klipper ends the current object: written the same way
+    // (found by the fuzzer: it was written `NAME=` and nothing)
+    for line in ["EXCLUDE_OBJECT_END", "EXCLUDE_OBJECT_END NAME=cup_1"] {
+        let read_once = one(Flavor::Klipper, line);
+        let mut chunk = Chunk::new();
+        write(d, &read_once[0], "", &mut chunk);
+        let text = std::str::from_utf8(chunk.bytes()).unwrap();
+        let again: Vec<Command> = text.lines().flat_map(|l| one(Flavor::Klipper, l)).collect();
+        assert_eq!(again, read_once, "{line} → {text:?}");
+    }
+    assert_eq!(
+        one(Flavor::Klipper, "EXCLUDE_OBJECT_END"),
+        [Command::Object(Object::End(String::new()))]
+    );
+}

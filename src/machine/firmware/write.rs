@@ -37,12 +37,12 @@ pub(crate) const E: f64 = 1e5;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct Dialect {
     /// The firmware.
-    pub flavor: Flavor,
+    pub(crate) flavor: Flavor,
     /// Write `EXCLUDE_OBJECT_START`/`_END` round each object.
-    pub object_labels: bool,
+    pub(crate) object_labels: bool,
     /// The firmware is Prusa's 8-bit one (MK3, MK2.5): linear advance is
     /// `M900 K`, not the Buddy firmware's `M572 S`.
-    pub prusa_8bit: bool,
+    pub(crate) prusa_8bit: bool,
 }
 
 impl Dialect {
@@ -164,7 +164,6 @@ pub(crate) fn write(d: Dialect, c: &Command, note: &str, out: &mut Chunk) {
         Command::Object(o) => object(d, o, out),
         Command::Pause => out.put(pause(d.flavor).as_bytes()),
         Command::Tool(n) => out.put(format!("T{n}").as_bytes()),
-        Command::Comment(t) => put_comment(out, t),
         Command::Other(t) => out.put(one_line(t).as_bytes()),
     }
     if !note.is_empty() {
@@ -214,29 +213,14 @@ fn object(d: Dialect, o: &Object, out: &mut Chunk) {
             format!("EXCLUDE_OBJECT_START NAME={n}\n; printing object {n}")
         }
         (Object::Start(n), false) => format!("; printing object {n}"),
+        // without a name Klipper ends the object being printed
+        (Object::End(n), true) if n.is_empty() => {
+            "; stop printing object\nEXCLUDE_OBJECT_END".to_string()
+        }
         (Object::End(n), true) => {
             format!("; stop printing object {n}\nEXCLUDE_OBJECT_END NAME={n}")
         }
         (Object::End(n), false) => format!("; stop printing object {n}"),
-        (
-            Object::Define {
-                name,
-                center,
-                polygon,
-            },
-            _,
-        ) => {
-            let pts: Vec<String> = polygon
-                .iter()
-                .map(|p| format!("[{:.3},{:.3}]", p[0], p[1]))
-                .collect();
-            format!(
-                "EXCLUDE_OBJECT_DEFINE NAME={name} CENTER={:.3},{:.3} POLYGON=[{}]",
-                center[0],
-                center[1],
-                pts.join(",")
-            )
-        }
     };
     // a label is made of safe characters (see output::gcode::labels)
     out.put(s.as_bytes());

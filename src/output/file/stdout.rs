@@ -39,25 +39,25 @@ pub(crate) fn tell_fmt(args: std::fmt::Arguments) {
     let _ = io::stderr().lock().write_fmt(args);
 }
 
-/// `print!` that ends quietly on a closed pipe (see [`say_fmt`]).
+/// `print!` that ends quietly on a closed pipe (see `say_fmt`).
 #[macro_export]
 macro_rules! say {
     ($($t:tt)*) => { $crate::output::file::say_fmt(format_args!($($t)*)) };
 }
 
-/// `println!` that ends quietly on a closed pipe (see [`say_fmt`]).
+/// `println!` that ends quietly on a closed pipe (see `say_fmt`).
 #[macro_export]
 macro_rules! sayln {
     ($($t:tt)*) => { $crate::output::file::say_fmt(format_args!("{}\n", format_args!($($t)*))) };
 }
 
-/// `eprint!` that never panics (see [`tell_fmt`]).
+/// `eprint!` that never panics (see `tell_fmt`).
 #[macro_export]
 macro_rules! tell {
     ($($t:tt)*) => { $crate::output::file::tell_fmt(format_args!($($t)*)) };
 }
 
-/// `eprintln!` that never panics (see [`tell_fmt`]).
+/// `eprintln!` that never panics (see `tell_fmt`).
 #[macro_export]
 macro_rules! tellln {
     ($($t:tt)*) => { $crate::output::file::tell_fmt(format_args!("{}\n", format_args!($($t)*))) };

@@ -45,11 +45,11 @@ pub struct Options {
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct Ahead {
     /// Planned time, s.
-    pub time: f64,
+    pub(crate) time: f64,
     /// Filament, mm.
-    pub filament: f64,
+    pub(crate) filament: f64,
     /// Filament volume, mm³.
-    pub volume: f64,
+    pub(crate) volume: f64,
 }
 
 impl Ahead {
@@ -68,10 +68,10 @@ impl Ahead {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Extent {
     /// Highest point of any part, recipe z.
-    pub top: f64,
+    pub(crate) top: f64,
     /// Lowest and highest nozzle height of an extruding move, machine z
     /// (None when nothing extrudes).
-    pub extruded: Option<(f64, f64)>,
+    pub(crate) extruded: Option<(f64, f64)>,
 }
 
 impl Extent {
@@ -90,15 +90,15 @@ impl Extent {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Layers {
     /// The first layer's nozzle height, machine z (z₁).
-    pub first: f64,
+    pub(crate) first: f64,
     /// The band's thickness h (= z₁; the nozzle's half when z₁ is not
     /// above the bed).
-    pub height: f64,
+    pub(crate) height: f64,
     /// Bands up to the highest extrusion.
-    pub count: u32,
+    pub(crate) count: u32,
     /// The highest extruding nozzle height, machine z (the object's height:
     /// `max_layer_z`, never a band's top above it).
-    pub highest: f64,
+    pub(crate) highest: f64,
 }
 
 impl Layers {

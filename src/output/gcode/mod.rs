@@ -47,15 +47,15 @@ fn feed_units(mm_s: f64) -> i64 {
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Head {
     /// The date and the package (see [`metadata::Options`]).
-    pub options: metadata::Options,
+    pub(crate) options: metadata::Options,
     /// The print's totals, when its moves were planned first.
-    pub ahead: Option<metadata::Ahead>,
+    pub(crate) ahead: Option<metadata::Ahead>,
     /// Thumbnail blocks (comments, see `output::preview::thumbnail`).
-    pub thumbnails: String,
+    pub(crate) thumbnails: String,
     /// G-code drawn, never sent (a preview's): written even when the
     /// profile's start or end G-code failed its checks, so that a preview
     /// shows a print the checks refuse too.
-    pub draft: bool,
+    pub(crate) draft: bool,
 }
 
 /// The dialect `printer`'s firmware reads.
@@ -234,11 +234,11 @@ pub(crate) struct Emitter<'a, W: Write, M: Moves> {
     /// `feed` in mm/s.
     feed_mm_s: f64,
     /// The moves so far.
-    pub stats: MoveStats,
+    pub(crate) stats: MoveStats,
     pending: Pending,
     /// Thumbnail blocks written after the header comments (see
     /// `crate::output::preview::thumbnail`); empty for none.
-    pub thumbnails: String,
+    pub(crate) thumbnails: String,
     /// The material's fan: (speed, start z), until it is switched on or a
     /// `fan` event takes over.
     fan: Option<(f64, f64)>,
@@ -844,7 +844,7 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
                     .unwrap_or_else(|_| vec![Command::Other(text.to_string())]);
                 return self.s.raw(text, &commands);
             }
-            Event::Set { setting, band } => return self.set(setting, band),
+            Event::Set { setting, band, .. } => return self.set(setting, band),
         };
         self.s.command(&c, "")
     }

@@ -18,7 +18,7 @@ use crate::machine::firmware::{write::write, Dialect, Motion, State};
 /// Text formatted into chunks and handed to `out`.
 pub(crate) struct Out<W: Write> {
     /// The destination.
-    pub out: W,
+    pub(crate) out: W,
     buf: Chunk,
     /// Bytes handed on so far.
     handed: u64,
@@ -69,11 +69,11 @@ impl<W: Write> Out<W> {
 /// The emitter's commands written and followed (see the module comment).
 pub(crate) struct Stream<W: Write, M: Moves> {
     /// The text.
-    pub out: Out<W>,
+    pub(crate) out: Out<W>,
     dialect: Dialect,
     state: State,
     /// The moves' consumer.
-    pub moves: M,
+    pub(crate) moves: M,
     /// The firmware's own retraction: length (mm) and speed (mm/s).
     firmware_retraction: (f64, f64),
     /// The speed factor (`M220`), 1 = 100 %: every feed runs at it.

@@ -39,13 +39,13 @@ const MEATPACK_COMMENTS: u16 = 2;
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Metadata {
     /// The file's: its producer.
-    pub file: Vec<(String, String)>,
+    pub(crate) file: Vec<(String, String)>,
     /// The printer's.
-    pub printer: Vec<(String, String)>,
+    pub(crate) printer: Vec<(String, String)>,
     /// The print's.
-    pub print: Vec<(String, String)>,
+    pub(crate) print: Vec<(String, String)>,
     /// The slicer's (all of it).
-    pub slicer: Vec<(String, String)>,
+    pub(crate) slicer: Vec<(String, String)>,
 }
 
 /// The `.bgcode` of ASCII G-code `gcode` with its metadata and thumbnails.
@@ -191,6 +191,7 @@ fn lines_in_blocks(text: &[u8], size: usize) -> Vec<&[u8]> {
 /// One block read back: its type, parameters and data (decompressed), from
 /// the specification alone.
 #[derive(Clone, Debug, PartialEq)]
+#[cfg(any(test, feature = "testing"))]
 pub struct Block {
     /// Block type.
     pub kind: u16,
@@ -202,6 +203,7 @@ pub struct Block {
 
 /// Reads every block of a `.bgcode` back, checking the magic, the version,
 /// each CRC-32 and each decompression; None at the first fault.
+#[cfg(any(test, feature = "testing"))]
 pub fn decode(file: &[u8]) -> Option<Vec<Block>> {
     let u16_at = |i: usize| Some(u16::from_le_bytes(file.get(i..i + 2)?.try_into().ok()?));
     let u32_at = |i: usize| Some(u32::from_le_bytes(file.get(i..i + 4)?.try_into().ok()?));

@@ -107,6 +107,7 @@ impl Bits {
 
 /// Decodes a heatshrink stream back into `size` bytes (from the format
 /// above; None when it is not one).
+#[cfg(any(test, feature = "testing"))]
 pub(crate) fn decode(data: &[u8], size: usize, w: u32, l: u32) -> Option<Vec<u8>> {
     let mut out = Vec::with_capacity(size);
     let mut pos = 0usize; // bit position

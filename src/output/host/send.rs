@@ -388,20 +388,20 @@ fn skip_string(chars: &mut std::iter::Peekable<std::str::Chars>) {
 #[derive(Clone, Debug)]
 pub(crate) struct Target {
     /// The host's base URL.
-    pub address: Address,
+    pub(crate) address: Address,
     /// Its API key (`X-Api-Key`), when it asks for one.
-    pub key: Option<String>,
+    pub(crate) key: Option<String>,
     /// How long the host may stay silent (see the module's notes).
-    pub timeout: Duration,
+    pub(crate) timeout: Duration,
 }
 
 /// What a host said to an upload.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct Sent {
     /// The file's path on the host, printable.
-    pub path: String,
+    pub(crate) path: String,
     /// Whether the host says the print started (or was queued).
-    pub printing: bool,
+    pub(crate) printing: bool,
 }
 
 /// A host's answer: its status, `Location` and at most [`ANSWER_BYTES`]

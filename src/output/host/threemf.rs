@@ -32,31 +32,31 @@ use crate::base::xml::Writer;
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Plate {
     /// Bambu's model id of the printer (`BL-P001` for an X1 Carbon…).
-    pub printer_model_id: String,
+    pub(crate) printer_model_id: String,
     /// Nozzle diameter, mm.
-    pub nozzle: f64,
+    pub(crate) nozzle: f64,
     /// Planned time, s.
-    pub seconds: f64,
+    pub(crate) seconds: f64,
     /// Filament, m, and its mass, g.
-    pub metres: f64,
+    pub(crate) metres: f64,
     /// Filament mass, g.
-    pub grams: f64,
+    pub(crate) grams: f64,
     /// Filament type (`PLA`…) and colour (`#RRGGBB`).
-    pub filament_type: String,
+    pub(crate) filament_type: String,
     /// Filament colour, `#RRGGBB`.
-    pub colour: String,
+    pub(crate) colour: String,
     /// Each object's name and its box on the bed, machine XY (x0, y0, x1,
     /// y1): a plate's objects, a recipe's parts.
-    pub parts: Vec<(String, [f64; 4])>,
+    pub(crate) parts: Vec<(String, [f64; 4])>,
     /// The objects are printed one after another (a plate): Bambu's
     /// `is_seq_print`.
-    pub sequential: bool,
+    pub(crate) sequential: bool,
     /// The first layer's height, mm.
-    pub layer_height: f64,
+    pub(crate) layer_height: f64,
     /// The plate's images: 512 px and 128 px PNGs.
-    pub image: Vec<u8>,
+    pub(crate) image: Vec<u8>,
     /// The small one.
-    pub small: Vec<u8>,
+    pub(crate) small: Vec<u8>,
 }
 
 /// Bambu's model id for a profile's `printer_model` (its short names or the

@@ -75,22 +75,22 @@ pub(crate) const UNITS_PER_MM: f64 = 1000.0;
 #[derive(Clone, Debug, Default, PartialEq)]
 pub(crate) struct Mesh {
     /// Vertices, integer micrometres.
-    pub vertices: Vec<[i64; 3]>,
+    pub(crate) vertices: Vec<[i64; 3]>,
     /// Triangles: vertex indices, counter-clockwise seen from outside.
-    pub triangles: Vec<[u32; 3]>,
+    pub(crate) triangles: Vec<[u32; 3]>,
     /// Beads: closed shells, one per continuous run of extrusion.
-    pub beads: usize,
+    pub(crate) beads: usize,
     /// Of them, beads closed on themselves (rings, no caps).
-    pub rings: usize,
+    pub(crate) rings: usize,
 }
 
 /// A section: w along the normal, h along the surface, chamfer legs k.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Section {
     /// Width across the surface's normal direction n, mm.
-    pub w: f64,
+    pub(crate) w: f64,
     /// Height along the surface (across to the next pass), mm.
-    pub h: f64,
+    pub(crate) h: f64,
 }
 
 impl Section {

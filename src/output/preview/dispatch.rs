@@ -104,7 +104,7 @@ pub(crate) enum Drawing<'p> {
 }
 
 /// A preview made, to be written or taken as bytes ([`Job::finish`]).
-pub struct Finished {
+pub(crate) struct Finished {
     out: PathBuf,
     made: Made,
 }
@@ -162,7 +162,7 @@ impl<'p> Job<'p> {
 impl Finished {
     /// Writes the preview to its file, atomically (an HTML page streamed
     /// into it as it is encoded); returns the line reporting it.
-    pub fn write(self) -> Result<String> {
+    pub(crate) fn write(self) -> Result<String> {
         let shown = self.out.display().to_string();
         let io = |e: std::io::Error| {
             Error::io_from(&shown, format!("cannot write the preview: {e}"), &e)
@@ -192,7 +192,7 @@ impl Finished {
     }
 
     /// The preview's bytes, and the line reporting them.
-    pub fn bytes(self) -> (Vec<u8>, String) {
+    pub(crate) fn bytes(self) -> (Vec<u8>, String) {
         let shown = self.out.display().to_string();
         match self.made {
             Made::Png(r, opts) => {

@@ -15,20 +15,20 @@ use crate::base::geom::passes::{pass_spacing, round_diameter};
 /// the print time at its end and whether a check found a problem in it.
 pub(crate) struct Scene<'a> {
     /// The plan drawn.
-    pub plan: &'a Plan,
+    pub(crate) plan: &'a Plan,
     /// Per path: print time at the end of each string, s (Σ length / speed);
     /// made when first asked for ([`Scene::time`]).
     time: std::sync::OnceLock<Vec<Vec<f64>>>,
     /// [`Scene::range`] of each colour mode, once asked for.
     ranges: [std::sync::OnceLock<(f64, f64)>; 6],
     /// Per path: whether a finding concerns each string.
-    pub flagged: Vec<Vec<bool>>,
+    pub(crate) flagged: Vec<Vec<bool>>,
     /// Per path: the typical spacing between its passes, mm.
-    pub spacing: Vec<f64>,
+    pub(crate) spacing: Vec<f64>,
     /// Where the findings are, recipe coordinates.
-    pub marks: Vec<DVec3>,
+    pub(crate) marks: Vec<DVec3>,
     /// The turtles' `draw_turtle` markers of every part.
-    pub turtles: Vec<crate::base::toolpath::Marker>,
+    pub(crate) turtles: Vec<crate::base::toolpath::Marker>,
 }
 
 impl<'a> Scene<'a> {

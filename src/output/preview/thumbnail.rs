@@ -130,13 +130,13 @@ pub(crate) fn blocks(plan: &Plan) -> Result<String> {
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub(crate) struct Thumbnail {
     /// Width named in the block header, pixels.
-    pub width: u32,
+    pub(crate) width: u32,
     /// Height named in the block header, pixels.
-    pub height: u32,
+    pub(crate) height: u32,
     /// The image's format (the block's tag).
-    pub format: ImageFormat,
+    pub(crate) format: ImageFormat,
     /// The decoded image bytes.
-    pub bytes: Vec<u8>,
+    pub(crate) bytes: Vec<u8>,
 }
 
 #[cfg(test)]
@@ -144,9 +144,9 @@ pub(crate) struct Thumbnail {
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub(crate) struct ThumbnailError {
     /// The 1-based line at fault (`None`: the end of the G-code).
-    pub line: Option<usize>,
+    pub(crate) line: Option<usize>,
     /// What is wrong there.
-    pub message: String,
+    pub(crate) message: String,
 }
 
 #[cfg(test)]

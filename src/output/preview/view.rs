@@ -4,12 +4,11 @@
 
 use glam::DVec3;
 
-use crate::base::error::{Error, Result};
 use crate::machine::Size;
 
 /// Where the still views look from.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum View {
+pub(crate) enum View {
     /// Isometric, from the front right and above.
     #[default]
     Iso,
@@ -23,38 +22,18 @@ pub enum View {
 
 /// An orthonormal view basis in recipe coordinates (right × up = toward).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Basis {
+pub(crate) struct Basis {
     /// Screen right.
-    pub right: DVec3,
+    pub(crate) right: DVec3,
     /// Screen up.
-    pub up: DVec3,
+    pub(crate) up: DVec3,
     /// Towards the viewer; depth grows along it.
-    pub toward: DVec3,
+    pub(crate) toward: DVec3,
 }
 
 impl View {
-    /// The names `--view` accepts.
-    pub const NAMES: [&'static str; 4] = ["iso", "top", "front", "side"];
-
-    /// Parses a `--view` value.
-    pub fn parse(s: &str) -> Result<View> {
-        match s {
-            "iso" => Ok(View::Iso),
-            "top" => Ok(View::Top),
-            "front" => Ok(View::Front),
-            "side" => Ok(View::Side),
-            _ => Err(Error::input(
-                "--view",
-                format!(
-                    "unknown view `{s}`; expected one of {}",
-                    View::NAMES.join(", ")
-                ),
-            )),
-        }
-    }
-
     /// The view's name.
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             View::Iso => "iso",
             View::Top => "top",
@@ -64,7 +43,7 @@ impl View {
     }
 
     /// The view's basis.
-    pub fn basis(self) -> Basis {
+    pub(crate) fn basis(self) -> Basis {
         match self {
             View::Top => Basis {
                 right: DVec3::X,
@@ -98,14 +77,14 @@ impl View {
 
 impl Basis {
     /// Screen-plane coordinates (u, w) and depth d of recipe point `p`.
-    pub fn project(&self, p: DVec3) -> (f64, f64, f64) {
+    pub(crate) fn project(&self, p: DVec3) -> (f64, f64, f64) {
         (p.dot(self.right), p.dot(self.up), p.dot(self.toward))
     }
 }
 
 /// What the colour of a string shows.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum ColorMode {
+pub(crate) enum ColorMode {
     /// Head speed v, mm/s.
     #[default]
     Speed,
@@ -123,7 +102,7 @@ pub enum ColorMode {
 
 impl ColorMode {
     /// The names `--color` accepts.
-    pub const NAMES: [&'static str; 6] = [
+    pub(crate) const NAMES: [&'static str; 6] = [
         "speed",
         "cross-section",
         "flow",
@@ -132,27 +111,8 @@ impl ColorMode {
         "plain",
     ];
 
-    /// Parses a `--color` value.
-    pub fn parse(s: &str) -> Result<ColorMode> {
-        match s {
-            "speed" => Ok(ColorMode::Speed),
-            "cross-section" => Ok(ColorMode::CrossSection),
-            "flow" => Ok(ColorMode::Flow),
-            "order" => Ok(ColorMode::Order),
-            "findings" => Ok(ColorMode::Findings),
-            "plain" => Ok(ColorMode::Plain),
-            _ => Err(Error::input(
-                "--color",
-                format!(
-                    "unknown colour mode `{s}`; expected one of {}",
-                    ColorMode::NAMES.join(", ")
-                ),
-            )),
-        }
-    }
-
     /// The mode's name.
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             ColorMode::Speed => "speed",
             ColorMode::CrossSection => "cross-section",
@@ -164,7 +124,7 @@ impl ColorMode {
     }
 
     /// The unit of the scale, for the legend.
-    pub fn unit(self) -> &'static str {
+    pub(crate) fn unit(self) -> &'static str {
         match self {
             ColorMode::Speed => "mm/s",
             ColorMode::CrossSection => "mm²",
@@ -177,15 +137,15 @@ impl ColorMode {
 
 /// What a preview shows and how big.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Options {
+pub(crate) struct Options {
     /// Still view (the HTML viewer starts there).
-    pub view: View,
+    pub(crate) view: View,
     /// Colour mode (the HTML viewer starts there).
-    pub color: ColorMode,
+    pub(crate) color: ColorMode,
     /// Image size (PNG only).
-    pub size: Size,
+    pub(crate) size: Size,
     /// Only the model: no title, stats or legend (PNG only).
-    pub bare: bool,
+    pub(crate) bare: bool,
 }
 
 /// Colour stops of the scalar modes: blue, cyan, green, yellow, red.
@@ -236,9 +196,12 @@ mod tests {
 
     #[test]
     fn view_bases_are_right_handed_and_orthonormal() {
-        for name in View::NAMES {
-            let b = View::parse(name).unwrap().basis();
-            assert!((b.right.cross(b.up) - b.toward).length() < 1e-12, "{name}");
+        for view in [View::Iso, View::Top, View::Front, View::Side] {
+            let b = view.basis();
+            assert!(
+                (b.right.cross(b.up) - b.toward).length() < 1e-12,
+                "{view:?}"
+            );
             for v in [b.right, b.up, b.toward] {
                 assert!((v.length() - 1.0).abs() < 1e-12);
             }
@@ -248,7 +211,6 @@ mod tests {
         let b = View::Iso.basis();
         assert!(b.up.z > 0.0 && b.right.z == 0.0);
         assert!(DVec3::X.dot(b.right) > 0.0 && DVec3::X.dot(b.up) < 0.0);
-        assert!(View::parse("bottom").is_err());
     }
 
     #[test]

@@ -30,12 +30,12 @@ pub(super) const MAX_INCLUDES: usize = 64;
 #[derive(Clone, Debug)]
 pub(crate) struct Template {
     /// As written.
-    pub raw: RawTemplate,
+    pub(crate) raw: RawTemplate,
     /// The included file that defines it, as shown in messages; `None` for
     /// the recipe itself.
-    pub file: Option<String>,
+    pub(crate) file: Option<String>,
     /// That file's folder (its relative paths start there).
-    pub dir: PathBuf,
+    pub(crate) dir: PathBuf,
 }
 
 /// The params and templates of a recipe and the files it includes.
@@ -43,9 +43,9 @@ pub(crate) struct Template {
 pub(crate) struct Library {
     /// Every param in evaluation order (included files first), with the
     /// included file that defines it (`None`: the recipe).
-    pub params: IndexMap<String, (RawParam, Option<String>)>,
+    pub(crate) params: IndexMap<String, (RawParam, Option<String>)>,
     /// Every template by name.
-    pub templates: IndexMap<String, Template>,
+    pub(crate) templates: IndexMap<String, Template>,
 }
 
 /// Reads the includes of `raw` (the recipe at `file`, when known, in `dir`)
@@ -226,13 +226,13 @@ impl Loader<'_> {
 #[derive(Debug)]
 pub(crate) struct Included {
     /// As written.
-    pub raw: RawRecipe,
+    pub(crate) raw: RawRecipe,
     /// Its params and templates (and those of the files it includes).
-    pub library: Library,
+    pub(crate) library: Library,
     /// Its folder (its relative paths start there).
-    pub dir: PathBuf,
+    pub(crate) dir: PathBuf,
     /// The file as shown in messages.
-    pub shown: String,
+    pub(crate) shown: String,
 }
 
 /// Every whole recipe the parts include, directly or through templates and

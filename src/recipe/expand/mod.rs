@@ -57,36 +57,36 @@ pub(crate) const MAX_DEPTH: usize = 32;
 #[derive(Clone, Debug)]
 pub(crate) struct Leaf<'a> {
     /// The part as written (it has a `primitive`).
-    pub part: &'a RawPart,
+    pub(crate) part: &'a RawPart,
     /// The recipe's params plus the template params and loop variables in scope.
-    pub params: Params,
+    pub(crate) params: Params,
     /// Where it is written, through templates and loops.
-    pub place: String,
+    pub(crate) place: String,
     /// Its name with placeholders filled and copy suffixes added; `None`
     /// when neither the part nor a template use names it.
-    pub name: Option<String>,
+    pub(crate) name: Option<String>,
     /// The folder of the file that wrote it (relative paths start there).
-    pub dir: &'a Path,
+    pub(crate) dir: &'a Path,
     /// The cross-section and speed of its recipe's `defaults` when it comes
     /// from a recipe included as a part; `None`: the recipe's own.
-    pub defaults: Option<(f64, f64)>,
+    pub(crate) defaults: Option<(f64, f64)>,
 }
 
 /// The steps of a group (or of a template use), to run on leaves `first..end`.
 #[derive(Clone, Debug)]
 pub(crate) struct GroupSpec<'a> {
     /// First leaf of the group.
-    pub first: usize,
+    pub(crate) first: usize,
     /// One past its last leaf.
-    pub end: usize,
+    pub(crate) end: usize,
     /// The steps as written.
-    pub steps: &'a [RawStep],
+    pub(crate) steps: &'a [RawStep],
     /// The params in scope where the steps are written.
-    pub params: Params,
+    pub(crate) params: Params,
     /// Where the group is written.
-    pub place: String,
+    pub(crate) place: String,
     /// The folder of the file that wrote it.
-    pub dir: &'a Path,
+    pub(crate) dir: &'a Path,
 }
 
 /// A recipe's parts expanded: leaves in print order, and group steps in the
@@ -94,9 +94,9 @@ pub(crate) struct GroupSpec<'a> {
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Expansion<'a> {
     /// The leaf parts, in print order.
-    pub leaves: Vec<Leaf<'a>>,
+    pub(crate) leaves: Vec<Leaf<'a>>,
     /// The group steps, innermost first.
-    pub groups: Vec<GroupSpec<'a>>,
+    pub(crate) groups: Vec<GroupSpec<'a>>,
 }
 
 /// Expands `parts` (written in the folder `dir`) with the recipe's evaluated
@@ -718,26 +718,26 @@ fn eval(n: &Num, params: &Params, place: &str) -> Result<f64> {
 /// `name` with each `{EXPR}` replaced by the expression's value in `params`
 /// (integers without decimals, others with up to 6).
 pub(crate) fn fill_name(name: &str, params: &Params, place: &str) -> Result<String> {
+    use crate::base::format::{pieces, Piece};
+    let pieces = pieces(name).map_err(|_| {
+        Error::input(
+            place,
+            format!(
+                "the name {name:?} has a `{{` without its `}}`; expected `{{EXPR}}`, e.g. `ring-{{k}}`"
+            ),
+        )
+    })?;
     let mut out = String::with_capacity(name.len());
-    let mut rest = name;
-    while let Some(open) = rest.find('{') {
-        out.push_str(&rest[..open]);
-        let after = &rest[open + 1..];
-        let close = after.find('}').ok_or_else(|| {
-            Error::input(
-                place,
-                format!(
-                    "the name {name:?} has a `{{` without its `}}`; expected `{{EXPR}}`, e.g. `ring-{{k}}`"
-                ),
-            )
-        })?;
-        let src = &after[..close];
-        let v = expr::eval_const(src, params)
-            .map_err(|m| Error::input(place, format!("in the name {name:?}: {m}")))?;
-        out.push_str(&fmt_value(v));
-        rest = &after[close + 1..];
+    for p in pieces {
+        match p {
+            Piece::Text(t) => out.push_str(t),
+            Piece::Expr(src) => {
+                let v = expr::eval_const(src, params)
+                    .map_err(|m| Error::input(place, format!("in the name {name:?}: {m}")))?;
+                out.push_str(&fmt_value(v));
+            }
+        }
     }
-    out.push_str(rest);
     Ok(out)
 }
 
@@ -748,19 +748,7 @@ pub(crate) fn check_name(name: &str, place: &str) -> Result<()> {
 
 /// A value in a name or a place: integers without decimals, others with up
 /// to 6, never `-0`.
-pub(crate) fn fmt_value(v: f64) -> String {
-    if v.fract() == 0.0 && v.abs() < 1e15 {
-        format!("{}", v as i64)
-    } else {
-        let s = format!("{v:.6}");
-        let s = s.trim_end_matches('0').trim_end_matches('.');
-        if s == "-0" {
-            "0".into()
-        } else {
-            s.to_string()
-        }
-    }
-}
+pub(crate) use crate::base::format::fmt_value;
 
 fn reserved_names() -> String {
     let mut v: Vec<&str> = expr::VAR_NAMES

@@ -30,9 +30,9 @@ pub(crate) struct Ini {
     /// Each section's place by kind and name (the first of a name).
     index: HashMap<(Kind, String), usize>,
     /// The keys before any section (an exported config's whole).
-    pub top: BTreeMap<String, String>,
+    pub(crate) top: BTreeMap<String, String>,
     /// Whether the file has sections at all.
-    pub sectioned: bool,
+    pub(crate) sectioned: bool,
 }
 
 /// Parses `text` (`file` names it in errors): sections, `key = value`

@@ -37,11 +37,11 @@ pub struct Imported {
     /// The profile, as a profile file's YAML parses into.
     pub(crate) raw: RawPrinter,
     /// What p3dp ignored or assumed, for the user.
-    pub notes: Vec<String>,
+    pub(crate) notes: Vec<String>,
     /// The preset file, as the user named it.
-    pub file: String,
+    pub(crate) file: String,
     /// The preset file's family.
-    pub format: Format,
+    pub(crate) format: Format,
 }
 
 /// Values only a slicer knows that start and end G-code may use, with the

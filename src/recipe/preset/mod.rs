@@ -25,7 +25,7 @@ use crate::base::input::Reads;
 
 /// The preset file's family.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Format {
+pub(crate) enum Format {
     /// PrusaSlicer, SuperSlicer, Slic3r: `key = value` text.
     Ini,
     /// OrcaSlicer, Bambu Studio: JSON strings and lists of strings.
@@ -83,11 +83,11 @@ pub enum Setting {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Preset {
     /// The preset's name.
-    pub name: String,
+    pub(crate) name: String,
     /// The file it was read from, as the user named it.
-    pub file: String,
+    pub(crate) file: String,
     /// The file's family.
-    pub format: Format,
+    pub(crate) format: Format,
     /// A printer's or a filament's.
     pub kind: Kind,
     /// Every setting, by key.
@@ -111,7 +111,7 @@ impl Preset {
     }
 
     /// A list setting: an `.ini` value split at commas, a `.json` list.
-    pub fn list(&self, key: &str) -> Option<Vec<String>> {
+    pub(crate) fn list(&self, key: &str) -> Option<Vec<String>> {
         match self.values.get(key)? {
             Setting::Ini(s) => Some(split(s)),
             Setting::Json(serde_json::Value::Array(a)) => Some(a.iter().map(json_text).collect()),
@@ -213,6 +213,7 @@ fn stem(path: &Path) -> String {
 }
 
 /// The printer presets `file` holds, in its order.
+#[cfg(any(test, feature = "testing"))]
 pub fn list(file: &Path, reads: &Reads) -> Result<Vec<String>> {
     list_of(Kind::Printer, file, reads)
 }

@@ -16,11 +16,11 @@ use crate::machine::printer::Envelope;
 #[derive(Debug, Default, PartialEq)]
 pub(crate) struct Reach {
     /// X and Y ranges beyond the bed grown by the margin.
-    pub xy: [Option<[f64; 2]>; 2],
+    pub(crate) xy: [Option<[f64; 2]>; 2],
     /// Depth below z = 0.
-    pub below: Option<f64>,
+    pub(crate) below: Option<f64>,
     /// A note for each, the farthest line named.
-    pub notes: Vec<String>,
+    pub(crate) notes: Vec<String>,
 }
 
 /// The reach along X and Y that the literal absolute moves of `templates`

@@ -10,11 +10,6 @@ use crate::recipe::schema::{
 };
 
 impl Imported {
-    /// The profile's name.
-    pub fn name(&self) -> &str {
-        &self.raw.name
-    }
-
     /// The profile as the YAML `p3dp printers import` writes: every key
     /// whose value is not a profile's default, each as it reads back (a
     /// test parses it into the same value), with the import's notes.

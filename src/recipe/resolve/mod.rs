@@ -55,176 +55,170 @@ impl<'a> std::ops::Deref for Ctx<'a> {
     }
 }
 
-impl Recipe {
-    /// Reads and resolves a recipe file. `printer` overrides the recipe's printer.
-    pub fn load(
-        path: &Path,
-        sets: &[(String, String)],
-        printer: Option<&Printer>,
-    ) -> Result<Recipe> {
-        Recipe::load_in(path, sets, printer, &Context::default())
-    }
+/// Reads and resolves a recipe file. `printer` overrides the recipe's printer.
+#[cfg(any(test, feature = "testing"))]
+pub fn load(path: &Path, sets: &[(String, String)], printer: Option<&Printer>) -> Result<Recipe> {
+    load_in(path, sets, printer, &Context::default())
+}
 
-    /// [`Recipe::load`] in the context `cx`: every file read noted there, the
-    /// z-buffers it lends used.
-    pub fn load_in(
-        path: &Path,
-        sets: &[(String, String)],
-        printer: Option<&Printer>,
-        cx: &Context,
-    ) -> Result<Recipe> {
-        Recipe::load_with(path, sets, printer, None, cx)
-    }
+/// [`load`] in the context `cx`: every file read noted there, the
+/// z-buffers it lends used.
+pub fn load_in(
+    path: &Path,
+    sets: &[(String, String)],
+    printer: Option<&Printer>,
+    cx: &Context,
+) -> Result<Recipe> {
+    load_with(path, sets, printer, None, cx)
+}
 
-    /// [`Recipe::load_in`], `material` (a filament preset's, `--filament`)
-    /// overriding the recipe's material.
-    pub fn load_with(
-        path: &Path,
-        sets: &[(String, String)],
-        printer: Option<&Printer>,
-        material: Option<&Material>,
-        cx: &Context,
-    ) -> Result<Recipe> {
-        let raw = Recipe::read_raw(path, cx)?;
-        Recipe::from_raw_in(&raw, path, sets, (printer, material), cx)
-    }
+/// [`load_in`], `material` (a filament preset's, `--filament`)
+/// overriding the recipe's material.
+pub(crate) fn load_with(
+    path: &Path,
+    sets: &[(String, String)],
+    printer: Option<&Printer>,
+    material: Option<&Material>,
+    cx: &Context,
+) -> Result<Recipe> {
+    let raw = read_raw(path, cx)?;
+    from_raw_in(&raw, path, sets, (printer, material), cx)
+}
 
-    /// The recipe file at `path` as written (a recipe or a plate), read in
-    /// the context `cx`.
-    pub(crate) fn read_raw(path: &Path, cx: &Context) -> Result<RawRecipe> {
-        let shown = path.display().to_string();
-        let text = cx.reads.read_text(path, "recipe")?;
-        let raw: RawRecipe = parse_yaml(&text, &shown)?;
-        if raw.parts.is_empty() && raw.plate.is_none() {
-            // neither key: named where the top-level map starts, as a
-            // missing key is
-            #[derive(serde::Deserialize)]
-            struct Parts {
-                #[allow(dead_code)]
-                parts: serde::de::IgnoredAny,
-            }
-            if let Err(e) = parse_yaml::<Parts>(&text, &shown) {
-                return Err(Error {
-                    message: "missing field `parts`; expected `parts` (the parts to print) or `plate` (the recipes a plate puts on the bed)".into(),
-                    ..e
-                });
-            }
+/// The recipe file at `path` as written (a recipe or a plate), read in
+/// the context `cx`.
+pub(crate) fn read_raw(path: &Path, cx: &Context) -> Result<RawRecipe> {
+    let shown = path.display().to_string();
+    let text = cx.reads.read_text(path, "recipe")?;
+    let raw: RawRecipe = parse_yaml(&text, &shown)?;
+    if raw.parts.is_empty() && raw.plate.is_none() {
+        // neither key: named where the top-level map starts, as a
+        // missing key is
+        #[derive(serde::Deserialize)]
+        struct Parts {
+            #[allow(dead_code)]
+            parts: serde::de::IgnoredAny,
         }
-        Ok(raw)
-    }
-
-    /// [`Recipe::load_in`] of the recipe `raw` read from `path`, with the
-    /// command line's printer and material (`--filament`) if given.
-    pub(crate) fn from_raw_in(
-        raw: &RawRecipe,
-        path: &Path,
-        sets: &[(String, String)],
-        given: (Option<&Printer>, Option<&Material>),
-        cx: &Context,
-    ) -> Result<Recipe> {
-        let shown = path.display().to_string();
-        let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-        Recipe::resolve_in(raw, sets, given, &dir, Some(path), cx).map_err(|e| e.in_file(&shown))
-    }
-
-    /// Resolves a parsed recipe; relative paths are taken from `dir`.
-    pub fn resolve(
-        raw: &RawRecipe,
-        sets: &[(String, String)],
-        printer: Option<&Printer>,
-        dir: &Path,
-    ) -> Result<Recipe> {
-        Recipe::resolve_in(raw, sets, (printer, None), dir, None, &Context::default())
-    }
-
-    /// [`Recipe::resolve`] for the recipe read from `file` (so that an
-    /// include cycle through it is named).
-    fn resolve_in(
-        raw: &RawRecipe,
-        sets: &[(String, String)],
-        (printer, given): (Option<&Printer>, Option<&Material>),
-        dir: &Path,
-        file: Option<&Path>,
-        cx: &Context,
-    ) -> Result<Recipe> {
-        check_top(raw)?;
-        if file.is_none() {
-            // a recipe given as parsed YAML reads in the project of `dir`
-            cx.reads.allow(&crate::base::input::project_root(dir));
+        if let Err(e) = parse_yaml::<Parts>(&text, &shown) {
+            return Err(Error {
+                message: "missing field `parts`; expected `parts` (the parts to print) or `plate` (the recipes a plate puts on the bed)".into(),
+                ..e
+            });
         }
-        let library = super::expand::load_library(raw, file, dir, &cx.reads)?;
-        let params = library.eval_params(sets)?;
-        let top = Scope::new(&params);
-        let printer = match printer {
-            Some(p) => p.clone(),
-            None => {
-                let spec = raw.printer.as_deref().unwrap_or("generic-220");
-                Printer::resolve(spec, dir, &cx.reads)?
-            }
-        };
-        let material = match given {
-            Some(m) => m.clone(),
-            None => material::resolve(&top.under(key!(raw.material)), raw.material.as_ref())?,
-        };
-        let mut printer = printer;
-        if let Some(q) = material.max_volumetric_speed {
-            // the filament's own flow limit, where it is below the hot end's
-            printer.max_flow = printer.max_flow.min(q);
-        }
-        let defaults = &raw.defaults;
-        let ds = top.under(key!(raw.defaults));
-        let c0 = ds.positive_or(at!(defaults.cross_section), DEFAULT_CROSS_SECTION)?;
-        let v0 = ds.positive_or(at!(defaults.speed), DEFAULT_SPEED)?;
-        let skirt = match &raw.skirt {
-            Some(s) => {
-                let ss = top.under(key!(raw.skirt));
-                Some(Skirt {
-                    distance: ss.non_negative(at!(s.distance))?,
-                    loops: ss.whole_max(at!(s.loops), 1, 1000)?,
-                })
-            }
-            None => None,
-        };
-        let max_strings = match at!(raw.max_strings).some() {
-            Some(n) => top.whole(n, 1)? as u64,
-            None => DEFAULT_MAX_STRINGS,
-        };
-        let d = material
-            .filament_diameter
-            .unwrap_or(printer.filament_diameter);
-        let turtle = (std::f64::consts::PI * (d / 2.0) * (d / 2.0), max_strings);
-        // templates, loops, groups and recipes included whole expanded into
-        // leaf parts; those that turn out empty (a turtle whose every move
-        // an `if` skips) dropped
-        let includes = super::expand::load_part_includes(raw, file, dir, &library, &cx.reads)?;
-        let expansion =
-            super::expand::expand(&raw.parts, &library.templates, &params, dir, &includes)?;
-        let check =
-            |t: &str| crate::analyse::check::gcode::command(t, &printer, &material).map(|_| ());
-        let (parts, kept) = leaves(&expansion, turtle, (c0, v0), max_strings, cx, &check)?;
-        if parts.is_empty() {
-            return Err(Error::input(
-                key!(raw.parts),
-                "every part is switched off (by `if`, an empty `for` or a path that moves nowhere): nothing to print; expected at least one part",
-            ));
-        }
-        let groups = groups(&expansion, &kept, turtle, cx, &check)?;
-        let allow: Vec<String> = raw.allow.iter().map(|a| a.code().to_string()).collect();
-        let allow_key = key!(raw.allow);
-        crate::base::finding::validate_allow(&allow, |i| format!("{allow_key}[{i}]"))?;
-        Ok(Recipe {
-            name: raw.name.clone(),
-            params,
-            printer,
-            material,
-            skirt,
-            parts,
-            max_strings,
-            allow,
-            groups,
-            objects: Vec::new(),
-        })
     }
+    Ok(raw)
+}
+
+/// [`load_in`] of the recipe `raw` read from `path`, with the
+/// command line's printer and material (`--filament`) if given.
+pub(crate) fn from_raw_in(
+    raw: &RawRecipe,
+    path: &Path,
+    sets: &[(String, String)],
+    given: (Option<&Printer>, Option<&Material>),
+    cx: &Context,
+) -> Result<Recipe> {
+    let shown = path.display().to_string();
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    resolve_in(raw, sets, given, &dir, Some(path), cx).map_err(|e| e.in_file(&shown))
+}
+
+/// Resolves a parsed recipe; relative paths are taken from `dir`.
+#[cfg(any(test, feature = "testing"))]
+pub(crate) fn resolve(
+    raw: &RawRecipe,
+    sets: &[(String, String)],
+    printer: Option<&Printer>,
+    dir: &Path,
+) -> Result<Recipe> {
+    resolve_in(raw, sets, (printer, None), dir, None, &Context::default())
+}
+
+/// [`resolve`] for the recipe read from `file` (so that an
+/// include cycle through it is named).
+fn resolve_in(
+    raw: &RawRecipe,
+    sets: &[(String, String)],
+    (printer, given): (Option<&Printer>, Option<&Material>),
+    dir: &Path,
+    file: Option<&Path>,
+    cx: &Context,
+) -> Result<Recipe> {
+    check_top(raw)?;
+    if file.is_none() {
+        // a recipe given as parsed YAML reads in the project of `dir`
+        cx.reads.allow(&crate::base::input::project_root(dir));
+    }
+    let library = super::expand::load_library(raw, file, dir, &cx.reads)?;
+    let params = library.eval_params(sets)?;
+    let top = Scope::new(&params);
+    let printer = match printer {
+        Some(p) => p.clone(),
+        None => {
+            let spec = raw.printer.as_deref().unwrap_or("generic-220");
+            crate::recipe::profile::resolve(spec, dir, &cx.reads)?
+        }
+    };
+    let material = match given {
+        Some(m) => m.clone(),
+        None => material::resolve(&top.under(key!(raw.material)), raw.material.as_ref())?,
+    };
+    let mut printer = printer;
+    if let Some(q) = material.max_volumetric_speed {
+        // the filament's own flow limit, where it is below the hot end's
+        printer.max_flow = printer.max_flow.min(q);
+    }
+    let defaults = &raw.defaults;
+    let ds = top.under(key!(raw.defaults));
+    let c0 = ds.positive_or(at!(defaults.cross_section), DEFAULT_CROSS_SECTION)?;
+    let v0 = ds.positive_or(at!(defaults.speed), DEFAULT_SPEED)?;
+    let skirt = match &raw.skirt {
+        Some(s) => {
+            let ss = top.under(key!(raw.skirt));
+            Some(Skirt {
+                distance: ss.non_negative(at!(s.distance))?,
+                loops: ss.whole_max(at!(s.loops), 1, 1000)?,
+            })
+        }
+        None => None,
+    };
+    let max_strings = match at!(raw.max_strings).some() {
+        Some(n) => top.whole(n, 1)? as u64,
+        None => DEFAULT_MAX_STRINGS,
+    };
+    let d = material
+        .filament_diameter
+        .unwrap_or(printer.filament_diameter);
+    let turtle = (std::f64::consts::PI * (d / 2.0) * (d / 2.0), max_strings);
+    // templates, loops, groups and recipes included whole expanded into
+    // leaf parts; those that turn out empty (a turtle whose every move
+    // an `if` skips) dropped
+    let includes = super::expand::load_part_includes(raw, file, dir, &library, &cx.reads)?;
+    let expansion = super::expand::expand(&raw.parts, &library.templates, &params, dir, &includes)?;
+    let check = |t: &str| crate::analyse::check::gcode::command(t, &printer, &material).map(|_| ());
+    let (parts, kept) = leaves(&expansion, turtle, (c0, v0), max_strings, cx, &check)?;
+    if parts.is_empty() {
+        return Err(Error::input(
+            key!(raw.parts),
+            "every part is switched off (by `if`, an empty `for` or a path that moves nowhere): nothing to print; expected at least one part",
+        ));
+    }
+    let groups = groups(&expansion, &kept, turtle, cx, &check)?;
+    let allow: Vec<String> = raw.allow.iter().map(|a| a.code().to_string()).collect();
+    let allow_key = key!(raw.allow);
+    crate::base::finding::validate_allow(&allow, |i| format!("{allow_key}[{i}]"))?;
+    Ok(Recipe {
+        name: raw.name.clone(),
+        params,
+        printer,
+        material,
+        skirt,
+        parts,
+        max_strings,
+        allow,
+        groups,
+        objects: Vec::new(),
+    })
 }
 
 /// The top level's own checks: the format version, a name, some parts.
@@ -287,6 +281,10 @@ fn leaves(
         let raw = leaf.part;
         let (c0, v0) = leaf.defaults.unwrap_or((c0, v0));
         let mut part = part::resolve(&ctx, raw, c0, v0, k).map_err(|e| e.under(place))?;
+        part::settings_under(&mut part.primitive, place);
+        for piece in &mut part.more {
+            part::settings_under(&mut piece.primitive, place);
+        }
         if part.primitives().all(|p| p.string_count() == 0) {
             kept.push(None);
             continue;
@@ -366,7 +364,7 @@ mod tests {
 
     fn load(text: &str) -> Result<Recipe> {
         let raw: RawRecipe = parse_yaml(text, "t.yaml")?;
-        Recipe::resolve(&raw, &[], None, Path::new("."))
+        super::resolve(&raw, &[], None, Path::new("."))
     }
 
     const HELIX: &str = "p3dp: 1\nname: h\nparams:\n  radius: 10\n  height: \"2*radius\"\nparts:\n  - primitive: {helix: {radius: radius, height: height, pitch: 0.5}}\n";
@@ -376,7 +374,7 @@ mod tests {
         let r = load(HELIX).unwrap();
         assert_eq!(r.params["height"], 20.0);
         let raw: RawRecipe = parse_yaml(HELIX, "t.yaml").unwrap();
-        let r = Recipe::resolve(
+        let r = super::resolve(
             &raw,
             &[("radius".into(), "3*4".into())],
             None,
@@ -384,7 +382,7 @@ mod tests {
         )
         .unwrap();
         assert_eq!(r.params["height"], 24.0);
-        let e = Recipe::resolve(&raw, &[("radios".into(), "3".into())], None, Path::new("."))
+        let e = super::resolve(&raw, &[("radios".into(), "3".into())], None, Path::new("."))
             .unwrap_err();
         assert!(e.to_string().contains("unknown param `radios`"), "{e}");
     }

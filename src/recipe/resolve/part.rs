@@ -52,6 +52,14 @@ pub(super) fn resolve(ctx: &Ctx, p: &RawPart, c0: f64, v0: f64, k: usize) -> Res
     })
 }
 
+/// Puts the key paths a turtle's or path's settings name under `prefix`,
+/// as the errors of its resolution are.
+pub(super) fn settings_under(p: &mut Primitive, prefix: &str) {
+    if let Primitive::Turtle(t) = p {
+        t.place_under(prefix);
+    }
+}
+
 /// One primitive of part `p`, written at `key` (`primitive`,
 /// `primitive[k]`), with its own cross-section and speed or the part's
 /// (`cv`).
@@ -72,7 +80,7 @@ fn piece(
         filament_area: ctx.turtle.0,
         max_strings: ctx.turtle.1,
     };
-    let primitive = super::primitive::resolve(
+    let mut primitive = super::primitive::resolve(
         &item.primitive,
         &ctx.scope,
         &env,
@@ -81,6 +89,7 @@ fn piece(
         ctx.gcode,
     )
     .map_err(|e| e.under(key))?;
+    settings_under(&mut primitive, key);
     // a solid's beads are layer_height × line_width: a cross_section the
     // recipe gives for it would be silently ignored, so refuse it
     if let Primitive::Solid(sol) = &primitive {

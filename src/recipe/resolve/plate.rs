@@ -39,40 +39,40 @@ pub(crate) const MAX_OBJECTS: usize = 200;
 #[derive(Clone, Debug, Default, PartialEq)]
 pub(crate) struct PlateSpec {
     /// The plate's name: the G-code's and the output file's.
-    pub name: String,
+    pub(crate) name: String,
     /// `printer:`, a built-in or a file relative to `dir`; `None`: the
     /// first object's recipe's.
-    pub printer: Option<String>,
+    pub(crate) printer: Option<String>,
     /// `material:`; `None`: the first object's.
-    pub material: Option<RawMaterial>,
+    pub(crate) material: Option<RawMaterial>,
     /// Check codes silenced on the whole plate.
-    pub allow: Vec<String>,
+    pub(crate) allow: Vec<String>,
     /// What goes on the bed, in order.
-    pub entries: Vec<PlateEntry>,
+    pub(crate) entries: Vec<PlateEntry>,
     /// Where relative paths start.
-    pub dir: PathBuf,
+    pub(crate) dir: PathBuf,
     /// The recipes were named on the command line (read wherever they
     /// lie), not reached through a plate file's keys (read in its project).
-    pub named: bool,
+    pub(crate) named: bool,
 }
 
 /// One entry: a recipe, its params, its variants and copies, maybe a place.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub(crate) struct PlateEntry {
     /// The recipe file.
-    pub recipe: PathBuf,
+    pub(crate) recipe: PathBuf,
     /// The objects' name; `None`: the recipe's.
-    pub name: Option<String>,
+    pub(crate) name: Option<String>,
     /// Copies of each variant.
-    pub copies: u32,
+    pub(crate) copies: u32,
     /// Its params, as `--set` gives them.
-    pub sets: Vec<(String, String)>,
+    pub(crate) sets: Vec<(String, String)>,
     /// Its variants, as `--sweep` gives them.
-    pub sweeps: Vec<(String, Vec<String>)>,
+    pub(crate) sweeps: Vec<(String, Vec<String>)>,
     /// A fixed place for its (0, 0), recipe coordinates.
-    pub at: Option<[f64; 2]>,
+    pub(crate) at: Option<[f64; 2]>,
     /// Where it is written (`plate[1]`; on the command line, the argument).
-    pub place: String,
+    pub(crate) place: String,
 }
 
 impl PlateSpec {
@@ -282,15 +282,16 @@ pub(crate) fn make(
 /// first object's recipe's, else the default.
 fn plate_printer(spec: &PlateSpec, cx: &Context) -> Result<Printer> {
     if let Some(p) = &spec.printer {
-        return Printer::resolve(p, &spec.dir, &cx.reads);
+        return crate::recipe::profile::resolve(p, &spec.dir, &cx.reads);
     }
     let first = &spec.entries[0];
     let path = spec.dir.join(&first.recipe);
     reach(spec, first, &path, cx)?;
-    let raw = Recipe::read_raw(&path, cx)?;
+    let raw = super::read_raw(&path, cx)?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let p = raw.printer.as_deref().unwrap_or("generic-220");
-    Printer::resolve(p, &dir, &cx.reads).map_err(|e| e.in_file(&path.display().to_string()))
+    crate::recipe::profile::resolve(p, &dir, &cx.reads)
+        .map_err(|e| e.in_file(&path.display().to_string()))
 }
 
 /// Refuses a recipe a plate file names outside the folders it may read
@@ -332,7 +333,7 @@ fn load_objects(
             let mut s = e.sets.clone();
             s.extend(variant);
             s.extend(sets.iter().cloned());
-            let recipe = Recipe::load_in(&path, &s, Some(printer), cx)?;
+            let recipe = super::load_in(&path, &s, Some(printer), cx)?;
             let paths = arrange::made(&recipe).map_err(|err| err.in_file(&shown))?;
             let (recipe, paths) = (std::sync::Arc::new(recipe), std::sync::Arc::new(paths));
             for _ in 0..e.copies {

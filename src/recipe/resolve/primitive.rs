@@ -97,11 +97,11 @@ fn label(
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Files<'a> {
     /// The folder file names are relative to (the recipe's).
-    pub dir: &'a Path,
+    pub(crate) dir: &'a Path,
     /// The recipe's `max_strings`: most points a drawing may flatten to.
-    pub max_strings: u64,
+    pub(crate) max_strings: u64,
     /// Where every file read is noted.
-    pub reads: &'a Reads,
+    pub(crate) reads: &'a Reads,
 }
 
 /// `path:` its commands run (or the SVG drawing read); `s` is under `path`.

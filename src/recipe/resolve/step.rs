@@ -6,9 +6,11 @@ use std::path::PathBuf;
 use super::Ctx;
 use crate::base::error::{Error, Result};
 use crate::base::expr::{var, Expr};
+use crate::base::gcode::named::{Key, Named, SHAPER_TYPE};
+use crate::base::gcode::Shaper;
 use crate::generate::step::{Bitmap, Deform, Keep, Modulate, ModulateMap, Set, Step};
-use crate::recipe::eval::{at, At, Scope};
-use crate::recipe::schema::{Num, RawAxis, RawDeform, RawKeep, RawStep};
+use crate::recipe::eval::{at, join, At, Scope};
+use crate::recipe::schema::{Num, RawAxis, RawDeform, RawKeep, RawSet, RawStep};
 use glam::{DAffine3, DVec3};
 
 /// What a point's expressions may read: its place, index, and the part's
@@ -81,17 +83,46 @@ pub(super) fn resolve(ctx: &Ctx, step: &RawStep) -> Result<Step> {
             };
             Step::Place("mirror", about(o, DAffine3::from_scale(flip)))
         }
-        RawStep::GcodeAt { z, gcode } => {
-            (ctx.gcode)(gcode).map_err(|m| s.error("gcode", m))?;
-            Step::GcodeAt(s.num(at!(z))?, gcode.trim().into())
-        }
+        RawStep::GcodeAt { z, gcode } => Step::GcodeAt(s.num(at!(z))?, gcode_at(ctx, &s, gcode)?),
         RawStep::Set(raw) => Step::Set(Box::new(set(&s, raw)?)),
     })
 }
 
+/// `gcode_at`'s line, `s` under its key: each `{expr}` replaced by its
+/// value over the params, then checked as a literal line is.
+fn gcode_at(ctx: &Ctx, s: &Scope, text: &str) -> Result<std::sync::Arc<str>> {
+    use crate::base::format::{fmt_value, pieces, Piece};
+    let cut = pieces(text).map_err(|m| s.error("gcode", m))?;
+    let mut line = String::with_capacity(text.len());
+    for c in &cut {
+        match c {
+            Piece::Text(t) => line.push_str(t),
+            Piece::Expr(src) => {
+                let n = Num::Expr((*src).into());
+                let v = s.num(At::new(&n, "gcode"))?;
+                line.push_str(&fmt_value(crate::recipe::eval::finite(
+                    v,
+                    &s.place("gcode"),
+                )?));
+            }
+        }
+    }
+    (ctx.gcode)(&line).map_err(|m| {
+        if line == text {
+            s.error("gcode", m)
+        } else {
+            s.error(
+                "gcode",
+                format!("the line `{}` made here: {m}", line.trim()),
+            )
+        }
+    })?;
+    Ok(line.trim().into())
+}
+
 /// A `set` step; `s` is under its key.
-fn set(s: &Scope, raw: &crate::recipe::schema::RawSet) -> Result<Set> {
-    use crate::generate::step::set::{Bands, Key, NAMES, VARS};
+fn set(s: &Scope, raw: &RawSet) -> Result<Set> {
+    use crate::generate::step::set::{Bands, NAMES, VARS};
     let bands = match (&raw.every, &raw.band) {
         (Some(_), Some(_)) => {
             return Err(s.error(
@@ -114,35 +145,50 @@ fn set(s: &Scope, raw: &crate::recipe::schema::RawSet) -> Result<Set> {
             Bands::Once
         }
     };
-    let mut values = Vec::new();
-    for (key, n) in raw.values() {
+    let named = named(raw, s.here(), |key, n| {
         let e =
             Expr::compile_ext(&n.src(), s.params, VARS, NAMES).map_err(|e| e.at(s.place(key)))?;
         if e.rands() > 0 {
             return Err(s.error(key, "`rand()` would set another value on every build of the same band; expected an expression of the position and `band`"));
         }
-        values.push((Key::of(key).expect("a setting's key"), e));
+        Ok(e)
+    })?;
+    Ok(Set { bands, named })
+}
+
+/// The settings of a `set` step or command written at `place` (its bands
+/// aside), each value made by `compile` (given the key and the value as
+/// written): the one reading of a settings map, which a step and a
+/// turtle's or path's command share.
+pub(super) fn named<T>(
+    raw: &RawSet,
+    place: &str,
+    mut compile: impl FnMut(&'static str, &Num) -> Result<T>,
+) -> Result<Named<T>> {
+    let error = |key: &str, m: String| Error::input(join(place, key), m);
+    let mut values = Vec::new();
+    for (key, n) in raw.values() {
+        values.push((Key::of(key).expect("a setting's key"), compile(key, n)?));
     }
     let shaper = match &raw.input_shaper_type {
-        Some(t) => Some(crate::base::gcode::Shaper::parse(t).ok_or_else(|| {
-            s.error(
-                "input_shaper_type",
+        Some(t) => Some(Shaper::parse(t).ok_or_else(|| {
+            error(
+                SHAPER_TYPE,
                 format!("unknown input shaper `{t}`; expected one of zv, mzv, zvd, ei, 2hump_ei, 3hump_ei"),
             )
         })?),
         None => None,
     };
     if values.is_empty() && shaper.is_none() {
-        return Err(s.error("", "a `set` step sets nothing; expected a setting such as `nozzle_temperature: \"start + band*step\"` (see docs/recipe.md)"));
+        return Err(error("", "`set` sets nothing; expected a setting such as `nozzle_temperature: \"start + band*step\"` (see docs/recipe.md)".into()));
     }
     if raw.wait.is_some() && raw.nozzle_temperature.is_none() {
-        return Err(s.error(
+        return Err(error(
             "wait",
-            "`wait` waits for `nozzle_temperature`; expected it beside that key",
+            "`wait` waits for `nozzle_temperature`; expected it beside that key".into(),
         ));
     }
-    Ok(Set {
-        bands,
+    Ok(Named {
         values,
         wait: raw.wait.unwrap_or(false),
         shaper,

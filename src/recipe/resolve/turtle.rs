@@ -10,10 +10,11 @@ use indexmap::IndexMap;
 
 use crate::base::error::{Error, Result};
 use crate::base::expr::{var, Expr, ExprErrorKind, Params};
+use crate::base::gcode::named::Named;
 use crate::generate::primitive::turtle::interp::Program;
 use crate::generate::primitive::turtle::lsystem::Lsystem;
 use crate::generate::primitive::turtle::program::{
-    Axis, Cmd, Curve, Op, Proc, Setting, Val, Values, STATE,
+    Axis, Cmd, Curve, Op, Piece, Proc, Setting, Val, Values, STATE,
 };
 use crate::generate::primitive::turtle::{self, Env, Frame, Turtle};
 use crate::recipe::eval::{at, join, key, Scope};
@@ -29,9 +30,11 @@ pub(super) fn resolve(
     gcode: super::GcodeCheck,
 ) -> Result<Turtle> {
     // the program's places are relative to `turtle` (the interpreter's too)
-    compile(raw, &Scope::new(s.params), gcode)
-        .and_then(|prog| turtle::run(&prog, env))
-        .map_err(|e| e.under(s.here()))
+    let mut t = compile(raw, &Scope::new(s.params), gcode)
+        .and_then(|prog| turtle::run(&prog, env, gcode))
+        .map_err(|e| e.under(s.here()))?;
+    t.place_under(s.here());
+    Ok(t)
 }
 
 /// The program of `raw` over the recipe's params: its start, seed,
@@ -72,7 +75,7 @@ pub(super) fn resolve_path(
     gcode: super::GcodeCheck,
 ) -> Result<Turtle> {
     let compiler = Compiler::new(s.params, &IndexMap::new(), gcode);
-    compiler
+    let mut t = compiler
         .block(cmds, key, &Arc::new(Vec::new()))
         .and_then(|main| {
             let prog = Program {
@@ -83,7 +86,7 @@ pub(super) fn resolve_path(
                 procs: Vec::new(),
                 path: true,
             };
-            turtle::run(&prog, env)
+            turtle::run(&prog, env, gcode)
         })
         .map_err(|e| {
             // a path that draws nothing: name its commands, as v1 did
@@ -96,7 +99,9 @@ pub(super) fn resolve_path(
                 e
             };
             e.under(s.here())
-        })
+        })?;
+    t.place_under(s.here());
+    Ok(t)
 }
 
 /// Compiles the commands of one turtle.
@@ -298,7 +303,8 @@ impl<'a> Compiler<'a> {
             | RawCommand::Line(_)
             | RawCommand::Rectangle(_)
             | RawCommand::ExtrudeVolume { .. }
-            | RawCommand::Gcode(_) => return self.more(c, item, scope),
+            | RawCommand::Gcode(_)
+            | RawCommand::Set(_) => return self.more(c, item, scope),
             RawCommand::SetHeading { heading, up } => (
                 at("set_heading"),
                 Op::SetHeading(Box::new((
@@ -457,12 +463,61 @@ impl<'a> Compiler<'a> {
             ),
             RawCommand::Gcode(text) => {
                 let p = at("gcode");
-                (self.gcode)(text).map_err(|m| Error::input(&p, m))?;
-                (p, Op::Gcode(text.trim().into()))
+                (p.clone(), self.gcode_line(text, scope, &p)?)
+            }
+            RawCommand::Set(raw) => {
+                let p = at("set");
+                (
+                    p.clone(),
+                    Op::Printer(Box::new(self.settings(raw, scope, &p)?)),
+                )
             }
             _ => unreachable!("`more` takes the commands it names"),
         };
         Ok(Cmd { place, op })
+    }
+
+    /// `gcode: text` at `place`: a literal line checked now; one with
+    /// `{expr}`s compiled into pieces, the line made and checked where it
+    /// runs (its values seen in the command's scope, as any other's).
+    fn gcode_line(&self, text: &str, scope: &Arc<Vec<String>>, place: &str) -> Result<Op> {
+        use crate::base::format::{pieces, Piece as Cut};
+        let cut = pieces(text).map_err(|m| Error::input(place, m))?;
+        if cut.iter().all(|c| matches!(c, Cut::Text(_))) {
+            (self.gcode)(text).map_err(|m| Error::input(place, m))?;
+            return Ok(Op::Gcode(text.trim().into()));
+        }
+        let mut out = Vec::with_capacity(cut.len());
+        for c in cut {
+            out.push(match c {
+                Cut::Text(t) => Piece::Text(t.into()),
+                Cut::Expr(src) => Piece::Value(self.val(&Num::Expr(src.into()), scope, place)?),
+            });
+        }
+        Ok(Op::GcodeWith(out))
+    }
+
+    /// `set: {…}` at `place`: the settings as a `set` step reads them
+    /// (without its bands), each value in the command's scope.
+    fn settings(
+        &self,
+        raw: &crate::recipe::schema::RawSet,
+        scope: &Arc<Vec<String>>,
+        place: &str,
+    ) -> Result<Named<Val>> {
+        for (key, given) in [
+            ("every", raw.every.is_some()),
+            ("from", raw.from.is_some()),
+            ("band", raw.band.is_some()),
+        ] {
+            if given {
+                return Err(Error::input(
+                    join(place, key),
+                    format!("a `set` command sets its values here, where it runs, so it has no bands (`{key}` is a `set` step's); expected the settings only, each an expression of x, y, z and the names in scope"),
+                ));
+            }
+        }
+        super::step::named(raw, place, |key, n| self.val(n, scope, &join(place, key)))
     }
 
     /// `for: {name: values, …}` with `do: body`, list item `item`: one
@@ -710,7 +765,6 @@ fn scalar(w: &str, v: Val) -> Op {
 mod tests {
     use super::*;
     use crate::base::toolpath::{Event, Toolpath};
-    use crate::generate::model::Recipe;
     use crate::generate::primitive::Primitive;
 
     fn env() -> Env {
@@ -1163,11 +1217,117 @@ mod tests {
         assert_eq!(e.place.as_deref(), Some("turtle.start"));
     }
 
+    /// `set`: one event per command the firmware sets (print and travel
+    /// acceleration in one), values from the turtle's scope where it runs,
+    /// each naming its key path under `turtle`; no bands.
+    #[test]
+    fn set_commands_evaluate_in_scope_and_name_their_keys() {
+        use crate::base::gcode::Setting;
+        let t = run("program:\n  - for: {k: \"0..2\"}\n    do:\n      - {set: {pressure_advance: \"0.01*k + x/1000\", travel_acceleration: \"side*100\", acceleration: 900}}\n      - {forward: 5}\n");
+        let sets: Vec<(usize, Setting, Option<&str>)> = t
+            .events
+            .iter()
+            .map(|(k, e)| match e {
+                Event::Set {
+                    setting,
+                    band: None,
+                    place,
+                } => (*k, *setting, place.as_deref()),
+                e => panic!("{e:?}"),
+            })
+            .collect();
+        assert_eq!(sets.len(), 6, "{sets:?}");
+        for (j, (k, s, place)) in sets.iter().enumerate() {
+            let line = j / 2;
+            // before the line's string, the head at x = 5·line
+            assert_eq!(*k, line);
+            if j % 2 == 0 {
+                let want = 0.01 * line as f64 + 5.0 * line as f64 / 1000.0;
+                assert_eq!(*s, Setting::PressureAdvance { k: want });
+                assert_eq!(*place, Some("turtle.program[0].do[0].set.pressure_advance"));
+            } else {
+                assert_eq!(
+                    *s,
+                    Setting::Acceleration {
+                        print: Some(900.0),
+                        travel: Some(1370.0),
+                        retract: None
+                    }
+                );
+                assert_eq!(*place, Some("turtle.program[0].do[0].set.acceleration"));
+            }
+        }
+        // a step's bands have no meaning where the command runs
+        for key in ["every", "from", "band"] {
+            let e = err(&format!(
+                "program:\n  - {{set: {{{key}: 1, fan: 1}}}}\n  - {{forward: 1}}\n"
+            ));
+            assert_eq!(e.place, Some(format!("turtle.program[0].set.{key}")), "{e}");
+            assert!(e.message.contains("no bands"), "{e}");
+        }
+        let e = err("program:\n  - {set: {}}\n  - {forward: 1}\n");
+        assert_eq!(e.place.as_deref(), Some("turtle.program[0].set"), "{e}");
+        assert!(e.message.contains("sets nothing"), "{e}");
+        let e = err("program:\n  - {set: {fan: \"q\"}}\n  - {forward: 1}\n");
+        assert_eq!(e.place.as_deref(), Some("turtle.program[0].set.fan"), "{e}");
+        let e = err("program:\n  - {set: {input_shaper_type: bump}}\n  - {forward: 1}\n");
+        assert_eq!(
+            e.place.as_deref(),
+            Some("turtle.program[0].set.input_shaper_type"),
+            "{e}"
+        );
+        let e = err("program:\n  - {set: {fan: \"1/(x - x)\"}}\n  - {forward: 1}\n");
+        assert_eq!(e.place.as_deref(), Some("turtle.program[0].set.fan"), "{e}");
+        assert!(e.message.contains("finite"), "{e}");
+    }
+
+    /// `gcode` with `{expr}`: each value from the command's scope, the
+    /// line made then checked as the literal line is, refused at its key.
+    #[test]
+    fn gcode_lines_take_values_and_are_checked_as_made() {
+        let t = run("program:\n  - for: {k: \"1..2\"}\n    do:\n      - {gcode: \"M900 K{0.01*k} ; line {k} at {x}, {side}\"}\n      - {forward: 2.5}\n");
+        let lines: Vec<&str> = t
+            .events
+            .iter()
+            .map(|(_, e)| match e {
+                Event::Gcode(l) => l.as_ref(),
+                e => panic!("{e:?}"),
+            })
+            .collect();
+        assert_eq!(
+            lines,
+            [
+                "M900 K0.01 ; line 1 at 0, 13.7",
+                "M900 K0.02 ; line 2 at 2.5, 13.7"
+            ]
+        );
+        // refused exactly as the literal line it makes, naming the key
+        let literal = err("program:\n  - {gcode: \"M104 S300\"}\n  - {forward: 1}\n");
+        let made = err(
+            "program:\n  - {let: {t: 299}}\n  - {gcode: \"M104 S{t + 1}\"}\n  - {forward: 1}\n",
+        );
+        assert_eq!(made.place.as_deref(), Some("turtle.program[1].gcode"));
+        assert_eq!(
+            made.message,
+            format!("the line `M104 S300` made here: {}", literal.message)
+        );
+        let made = err("program:\n  - {forward: 1}\n  - {gcode: \"G1 X{x + 1}\"}\n");
+        let literal = err("program:\n  - {gcode: \"G1 X2\"}\n");
+        assert!(made.message.ends_with(&literal.message), "{made}");
+        // a brace without its end, an unknown name: refused at the key
+        let e = err("program:\n  - {gcode: \"M117 {k\"}\n");
+        assert_eq!(e.place.as_deref(), Some("turtle.program[0].gcode"));
+        assert!(e.message.contains("without its `}`"), "{e}");
+        let e = err("program:\n  - {gcode: \"M117 {q}\"}\n");
+        assert_eq!(e.place.as_deref(), Some("turtle.program[0].gcode"));
+        assert!(e.message.contains("unknown name `q`"), "{e}");
+    }
+
     #[test]
     fn temperature_events_are_checked() {
         let text = "p3dp: 1\nname: t\nparts:\n  - primitive:\n      turtle:\n        program:\n          - {nozzle_temp: 300}\n          - {forward: 10}\n          - {bed_temp: 60}\n          - {bed_temp: 150}\n          - {forward: 10}\n";
         let raw: crate::recipe::RawRecipe = crate::recipe::parse_yaml(text, "t.yaml").unwrap();
-        let r = Recipe::resolve(&raw, &[], None, std::path::Path::new(".")).unwrap();
+        let r = crate::recipe::resolve(&raw, &[], None, std::path::Path::new(".")).unwrap();
         let Primitive::Turtle(t) = &r.parts[0].primitive else {
             panic!()
         };

@@ -12,25 +12,25 @@ use super::num::{Num, RawPoint};
 /// radius radius + (end_radius − radius)·k/n, height center.z + rise·k/n.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct RawArcCmd {
+pub(crate) struct RawArcCmd {
     /// The centre (missing coordinates: the head's).
-    pub center: RawPoint,
+    pub(crate) center: RawPoint,
     /// mm, at the first point.
-    pub radius: Num,
+    pub(crate) radius: Num,
     /// Angle of the first point, radians from +x, counter-clockwise (0).
     #[serde(default = "zero")]
-    pub start: Num,
+    pub(crate) start: Num,
     /// Angle from the first point to the last, radians (negative: clockwise;
     /// `tau`: a full circle).
-    pub sweep: Num,
+    pub(crate) sweep: Num,
     /// Strings along the arc (FullControl's `segments`).
-    pub segments: Num,
+    pub(crate) segments: Num,
     /// mm at the last point (a spiral); `radius` when absent.
     #[serde(default)]
-    pub end_radius: Option<Num>,
+    pub(crate) end_radius: Option<Num>,
     /// mm the last point is above the first (a helix); 0 when absent.
     #[serde(default)]
-    pub rise: Option<Num>,
+    pub(crate) rise: Option<Num>,
 }
 
 /// `bezier:` the Bézier curve of the control `points`, at `segments` + 1
@@ -38,24 +38,24 @@ pub struct RawArcCmd {
 /// the last.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct RawBezier {
+pub(crate) struct RawBezier {
     /// Control points, at least two (missing coordinates: the head's).
-    pub points: Vec<RawPoint>,
+    pub(crate) points: Vec<RawPoint>,
     /// Strings along the curve.
-    pub segments: Num,
+    pub(crate) segments: Num,
 }
 
 /// `line:` a straight line cut into `segments` equal strings.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct RawLine {
+pub(crate) struct RawLine {
     /// Where it starts; the head when absent.
     #[serde(default)]
-    pub from: Option<RawPoint>,
+    pub(crate) from: Option<RawPoint>,
     /// Where it ends.
-    pub to: RawPoint,
+    pub(crate) to: RawPoint,
     /// Strings along it.
-    pub segments: Num,
+    pub(crate) segments: Num,
 }
 
 /// `rectangle:` four sides from `corner` and back to it, along x first
@@ -63,14 +63,14 @@ pub struct RawLine {
 /// `clockwise: true` (FullControl's `rectangleXY`).
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct RawRectangle {
+pub(crate) struct RawRectangle {
     /// The first (and last) corner.
-    pub corner: RawPoint,
+    pub(crate) corner: RawPoint,
     /// `[dx, dy]`, mm (signed).
-    pub size: [Num; 2],
+    pub(crate) size: [Num; 2],
     /// Along y first (false when absent).
     #[serde(default)]
-    pub clockwise: Option<bool>,
+    pub(crate) clockwise: Option<bool>,
 }
 
 /// An arc's default start: +x.

@@ -33,8 +33,7 @@ pub(crate) use primitive::{
     RawLayout, RawOutline, RawPath, RawPatternHelix, RawPrimitive, RawRule, RawSpiral,
 };
 pub(crate) use profile::{
-    RawBed, RawCheckLimits, RawExtrusion, RawFlavor, RawHead, RawKinematics, RawPrinter,
-    RawRetraction, RawVariable,
+    RawBed, RawExtrusion, RawFlavor, RawHead, RawKinematics, RawPrinter, RawRetraction, RawVariable,
 };
 pub(crate) use solid::{RawFeature, RawInfill, RawOp, RawPattern, RawSolid};
 pub(crate) use step::{RawAxis, RawDeform, RawKeep, RawSet, RawStep};
@@ -42,7 +41,7 @@ pub(crate) use turtle::{RawCommand, RawLsystem, RawProcedure, RawTurtle};
 
 /// `material:` a built-in name or an inline map.
 #[derive(Clone, Debug, PartialEq)]
-pub enum RawMaterial {
+pub(crate) enum RawMaterial {
     /// `pla`, `abs` or `petg`.
     Named(String),
     /// `{filament_diameter, density, nozzle_temp, bed_temp}`.
@@ -52,31 +51,31 @@ pub enum RawMaterial {
 /// An inline material.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct InlineMaterial {
+pub(crate) struct InlineMaterial {
     /// Name for reports.
     #[serde(default)]
-    pub name: Option<String>,
+    pub(crate) name: Option<String>,
     /// mm; the printer's when absent.
     #[serde(default)]
-    pub filament_diameter: Option<Num>,
+    pub(crate) filament_diameter: Option<Num>,
     /// g/cm³.
-    pub density: Num,
+    pub(crate) density: Num,
     /// °C.
-    pub nozzle_temp: Num,
+    pub(crate) nozzle_temp: Num,
     /// °C.
-    pub bed_temp: Num,
+    pub(crate) bed_temp: Num,
     /// Hottest safe nozzle, °C; `nozzle_temp` + 25 when absent.
     #[serde(default)]
-    pub max_nozzle_temp: Option<Num>,
+    pub(crate) max_nozzle_temp: Option<Num>,
     /// Part-cooling fan, 0 to 1, above `fan_start_z`; 0 (off) when absent.
     #[serde(default)]
-    pub fan_speed: Option<Num>,
+    pub(crate) fan_speed: Option<Num>,
     /// Height above which the fan turns on, mm; 0.5 when absent.
     #[serde(default)]
-    pub fan_start_z: Option<Num>,
+    pub(crate) fan_start_z: Option<Num>,
     /// Filament colour `#rrggbb` (the 3MF of `p3dp mesh`); `#FA8F29` when absent.
     #[serde(default)]
-    pub color: Option<String>,
+    pub(crate) color: Option<String>,
 }
 
 impl<'de> Deserialize<'de> for RawMaterial {
@@ -105,83 +104,83 @@ impl<'de> Deserialize<'de> for RawMaterial {
 /// `defaults:`.
 #[derive(Clone, Debug, Default, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct RawDefaults {
+pub(crate) struct RawDefaults {
     /// mm².
     #[serde(default)]
-    pub cross_section: Option<Num>,
+    pub(crate) cross_section: Option<Num>,
     /// mm/s.
     #[serde(default)]
-    pub speed: Option<Num>,
+    pub(crate) speed: Option<Num>,
 }
 
 /// `skirt:`.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct RawSkirt {
+pub(crate) struct RawSkirt {
     /// mm outside the parts' footprint.
-    pub distance: Num,
+    pub(crate) distance: Num,
     /// Number of loops.
-    pub loops: Num,
+    pub(crate) loops: Num,
 }
 
 /// The top level of a recipe file.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct RawRecipe {
+pub(crate) struct RawRecipe {
     /// Format version; must be 1.
-    pub p3dp: u32,
+    pub(crate) p3dp: u32,
     /// Recipe name.
-    pub name: String,
+    pub(crate) name: String,
     /// Free text.
     #[serde(default)]
-    pub description: Option<String>,
+    pub(crate) description: Option<String>,
     /// Built-in profile name or a path.
     #[serde(default)]
-    pub printer: Option<String>,
+    pub(crate) printer: Option<String>,
     /// Built-in material or inline map.
     #[serde(default)]
-    pub material: Option<RawMaterial>,
+    pub(crate) material: Option<RawMaterial>,
     /// Named params in order.
     #[serde(default, deserialize_with = "unique_map")]
-    pub params: IndexMap<String, RawParam>,
+    pub(crate) params: IndexMap<String, RawParam>,
     /// Default cross-section and speed.
     #[serde(default)]
-    pub defaults: RawDefaults,
+    pub(crate) defaults: RawDefaults,
     /// Optional skirt.
     #[serde(default)]
-    pub skirt: Option<RawSkirt>,
+    pub(crate) skirt: Option<RawSkirt>,
     /// The parts, printed in order (a plate has `plate` instead).
     #[serde(default)]
-    pub parts: Vec<RawPart>,
+    pub(crate) parts: Vec<RawPart>,
     /// What goes on the bed, instead of `parts`: whole recipes, each
     /// printed complete, one after another (see `docs/recipe.md`, Plates).
     #[serde(default)]
-    pub plate: Option<Vec<RawPlateItem>>,
+    pub(crate) plate: Option<Vec<RawPlateItem>>,
     /// Most strings one part may have (default 50 million).
     #[serde(default)]
-    pub max_strings: Option<Num>,
+    pub(crate) max_strings: Option<Num>,
     /// Check codes silenced for this recipe (the codes a finding names).
     #[serde(default)]
-    pub allow: Vec<RawAllow>,
+    pub(crate) allow: Vec<RawAllow>,
     /// Named, parameterised part trees (see [`super::expand`]).
     #[serde(default)]
-    pub templates: IndexMap<String, RawTemplate>,
+    pub(crate) templates: IndexMap<String, RawTemplate>,
     /// Files whose params and templates this recipe uses, relative to it.
     #[serde(default)]
-    pub include: Vec<String>,
+    pub(crate) include: Vec<String>,
 }
 
 /// A named, parameterised part tree (draw3dp's part-assembly functions).
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct RawTemplate {
+pub(crate) struct RawTemplate {
     /// The params and their defaults, in order, as a recipe's params are
     /// (numbers, true/false, lists, choices); a default may use the
     /// recipe's params and the template params before it.
     #[serde(default, deserialize_with = "unique_map")]
-    pub params: IndexMap<String, RawParam>,
+    pub(crate) params: IndexMap<String, RawParam>,
     /// The part (or group) it makes.
-    pub part: RawPart,
+    pub(crate) part: RawPart,
 }
 
 /// An included file: a recipe or a library of params and templates. Only
@@ -192,36 +191,36 @@ pub struct RawTemplate {
 #[allow(missing_docs)]
 pub(crate) struct RawLibrary {
     /// Format version; must be 1.
-    pub p3dp: u32,
+    pub(crate) p3dp: u32,
     #[serde(default)]
-    pub name: Option<IgnoredAny>,
+    pub(crate) name: Option<IgnoredAny>,
     #[serde(default)]
-    pub description: Option<IgnoredAny>,
+    pub(crate) description: Option<IgnoredAny>,
     #[serde(default)]
-    pub printer: Option<IgnoredAny>,
+    pub(crate) printer: Option<IgnoredAny>,
     #[serde(default)]
-    pub material: Option<IgnoredAny>,
+    pub(crate) material: Option<IgnoredAny>,
     #[serde(default)]
-    pub defaults: Option<IgnoredAny>,
+    pub(crate) defaults: Option<IgnoredAny>,
     #[serde(default)]
-    pub skirt: Option<IgnoredAny>,
+    pub(crate) skirt: Option<IgnoredAny>,
     #[serde(default)]
-    pub parts: Option<IgnoredAny>,
+    pub(crate) parts: Option<IgnoredAny>,
     #[serde(default)]
-    pub max_strings: Option<IgnoredAny>,
+    pub(crate) max_strings: Option<IgnoredAny>,
     #[serde(default)]
-    pub allow: Option<IgnoredAny>,
+    pub(crate) allow: Option<IgnoredAny>,
     #[serde(default)]
-    pub plate: Option<IgnoredAny>,
+    pub(crate) plate: Option<IgnoredAny>,
     /// Params, in order.
     #[serde(default, deserialize_with = "unique_map")]
-    pub params: IndexMap<String, RawParam>,
+    pub(crate) params: IndexMap<String, RawParam>,
     /// Templates.
     #[serde(default)]
-    pub templates: IndexMap<String, RawTemplate>,
+    pub(crate) templates: IndexMap<String, RawTemplate>,
     /// Files it includes in turn.
     #[serde(default)]
-    pub include: Vec<String>,
+    pub(crate) include: Vec<String>,
 }
 
 /// The JSON Schema (draft 2020-12) of a recipe, made from the same `Raw*`
@@ -247,7 +246,7 @@ pub(crate) fn json_schema() -> serde_json::Value {
 
 /// An `allow:` entry: a check code, or `{code, reason}`.
 #[derive(Clone, Debug, PartialEq)]
-pub enum RawAllow {
+pub(crate) enum RawAllow {
     /// Just the code.
     Code(String),
     /// The code and why it is allowed.
@@ -321,7 +320,7 @@ impl schemars::JsonSchema for RawAllow {
 
 impl RawAllow {
     /// The check code.
-    pub fn code(&self) -> &str {
+    pub(crate) fn code(&self) -> &str {
         match self {
             RawAllow::Code(c) | RawAllow::WithReason { code: c, .. } => c,
         }

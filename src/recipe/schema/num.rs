@@ -8,7 +8,7 @@ use serde::Deserialize;
 
 /// A number, or an expression over params written as a string.
 #[derive(Clone, Debug, PartialEq)]
-pub enum Num {
+pub(crate) enum Num {
     /// A literal number.
     Value(f64),
     /// An expression string, e.g. `"pi/2*radius"`.
@@ -17,7 +17,7 @@ pub enum Num {
 
 impl Num {
     /// The expression text (a literal number becomes its decimal text).
-    pub fn src(&self) -> String {
+    pub(crate) fn src(&self) -> String {
         match self {
             Num::Value(v) => format!("{v}"),
             Num::Expr(s) => s.clone(),
@@ -70,7 +70,7 @@ impl schemars::JsonSchema for Num {
 /// `Point(z=…)`), or `{polar: [cx, cy, cz], radius, angle}` (FullControl's
 /// `polar_to_point`).
 #[derive(Clone, Debug, PartialEq)]
-pub enum RawPoint {
+pub(crate) enum RawPoint {
     /// `[x, y, z]`.
     Full(Num3),
     /// `{x: …, z: …}`: only these coordinates change.
@@ -121,7 +121,7 @@ struct PartialPoint {
 impl RawPoint {
     /// The three coordinates, `None` for those that stay; a polar point's
     /// as expressions (`cx + (r)*cos(a)`, `cy + (r)*sin(a)`, `cz`).
-    pub fn coords(&self) -> [Option<Num>; 3] {
+    pub(crate) fn coords(&self) -> [Option<Num>; 3] {
         match self {
             RawPoint::Full([x, y, z]) => [Some(x.clone()), Some(y.clone()), Some(z.clone())],
             RawPoint::Partial { x, y, z } => [x.clone(), y.clone(), z.clone()],

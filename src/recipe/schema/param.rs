@@ -14,7 +14,7 @@ use super::part::RawLoop;
 
 /// One param of `params:`.
 #[derive(Clone, Debug, PartialEq)]
-pub enum RawParam {
+pub(crate) enum RawParam {
     /// A number or an expression over the params before it.
     Num(Num),
     /// `true` or `false`: 1 or 0 in expressions.
@@ -54,11 +54,11 @@ struct RawMapParam {
 /// `{choices: [a, b, c], default: b}`: a param that is one of these strings.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct RawChoice {
+pub(crate) struct RawChoice {
     /// The strings it may be (letters, digits and `_`).
-    pub choices: Vec<String>,
+    pub(crate) choices: Vec<String>,
     /// The one it is unless `--set` says otherwise.
-    pub default: String,
+    pub(crate) default: String,
 }
 
 impl<'de> Deserialize<'de> for RawParam {

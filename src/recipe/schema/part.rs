@@ -17,98 +17,98 @@ use super::step::RawStep;
 /// One part.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct RawPart {
+pub(crate) struct RawPart {
     /// Name for reports.
     #[serde(default)]
-    pub name: Option<String>,
+    pub(crate) name: Option<String>,
     /// mm², overrides defaults.
     #[serde(default)]
-    pub cross_section: Option<Num>,
+    pub(crate) cross_section: Option<Num>,
     /// mm/s, overrides defaults.
     #[serde(default)]
-    pub speed: Option<Num>,
+    pub(crate) speed: Option<Num>,
     /// One primitive, or a list whose strings follow each other.
     #[serde(default)]
-    pub primitive: Option<RawPrimitives>,
+    pub(crate) primitive: Option<RawPrimitives>,
     /// Steps in order.
     #[serde(default)]
-    pub steps: Vec<RawStep>,
+    pub(crate) steps: Vec<RawStep>,
     /// Loops on the bed round the part's first contact, printed first.
     #[serde(default)]
-    pub brim: Option<RawBrim>,
+    pub(crate) brim: Option<RawBrim>,
     /// A short printed tube under the part's first contact, printed first.
     #[serde(default)]
-    pub stand: Option<RawStand>,
+    pub(crate) stand: Option<RawStand>,
     /// Child parts, making this part a group (see [`super::expand`]).
     #[serde(default)]
-    pub parts: Option<Vec<RawPart>>,
+    pub(crate) parts: Option<Vec<RawPart>>,
     /// A template to use instead of `primitive` or `parts`.
     #[serde(default)]
-    pub template: Option<String>,
+    pub(crate) template: Option<String>,
     /// A whole recipe file whose parts this part is (a group), instead of
     /// `primitive`, `parts` or `template`.
     #[serde(default)]
-    pub include: Option<String>,
+    pub(crate) include: Option<String>,
     /// The template's (or the included recipe's) params for this use: a
     /// number or expression, true or false, a list, or one of a choice's
     /// strings.
     #[serde(default)]
-    pub with: IndexMap<String, RawParam>,
+    pub(crate) with: IndexMap<String, RawParam>,
     /// Repeat the part once per value of each name (`for:` in a recipe).
     #[serde(default, rename = "for")]
-    pub repeat: IndexMap<String, RawLoop>,
+    pub(crate) repeat: IndexMap<String, RawLoop>,
     /// The part is made only when this is non-zero (`if:` in a recipe).
     #[serde(default, rename = "if")]
-    pub when: Option<Num>,
+    pub(crate) when: Option<Num>,
 }
 
 /// `brim:` of a part: loops on the bed round its first contact.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct RawBrim {
+pub(crate) struct RawBrim {
     /// Number of loops.
-    pub loops: Num,
+    pub(crate) loops: Num,
     /// Width of a loop and the step between loops, mm (0.45).
     #[serde(default)]
-    pub line_width: Option<Num>,
+    pub(crate) line_width: Option<Num>,
     /// Height of the loops' bead, mm (0.2).
     #[serde(default)]
-    pub layer_height: Option<Num>,
+    pub(crate) layer_height: Option<Num>,
     /// mm/s (the part's speed).
     #[serde(default)]
-    pub speed: Option<Num>,
+    pub(crate) speed: Option<Num>,
 }
 
 /// `stand:` of a part: a short printed tube round its first contact, its top
 /// just under where the part passes over it.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct RawStand {
+pub(crate) struct RawStand {
     /// Radius of the outer wall's centre line, mm, about the middle of the
     /// part's first contact.
-    pub radius: Num,
+    pub(crate) radius: Num,
     /// Number of walls, `line_width` apart, from `radius` inwards (2).
     #[serde(default)]
-    pub walls: Option<Num>,
+    pub(crate) walls: Option<Num>,
     /// Height, mm, in whole layers (as tall as the part leaves room for: no
     /// higher than the nozzle where the part passes over the walls).
     #[serde(default)]
-    pub height: Option<Num>,
+    pub(crate) height: Option<Num>,
     /// Width of a wall, mm (0.45).
     #[serde(default)]
-    pub line_width: Option<Num>,
+    pub(crate) line_width: Option<Num>,
     /// Height of a layer, mm (0.2).
     #[serde(default)]
-    pub layer_height: Option<Num>,
+    pub(crate) layer_height: Option<Num>,
     /// mm/s (the part's speed).
     #[serde(default)]
-    pub speed: Option<Num>,
+    pub(crate) speed: Option<Num>,
 }
 
 /// `primitive:` one primitive, or a list whose strings follow each other in
 /// order (draw3dp's `Trace`).
 #[derive(Clone, Debug, PartialEq)]
-pub enum RawPrimitives {
+pub(crate) enum RawPrimitives {
     /// `primitive: {helix: {…}}`, as in v1.
     One(Box<RawPrimitiveItem>),
     /// `primitive: [{spiral: {…}}, {helix: {…}}]`.
@@ -118,7 +118,7 @@ pub enum RawPrimitives {
 impl RawPrimitives {
     /// The primitives in order, each with its key path below the part: `key`
     /// (the part's key for them, `primitive`) for one, `key[k]` in a list.
-    pub fn items(&self, key: &str) -> Vec<(String, &RawPrimitiveItem)> {
+    pub(crate) fn items(&self, key: &str) -> Vec<(String, &RawPrimitiveItem)> {
         match self {
             RawPrimitives::One(p) => vec![(key.to_string(), &**p)],
             RawPrimitives::List(v) => v
@@ -134,13 +134,13 @@ impl RawPrimitives {
 /// that replace the part's for this primitive's strings
 /// (`{cylinder: {…}, cross_section: 0.1, speed: 25}`).
 #[derive(Clone, Debug, PartialEq)]
-pub struct RawPrimitiveItem {
+pub(crate) struct RawPrimitiveItem {
     /// The primitive.
-    pub primitive: RawPrimitive,
+    pub(crate) primitive: RawPrimitive,
     /// mm², the part's when absent.
-    pub cross_section: Option<Num>,
+    pub(crate) cross_section: Option<Num>,
     /// mm/s, the part's when absent.
-    pub speed: Option<Num>,
+    pub(crate) speed: Option<Num>,
 }
 
 impl<'de> Deserialize<'de> for RawPrimitives {
@@ -362,7 +362,7 @@ impl<'de, A: MapAccess<'de>> de::VariantAccess<'de> for Content<'_, A> {
 
 /// The values of one name of a `for`: a range string or a list.
 #[derive(Clone, Debug, PartialEq)]
-pub enum RawLoop {
+pub(crate) enum RawLoop {
     /// `"a..b"` or `"a..b:step"`, a and b (and step) expressions, b included.
     Range(String),
     /// `[v1, v2, …]`, numbers or expressions.

@@ -13,32 +13,32 @@ use super::param::RawParam;
 /// One entry of `plate:`: a recipe, printed whole, once or more.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct RawPlateItem {
+pub(crate) struct RawPlateItem {
     /// The recipe file, relative to the plate.
-    pub recipe: String,
+    pub(crate) recipe: String,
     /// The objects' name (default: the recipe's), numbered when there are several.
     #[serde(default)]
-    pub name: Option<String>,
+    pub(crate) name: Option<String>,
     /// How many of each variant (1).
     #[serde(default)]
-    pub copies: Option<Num>,
+    pub(crate) copies: Option<Num>,
     /// The recipe's params for these objects, as `--set` gives them: a
     /// number or expression, true or false, a list, one of a choice's strings.
     #[serde(default)]
-    pub set: IndexMap<String, RawParam>,
+    pub(crate) set: IndexMap<String, RawParam>,
     /// Variants: every combination of these values, each its own object(s),
     /// as `--sweep` makes them (`"40, 60"`, `"1..3:0.5"` or a list).
     #[serde(default)]
-    pub sweep: IndexMap<String, RawSweep>,
+    pub(crate) sweep: IndexMap<String, RawSweep>,
     /// A fixed place: where the recipe's (0, 0) goes on the bed, `[x, y]`
     /// from the bed's centre, mm (default: arranged).
     #[serde(default)]
-    pub at: Option<[Num; 2]>,
+    pub(crate) at: Option<[Num; 2]>,
 }
 
 /// The values of one name of a `sweep:`: a `--sweep` text or a list.
 #[derive(Clone, Debug, PartialEq)]
-pub enum RawSweep {
+pub(crate) enum RawSweep {
     /// `"v1, v2"`, `"a..b"` or `"a..b:step"`.
     Text(String),
     /// `[v1, v2, …]`.

@@ -11,7 +11,7 @@ use super::turtle::{RawCommand, RawTurtle};
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
 #[allow(missing_docs)]
-pub enum RawPrimitive {
+pub(crate) enum RawPrimitive {
     Path(RawPath),
     Circle(RawCircle),
     Arc(RawArc),
@@ -28,7 +28,7 @@ pub enum RawPrimitive {
 impl RawPrimitive {
     /// The primitive's key (`helix`, `pattern_helix`): the variant's name as
     /// serde reads it (snake_case), the first segment of its key paths.
-    pub fn key(&self) -> &'static str {
+    pub(crate) fn key(&self) -> &'static str {
         match self {
             RawPrimitive::Path(_) => "path",
             RawPrimitive::Circle(_) => "circle",
@@ -49,12 +49,12 @@ impl RawPrimitive {
 /// `move` and `draw`), or an SVG drawing. A list in place of the map is
 /// its `commands`.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct RawPath(PathMap, bool);
+pub(crate) struct RawPath(PathMap, bool);
 
 impl RawPath {
     /// Whether it was written as the list of commands itself (its key
     /// paths are then `path[k]`, not `path.commands[k]`).
-    pub fn is_list(&self) -> bool {
+    pub(crate) fn is_list(&self) -> bool {
         self.1
     }
 }
@@ -76,25 +76,25 @@ impl schemars::JsonSchema for RawPath {
 /// The map form of `path:`.
 #[derive(Clone, Debug, Default, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct PathMap {
+pub(crate) struct PathMap {
     /// The commands, in order.
     #[serde(default)]
-    pub commands: Option<Vec<RawCommand>>,
+    pub(crate) commands: Option<Vec<RawCommand>>,
     /// An SVG file whose paths are drawn as strings (instead of `commands`).
     #[serde(default)]
-    pub svg: Option<String>,
+    pub(crate) svg: Option<String>,
     /// Only the SVG element with this id.
     #[serde(default)]
-    pub id: Option<String>,
+    pub(crate) id: Option<String>,
     /// Factor on the SVG's drawn size (mm).
     #[serde(default)]
-    pub scale: Option<Num>,
+    pub(crate) scale: Option<Num>,
     /// Chord tolerance of flattened curves, mm.
     #[serde(default)]
-    pub tolerance: Option<Num>,
+    pub(crate) tolerance: Option<Num>,
     /// Where the centre of the drawing's bounding box goes.
     #[serde(default)]
-    pub center: Option<Num3>,
+    pub(crate) center: Option<Num3>,
 }
 
 impl std::ops::Deref for RawPath {
@@ -137,12 +137,12 @@ impl<'de> Deserialize<'de> for RawPath {
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 #[allow(missing_docs)]
-pub struct RawCircle {
-    pub radius: Num,
+pub(crate) struct RawCircle {
+    pub(crate) radius: Num,
     #[serde(default)]
-    pub center: Option<Num3>,
+    pub(crate) center: Option<Num3>,
     #[serde(default)]
-    pub segments: Option<Num>,
+    pub(crate) segments: Option<Num>,
 }
 
 /// `label:` as written: a short text in a seven-segment font; `{EXPR}` in
@@ -150,41 +150,41 @@ pub struct RawCircle {
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 #[allow(missing_docs)]
-pub struct RawLabel {
-    pub text: String,
+pub(crate) struct RawLabel {
+    pub(crate) text: String,
     #[serde(default)]
-    pub center: Option<Num3>,
+    pub(crate) center: Option<Num3>,
     #[serde(default)]
-    pub height: Option<Num>,
+    pub(crate) height: Option<Num>,
     #[serde(default)]
-    pub layers: Option<Num>,
+    pub(crate) layers: Option<Num>,
     #[serde(default)]
-    pub layer_height: Option<Num>,
+    pub(crate) layer_height: Option<Num>,
     #[serde(default)]
-    pub angle: Option<Num>,
+    pub(crate) angle: Option<Num>,
 }
 
 /// `arc:` as written.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 #[allow(missing_docs)]
-pub struct RawArc {
-    pub radius: Num,
-    pub start: Num,
-    pub end: Num,
+pub(crate) struct RawArc {
+    pub(crate) radius: Num,
+    pub(crate) start: Num,
+    pub(crate) end: Num,
     #[serde(default)]
-    pub center: Option<Num3>,
+    pub(crate) center: Option<Num3>,
     #[serde(default)]
-    pub segments: Option<Num>,
+    pub(crate) segments: Option<Num>,
     #[serde(default)]
-    pub rise: Option<Num>,
+    pub(crate) rise: Option<Num>,
 }
 
 /// `direction:` of a spiral as written.
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 #[allow(missing_docs)]
-pub enum RawDirection {
+pub(crate) enum RawDirection {
     Outward,
     Inward,
 }
@@ -193,69 +193,69 @@ pub enum RawDirection {
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 #[allow(missing_docs)]
-pub struct RawSpiral {
+pub(crate) struct RawSpiral {
     #[serde(default)]
-    pub radius: Option<Num>,
-    pub pitch: Num,
+    pub(crate) radius: Option<Num>,
+    pub(crate) pitch: Num,
     #[serde(default)]
-    pub center: Option<Num3>,
+    pub(crate) center: Option<Num3>,
     #[serde(default)]
-    pub segments: Option<Num>,
+    pub(crate) segments: Option<Num>,
     #[serde(default)]
-    pub inner_radius: Option<Num>,
+    pub(crate) inner_radius: Option<Num>,
     #[serde(default)]
-    pub direction: Option<RawDirection>,
+    pub(crate) direction: Option<RawDirection>,
     #[serde(default)]
-    pub outline: Option<RawOutline>,
+    pub(crate) outline: Option<RawOutline>,
 }
 
 /// `helix:` as written.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 #[allow(missing_docs)]
-pub struct RawHelix {
+pub(crate) struct RawHelix {
     #[serde(default)]
-    pub radius: Option<Num>,
-    pub height: Num,
-    pub pitch: Num,
+    pub(crate) radius: Option<Num>,
+    pub(crate) height: Num,
+    pub(crate) pitch: Num,
     #[serde(default)]
-    pub center: Option<Num3>,
+    pub(crate) center: Option<Num3>,
     #[serde(default)]
-    pub segments: Option<Num>,
+    pub(crate) segments: Option<Num>,
     #[serde(default)]
-    pub outline: Option<RawOutline>,
+    pub(crate) outline: Option<RawOutline>,
 }
 
 /// `cylinder:` as written.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 #[allow(missing_docs)]
-pub struct RawCylinder {
+pub(crate) struct RawCylinder {
     #[serde(default)]
-    pub radius: Option<Num>,
-    pub height: Num,
-    pub vpitch: Num,
-    pub hpitch: Num,
+    pub(crate) radius: Option<Num>,
+    pub(crate) height: Num,
+    pub(crate) vpitch: Num,
+    pub(crate) hpitch: Num,
     #[serde(default)]
-    pub center: Option<Num3>,
+    pub(crate) center: Option<Num3>,
     #[serde(default)]
-    pub segments: Option<Num>,
+    pub(crate) segments: Option<Num>,
     #[serde(default)]
-    pub outline: Option<RawOutline>,
+    pub(crate) outline: Option<RawOutline>,
 }
 
 /// `outline:` as written: a closed SVG outline.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 #[allow(missing_docs)]
-pub struct RawOutline {
-    pub svg: String,
+pub(crate) struct RawOutline {
+    pub(crate) svg: String,
     #[serde(default)]
-    pub id: Option<String>,
+    pub(crate) id: Option<String>,
     #[serde(default)]
-    pub scale: Option<Num>,
+    pub(crate) scale: Option<Num>,
     #[serde(default)]
-    pub tolerance: Option<Num>,
+    pub(crate) tolerance: Option<Num>,
 }
 
 /// `pattern_helix:` as written in a recipe. Required: `radius`, `layers`
@@ -265,31 +265,31 @@ pub struct RawOutline {
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 #[allow(missing_docs)]
-pub struct RawPatternHelix {
-    pub radius: Num,
-    pub layers: Num,
-    pub layer_height: Num,
+pub(crate) struct RawPatternHelix {
+    pub(crate) radius: Num,
+    pub(crate) layers: Num,
+    pub(crate) layer_height: Num,
     #[serde(default)]
-    pub segments: Option<Num>,
+    pub(crate) segments: Option<Num>,
     #[serde(default)]
-    pub cross_section: Option<Num>,
+    pub(crate) cross_section: Option<Num>,
     #[serde(default)]
-    pub speed: Option<Num>,
+    pub(crate) speed: Option<Num>,
     #[serde(default)]
-    pub first_layer: Option<RawFirstLayer>,
+    pub(crate) first_layer: Option<RawFirstLayer>,
     #[serde(default)]
-    pub center: Option<Num3>,
+    pub(crate) center: Option<Num3>,
 }
 
 /// `first_layer:` of a `pattern_helix`.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 #[allow(missing_docs)]
-pub struct RawFirstLayer {
+pub(crate) struct RawFirstLayer {
     #[serde(default)]
-    pub cross_section: Option<Num>,
+    pub(crate) cross_section: Option<Num>,
     #[serde(default)]
-    pub speed: Option<Num>,
+    pub(crate) speed: Option<Num>,
 }
 
 /// `ca_helix:` as written in a recipe. Required: `radius`, `layers` (turns,
@@ -301,39 +301,39 @@ pub struct RawFirstLayer {
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 #[allow(missing_docs)]
-pub struct RawCaHelix {
-    pub radius: Num,
-    pub layers: Num,
-    pub layer_height: Num,
+pub(crate) struct RawCaHelix {
+    pub(crate) radius: Num,
+    pub(crate) layers: Num,
+    pub(crate) layer_height: Num,
     #[serde(default)]
-    pub cells: Option<Num>,
+    pub(crate) cells: Option<Num>,
     #[serde(default)]
-    pub rule: Option<RawRule>,
+    pub(crate) rule: Option<RawRule>,
     #[serde(default)]
-    pub layout: Option<RawLayout>,
+    pub(crate) layout: Option<RawLayout>,
     #[serde(default)]
-    pub p0: Option<Num>,
+    pub(crate) p0: Option<Num>,
     #[serde(default)]
-    pub p1: Option<Num>,
+    pub(crate) p1: Option<Num>,
     #[serde(default)]
-    pub consume: Option<Num>,
+    pub(crate) consume: Option<Num>,
     #[serde(default)]
-    pub e1: Option<Num>,
+    pub(crate) e1: Option<Num>,
     #[serde(default)]
-    pub initial: Option<RawInitial>,
+    pub(crate) initial: Option<RawInitial>,
     #[serde(default)]
-    pub noise: Option<Num>,
+    pub(crate) noise: Option<Num>,
     #[serde(default)]
-    pub seed: Option<Num>,
+    pub(crate) seed: Option<Num>,
     #[serde(default)]
-    pub center: Option<Num3>,
+    pub(crate) center: Option<Num3>,
 }
 
 /// Which of the paper's rules decides a cell.
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, schemars::JsonSchema)]
 // serde's messages name the type ("expected enum Rule"), the schema too
 #[serde(rename = "Rule", rename_all = "snake_case", expecting = "enum Rule")]
-pub enum RawRule {
+pub(crate) enum RawRule {
     /// Fig. 5: straight up at p0, else on the next cell (i + 1) at p1.
     Basic,
     /// Section 4.2: on i − 1, else on i + 1 at p1, else straight up at p0 using C.
@@ -347,7 +347,7 @@ pub enum RawRule {
     rename_all = "snake_case",
     expecting = "enum Layout"
 )]
-pub enum RawLayout {
+pub(crate) enum RawLayout {
     /// One helix, the paper's method (section 2): a cell's neighbours below
     /// run on across the seam into the turn being printed.
     Helix,
@@ -361,7 +361,7 @@ pub enum RawLayout {
 /// `initial:` as written.
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
-pub enum RawInitial {
+pub(crate) enum RawInitial {
     /// Every cell of the first turn filled (the paper's usual start).
     Ones,
     /// Each cell of the first turn empty with probability `noise` (Fig. 11b).

@@ -69,12 +69,12 @@ pub(crate) enum RawBed {
 #[serde(deny_unknown_fields, expecting = "struct Retraction")]
 pub(crate) struct RawRetraction {
     /// Filament pulled back, mm (0 for none).
-    pub length: f64,
+    pub(crate) length: f64,
     /// Retraction speed, mm/s of filament.
-    pub speed: f64,
+    pub(crate) speed: f64,
     /// Travel moves shorter than this are not retracted, mm.
     #[serde(default = "d_min_travel")]
-    pub min_travel: f64,
+    pub(crate) min_travel: f64,
 }
 
 fn d_min_travel() -> f64 {
@@ -97,115 +97,115 @@ impl Default for RawRetraction {
 #[serde(deny_unknown_fields, expecting = "struct Printer")]
 pub(crate) struct RawPrinter {
     /// Profile name.
-    pub name: String,
+    pub(crate) name: String,
     /// The model as its maker's software names it (`MK4`, `X1C`; PrusaSlicer's
     /// `printer_model`, also accepted under that name): `[printer_model]` in
     /// start G-code, the G-code's metadata, Bambu's package (none).
     #[serde(default, alias = "printer_model")]
-    pub model: String,
+    pub(crate) model: String,
     /// Firmware dialect.
     #[serde(default)]
-    pub flavor: RawFlavor,
+    pub(crate) flavor: RawFlavor,
     /// Printable area.
-    pub bed: RawBed,
+    pub(crate) bed: RawBed,
     /// Where recipe (0, 0, 0) lands, in machine coordinates.
-    pub origin: [f64; 3],
+    pub(crate) origin: [f64; 3],
     /// Nozzle diameter, mm.
-    pub nozzle_diameter: f64,
+    pub(crate) nozzle_diameter: f64,
     /// Filament diameter, mm (a material may override it).
-    pub filament_diameter: f64,
+    pub(crate) filament_diameter: f64,
     /// Absolute or relative E.
     #[serde(default)]
-    pub extrusion: RawExtrusion,
+    pub(crate) extrusion: RawExtrusion,
     /// Extruders (or a filament changer's slots) the start and end G-code
     /// know: the length of the slicers' per-extruder values (1); p3dp prints
     /// with the first.
     #[serde(default = "d_extruders")]
-    pub extruders: u32,
+    pub(crate) extruders: u32,
     /// The extruder p3dp prints with, 0-based (0).
     #[serde(default)]
-    pub tool: u32,
+    pub(crate) tool: u32,
     /// G-code before the print, with placeholders.
     #[serde(default)]
-    pub start_gcode: String,
+    pub(crate) start_gcode: String,
     /// G-code after the print, with the same placeholders.
     #[serde(default)]
-    pub end_gcode: String,
+    pub(crate) end_gcode: String,
     /// Values of template variables only a slicer knows (none).
     #[serde(default)]
-    pub gcode_variables: indexmap::IndexMap<String, RawVariable>,
+    pub(crate) gcode_variables: indexmap::IndexMap<String, RawVariable>,
     /// Where the start and end G-code may move the head.
     #[serde(default)]
-    pub envelope: RawEnvelope,
+    pub(crate) envelope: RawEnvelope,
     /// Head speed of travel moves, mm/s (120).
     #[serde(default = "d_travel")]
-    pub travel_speed: f64,
+    pub(crate) travel_speed: f64,
     /// Retraction before long travel moves (none).
     #[serde(default)]
-    pub retraction: RawRetraction,
+    pub(crate) retraction: RawRetraction,
     /// Retract with the firmware's `G10`/`G11` instead of E moves.
     #[serde(default)]
-    pub firmware_retraction: bool,
+    pub(crate) firmware_retraction: bool,
     /// Hottest nozzle the hot end allows, °C (260).
     #[serde(default = "d_max_nozzle")]
-    pub max_nozzle_temp: f64,
+    pub(crate) max_nozzle_temp: f64,
     /// Hottest bed allowed, °C (110).
     #[serde(default = "d_max_bed")]
-    pub max_bed_temp: f64,
+    pub(crate) max_bed_temp: f64,
     /// Fastest head speed, mm/s (300).
     #[serde(default = "d_max_speed")]
-    pub max_speed: f64,
+    pub(crate) max_speed: f64,
     /// Hot-end volumetric flow limit, mm³/s (12).
     #[serde(default = "d_max_flow")]
-    pub max_flow: f64,
+    pub(crate) max_flow: f64,
     /// Shortest extruding run kept as its own move, mm (0.1).
     #[serde(default = "d_min_string")]
-    pub min_string_length: f64,
+    pub(crate) min_string_length: f64,
     /// Fit `G2`/`G3` arcs to runs of strings (off).
     #[serde(default)]
-    pub arcs: bool,
+    pub(crate) arcs: bool,
     /// Largest distance between an arc and the strings it replaces, mm (0.025).
     #[serde(default = "d_arc_tolerance")]
-    pub arc_tolerance: f64,
+    pub(crate) arc_tolerance: f64,
     /// Thumbnails to embed in the G-code, as `WxH` (PNG) or `WxH/FORMAT`
     /// with FORMAT `PNG`, `QOI` or `JPG` (none).
     #[serde(default)]
-    pub thumbnails: Vec<String>,
+    pub(crate) thumbnails: Vec<String>,
     /// `M73` progress from the planner's time (on for Marlin and Prusa).
     #[serde(default)]
-    pub progress: Option<bool>,
+    pub(crate) progress: Option<bool>,
     /// Klipper's object labels, `EXCLUDE_OBJECT_*` (on for Klipper).
     #[serde(default)]
-    pub object_labels: Option<bool>,
+    pub(crate) object_labels: Option<bool>,
     /// Binary G-code (`.bgcode`) unless the output's name says otherwise (off).
     #[serde(default)]
-    pub binary_gcode: bool,
+    pub(crate) binary_gcode: bool,
     /// The start G-code is the maker's own sequence: its nozzle
     /// temperatures held to the printer's limit, the one the print starts
     /// at to the material's (off).
     #[serde(default)]
-    pub maker_temperatures: bool,
+    pub(crate) maker_temperatures: bool,
     /// Write the firmware's limits (`kinematics`) as `M201`–`M205` before
     /// the start G-code, as PrusaSlicer's `emit_to_gcode` (off).
     #[serde(default)]
-    pub emit_limits: bool,
+    pub(crate) emit_limits: bool,
     /// The firmware's maximum X and Y accelerations, mm/s², written as
     /// `M201 X Y` with `emit_limits` (none).
     #[serde(default)]
-    pub axis_acceleration: Option<[f64; 2]>,
+    pub(crate) axis_acceleration: Option<[f64; 2]>,
     /// Pressure (linear) advance written after the start G-code, s (none:
     /// the firmware keeps its own); `p3dp calibrate apply` writes it.
     #[serde(default)]
-    pub pressure_advance: Option<f64>,
+    pub(crate) pressure_advance: Option<f64>,
     /// The firmware planner's limits.
     #[serde(default)]
-    pub kinematics: RawKinematics,
+    pub(crate) kinematics: RawKinematics,
     /// The print head's geometry.
     #[serde(default)]
-    pub head: RawHead,
+    pub(crate) head: RawHead,
     /// Thresholds of the flow, support and planner checks.
     #[serde(default)]
-    pub checks: RawCheckLimits,
+    pub(crate) checks: CheckLimits,
 }
 
 /// A value under `gcode_variables:`: a boolean, a number, a string or a
@@ -230,12 +230,12 @@ pub(crate) enum RawVariable {
 #[serde(deny_unknown_fields, default, expecting = "struct Envelope")]
 #[allow(missing_docs)]
 pub(crate) struct RawEnvelope {
-    pub margin: f64,
-    pub below_bed: f64,
+    pub(crate) margin: f64,
+    pub(crate) below_bed: f64,
     /// `[lowest, highest]` machine X the head reaches.
-    pub x: Option<[f64; 2]>,
+    pub(crate) x: Option<[f64; 2]>,
     /// `[lowest, highest]` machine Y the head reaches.
-    pub y: Option<[f64; 2]>,
+    pub(crate) y: Option<[f64; 2]>,
 }
 
 impl Default for RawEnvelope {
@@ -295,7 +295,7 @@ impl RawPrinter {
             pressure_advance: None,
             kinematics: RawKinematics::default(),
             head: RawHead::default(),
-            checks: RawCheckLimits::default(),
+            checks: CheckLimits::default(),
         }
     }
 }
@@ -332,43 +332,43 @@ fn d_arc_tolerance() -> f64 {
 #[allow(missing_docs)]
 pub(crate) struct RawKinematics {
     #[serde(default)]
-    pub max_velocity: Option<f64>,
+    pub(crate) max_velocity: Option<f64>,
     #[serde(default = "d_accel")]
-    pub max_acceleration: f64,
+    pub(crate) max_acceleration: f64,
     #[serde(default)]
-    pub travel_acceleration: Option<f64>,
+    pub(crate) travel_acceleration: Option<f64>,
     #[serde(default)]
-    pub retract_acceleration: Option<f64>,
+    pub(crate) retract_acceleration: Option<f64>,
     #[serde(default)]
-    pub junction_deviation: Option<f64>,
+    pub(crate) junction_deviation: Option<f64>,
     #[serde(default)]
-    pub jerk: Option<f64>,
+    pub(crate) jerk: Option<f64>,
     #[serde(default)]
-    pub square_corner_velocity: Option<f64>,
+    pub(crate) square_corner_velocity: Option<f64>,
     #[serde(default)]
-    pub min_segment_time: Option<f64>,
+    pub(crate) min_segment_time: Option<f64>,
     #[serde(default)]
-    pub minimum_cruise_ratio: Option<f64>,
+    pub(crate) minimum_cruise_ratio: Option<f64>,
     #[serde(default)]
-    pub max_z_speed: Option<f64>,
+    pub(crate) max_z_speed: Option<f64>,
     #[serde(default)]
-    pub max_z_acceleration: Option<f64>,
+    pub(crate) max_z_acceleration: Option<f64>,
     #[serde(default)]
-    pub instantaneous_corner_velocity: Option<f64>,
+    pub(crate) instantaneous_corner_velocity: Option<f64>,
     #[serde(default)]
-    pub max_extrude_only_velocity: Option<f64>,
+    pub(crate) max_extrude_only_velocity: Option<f64>,
     #[serde(default)]
-    pub max_extrude_only_accel: Option<f64>,
+    pub(crate) max_extrude_only_accel: Option<f64>,
     #[serde(default)]
-    pub max_extrude_cross_section: Option<f64>,
+    pub(crate) max_extrude_cross_section: Option<f64>,
     #[serde(default)]
-    pub max_extrude_only_distance: Option<f64>,
+    pub(crate) max_extrude_only_distance: Option<f64>,
     #[serde(default)]
-    pub min_segment_time_floor: bool,
+    pub(crate) min_segment_time_floor: bool,
     #[serde(default)]
-    pub block_buffer_size: Option<u32>,
+    pub(crate) block_buffer_size: Option<u32>,
     #[serde(default)]
-    pub command_rate: Option<f64>,
+    pub(crate) command_rate: Option<f64>,
 }
 
 fn d_accel() -> f64 {
@@ -408,13 +408,13 @@ impl Default for RawKinematics {
 #[serde(deny_unknown_fields, default, expecting = "struct Head")]
 #[allow(missing_docs)]
 pub(crate) struct RawHead {
-    pub cone_angle: f64,
-    pub cone_height: f64,
-    pub tip_diameter: f64,
+    pub(crate) cone_angle: f64,
+    pub(crate) cone_height: f64,
+    pub(crate) tip_diameter: f64,
     #[serde(rename = "box")]
-    pub head_box: [f64; 4],
-    pub clearance: f64,
-    pub gantry: Option<RawGantry>,
+    pub(crate) head_box: [f64; 4],
+    pub(crate) clearance: f64,
+    pub(crate) gantry: Option<RawGantry>,
 }
 
 /// `head.gantry:` from `height` above the tip, the whole bed in x, `y`
@@ -423,8 +423,8 @@ pub(crate) struct RawHead {
 #[serde(deny_unknown_fields)]
 #[allow(missing_docs)]
 pub(crate) struct RawGantry {
-    pub height: f64,
-    pub y: [f64; 2],
+    pub(crate) height: f64,
+    pub(crate) y: [f64; 2],
 }
 
 impl Default for RawHead {
@@ -437,46 +437,6 @@ impl Default for RawHead {
             head_box: h.head_box,
             clearance: h.clearance,
             gantry: None,
-        }
-    }
-}
-
-/// `checks:` thresholds of the flow, support and planner checks; each
-/// absent key is [`CheckLimits::default`]'s.
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields, default, expecting = "struct CheckLimits")]
-#[allow(missing_docs)]
-pub(crate) struct RawCheckLimits {
-    pub cross_section_max: f64,
-    pub cross_section_hard_max: f64,
-    pub cross_section_min: f64,
-    pub cross_section_hard_min: f64,
-    pub flow_hard_max: f64,
-    pub max_bridge: f64,
-    pub support_tolerance: f64,
-    pub min_move_time: f64,
-    pub planner_buffer: u32,
-    pub first_layer_min: f64,
-    pub min_contact_per_height: f64,
-    pub min_contact_per_gram: f64,
-}
-
-impl Default for RawCheckLimits {
-    fn default() -> Self {
-        let c = CheckLimits::default();
-        RawCheckLimits {
-            cross_section_max: c.cross_section_max,
-            cross_section_hard_max: c.cross_section_hard_max,
-            cross_section_min: c.cross_section_min,
-            cross_section_hard_min: c.cross_section_hard_min,
-            flow_hard_max: c.flow_hard_max,
-            max_bridge: c.max_bridge,
-            support_tolerance: c.support_tolerance,
-            min_move_time: c.min_move_time,
-            planner_buffer: c.planner_buffer,
-            first_layer_min: c.first_layer_min,
-            min_contact_per_height: c.min_contact_per_height,
-            min_contact_per_gram: c.min_contact_per_gram,
         }
     }
 }

@@ -7,51 +7,51 @@ use super::num::{Num, Num3};
 /// `solid:` as written.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct RawSolid {
+pub(crate) struct RawSolid {
     /// mm (0.2).
     #[serde(default)]
-    pub layer_height: Option<Num>,
+    pub(crate) layer_height: Option<Num>,
     /// Perimeter loops per layer (2).
     #[serde(default)]
-    pub perimeters: Option<Num>,
+    pub(crate) perimeters: Option<Num>,
     /// Extrusion width, mm (0.45).
     #[serde(default)]
-    pub line_width: Option<Num>,
+    pub(crate) line_width: Option<Num>,
     /// Most a chord may stray from an arc, mm (0.01).
     #[serde(default)]
-    pub chord_tolerance: Option<Num>,
+    pub(crate) chord_tolerance: Option<Num>,
     /// Infill lines.
     #[serde(default)]
-    pub infill: Option<RawInfill>,
+    pub(crate) infill: Option<RawInfill>,
     /// The features, combined in order.
-    pub features: Vec<RawFeature>,
+    pub(crate) features: Vec<RawFeature>,
 }
 
 /// `infill:` as written.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct RawInfill {
+pub(crate) struct RawInfill {
     /// Degrees from +x (45).
     #[serde(default)]
-    pub angle: Option<Num>,
+    pub(crate) angle: Option<Num>,
     /// mm between lines of one direction (lines: line_width; grid: 2 × line_width; both solid).
     #[serde(default)]
-    pub spacing: Option<Num>,
+    pub(crate) spacing: Option<Num>,
     /// +angle and −angle on alternate layers (true; lines only).
     #[serde(default)]
-    pub alternate: Option<bool>,
+    pub(crate) alternate: Option<bool>,
     /// lines (default): one direction per layer; grid: both in every layer.
     #[serde(default)]
-    pub pattern: Option<RawPattern>,
+    pub(crate) pattern: Option<RawPattern>,
     /// Join the lines end to end along the boundary where the join stays inside (false).
     #[serde(default)]
-    pub connect: Option<bool>,
+    pub(crate) connect: Option<bool>,
 }
 
 /// `pattern:` of the infill.
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
-pub enum RawPattern {
+pub(crate) enum RawPattern {
     /// One direction per layer.
     Lines,
     /// Both directions (+angle, then −angle) in every layer.
@@ -61,7 +61,7 @@ pub enum RawPattern {
 /// A feature as written: `{box: {…}}` or `{cylinder: {…}}`.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
-pub enum RawFeature {
+pub(crate) enum RawFeature {
     /// An axis-aligned rectangular prism.
     Box(RawBox),
     /// A vertical cylinder.
@@ -71,35 +71,35 @@ pub enum RawFeature {
 /// `box:` keys.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct RawBox {
+pub(crate) struct RawBox {
     /// Centre of the box.
-    pub center: Num3,
+    pub(crate) center: Num3,
     /// Sizes along x, y, z.
-    pub size: Num3,
+    pub(crate) size: Num3,
     /// union (default), subtract or intersect.
     #[serde(default)]
-    pub op: Option<RawOp>,
+    pub(crate) op: Option<RawOp>,
 }
 
 /// `cylinder:` keys.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct RawCylinder {
+pub(crate) struct RawCylinder {
     /// Centre of the bottom face.
-    pub center: Num3,
+    pub(crate) center: Num3,
     /// Radius.
-    pub radius: Num,
+    pub(crate) radius: Num,
     /// Height above the centre.
-    pub height: Num,
+    pub(crate) height: Num,
     /// union (default), subtract or intersect.
     #[serde(default)]
-    pub op: Option<RawOp>,
+    pub(crate) op: Option<RawOp>,
 }
 
 /// `op:` of a feature.
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
-pub enum RawOp {
+pub(crate) enum RawOp {
     /// Adds material.
     Union,
     /// Removes material.

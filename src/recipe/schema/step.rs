@@ -8,7 +8,7 @@ use super::num::{Num, Num3};
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 #[allow(missing_docs)]
-pub enum RawKeep {
+pub(crate) enum RawKeep {
     Flow,
     Speed,
 }
@@ -17,20 +17,20 @@ pub enum RawKeep {
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 #[allow(missing_docs)]
-pub struct RawDeform {
+pub(crate) struct RawDeform {
     #[serde(default)]
-    pub position: Option<Num3>,
+    pub(crate) position: Option<Num3>,
     #[serde(default)]
-    pub cross_section: Option<Num>,
+    pub(crate) cross_section: Option<Num>,
     #[serde(default)]
-    pub speed: Option<Num>,
+    pub(crate) speed: Option<Num>,
 }
 
 /// A step as written.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
 #[allow(missing_docs)]
-pub enum RawStep {
+pub(crate) enum RawStep {
     DeformXyz(RawDeform),
     DeformCylinder(RawDeform),
     ModulateCylinder {
@@ -98,55 +98,55 @@ pub enum RawStep {
 #[derive(Clone, Debug, Default, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 #[allow(missing_docs)]
-pub struct RawSet {
+pub(crate) struct RawSet {
     /// Height of a band, mm: band `k` runs from `from + k·every` up.
     #[serde(default)]
-    pub every: Option<Num>,
+    pub(crate) every: Option<Num>,
     /// Height where band 0 begins, mm (0).
     #[serde(default)]
-    pub from: Option<Num>,
+    pub(crate) from: Option<Num>,
     /// This part is band `band` of a line test (no `every`).
     #[serde(default)]
-    pub band: Option<Num>,
+    pub(crate) band: Option<Num>,
     #[serde(default)]
-    pub nozzle_temperature: Option<Num>,
+    pub(crate) nozzle_temperature: Option<Num>,
     /// Wait for `nozzle_temperature` (false).
     #[serde(default)]
-    pub wait: Option<bool>,
+    pub(crate) wait: Option<bool>,
     #[serde(default)]
-    pub fan: Option<Num>,
+    pub(crate) fan: Option<Num>,
     #[serde(default)]
-    pub pressure_advance: Option<Num>,
+    pub(crate) pressure_advance: Option<Num>,
     #[serde(default)]
-    pub retraction_length: Option<Num>,
+    pub(crate) retraction_length: Option<Num>,
     #[serde(default)]
-    pub retraction_speed: Option<Num>,
+    pub(crate) retraction_speed: Option<Num>,
     #[serde(default)]
-    pub acceleration: Option<Num>,
+    pub(crate) acceleration: Option<Num>,
     #[serde(default)]
-    pub travel_acceleration: Option<Num>,
+    pub(crate) travel_acceleration: Option<Num>,
     #[serde(default)]
-    pub speed_limit: Option<Num>,
+    pub(crate) speed_limit: Option<Num>,
     #[serde(default)]
-    pub square_corner_velocity: Option<Num>,
+    pub(crate) square_corner_velocity: Option<Num>,
     #[serde(default)]
-    pub junction_deviation: Option<Num>,
+    pub(crate) junction_deviation: Option<Num>,
     #[serde(default)]
-    pub jerk: Option<Num>,
+    pub(crate) jerk: Option<Num>,
     #[serde(default)]
-    pub input_shaper_frequency: Option<Num>,
+    pub(crate) input_shaper_frequency: Option<Num>,
     #[serde(default)]
-    pub input_shaper_damping: Option<Num>,
+    pub(crate) input_shaper_damping: Option<Num>,
     /// `zv`, `mzv`, `zvd`, `ei`, `2hump_ei`, `3hump_ei`.
     #[serde(default)]
-    pub input_shaper_type: Option<String>,
+    pub(crate) input_shaper_type: Option<String>,
     #[serde(default)]
-    pub flow: Option<Num>,
+    pub(crate) flow: Option<Num>,
 }
 
 impl RawSet {
     /// The settings given, in the order of the docs: key and value.
-    pub fn values(&self) -> Vec<(&'static str, &Num)> {
+    pub(crate) fn values(&self) -> Vec<(&'static str, &Num)> {
         [
             ("nozzle_temperature", &self.nozzle_temperature),
             ("fan", &self.fan),
@@ -173,7 +173,7 @@ impl RawSet {
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 #[allow(missing_docs)]
-pub enum RawAxis {
+pub(crate) enum RawAxis {
     X,
     Y,
     Z,
@@ -182,7 +182,7 @@ pub enum RawAxis {
 impl RawStep {
     /// The step's key (`deform_xyz`, `translate`): the variant's name as
     /// serde reads it (snake_case), the first segment of its key paths.
-    pub fn key(&self) -> &'static str {
+    pub(crate) fn key(&self) -> &'static str {
         match self {
             RawStep::DeformXyz(_) => "deform_xyz",
             RawStep::DeformCylinder(_) => "deform_cylinder",

@@ -10,64 +10,65 @@ use serde::Deserialize;
 use super::curve::{RawArcCmd, RawBezier, RawLine, RawRectangle};
 use super::num::{Num, Num3, RawPoint};
 use super::part::RawLoop;
+use super::step::RawSet;
 
 /// `turtle:` as written.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct RawTurtle {
+pub(crate) struct RawTurtle {
     /// Start position and frame.
     #[serde(default)]
-    pub start: Option<RawStart>,
+    pub(crate) start: Option<RawStart>,
     /// Seed of `rand()` (0 when absent).
     #[serde(default)]
-    pub seed: Option<Num>,
+    pub(crate) seed: Option<Num>,
     /// Named procedures with parameters, run by `call`.
     #[serde(default)]
-    pub procedures: IndexMap<String, RawProcedure>,
+    pub(crate) procedures: IndexMap<String, RawProcedure>,
     /// The commands, run in order.
-    pub program: Vec<RawCommand>,
+    pub(crate) program: Vec<RawCommand>,
 }
 
 /// `start:` of a turtle.
 #[derive(Clone, Debug, Default, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct RawStart {
+pub(crate) struct RawStart {
     /// Where the turtle starts ([0, 0, 0]).
     #[serde(default)]
-    pub position: Option<Num3>,
+    pub(crate) position: Option<Num3>,
     /// Which way it faces ([1, 0, 0]).
     #[serde(default)]
-    pub heading: Option<Num3>,
+    pub(crate) heading: Option<Num3>,
     /// Its up axis ([0, 0, 1]), made perpendicular to the heading.
     #[serde(default)]
-    pub up: Option<Num3>,
+    pub(crate) up: Option<Num3>,
 }
 
 /// A procedure: parameter names and a body.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct RawProcedure {
+pub(crate) struct RawProcedure {
     /// Parameter names, bound in order to a call's `args`.
     #[serde(default)]
-    pub params: Vec<String>,
+    pub(crate) params: Vec<String>,
     /// The commands.
     #[serde(rename = "do")]
-    pub body: Vec<RawCommand>,
+    pub(crate) body: Vec<RawCommand>,
 }
 
 /// `lsystem:` as written.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct RawLsystem {
+pub(crate) struct RawLsystem {
     /// The starting word.
-    pub axiom: String,
+    pub(crate) axiom: String,
     /// Rewriting rules: one symbol → its replacement, applied to every symbol at once.
     #[serde(default)]
-    pub rules: IndexMap<String, String>,
+    pub(crate) rules: IndexMap<String, String>,
     /// How many times the rules are applied (may use loop counters).
-    pub iterations: Num,
+    pub(crate) iterations: Num,
     /// What each symbol of the final word does.
-    pub commands: IndexMap<String, Vec<RawCommand>>,
+    pub(crate) commands: IndexMap<String, Vec<RawCommand>>,
 }
 
 /// One command as written: a one-key map (`{forward: 10}`) with, for a few
@@ -75,7 +76,7 @@ pub struct RawLsystem {
 /// `wait`), or a bare word (`pen_up`).
 #[derive(Clone, Debug, PartialEq)]
 #[allow(missing_docs)]
-pub enum RawCommand {
+pub(crate) enum RawCommand {
     /// A command without a value: `pen_up`, `pen_down`, `pause`, `push`, `pop`, `draw_turtle`.
     Bare(&'static str),
     /// A command with one number: movement, turns, settings, events.
@@ -105,8 +106,12 @@ pub enum RawCommand {
         volume: Num,
         feed: Option<Num>,
     },
-    /// `gcode: "M600"`: a printer command written as it is, here.
+    /// `gcode: "M600"`: a printer command written here, each `{expr}` in
+    /// it replaced by the expression's value.
     Gcode(String),
+    /// `set: {pressure_advance: …, …}`: the printer's settings here, as a
+    /// `set` step's (without its bands).
+    Set(Box<RawSet>),
     SetHeading {
         heading: Num3,
         up: Option<Num3>,
@@ -165,7 +170,7 @@ pub(super) const SCALAR: &[&str] = &[
 /// Every command, for error messages.
 pub(super) const COMMANDS: &str = "forward, backward, lift, goto, move, draw, yaw, pitch, roll, left, right, \
 set_heading, pen_up, pen_down, extrude_rate, cross_section, speed, extrude, extrude_volume, dwell, pause, \
-nozzle_temp, bed_temp, fan, gcode, push, pop, draw_turtle, repeat, for, let, if, call, lsystem, hair, \
+nozzle_temp, bed_temp, fan, gcode, set, push, pop, draw_turtle, repeat, for, let, if, call, lsystem, hair, \
 arc, bezier, line, rectangle";
 
 impl schemars::JsonSchema for RawCommand {
@@ -212,6 +217,7 @@ struct Keys {
     line: Option<RawLine>,
     rectangle: Option<RawRectangle>,
     text: Option<String>,
+    settings: Option<RawSet>,
     name: Option<String>,
     lsystem: Option<RawLsystem>,
     var: Option<String>,
@@ -295,6 +301,10 @@ impl<'de> Visitor<'de> for CommandVisitor {
                     set(&mut k.cmd, "gcode")?;
                     k.text = Some(m.next_value()?);
                 }
+                "set" => {
+                    set(&mut k.cmd, "set")?;
+                    k.settings = Some(m.next_value()?);
+                }
                 "arc" => {
                     set(&mut k.cmd, "arc")?;
                     k.arc = Some(m.next_value()?);
@@ -376,6 +386,7 @@ impl Keys {
             },
             "let" => RawCommand::Let(self.lets.unwrap()),
             "gcode" => RawCommand::Gcode(self.text.unwrap()),
+            "set" => RawCommand::Set(Box::new(self.settings.unwrap())),
             "arc" => RawCommand::Arc(Box::new(self.arc.unwrap())),
             "bezier" => RawCommand::Bezier(Box::new(self.bezier.unwrap())),
             "line" => RawCommand::Line(Box::new(self.line.unwrap())),

@@ -2,4 +2,5 @@
 
 mod procedural;
 mod recipe_doc;
+mod settings;
 mod switches;

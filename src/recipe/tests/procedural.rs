@@ -5,7 +5,7 @@
 //! comments promise.
 //!
 //! Past the public face: `recipe::{parse_yaml, RawRecipe, Num}`,
-//! `Recipe::resolve`, `Recipe::groups`, `Primitive::Helix` and
+//! `recipe::resolve`, `Recipe::groups`, `Primitive::Helix` and
 //! `Primitive::string_count` off `Recipe::parts`. Home: beside
 //! `recipe::expand` and `recipe::resolve`.
 
@@ -24,12 +24,12 @@ use glam::DVec3;
 /// Resolves recipe `text` as if it were a file in `tests/fixtures/procedural`.
 fn resolve(text: &str) -> Recipe {
     let raw: RawRecipe = parse_yaml(text, "t.yaml").unwrap_or_else(|e| panic!("{e}"));
-    Recipe::resolve(&raw, &[], None, &fixture("")).unwrap_or_else(|e| panic!("{e}"))
+    crate::recipe::resolve(&raw, &[], None, &fixture("")).unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn resolve_err(text: &str) -> String {
     let raw: RawRecipe = parse_yaml(text, "t.yaml").unwrap_or_else(|e| panic!("{e}"));
-    match Recipe::resolve(&raw, &[], None, &fixture("")) {
+    match crate::recipe::resolve(&raw, &[], None, &fixture("")) {
         Ok(_) => panic!("resolved:\n{text}"),
         Err(e) => e.to_string(),
     }
@@ -326,7 +326,7 @@ parts:
 /// its `for` value put it, its rim's wave with that many cycles.
 #[test]
 fn plate_sampler_lays_out_plates_of_3_to_6_cycles() {
-    let recipe = Recipe::load(&recipe("plate-sampler.yaml"), &[], None).unwrap();
+    let recipe = crate::recipe::load(&recipe("plate-sampler.yaml"), &[], None).unwrap();
     let names: Vec<&str> = recipe.parts.iter().map(|p| p.name.as_str()).collect();
     assert_eq!(names, ["plate-3", "plate-4", "plate-5", "plate-6"]);
     let param = |n: &str| recipe.params[n];
@@ -390,7 +390,7 @@ fn lamp_shade_tiers_follow_their_templates_profile() {
     let path = recipe("lamp-shade-tiers.yaml");
     let text = std::fs::read_to_string(&path).unwrap();
     let raw: RawRecipe = parse_yaml(&text, "lamp-shade-tiers.yaml").unwrap();
-    let recipe = Recipe::load(&path, &[], None).unwrap();
+    let recipe = crate::recipe::load(&path, &[], None).unwrap();
     let names: Vec<&str> = recipe.parts.iter().map(|p| p.name.as_str()).collect();
     assert_eq!(names, ["base", "tier-1", "tier-2", "tier-3"]);
     let (ripple, twist, lift) = (

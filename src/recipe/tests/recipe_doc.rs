@@ -208,7 +208,7 @@ fn every_variable_and_function_is_in_the_reference() {
 /// A recipe resolved from `text` (relative paths from the crate root).
 fn resolved(text: &str) -> crate::generate::model::Recipe {
     let raw: RawRecipe = parse_yaml(text, "doc.yaml").unwrap();
-    crate::generate::model::Recipe::resolve(&raw, &[], None, std::path::Path::new(".")).unwrap()
+    crate::recipe::resolve(&raw, &[], None, std::path::Path::new(".")).unwrap()
 }
 
 /// The defaults and units `docs/recipe.md` states are the loader's: each

@@ -4,7 +4,7 @@
 //! places its errors name.
 //!
 //! Past the public face: `recipe::{parse_yaml, RawRecipe}`,
-//! `Recipe::load`, `Recipe::resolve`, `Recipe::parts`. Home: beside
+//! `recipe::load`, `recipe::resolve`, `Recipe::parts`. Home: beside
 //! `recipe::expand`.
 
 use std::path::Path;
@@ -20,7 +20,7 @@ fn names(text: &str, sets: &[(&str, &str)]) -> Result<Vec<String>, String> {
         .iter()
         .map(|(n, v)| (n.to_string(), v.to_string()))
         .collect();
-    Recipe::resolve(&raw, &sets, None, Path::new("."))
+    crate::recipe::resolve(&raw, &sets, None, Path::new("."))
         .map(|r| r.parts.iter().map(|p| p.name.clone()).collect())
         .map_err(|e| e.to_string())
 }
@@ -109,7 +109,7 @@ fn load(tag: &str, files: &[(&str, &str)], main: &str) -> Result<Recipe, String>
     for (name, text) in files {
         std::fs::write(dir.join(name), text).unwrap();
     }
-    Recipe::load(&dir.join(main), &[], None).map_err(|e| e.to_string())
+    crate::recipe::load(&dir.join(main), &[], None).map_err(|e| e.to_string())
 }
 
 const CUP: &str = "p3dp: 1\nname: cup\nparams: {rad: 5, kind: {choices: [low, high], default: low}}\ndefaults: {cross_section: 0.1}\nparts:\n  - {name: ring, primitive: {helix: {radius: rad, height: \"if(kind == 'high', 4, 1)\", pitch: 0.5, center: [0, 0, 0.2]}}}\n";

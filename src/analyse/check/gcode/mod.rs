@@ -251,7 +251,7 @@ pub(crate) fn command(
     })
 }
 
-/// Checks a `set` step's setting for printer `p` and material `m`: a
+/// Checks a `set` step's or command's setting for printer `p` and material `m`: a
 /// command the printer's firmware has (`write::refusal`), its values within
 /// the limits a recipe's own command is held to ([`Policy::Raw`]).
 pub(crate) fn setting(s: &Setting, p: &Printer, m: &Material) -> std::result::Result<(), String> {
@@ -563,8 +563,7 @@ impl Checker {
             Command::FirmwareRetract { .. }
             | Command::Progress { .. }
             | Command::Object(_)
-            | Command::Pause
-            | Command::Comment(_) => Ok(()),
+            | Command::Pause => Ok(()),
             Command::Other(_) => Ok(()),
         }
     }

@@ -40,6 +40,7 @@ pub(crate) enum Kind {
 
 use Kind::{Firmware, FrameOnly, Heats, Inert, MovesAndHeats, Refused, Trim};
 
+const MOTORS_OFF: &str = "turns the motors off, and the printer loses the head's position: an end G-code's command, not one in the middle of a print";
 const SHIFTS: &str =
     "shifts the coordinates or the machine's geometry, so p3dp could not check the moves after it";
 const SETTINGS: &str = "rewrites or reloads the firmware's stored settings, which p3dp cannot see";
@@ -53,7 +54,7 @@ const PINS: &str = "drives the controller's pins or a tool (a heater could be on
 /// M codes of Marlin and its descendants (Prusa's, Bambu's).
 const MARLIN_M: &[(u32, Kind)] = &[
     (17, Inert),
-    (18, Inert),
+    (18, FrameOnly(MOTORS_OFF)),
     (20, Inert),
     (21, Inert),
     (22, Inert),
@@ -78,7 +79,7 @@ const MARLIN_M: &[(u32, Kind)] = &[
     (78, Inert),
     (80, Inert),
     (81, Inert),
-    (84, Inert),
+    (84, FrameOnly(MOTORS_OFF)),
     (85, Inert),
     (86, Inert),
     (92, Refused(EXTRUSION)),
@@ -464,8 +465,6 @@ const KLIPPER_INERT: &[&str] = &[
     "M117",
     "M118",
     "M400",
-    "M84",
-    "M18",
     "RESPOND",
     "SET_DISPLAY_TEXT",
     "SET_FAN_SPEED",
@@ -526,6 +525,7 @@ pub(crate) fn kind(flavor: Flavor, code: &Code) -> Option<Kind> {
                 return Some(Inert);
             }
             match (*letter, *number) {
+                (b'M', 18 | 84) => Some(FrameOnly(MOTORS_OFF)),
                 (b'G', 29 | 80) => Some(Firmware),
                 // a printer's macro of that name (Klipper runs no M141):
                 // the chamber heater its `S` names

@@ -18,7 +18,7 @@ use piece::Piece;
 /// One piece of a loop.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
-pub enum CurvePiece {
+pub(crate) enum CurvePiece {
     /// A segment.
     Line {
         /// Start point.
@@ -45,46 +45,46 @@ pub enum CurvePiece {
 
 /// One loop of a section.
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct CurveLoop {
+pub(crate) struct CurveLoop {
     /// `ccw` (an outer loop) or `cw` (a hole).
-    pub orientation: &'static str,
+    pub(crate) orientation: &'static str,
     /// Signed area, mm² (negative for a hole).
-    pub area_mm2: f64,
+    pub(crate) area_mm2: f64,
     /// The pieces in order, each starting where the one before ends.
-    pub pieces: Vec<CurvePiece>,
+    pub(crate) pieces: Vec<CurvePiece>,
 }
 
 /// One distinct section of the z-buffer.
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct CurveSection {
+pub(crate) struct CurveSection {
     /// Area, mm².
-    pub area_mm2: f64,
+    pub(crate) area_mm2: f64,
     /// Its loops.
-    pub loops: Vec<CurveLoop>,
+    pub(crate) loops: Vec<CurveLoop>,
 }
 
 /// One layer: where it is printed and which section it prints.
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct CurveLayer {
+pub(crate) struct CurveLayer {
     /// 1 for the first layer on the bed.
-    pub index: u64,
+    pub(crate) index: u64,
     /// Height the layer is printed at, mm (its section is taken half a layer lower).
-    pub z: f64,
+    pub(crate) z: f64,
     /// Index into `sections` (`null`: nothing at this height).
-    pub section: Option<usize>,
+    pub(crate) section: Option<usize>,
 }
 
 /// A solid part's z-buffer as curves.
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct SolidCurves {
+pub(crate) struct SolidCurves {
     /// Part name.
-    pub part: String,
+    pub(crate) part: String,
     /// mm.
-    pub layer_height: f64,
+    pub(crate) layer_height: f64,
     /// The distinct sections, bottom up.
-    pub sections: Vec<CurveSection>,
+    pub(crate) sections: Vec<CurveSection>,
     /// Every layer bottom up.
-    pub layers: Vec<CurveLayer>,
+    pub(crate) layers: Vec<CurveLayer>,
 }
 
 fn xy(p: DVec2) -> [f64; 2] {
@@ -120,7 +120,7 @@ pub(crate) fn curve_loop(l: &Loop) -> CurveLoop {
 
 impl Solid {
     /// The z-buffer as curves, under the part name `part`.
-    pub fn curves(&self, part: &str) -> SolidCurves {
+    pub(crate) fn curves(&self, part: &str) -> SolidCurves {
         SolidCurves {
             part: part.to_string(),
             layer_height: self.layer_height,

@@ -4,7 +4,7 @@ use super::*;
 
 /// The solid of one feature.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Body {
+pub(crate) enum Body {
     /// An axis-aligned prism: centre and sizes.
     Box {
         /// Centre.
@@ -25,16 +25,16 @@ pub enum Body {
 
 /// A feature: a body and how it combines with those before it.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Feature {
+pub(crate) struct Feature {
     /// The body.
-    pub body: Body,
+    pub(crate) body: Body,
     /// The boolean operation.
-    pub op: Op,
+    pub(crate) op: Op,
 }
 
 impl Feature {
     /// Lowest and highest z.
-    pub fn z_range(&self) -> (f64, f64) {
+    pub(crate) fn z_range(&self) -> (f64, f64) {
         match self.body {
             Body::Box { center, size } => (center.z - size.z / 2.0, center.z + size.z / 2.0),
             Body::Cylinder { center, height, .. } => (center.z, center.z + height),
@@ -42,7 +42,7 @@ impl Feature {
     }
 
     /// The cross-section in the plane z (`None` outside z0 ≤ z < z1).
-    pub fn section(&self, z: f64) -> Option<Shape> {
+    pub(crate) fn section(&self, z: f64) -> Option<Shape> {
         let (z0, z1) = self.z_range();
         if !(z0 <= z && z < z1) {
             return None;
@@ -79,23 +79,23 @@ impl Feature {
 
 /// Infill settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Infill {
+pub(crate) struct Infill {
     /// Degrees from +x.
-    pub angle: f64,
+    pub(crate) angle: f64,
     /// mm between lines.
-    pub spacing: f64,
+    pub(crate) spacing: f64,
     /// +angle on odd layers, −angle on even ones (lines only).
-    pub alternate: bool,
+    pub(crate) alternate: bool,
     /// Lines of one direction per layer, or the grid of both.
-    pub pattern: Pattern,
+    pub(crate) pattern: Pattern,
     /// Lines joined end to end along the boundary (zig-zag) where the join
     /// stays inside, instead of a travel per line.
-    pub connect: bool,
+    pub(crate) connect: bool,
 }
 
 /// An infill pattern.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Pattern {
+pub(crate) enum Pattern {
     /// One direction per layer (alternating with `alternate`).
     Lines,
     /// Both directions, +angle then −angle, in every layer (the paper's ±45° grid).
@@ -104,15 +104,15 @@ pub enum Pattern {
 
 /// What one island of a section becomes.
 #[derive(Clone, Debug, PartialEq)]
-pub struct IslandPlan {
+pub(crate) struct IslandPlan {
     /// The island: one outer loop and its holes.
-    pub region: Region,
+    pub(crate) region: Region,
     /// The perimeters' centre lines, outermost first (exact loops).
-    pub perimeters: Vec<Region>,
+    pub(crate) perimeters: Vec<Region>,
     /// The area the infill fills.
-    pub infill_region: Region,
+    pub(crate) infill_region: Region,
     /// Infill spans at +angle and at −angle.
-    pub infill: [Vec<(DVec2, DVec2)>; 2],
+    pub(crate) infill: [Vec<(DVec2, DVec2)>; 2],
 }
 
 /// The strings of one layer in the plane: polylines, each reached by travel.
@@ -127,58 +127,58 @@ pub(super) struct Program {
 
 /// One entry of the z-buffer: a cross-section shared by consecutive layers.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Slab {
+pub(crate) struct Slab {
     /// The exact cross-section.
-    pub region: Region,
+    pub(crate) region: Region,
     /// Its islands, perimeters and infill.
-    pub islands: Vec<IslandPlan>,
+    pub(crate) islands: Vec<IslandPlan>,
     pub(super) programs: [Program; 2],
 }
 
 /// One layer of a solid, for reports and tests.
 #[derive(Clone, Copy, Debug)]
-pub struct Layer<'a> {
+pub(crate) struct Layer<'a> {
     /// 1 for the first layer on the bed.
-    pub index: u64,
+    pub(crate) index: u64,
     /// Height the layer is printed at, mm.
-    pub z: f64,
+    pub(crate) z: f64,
     /// Its cross-section and what it becomes (`None`: nothing at this height).
-    pub slab: Option<&'a Slab>,
+    pub(crate) slab: Option<&'a Slab>,
     /// Which infill direction: 0 for +angle, 1 for −angle.
-    pub parity: usize,
+    pub(crate) parity: usize,
 }
 
 /// What a solid's slabs are made with, beside its features: a slab is a
 /// function of these and of the features holding its plane.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Settings {
+pub(crate) struct Settings {
     /// mm.
-    pub layer_height: f64,
+    pub(crate) layer_height: f64,
     /// Perimeter loops per layer.
-    pub perimeters: u32,
+    pub(crate) perimeters: u32,
     /// Extrusion width, mm.
-    pub line_width: f64,
+    pub(crate) line_width: f64,
     /// Most a chord may stray from an arc, mm.
-    pub chord_tolerance: f64,
+    pub(crate) chord_tolerance: f64,
     /// Infill settings.
-    pub infill: Infill,
+    pub(crate) infill: Infill,
 }
 
 /// A `solid` primitive resolved, with its z-buffer computed.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Solid {
+pub(crate) struct Solid {
     /// mm.
-    pub layer_height: f64,
+    pub(crate) layer_height: f64,
     /// Perimeter loops per layer.
-    pub perimeters: u32,
+    pub(crate) perimeters: u32,
     /// Extrusion width, mm.
-    pub line_width: f64,
+    pub(crate) line_width: f64,
     /// Most a chord may stray from an arc, mm.
-    pub chord_tolerance: f64,
+    pub(crate) chord_tolerance: f64,
     /// Infill settings.
-    pub infill: Infill,
+    pub(crate) infill: Infill,
     /// Features in order.
-    pub features: Vec<Feature>,
+    pub(crate) features: Vec<Feature>,
     pub(super) slabs: Vec<Arc<Slab>>,
     /// Slab of layer j + 1.
     pub(super) layer_slab: Vec<Option<usize>>,

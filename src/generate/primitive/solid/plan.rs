@@ -6,7 +6,7 @@ impl Solid {
     /// A solid with its z-buffer computed (from `reuse`'s when a cache is
     /// lent: see [`Reusing`]); the error names the key at fault (relative to
     /// the primitive, as the recipe's resolution does).
-    pub fn new(
+    pub(crate) fn new(
         layer_height: f64,
         perimeters: u32,
         line_width: f64,
@@ -27,7 +27,7 @@ impl Solid {
 
     /// The solid printed from a z-buffer (its slabs shared, not recomputed);
     /// refused when it leaves nothing to print.
-    pub fn from_zbuffer(zb: &ZBuffer) -> Result<Solid> {
+    pub(crate) fn from_zbuffer(zb: &ZBuffer) -> Result<Solid> {
         let st = zb.settings();
         let mut s = Solid {
             layer_height: st.layer_height,
@@ -325,7 +325,7 @@ impl Solid {
     }
 
     /// The layers bottom up, each with its slab of the z-buffer.
-    pub fn layers(&self) -> impl Iterator<Item = Layer<'_>> + '_ {
+    pub(crate) fn layers(&self) -> impl Iterator<Item = Layer<'_>> + '_ {
         self.layer_slab.iter().enumerate().map(|(k, s)| {
             let index = k as u64 + 1;
             Layer {
@@ -345,19 +345,20 @@ impl Solid {
     }
 
     /// The z-buffer: the distinct cross-sections.
-    pub fn slabs(&self) -> &[Arc<Slab>] {
+    #[cfg(test)]
+    pub(crate) fn slabs(&self) -> &[Arc<Slab>] {
         &self.slabs
     }
 
     /// Exactly how many strings [`Solid::build`] makes.
-    pub fn string_count(&self) -> u64 {
+    pub(crate) fn string_count(&self) -> u64 {
         self.count
     }
 
     /// The width of layer each infill line stands for: its spacing with
     /// lines (a region of area A gets A / spacing of line); half of it with
     /// the grid (A / spacing per direction, 2·A / spacing in all).
-    pub fn infill_share(&self) -> f64 {
+    pub(crate) fn infill_share(&self) -> f64 {
         match self.infill.pattern {
             Pattern::Lines => self.infill.spacing,
             Pattern::Grid => 0.5 * self.infill.spacing,
@@ -370,7 +371,7 @@ impl Solid {
     /// fills its area × height (lines closer than their width are squeezed
     /// to their share, not piled on each other). The part's cross-section `_c` is not used: the recipe's
     /// resolution refuses one that differs from layer_height × line_width.
-    pub fn build(&self, _c: f64, v: f64) -> Toolpath {
+    pub(crate) fn build(&self, _c: f64, v: f64) -> Toolpath {
         let c = self.layer_height * self.line_width;
         let c_infill = self.layer_height * self.line_width.min(self.infill_share());
         let mut t: Option<Toolpath> = None;

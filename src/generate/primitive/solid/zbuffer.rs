@@ -21,7 +21,7 @@ use super::*;
 
 /// The z-buffer of a solid: its features (each with an id) and one slab per layer.
 #[derive(Clone, Debug)]
-pub struct ZBuffer {
+pub(crate) struct ZBuffer {
     settings: Settings,
     features: Vec<Feature>,
     ids: Vec<u64>,
@@ -32,26 +32,26 @@ pub struct ZBuffer {
 
 /// What one update did.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub struct Update {
+pub(crate) struct Update {
     /// The layers (1 for the first) whose slab was recomputed, ascending.
-    pub layers: Vec<u64>,
+    pub(crate) layers: Vec<u64>,
     /// Booleans computed for them (recomputed layers held by the same
     /// features share one).
-    pub sections: u64,
+    pub(crate) sections: u64,
     /// Ids of the features added, in order.
-    pub added: Vec<u64>,
+    pub(crate) added: Vec<u64>,
 }
 
 impl Update {
     /// How many layers were recomputed.
-    pub fn recomputed(&self) -> u64 {
+    pub(crate) fn recomputed(&self) -> u64 {
         self.layers.len() as u64
     }
 }
 
 impl ZBuffer {
     /// An empty buffer (no features, no layers).
-    pub fn new(settings: Settings) -> ZBuffer {
+    pub(crate) fn new(settings: Settings) -> ZBuffer {
         ZBuffer {
             settings,
             features: Vec::new(),
@@ -62,45 +62,42 @@ impl ZBuffer {
     }
 
     /// A buffer built from `features` at once.
-    pub fn build(settings: Settings, features: Vec<Feature>) -> Result<ZBuffer> {
+    pub(crate) fn build(settings: Settings, features: Vec<Feature>) -> Result<ZBuffer> {
         let mut zb = ZBuffer::new(settings);
         zb.splice(0, 0, features)?;
         Ok(zb)
     }
 
     /// The settings its slabs are made with.
-    pub fn settings(&self) -> &Settings {
+    pub(crate) fn settings(&self) -> &Settings {
         &self.settings
     }
 
     /// The features in order.
-    pub fn features(&self) -> &[Feature] {
+    pub(crate) fn features(&self) -> &[Feature] {
         &self.features
     }
 
-    /// The features' ids, in the order of [`ZBuffer::features`].
-    pub fn ids(&self) -> &[u64] {
-        &self.ids
-    }
-
     /// Number of layers (up to the highest union's top).
-    pub fn layer_count(&self) -> u64 {
+    pub(crate) fn layer_count(&self) -> u64 {
         self.layers.len() as u64
     }
 
     /// Each layer's slab, bottom up (`None`: nothing at that height).
-    pub fn layer_slabs(&self) -> impl Iterator<Item = Option<&Arc<Slab>>> + '_ {
+    pub(crate) fn layer_slabs(&self) -> impl Iterator<Item = Option<&Arc<Slab>>> + '_ {
         self.layers.iter().map(Option::as_ref)
     }
 
     /// Adds a feature after the others; only the layers it reaches are recomputed.
-    pub fn add_feature(&mut self, f: Feature) -> Result<Update> {
+    #[cfg(test)]
+    pub(crate) fn add_feature(&mut self, f: Feature) -> Result<Update> {
         let n = self.features.len();
         self.splice(n, 0, vec![f])
     }
 
     /// Removes the feature with id `id`; only the layers it reached are recomputed.
-    pub fn remove_feature(&mut self, id: u64) -> Result<Update> {
+    #[cfg(test)]
+    pub(crate) fn remove_feature(&mut self, id: u64) -> Result<Update> {
         let Some(k) = self.ids.iter().position(|&i| i == id) else {
             return Err(Error::input(
                 "solid.features",
@@ -113,7 +110,12 @@ impl ZBuffer {
     /// Replaces the features `at .. at + remove` by `insert` and recomputes
     /// the layers any of them reaches (see the module comment). On an error
     /// (too many layers or lines) the buffer is left as it was.
-    pub fn splice(&mut self, at: usize, remove: usize, insert: Vec<Feature>) -> Result<Update> {
+    pub(crate) fn splice(
+        &mut self,
+        at: usize,
+        remove: usize,
+        insert: Vec<Feature>,
+    ) -> Result<Update> {
         let end = at.saturating_add(remove);
         if end > self.features.len() {
             return Err(Error::input(
@@ -293,21 +295,21 @@ fn check(st: &Settings, features: &[Feature]) -> Result<u64> {
 
 /// What a build did with one solid's z-buffer when a cache was lent to it ([`Reusing`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Reuse {
+pub(crate) struct Reuse {
     /// Layers of the solid.
-    pub layers: u64,
+    pub(crate) layers: u64,
     /// Layers whose slab was recomputed (all of them when nothing was kept).
-    pub recomputed: u64,
+    pub(crate) recomputed: u64,
 }
 
 /// The z-buffers a long-running command keeps between builds (`p3dp
 /// watch`), in the order a build resolves its solids; lent to each build as
 /// [`Reusing`].
 #[derive(Clone, Debug, Default)]
-pub struct Cache {
+pub(crate) struct Cache {
     buffers: Vec<ZBuffer>,
     /// What the last build it was lent to did with each solid, in order.
-    pub last: Vec<Reuse>,
+    pub(crate) last: Vec<Reuse>,
 }
 
 /// A [`Cache`] lent to one build: the k-th solid it resolves starts from
@@ -315,7 +317,7 @@ pub struct Cache {
 /// features that differ (those between the longest common head and tail of
 /// the two feature lists) are removed and added (see [`ZBuffer::splice`]).
 #[derive(Debug, Default)]
-pub struct Reusing(std::sync::Mutex<Lent>);
+pub(crate) struct Reusing(std::sync::Mutex<Lent>);
 
 /// The buffers of the cache, those of the build so far, and what it did.
 #[derive(Debug, Default)]
@@ -327,7 +329,7 @@ struct Lent {
 
 impl Reusing {
     /// Lends `cache` to a build.
-    pub fn new(cache: Cache) -> Reusing {
+    pub(crate) fn new(cache: Cache) -> Reusing {
         Reusing(std::sync::Mutex::new(Lent {
             old: cache.buffers,
             ..Lent::default()
@@ -335,7 +337,7 @@ impl Reusing {
     }
 
     /// The cache to keep once the build has ended.
-    pub fn finish(self) -> Cache {
+    pub(crate) fn finish(self) -> Cache {
         let Lent {
             mut old,
             mut new,

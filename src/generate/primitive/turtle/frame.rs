@@ -44,13 +44,13 @@ impl std::error::Error for FrameError {}
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Frame {
     /// Position, recipe coordinates, mm.
-    pub pos: DVec3,
+    pub(crate) pos: DVec3,
     /// Unit heading: where `forward` goes.
-    pub heading: DVec3,
+    pub(crate) heading: DVec3,
     /// Unit left axis: up × heading.
-    pub left: DVec3,
+    pub(crate) left: DVec3,
     /// Unit up axis: where `lift` goes.
-    pub up: DVec3,
+    pub(crate) up: DVec3,
 }
 
 /// sin and cos of `deg` degrees, exact at multiples of 90°.

@@ -9,9 +9,11 @@ use glam::DVec3;
 
 use super::frame::Frame;
 use super::lsystem::{Lsystem, MAX_ITERATIONS};
-use super::program::{Axis, Cmd, Curve, Op, Proc, Setting, Val, Values};
+use super::program::{Axis, Cmd, Curve, Op, Piece, Proc, Setting, Val, Values};
 use crate::base::error::{Error, Result};
 use crate::base::expr::{var, Memo};
+use crate::base::format::fmt_value;
+use crate::base::gcode::named::Named;
 use crate::base::rng::SplitMix64;
 use crate::base::toolpath::{Event, Toolpath};
 
@@ -31,33 +33,40 @@ pub(crate) const DEFAULT_HAIR_RATE: f64 = 0.01;
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Limits {
     /// Most strings plus events (the recipe's `max_strings`).
-    pub max_strings: u64,
+    pub(crate) max_strings: u64,
     /// Most steps (commands run and L-system symbols visited).
-    pub max_steps: u64,
+    pub(crate) max_steps: u64,
 }
+
+/// The check of a recipe's own printer command for its printer and
+/// material (a `gcode` line with `{expr}`s, made as the program runs):
+/// `Err` says why it is refused.
+pub(crate) type Check<'a> = &'a dyn Fn(&str) -> std::result::Result<(), String>;
 
 /// A compiled program ready to run.
 #[derive(Clone, Debug)]
 pub(crate) struct Program {
     /// The start frame.
-    pub start: Frame,
+    pub(crate) start: Frame,
     /// Seed of `rand()`.
-    pub seed: u64,
+    pub(crate) seed: u64,
     /// The commands.
-    pub main: Vec<Cmd>,
+    pub(crate) main: Vec<Cmd>,
     /// The procedures, by number.
-    pub procs: Vec<Proc>,
+    pub(crate) procs: Vec<Proc>,
     /// A `path`'s commands rather than a turtle's: the path starts where
     /// its first movement goes when that travels (a `move`, a movement
     /// with the pen up) or is a curve's first point, instead of drawing or
     /// travelling there from `start`; a `pen_up` before anything is drawn
     /// retracts nothing.
-    pub path: bool,
+    pub(crate) path: bool,
 }
 
 /// The state of one run.
 struct Run<'a> {
     prog: &'a Program,
+    /// The check of the `gcode` lines made as it runs.
+    check: Check<'a>,
     limits: Limits,
     frame: Frame,
     pen_down: bool,
@@ -133,34 +142,40 @@ impl ForValues {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct Counts {
     /// Strings made.
-    pub strings: u64,
+    pub(crate) strings: u64,
     /// Events made.
-    pub events: u64,
+    pub(crate) events: u64,
 }
 
 impl Program {
     /// Runs the program: strings start with cross-section `c` and speed `v`;
-    /// `area` (mm²) turns `extrude_rate` into a cross-section.
-    pub(crate) fn run(&self, c: f64, v: f64, area: f64, limits: Limits) -> Result<Toolpath> {
-        let (counts, _) = self.execute(c, v, area, limits, None)?;
+    /// `area` (mm²) turns `extrude_rate` into a cross-section; `check`
+    /// holds the `gcode` lines it makes to the printer.
+    pub(crate) fn run(
+        &self,
+        (c, v, area): (f64, f64, f64),
+        limits: Limits,
+        check: Check,
+    ) -> Result<Toolpath> {
+        let (counts, _) = self.execute((c, v, area), limits, check, None)?;
         let mut tp = Toolpath::with_capacity(self.start.pos, counts.strings as usize);
         tp.events.reserve(counts.events as usize);
-        let (_, tp) = self.execute(c, v, area, limits, Some(tp))?;
+        let (_, tp) = self.execute((c, v, area), limits, check, Some(tp))?;
         Ok(tp.expect("a building run returns its toolpath"))
     }
 
     fn execute(
         &self,
-        c: f64,
-        v: f64,
-        area: f64,
+        (c, v, area): (f64, f64, f64),
         limits: Limits,
+        check: Check,
         out: Option<Toolpath>,
     ) -> Result<(Counts, Option<Toolpath>)> {
         least(&self.main, &Bound::steps(limits.max_steps))?;
         least(&self.main, &Bound::strings(limits.max_strings))?;
         let mut run = Run {
             prog: self,
+            check,
             limits,
             frame: self.start,
             pen_down: true,
@@ -664,7 +679,9 @@ impl<'a> Run<'a> {
             | Op::Let(_)
             | Op::Curve(_)
             | Op::ExtrudeVolume(..)
-            | Op::Gcode(_) => self.program(&cmd.op, vals, place, tasks),
+            | Op::Gcode(_)
+            | Op::GcodeWith(_)
+            | Op::Printer(_) => self.program(&cmd.op, vals, place, tasks),
             Op::Repeat {
                 count,
                 counter,
@@ -1024,8 +1041,56 @@ impl<'a> Run<'a> {
                 self.event(Event::Extrude { filament, speed }, place)
             }
             Op::Gcode(text) => self.event(Event::Gcode(text.clone()), place),
+            Op::GcodeWith(pieces) => self.gcode(pieces, vals, place),
+            Op::Printer(named) => self.printer(named, vals, place),
             _ => Ok(()),
         }
+    }
+
+    /// `gcode` with `{expr}`s: each value evaluated here and written into
+    /// the line, which is then checked as a literal line is when compiled.
+    fn gcode(&mut self, pieces: &[Piece], vals: &mut Vec<f64>, place: &str) -> Result<()> {
+        let mut line = String::new();
+        for p in pieces {
+            match p {
+                Piece::Text(t) => line.push_str(t),
+                Piece::Value(v) => {
+                    let x = self.eval(v, vals, place)?;
+                    line.push_str(&fmt_value(x));
+                }
+            }
+        }
+        // the building run writes it: checked then (the counting run
+        // evaluated the same values)
+        if self.out.is_some() {
+            (self.check)(&line).map_err(|m| {
+                Error::input(place, format!("the line `{}` made here: {m}", line.trim()))
+            })?;
+        }
+        self.event(Event::Gcode(line.trim().into()), place)
+    }
+
+    /// `set`: the printer's settings with their values here, one event
+    /// each (as the firmware sets them: print and travel acceleration in
+    /// one …), each naming its key path for the `setting` check.
+    fn printer(&mut self, named: &Named<Val>, vals: &mut Vec<f64>, place: &str) -> Result<()> {
+        let settings = named.lower(|key, v| {
+            // the key's place made only when its value fails
+            self.eval(v, vals, place).map_err(|mut e| {
+                e.place = Some(format!("{place}.{}", key.name()));
+                e
+            })
+        })?;
+        for (setting, key) in settings {
+            let at = self.out.is_some().then(|| format!("{place}.{key}").into());
+            let e = Event::Set {
+                setting,
+                band: None,
+                place: at,
+            };
+            self.event(e, place)?;
+        }
+        Ok(())
     }
 
     /// The filament's cross-section, mm² (`extrude_rate` and volumes use it).

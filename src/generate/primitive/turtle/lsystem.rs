@@ -22,15 +22,15 @@ pub(crate) const MAX_ITERATIONS: u32 = 40;
 pub(crate) struct Lsystem {
     #[cfg_attr(not(test), allow(dead_code))]
     /// The symbols, by number.
-    pub symbols: Vec<char>,
+    pub(crate) symbols: Vec<char>,
     /// The axiom, as symbol numbers.
-    pub axiom: Vec<u16>,
+    pub(crate) axiom: Vec<u16>,
     /// Each symbol's replacement, if it has a rule.
-    pub rules: Vec<Option<Vec<u16>>>,
+    pub(crate) rules: Vec<Option<Vec<u16>>>,
     /// Each symbol's commands (empty: it draws nothing).
-    pub commands: Vec<Vec<Cmd>>,
+    pub(crate) commands: Vec<Vec<Cmd>>,
     /// How many times the rules apply, evaluated when the command runs.
-    pub iterations: Val,
+    pub(crate) iterations: Val,
 }
 
 impl Lsystem {

@@ -30,44 +30,60 @@ use crate::base::toolpath::Toolpath;
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Env {
     /// The part's cross-section, mm² (until the program sets one).
-    pub cross_section: f64,
+    pub(crate) cross_section: f64,
     /// The part's speed, mm/s (until the program sets one).
-    pub speed: f64,
+    pub(crate) speed: f64,
     /// Filament cross-section area, mm² (turns `extrude_rate` into mm²).
-    pub filament_area: f64,
+    pub(crate) filament_area: f64,
     /// The recipe's `max_strings`: most strings plus events.
-    pub max_strings: u64,
+    pub(crate) max_strings: u64,
 }
 
 /// A turtle's program, already run: its strings and events.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Turtle {
+pub(crate) struct Turtle {
     /// The strings and events the program made.
-    pub path: Toolpath,
+    pub(crate) path: Toolpath,
 }
 
 impl Turtle {
     /// How many strings it made.
-    pub fn string_count(&self) -> u64 {
+    pub(crate) fn string_count(&self) -> u64 {
         self.path.len() as u64
     }
 
     /// Its strings (the part's c and v were applied when it ran).
-    pub fn build(&self) -> Toolpath {
+    pub(crate) fn build(&self) -> Toolpath {
         self.path.clone()
+    }
+
+    /// Puts the key paths its settings name under `prefix`, as
+    /// [`Error::under`] does with an error's place (the program's places
+    /// are relative to `turtle` or to a path's commands).
+    pub(crate) fn place_under(&mut self, prefix: &str) {
+        for (_, e) in &mut self.path.events {
+            if let crate::base::toolpath::Event::Set {
+                place: Some(place), ..
+            } = e
+            {
+                *place = crate::base::error::place_under(prefix, place).into();
+            }
+        }
     }
 }
 
 /// Runs a compiled program from `env` (the part's cross-section and speed,
-/// the recipe's limits); errors name key paths relative to `turtle`.
-pub(crate) fn run(prog: &interp::Program, env: &Env) -> Result<Turtle> {
+/// the recipe's limits), `check` holding the `gcode` lines it makes to the
+/// printer; errors name key paths relative to `turtle`.
+pub(crate) fn run(prog: &interp::Program, env: &Env, check: interp::Check) -> Result<Turtle> {
     let limits = interp::Limits {
         max_strings: env.max_strings,
         max_steps: env.max_strings.saturating_mul(8).saturating_add(1_000_000),
     };
     // the interpreter keeps its own stack of tasks (blocks, calls, L-system
     // derivations) on the heap, so it runs here, on the caller's thread
-    let path = prog.run(env.cross_section, env.speed, env.filament_area, limits)?;
+    let cvs = (env.cross_section, env.speed, env.filament_area);
+    let path = prog.run(cvs, limits, check)?;
     // a program that makes no move at all (every move behind an `if` that
     // is 0) makes no part: the part is left out, as one switched off
     if !path.strings.is_empty() && path.strings.iter().all(|s| s.travel) {

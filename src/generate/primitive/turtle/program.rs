@@ -7,17 +7,18 @@
 use std::sync::Arc;
 
 use crate::base::expr::Expr;
+use crate::base::gcode::named::Named;
 
 /// A compiled value: an expression and the names its extra slots hold.
 #[derive(Clone, Debug)]
 pub(crate) struct Val {
     /// The expression.
-    pub expr: Expr,
+    pub(crate) expr: Expr,
     /// Names of the loop counters and procedure parameters in scope, in slot order.
-    pub scope: Arc<Vec<String>>,
+    pub(crate) scope: Arc<Vec<String>>,
     /// Whether it reads the turtle's state ([`STATE`]), in the slots after
     /// the scope's.
-    pub reads_state: bool,
+    pub(crate) reads_state: bool,
 }
 
 /// The turtle's state an expression may read, as functions of no arguments
@@ -75,6 +76,11 @@ pub(crate) enum Op {
     ExtrudeVolume(Val, Option<Val>),
     /// `gcode`: a printer command, checked when compiled.
     Gcode(std::sync::Arc<str>),
+    /// `gcode` with `{expr}`s: the line made of its pieces and checked
+    /// where it runs.
+    GcodeWith(Vec<Piece>),
+    /// `set`: the printer's settings, their values evaluated where it runs.
+    Printer(Box<Named<Val>>),
     /// A turn by sign × value degrees (`right` is yaw with sign −1).
     Turn(Axis, Val, f64),
     SetHeading(Box<([Val; 3], Option<[Val; 3]>)>),
@@ -118,6 +124,15 @@ pub(crate) enum Op {
         blob: Option<Val>,
         rate: Option<Val>,
     },
+}
+
+/// A piece of a `gcode` line with `{expr}`s.
+#[derive(Clone, Debug)]
+pub(crate) enum Piece {
+    /// Text as it is.
+    Text(String),
+    /// A value, written as [`crate::base::format::fmt_value`] writes it.
+    Value(Val),
 }
 
 /// The values of a `for`: a range `a..b` or `a..b:step` (b included when
@@ -172,16 +187,16 @@ pub(crate) enum Curve {
 #[derive(Clone, Debug)]
 pub(crate) struct Cmd {
     /// Key path, e.g. `program[3].do[1].forward`.
-    pub place: String,
+    pub(crate) place: String,
     /// What it does.
-    pub op: Op,
+    pub(crate) op: Op,
 }
 
 /// A compiled procedure.
 #[derive(Clone, Debug)]
 pub(crate) struct Proc {
     /// Its name.
-    pub name: String,
+    pub(crate) name: String,
     /// Its body (its parameters are the first slots).
-    pub body: Vec<Cmd>,
+    pub(crate) body: Vec<Cmd>,
 }

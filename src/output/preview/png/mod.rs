@@ -42,13 +42,13 @@ use crate::base::par;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Frame {
     /// The view.
-    pub basis: Basis,
+    pub(crate) basis: Basis,
     /// Pixels per mm.
-    pub scale: f64,
+    pub(crate) scale: f64,
     /// The screen-plane point (u, w) drawn at `pixel_centre`.
-    pub centre: (f64, f64),
+    pub(crate) centre: (f64, f64),
     /// Pixel where `centre` lands.
-    pub pixel_centre: (f64, f64),
+    pub(crate) pixel_centre: (f64, f64),
 }
 
 impl Frame {
@@ -103,9 +103,9 @@ impl Frame {
 /// A rendered preview and where recipe space landed in it.
 pub(crate) struct Rendered {
     /// The image (premultiplied RGBA).
-    pub pixmap: Pixmap,
+    pub(crate) pixmap: Pixmap,
     /// The projection used.
-    pub frame: Frame,
+    pub(crate) frame: Frame,
 }
 
 const BACKGROUND: [u8; 3] = [30, 33, 39];
