@@ -32,12 +32,12 @@ pub(crate) enum RawParam {
 /// params before it and `k`.
 #[derive(Clone, Debug, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct RawEach {
+pub(crate) struct RawEach {
     /// One name and its values.
     #[serde(rename = "for")]
-    pub each: IndexMap<String, RawLoop>,
+    pub(crate) each: IndexMap<String, RawLoop>,
     /// Each element's value.
-    pub value: Num,
+    pub(crate) value: Num,
 }
 
 /// A param written as a map: a choice's or a loop's keys.
