@@ -6,6 +6,17 @@ use std::path::Path;
 use clap::Parser;
 
 use crate::app::cli::{self, Cli};
+use crate::machine::Flavor;
+
+/// A built-in printer (or fixture) of each flavour, for the tests that read
+/// a print back in every firmware's dialect.
+pub(crate) const FLAVOURS: [(&str, Flavor); 5] = [
+    ("generic-220", Flavor::Marlin),
+    ("prusa-mk4", Flavor::Prusa),
+    ("voron-350", Flavor::Klipper),
+    ("rostock-max", Flavor::Reprap),
+    ("tests/fixtures/printers/bambu-flavor.yaml", Flavor::Bambu),
+];
 
 /// What a command run in process left: its exit status (0, 1 or 2, as the
 /// binary's) and its errors as the binary renders them.

@@ -411,20 +411,11 @@ pub(crate) fn apply(a: &Apply) -> Result<String> {
 
 #[cfg(test)]
 mod tests {
-    use crate::app::testing::p3dp;
+    use crate::app::testing::{p3dp, FLAVOURS};
     use crate::base::gcode::{Command, Setting};
     use crate::base::testing::{root, tmp};
     use crate::machine::firmware::read;
     use crate::machine::Flavor;
-
-    /// The built-in printer (or fixture) of each flavour.
-    const FLAVOURS: [(&str, Flavor); 5] = [
-        ("generic-220", Flavor::Marlin),
-        ("prusa-mk4", Flavor::Prusa),
-        ("voron-350", Flavor::Klipper),
-        ("rostock-max", Flavor::Reprap),
-        ("tests/fixtures/printers/bambu-flavor.yaml", Flavor::Bambu),
-    ];
 
     /// The value a test's band sets, if `c` is that setting.
     fn value(test: &str, c: &Command) -> Option<f64> {

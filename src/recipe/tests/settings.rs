@@ -7,20 +7,10 @@
 //! Home: beside `recipe::resolve::turtle` (the commands' compilation) and
 //! `base::gcode::named` (the lowering a step and a command share).
 
-use crate::app::testing::p3dp;
+use crate::app::testing::{p3dp, FLAVOURS};
 use crate::base::gcode::{Command, Setting};
 use crate::base::testing::{root, tmp};
 use crate::machine::firmware::read;
-use crate::machine::Flavor;
-
-/// The built-in printer (or fixture) of each flavour.
-const FLAVOURS: [(&str, Flavor); 5] = [
-    ("generic-220", Flavor::Marlin),
-    ("prusa-mk4", Flavor::Prusa),
-    ("voron-350", Flavor::Klipper),
-    ("rostock-max", Flavor::Reprap),
-    ("tests/fixtures/printers/bambu-flavor.yaml", Flavor::Bambu),
-];
 
 /// Lines of a pressure advance test as one turtle: line k travels to its
 /// start, sets its factor and acceleration from `k`, then prints slow,
