@@ -473,3 +473,32 @@ fn the_guide_recipes_build_clean_and_have_pictures() {
     }
     assert!(recipes >= 4);
 }
+
+/// The guide has its plates chapter (issue 41): listed in the guide's
+/// contents, with a plate file the tests save and build, the same plate
+/// by `p3dp plate`, and a package of a plate; its examples run with the
+/// guide's (`the_guide_examples_run`).
+#[test]
+fn the_guide_has_a_plates_chapter() {
+    let page = "docs/guide/11-plates.md";
+    let contents = std::fs::read_to_string(root().join("docs/guide/README.md")).unwrap();
+    assert!(contents.contains("[Plates](11-plates.md)"), "{contents}");
+    let blocks = blocks(page);
+    let plate_file = blocks.iter().find(|b| {
+        b.lang == "yaml"
+            && serde_yaml::from_str::<serde_yaml::Value>(&b.text)
+                .is_ok_and(|d| d["p3dp"].is_number() && d["plate"].is_sequence())
+    });
+    assert!(plate_file.is_some(), "{page}: no plate file");
+    let commands: Vec<String> = blocks
+        .iter()
+        .filter(|b| b.lang == "sh")
+        .flat_map(|b| commands(&b.text))
+        .collect();
+    for wanted in ["p3dp plate ", ".gcode.3mf"] {
+        assert!(
+            commands.iter().any(|c| c.contains(wanted)),
+            "{page}: no command with `{wanted}`: {commands:?}"
+        );
+    }
+}
