@@ -63,6 +63,99 @@ pub(crate) fn expand(
         .collect()
 }
 
+/// The errors of a batch's variants that could not be resolved
+/// (`results`, one per job), each said once, before anything is built:
+///
+/// - one about a sweep's value (`--set NAME=VALUE` as the params read it)
+///   names `--sweep NAME=VALUE`, the values that failed alike listed
+///   together (`--sweep n=1,2`), however many variants hold them;
+/// - any other names in its help the variants it holds in (none when it
+///   holds in all of its recipe's).
+///
+/// Each one's help says that no variant was built, after the help it had
+/// (its own, or the one `derived` from its message, which is left as it
+/// is). Empty when every variant resolved.
+pub(crate) fn unresolved(
+    jobs: &[Job],
+    results: Vec<Result<()>>,
+    derived: impl Fn(&Error) -> Option<String>,
+) -> Vec<Error> {
+    // the error with no variant in it, the sweep's name (none: not a
+    // value's), the values or variants it holds in, and how many variants
+    // its recipe has
+    let mut groups: Vec<(Error, Option<String>, Vec<String>, usize)> = Vec::new();
+    for (job, r) in jobs.iter().zip(results) {
+        let Err(e) = r else { continue };
+        // the sweep's values are the last of the job's sets
+        let tail = &job.sets[job.sets.len().saturating_sub(job.sweep.len())..];
+        let swept = tail
+            .iter()
+            .find(|(n, v)| e.place.as_deref() == Some(&format!("--set {n}={v}")));
+        let (name, item) = match swept {
+            Some((n, v)) => (Some(n.clone()), v.clone()),
+            None => (None, variant_label(job)),
+        };
+        let same = |(g, gn, _, _): &&mut (Error, Option<String>, Vec<String>, usize)| {
+            *gn == name
+                && g.file == e.file
+                && g.message == e.message
+                && g.help == e.help
+                && (name.is_some() || (g.place == e.place && g.line == e.line))
+        };
+        match groups.iter_mut().find(same) {
+            Some((_, _, items, _)) if items.contains(&item) => {}
+            Some((_, _, items, _)) => items.push(item),
+            None => {
+                let of_recipe = jobs.iter().filter(|j| j.recipe == job.recipe).count();
+                groups.push((e, name, vec![item], of_recipe));
+            }
+        }
+    }
+    groups
+        .into_iter()
+        .map(|(e, name, items, of_recipe)| {
+            let mut e = match &name {
+                Some(n) => Error {
+                    place: Some(format!("--sweep {n}={}", items.join(","))),
+                    ..e
+                },
+                None => e,
+            };
+            let note = if name.is_none() && items.len() < of_recipe {
+                format!("with --sweep {}; no variant was built", listed(&items))
+            } else {
+                "no variant was built".to_string()
+            };
+            let help = match e
+                .help
+                .as_deref()
+                .map(str::to_string)
+                .or_else(|| derived(&e))
+            {
+                Some(h) => format!("{h}; {note}"),
+                None => note,
+            };
+            e.help = Some(help.into_boxed_str());
+            e
+        })
+        .collect()
+}
+
+/// A job's sweep values as `--sweep` gives them: `a=1 b=x`.
+fn variant_label(job: &Job) -> String {
+    let tail = &job.sets[job.sets.len().saturating_sub(job.sweep.len())..];
+    let v: Vec<String> = tail.iter().map(|(n, v)| format!("{n}={v}")).collect();
+    v.join(" ")
+}
+
+/// At most three variants, then how many there are.
+fn listed(items: &[String]) -> String {
+    if items.len() <= 3 {
+        return items.join(", ");
+    }
+    format!("{}, … ({} variants)", items[..3].join(", "), items.len())
+}
+
 /// Runs `f(0..n)` side by side on the pool; results in index order.
 /// `tick` is called after each job finishes (for a progress bar).
 pub(crate) fn run_parallel<T: Send>(

@@ -87,7 +87,7 @@ pub(crate) fn render_with(e: &Error, text: Option<&str>, color: bool) -> String 
 
 /// A `help:` where the remedy is known from the message: a failed check, a
 /// misspelt name in an expression, a missing image.
-fn check_help(e: &Error) -> Option<String> {
+pub(crate) fn check_help(e: &Error) -> Option<String> {
     let m = &e.message;
     if e.kind == Kind::Check {
         return m.contains("[out-of-bed]").then(|| {

@@ -58,6 +58,23 @@ pub fn prepare_in(path: &Path, opts: &Options, cx: &Context) -> Result<Plan> {
     Plan::new(shown, recipe, paths)
 }
 
+/// What [`prepare_in`] does before it makes any string: the command line
+/// read, the recipe resolved (its params with `opts.sets`, every key and
+/// value); a plate is made whole (its objects are recipes built and
+/// arranged). A batch resolves every variant so before it builds any.
+pub(crate) fn resolve_in(path: &Path, opts: &Options, cx: &Context) -> Result<()> {
+    let printer = command_line(opts, cx)?;
+    let raw = crate::recipe::read_raw(path, cx)?;
+    if raw.plate.is_some() {
+        let spec = crate::recipe::resolve::plate::PlateSpec::from_raw(&raw, path)?;
+        let shown = path.display().to_string();
+        return prepare_plate(&spec, &shown, opts, printer.as_ref(), cx).map(drop);
+    }
+    let material = filament(opts, cx)?;
+    let given = (printer.as_ref(), material.as_ref());
+    crate::recipe::from_raw_in(&raw, path, &opts.sets, given, cx).map(drop)
+}
+
 /// [`prepare_in`] of the plate `spec` the command line describes (`p3dp
 /// plate`), reported as `shown`.
 pub(crate) fn prepare_plate_in(

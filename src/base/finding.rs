@@ -51,6 +51,7 @@ pub const CODES: &[(&str, &str)] = &[
     ("head-collision", "the head's box passes through filament printed earlier (warning: the box is an estimate)"),
     ("pattern-range", "a pattern_helix parameter outside the paper's ranges (warning)"),
     ("pattern-modulated", "a pattern_helix whose strings are modulated (warning)"),
+    ("output-package", "the output is a package the printer's firmware does not read: .bgcode without Prusa's Buddy firmware, .gcode.3mf for a printer not Bambu Lab's (warning)"),
 ];
 
 /// The machine's safety limits: a move outside the printer's volume, a

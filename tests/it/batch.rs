@@ -386,3 +386,83 @@ fn a_checked_sweep_lets_each_variant_go() {
     );
     assert!(peak > 0 && peak < 60_000, "peak {peak} kB");
 }
+
+/// A sweep is resolved whole before any variant is built (issue 41): a
+/// value that is no value is named once as `--sweep NAME=VALUE`, however
+/// many variants hold it; a value that makes the recipe invalid names its
+/// variant; either way nothing is written, not even the first variant or
+/// the summary; `check --sweep` refuses alike.
+#[test]
+fn a_bad_sweep_value_refuses_the_batch_before_anything_is_written() {
+    let dir = tmp("sweep-bad");
+    let sphere = recipe("sphere.yaml");
+    let s = sphere.to_str().unwrap();
+    let run = |args: &[&str]| {
+        let o = p3dp(&dir, args);
+        (
+            o.status.code(),
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+        )
+    };
+    let (code, err) = run(&[
+        "build",
+        s,
+        "--sweep",
+        "radius=10,abc",
+        "--sweep",
+        "pitch=0.2,0.25",
+        "-o",
+        "out",
+    ]);
+    assert_eq!(code, Some(2), "{err}");
+    assert_eq!(err.matches("error: ").count(), 1, "{err}");
+    assert!(
+        err.contains(": --sweep radius=abc: unknown name `abc`"),
+        "{err}"
+    );
+    assert!(!err.contains("--set"), "{err}");
+    assert!(err.contains("no variant was built"), "{err}");
+    assert!(!dir.join("out").exists(), "a refused batch wrote out/");
+    // a value that parses but makes the recipe invalid: its variants named
+    let (code, err) = run(&[
+        "build",
+        s,
+        "--sweep",
+        "radius=10,-5",
+        "--sweep",
+        "pitch=0.2,0.25",
+        "-o",
+        "out",
+    ]);
+    assert_eq!(code, Some(2), "{err}");
+    assert_eq!(err.matches("error: ").count(), 1, "{err}");
+    assert!(err.contains("-5 is not allowed"), "{err}");
+    assert!(
+        err.contains("with --sweep radius=-5 pitch=0.2, radius=-5 pitch=0.25"),
+        "{err}"
+    );
+    assert!(!dir.join("out").exists(), "a refused batch wrote out/");
+    // a name that is no param: once, with its values
+    let (code, err) = run(&["build", s, "--sweep", "foo=1,2", "-o", "out"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert_eq!(err.matches("error: ").count(), 1, "{err}");
+    assert!(
+        err.contains("--sweep foo=1,2: unknown param `foo`"),
+        "{err}"
+    );
+    assert!(!dir.join("out").exists());
+    // check: refused before any variant is checked (no variant's line)
+    let o = p3dp(&dir, &["check", s, "--sweep", "radius=10,abc"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        o.stdout.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--sweep radius=abc"), "{err}");
+    // the good values alone still build, both variants
+    let (code, err) = run(&["build", s, "--sweep", "radius=10,12", "-o", "out"]);
+    assert_eq!(code, Some(0), "{err}");
+    assert!(dir.join("out/sphere_radius-12.gcode").is_file());
+}

@@ -660,3 +660,64 @@ fn a_stand_is_printed_first_and_counted() {
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(err.contains("parts[0].stand"), "{err}");
 }
+
+/// `-o` asking for a package the printer's firmware does not read is an
+/// `output-package` warning, once in the report, the file still written
+/// (issue 41): `.bgcode` for a printer without Prusa's Buddy firmware,
+/// `.gcode.3mf` for a printer not Bambu Lab's; none for a Prusa MK4S's
+/// `.bgcode` nor a Bambu A1's `.gcode.3mf`; `--allow` silences it and
+/// `--strict` fails on it as on any warning.
+#[test]
+fn a_package_the_printer_cannot_read_is_a_warning() {
+    let dir = tmp("output-package");
+    let sphere = root().join("recipes/sphere.yaml");
+    let s = sphere.to_str().unwrap();
+    let build = |printer: &str, out: &str, more: &[&str]| {
+        let mut args = vec!["build", s, "--printer", printer, "-o", out];
+        args.extend(more);
+        let o = p3dp(&dir, &args);
+        let report = String::from_utf8_lossy(&o.stdout).into_owned();
+        (
+            o.status.code(),
+            report,
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+        )
+    };
+    for (printer, out) in [("prusa-mk4s", "a.bgcode"), ("bambu-a1", "a.gcode.3mf")] {
+        let (code, report, err) = build(printer, out, &[]);
+        assert_eq!(code, Some(0), "{err}");
+        assert!(
+            !report.contains("output-package"),
+            "{printer} {out}: {report}"
+        );
+        assert!(report.contains("0 warnings, 0 errors"), "{report}");
+    }
+    for (printer, out, says) in [
+        ("prusa-mk3s", "b.bgcode", "Buddy"),
+        ("ender3", "c.bgcode", "Buddy"),
+        ("prusa-mk4s", "d.gcode.3mf", "Bambu"),
+        ("voron-350", "e.gcode.3mf", "Bambu"),
+    ] {
+        let (code, report, err) = build(printer, out, &[]);
+        assert_eq!(code, Some(0), "{printer} {out}: {err}");
+        assert!(dir.join(out).is_file(), "{out} not written");
+        assert_eq!(
+            report.matches("warning [output-package]: ").count(),
+            1,
+            "{printer} {out}: {report}"
+        );
+        assert!(
+            report.contains(says) && report.contains(&format!("`{printer}`")),
+            "{report}"
+        );
+        assert!(report.contains("1 warning, 0 errors"), "{report}");
+        let (code, report, _) = build(printer, out, &["--allow", "output-package"]);
+        assert_eq!(code, Some(0));
+        assert!(!report.contains("[output-package]"), "{report}");
+        let strict = format!("strict-{out}");
+        let (code, _, err) = build(printer, &strict, &["--strict"]);
+        assert!(!dir.join(&strict).exists(), "--strict wrote {strict}");
+        assert_eq!(code, Some(1), "{printer}: --strict {err}");
+        assert!(err.contains("[output-package]"), "{err}");
+    }
+}

@@ -92,9 +92,40 @@ fn workspace(tag: &str) -> crate::common::Tmp {
     std::fs::create_dir_all(dir.join(".git")).unwrap();
     copy_tree(&root().join("maps"), &dir.join("maps"));
     copy_tree(&root().join("recipes"), &dir.join("recipes"));
+    std::fs::copy(root().join(".gitignore"), dir.join(".gitignore")).unwrap();
     #[cfg(unix)]
     std::os::unix::fs::symlink(root().join("docs"), dir.join("docs")).unwrap();
     dir
+}
+
+/// The files of `dir` git would call untracked, as the repository's
+/// `.gitignore` (copied there) says; `None` without git on the `PATH`.
+/// The folder is made a git repository the first time (its `.git` was
+/// only a project's mark); nothing is ever added to it.
+fn untracked(dir: &Path) -> Option<std::collections::BTreeSet<String>> {
+    let git = |args: &[&str]| {
+        Command::new("git")
+            .args(args)
+            .current_dir(dir)
+            .output()
+            .ok()
+    };
+    if !dir.join(".git/HEAD").is_file() {
+        git(&["init", "-q"]).filter(|o| o.status.success())?;
+    }
+    let o = git(&["status", "--porcelain", "--untracked-files=all"])?;
+    assert!(
+        o.status.success(),
+        "git status: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    Some(
+        String::from_utf8_lossy(&o.stdout)
+            .lines()
+            .filter_map(|l| l.strip_prefix("?? "))
+            .map(str::to_string)
+            .collect(),
+    )
 }
 
 /// Copies the folder `from` to `to`, its subfolders too.
@@ -155,17 +186,24 @@ fn commands(text: &str) -> Vec<String> {
     out
 }
 
-/// Runs every example of `page` in order; returns how many ran.
+/// Runs every example of `page` in order; returns how many ran. The
+/// commands leave no file git would see as new in the repository, run
+/// from its root as the pages say: what they write is ignored (a build's
+/// G-code or package, the scratch folder `out/`, the reader's `my-*`
+/// files; see `.gitignore`); the recipes and profiles this test saves
+/// for the reader are the reader's to keep.
 fn run_page(page: &str) -> usize {
     let tag = page.replace(['/', '.'], "-");
     let dir = workspace(&tag);
+    let before = untracked(&dir);
+    let mut saved = std::collections::BTreeSet::new();
     let mut ran = 0;
     for b in blocks(page) {
         let at = format!("{}:{}", b.page, b.line);
         match b.lang.as_str() {
             "yaml" => {
                 ran += 1;
-                run_yaml(&dir, &at, &b.text);
+                saved.extend(run_yaml(&dir, &at, &b.text));
             }
             "sh" => {
                 for c in commands(&b.text) {
@@ -186,13 +224,26 @@ fn run_page(page: &str) -> usize {
             _ => {}
         }
     }
+    match (before, untracked(&dir)) {
+        (Some(before), Some(after)) => {
+            let new: Vec<&String> = after
+                .iter()
+                .filter(|f| !before.contains(*f) && !saved.iter().any(|s| f.starts_with(s)))
+                .collect();
+            assert!(
+                new.is_empty(),
+                "{page}: its commands leave files git sees as new in the repository: {new:?}; write them to out/ or a name .gitignore ignores"
+            );
+        }
+        _ => eprintln!("note: no git on the PATH: {page}'s files not looked at"),
+    }
     let _ = std::fs::remove_dir_all(&dir);
     ran
 }
 
 /// A `yaml` block: a recipe checked clean, a printer profile used, or a
 /// fragment parsed.
-fn run_yaml(dir: &Path, at: &str, text: &str) {
+fn run_yaml(dir: &Path, at: &str, text: &str) -> Option<String> {
     let doc: serde_yaml::Value =
         serde_yaml::from_str(text).unwrap_or_else(|e| panic!("{at}: not YAML: {e}\n{text}"));
     let top = |k: &str| doc.as_mapping().is_some_and(|m| m.contains_key(k));
@@ -209,6 +260,7 @@ fn run_yaml(dir: &Path, at: &str, text: &str) {
             "{at}: the recipe does not check clean:\n{out}{}",
             String::from_utf8_lossy(&o.stderr)
         );
+        Some(file)
     } else if top("inherits") || top("flavor") {
         let file = format!("profile-{}.yaml", at.rsplit(':').next().unwrap());
         std::fs::write(dir.join(&file), text).unwrap();
@@ -218,6 +270,7 @@ fn run_yaml(dir: &Path, at: &str, text: &str) {
             "{at}: the profile is refused:\n{}",
             String::from_utf8_lossy(&o.stderr)
         );
+        Some(file)
     } else if let Some(recipe) = in_a_recipe(&doc) {
         // a fragment, set in a recipe round it: the loader must take its
         // keys and expressions (its checks may fail: it is a piece)
@@ -232,6 +285,9 @@ fn run_yaml(dir: &Path, at: &str, text: &str) {
             "{at}: the fragment does not load in a recipe round it:\n{}\n{text}",
             String::from_utf8_lossy(&o.stderr)
         );
+        Some("fragments/".to_string())
+    } else {
+        None
     }
 }
 
@@ -416,4 +472,33 @@ fn the_guide_recipes_build_clean_and_have_pictures() {
         assert!(shown, "{stem}.yaml is not shown whole in a chapter");
     }
     assert!(recipes >= 4);
+}
+
+/// The guide has its plates chapter (issue 41): listed in the guide's
+/// contents, with a plate file the tests save and build, the same plate
+/// by `p3dp plate`, and a package of a plate; its examples run with the
+/// guide's (`the_guide_examples_run`).
+#[test]
+fn the_guide_has_a_plates_chapter() {
+    let page = "docs/guide/11-plates.md";
+    let contents = std::fs::read_to_string(root().join("docs/guide/README.md")).unwrap();
+    assert!(contents.contains("[Plates](11-plates.md)"), "{contents}");
+    let blocks = blocks(page);
+    let plate_file = blocks.iter().find(|b| {
+        b.lang == "yaml"
+            && serde_yaml::from_str::<serde_yaml::Value>(&b.text)
+                .is_ok_and(|d| d["p3dp"].is_number() && d["plate"].is_sequence())
+    });
+    assert!(plate_file.is_some(), "{page}: no plate file");
+    let commands: Vec<String> = blocks
+        .iter()
+        .filter(|b| b.lang == "sh")
+        .flat_map(|b| commands(&b.text))
+        .collect();
+    for wanted in ["p3dp plate ", ".gcode.3mf"] {
+        assert!(
+            commands.iter().any(|c| c.contains(wanted)),
+            "{page}: no command with `{wanted}`: {commands:?}"
+        );
+    }
 }

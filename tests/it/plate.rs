@@ -648,3 +648,130 @@ fn the_hosts_read_a_plates_objects() {
     assert_eq!(v["errors"], serde_json::json!([]), "{v}");
     assert_eq!(v["warnings"], serde_json::json!([]), "{v}");
 }
+
+/// The `.gcode.3mf`'s top and pick pictures are drawn from above, the
+/// whole bed in the picture as Bambu Studio frames them (a 256 mm bed on
+/// 512 px: 2 px/mm, y up the bed is up the picture): each object's pixels
+/// lie over its footprint (its box in `plate_1.json`) and nowhere else, the
+/// objects apart; the pick picture gives each object one flat opaque
+/// colour that numbers it, r + 256 g + 65536 b = its `identify_id` in
+/// `slice_info.config`, and no pixel mixes two (no blending).
+#[test]
+fn the_packages_top_and_pick_pictures_show_each_object_from_above() {
+    let dir = tmp("plate-pictures");
+    let (pot, vase) = (plates("pot.yaml"), plates("bud-vase.yaml"));
+    let o = p3dp(
+        &dir,
+        &[
+            "plate",
+            pot.to_str().unwrap(),
+            vase.to_str().unwrap(),
+            "--printer",
+            "bambu-a1",
+            "-o",
+            "two.gcode.3mf",
+        ],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let bytes = std::fs::read(dir.join("two.gcode.3mf")).unwrap();
+    let mut z = zip::ZipArchive::new(std::io::Cursor::new(bytes)).unwrap();
+    let mut read = |name: &str| {
+        let mut v = Vec::new();
+        std::io::Read::read_to_end(&mut z.by_name(name).unwrap(), &mut v).unwrap();
+        v
+    };
+    let json: serde_json::Value = serde_json::from_slice(&read("Metadata/plate_1.json")).unwrap();
+    let info = String::from_utf8(read("Metadata/slice_info.config")).unwrap();
+    let png = |v: Vec<u8>| {
+        image::load_from_memory_with_format(&v, image::ImageFormat::Png)
+            .unwrap()
+            .to_rgba8()
+    };
+    let (iso, top, pick) = (
+        read("Metadata/plate_1.png"),
+        read("Metadata/top_1.png"),
+        read("Metadata/pick_1.png"),
+    );
+    assert_ne!(top, iso, "the top picture is its own view");
+    let (top, pick) = (png(top), png(pick));
+    assert_eq!((top.width(), top.height()), (512, 512));
+    assert_eq!((pick.width(), pick.height()), (512, 512));
+    // each object's box on the bed, in pixels (2 px/mm, y flipped), grown
+    // by 2 px for the strings' width and the edge pixels
+    let boxes: Vec<(u32, [f64; 4])> = json["bbox_objects"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|o| {
+            let b: Vec<f64> = o["bbox"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_f64().unwrap())
+                .collect();
+            let id = o["id"].as_u64().unwrap() as u32;
+            (
+                id,
+                [
+                    2.0 * b[0] - 2.0,
+                    512.0 - 2.0 * b[3] - 2.0,
+                    2.0 * b[2] + 2.0,
+                    512.0 - 2.0 * b[1] + 2.0,
+                ],
+            )
+        })
+        .collect();
+    assert_eq!(boxes.len(), 2);
+    for (id, _) in &boxes {
+        assert!(info.contains(&format!("identify_id=\"{id}\"")), "{info}");
+    }
+    // the boxes apart: a gap of transparent pixels between them
+    let (a, b) = (boxes[0].1, boxes[1].1);
+    assert!(
+        a[2] < b[0] || b[2] < a[0] || a[3] < b[1] || b[3] < a[1],
+        "{a:?} {b:?}"
+    );
+    let inside = |x: u32, y: u32| {
+        boxes
+            .iter()
+            .find(|(_, r)| {
+                (x as f64) >= r[0] && (x as f64) <= r[2] && (y as f64) >= r[1] && (y as f64) <= r[3]
+            })
+            .map(|(id, _)| *id)
+    };
+    let mut top_in = [0usize; 2];
+    let mut pick_in = [0usize; 2];
+    for (x, y, p) in top.enumerate_pixels() {
+        if p[3] > 0 {
+            let id = inside(x, y).unwrap_or_else(|| panic!("top: ({x}, {y}) lies on no object"));
+            top_in[id as usize - 1] += 1;
+        }
+    }
+    for (x, y, p) in pick.enumerate_pixels() {
+        match p[3] {
+            0 => {}
+            255 => {
+                let id = p[0] as u32 + 256 * p[1] as u32 + 65536 * p[2] as u32;
+                assert_eq!(inside(x, y), Some(id), "pick: ({x}, {y}) has id {id}");
+                pick_in[id as usize - 1] += 1;
+            }
+            a => panic!("pick: ({x}, {y}) is blended (alpha {a})"),
+        }
+    }
+    // each object covers most of its box's disc from above (a pot's and a
+    // vase's bottoms are filled): π/4 of a 30 mm box is ~2800 px
+    for k in 0..2 {
+        assert!(
+            top_in[k] > 2000,
+            "top: object {} has {} px",
+            k + 1,
+            top_in[k]
+        );
+        assert!(
+            pick_in[k] > 2000,
+            "pick: object {} has {} px",
+            k + 1,
+            pick_in[k]
+        );
+    }
+}

@@ -13,6 +13,7 @@ pub(crate) mod collision;
 pub(crate) mod first_layer;
 pub(crate) mod flow;
 pub(crate) mod gcode;
+pub(crate) mod package;
 pub(crate) mod pattern;
 pub(crate) mod starvation;
 pub(crate) mod support;

@@ -4,4 +4,5 @@
 mod extruder_turtle;
 mod gcode;
 mod makers;
+mod package;
 mod planner;

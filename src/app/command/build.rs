@@ -135,10 +135,21 @@ struct Prepared {
     stats_file: Option<AtomicFile>,
 }
 
-/// Expands the jobs and refuses flag combinations before anything is built.
-fn prepare(a: &Options) -> Result<Prepared> {
-    let jobs = a.builds.jobs()?;
-    refuse_flags(a, jobs.len())?;
+/// Expands the jobs and refuses flag combinations, and a sweep with a
+/// variant that cannot be resolved, before anything is built.
+fn prepare(a: &Options) -> std::result::Result<Prepared, Vec<Error>> {
+    let jobs = a.builds.jobs().map_err(|e| vec![e])?;
+    refuse_flags(a, jobs.len()).map_err(|e| vec![e])?;
+    let unresolved = a.builds.refuse_unresolved(&jobs);
+    if !unresolved.is_empty() {
+        return Err(unresolved);
+    }
+    settle(a, jobs).map_err(|e| vec![e])
+}
+
+/// Where each job writes, its outputs checked against each other and the
+/// inputs, the stats file opened early.
+fn settle(a: &Options, jobs: Vec<Job>) -> Result<Prepared> {
     let (targets, dir) = targets(a, &jobs)?;
     // no output over another, nor over an input: refused before any is
     // written (and each job's own reads before it writes: `build_job`)
@@ -350,6 +361,13 @@ fn build_package(
         ..a.builds.job(options)
     };
     let written = pipeline::write(&mut p, &job, Vec::new());
+    // a package the printer's firmware may not read: a warning, in the
+    // report with the checks' findings (silenced as they are)
+    if let Some(f) = package.unsuited(&p.recipe.printer) {
+        let mut unsuited = vec![f];
+        p.silence(&mut unsuited, &a.builds.allow);
+        p.findings.extend(unsuited);
+    }
     a.builds.refuse_failing(&p)?;
     let w = written?;
     let (gcode, moves) = (w.out, w.moves);
@@ -358,7 +376,8 @@ fn build_package(
         Package::Bgcode => crate::output::host::bgcode_of(&p, &gcode, &moves, &images)?,
         Package::Bambu => {
             let png = |w: u32| crate::output::preview::thumbnail::png_of(&p, w, w);
-            crate::output::host::threemf_of(&p, &gcode, &moves, png(512), png(128))?
+            let (top, pick) = crate::output::preview::thumbnail::bed_views_png(&p, 512);
+            crate::output::host::threemf_of(&p, &gcode, &moves, [png(512), png(128), top, pick])?
         }
         Package::Gcode => gcode,
     };
@@ -531,7 +550,7 @@ pub(crate) fn run(a: &Options) -> Vec<Error> {
         stats_file,
     } = match prepare(a) {
         Ok(p) => p,
-        Err(e) => return vec![e],
+        Err(e) => return e,
     };
     let single = jobs.len() == 1;
     let bar = progress(jobs.len());

@@ -10,6 +10,11 @@ pub(crate) fn run(c: &Builds) -> Vec<Error> {
         Ok(j) => j,
         Err(e) => return vec![e],
     };
+    // a sweep's variants all resolved before any is checked
+    let unresolved = c.refuse_unresolved(&jobs);
+    if !unresolved.is_empty() {
+        return unresolved;
+    }
     // each variant's plan let go as soon as it is checked: only its lines
     // and its verdict are kept until they are printed, in order
     let results = batch::run_parallel(

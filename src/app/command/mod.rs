@@ -112,15 +112,40 @@ impl Builds {
         plan
     }
 
-    /// Plans a job (unchecked), with the files its load read or tried.
-    pub(crate) fn load(&self, job: &Job) -> (Result<Plan>, Reads) {
-        let opts = Options {
+    /// What loading `job` takes from the command line.
+    fn options(&self, job: &Job) -> Options {
+        Options {
             sets: job.sets.clone(),
             printer: self.printer.clone().or_else(|| job.printer.clone()),
             filament: self.filament.clone(),
             allow: self.allow.clone(),
             allow_read: self.allow_read.clone(),
-        };
+        }
+    }
+
+    /// Refuses a sweep one of whose variants cannot be resolved (a value
+    /// that is no value, or that makes the recipe invalid), before any
+    /// variant is built: every variant resolved side by side, the errors
+    /// named by their `--sweep` value, each once ([`batch::unresolved`]).
+    /// Nothing to do without a sweep (one build says its own errors).
+    pub(crate) fn refuse_unresolved(&self, jobs: &[Job]) -> Vec<Error> {
+        if jobs.iter().all(|j| j.sweep.is_empty()) {
+            return Vec::new();
+        }
+        let results = batch::run_parallel(
+            jobs.len(),
+            |k| {
+                let cx = Context::default();
+                crate::app::prepare::resolve_in(&jobs[k].recipe, &self.options(&jobs[k]), &cx)
+            },
+            || {},
+        );
+        batch::unresolved(jobs, results, crate::app::diagnostic::check_help)
+    }
+
+    /// Plans a job (unchecked), with the files its load read or tried.
+    pub(crate) fn load(&self, job: &Job) -> (Result<Plan>, Reads) {
+        let opts = self.options(job);
         let cx = Context::default();
         let plan = match &self.plate {
             Some(spec) => crate::app::prepare::prepare_plate_in(spec, &spec.name, &opts, &cx),

@@ -1097,6 +1097,61 @@ fn the_zbuffer_json_is_the_exact_loops_and_the_svg_draws_a_layer() {
 }
 
 #[test]
+fn the_zbuffer_svg_writes_numbers_to_the_micrometre() {
+    // a box whose edges and centre are no binary fractions, a boss of
+    // radius 2.35, and layer 3 printed at 3 × 0.2 = 0.6000000000000001
+    let path = recipe_file(
+        "zbuf-digits",
+        "{layer_height: 0.2, perimeters: 1, infill: {angle: 45, spacing: 0.8}, features: [{box: {center: [0.1, -0.3, 1.5], size: [40.3, 30.7, 3]}}, {cylinder: {center: [-10.3, 0.7, 0], radius: 2.35, height: 3, op: subtract}}]}",
+    );
+    let r = load(&path);
+    let s = solid_of(&r, 0);
+    let layer = s.layers().find(|l| l.index == 3).unwrap();
+    assert_ne!(
+        format!("{}", layer.z),
+        "0.6",
+        "the test needs a z of many digits"
+    );
+    let svg = crate::generate::primitive::solid::layer_svg(&[("solid", s)], 3)
+        .unwrap()
+        .unwrap();
+    assert!(svg.contains("layer 3 at z 0.6 mm"), "{svg}");
+    // every number written: at most 3 decimals, no trailing zero, no -0
+    let number = regex::Regex::new(r"-?[0-9]+(\.[0-9]+)?").unwrap();
+    let mut seen = 0;
+    for m in number.find_iter(&svg) {
+        let t = m.as_str();
+        seen += 1;
+        assert!(t != "-0", "a negative zero in {svg}");
+        if let Some((_, frac)) = t.split_once('.') {
+            assert!(frac.len() <= 3 && !frac.ends_with('0'), "`{t}` in {svg}");
+        }
+    }
+    assert!(seen > 20, "{svg}");
+    // the outline as written is the exact one within half a micrometre:
+    // the box's corners, x 0.1 ± 20.15, y -0.3 ± 15.35
+    let d = svg.split("<path d=\"").nth(1).unwrap();
+    let d = &d[..d.find('"').unwrap()];
+    let values: Vec<f64> = number
+        .find_iter(d)
+        .map(|m| m.as_str().parse().unwrap())
+        .collect();
+    for (x, y) in [
+        (-20.05, -15.65),
+        (20.25, -15.65),
+        (20.25, 15.05),
+        (-20.05, 15.05),
+    ] {
+        let near = values
+            .windows(2)
+            .any(|p| (p[0] - x).abs() < 5e-4 && (p[1] - y).abs() < 5e-4);
+        assert!(near, "no corner ({x}, {y}) in {d}");
+    }
+    // the hole's arcs keep their radius to the micrometre
+    assert!(d.contains("A2.35 2.35 0"), "{d}");
+}
+
+#[test]
 fn a_kept_z_buffer_re_slices_only_the_edited_feature() {
     use crate::generate::primitive::solid::{Cache, Reusing};
     use crate::recipe::context::Context;

@@ -44,6 +44,22 @@ impl Package {
     }
 }
 
+impl Package {
+    /// The `output-package` warning when a file of this package does not
+    /// suit `printer`'s firmware ([`crate::analyse::check::package`]).
+    pub(crate) fn unsuited(
+        self,
+        printer: &crate::machine::Printer,
+    ) -> Option<crate::base::finding::Finding> {
+        use crate::analyse::check::package::{output_package, Packed};
+        match self {
+            Package::Gcode => None,
+            Package::Bgcode => output_package(Packed::Bgcode, printer),
+            Package::Bambu => output_package(Packed::Bambu, printer),
+        }
+    }
+}
+
 /// The metadata pairs of `plan`'s print, as written (`stats`).
 fn pairs(plan: &Plan, stats: &MoveStats) -> Vec<(&'static str, String)> {
     let extent = Extent::of(plan);
@@ -106,13 +122,13 @@ pub(crate) fn bgcode_of(
 
 /// Bambu's `.gcode.3mf` of `plan` (see [`threemf`]): its G-code `gcode`
 /// (written with Bambu's header block and layer markers), what its moves
-/// came to (`stats`) and the plate's images (512 and 128 px PNGs).
+/// came to (`stats`) and the plate's images: the iso view at 512 and 128
+/// px, the top and pick pictures (PNGs).
 pub(crate) fn threemf_of(
     plan: &Plan,
     gcode: &[u8],
     stats: &MoveStats,
-    image: Vec<u8>,
-    small: Vec<u8>,
+    [image, small, top, pick]: [Vec<u8>; 4],
 ) -> Result<Vec<u8>> {
     let recipe = &plan.recipe;
     let p = &recipe.printer;
@@ -155,6 +171,8 @@ pub(crate) fn threemf_of(
         layer_height: layers.map_or(0.0, |l| l.height),
         image,
         small,
+        top,
+        pick,
     };
     threemf::encode(gcode, &plate)
 }

@@ -4,9 +4,11 @@
 //!
 //! - `Metadata/plate_1.gcode` and `Metadata/plate_1.gcode.md5` (its MD5 in
 //!   upper-case hex, which the printer checks);
-//! - `Metadata/plate_1.png` (512 px), `plate_1_small.png` (128 px),
-//!   `plate_no_light_1.png`, `top_1.png` and `pick_1.png` (the same view:
-//!   p3dp has no separate top or pick render);
+//! - `Metadata/plate_1.png` (512 px, the iso view), `plate_1_small.png`
+//!   (128 px), `plate_no_light_1.png` (the iso view again), `top_1.png`
+//!   (512 px, the whole bed from above) and `pick_1.png` (the same view,
+//!   each object one flat colour that numbers it, its `identify_id` in
+//!   `slice_info.config`: what the printer's screen picks objects by);
 //! - `Metadata/slice_info.config` (printer model, nozzle, predicted time in
 //!   s, weight in g, the parts, the filament), `Metadata/model_settings.config`
 //!   and its relationships (which file is the plate's G-code), and
@@ -57,6 +59,11 @@ pub(crate) struct Plate {
     pub(crate) image: Vec<u8>,
     /// The small one.
     pub(crate) small: Vec<u8>,
+    /// The bed seen from above (`top_1.png`).
+    pub(crate) top: Vec<u8>,
+    /// The objects from above, each a flat colour that numbers it
+    /// (`pick_1.png`, what the printer's screen picks objects by).
+    pub(crate) pick: Vec<u8>,
 }
 
 /// Bambu's model id for a profile's `printer_model` (its short names or the
@@ -369,8 +376,8 @@ pub(crate) fn encode(gcode: &[u8], plate: &Plate) -> Result<Vec<u8>> {
         ("Metadata/plate_1.png", &plate.image),
         ("Metadata/plate_no_light_1.png", &plate.image),
         ("Metadata/plate_1_small.png", &plate.small),
-        ("Metadata/top_1.png", &plate.image),
-        ("Metadata/pick_1.png", &plate.image),
+        ("Metadata/top_1.png", &plate.top),
+        ("Metadata/pick_1.png", &plate.pick),
     ];
     for (name, bytes) in entries {
         z.start_file(name, opts).map_err(zerr)?;
@@ -398,6 +405,8 @@ mod tests {
             layer_height: 0.2,
             image: vec![1],
             small: vec![2],
+            top: vec![3],
+            pick: vec![4],
         };
         let gcode = b"; HEADER_BLOCK_START\nG28\n";
         let bytes = encode(gcode, &plate).unwrap();
@@ -409,6 +418,16 @@ mod tests {
             s
         };
         assert_eq!(read("Metadata/plate_1.gcode"), gcode);
+        // each picture its own
+        for (name, bytes) in [
+            ("plate_1.png", 1),
+            ("plate_no_light_1.png", 1),
+            ("plate_1_small.png", 2),
+            ("top_1.png", 3),
+            ("pick_1.png", 4),
+        ] {
+            assert_eq!(read(&format!("Metadata/{name}")), [bytes], "{name}");
+        }
         let md5 = String::from_utf8(read("Metadata/plate_1.gcode.md5")).unwrap();
         assert_eq!(md5, md5_upper(gcode));
         assert_eq!(md5.len(), 32);

@@ -117,6 +117,33 @@ pub(crate) fn png_of(plan: &Plan, width: u32, height: u32) -> Vec<u8> {
     png::encode(&pm[0], true)
 }
 
+/// Bambu's top and pick pictures of `plan`, `width` px square PNGs (see
+/// [`png::bed_views`]): the whole bed seen from above, its objects (a
+/// plate's, or each path of a recipe) numbered in the pick picture in the
+/// order of [`Plan::objects`].
+pub(crate) fn bed_views_png(plan: &Plan, width: u32) -> (Vec<u8>, Vec<u8>) {
+    let p = &plan.recipe.printer;
+    // the bed's box in machine coordinates, then recipe ones (− origin)
+    let (lo, hi) = match p.bed {
+        crate::machine::Bed::Rectangle { size, min, .. } => {
+            (min, [min[0] + size[0], min[1] + size[1]])
+        }
+        crate::machine::Bed::Circle { diameter, .. } => {
+            let r = diameter / 2.0;
+            ([-r, -r], [r, r])
+        }
+    };
+    let o = p.origin;
+    let bed = [lo[0] - o[0], lo[1] - o[1], hi[0] - o[0], hi[1] - o[1]];
+    let objects: Vec<std::ops::Range<usize>> = plan.objects().into_iter().map(|(_, r)| r).collect();
+    let size = Size {
+        width,
+        height: width,
+    };
+    let (top, pick) = png::bed_views(&Scene::round(plan), size, bed, &objects);
+    (png::encode(&top, true), png::encode(&pick, true))
+}
+
 /// The thumbnail blocks `plan`'s printer asks for (empty when none).
 pub(crate) fn blocks(plan: &Plan) -> Result<String> {
     Ok(images(plan)?

@@ -331,9 +331,10 @@ fn load_objects(
         }
         for variant in variants(&e.sweeps) {
             let mut s = e.sets.clone();
-            s.extend(variant);
+            s.extend(variant.iter().cloned());
             s.extend(sets.iter().cloned());
-            let recipe = super::load_in(&path, &s, Some(printer), cx)?;
+            let recipe = super::load_in(&path, &s, Some(printer), cx)
+                .map_err(|err| own_values(err, spec, e, &variant))?;
             let paths = arrange::made(&recipe).map_err(|err| err.in_file(&shown))?;
             let (recipe, paths) = (std::sync::Arc::new(recipe), std::sync::Arc::new(paths));
             for _ in 0..e.copies {
@@ -346,6 +347,32 @@ fn load_objects(
         }
     }
     Ok(out)
+}
+
+/// An object's load error about a value its entry gave (the params read
+/// each as a `--set`) named where it was given: a plate file's
+/// `plate[k].set.NAME` or `plate[k].sweep.NAME` (in the plate file), the
+/// command line's `--sweep NAME=VALUE`.
+fn own_values(err: Error, spec: &PlateSpec, e: &PlateEntry, variant: &[(String, String)]) -> Error {
+    let given =
+        |(n, v): &&(String, String)| err.place.as_deref() == Some(&format!("--set {n}={v}"));
+    let (what, (name, value)) = match (variant.iter().find(given), e.sets.iter().find(given)) {
+        (Some(nv), _) => ("sweep", nv),
+        (None, Some(nv)) => ("set", nv),
+        (None, None) => return err,
+    };
+    if spec.named {
+        return Error {
+            place: Some(format!("--{what} {name}={value}")),
+            ..err
+        };
+    }
+    Error {
+        file: None,
+        line: None,
+        place: Some(format!("{}.{what}.{name}", e.place)),
+        ..err
+    }
 }
 
 /// Every combination of the sweeps' values (the first sweep outermost), as

@@ -146,6 +146,12 @@ impl Solid {
     }
 }
 
+/// A number of the SVG drawing: at most 3 decimals (a micrometre), no
+/// trailing zeros, `0` for a negative zero (`12.300000000000001` → `12.3`).
+fn n(v: f64) -> String {
+    crate::base::format::fmt_num(v)
+}
+
 /// SVG path data of a loop (y up as in the recipe; the drawing flips it).
 /// An arc is an SVG elliptical arc with equal radii: large-arc when it
 /// turns more than half a circle, sweep-flag 1 when counter-clockwise
@@ -155,33 +161,32 @@ fn path_data(l: &Loop, out: &mut String) {
         return;
     };
     let s = first.start();
-    let _ = write!(out, "M{} {}", s.x, s.y);
+    let _ = write!(out, "M{} {}", n(s.x), n(s.y));
     for p in &l.pieces {
         match p {
             Piece::Line(_, b) => {
-                let _ = write!(out, "L{} {}", b.x, b.y);
+                let _ = write!(out, "L{} {}", n(b.x), n(b.y));
             }
             Piece::Arc(k) => {
                 let sweep = u8::from(k.sweep > 0.0);
+                let r = n(k.r);
                 if k.is_full() {
                     let m = k.at(std::f64::consts::PI);
                     let _ = write!(
                         out,
                         "A{r} {r} 0 0 {sweep} {} {}A{r} {r} 0 0 {sweep} {} {}",
-                        m.x,
-                        m.y,
-                        k.p1.x,
-                        k.p1.y,
-                        r = k.r
+                        n(m.x),
+                        n(m.y),
+                        n(k.p1.x),
+                        n(k.p1.y),
                     );
                 } else {
                     let large = u8::from(k.sweep.abs() > std::f64::consts::PI);
                     let _ = write!(
                         out,
                         "A{r} {r} 0 {large} {sweep} {} {}",
-                        k.p1.x,
-                        k.p1.y,
-                        r = k.r
+                        n(k.p1.x),
+                        n(k.p1.y),
                     );
                 }
             }
@@ -232,7 +237,8 @@ impl LayerDrawing {
         let _ = write!(
             self.body,
             "<g id=\"{name}\"><title>{name} layer {} at z {} mm</title>",
-            layer.index, layer.z
+            layer.index,
+            n(layer.z)
         );
         if let Some(slab) = layer.slab {
             self.slab(slab);
@@ -309,13 +315,13 @@ impl LayerDrawing {
         let size = hi - lo;
         format!(
             "<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"{} {} {} {}\" width=\"{}mm\" height=\"{}mm\">\n<g transform=\"matrix(1 0 0 -1 0 {})\">{}</g>\n</svg>\n",
-            lo.x,
-            lo.y,
-            size.x,
-            size.y,
-            size.x,
-            size.y,
-            lo.y + hi.y,
+            n(lo.x),
+            n(lo.y),
+            n(size.x),
+            n(size.y),
+            n(size.x),
+            n(size.y),
+            n(lo.y + hi.y),
             self.body
         )
     }

@@ -306,6 +306,114 @@ pub(crate) fn thumbnails(scene: &Scene, sizes: &[Size]) -> Vec<Pixmap> {
         .collect()
 }
 
+/// Bambu's top and pick pictures of `scene` (as [`Scene::round`] reads
+/// it), `size` each, seen from above with the bed's box `bed` (recipe
+/// coordinates, [x0, y0, x1, y1]) filling the picture as Bambu Studio
+/// frames them, so that a pixel is a place on the bed; travels left out,
+/// on a transparent background.
+///
+/// - The top picture: the strings lit in filament colour, as the
+///   thumbnails draw them.
+/// - The pick picture: object k (its paths `objects[k]`) in one flat,
+///   opaque colour that numbers it, k + 1 = r + 256 g + 65536 b (Bambu
+///   Studio's encoding of an object's id, the `identify_id` the package's
+///   `slice_info.config` gives it), drawn without blending: a pixel is
+///   an object's where its strings cover at least half of it (a string at
+///   least 2 px wide), else transparent, never a mix of two colours. A
+///   higher object is drawn over a lower one.
+pub(crate) fn bed_views(
+    scene: &Scene,
+    size: Size,
+    bed: [f64; 4],
+    objects: &[std::ops::Range<usize>],
+) -> (Pixmap, Pixmap) {
+    let (w, h) = (f64::from(size.width), f64::from(size.height));
+    let rect = [0.0, 0.0, w, h];
+    let mut model = Model::new(
+        scene,
+        super::View::Top,
+        ColorMode::Plain,
+        rect,
+        PIECE,
+        Passes::Round,
+        par::width(),
+    );
+    model.frame = Frame::fit_box(
+        model.frame.basis,
+        (bed[0], bed[1]),
+        (bed[2], bed[3]),
+        rect,
+        0.0,
+    );
+    let pal = Palette::of_model(&model, ColorMode::Plain);
+    // each lit stroke with its path (a travel's alpha 0 marks it, dropped)
+    let mut strokes: Vec<(Px, u32)> = model.strokes(|it| match it.kind {
+        1 => (Px::default(), 0),
+        _ => (
+            Px {
+                r: (0.5 * it.width).max(0.5),
+                ..pal.px(it)
+            },
+            it.path,
+        ),
+    });
+    drop(model);
+    strokes.retain(|(px, _)| px.alpha == 255);
+    let mut lit: Vec<Px> = strokes.iter().map(|(px, _)| *px).collect();
+    sort_far_first(&mut lit);
+    let mut top = Pixmap::new(size.width, size.height).expect("sizes are 1..=8192");
+    paint_bands(&mut top, &once(lit));
+    (top, pick(size, &strokes, objects))
+}
+
+/// The pick picture of [`bed_views`] from its strokes and their paths.
+fn pick(size: Size, strokes: &[(Px, u32)], objects: &[std::ops::Range<usize>]) -> Pixmap {
+    let (width, height) = (size.width as usize, size.height as usize);
+    let mut out = Pixmap::new(size.width, size.height).expect("sizes are 1..=8192");
+    let mut mask = Pixmap::new(size.width, size.height).expect("sizes are 1..=8192");
+    // the objects lowest first (the top of the highest stroke), so that a
+    // higher one is drawn over it
+    let mut order: Vec<(f32, usize)> = objects
+        .iter()
+        .enumerate()
+        .map(|(k, paths)| {
+            let top = strokes
+                .iter()
+                .filter(|(_, p)| paths.contains(&(*p as usize)))
+                .map(|(px, _)| px.depth)
+                .fold(f32::NEG_INFINITY, f32::max);
+            (top, k)
+        })
+        .collect();
+    order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    for (_, k) in order {
+        let mine: Vec<Px> = strokes
+            .iter()
+            .filter(|(_, p)| objects[k].contains(&(*p as usize)))
+            .map(|(px, _)| Px {
+                rgb: [255, 255, 255],
+                r: px.r.max(1.0),
+                ..*px
+            })
+            .collect();
+        if mine.is_empty() {
+            continue;
+        }
+        mask.fill(tiny_skia::Color::TRANSPARENT);
+        paint_bands(&mut mask, &mine);
+        let id = k as u32 + 1;
+        let colour = [id & 0xff, (id >> 8) & 0xff, (id >> 16) & 0xff, 255].map(|c| c as u8);
+        let src = mask.data();
+        let dst = out.data_mut();
+        for i in 0..width * height {
+            if src[4 * i + 3] >= 128 {
+                dst[4 * i..4 * i + 4].copy_from_slice(&colour);
+            }
+        }
+    }
+    out
+}
+
 /// Each stroke painted once: of strokes alike in all that is drawn of them
 /// (ends, width, depth, colour, opacity), only the last in painting order,
 /// the one that shows, is kept: a line retraced 600 000 times is a stroke

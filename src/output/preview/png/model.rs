@@ -31,6 +31,8 @@ pub(super) struct Item {
     pub(super) width: f32,
     /// 0: lit string; 1: travel (faint, unlit); 2: flagged (lit, brighter).
     pub(super) kind: u8,
+    /// The path it belongs to.
+    pub(super) path: u32,
 }
 
 /// The strings of a scene made ready to paint into a rectangle of an image:
@@ -294,6 +296,7 @@ impl<'s, 'p> Model<'s, 'p> {
             } else {
                 0
             },
+            path: pi as u32,
         }
     }
 
