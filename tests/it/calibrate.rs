@@ -72,11 +72,9 @@ fn every_test_builds_clean_on_small_beds() {
             let report = String::from_utf8_lossy(&out.stdout);
             assert!(report.contains("0 errors"), "{t} on {printer}: {report}");
             let s = stats(&dir, "s.json");
-            if !matches!(t, "vfa" | "volumetric-speed") {
-                let bands = s["bands"].as_array().unwrap();
-                assert!(bands.len() >= 5, "{t}: {bands:?}");
-                assert!(report.contains("  bands:\n"), "{report}");
-            }
+            let bands = s["bands"].as_array().unwrap();
+            assert!(bands.len() >= 5, "{t}: {bands:?}");
+            assert!(report.contains("  bands:\n"), "{report}");
         }
     }
 }
@@ -365,4 +363,83 @@ fn every_gallery_recipe_is_in_the_lock() {
         }
     }
     assert!(n >= 11);
+}
+
+/// `volumetric-speed`'s band N lands in the profile's `max_flow`, and a
+/// rebuild with that profile holds the `flow` check to it; `vfa`, whose
+/// value no profile holds, is refused saying the band's speed and where it
+/// goes, and writes nothing.
+#[test]
+fn apply_writes_max_flow_and_says_what_vfa_gives() {
+    let dir = tmp("calibrate-apply-flow");
+    let run = |args: &[&str]| p3dp(&dir, args);
+    let out = run(&[
+        "calibrate",
+        "volumetric-speed",
+        "--set",
+        "step=1/2",
+        "-o",
+        "f.gcode",
+        "--stats-json",
+        "f.json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let band = &stats(&dir, "f.json")["bands"][7];
+    assert_eq!(band["value"].as_f64(), Some(8.5));
+    let out = run(&[
+        "calibrate",
+        "apply",
+        "volumetric-speed",
+        "--set",
+        "step=1/2",
+        "--height",
+        &format!("{}", band["z_from"].as_f64().unwrap() + 0.1),
+        "-o",
+        "flow.yaml",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let profile = std::fs::read_to_string(dir.join("flow.yaml")).unwrap();
+    assert!(profile.contains("inherits: generic-220\n"), "{profile}");
+    assert!(profile.contains("\nmax_flow: 8.5\n"), "{profile}");
+    // 0.1 mm² at 100 mm/s: 10 mm³/s, under generic-220's 12, over 8.5
+    std::fs::write(
+        dir.join("fast.yaml"),
+        "p3dp: 1\nname: fast\nparts:\n  - {cross_section: 0.1, speed: 100, primitive: {helix: {radius: 15, height: 2, pitch: 0.2, segments: 90, center: [0, 0, 0.2]}}}\n",
+    )
+    .unwrap();
+    for (printer, warned) in [("generic-220", false), ("flow.yaml", true)] {
+        let out = run(&[
+            "build",
+            "fast.yaml",
+            "--printer",
+            printer,
+            "-o",
+            "fast.gcode",
+        ]);
+        let all = format!(
+            "{}{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(out.status.success(), "{all}");
+        assert_eq!(
+            all.contains("hot end's 8.5 mm³/s"),
+            warned,
+            "{printer}: {all}"
+        );
+    }
+    let out = run(&["calibrate", "apply", "vfa", "--band", "3", "-o", "v.yaml"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("band 3 gives 50)"), "{err}");
+    assert!(err.contains("print walls no faster"), "{err}");
+    assert!(!dir.join("v.yaml").exists());
 }
