@@ -684,8 +684,8 @@ mod tests {
                     Command::Move(m) => {
                         feed = m.feed.unwrap_or(feed);
                         let from = at;
-                        for k in 0..3 {
-                            at[k] = m.to[k].unwrap_or(at[k]);
+                        for (a, to) in at.iter_mut().zip(m.to) {
+                            *a = to.unwrap_or(*a);
                         }
                         let Some(v) = m.e else { continue };
                         let de = if relative { v } else { v - e };
