@@ -3,8 +3,10 @@
 //! runs it, a fresh process per run: wall, CPU and peak memory per thread
 //! budget; every run of a case must write the same bytes. Then a batch:
 //! `check --sweep` of 10,000 variants of a 2 mm helix
-//! (`benches/sweep-helix.yaml`), and a `check` of 49 million strings
-//! (`benches/check-49m.yaml`): its peak memory against the budget.
+//! (`benches/sweep-helix.yaml`), a `check` of 49 million strings
+//! (`benches/check-49m.yaml`): its peak memory against the budget; then
+//! each calibration test of the gallery (`p3dp calibrate TEST`, target
+//! under 1 s).
 //!
 //!     cargo bench --bench cli
 //!     P3DP_BASELINE=/path/to/older/p3dp cargo bench --bench cli
@@ -85,5 +87,24 @@ fn main() {
         || {},
         |_| {},
     );
+    // every calibration test of the gallery for its default printer
+    // (target: under 1 s each, issue 40), the list as `calibrate --list`
+    // gives it
+    let list = std::process::Command::new(env!("CARGO_BIN_EXE_p3dp"))
+        .args(["calibrate", "--list"])
+        .output()
+        .expect("p3dp calibrate --list");
+    let list = String::from_utf8_lossy(&list.stdout).to_string();
+    for test in list.lines().filter_map(|l| l.split_whitespace().next()) {
+        let out = dir.join(format!("{test}.gcode"));
+        common::compare(
+            &format!("calibrate {test}"),
+            &["calibrate", test, "-o", out.to_str().unwrap()],
+            &dir,
+            11,
+            || {},
+            |_| {},
+        );
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }

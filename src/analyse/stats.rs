@@ -174,12 +174,14 @@ pub struct BandStats {
     pub line: Option<u32>,
 }
 
-/// The bands the `set` steps of `paths` begin, in print order.
+/// The bands the `set` steps and commands of `paths` begin, in print order:
+/// a firmware setting's or a pace's (`Event::Band`).
 pub(crate) fn bands(paths: &[crate::base::toolpath::Toolpath]) -> Vec<BandStats> {
     let mut out = Vec::new();
     for tp in paths {
         for (_, e) in &tp.events {
-            if let crate::base::toolpath::Event::Set { band: Some(b), .. } = e {
+            use crate::base::toolpath::Event;
+            if let Event::Set { band: Some(b), .. } | Event::Band { band: b, .. } = e {
                 out.push(BandStats {
                     index: b.index,
                     // start + band·step to 9 decimals: 0.6, not 0.6000000000000001

@@ -82,6 +82,25 @@ pub enum Event {
         /// for the `setting` check to name.
         place: Option<std::sync::Arc<str>>,
     },
+    /// A band of a calibration print that no firmware command begins (a
+    /// `set` step's `speed` or `volumetric_speed`): its extruding strings
+    /// carry the value, until the next band's; written as a comment.
+    Band {
+        /// The band.
+        band: Band,
+        /// What its value is.
+        pace: Pace,
+    },
+}
+
+/// What a band's strings carry when no firmware command begins it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Pace {
+    /// The head's speed, mm/s.
+    Speed,
+    /// The volumetric speed (flow), mm³/s: each string's speed is it over
+    /// the string's cross-section.
+    Volumetric,
 }
 
 /// A band of a calibration print: where one value of a `set` step holds.

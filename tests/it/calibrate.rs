@@ -47,12 +47,22 @@ fn the_list_names_every_test_in_the_guides_order() {
     );
 }
 
-/// Every test on the smallest built-in beds (the A1 mini's and the MINI's
-/// 180 mm) and a Klipper and a delta printer: clean, with its bands.
+/// Every test on every built-in printer (the smallest beds, the A1 mini's
+/// and the MINI's 180 mm, among them): clean, with its bands; the
+/// volumetric speed test's default range kept under the hot end's hard
+/// flow limit (the Ender 3's 8 mm³/s × 1.5: its last band 11 mm³/s).
 #[test]
-fn every_test_builds_clean_on_small_beds() {
+fn every_test_builds_clean_on_every_built_in_printer() {
     let dir = tmp("calibrate-small");
-    for printer in ["bambu-a1-mini", "prusa-mini", "voron-350", "rostock-max"] {
+    let mut printers: Vec<String> = std::fs::read_dir(root().join("src/machine/printers"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().to_string())
+        .filter_map(|n| n.strip_suffix(".yaml").map(str::to_string))
+        .collect();
+    printers.sort();
+    assert!(printers.len() >= 15, "{printers:?}");
+    for printer in &printers {
+        let printer = printer.as_str();
         for t in TESTS {
             let out = p3dp(
                 &dir,
@@ -72,10 +82,12 @@ fn every_test_builds_clean_on_small_beds() {
             let report = String::from_utf8_lossy(&out.stdout);
             assert!(report.contains("0 errors"), "{t} on {printer}: {report}");
             let s = stats(&dir, "s.json");
-            if !matches!(t, "vfa" | "volumetric-speed") {
-                let bands = s["bands"].as_array().unwrap();
-                assert!(bands.len() >= 5, "{t}: {bands:?}");
-                assert!(report.contains("  bands:\n"), "{report}");
+            let bands = s["bands"].as_array().unwrap();
+            assert!(bands.len() >= 5, "{t}: {bands:?}");
+            assert!(report.contains("  bands:\n"), "{report}");
+            if (t, printer) == ("volumetric-speed", "ender3") {
+                let last = bands.last().unwrap()["value"].as_f64();
+                assert_eq!(last, Some(11.0), "{bands:?}");
             }
         }
     }
@@ -365,4 +377,124 @@ fn every_gallery_recipe_is_in_the_lock() {
         }
     }
     assert!(n >= 11);
+}
+
+/// `volumetric-speed`'s band N lands in the profile's `max_flow`, and a
+/// rebuild with that profile holds the `flow` check to it; `vfa`, whose
+/// value no profile holds, is refused saying the band's speed and where it
+/// goes, and writes nothing.
+#[test]
+fn apply_writes_max_flow_and_says_what_vfa_gives() {
+    let dir = tmp("calibrate-apply-flow");
+    let run = |args: &[&str]| p3dp(&dir, args);
+    let out = run(&[
+        "calibrate",
+        "volumetric-speed",
+        "--set",
+        "step=1/2",
+        "-o",
+        "f.gcode",
+        "--stats-json",
+        "f.json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let band = &stats(&dir, "f.json")["bands"][7];
+    assert_eq!(band["value"].as_f64(), Some(8.5));
+    let out = run(&[
+        "calibrate",
+        "apply",
+        "volumetric-speed",
+        "--set",
+        "step=1/2",
+        "--height",
+        &format!("{}", band["z_from"].as_f64().unwrap() + 0.1),
+        "-o",
+        "flow.yaml",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let profile = std::fs::read_to_string(dir.join("flow.yaml")).unwrap();
+    assert!(profile.contains("inherits: generic-220\n"), "{profile}");
+    assert!(profile.contains("\nmax_flow: 8.5\n"), "{profile}");
+    // 0.1 mm² at 100 mm/s: 10 mm³/s, under generic-220's 12, over 8.5
+    std::fs::write(
+        dir.join("fast.yaml"),
+        "p3dp: 1\nname: fast\nparts:\n  - {cross_section: 0.1, speed: 100, primitive: {helix: {radius: 15, height: 2, pitch: 0.2, segments: 90, center: [0, 0, 0.2]}}}\n",
+    )
+    .unwrap();
+    for (printer, warned) in [("generic-220", false), ("flow.yaml", true)] {
+        let out = run(&[
+            "build",
+            "fast.yaml",
+            "--printer",
+            printer,
+            "-o",
+            "fast.gcode",
+        ]);
+        let all = format!(
+            "{}{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(out.status.success(), "{all}");
+        assert_eq!(
+            all.contains("hot end's 8.5 mm³/s"),
+            warned,
+            "{printer}: {all}"
+        );
+    }
+    let out = run(&["calibrate", "apply", "vfa", "--band", "3", "-o", "v.yaml"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("band 3 gives 50)"), "{err}");
+    assert!(err.contains("print walls no faster"), "{err}");
+    assert!(!dir.join("v.yaml").exists());
+}
+
+/// The guide's chapter runs the tests in the order the calibration guides
+/// recommend: temperature, maximum volumetric speed, pressure advance,
+/// flow, retraction, cornering, input shaping, VFA; each section's
+/// commands name its tests.
+#[test]
+fn the_guide_runs_the_tests_in_the_recommended_order() {
+    let guide = std::fs::read_to_string(root().join("docs/guide/12-calibrate.md")).unwrap();
+    assert!(guide.starts_with("# Calibrate your printer\n"));
+    let headings: Vec<&str> = guide.lines().filter(|l| l.starts_with("## ")).collect();
+    assert_eq!(
+        headings,
+        [
+            "## 1. Temperature",
+            "## 2. Maximum volumetric speed",
+            "## 3. Pressure advance",
+            "## 4. Flow",
+            "## 5. Retraction",
+            "## 6. Cornering, 7. input shaping, 8. VFA",
+        ]
+    );
+    // the first command of each test comes in that order too
+    let at = |t: &str| {
+        guide
+            .find(&format!("p3dp calibrate {t} "))
+            .unwrap_or_else(|| panic!("{t} not in the guide"))
+    };
+    let order = [
+        "temperature",
+        "volumetric-speed",
+        "pressure-advance-tower",
+        "flow",
+        "retraction",
+        "cornering",
+        "input-shaping-frequency",
+        "vfa",
+    ];
+    for w in order.windows(2) {
+        assert!(at(w[0]) < at(w[1]), "{} after {}", w[0], w[1]);
+    }
 }

@@ -21,6 +21,9 @@ pub(crate) struct Test {
     pub(crate) ranges: &'static [(&'static str, [f64; 3])],
     /// The profile key `apply` writes, if any.
     pub(crate) key: Option<&'static str>,
+    /// Without a key: what the value is and where it goes instead (`apply`
+    /// says so, with the band's value, and writes nothing).
+    pub(crate) instead: &'static str,
     /// The recipe and key for a Klipper printer, when they differ.
     pub(crate) klipper: Option<(&'static str, &'static str)>,
 }
@@ -44,6 +47,7 @@ pub(crate) const TESTS: &[Test] = &[
             ("tpu", [240.0, 210.0, -5.0]),
         ],
         key: None,
+        instead: "the material's nozzle temperature: set it as your material's `nozzle_temp` (an inline `material:` map) or in your slicer",
         klipper: None,
     },
     Test {
@@ -51,7 +55,8 @@ pub(crate) const TESTS: &[Test] = &[
         what: "maximum volumetric speed: a vase, one flow (mm³/s) per band",
         recipe: gallery_file!("volumetric-speed"),
         ranges: &[("pla", [5.0, 15.0, 1.0]), ("petg", [4.0, 12.0, 1.0])],
-        key: None,
+        key: Some("max_flow"),
+        instead: "",
         klipper: None,
     },
     Test {
@@ -60,6 +65,7 @@ pub(crate) const TESTS: &[Test] = &[
         recipe: gallery_file!("pressure-advance-tower"),
         ranges: &[("pla", [0.0, 0.08, 0.008]), ("petg", [0.0, 0.1, 0.01])],
         key: Some("pressure_advance"),
+        instead: "",
         klipper: None,
     },
     Test {
@@ -68,6 +74,7 @@ pub(crate) const TESTS: &[Test] = &[
         recipe: gallery_file!("pressure-advance-line"),
         ranges: &[("pla", [0.0, 0.08, 0.01]), ("petg", [0.0, 0.1, 0.0125])],
         key: Some("pressure_advance"),
+        instead: "",
         klipper: None,
     },
     Test {
@@ -76,6 +83,7 @@ pub(crate) const TESTS: &[Test] = &[
         recipe: gallery_file!("pressure-advance-pattern"),
         ranges: &[("pla", [0.0, 0.08, 0.01]), ("petg", [0.0, 0.1, 0.0125])],
         key: Some("pressure_advance"),
+        instead: "",
         klipper: None,
     },
     Test {
@@ -84,6 +92,7 @@ pub(crate) const TESTS: &[Test] = &[
         recipe: gallery_file!("flow"),
         ranges: &[("pla", [0.9, 1.1, 0.025])],
         key: None,
+        instead: "the material's flow factor: set it with a `set` step's `flow` in your recipes, or as your slicer's extrusion multiplier",
         klipper: None,
     },
     Test {
@@ -92,6 +101,7 @@ pub(crate) const TESTS: &[Test] = &[
         recipe: gallery_file!("retraction"),
         ranges: &[("pla", [0.2, 2.0, 0.2]), ("petg", [0.4, 2.4, 0.2])],
         key: Some("retraction.length"),
+        instead: "",
         klipper: None,
     },
     Test {
@@ -100,6 +110,7 @@ pub(crate) const TESTS: &[Test] = &[
         recipe: gallery_file!("cornering"),
         ranges: &[("pla", [2.0, 20.0, 2.0])],
         key: Some("kinematics.jerk"),
+        instead: "",
         klipper: Some((
             gallery_file!("cornering-scv"),
             "kinematics.square_corner_velocity",
@@ -111,6 +122,7 @@ pub(crate) const TESTS: &[Test] = &[
         recipe: gallery_file!("input-shaping-frequency"),
         ranges: &[("pla", [20.0, 70.0, 5.0])],
         key: None,
+        instead: "the firmware's input shaper frequency: set it in the firmware's configuration (Klipper's `[input_shaper]`, Marlin's `M593 F` and `M500`)",
         klipper: None,
     },
     Test {
@@ -119,6 +131,7 @@ pub(crate) const TESTS: &[Test] = &[
         recipe: gallery_file!("input-shaping-damping"),
         ranges: &[("pla", [0.02, 0.2, 0.02])],
         key: None,
+        instead: "the firmware's input shaper damping ratio: set it in the firmware's configuration (Klipper's `[input_shaper]`, Marlin's `M593 D` and `M500`)",
         klipper: None,
     },
     Test {
@@ -127,6 +140,7 @@ pub(crate) const TESTS: &[Test] = &[
         recipe: gallery_file!("vfa"),
         ranges: &[("pla", [20.0, 100.0, 10.0])],
         key: None,
+        instead: "the fastest wall speed free of fine vertical artefacts: print walls no faster (your recipes' `speed`)",
         klipper: None,
     },
 ];
@@ -265,7 +279,11 @@ fn prepare(o: &Options) -> Result<(build::Options, tempfile::TempDir)> {
     let mut opts = o.build.clone();
     let printer = printer(opts.builds.printer.as_deref(), t)?;
     let material = o.material.as_deref().unwrap_or("pla");
+    let user_end = opts.builds.sets.iter().any(|(k, _)| k == "end");
     opts.builds.sets = sets(t, material, printer.nozzle_diameter, &opts.builds.sets);
+    if t.name == "volumetric-speed" && !user_end {
+        cap_flow(&mut opts.builds.sets, &printer);
+    }
     let dir = scratch()?;
     let file = stage_recipe(
         t,
@@ -277,6 +295,33 @@ fn prepare(o: &Options) -> Result<(build::Options, tempfile::TempDir)> {
     // the report names the test, not the staged file
     opts.shown = Some(format!("calibration test {}", t.name));
     Ok((opts, dir))
+}
+
+/// `volumetric-speed`'s `end` (not the user's) kept below the hot end's
+/// hard limit (`checks.flow_hard_max` × `max_flow`), where the `flow` check
+/// refuses a print as a clog: the last band `start + k·step` strictly
+/// under it (a band at the limit itself could compute c·(Q/c) a hair
+/// above it). Values that are no plain numbers are left alone.
+fn cap_flow(sets: &mut [(String, String)], printer: &crate::machine::Printer) {
+    let num = |key: &str| {
+        let (_, v) = sets.iter().find(|(k, _)| k == key)?;
+        crate::base::expr::eval_const(v, &crate::base::expr::Params::new()).ok()
+    };
+    let (Some(start), Some(end), Some(step)) = (num("start"), num("end"), num("step")) else {
+        return;
+    };
+    let hard = printer.checks.flow_hard_max * printer.max_flow;
+    if step <= 0.0 || end < hard || start >= hard {
+        return;
+    }
+    let mut k = libm::floor((hard - start) / step + 1e-9);
+    if start + k * step >= hard - 1e-9 {
+        k -= 1.0;
+    }
+    let capped = libm::round((start + k * step) * 1e9) / 1e9;
+    if let Some(e) = sets.iter_mut().find(|(key, _)| key == "end") {
+        e.1 = format!("{capped}");
+    }
 }
 
 /// The recipe and `apply`'s key of `t` for `printer`'s firmware.
@@ -327,62 +372,23 @@ pub(crate) struct Apply {
 }
 
 /// `p3dp calibrate apply`: the band's value written into a profile that
-/// inherits the printer; the line to print.
+/// inherits the printer; the line to print. A test whose value no profile
+/// key holds is refused, saying the band's value and where it goes.
 pub(crate) fn apply(a: &Apply) -> Result<String> {
     let t = test(&a.test)?;
-    let printer_spec = a.printer.clone().unwrap_or_else(|| "generic-220".into());
-    let Some(key) = recipe_for(t, &printer(Some(&printer_spec), t)?).1 else {
+    let printer = a.printer.clone().unwrap_or_else(|| "generic-220".into());
+    let key = recipe_for(t, &self::printer(Some(&printer), t)?).1;
+    let band = picked(a, &printer)?;
+    let value = band.value;
+    let Some(key) = key else {
         return Err(Error::input(
             "TEST",
             format!(
-                "`{}` tunes a value a printer profile does not hold (the material's, or the firmware's own); read it off the print and set it there",
-                t.name
+                "`{}` tunes {}; a printer profile does not hold it, so nothing is written (band {} gives {value})",
+                t.name, t.instead, band.index
             ),
         ));
     };
-    let printer = a.printer.clone().unwrap_or_else(|| "generic-220".into());
-    let o = Options {
-        test: a.test.clone(),
-        material: a.material.clone(),
-        build: build::Options {
-            builds: super::Builds {
-                printer: Some(printer.clone()),
-                sets: a.sets.clone(),
-                ..super::Builds::default()
-            },
-            ..build::Options::default()
-        },
-    };
-    let (opts, _dir) = prepare(&o)?;
-    let plan = crate::app::prepare::prepare(
-        &opts.builds.recipes[0],
-        &crate::app::prepare::Options {
-            sets: opts.builds.sets.clone(),
-            printer: Some(printer.clone()),
-            ..Default::default()
-        },
-    );
-    let plan = plan?;
-    let bands = crate::analyse::stats::bands(&plan.paths);
-    let band = bands
-        .iter()
-        .find(|b| match a.pick {
-            Pick::Band(n) => b.index == n,
-            Pick::Height(z) => b
-                .z_from
-                .zip(b.z_to)
-                .is_some_and(|(lo, hi)| z >= lo && z < hi),
-        })
-        .ok_or_else(|| {
-            Error::input(
-                "--band",
-                format!(
-                    "the print has no such band; expected one of bands 0 to {}",
-                    bands.len().saturating_sub(1)
-                ),
-            )
-        })?;
-    let value = band.value;
     let body = match key.split_once('.') {
         Some((map, k)) => format!("{map}: {{ {k}: {value} }}\n"),
         None => format!("{key}: {value}\n"),
@@ -407,6 +413,52 @@ pub(crate) fn apply(a: &Apply) -> Result<String> {
         band.index,
         a.output.display()
     ))
+}
+
+/// The band `apply` picks, of the test built as the print was (the same
+/// printer, material and `--set`).
+fn picked(a: &Apply, printer: &str) -> Result<crate::analyse::stats::BandStats> {
+    let o = Options {
+        test: a.test.clone(),
+        material: a.material.clone(),
+        build: build::Options {
+            builds: super::Builds {
+                printer: Some(printer.to_string()),
+                sets: a.sets.clone(),
+                ..super::Builds::default()
+            },
+            ..build::Options::default()
+        },
+    };
+    let (opts, _dir) = prepare(&o)?;
+    let plan = crate::app::prepare::prepare(
+        &opts.builds.recipes[0],
+        &crate::app::prepare::Options {
+            sets: opts.builds.sets.clone(),
+            printer: Some(printer.to_string()),
+            ..Default::default()
+        },
+    )?;
+    let bands = crate::analyse::stats::bands(&plan.paths);
+    let n = bands.len();
+    bands
+        .into_iter()
+        .find(|b| match a.pick {
+            Pick::Band(n) => b.index == n,
+            Pick::Height(z) => b
+                .z_from
+                .zip(b.z_to)
+                .is_some_and(|(lo, hi)| z >= lo && z < hi),
+        })
+        .ok_or_else(|| {
+            Error::input(
+                "--band",
+                format!(
+                    "the print has no such band; expected one of bands 0 to {}",
+                    n.saturating_sub(1)
+                ),
+            )
+        })
 }
 
 #[cfg(test)]
@@ -587,8 +639,12 @@ mod tests {
             assert!((band["value"].as_f64().unwrap() - want).abs() < 1e-9);
             assert_eq!(band["index"].as_u64(), Some(i as u64));
             if let (Some(lo), Some(hi)) = (band["z_from"].as_f64(), band["z_to"].as_f64()) {
-                // recipe z: the machine z less the printer's origin
-                let _ = (lo, hi, z);
+                // the band's first move lies in the band (the G-code's z is
+                // the recipe's: these printers' z origin is 0)
+                assert!(
+                    *z >= lo - 1e-9 && *z < hi,
+                    "{test} {flavor:?} band {i}: first move at z {z}, not in [{lo}, {hi})"
+                );
             } else {
                 assert_eq!(band["line"].as_u64(), Some(i as u64));
             }
@@ -600,17 +656,135 @@ mod tests {
         }
     }
 
-    /// p3dp's own retraction per band: after band k's note every
-    /// retraction the reader reads takes back `start + k·step` mm, in
-    /// absolute and relative E; with firmware retraction, one `M207` /
-    /// `SET_RETRACTION` per band.
+    /// The labels the G-code's part names carry (`label-K-VALUE`), in order.
+    fn labels(gcode: &str) -> Vec<f64> {
+        gcode
+            .lines()
+            .filter_map(|l| l.strip_prefix("; part: label-"))
+            .map(|name| name.split([' ', '-']).nth(1).unwrap().parse().unwrap())
+            .collect()
+    }
+
+    /// The extruding moves of part `part` read back: (z, mm/s, mm³/s),
+    /// the flow from E over the move's time (`area`: the filament's
+    /// section, mm²).
+    fn paced_moves(flavor: Flavor, gcode: &str, part: &str, area: f64) -> Vec<(f64, f64, f64)> {
+        let (mut relative, mut e, mut feed) = (false, 0.0, 0.0);
+        let mut at = [0.0; 3];
+        let mut inside = false;
+        let mut out = Vec::new();
+        for line in gcode.lines() {
+            if let Some(name) = line.strip_prefix("; part: ") {
+                inside = name.split(' ').next() == Some(part);
+            }
+            for c in read(flavor, line).unwrap().commands {
+                match c {
+                    Command::RelativeE(r) => relative = r,
+                    Command::SetPosition { e: Some(v), .. } => e = v,
+                    Command::Move(m) => {
+                        feed = m.feed.unwrap_or(feed);
+                        let from = at;
+                        for (a, to) in at.iter_mut().zip(m.to) {
+                            *a = to.unwrap_or(*a);
+                        }
+                        let Some(v) = m.e else { continue };
+                        let de = if relative { v } else { v - e };
+                        e = if relative { e + v } else { v };
+                        let len = (0..3)
+                            .map(|k| (at[k] - from[k]).powi(2))
+                            .sum::<f64>()
+                            .sqrt();
+                        if inside && de > 0.0 && len > 0.0 {
+                            let speed = feed / 60.0;
+                            out.push((at[2], speed, de * area * speed / len));
+                        }
+                    }
+                    _ => {}
+                }
+            }
+        }
+        out
+    }
+
+    /// `vfa` and `volumetric-speed` (the moves' speed and flow, no firmware
+    /// setting), every flavour, a step no slicer offers: read back, every
+    /// extruding move of the wall lies in a band of the stats and carries
+    /// that band's value `start + i·step` (F exactly, the flow from E and F
+    /// to the writing's precision); every band has moves, its first at its
+    /// bottom; the labels are the bands' values.
+    #[test]
+    fn paced_bands_read_back_in_every_flavour() {
+        for (test, part, step) in [
+            ("vfa", "tower", "step=7"),
+            ("volumetric-speed", "vase", "step=7/10"),
+        ] {
+            for (printer, flavor) in FLAVOURS {
+                let b = build(test, printer, &[step, "band_height=2"]).unwrap();
+                let s = &b.stats;
+                let area = s["filament_volume_mm3"].as_f64().unwrap()
+                    / s["filament_length_mm"].as_f64().unwrap();
+                let bands = s["bands"].as_array().unwrap();
+                let (start, step) = (
+                    s["params"]["start"].as_f64().unwrap(),
+                    s["params"]["step"].as_f64().unwrap(),
+                );
+                assert!(bands.len() >= 12, "{test}: {bands:?}");
+                let span = |b: &serde_json::Value| {
+                    [b["z_from"].as_f64().unwrap(), b["z_to"].as_f64().unwrap()]
+                };
+                let mut first: Vec<Option<f64>> = vec![None; bands.len()];
+                for (z, speed, flow) in paced_moves(flavor, &b.gcode, part, area) {
+                    // the G-code's z is the recipe's (these printers' z origin is 0)
+                    let last = bands.len() - 1;
+                    let i = bands
+                        .iter()
+                        .position(|b| {
+                            let [lo, hi] = span(b);
+                            z >= lo - 1e-9
+                                && (z < hi - 1e-9 || (z <= hi + 1e-9 && b == &bands[last]))
+                        })
+                        .unwrap_or_else(|| panic!("{test} {flavor:?}: a move at z {z} in no band"));
+                    let want = start + i as f64 * step;
+                    let got = if test == "vfa" { speed } else { flow };
+                    assert!(
+                        (got - want).abs() <= 2e-3 * want,
+                        "{test} {flavor:?} band {i} at z {z}: {got} ≠ {want}"
+                    );
+                    if test == "vfa" {
+                        assert_eq!(speed * 60.0, libm::round(want * 60.0));
+                    }
+                    first[i].get_or_insert(z);
+                }
+                for (i, (band, z)) in bands.iter().zip(&first).enumerate() {
+                    assert_eq!(band["index"].as_u64(), Some(i as u64));
+                    let want = start + i as f64 * step;
+                    assert!((band["value"].as_f64().unwrap() - want).abs() < 1e-9);
+                    let [lo, _] = span(band);
+                    let z = z.unwrap_or_else(|| panic!("{test} {flavor:?}: band {i} has no move"));
+                    assert!(
+                        z >= lo - 1e-9 && z < lo + 0.2,
+                        "{test} band {i}: first move at {z}, from {lo}"
+                    );
+                }
+                let values: Vec<f64> = bands.iter().map(|b| b["value"].as_f64().unwrap()).collect();
+                let labels = labels(&b.gcode);
+                assert_eq!(labels.len(), values.len(), "{test}: {labels:?}");
+                for (l, v) in labels.iter().zip(&values) {
+                    assert!((l - v).abs() < 1e-6, "{test}: label {l} for band value {v}");
+                }
+                assert_eq!(b.gcode.matches("\n; band ").count(), bands.len());
+            }
+        }
+    }
+
+    /// p3dp's own retraction per band, every flavour: after band k's note
+    /// every retraction the reader reads takes back `start + k·step` mm, in
+    /// absolute and relative E; the labels are the bands' values. (These
+    /// printers retract with E moves; firmware retraction's `M207` /
+    /// `SET_RETRACTION` per band is not read back here.)
     #[test]
     fn retraction_bands_are_the_retractions_read_back() {
-        for (printer, flavor) in [
-            ("generic-220", Flavor::Marlin),
-            ("prusa-mk4", Flavor::Prusa),
-            ("voron-350", Flavor::Klipper),
-        ] {
+        for (printer, flavor) in FLAVOURS {
             let b = build("retraction", printer, &["step=3/10", "end=2"]).unwrap();
             let bands = b.stats["bands"].as_array().unwrap();
             let (mut relative, mut e, mut band): (bool, f64, Option<f64>) = (false, 0.0, None);
@@ -650,6 +824,7 @@ mod tests {
                 .map(|i| libm::round((0.2 + 0.3 * i as f64) * 1e9) / 1e9)
                 .collect();
             assert_eq!(values, want);
+            assert_eq!(labels(&b.gcode), values, "{printer}");
         }
     }
 }

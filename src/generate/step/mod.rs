@@ -83,7 +83,10 @@ impl Step {
                 .any(|e| e.uses(k)),
             Step::ModulateCylinder(m) => m.factor.uses(k),
             Step::ModulateMap(m) => m.u.uses(k) || m.v.uses(k),
-            Step::Set(s) => s.named.values.iter().any(|(_, e)| e.uses(k)),
+            Step::Set(s) => {
+                s.named.values.iter().any(|(_, e)| e.uses(k))
+                    || s.pace.as_ref().is_some_and(|(_, e)| e.uses(k))
+            }
             Step::Subdivide(_) | Step::Translate(_) | Step::Place(..) | Step::GcodeAt(..) => false,
         }
     }

@@ -8,12 +8,16 @@
 //! written as 25 × 0.2 = 5.000000000000001 or 4.999999999999999) belongs to
 //! the band above it, whatever the rounding of its z; only the part's top,
 //! when it lies on an edge, closes the band below it.
+//!
+//! A pace (`speed`, `volumetric_speed`) is no firmware setting: the band's
+//! extruding strings carry it (v, or v = Q/c for a flow Q), from the band's
+//! first string to the next band's, and a `Band` event marks the band.
 
 use crate::base::error::{Error, Result};
 use crate::base::expr::{var, Expr, Memo, Vars};
 use crate::base::gcode::named::Named;
 use crate::base::gcode::Setting;
-use crate::base::toolpath::{Band, Event, Toolpath};
+use crate::base::toolpath::{Band, Event, Pace, Toolpath};
 
 /// Where a `set` step's bands are.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -39,6 +43,10 @@ pub(crate) struct Set {
     /// The settings: each value an expression of x, y, z (variables) and
     /// `band` (extra slot 0).
     pub(crate) named: Named<Expr>,
+    /// What the band's extruding strings carry (`speed` or
+    /// `volumetric_speed`), an expression as the settings' are: the band's
+    /// value when given.
+    pub(crate) pace: Option<(Pace, Expr)>,
 }
 
 /// The variables a `set` value may read.
@@ -46,42 +54,97 @@ pub(crate) const VARS: &[usize] = &[var::X, var::Y, var::Z];
 /// The extra names a `set` value may read.
 pub(crate) const NAMES: &[&str] = &["band"];
 
+/// What one band of a `set` step holds: the firmware's settings, the
+/// strings' pace (if any), and the band's value (the pace, else the first
+/// setting's).
+struct Held {
+    settings: Vec<Setting>,
+    pace: Option<f64>,
+    value: f64,
+}
+
 impl Set {
-    /// The settings at `vars` in band `band`, merged as the firmware sets
-    /// them (print and travel acceleration in one, the shaper's values in
-    /// one …), and the first value given (the band's).
-    pub(crate) fn settings(
-        &self,
-        vars: &Vars,
-        band: u32,
-        memo: &mut Memo,
-    ) -> Result<(Vec<Setting>, f64)> {
-        let mut first = None;
-        let out = self.named.lower(|_, e| {
-            let v = e.eval_ext(vars, &[f64::from(band)], memo);
-            if !v.is_finite() {
-                return Err(Error::input(
-                    "",
-                    format!(
-                        "`{}` gives {v} in band {band} at (x, y, z) = ({:.3}, {:.3}, {:.3}); expected a finite number",
-                        e.src(),
-                        vars[var::X],
-                        vars[var::Y],
-                        vars[var::Z]
-                    ),
-                ));
+    /// `e` at `vars` in band `band`, a finite number.
+    fn value(e: &Expr, vars: &Vars, band: u32, memo: &mut Memo) -> Result<f64> {
+        let v = e.eval_ext(vars, &[f64::from(band)], memo);
+        if !v.is_finite() {
+            return Err(Error::input(
+                "",
+                format!(
+                    "`{}` gives {v} in band {band} at (x, y, z) = ({:.3}, {:.3}, {:.3}); expected a finite number",
+                    e.src(),
+                    vars[var::X],
+                    vars[var::Y],
+                    vars[var::Z]
+                ),
+            ));
+        }
+        Ok(v)
+    }
+
+    /// What band `band` holds at `vars`: the settings merged as the
+    /// firmware sets them (print and travel acceleration in one, the
+    /// shaper's values in one …), the pace, and the band's value.
+    fn held(&self, vars: &Vars, band: u32, memo: &mut Memo) -> Result<Held> {
+        let pace = match &self.pace {
+            Some((kind, e)) => {
+                let v = Set::value(e, vars, band, memo)?;
+                if v <= 0.0 {
+                    let (key, unit) = match kind {
+                        Pace::Speed => ("speed", "mm/s"),
+                        Pace::Volumetric => ("volumetric_speed", "mm³/s"),
+                    };
+                    return Err(Error::input(
+                        key,
+                        format!(
+                            "`{}` gives {v} in band {band}; expected a speed above 0, {unit}",
+                            e.src()
+                        ),
+                    ));
+                }
+                Some(v)
             }
+            None => None,
+        };
+        let mut first = pace;
+        let out = self.named.lower(|_, e| {
+            let v = Set::value(e, vars, band, memo)?;
             first.get_or_insert(v);
             Ok(v)
         })?;
-        Ok((
-            out.into_iter().map(|(s, _)| s).collect(),
-            first.unwrap_or(0.0),
-        ))
+        Ok(Held {
+            settings: out.into_iter().map(|(s, _)| s).collect(),
+            pace,
+            value: first.unwrap_or(0.0),
+        })
+    }
+
+    /// The band of an extruding string ending at height `z` in a part whose
+    /// top is `top`, and the band's heights; `None` below band 0.
+    fn band_of(&self, z: f64, top: f64) -> Option<(u32, Option<[f64; 2]>)> {
+        match self.bands {
+            Bands::Height { from, every } => {
+                let mut b = libm::floor((z - from) / every + 1e-9);
+                if b < 0.0 || b >= f64::from(u32::MAX) {
+                    return None;
+                }
+                // the part's top on an edge closes the band below it
+                if b > 0.0 && from + b * every >= top - 1e-9 {
+                    b -= 1.0;
+                }
+                let b = b as u32;
+                let lo = from + f64::from(b) * every;
+                Some((b, Some([lo, (lo + every).min(top.max(lo))])))
+            }
+            Bands::Line(b) => Some((b, None)),
+            Bands::Once => Some((0, None)),
+        }
     }
 
     /// Puts the settings into `tp` before the first extruding string of
-    /// each band (after the events already there).
+    /// each band (after the events already there); with a pace, every
+    /// extruding string from a band's first to the next band's carries
+    /// the band's.
     pub(crate) fn apply(&self, tp: &mut Toolpath) -> Result<()> {
         let mut memo = Memo::default();
         let mut new: Vec<(usize, Event)> = Vec::new();
@@ -90,59 +153,75 @@ impl Set {
             .map(|k| tp.points[k + 1].z)
             .fold(f64::NEG_INFINITY, f64::max);
         let mut last: Option<u32> = None;
+        let mut pace: Option<f64> = None;
         for k in 0..tp.len() {
             if tp.strings[k].travel {
                 continue;
             }
             let p = tp.points[k + 1];
-            let (band, z) = match self.bands {
-                Bands::Height { from, every } => {
-                    let mut b = libm::floor((p.z - from) / every + 1e-9);
-                    if b < 0.0 || b >= f64::from(u32::MAX) {
-                        continue;
-                    }
-                    // the part's top on an edge closes the band below it
-                    if b > 0.0 && from + b * every >= top - 1e-9 {
-                        b -= 1.0;
-                    }
-                    let b = b as u32;
-                    let lo = from + f64::from(b) * every;
-                    (b, Some([lo, (lo + every).min(top.max(lo))]))
-                }
-                Bands::Line(b) => (b, None),
-                Bands::Once => (0, None),
-            };
-            if last.is_some_and(|l| band <= l) {
+            let Some((band, z)) = self.band_of(p.z, top) else {
                 continue;
+            };
+            if last.is_none_or(|l| band > l) {
+                last = Some(band);
+                let mut vars = [0.0; var::COUNT];
+                vars[var::X] = p.x;
+                vars[var::Y] = p.y;
+                vars[var::Z] = p.z;
+                let held = self.held(&vars, band, &mut memo)?;
+                pace = held.pace;
+                self.mark(k, band, z, held, &mut new);
             }
-            last = Some(band);
-            let mut vars = [0.0; var::COUNT];
-            vars[var::X] = p.x;
-            vars[var::Y] = p.y;
-            vars[var::Z] = p.z;
-            let (settings, value) = self.settings(&vars, band, &mut memo)?;
-            let mark = (self.bands != Bands::Once).then_some(Band {
-                index: band,
-                value,
-                z,
-            });
-            for (j, s) in settings.into_iter().enumerate() {
-                let band = if j == 0 { mark } else { None };
-                new.push((
-                    k,
-                    Event::Set {
-                        setting: s,
-                        band,
-                        place: None,
-                    },
-                ));
-            }
-            if !matches!(self.bands, Bands::Height { .. }) {
-                break;
+            if let (Some(v), Some((kind, _))) = (pace, &self.pace) {
+                let s = &mut tp.strings[k];
+                s.v = match kind {
+                    Pace::Speed => v,
+                    // v = Q / c: the string's flow is the band's
+                    Pace::Volumetric if s.c > 0.0 => v / s.c,
+                    Pace::Volumetric => s.v,
+                };
             }
         }
         merge_events(tp, new);
         Ok(())
+    }
+
+    /// The events of band `band` at string `k`: its mark (a `Band` event
+    /// when a pace gives its value, else on its first setting) and its
+    /// settings.
+    fn mark(
+        &self,
+        k: usize,
+        band: u32,
+        z: Option<[f64; 2]>,
+        held: Held,
+        new: &mut Vec<(usize, Event)>,
+    ) {
+        let mut mark = (self.bands != Bands::Once).then_some(Band {
+            index: band,
+            value: held.value,
+            z,
+        });
+        if let (Some(b), Some((pace, _))) = (mark, &self.pace) {
+            new.push((
+                k,
+                Event::Band {
+                    band: b,
+                    pace: *pace,
+                },
+            ));
+            mark = None;
+        }
+        for s in held.settings {
+            new.push((
+                k,
+                Event::Set {
+                    setting: s,
+                    band: mark.take(),
+                    place: None,
+                },
+            ));
+        }
     }
 }
 
@@ -204,6 +283,7 @@ mod tests {
                 wait: false,
                 shaper: None,
             },
+            pace: None,
         }
     }
 

@@ -845,6 +845,19 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
                 return self.s.raw(text, &commands);
             }
             Event::Set { setting, band, .. } => return self.set(setting, band),
+            // no command: the band's strings carry its speed
+            Event::Band { band, pace } => {
+                let (what, unit) = match pace {
+                    crate::base::toolpath::Pace::Speed => ("speed", "mm/s"),
+                    crate::base::toolpath::Pace::Volumetric => ("volumetric speed", "mm3/s"),
+                };
+                let t = format!(
+                    "; band {}: {what} {} {unit}",
+                    band.index,
+                    fmt_num(band.value)
+                );
+                return self.text(&t);
+            }
         };
         self.s.command(&c, "")
     }

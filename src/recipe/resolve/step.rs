@@ -122,6 +122,7 @@ fn gcode_at(ctx: &Ctx, s: &Scope, text: &str) -> Result<std::sync::Arc<str>> {
 
 /// A `set` step; `s` is under its key.
 fn set(s: &Scope, raw: &RawSet) -> Result<Set> {
+    use crate::base::toolpath::Pace;
     use crate::generate::step::set::{Bands, NAMES, VARS};
     let bands = match (&raw.every, &raw.band) {
         (Some(_), Some(_)) => {
@@ -145,15 +146,32 @@ fn set(s: &Scope, raw: &RawSet) -> Result<Set> {
             Bands::Once
         }
     };
-    let named = named(raw, s.here(), |key, n| {
+    let compile = |key: &str, n: &Num| {
         let e =
             Expr::compile_ext(&n.src(), s.params, VARS, NAMES).map_err(|e| e.at(s.place(key)))?;
         if e.rands() > 0 {
             return Err(s.error(key, "`rand()` would set another value on every build of the same band; expected an expression of the position and `band`"));
         }
         Ok(e)
-    })?;
-    Ok(Set { bands, named })
+    };
+    let pace =
+        match raw.paces().as_slice() {
+            [] => None,
+            [(key, n)] => {
+                let kind = if *key == "speed" {
+                    Pace::Speed
+                } else {
+                    Pace::Volumetric
+                };
+                Some((kind, compile(key, n)?))
+            }
+            _ => return Err(s.error(
+                "volumetric_speed",
+                "`speed` and `volumetric_speed` both set the strings' speed; expected one of them",
+            )),
+        };
+    let named = named(raw, s.here(), compile)?;
+    Ok(Set { bands, named, pace })
 }
 
 /// The settings of a `set` step or command written at `place` (its bands
@@ -179,7 +197,7 @@ pub(super) fn named<T>(
         })?),
         None => None,
     };
-    if values.is_empty() && shaper.is_none() {
+    if values.is_empty() && shaper.is_none() && raw.paces().is_empty() {
         return Err(error("", "`set` sets nothing; expected a setting such as `nozzle_temperature: \"start + band*step\"` (see docs/recipe.md)".into()));
     }
     if raw.wait.is_some() && raw.nozzle_temperature.is_none() {

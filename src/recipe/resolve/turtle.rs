@@ -10,11 +10,10 @@ use indexmap::IndexMap;
 
 use crate::base::error::{Error, Result};
 use crate::base::expr::{var, Expr, ExprErrorKind, Params};
-use crate::base::gcode::named::Named;
 use crate::generate::primitive::turtle::interp::Program;
 use crate::generate::primitive::turtle::lsystem::Lsystem;
 use crate::generate::primitive::turtle::program::{
-    Axis, Cmd, Curve, Op, Piece, Proc, Setting, Val, Values, STATE,
+    Axis, Cmd, Curve, Op, Piece, Proc, Setting, Settings, Val, Values, STATE,
 };
 use crate::generate::primitive::turtle::{self, Env, Frame, Turtle};
 use crate::recipe::eval::{at, join, key, Scope};
@@ -498,26 +497,34 @@ impl<'a> Compiler<'a> {
     }
 
     /// `set: {…}` at `place`: the settings as a `set` step reads them
-    /// (without its bands), each value in the command's scope.
+    /// (no height bands; `band`, a line's index, allowed), each value in
+    /// the command's scope.
     fn settings(
         &self,
         raw: &crate::recipe::schema::RawSet,
         scope: &Arc<Vec<String>>,
         place: &str,
-    ) -> Result<Named<Val>> {
-        for (key, given) in [
-            ("every", raw.every.is_some()),
-            ("from", raw.from.is_some()),
-            ("band", raw.band.is_some()),
-        ] {
+    ) -> Result<Settings> {
+        for (key, given) in [("every", raw.every.is_some()), ("from", raw.from.is_some())] {
             if given {
                 return Err(Error::input(
                     join(place, key),
-                    format!("a `set` command sets its values here, where it runs, so it has no bands (`{key}` is a `set` step's); expected the settings only, each an expression of x, y, z and the names in scope"),
+                    format!("a `set` command sets its values here, where it runs, so it has no height bands (`{key}` is a `set` step's); expected the settings, each an expression of x, y, z and the names in scope, and `band` for a line test's line"),
                 ));
             }
         }
-        super::step::named(raw, place, |key, n| self.val(n, scope, &join(place, key)))
+        if let Some((key, _)) = raw.paces().first() {
+            return Err(Error::input(
+                join(place, key),
+                format!("`{key}` in a `set` command: the turtle's own `speed` command sets the speed of the strings that follow (`{{speed: v}}`, or v = flow/cross-section); expected the firmware's settings only"),
+            ));
+        }
+        let band = match &raw.band {
+            Some(n) => Some(self.val(n, scope, &join(place, "band"))?),
+            None => None,
+        };
+        let named = super::step::named(raw, place, |key, n| self.val(n, scope, &join(place, key)))?;
+        Ok(Settings { named, band })
     }
 
     /// `for: {name: values, …}` with `do: body`, list item `item`: one
@@ -1217,9 +1224,37 @@ mod tests {
         assert_eq!(e.place.as_deref(), Some("turtle.start"));
     }
 
+    /// `set` with `band`: line `band`'s mark on the command's first
+    /// setting (its value that setting's), none on the others, no height.
+    #[test]
+    fn a_set_command_with_band_marks_its_line() {
+        use crate::base::toolpath::Band;
+        let t = run("program:\n  - for: {k: \"0..3\"}\n    do:\n      - {set: {band: \"3 - k\", acceleration: \"1000 + k\", pressure_advance: \"0.01*k\"}}\n      - {forward: 5}\n");
+        let marks: Vec<(usize, Option<Band>)> = t
+            .events
+            .iter()
+            .map(|(k, e)| match e {
+                Event::Set { band, .. } => (*k, *band),
+                e => panic!("{e:?}"),
+            })
+            .collect();
+        assert_eq!(marks.len(), 8, "{marks:?}");
+        for (j, (k, band)) in marks.iter().enumerate() {
+            let line = j / 2;
+            assert_eq!(*k, line);
+            let want = (j % 2 == 0).then_some(Band {
+                index: 3 - line as u32,
+                // pressure advance comes first in the docs' order
+                value: 0.01 * line as f64,
+                z: None,
+            });
+            assert_eq!(*band, want, "{j}");
+        }
+    }
+
     /// `set`: one event per command the firmware sets (print and travel
     /// acceleration in one), values from the turtle's scope where it runs,
-    /// each naming its key path under `turtle`; no bands.
+    /// each naming its key path under `turtle`; no bands without `band`.
     #[test]
     fn set_commands_evaluate_in_scope_and_name_their_keys() {
         use crate::base::gcode::Setting;
@@ -1257,14 +1292,31 @@ mod tests {
                 assert_eq!(*place, Some("turtle.program[0].do[0].set.acceleration"));
             }
         }
-        // a step's bands have no meaning where the command runs
-        for key in ["every", "from", "band"] {
+        // a step's height bands have no meaning where the command runs,
+        // nor a pace (the turtle's own `speed` sets it)
+        for (key, why) in [
+            ("every", "no height bands"),
+            ("from", "no height bands"),
+            ("speed", "the turtle's own `speed`"),
+            ("volumetric_speed", "the turtle's own `speed`"),
+        ] {
             let e = err(&format!(
                 "program:\n  - {{set: {{{key}: 1, fan: 1}}}}\n  - {{forward: 1}}\n"
             ));
             assert_eq!(e.place, Some(format!("turtle.program[0].set.{key}")), "{e}");
-            assert!(e.message.contains("no bands"), "{e}");
+            assert!(e.message.contains(why), "{e}");
         }
+        // `band`: a line's index, a whole number from 0 where it runs
+        let e = err("program:\n  - for: {k: \"0..1\"}\n    do:\n      - {set: {band: \"k - 1/2\", fan: 1}}\n      - {forward: 1}\n");
+        assert_eq!(
+            e.place.as_deref(),
+            Some("turtle.program[0].do[0].set.band"),
+            "{e}"
+        );
+        assert!(
+            e.message.contains("gives -0.5; expected a whole number"),
+            "{e}"
+        );
         let e = err("program:\n  - {set: {}}\n  - {forward: 1}\n");
         assert_eq!(e.place.as_deref(), Some("turtle.program[0].set"), "{e}");
         assert!(e.message.contains("sets nothing"), "{e}");

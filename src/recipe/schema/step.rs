@@ -105,9 +105,18 @@ pub(crate) struct RawSet {
     /// Height where band 0 begins, mm (0).
     #[serde(default)]
     pub(crate) from: Option<Num>,
-    /// This part is band `band` of a line test (no `every`).
+    /// This part is band `band` of a line test (no `every`); in a turtle's
+    /// or path's `set` command, the line the command begins.
     #[serde(default)]
     pub(crate) band: Option<Num>,
+    /// The head's speed of the band's extruding strings, mm/s (no firmware
+    /// setting: the moves carry it).
+    #[serde(default)]
+    pub(crate) speed: Option<Num>,
+    /// The flow of the band's extruding strings, mm³/s (each string's speed
+    /// is it over the string's cross-section).
+    #[serde(default)]
+    pub(crate) volumetric_speed: Option<Num>,
     #[serde(default)]
     pub(crate) nozzle_temperature: Option<Num>,
     /// Wait for `nozzle_temperature` (false).
@@ -145,7 +154,18 @@ pub(crate) struct RawSet {
 }
 
 impl RawSet {
-    /// The settings given, in the order of the docs: key and value.
+    /// The pace given (`speed` or `volumetric_speed`): its key and value.
+    pub(crate) fn paces(&self) -> Vec<(&'static str, &Num)> {
+        [
+            ("speed", &self.speed),
+            ("volumetric_speed", &self.volumetric_speed),
+        ]
+        .into_iter()
+        .filter_map(|(k, v)| v.as_ref().map(|v| (k, v)))
+        .collect()
+    }
+
+    /// The firmware settings given, in the order of the docs: key and value.
     pub(crate) fn values(&self) -> Vec<(&'static str, &Num)> {
         [
             ("nozzle_temperature", &self.nozzle_temperature),

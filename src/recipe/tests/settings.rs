@@ -13,8 +13,8 @@ use crate::base::testing::{root, tmp};
 use crate::machine::firmware::read;
 
 /// Lines of a pressure advance test as one turtle: line k travels to its
-/// start, sets its factor and acceleration from `k`, then prints slow,
-/// fast, slow.
+/// start, sets its factor and acceleration from `k` (band k: its line),
+/// then prints slow, fast, slow.
 const LINES: &str = "p3dp: 1
 name: lines
 printer: generic-220
@@ -31,7 +31,7 @@ parts:
               - pen_up
               - {goto: [-30, \"k*4 - 8\", 0.2]}
               - pen_down
-              - {set: {pressure_advance: \"0.005 + 0.0075*k\", acceleration: \"600 + 50*k\"}}
+              - {set: {band: k, pressure_advance: \"0.005 + 0.0075*k\", acceleration: \"600 + 50*k\"}}
               - {speed: 20}
               - {forward: 15}
               - {speed: 80}
@@ -67,7 +67,8 @@ fn build(dir: &std::path::Path, file: &str, printer: &str) -> Result<String, Str
 
 /// Every flavour: read back, each line's pressure advance and acceleration
 /// come once each, before the line's first extruding move and after the
-/// line before it, with line k's values.
+/// line before it, with line k's values; the stats' and the report's bands
+/// are the lines (`line: k`), each the factor read back.
 #[test]
 fn one_setting_per_line_at_its_first_extruding_move_in_every_flavour() {
     for (printer, flavor) in FLAVOURS {
@@ -127,6 +128,20 @@ fn one_setting_per_line_at_its_first_extruding_move_in_every_flavour() {
             (None, None),
             "{flavor:?}: a setting after the last line"
         );
+        let stats: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("stats.json")).unwrap())
+                .unwrap();
+        let bands = stats["bands"].as_array().unwrap();
+        assert_eq!(bands.len(), seen.len(), "{flavor:?}: {bands:?}");
+        for (i, (b, got)) in bands.iter().zip(&seen).enumerate() {
+            assert_eq!(b["index"].as_u64(), Some(i as u64));
+            assert_eq!(b["line"].as_u64(), Some(i as u64));
+            assert_eq!(b["part"], "lines");
+            assert!(b.get("z_from").is_none(), "{b}");
+            let value = b["value"].as_f64().unwrap();
+            assert!((value - got.0.unwrap()).abs() < 6e-5, "{flavor:?}: {b}");
+        }
+        assert_eq!(gcode.matches(" ; band ").count(), 5, "{flavor:?}");
     }
 }
 

@@ -9,13 +9,12 @@ use glam::DVec3;
 
 use super::frame::Frame;
 use super::lsystem::{Lsystem, MAX_ITERATIONS};
-use super::program::{Axis, Cmd, Curve, Op, Piece, Proc, Setting, Val, Values};
+use super::program::{Axis, Cmd, Curve, Op, Piece, Proc, Setting, Settings, Val, Values};
 use crate::base::error::{Error, Result};
 use crate::base::expr::{var, Memo};
 use crate::base::format::fmt_value;
-use crate::base::gcode::named::Named;
 use crate::base::rng::SplitMix64;
-use crate::base::toolpath::{Event, Toolpath};
+use crate::base::toolpath::{Band, Event, Toolpath};
 
 /// Deepest nesting of procedure calls (a procedure calling itself with no
 /// `if` to stop it reaches this at once).
@@ -1072,25 +1071,51 @@ impl<'a> Run<'a> {
 
     /// `set`: the printer's settings with their values here, one event
     /// each (as the firmware sets them: print and travel acceleration in
-    /// one …), each naming its key path for the `setting` check.
-    fn printer(&mut self, named: &Named<Val>, vals: &mut Vec<f64>, place: &str) -> Result<()> {
-        let settings = named.lower(|key, v| {
+    /// one …), each naming its key path for the `setting` check; with
+    /// `band`, the first carries the line's band (its value the first
+    /// setting's), as a `set` step's does.
+    fn printer(&mut self, set: &Settings, vals: &mut Vec<f64>, place: &str) -> Result<()> {
+        let mut first = None;
+        let settings = set.named.lower(|key, v| {
             // the key's place made only when its value fails
-            self.eval(v, vals, place).map_err(|mut e| {
+            let x = self.eval(v, vals, place).map_err(|mut e| {
                 e.place = Some(format!("{place}.{}", key.name()));
                 e
-            })
+            })?;
+            first.get_or_insert(x);
+            Ok(x)
         })?;
+        let mut band = match &set.band {
+            Some(v) => Some(Band {
+                index: self.line_index(v, vals, place)?,
+                value: first.unwrap_or(0.0),
+                z: None,
+            }),
+            None => None,
+        };
         for (setting, key) in settings {
             let at = self.out.is_some().then(|| format!("{place}.{key}").into());
             let e = Event::Set {
                 setting,
-                band: None,
+                band: band.take(),
                 place: at,
             };
             self.event(e, place)?;
         }
         Ok(())
+    }
+
+    /// A `set` command's `band`: a whole number from 0, a line's index.
+    fn line_index(&mut self, v: &Val, vals: &mut Vec<f64>, place: &str) -> Result<u32> {
+        let at = format!("{place}.band");
+        let b = self.eval(v, vals, &at)?;
+        if b.fract() != 0.0 || !(0.0..=f64::from(u32::MAX)).contains(&b) {
+            return Err(Error::input(
+                at,
+                format!("`band` gives {b}; expected a whole number from 0 (the index of a line test's line)"),
+            ));
+        }
+        Ok(b as u32)
     }
 
     /// The filament's cross-section, mm² (`extrude_rate` and volumes use it).

@@ -80,7 +80,7 @@ pub(crate) enum Op {
     /// where it runs.
     GcodeWith(Vec<Piece>),
     /// `set`: the printer's settings, their values evaluated where it runs.
-    Printer(Box<Named<Val>>),
+    Printer(Box<Settings>),
     /// A turn by sign × value degrees (`right` is yaw with sign −1).
     Turn(Axis, Val, f64),
     SetHeading(Box<([Val; 3], Option<[Val; 3]>)>),
@@ -199,4 +199,14 @@ pub(crate) struct Proc {
     pub(crate) name: String,
     /// Its body (its parameters are the first slots).
     pub(crate) body: Vec<Cmd>,
+}
+
+/// A `set` command compiled: its settings, and the line of a line test it
+/// begins (`band`: a whole number where it runs), if any.
+#[derive(Clone, Debug)]
+pub(crate) struct Settings {
+    /// The settings by name.
+    pub(crate) named: Named<Val>,
+    /// The band (a line's index) the command begins.
+    pub(crate) band: Option<Val>,
 }
