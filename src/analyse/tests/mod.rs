@@ -4,4 +4,5 @@
 mod extruder_turtle;
 mod gcode;
 mod makers;
+mod makers_marlin;
 mod planner;

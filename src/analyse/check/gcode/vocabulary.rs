@@ -34,11 +34,17 @@ pub(crate) enum Kind {
     /// p3dp checks itself, and refused in a recipe's command: why it is
     /// refused there.
     FrameOnly(&'static str),
+    /// Refused, and why — unless the line sets what p3dp assumes already:
+    /// one of the alternatives, each a set of words with their values
+    /// (`M200 D0`: E read as filament length; `M211 S1`: the soft endstops
+    /// on; `M206 X0 Y0 Z0`: no home offset), the last of a repeated word
+    /// as the firmware reads it.
+    RefusedUnless(&'static [&'static [(&'static str, f64)]], &'static str),
     /// Refused, and why.
     Refused(&'static str),
 }
 
-use Kind::{Firmware, FrameOnly, Heats, Inert, MovesAndHeats, Refused, Trim};
+use Kind::{Firmware, FrameOnly, Heats, Inert, MovesAndHeats, Refused, RefusedUnless, Trim};
 
 const MOTORS_OFF: &str = "turns the motors off, and the printer loses the head's position: an end G-code's command, not one in the middle of a print";
 const SHIFTS: &str =
@@ -83,6 +89,11 @@ const MARLIN_M: &[(u32, Kind)] = &[
     (85, Inert),
     (86, Inert),
     (92, Refused(EXTRUSION)),
+    // Sailfish's "recall stored home offsets" (MakerBot's and FlashForge's
+    // printers, after G161/G162 or G28): the axes take the machine's own
+    // calibrated home position, which p3dp does not know until the next
+    // absolute move; Marlin does not know the code and skips it
+    (132, Firmware),
     (100, Inert),
     (105, Inert),
     (106, Inert),
@@ -115,12 +126,12 @@ const MARLIN_M: &[(u32, Kind)] = &[
     (163, Refused(EXTRUSION)),
     (164, Refused(EXTRUSION)),
     (165, Refused(EXTRUSION)),
-    (200, Refused(EXTRUSION)),
+    (200, RefusedUnless(&[&[("D", 0.0)], &[("S", 0.0)]], EXTRUSION)),
     (205, Inert),
-    (206, Refused(SHIFTS)),
+    (206, RefusedUnless(&[&[("X", 0.0), ("Y", 0.0), ("Z", 0.0)]], SHIFTS)),
     (208, Inert),
     (209, Inert),
-    (211, Refused(LIMIT)),
+    (211, RefusedUnless(&[&[("S", 1.0)]], LIMIT)),
     (217, Inert),
     (218, Refused(SHIFTS)),
     (226, Inert),
@@ -192,6 +203,15 @@ const MARLIN_M: &[(u32, Kind)] = &[
     (928, Refused(FILES)),
     (997, Refused(STOPS)),
     (999, Refused(STOPS)),
+    // makers' own codes, their effect from the comment their presets carry
+    // beside them (stock Marlin skips a code it does not know):
+    // iQ's housing fan ("turn off housing fan", `S0`)
+    (806, Inert),
+    // Geeetech's light ("ON Light")
+    (2012, Inert),
+    // Anker's planner mode ("Enable v3 jerk and S-curve acceleration"): how
+    // the firmware shapes accelerations, no motion or heat of its own
+    (4899, Inert),
 ];
 
 /// G codes of Marlin and its descendants besides the typed ones.
