@@ -110,8 +110,12 @@ pub(crate) fn frame(recipe: &Recipe, ext: &Extent) -> Result<Frame> {
             .expand_io(&vars, &mut globals)
             .map_err(|e| Error::input(format!("{key} line {}", e.line), e.message))
             .map_err(|e| e.in_file(&shown))?;
-        if !end {
-            out.push_str(&unretract(p, &outputs));
+        let back = if end { String::new() } else { unretract(p, &outputs) };
+        if !back.is_empty() {
+            if !out.is_empty() && !out.ends_with('\n') {
+                out.push('\n');
+            }
+            out.push_str(&back);
         }
         let from = if end {
             let d = recipe
@@ -152,7 +156,7 @@ fn unretract(p: &Printer, outputs: &Vars) -> String {
     }
     let f = p.retraction.speed * 60.0;
     format!(
-        "\nM83 ; relative E for the unretraction\nG1 E{} F{} ; unretract what the start G-code retracted (e_retracted, e_restart_extra)\n",
+        "M83 ; relative E for the unretraction\nG1 E{} F{} ; unretract what the start G-code retracted (e_retracted, e_restart_extra)\n",
         crate::base::format::fmt_num(feed),
         crate::base::format::fmt_num(f)
     )

@@ -62,3 +62,35 @@ fn a_code_that_sets_the_default_passes_and_no_other() {
         assert!(e.contains("which sets what p3dp assumes"), "{bad}: {e}");
     }
 }
+
+/// Prusa's MMU test load (Buddy's `M1704 P`) and the XL's tool park
+/// (`P0`) are the firmware's own motion on Prusa's flavour; Marlin knows
+/// neither.
+#[test]
+fn prusas_mmu_test_load_is_the_firmwares_motion() {
+    let mut r = marlin();
+    r.printer.flavor = Flavor::Prusa;
+    assert_eq!(start(&r, "G28\nM1704 P0\nG1 X10 Y10"), Ok(3));
+    let e = start(&r, "G28\nM1704 P0\nG91\nG1 X-300").unwrap_err();
+    assert!(e.contains("more than the machine is wide"), "{e}");
+    // the XL parks its tool (`P0`): the position is unknown after it
+    assert_eq!(start(&r, "G28\nP0 S1 L1 D0 ; park\nG1 X10 Y10"), Ok(3));
+    let e = start(&r, "G28\nP0 S1\nG91\nG1 X-300").unwrap_err();
+    assert!(e.contains("more than the machine is wide"), "{e}");
+    let e = start(&marlin(), "P0 S1").unwrap_err();
+    assert!(e.contains("a line that begins with a parameter"), "{e}");
+    let e = start(&marlin(), "M1704 P0").unwrap_err();
+    assert!(e.contains("`M1704` is a command p3dp cannot check"), "{e}");
+}
+
+/// Klipper runs `M117 .` as M117 (its `cmd_default` takes the first word of
+/// a command whose number runs into other text), `M23 x.gcode` as M23, and
+/// skips any other such line as an unknown command.
+#[test]
+fn klipper_reads_a_number_run_into_text_as_its_first_word() {
+    let mut r = marlin();
+    r.printer.flavor = Flavor::Klipper;
+    assert_eq!(start(&r, "M117 .\nM118 3.5 done\nM104 .S900"), Ok(3));
+    let e = start(&r, "M23 .x.gcode").unwrap_err();
+    assert!(e.contains("starts, changes or deletes files"), "{e}");
+}

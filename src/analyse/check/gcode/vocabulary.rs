@@ -278,6 +278,10 @@ const PRUSA: &[(u8, u32, Kind)] = &[
     (b'M', 708, Inert),
     (b'G', 64, Firmware),
     (b'G', 1009, Inert),
+    // the MMU's test load of a slot (`P`), Buddy's `M1704` ("Test Load to
+    // MMU", `mmu_load_test`): the MMU's motors and the extruder's feed the
+    // filament and back, the firmware's own motion
+    (b'M', 1704, Firmware),
 ];
 
 const NOZZLE_T: &[(&str, Heater)] = &[("T", Heater::Nozzle(0))];
@@ -521,6 +525,17 @@ fn find_lettered(table: &[(u8, u32, Kind)], l: u8, n: u32) -> Option<Kind> {
 /// checks do not know.
 pub(crate) fn kind(flavor: Flavor, code: &Code) -> Option<Kind> {
     match (flavor, code) {
+        (Flavor::Klipper, Code::Name(n)) if n.contains([' ', '\t']) => {
+            // a traditional command whose number runs into other text
+            // (`M117 .`): Klipper's `cmd_default` runs M117, M118 and M23
+            // on the first word, and answers "Unknown command" to any
+            // other (no handler or macro name holds a space)
+            match n.split_whitespace().next() {
+                Some("M117" | "M118") => Some(Inert),
+                Some("M23") => Some(Refused(FILES)),
+                _ => Some(Inert),
+            }
+        }
         (Flavor::Klipper, Code::Name(n)) => {
             if let Some((_, why)) = KLIPPER_REFUSED.iter().find(|(k, _)| k == n) {
                 return Some(Refused(why));
@@ -558,6 +573,10 @@ pub(crate) fn kind(flavor: Flavor, code: &Code) -> Option<Kind> {
                 _ => None,
             }
         }
+        // Buddy's `P0`: the XL parks its tool in the changer's dock (its
+        // `PrusaGcodeSuite::P0`, a change to no tool), the firmware's own
+        // motion; a machine without a changer does not process it
+        (Flavor::Prusa, Code::Name(n)) if n == "P0" => Some(Firmware),
         (_, Code::Name(n)) => named_elsewhere(flavor, n),
         (
             _,
