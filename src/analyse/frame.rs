@@ -110,7 +110,11 @@ pub(crate) fn frame(recipe: &Recipe, ext: &Extent) -> Result<Frame> {
             .expand_io(&vars, &mut globals)
             .map_err(|e| Error::input(format!("{key} line {}", e.line), e.message))
             .map_err(|e| e.in_file(&shown))?;
-        let back = if end { String::new() } else { unretract(p, &outputs) };
+        let back = if end {
+            String::new()
+        } else {
+            unretract(p, &outputs)
+        };
         if !back.is_empty() {
             if !out.is_empty() && !out.ends_with('\n') {
                 out.push('\n');

@@ -1055,7 +1055,15 @@ fn a_template_for_five_tools_on_two_and_its_retraction_read_back() {
     let ini = fixture("acme.ini");
     let o = p3dp(
         &dir,
-        &["printers", "import", path(&ini), "--preset", "Acme XL 2T", "-o", "xl2.yaml"],
+        &[
+            "printers",
+            "import",
+            path(&ini),
+            "--preset",
+            "Acme XL 2T",
+            "-o",
+            "xl2.yaml",
+        ],
     );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let g = build_with(&dir, &["--printer", "xl2.yaml"]).unwrap();
@@ -1079,17 +1087,26 @@ fn a_template_for_five_tools_on_two_and_its_retraction_read_back() {
     // without the assignment, nothing is unretracted
     let plain = std::fs::read_to_string(dir.join("xl2.yaml"))
         .unwrap()
-        .replace("{e_retracted[initial_tool] = retract_length_toolchange[initial_tool]}", "");
+        .replace(
+            "{e_retracted[initial_tool] = retract_length_toolchange[initial_tool]}",
+            "",
+        );
     std::fs::write(dir.join("plain.yaml"), plain).unwrap();
     let g = build_with(&dir, &["--printer", "plain.yaml"]).unwrap();
     assert!(!g.contains("unretract what the start G-code"), "{g}");
     // a setting of the slicer's is still read-only
     let bad = std::fs::read_to_string(dir.join("xl2.yaml"))
         .unwrap()
-        .replace("{e_retracted[initial_tool] =", "{retract_length[initial_tool] =");
+        .replace(
+            "{e_retracted[initial_tool] =",
+            "{retract_length[initial_tool] =",
+        );
     std::fs::write(dir.join("bad.yaml"), bad).unwrap();
     let e = build_with(&dir, &["--printer", "bad.yaml"]).unwrap_err();
-    assert!(e.contains("`retract_length` is no variable of `local` or `global`"), "{e}");
+    assert!(
+        e.contains("`retract_length` is no variable of `local` or `global`"),
+        "{e}"
+    );
 
     // OrcaSlicer's C escapes in a `.json` string
     let json = dir.join("Acme U1.json");

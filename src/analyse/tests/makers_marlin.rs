@@ -24,14 +24,15 @@ fn start(r: &Recipe, text: &str) -> Result<usize, String> {
         .map_err(|e| e.to_string())
 }
 
-/// Anker's planner mode, Geeetech's light, iQ's housing fan: inert, as
+/// Anker's planner mode, Geeetech's light, iQ's housing fan, Sailfish's
+/// waits for the tool and the platform (`M6`, `M7`): inert, as
 /// their presets' comments say; Sailfish's recall of the home offsets is
 /// the firmware's own homing, after which the position is unknown (a
 /// relative move may not follow before an absolute one).
 #[test]
 fn makers_codes_with_a_stated_effect_are_known() {
     let r = marlin();
-    let seq = "M4899 T3 ; S-curve\nM2012 P8 S1 F100 ; light\nM806 S0 ; housing fan\nG28\nM132 X Y Z A B\nG1 Z50 F420\nG1 X10 Y10";
+    let seq = "M4899 T3 ; S-curve\nM2012 P8 S1 F100 ; light\nM806 S0 ; housing fan\nG28\nM132 X Y Z A B\nG1 Z50 F420\nG1 X10 Y10\nM7 T0 ; platform\nM6 T0 ; tool";
     assert_eq!(start(&r, seq), Ok(seq.lines().count()));
     let e = start(&r, "G28\nM132 X Y Z A B\nG91\nG1 X-300").unwrap_err();
     assert!(e.contains("more than the machine is wide"), "{e}");
@@ -46,7 +47,13 @@ fn makers_codes_with_a_stated_effect_are_known() {
 #[test]
 fn a_code_that_sets_the_default_passes_and_no_other() {
     let r = marlin();
-    for ok in ["M200 D0 ; volumetric off", "M200 S0", "M211 S1", "M206 X0 Y0 Z0", "M211 S0 S1"] {
+    for ok in [
+        "M200 D0 ; volumetric off",
+        "M200 S0",
+        "M211 S1",
+        "M206 X0 Y0 Z0",
+        "M211 S0 S1",
+    ] {
         assert_eq!(start(&r, ok), Ok(1), "{ok}");
     }
     for (bad, why) in [

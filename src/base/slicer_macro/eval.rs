@@ -342,7 +342,10 @@ impl<'t> Run<'t> {
         let v = match value {
             // past the end: the first element, as the slicer serialises it
             Value::List(items) => items.get(index).or_else(|| items.first()).ok_or_else(|| {
-                self.error(at, format!("`{name}` is an empty vector: it has no element {index}"))
+                self.error(
+                    at,
+                    format!("`{name}` is an empty vector: it has no element {index}"),
+                )
             })?,
             v if idx.is_none() || index == 0 => v,
             _ => {
@@ -449,11 +452,18 @@ impl<'t> Run<'t> {
     fn element(&mut self, name: &str, index: &Expr, at: usize) -> R<Value> {
         let i = self.index(index)?;
         match self.lookup(name, at)? {
-            Value::List(items) => items
-                .get(i)
-                .or_else(|| items.first())
-                .cloned()
-                .ok_or_else(|| self.error(at, format!("`{name}` is an empty vector: it has no element {i}"))),
+            Value::List(items) => {
+                items
+                    .get(i)
+                    .or_else(|| items.first())
+                    .cloned()
+                    .ok_or_else(|| {
+                        self.error(
+                            at,
+                            format!("`{name}` is an empty vector: it has no element {i}"),
+                        )
+                    })
+            }
             v if i == 0 => Ok(v.clone()),
             _ => Err(self.error(at, format!("`{name}` is not a list; it cannot be indexed"))),
         }

@@ -249,7 +249,10 @@ impl Template {
     ) -> Result<(String, Vars), MacroError> {
         let mut run = eval::Run::new(self, vars, globals);
         run.nodes(&self.nodes)?;
-        Ok((std::mem::take(&mut run.out), std::mem::take(&mut run.outputs)))
+        Ok((
+            std::mem::take(&mut run.out),
+            std::mem::take(&mut run.outputs),
+        ))
     }
 
     /// The names the template's `global` statements make (a later template

@@ -375,7 +375,10 @@ fn output_values_and_work_are_bounded() {
 #[test]
 fn an_index_past_the_end_reads_the_first_element() {
     assert_eq!(x("{first_layer_temperature[4]}"), "215");
-    assert_eq!(x("[first_layer_temperature[3]] [first_layer_temperature_1]"), "215 230");
+    assert_eq!(
+        x("[first_layer_temperature[3]] [first_layer_temperature_1]"),
+        "215 230"
+    );
     assert_eq!(
         x("{if first_layer_temperature[2] > 0 and false}M104 T2{endif}ok"),
         "ok"

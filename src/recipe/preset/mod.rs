@@ -328,14 +328,22 @@ mod tests {
             format: Format::Json,
             kind: Kind::Printer,
             values: [
-                ("one".to_string(), j(serde_json::json!(r#"G28\nM117 \"a\"\n{if x==\"b\"}T0{endif}"#))),
+                (
+                    "one".to_string(),
+                    j(serde_json::json!(
+                        r#"G28\nM117 \"a\"\n{if x==\"b\"}T0{endif}"#
+                    )),
+                ),
                 ("real".to_string(), j(serde_json::json!("G28\nG1 Z5"))),
                 ("list".to_string(), j(serde_json::json!([r"a\nb"]))),
             ]
             .into_iter()
             .collect(),
         };
-        assert_eq!(p.text("one").unwrap(), "G28\nM117 \"a\"\n{if x==\"b\"}T0{endif}");
+        assert_eq!(
+            p.text("one").unwrap(),
+            "G28\nM117 \"a\"\n{if x==\"b\"}T0{endif}"
+        );
         assert_eq!(p.text("real").unwrap(), "G28\nG1 Z5");
         assert_eq!(p.text("list").unwrap(), r"a\nb");
     }

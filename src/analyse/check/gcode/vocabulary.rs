@@ -59,6 +59,12 @@ const PINS: &str = "drives the controller's pins or a tool (a heater could be on
 
 /// M codes of Marlin and its descendants (Prusa's, Bambu's).
 const MARLIN_M: &[(u32, Kind)] = &[
+    // Sailfish's waits (MakerBot's, FlashForge's and Dremel's printers, whose
+    // presets say `marlin`): `M6 T` for the tool, `M7 T` for the platform to
+    // reach its temperature; no heat of their own (Marlin's M7 is a
+    // coolant pin, which no printer's configuration enables)
+    (6, Inert),
+    (7, Inert),
     (17, Inert),
     (18, FrameOnly(MOTORS_OFF)),
     (20, Inert),
@@ -126,9 +132,15 @@ const MARLIN_M: &[(u32, Kind)] = &[
     (163, Refused(EXTRUSION)),
     (164, Refused(EXTRUSION)),
     (165, Refused(EXTRUSION)),
-    (200, RefusedUnless(&[&[("D", 0.0)], &[("S", 0.0)]], EXTRUSION)),
+    (
+        200,
+        RefusedUnless(&[&[("D", 0.0)], &[("S", 0.0)]], EXTRUSION),
+    ),
     (205, Inert),
-    (206, RefusedUnless(&[&[("X", 0.0), ("Y", 0.0), ("Z", 0.0)]], SHIFTS)),
+    (
+        206,
+        RefusedUnless(&[&[("X", 0.0), ("Y", 0.0), ("Z", 0.0)]], SHIFTS),
+    ),
     (208, Inert),
     (209, Inert),
     (211, RefusedUnless(&[&[("S", 1.0)]], LIMIT)),
