@@ -3,8 +3,7 @@
 //! G-code (a purge at X −48.2 on Bambu's A1, a park at Y −9 on Prusa's
 //! CORE One), and of the relative ones from a place such moves set
 //! (Comgrow's `G1 X0`, `G1 Y0`, `G91`, `G1 X-2 Y-6`), are the maker's
-//! statement of where its head goes; so is a placeholder that reads no
-//! variable (`Y{(0 < 4 ? -7 : -4.5)}`). The profile's
+//! statement of where its head goes. The profile's
 //! `envelope.x`/`envelope.y` are set to hold them, so the check holds every
 //! other move (a computed one, a recipe's, a stranger's edit) to that reach
 //! rather than to the bed grown by a flat 5 mm. A literal more than
@@ -61,10 +60,8 @@ pub(crate) fn reach(
                             Some(b'Z' | b'z') => 2,
                             _ => continue,
                         };
-                        // a literal number, or a placeholder that reads no
-                        // variable (Orca's XL 5T: `Y{(0 < 4 ? -7 : -4.5)}`);
-                        // any other placeholder's value is the print's
-                        let Some(d) = literal(&w[1..]) else {
+                        // a literal number only: a placeholder's value is the print's
+                        let Ok(d) = w[1..].parse::<f64>() else {
                             pos[k] = None;
                             continue;
                         };
@@ -123,23 +120,6 @@ pub(crate) fn reach(
     out
 }
 
-/// The number `text` states whatever the print: a literal, or a template
-/// that expands to one without any variable.
-fn literal(text: &str) -> Option<f64> {
-    if let Ok(v) = text.parse::<f64>() {
-        return Some(v);
-    }
-    if !text.contains('{') {
-        return None;
-    }
-    let t = crate::base::slicer_macro::Template::parse(text).ok()?;
-    let mut globals = crate::base::slicer_macro::Vars::new();
-    let out = t
-        .expand_with(&crate::base::slicer_macro::Vars::new(), &mut globals)
-        .ok()?;
-    out.trim().parse::<f64>().ok().filter(|v| v.is_finite())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -180,10 +160,6 @@ mod tests {
             "{:?}",
             r.notes
         );
-        // a placeholder that reads no variable states its value
-        let start = "G1 X{(0 == 0 ? 30 : 150)} Y{(0 < 4 ? -7 : -4.5)} Z10\nG1 Y{first_layer_print_min[1] - 9}";
-        let r = reach(&[("start_gcode", start)], [0.0, 0.0], [360.0, 360.0], 5.0);
-        assert_eq!(r.xy, [None, Some([-7.0, 365.0])]);
         // a placeholder forgets the axis
         let start = "G1 Y0\nG1 Y{first_layer_print_min[1]}\nG91\nG1 Y-8";
         let r = reach(&[("start_gcode", start)], [0.0, 0.0], [300.0, 300.0], 5.0);
