@@ -106,10 +106,21 @@ pub(crate) fn frame(recipe: &Recipe, ext: &Extent) -> Result<Frame> {
         has_values(recipe, &t, &vars, &globals).map_err(|(line, message)| {
             Error::input(format!("{key} line {line}"), message).in_file(&shown)
         })?;
-        let out = t
-            .expand_with(&vars, &mut globals)
+        let (mut out, outputs) = t
+            .expand_io(&vars, &mut globals)
             .map_err(|e| Error::input(format!("{key} line {}", e.line), e.message))
             .map_err(|e| e.in_file(&shown))?;
+        let back = if end {
+            String::new()
+        } else {
+            unretract(p, &outputs)
+        };
+        if !back.is_empty() {
+            if !out.is_empty() && !out.ends_with('\n') {
+                out.push('\n');
+            }
+            out.push_str(&back);
+        }
         let from = if end {
             let d = recipe
                 .material
@@ -131,6 +142,28 @@ pub(crate) fn frame(recipe: &Recipe, ext: &Extent) -> Result<Frame> {
         start,
         end: one("end_gcode", &p.end_gcode, true)?,
     })
+}
+
+/// What the print pushes back after a start G-code that left the filament
+/// retracted and said so (`{e_retracted[t] = …}`, `e_restart_extra[t]`:
+/// PrusaSlicer reads them back and unretracts their sum before the first
+/// extrusion, its `GCodeWriter::unretract`): relative E, then that feed at
+/// the retraction speed; nothing when the template set neither.
+fn unretract(p: &Printer, outputs: &Vars) -> String {
+    let at = |name: &str| match outputs.get(name) {
+        Some(Value::List(items)) => items.get(p.tool).and_then(number).unwrap_or(0.0),
+        _ => 0.0,
+    };
+    let feed = at("e_retracted") + at("e_restart_extra");
+    if !(feed > 0.0 && feed.is_finite()) {
+        return String::new();
+    }
+    let f = p.retraction.speed * 60.0;
+    format!(
+        "M83 ; relative E for the unretraction\nG1 E{} F{} ; unretract what the start G-code retracted (e_retracted, e_restart_extra)\n",
+        crate::base::format::fmt_num(feed),
+        crate::base::format::fmt_num(f)
+    )
 }
 
 /// The firmware's limits written before the start G-code when the profile
@@ -506,6 +539,7 @@ fn tools(recipe: &Recipe, ext: &Extent, end: bool, n: usize, set: &mut impl FnMu
         0.0
     };
     set("e_retracted", each(n, Value::Float(back)));
+    set("e_restart_extra", each(n, Value::Float(0.0)));
     set("zhop", Value::Float(0.0));
     set("input_filename_base", Value::Str(recipe.name.clone()));
     set("input_filename", Value::Str(recipe.name.clone()));

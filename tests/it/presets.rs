@@ -1043,6 +1043,86 @@ fn multi_tool_machines_print_with_the_tool_their_start_gcode_selects() {
     assert!(!g.contains("M104 T1"), "the second nozzle heated");
 }
 
+/// PrusaSlicer's reading of a multi-tool template: an index past a
+/// vector's end reads its first element, the start G-code's
+/// `e_retracted[t]` is read back and unretracted before the print, and
+/// Buddy's tool park (`P0`) and MMU test load (`M1704`) are the firmware's
+/// own motion; a `.json` G-code written on one line with `\n` is read as
+/// OrcaSlicer reads it.
+#[test]
+fn a_template_for_five_tools_on_two_and_its_retraction_read_back() {
+    let dir = vase_dir("xl-2t");
+    let ini = fixture("acme.ini");
+    let o = p3dp(
+        &dir,
+        &[
+            "printers",
+            "import",
+            path(&ini),
+            "--preset",
+            "Acme XL 2T",
+            "-o",
+            "xl2.yaml",
+        ],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let g = build_with(&dir, &["--printer", "xl2.yaml"]).unwrap();
+    has_lines(
+        &g,
+        &[
+            "; tool four reads 215 as PrusaSlicer does",
+            "M1704 P0 ; MMU test load",
+            "P0 S1 L1 D0 ; park the tool",
+            "G1 E-1.5 F2400 ; retract",
+            "M83 ; relative E for the unretraction",
+            "G1 E1.5 F2100 ; unretract what the start G-code retracted (e_retracted, e_restart_extra)",
+        ],
+    );
+    // the unretraction follows the start G-code, before p3dp's own modes
+    let at = |l: &str| g.find(l).unwrap();
+    assert!(at("G92 E0\nM83 ; relative E") < at("G21 ; millimetres"));
+    for t in 1..5 {
+        assert!(!g.contains(&format!("M104 T{t}")), "tool {t} heated");
+    }
+    // without the assignment, nothing is unretracted
+    let plain = std::fs::read_to_string(dir.join("xl2.yaml"))
+        .unwrap()
+        .replace(
+            "{e_retracted[initial_tool] = retract_length_toolchange[initial_tool]}",
+            "",
+        );
+    std::fs::write(dir.join("plain.yaml"), plain).unwrap();
+    let g = build_with(&dir, &["--printer", "plain.yaml"]).unwrap();
+    assert!(!g.contains("unretract what the start G-code"), "{g}");
+    // a setting of the slicer's is still read-only
+    let bad = std::fs::read_to_string(dir.join("xl2.yaml"))
+        .unwrap()
+        .replace(
+            "{e_retracted[initial_tool] =",
+            "{retract_length[initial_tool] =",
+        );
+    std::fs::write(dir.join("bad.yaml"), bad).unwrap();
+    let e = build_with(&dir, &["--printer", "bad.yaml"]).unwrap_err();
+    assert!(
+        e.contains("`retract_length` is no variable of `local` or `global`"),
+        "{e}"
+    );
+
+    // OrcaSlicer's C escapes in a `.json` string
+    let json = dir.join("Acme U1.json");
+    std::fs::write(
+        &json,
+        r#"{"type": "machine", "name": "Acme U1", "instantiation": "true", "gcode_flavor": "klipper",
+"printable_area": ["0x0", "270x0", "270x270", "0x270"], "printable_height": "270", "nozzle_diameter": ["0.4"],
+"machine_start_gcode": "G28\\nM117 \\\"U1\\\" start\\n{if printer_preset==\\\"Acme U1\\\"}; named{else}; other{endif}\\nM109 S[nozzle_temperature_initial_layer]",
+"machine_end_gcode": "M104 S0\\nM84"}"#,
+    )
+    .unwrap();
+    let g = build_with(&dir, &["--printer", path(&json)]).unwrap();
+    has_lines(&g, &["G28", "M117 \"U1\" start", "; named", "M84"]);
+    assert!(!g.contains("\\n"), "{g}");
+}
+
 /// A preset maps to the profile's own type: what `--printer FILE` builds
 /// with is what `printers import` writes, read back — for every preset of
 /// the fixtures.

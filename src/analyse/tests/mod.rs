@@ -4,5 +4,6 @@
 mod extruder_turtle;
 mod gcode;
 mod makers;
+mod makers_marlin;
 mod package;
 mod planner;

@@ -27,12 +27,23 @@ const EQUAL_WITHIN: f64 = 1e-8;
 /// end's value (PrusaSlicer's EPSILON).
 const TABLE_SLACK: f64 = 1e-4;
 
+/// The slicer's variables a template may assign, element by element, which
+/// the slicer reads back after it (PrusaSlicer's `output_config`, its
+/// `PlaceholderParserIntegration`): where the head is, E's position, and
+/// the filament each extruder has retracted (`e_retracted`) and will push
+/// back beyond it at the next unretraction (`e_restart_extra`). Every other
+/// setting is read-only.
+pub(super) const OUTPUTS: [&str; 4] = ["position", "e_position", "e_retracted", "e_restart_extra"];
+
 /// The state of one expansion.
 pub(super) struct Run<'t> {
     t: &'t Template,
     vars: &'t Vars,
     globals: &'t mut Vars,
     locals: Vars,
+    /// The slicer's output variables the template assigned ([`OUTPUTS`]),
+    /// copied from `vars` at the first assignment.
+    pub(super) outputs: Vars,
     pub(super) out: String,
     rng: SplitMix64,
     work: u64,
@@ -50,6 +61,7 @@ impl<'t> Run<'t> {
             vars,
             globals,
             locals: Vars::new(),
+            outputs: Vars::new(),
             out: String::new(),
             rng: SplitMix64::new(t.seed),
             work: 0,
@@ -115,6 +127,7 @@ impl<'t> Run<'t> {
         self.locals
             .get(name)
             .or_else(|| self.globals.get(name))
+            .or_else(|| self.outputs.get(name))
             .or_else(|| self.vars.get(name))
             .ok_or_else(|| self.error(at, format!("unknown variable `{name}`")))
     }
@@ -162,10 +175,7 @@ impl<'t> Run<'t> {
         let v = self.init(init, at)?;
         let local = self.locals.contains_key(name);
         if !local && !self.globals.contains_key(name) {
-            return Err(self.error(
-                at,
-                format!("`{name}` is no variable of `local` or `global`; a slicer's setting cannot be assigned"),
-            ));
+            return self.assign_output(name, i, v, at);
         }
         let slot = if local {
             self.locals.get_mut(name)
@@ -183,6 +193,49 @@ impl<'t> Run<'t> {
                 Ok(())
             }
             Value::List(items) => {
+                let n = items.len();
+                Err(self.error(at, format!("`{name}` has {n} elements, no index {i}")))
+            }
+            _ => Err(self.error(
+                at,
+                format!("`{name}` is not a vector; it cannot be indexed"),
+            )),
+        }
+    }
+
+    /// `name[i] = v` for one of the slicer's [`OUTPUTS`]: an element of a
+    /// vector the slicer gave, a number (PrusaSlicer's
+    /// `vector_variable_element_assign_scalar`); the vector keeps its size.
+    fn assign_output(&mut self, name: &str, i: Option<usize>, v: Value, at: usize) -> R<()> {
+        let given = self.vars.get(name);
+        if !OUTPUTS.contains(&name) || given.is_none() {
+            return Err(self.error(
+                at,
+                format!("`{name}` is no variable of `local` or `global`; a slicer's setting cannot be assigned (only {} can)", OUTPUTS.map(|o| format!("`{o}`")).join(", ")),
+            ));
+        }
+        let Some(i) = i else {
+            return Err(self.error(
+                at,
+                format!("`{name}` is a vector the slicer reads back: assign its elements (`{name}[0] = …`), not the whole"),
+            ));
+        };
+        let Some(x) = v.number() else {
+            return Err(self.error(
+                at,
+                format!("`{name}[{i}]` takes a number, not {}", v.kind()),
+            ));
+        };
+        if !self.outputs.contains_key(name) {
+            let copy = given.cloned().unwrap_or(Value::Nil);
+            self.outputs.insert(name.to_string(), copy);
+        }
+        match self.outputs.get_mut(name) {
+            Some(Value::List(items)) if i < items.len() => {
+                items[i] = Value::Float(x);
+                Ok(())
+            }
+            Some(Value::List(items)) => {
                 let n = items.len();
                 Err(self.error(at, format!("`{name}` has {n} elements, no index {i}")))
             }
@@ -287,10 +340,12 @@ impl<'t> Run<'t> {
             (None, Some(_)) => return Err(self.error(at, format!("unknown variable `{name}`"))),
         };
         let v = match value {
-            Value::List(items) => items.get(index).ok_or_else(|| {
-                let n = items.len();
-                let s = if n == 1 { "" } else { "s" };
-                self.error(at, format!("`{name}` has {n} element{s}, no index {index}"))
+            // past the end: the first element, as the slicer serialises it
+            Value::List(items) => items.get(index).or_else(|| items.first()).ok_or_else(|| {
+                self.error(
+                    at,
+                    format!("`{name}` is an empty vector: it has no element {index}"),
+                )
             })?,
             v if idx.is_none() || index == 0 => v,
             _ => {
@@ -390,21 +445,25 @@ impl<'t> Run<'t> {
         }
     }
 
-    /// `name[index]`.
+    /// `name[index]`: an index past the end reads the first element, as
+    /// PrusaSlicer's parser reads a vector (its `vector_element_to_expr`:
+    /// a template written for five tools reads tool 0's value on a machine
+    /// with fewer); an empty vector has no element to read.
     fn element(&mut self, name: &str, index: &Expr, at: usize) -> R<Value> {
         let i = self.index(index)?;
         match self.lookup(name, at)? {
-            Value::List(items) => items.get(i).cloned().ok_or_else(|| {
-                self.error(
-                    at,
-                    if items.len() == 1 {
-                        // the per-extruder lists: p3dp gives tool 0 only
-                        format!("`{name}[{i}]`: `{name}` is a value per extruder and p3dp drives one (index 0 only); a preset for several extruders or a filament changer needs its single-extruder variant")
-                    } else {
-                        format!("`{name}` has {} elements, no index {i}", items.len())
-                    },
-                )
-            }),
+            Value::List(items) => {
+                items
+                    .get(i)
+                    .or_else(|| items.first())
+                    .cloned()
+                    .ok_or_else(|| {
+                        self.error(
+                            at,
+                            format!("`{name}` is an empty vector: it has no element {i}"),
+                        )
+                    })
+            }
             v if i == 0 => Ok(v.clone()),
             _ => Err(self.error(at, format!("`{name}` is not a list; it cannot be indexed"))),
         }

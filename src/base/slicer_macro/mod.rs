@@ -10,14 +10,18 @@
 //! - `{code}`: statements separated by `;` — an expression (its value is
 //!   written), `local name = …` and `global name = …` (a new variable of
 //!   this expansion, or of every later one given the same globals), an
-//!   assignment `name = …` or `name[i] = …` to one of those; a right side
-//!   may be a vector `(a, b, …)` or `repeat(n, value)`;
+//!   assignment `name = …` or `name[i] = …` to one of those, or
+//!   `name[i] = number` to one of the slicer's output vectors
+//!   (`e_retracted`, `e_restart_extra`, `position`, `e_position`, which it
+//!   reads back); a right side may be a vector `(a, b, …)` or
+//!   `repeat(n, value)`;
 //! - `{if c}…{elsif c}…{else}…{endif}`: the text of the first true branch,
 //!   anywhere in the text or inside code (`{if c then …; else …; endif}`,
 //!   `{local t = 1; if t > 0}…{endif}`).
 //!
 //! Expressions: numbers (`3` is an integer, `3.0` a real), `"strings"`,
-//! `true`/`false`, variables, `name[expression]`, `+ - * / %` (integer
+//! `true`/`false`, variables, `name[expression]` (an index past a vector's
+//! end reads its first element, as PrusaSlicer's parser does), `+ - * / %` (integer
 //! division of two integers, as C's; `+` joins strings), the comparisons
 //! `< > <= >= == != <>` (reals equal within 1e-8, a string compared with
 //! anything as text), the match `=~ /re/` and `!~` (the whole string),
@@ -231,9 +235,24 @@ impl Template {
         vars: &Vars,
         globals: &mut Vars,
     ) -> Result<String, MacroError> {
+        self.expand_io(vars, globals).map(|(out, _)| out)
+    }
+
+    /// [`Template::expand_with`], and the slicer's output variables the
+    /// template assigned (`e_retracted`, `e_restart_extra`, `position`,
+    /// `e_position`: PrusaSlicer reads them back after a custom G-code),
+    /// each with every element, those not assigned as `vars` gave them.
+    pub(crate) fn expand_io(
+        &self,
+        vars: &Vars,
+        globals: &mut Vars,
+    ) -> Result<(String, Vars), MacroError> {
         let mut run = eval::Run::new(self, vars, globals);
         run.nodes(&self.nodes)?;
-        Ok(run.out)
+        Ok((
+            std::mem::take(&mut run.out),
+            std::mem::take(&mut run.outputs),
+        ))
     }
 
     /// The names the template's `global` statements make (a later template

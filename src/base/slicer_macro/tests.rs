@@ -26,6 +26,9 @@ fn vars() -> Vars {
         Value::List(vec![Value::Str("Prusament PA11 Carbon".into())]),
     );
     v.insert("park".into(), Value::Shown(12.3, "12.300".into()));
+    v.insert("empty_list".into(), Value::List(vec![]));
+    v.insert("e_retracted".into(), Value::List(vec![f(0.0), f(0.0)]));
+    v.insert("retract_length".into(), Value::List(vec![f(0.8), f(0.7)]));
     v
 }
 
@@ -110,7 +113,8 @@ fn errors_name_the_line_and_the_variable() {
         "{1 +}",
         "M117 [not a var]",
         "{layer_height + \"a\" * 2}",
-        "{first_layer_temperature[5]}",
+        "{empty_list[0]}",
+        "[empty_list]",
         "{1/0}",
         "{\"abc}",
     ] {
@@ -188,6 +192,8 @@ fn statements_local_global_and_vectors() {
     assert_eq!(b.expand_with(&vars(), &mut globals).unwrap(), "M117 6");
     // a local is not a slicer's setting to change, nor one to read later
     let e = expand("{layer_height = 2}", &vars()).unwrap_err();
+    assert!(e.message.contains("cannot be assigned"), "{e:?}");
+    let e = expand("{first_layer_temperature[0] = 2}", &vars()).unwrap_err();
     assert!(e.message.contains("cannot be assigned"), "{e:?}");
     // what a template makes itself is not an outside variable
     let t = Template::parse("{local k = 2}{k}[printer_model]").unwrap();
@@ -362,4 +368,49 @@ fn output_values_and_work_are_bounded() {
     v.insert("big".into(), Value::Str("y".repeat(1 << 20)));
     let e = expand(&"[big]".repeat(8), &v).unwrap_err();
     assert!(e.message.contains("longer than"), "{e:?}");
+}
+
+/// An index past a vector's end reads its first element, as PrusaSlicer's
+/// parser reads one (a template for five tools on a machine with two).
+#[test]
+fn an_index_past_the_end_reads_the_first_element() {
+    assert_eq!(x("{first_layer_temperature[4]}"), "215");
+    assert_eq!(
+        x("[first_layer_temperature[3]] [first_layer_temperature_1]"),
+        "215 230"
+    );
+    assert_eq!(
+        x("{if first_layer_temperature[2] > 0 and false}M104 T2{endif}ok"),
+        "ok"
+    );
+    assert_eq!(x("{local v = (1, 2); v[7]}"), "1");
+    assert_eq!(x("{is_nil(first_layer_temperature[9])}"), "false");
+}
+
+/// The slicer's output vectors take a number per element, which the
+/// caller reads back; they keep their size, and nothing else is writable.
+#[test]
+fn the_slicers_output_variables_are_assigned_and_read_back() {
+    let t = Template::parse(
+        "G1 E-{retract_length[0]}\n{e_retracted[0] = retract_length[0]}{e_retracted[0]} {e_retracted[1]}",
+    )
+    .unwrap();
+    let (out, outputs) = t.expand_io(&vars(), &mut Vars::new()).unwrap();
+    assert_eq!(out, "G1 E-0.8\n0.8 0");
+    assert_eq!(
+        outputs.get("e_retracted"),
+        Some(&Value::List(vec![Value::Float(0.8), Value::Float(0.0)]))
+    );
+    // untouched, nothing comes back
+    let t = Template::parse("{e_retracted[1]}").unwrap();
+    assert!(t.expand_io(&vars(), &mut Vars::new()).unwrap().1.is_empty());
+    for (bad, why) in [
+        ("{e_retracted[2] = 1}", "has 2 elements, no index 2"),
+        ("{e_retracted = 1}", "assign its elements"),
+        ("{e_retracted[0] = \"a\"}", "takes a number"),
+        ("{e_restart_extra[0] = 1}", "cannot be assigned"),
+    ] {
+        let e = expand(bad, &vars()).unwrap_err();
+        assert!(e.message.contains(why), "{bad}: {e:?}");
+    }
 }

@@ -101,10 +101,15 @@ impl Preset {
     }
 
     /// A string setting (`.ini` escapes undone; a `.json` list's first element).
+    /// A `.json` string has its C escapes undone too, as OrcaSlicer and
+    /// Bambu Studio read one (`ConfigBase::load_from_json` deserialises a
+    /// string option with `unescape_string_cstyle`: Snapmaker's U1 writes
+    /// its G-code on one line with `\n` between the commands); a list's
+    /// elements are taken as they are (escaped and unescaped again there).
     pub fn text(&self, key: &str) -> Option<String> {
         match self.values.get(key)? {
             Setting::Ini(s) => Some(ini::unescape(s)),
-            Setting::Json(serde_json::Value::String(s)) => Some(s.clone()),
+            Setting::Json(serde_json::Value::String(s)) => Some(ini::unescape(s)),
             Setting::Json(serde_json::Value::Array(a)) => a.first().map(json_text),
             Setting::Json(v) => Some(json_text(v)),
         }
@@ -311,6 +316,37 @@ pub(crate) fn no_such(kind: Kind, name: &str, names: &[String], file: &str) -> S
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A `.json` string's C escapes are undone as OrcaSlicer undoes them (a
+    /// G-code written on one line with `\n`); a list's elements are not.
+    #[test]
+    fn json_strings_are_unescaped_as_orcaslicer_reads_them() {
+        let j = |v: serde_json::Value| Setting::Json(v);
+        let p = Preset {
+            name: "U".into(),
+            file: "u.json".into(),
+            format: Format::Json,
+            kind: Kind::Printer,
+            values: [
+                (
+                    "one".to_string(),
+                    j(serde_json::json!(
+                        r#"G28\nM117 \"a\"\n{if x==\"b\"}T0{endif}"#
+                    )),
+                ),
+                ("real".to_string(), j(serde_json::json!("G28\nG1 Z5"))),
+                ("list".to_string(), j(serde_json::json!([r"a\nb"]))),
+            ]
+            .into_iter()
+            .collect(),
+        };
+        assert_eq!(
+            p.text("one").unwrap(),
+            "G28\nM117 \"a\"\n{if x==\"b\"}T0{endif}"
+        );
+        assert_eq!(p.text("real").unwrap(), "G28\nG1 Z5");
+        assert_eq!(p.text("list").unwrap(), r"a\nb");
+    }
 
     /// A missed name among thousands of long ones is answered quickly: the
     /// search compares the first characters of each name only.

@@ -1,7 +1,9 @@
 //! Where a maker's machine reaches beyond its bed, from its own G-code: the
 //! literal X and Y of the absolute moves in the preset's start and end
 //! G-code (a purge at X −48.2 on Bambu's A1, a park at Y −9 on Prusa's
-//! CORE One) are the maker's statement of where its head goes. The profile's
+//! CORE One), and of the relative ones from a place such moves set
+//! (Comgrow's `G1 X0`, `G1 Y0`, `G91`, `G1 X-2 Y-6`), are the maker's
+//! statement of where its head goes. The profile's
 //! `envelope.x`/`envelope.y` are set to hold them, so the check holds every
 //! other move (a computed one, a recipe's, a stranger's edit) to that reach
 //! rather than to the bed grown by a flat 5 mm. A literal more than
@@ -38,13 +40,19 @@ pub(crate) fn reach(
     let mut below: Option<(f64, String)> = None;
     for (key, text) in templates {
         let mut relative = false;
+        // where the literal moves have put the head, per axis: a relative
+        // literal move from a known place is as much the maker's statement
+        // as an absolute one (Comgrow's `G1 X0`, `G1 Y0`, `G91`,
+        // `G1 X-2 Y-6`); anything else that may move the head forgets it
+        let mut pos: [Option<f64>; 3] = [None; 3];
         for (n, line) in text.split('\n').enumerate() {
             let code = line.split(';').next().unwrap_or("").trim();
             let mut words = code.split_ascii_whitespace();
-            match words.next().map(str::to_ascii_uppercase).as_deref() {
+            let cmd = words.next().map(str::to_ascii_uppercase);
+            match cmd.as_deref() {
                 Some("G90") => relative = false,
                 Some("G91") => relative = true,
-                Some("G0" | "G1") if !relative => {
+                Some("G0" | "G1") => {
                     for w in words {
                         let k = match w.as_bytes().first() {
                             Some(b'X' | b'x') => 0,
@@ -53,12 +61,19 @@ pub(crate) fn reach(
                             _ => continue,
                         };
                         // a literal number only: a placeholder's value is the print's
-                        let Ok(v) = w[1..].parse::<f64>() else {
+                        let Ok(d) = w[1..].parse::<f64>() else {
+                            pos[k] = None;
                             continue;
                         };
+                        let v = match (relative, pos[k]) {
+                            (false, _) => d,
+                            (true, Some(p)) => p + d,
+                            (true, None) => continue,
+                        };
+                        pos[k] = Some(v);
                         if k == 2 {
                             let deeper = below.as_ref().is_none_or(|(d, _)| -v > *d);
-                            if v < 0.0 && -v <= Envelope::MAX_BELOW_BED && deeper {
+                            if v < 0.0 && -v <= Envelope::MAX_BELOW_BED && deeper && !relative {
                                 below = Some((-v, format!("{key} line {}: `{}`", n + 1, code)));
                             }
                             continue;
@@ -74,7 +89,13 @@ pub(crate) fn reach(
                         }
                     }
                 }
-                _ => {}
+                // no motion of the head
+                None
+                | Some(
+                    "G4" | "G21" | "M82" | "M83" | "M104" | "M106" | "M107" | "M109" | "M140"
+                    | "M190" | "M117" | "M400",
+                ) => {}
+                _ => pos = [None; 3],
             }
         }
     }
@@ -104,7 +125,8 @@ mod tests {
     use super::*;
 
     /// A purge beside the bed sets the reach on its axis, in absolute mode
-    /// only; a placeholder, a relative move and a move metres away set none.
+    /// (or relative from a place they set); a placeholder, a relative move
+    /// from an unknown place and a move metres away set none.
     #[test]
     fn the_makers_literal_moves_set_the_reach() {
         let start = "G28\nG1 X-48.2 Y10 F6000 ; purge\nG91\nG1 X-100 Z-9\nG90\nG1 X{first_layer_print_min[0] - 50}\nG1 Y-500\nG0 Z-1.01 ; stop the nozzle\nG1 Z-40";
@@ -128,6 +150,20 @@ mod tests {
             notes[2].contains("start_gcode line 8: `G0 Z-1.01`"),
             "{notes:?}"
         );
+        // a relative literal move from a place the literal moves set
+        let start = "G28\nG1 X0 F3000\nG1 Y0\nG91\nG1 X-2 Y-6\nG90\nG1 X10 Y10\nSTART_PRINT\nG91\nG1 Y-40\nG1 Z-3";
+        let r = reach(&[("start_gcode", start)], [0.0, 0.0], [300.0, 300.0], 5.0);
+        assert_eq!(r.xy, [None, Some([-6.0, 305.0])]);
+        assert_eq!(r.below, None);
+        assert!(
+            r.notes[0].contains("start_gcode line 5: `G1 X-2 Y-6`"),
+            "{:?}",
+            r.notes
+        );
+        // a placeholder forgets the axis
+        let start = "G1 Y0\nG1 Y{first_layer_print_min[1]}\nG91\nG1 Y-8";
+        let r = reach(&[("start_gcode", start)], [0.0, 0.0], [300.0, 300.0], 5.0);
+        assert_eq!(r, Reach::default());
         // within the margin: nothing to set
         let r = reach(
             &[("start_gcode", "G1 X-3 Y260 Z0")],

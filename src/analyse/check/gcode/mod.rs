@@ -414,6 +414,29 @@ impl Checker {
         };
         match (kind, self.policy) {
             (Kind::Refused(why), _) => Err(format!("`{shown}` is refused: it {why}")),
+            (Kind::RefusedUnless(defaults, why), _) => {
+                for set in defaults {
+                    let mut all = true;
+                    for (key, v) in *set {
+                        all &= l.number(key)? == Some(*v);
+                    }
+                    if all {
+                        return Ok(());
+                    }
+                }
+                let shown_defaults: Vec<String> = defaults
+                    .iter()
+                    .map(|set| {
+                        let words: Vec<String> =
+                            set.iter().map(|(k, v)| format!("{k}{}", fmt_num(*v))).collect();
+                        format!("`{} {}`", code.shown(), words.join(" "))
+                    })
+                    .collect();
+                Err(format!(
+                    "`{shown}` is refused: it {why} (accepted as {}, which sets what p3dp assumes)",
+                    shown_defaults.join(" or ")
+                ))
+            }
             (Kind::FrameOnly(why), Policy::Raw) => Err(format!("`{shown}` is refused: it {why}")),
             (Kind::Inert | Kind::FrameOnly(_), _) => Ok(()),
             (Kind::Trim(key, max), _) => {

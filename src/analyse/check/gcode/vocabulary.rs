@@ -34,11 +34,17 @@ pub(crate) enum Kind {
     /// p3dp checks itself, and refused in a recipe's command: why it is
     /// refused there.
     FrameOnly(&'static str),
+    /// Refused, and why — unless the line sets what p3dp assumes already:
+    /// one of the alternatives, each a set of words with their values
+    /// (`M200 D0`: E read as filament length; `M211 S1`: the soft endstops
+    /// on; `M206 X0 Y0 Z0`: no home offset), the last of a repeated word
+    /// as the firmware reads it.
+    RefusedUnless(&'static [&'static [(&'static str, f64)]], &'static str),
     /// Refused, and why.
     Refused(&'static str),
 }
 
-use Kind::{Firmware, FrameOnly, Heats, Inert, MovesAndHeats, Refused, Trim};
+use Kind::{Firmware, FrameOnly, Heats, Inert, MovesAndHeats, Refused, RefusedUnless, Trim};
 
 const MOTORS_OFF: &str = "turns the motors off, and the printer loses the head's position: an end G-code's command, not one in the middle of a print";
 const SHIFTS: &str =
@@ -53,6 +59,12 @@ const PINS: &str = "drives the controller's pins or a tool (a heater could be on
 
 /// M codes of Marlin and its descendants (Prusa's, Bambu's).
 const MARLIN_M: &[(u32, Kind)] = &[
+    // Sailfish's waits (MakerBot's, FlashForge's and Dremel's printers, whose
+    // presets say `marlin`): `M6 T` for the tool, `M7 T` for the platform to
+    // reach its temperature; no heat of their own (Marlin's M7 is a
+    // coolant pin, which no printer's configuration enables)
+    (6, Inert),
+    (7, Inert),
     (17, Inert),
     (18, FrameOnly(MOTORS_OFF)),
     (20, Inert),
@@ -83,6 +95,11 @@ const MARLIN_M: &[(u32, Kind)] = &[
     (85, Inert),
     (86, Inert),
     (92, Refused(EXTRUSION)),
+    // Sailfish's "recall stored home offsets" (MakerBot's and FlashForge's
+    // printers, after G161/G162 or G28): the axes take the machine's own
+    // calibrated home position, which p3dp does not know until the next
+    // absolute move; Marlin does not know the code and skips it
+    (132, Firmware),
     (100, Inert),
     (105, Inert),
     (106, Inert),
@@ -115,12 +132,18 @@ const MARLIN_M: &[(u32, Kind)] = &[
     (163, Refused(EXTRUSION)),
     (164, Refused(EXTRUSION)),
     (165, Refused(EXTRUSION)),
-    (200, Refused(EXTRUSION)),
+    (
+        200,
+        RefusedUnless(&[&[("D", 0.0)], &[("S", 0.0)]], EXTRUSION),
+    ),
     (205, Inert),
-    (206, Refused(SHIFTS)),
+    (
+        206,
+        RefusedUnless(&[&[("X", 0.0), ("Y", 0.0), ("Z", 0.0)]], SHIFTS),
+    ),
     (208, Inert),
     (209, Inert),
-    (211, Refused(LIMIT)),
+    (211, RefusedUnless(&[&[("S", 1.0)]], LIMIT)),
     (217, Inert),
     (218, Refused(SHIFTS)),
     (226, Inert),
@@ -192,6 +215,15 @@ const MARLIN_M: &[(u32, Kind)] = &[
     (928, Refused(FILES)),
     (997, Refused(STOPS)),
     (999, Refused(STOPS)),
+    // makers' own codes, their effect from the comment their presets carry
+    // beside them (stock Marlin skips a code it does not know):
+    // iQ's housing fan ("turn off housing fan", `S0`)
+    (806, Inert),
+    // Geeetech's light ("ON Light")
+    (2012, Inert),
+    // Anker's planner mode ("Enable v3 jerk and S-curve acceleration"): how
+    // the firmware shapes accelerations, no motion or heat of its own
+    (4899, Inert),
 ];
 
 /// G codes of Marlin and its descendants besides the typed ones.
@@ -258,6 +290,10 @@ const PRUSA: &[(u8, u32, Kind)] = &[
     (b'M', 708, Inert),
     (b'G', 64, Firmware),
     (b'G', 1009, Inert),
+    // the MMU's test load of a slot (`P`), Buddy's `M1704` ("Test Load to
+    // MMU", `mmu_load_test`): the MMU's motors and the extruder's feed the
+    // filament and back, the firmware's own motion
+    (b'M', 1704, Firmware),
 ];
 
 const NOZZLE_T: &[(&str, Heater)] = &[("T", Heater::Nozzle(0))];
@@ -501,6 +537,17 @@ fn find_lettered(table: &[(u8, u32, Kind)], l: u8, n: u32) -> Option<Kind> {
 /// checks do not know.
 pub(crate) fn kind(flavor: Flavor, code: &Code) -> Option<Kind> {
     match (flavor, code) {
+        (Flavor::Klipper, Code::Name(n)) if n.contains([' ', '\t']) => {
+            // a traditional command whose number runs into other text
+            // (`M117 .`): Klipper's `cmd_default` runs M117, M118 and M23
+            // on the first word, and answers "Unknown command" to any
+            // other (no handler or macro name holds a space)
+            match n.split_whitespace().next() {
+                Some("M117" | "M118") => Some(Inert),
+                Some("M23") => Some(Refused(FILES)),
+                _ => Some(Inert),
+            }
+        }
         (Flavor::Klipper, Code::Name(n)) => {
             if let Some((_, why)) = KLIPPER_REFUSED.iter().find(|(k, _)| k == n) {
                 return Some(Refused(why));
@@ -538,6 +585,10 @@ pub(crate) fn kind(flavor: Flavor, code: &Code) -> Option<Kind> {
                 _ => None,
             }
         }
+        // Buddy's `P0`: the XL parks its tool in the changer's dock (its
+        // `PrusaGcodeSuite::P0`, a change to no tool), the firmware's own
+        // motion; a machine without a changer does not process it
+        (Flavor::Prusa, Code::Name(n)) if n == "P0" => Some(Firmware),
         (_, Code::Name(n)) => named_elsewhere(flavor, n),
         (
             _,
