@@ -353,7 +353,8 @@ pub(crate) fn variable(v: RawVariable) -> Value {
     }
 }
 
-fn flavor(f: RawFlavor) -> Flavor {
+/// The firmware flavour a profile's `flavor:` names.
+pub(crate) fn flavor(f: RawFlavor) -> Flavor {
     match f {
         RawFlavor::Marlin => Flavor::Marlin,
         RawFlavor::Klipper => Flavor::Klipper,
