@@ -353,15 +353,8 @@ pub(crate) fn variable(v: RawVariable) -> Value {
     }
 }
 
-/// The firmware flavour a profile's `flavor:` names.
-pub(crate) fn flavor(f: RawFlavor) -> Flavor {
-    match f {
-        RawFlavor::Marlin => Flavor::Marlin,
-        RawFlavor::Klipper => Flavor::Klipper,
-        RawFlavor::Reprap => Flavor::Reprap,
-        RawFlavor::Prusa => Flavor::Prusa,
-        RawFlavor::Bambu => Flavor::Bambu,
-    }
+fn flavor(f: RawFlavor) -> Flavor {
+    f.flavor()
 }
 
 fn retraction(r: RawRetraction) -> Retraction {

@@ -249,7 +249,7 @@ fn space(c: u8) -> bool {
 fn marlin<'a>(code: &'a str, quoted: bool, out: &mut Line<'a>) -> Result<(), String> {
     let b = code.as_bytes();
     let letter = b[0].to_ascii_uppercase();
-    if !(b[0].is_ascii_alphanumeric() || b[0] == b'_') && !b.iter().any(u8::is_ascii_digit) {
+    if !(b[0].is_ascii_alphanumeric() || b[0] == b'_' || b.iter().any(u8::is_ascii_digit)) {
         // no letter first and no number anywhere (a maker's banner that lost
         // its `;`, Bambu's `==== record data ====`): Marlin takes no command
         // letter from it and answers "unknown command"; read as a named

@@ -288,7 +288,7 @@ fn reach(raw: &mut RawPrinter, notes: &mut Vec<String>) {
             ("start_gcode", raw.start_gcode.as_str()),
             ("end_gcode", raw.end_gcode.as_str()),
         ];
-        let flavor = crate::recipe::profile::flavor(raw.flavor);
+        let flavor = raw.flavor.flavor();
         let r = super::reach::reach(&texts, min, max, raw.envelope.margin, flavor);
         [raw.envelope.x, raw.envelope.y] = r.xy;
         if let Some(d) = r.below {
