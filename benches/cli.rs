@@ -3,7 +3,8 @@
 //! runs it, a fresh process per run: wall, CPU and peak memory per thread
 //! budget; every run of a case must write the same bytes. Then a batch:
 //! `check --sweep` of 10,000 variants of a 2 mm helix
-//! (`benches/sweep-helix.yaml`).
+//! (`benches/sweep-helix.yaml`), and a `check` of 49 million strings
+//! (`benches/check-49m.yaml`): its peak memory against the budget.
 //!
 //!     cargo bench --bench cli
 //!     P3DP_BASELINE=/path/to/older/p3dp cargo bench --bench cli
@@ -70,6 +71,17 @@ fn main() {
         &["check", sweep.to_str().unwrap(), "--sweep", "b=1..10000"],
         &dir,
         3,
+        || {},
+        |_| {},
+    );
+    // 49 million strings checked: the memory budget (issue 42: 1.5 GB;
+    // figures in docs/performance.md)
+    let big = root.join("benches/check-49m.yaml");
+    common::compare(
+        "check of 49M strings",
+        &["check", big.to_str().unwrap()],
+        &dir,
+        1,
         || {},
         |_| {},
     );

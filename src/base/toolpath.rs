@@ -109,6 +109,237 @@ pub(crate) struct Marker {
     pub(crate) up: DVec3,
 }
 
+/// The strings' attributes, string k's at `[k]`: held once for a part
+/// whose strings are all alike (a primitive before any step changes them;
+/// 24 bytes a string otherwise), so a check of tens of millions of strings
+/// keeps little more than their points.
+#[derive(Clone, Debug, Default)]
+pub struct Strands(Repr);
+
+#[derive(Clone, Debug)]
+enum Repr {
+    /// `n` strings, all `strand`.
+    Same(Strand, usize),
+    /// One each.
+    Each(Vec<Strand>),
+}
+
+impl Default for Repr {
+    fn default() -> Repr {
+        Repr::Each(Vec::new())
+    }
+}
+
+impl Strands {
+    /// `n` strings, all `strand`.
+    pub(crate) fn same(strand: Strand, n: usize) -> Strands {
+        Strands(Repr::Same(strand, n))
+    }
+
+    /// Number of strings.
+    #[inline]
+    pub fn len(&self) -> usize {
+        match &self.0 {
+            Repr::Same(_, n) => *n,
+            Repr::Each(v) => v.len(),
+        }
+    }
+
+    /// Whether there is none.
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// String k's, if there is one.
+    #[inline]
+    pub fn get(&self, k: usize) -> Option<&Strand> {
+        match &self.0 {
+            Repr::Same(s, n) => (k < *n).then_some(s),
+            Repr::Each(v) => v.get(k),
+        }
+    }
+
+    /// The last string's.
+    pub fn last(&self) -> Option<&Strand> {
+        self.len().checked_sub(1).and_then(|k| self.get(k))
+    }
+
+    /// Each string's, in order.
+    #[inline]
+    pub fn iter(&self) -> Iter<'_> {
+        match &self.0 {
+            Repr::Same(s, n) => Iter::Same(s, *n),
+            Repr::Each(v) => Iter::Each(v.iter()),
+        }
+    }
+
+    /// One per string, to change in place (made so when they were alike).
+    pub fn make_mut(&mut self) -> &mut Vec<Strand> {
+        if let Repr::Same(s, n) = self.0 {
+            self.0 = Repr::Each(crate::base::par::fill_vec(n, 8_192, |_| s));
+        }
+        match &mut self.0 {
+            Repr::Each(v) => v,
+            Repr::Same(..) => unreachable!("made one each above"),
+        }
+    }
+
+    /// The one strand all strings share, when they are held once.
+    pub(crate) fn alike(&self) -> Option<Strand> {
+        match &self.0 {
+            Repr::Same(s, _) => Some(*s),
+            Repr::Each(_) => None,
+        }
+    }
+
+    /// Adds a string's (alike ones stay held once).
+    #[inline]
+    pub fn push(&mut self, s: Strand) {
+        match &mut self.0 {
+            Repr::Same(t, n) if *t == s => *n += 1,
+            Repr::Each(v) if v.is_empty() => self.0 = Repr::Same(s, 1),
+            Repr::Each(v) => v.push(s),
+            Repr::Same(..) => self.make_mut().push(s),
+        }
+    }
+
+    /// Room for `n` more different strings.
+    pub(crate) fn reserve(&mut self, n: usize) {
+        if let Repr::Each(v) = &mut self.0 {
+            v.reserve(n);
+        }
+    }
+
+    /// Adds `other`'s strings after these.
+    pub(crate) fn extend_from(&mut self, other: &Strands) {
+        match (&mut self.0, &other.0) {
+            (_, Repr::Same(_, 0)) => {}
+            (Repr::Same(t, n), Repr::Same(s, m)) if t == s => *n += m,
+            (Repr::Each(v), Repr::Same(s, m)) if v.is_empty() => {
+                self.0 = Repr::Same(*s, *m);
+            }
+            (Repr::Same(_, 0), _) => *self = other.clone(),
+            (Repr::Each(v), Repr::Each(o)) => v.extend_from_slice(o),
+            _ => {
+                let v = self.make_mut();
+                v.extend(other.iter());
+            }
+        }
+    }
+
+    /// Puts `before`'s strings ahead of these.
+    pub(crate) fn prepend(&mut self, mut before: Strands) {
+        before.extend_from(self);
+        *self = before;
+    }
+
+    /// Strings `from..to`'s.
+    pub(crate) fn range(&self, from: usize, to: usize) -> Strands {
+        match &self.0 {
+            Repr::Same(s, n) => {
+                assert!(from <= to && to <= *n, "strings {from}..{to} of {n}");
+                Strands(Repr::Same(*s, to - from))
+            }
+            Repr::Each(v) => Strands::from(v[from..to].to_vec()),
+        }
+    }
+}
+
+impl From<Vec<Strand>> for Strands {
+    /// One per string; held once when they are all alike.
+    fn from(v: Vec<Strand>) -> Strands {
+        match v.first() {
+            Some(&s) if v.iter().all(|t| *t == s) => Strands(Repr::Same(s, v.len())),
+            _ => Strands(Repr::Each(v)),
+        }
+    }
+}
+
+impl PartialEq for Strands {
+    fn eq(&self, other: &Strands) -> bool {
+        self.len() == other.len() && self.iter().eq(other.iter())
+    }
+}
+
+impl std::ops::Index<usize> for Strands {
+    type Output = Strand;
+
+    #[inline]
+    fn index(&self, k: usize) -> &Strand {
+        match &self.0 {
+            Repr::Same(s, n) => {
+                assert!(k < *n, "string {k} of {n}");
+                s
+            }
+            Repr::Each(v) => &v[k],
+        }
+    }
+}
+
+impl std::ops::IndexMut<usize> for Strands {
+    fn index_mut(&mut self, k: usize) -> &mut Strand {
+        &mut self.make_mut()[k]
+    }
+}
+
+impl<'a> IntoIterator for &'a Strands {
+    type Item = &'a Strand;
+    type IntoIter = Iter<'a>;
+
+    fn into_iter(self) -> Iter<'a> {
+        self.iter()
+    }
+}
+
+/// The strings' attributes in order ([`Strands::iter`]).
+#[derive(Clone, Debug)]
+pub enum Iter<'a> {
+    /// The same one, this many times more.
+    Same(&'a Strand, usize),
+    /// One each.
+    Each(std::slice::Iter<'a, Strand>),
+}
+
+impl<'a> Iterator for Iter<'a> {
+    type Item = &'a Strand;
+
+    #[inline]
+    fn next(&mut self) -> Option<&'a Strand> {
+        match self {
+            Iter::Same(s, n) => {
+                if *n == 0 {
+                    None
+                } else {
+                    *n -= 1;
+                    Some(*s)
+                }
+            }
+            Iter::Each(it) => it.next(),
+        }
+    }
+
+    #[inline]
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        let n = match self {
+            Iter::Same(_, n) => *n,
+            Iter::Each(it) => it.len(),
+        };
+        (n, Some(n))
+    }
+}
+
+impl ExactSizeIterator for Iter<'_> {}
+
+impl DoubleEndedIterator for Iter<'_> {
+    fn next_back(&mut self) -> Option<Self::Item> {
+        match self {
+            Iter::Same(..) => self.next(),
+            Iter::Each(it) => it.next_back(),
+        }
+    }
+}
+
 /// A part: a polyline of points and the strings between them.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Toolpath {
@@ -117,7 +348,7 @@ pub struct Toolpath {
     /// n + 1 points for n strings.
     pub points: Vec<DVec3>,
     /// String k runs from `points[k]` to `points[k + 1]`.
-    pub strings: Vec<Strand>,
+    pub strings: Strands,
     /// Events in order of their string index: `(k, e)` happens before
     /// string k (k = n: after the last string).
     pub(crate) events: Vec<(usize, Event)>,
@@ -137,7 +368,7 @@ impl Toolpath {
         Toolpath {
             name: String::new(),
             points: vec![start],
-            strings: Vec::new(),
+            strings: Strands::default(),
             events: Vec::new(),
             markers: Vec::new(),
             turns: None,
@@ -157,8 +388,7 @@ impl Toolpath {
         };
         Toolpath {
             name: String::new(),
-            // filled in chunks: a big part's fresh pages are shared out too
-            strings: crate::base::par::fill_vec(points.len() - 1, 8_192, |_| strand),
+            strings: Strands::same(strand, points.len() - 1),
             points,
             events: Vec::new(),
             markers: Vec::new(),
@@ -166,14 +396,14 @@ impl Toolpath {
         }
     }
 
-    /// An empty part with room for `n` strings.
+    /// An empty part with room for `n` strings' points.
     pub(crate) fn with_capacity(start: DVec3, n: usize) -> Toolpath {
         let mut points = Vec::with_capacity(n + 1);
         points.push(start);
         Toolpath {
             name: String::new(),
             points,
-            strings: Vec::with_capacity(n),
+            strings: Strands::default(),
             events: Vec::new(),
             markers: Vec::new(),
             turns: None,
@@ -297,7 +527,7 @@ impl Toolpath {
             }
         }
         self.points.extend_from_slice(&other.points[1..]);
-        self.strings.extend_from_slice(&other.strings);
+        self.strings.extend_from(&other.strings);
         self.markers.extend_from_slice(&other.markers);
     }
 
@@ -326,7 +556,7 @@ impl Toolpath {
         }
         // the join is `before`'s last point, as in `append`
         self.points.splice(0..1, before.points);
-        self.strings.splice(0..0, before.strings);
+        self.strings.prepend(before.strings);
         self.markers.splice(0..0, before.markers);
     }
 }
@@ -365,6 +595,46 @@ pub(crate) fn angle(p: DVec3) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn alike_strings_are_held_once_and_read_as_one_each() {
+        let s = |c: f64| Strand {
+            c,
+            v: 30.0,
+            travel: false,
+            hair: false,
+        };
+        // a part of alike strings keeps one strand, whatever joins it
+        let mut t = Toolpath::uniform(vec![DVec3::ZERO; 1001], 0.2, 30.0);
+        assert_eq!(t.strings.alike(), Some(s(0.2)));
+        t.draw(DVec3::X, 0.2, 30.0);
+        let same = Toolpath::uniform(vec![DVec3::X; 11], 0.2, 30.0);
+        t.append(&same, 99.0);
+        assert_eq!(t.strings.alike(), Some(s(0.2)));
+        assert_eq!(t.len(), 1011);
+        assert_eq!(t.strings.range(3, 9), Strands::same(s(0.2), 6));
+        // one different string: one each from then on, read the same
+        t.draw(DVec3::Y, 0.3, 30.0);
+        assert_eq!(t.strings.alike(), None);
+        let want: Vec<Strand> = (0..1012)
+            .map(|k| s(if k < 1011 { 0.2 } else { 0.3 }))
+            .collect();
+        assert!(t.strings.iter().eq(want.iter()));
+        assert_eq!(t.strings.iter().len(), 1012);
+        assert_eq!(t.strings, Strands::from(want.clone()));
+        assert_eq!(t.strings[1011], s(0.3));
+        assert_eq!(t.strings.last(), Some(&s(0.3)));
+        // changed in place through `make_mut`, equal to the list changed so
+        let mut u = Strands::same(s(0.2), 4);
+        u[2].c = 0.5;
+        assert_eq!(u, Strands::from(vec![s(0.2), s(0.2), s(0.5), s(0.2)]));
+        // a list of alike ones is held once; prepending keeps the order
+        assert_eq!(Strands::from(vec![s(0.1); 5]).alike(), Some(s(0.1)));
+        let mut v = Strands::from(vec![s(0.3)]);
+        v.prepend(Strands::same(s(0.1), 2));
+        assert!(v.iter().map(|x| x.c).eq([0.1, 0.1, 0.3]));
+        assert!(Strands::default().is_empty() && Strands::same(s(0.1), 0).last().is_none());
+    }
 
     #[test]
     fn polyline_strings_share_points() {

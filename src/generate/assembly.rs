@@ -156,7 +156,7 @@ fn join(parts: &[Toolpath]) -> Toolpath {
         all.events
             .extend(t.events.iter().map(|(i, e)| (base + i, e.clone())));
         all.points.extend_from_slice(&t.points);
-        all.strings.extend_from_slice(&t.strings);
+        all.strings.extend_from(&t.strings);
     }
     // an outline's `s` travels with its points (0 on parts without one)
     if parts.iter().any(|t| t.turns.is_some()) {
@@ -187,7 +187,7 @@ fn split(all: Toolpath) -> Vec<Toolpath> {
         let mut tp = Toolpath {
             name: String::new(),
             points: all.points[first..=k].to_vec(),
-            strings: all.strings[first..k].to_vec(),
+            strings: all.strings.range(first, k),
             events: Vec::new(),
             markers: Vec::new(),
             turns: all.turns.as_ref().map(|u| u[first..=k].to_vec()),

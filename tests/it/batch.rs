@@ -361,39 +361,17 @@ fn a_checked_sweep_lets_each_variant_go() {
         "p3dp: 1\nname: big\nprinter: generic-220\nmaterial: pla\nparams: {rad: 10}\nparts:\n  - primitive:\n      helix: { radius: rad, height: 30, pitch: 0.2 }\n",
     )
     .unwrap();
-    let child = std::process::Command::new(env!("CARGO_BIN_EXE_p3dp"))
-        .args([
+    let (out, peak) = p3dp_peak(
+        &dir,
+        &[
             "check",
             "big.yaml",
             "--sweep",
             "rad=10..10.299:0.001",
             "-j",
             "2",
-        ])
-        .current_dir(&dir)
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::null())
-        .spawn()
-        .unwrap();
-    let pid = child.id();
-    // the peak, read until the process ends
-    let peak = std::thread::spawn(move || {
-        let mut peak = 0u64;
-        while let Ok(s) = std::fs::read_to_string(format!("/proc/{pid}/status")) {
-            let kb = s
-                .lines()
-                .find_map(|l| l.strip_prefix("VmHWM:"))
-                .and_then(|v| v.trim().trim_end_matches("kB").trim().parse().ok());
-            match kb {
-                Some(kb) => peak = peak.max(kb),
-                None => break, // a zombie: done
-            }
-            std::thread::sleep(std::time::Duration::from_millis(10));
-        }
-        peak
-    });
-    let out = child.wait_with_output().unwrap();
-    let peak = peak.join().unwrap();
+        ],
+    );
     let text = String::from_utf8_lossy(&out.stdout);
     let labels: Vec<&str> = text
         .lines()

@@ -229,3 +229,28 @@ fn previews_and_meshes_of_a_model_metres_away_are_refused_at_once() {
     );
     assert!(dir.join("r.png").exists());
 }
+
+/// A check keeps about 24 bytes a string when a part's strings are all
+/// alike (a primitive's): their point, one shared cross-section and speed,
+/// and the support check's path length every 64th point. It kept 56 (the
+/// attributes and the path length at every point too), so the 50 million
+/// strings `max_strings` allows took 2.7 GB (issue 42).
+#[test]
+fn a_check_of_millions_of_alike_strings_keeps_little_more_than_their_points() {
+    let dir = tmp("check-memory");
+    std::fs::write(
+        dir.join("big.yaml"),
+        "p3dp: 1\nname: big\nprinter: generic-220\nmaterial: pla\ndefaults: {cross_section: 0.08, speed: 40}\nparts:\n  - primitive: {helix: {radius: 50, height: 16, pitch: 0.02, segments: 5000, center: [0, 0, 0.2]}}\n",
+    )
+    .unwrap();
+    let (out, peak) = p3dp_peak(&dir, &["check", "big.yaml", "-j", "2"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success() && text.contains("big.yaml: "),
+        "{text}"
+    );
+    // 4 million strings: their points are 96 MB; 36 bytes a string and the
+    // program's own 30 MB at most (56 bytes a string made 250 MB)
+    let strings = 4_000_000u64;
+    assert!(peak < (strings * 36 + 30_000_000) / 1024, "peak {peak} kB");
+}

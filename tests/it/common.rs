@@ -20,3 +20,33 @@ pub fn p3dp(dir: &Path, args: &[&str]) -> Output {
         .output()
         .expect("run p3dp")
 }
+
+/// Runs `p3dp ARGS` in `dir` (standard error dropped) and reads its peak
+/// resident memory (`VmHWM`, kB) from `/proc` until it ends.
+pub fn p3dp_peak(dir: &Path, args: &[&str]) -> (Output, u64) {
+    let child = Command::new(env!("CARGO_BIN_EXE_p3dp"))
+        .args(args)
+        .current_dir(dir)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("run p3dp");
+    let pid = child.id();
+    let peak = std::thread::spawn(move || {
+        let mut peak = 0u64;
+        while let Ok(s) = std::fs::read_to_string(format!("/proc/{pid}/status")) {
+            let kb = s
+                .lines()
+                .find_map(|l| l.strip_prefix("VmHWM:"))
+                .and_then(|v| v.trim().trim_end_matches("kB").trim().parse().ok());
+            match kb {
+                Some(kb) => peak = peak.max(kb),
+                None => break, // a zombie: done
+            }
+            std::thread::sleep(std::time::Duration::from_millis(10));
+        }
+        peak
+    });
+    let out = child.wait_with_output().expect("p3dp ran");
+    (out, peak.join().expect("the peak"))
+}

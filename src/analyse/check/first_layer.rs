@@ -528,7 +528,7 @@ mod tests {
             })
             .collect()
     }
-    use crate::base::toolpath::Strand;
+    use crate::base::toolpath::{Strand, Strands};
 
     fn ring(r: f64, z: f64, n: usize, c: f64) -> Toolpath {
         let mut tp = Toolpath {
@@ -541,7 +541,7 @@ mod tests {
             tp.points
                 .push(DVec3::new(r * libm::cos(a), r * libm::sin(a), z));
         }
-        tp.strings = vec![
+        tp.strings = Strands::from(vec![
             Strand {
                 c,
                 v: 30.0,
@@ -549,7 +549,7 @@ mod tests {
                 hair: false,
             };
             n
-        ];
+        ]);
         tp
     }
 
@@ -612,7 +612,7 @@ mod tests {
         let mut tp = one.clone();
         for _ in 1..turns {
             tp.points.extend_from_slice(&one.points[1..]);
-            tp.strings.extend_from_slice(&one.strings);
+            tp.strings.extend_from(&one.strings);
         }
         tp
     }

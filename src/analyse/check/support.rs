@@ -84,6 +84,37 @@ const MAX_NEAR: usize = 32768;
 /// Unsupported samples whose overhang is measured (the rest use the bed).
 const GAP_BUDGET: usize = 20_000;
 
+/// Points between the path lengths [`PathLength`] keeps.
+const ARC_EVERY: usize = 64;
+
+/// A path's length before each of its points, kept every [`ARC_EVERY`]
+/// points and summed on from there (or from the last one asked, when that
+/// is nearer): the same additions in the same order as a table of every
+/// point, so the same bits, in 1/64 of the memory.
+struct PathLength {
+    /// The length before points 0, 64, 128 …
+    every: Vec<f64>,
+    /// The last point asked for and its length.
+    cursor: std::cell::Cell<(usize, f64)>,
+}
+
+impl PathLength {
+    /// The length before point `k` of `points`.
+    fn at(&self, points: &[DVec3], k: usize) -> f64 {
+        let base = k - k % ARC_EVERY;
+        let (mut j, mut acc) = self.cursor.get();
+        if !(base..=k).contains(&j) {
+            (j, acc) = (base, self.every[k / ARC_EVERY]);
+        }
+        while j < k {
+            acc += points[j].distance(points[j + 1]);
+            j += 1;
+        }
+        self.cursor.set((k, acc));
+        acc
+    }
+}
+
 /// The extruding strings of all paths in print order, and the grid over them.
 pub(crate) struct Deposits<'a> {
     /// The paths, in print order.
@@ -94,8 +125,8 @@ pub(crate) struct Deposits<'a> {
     ids: Vec<(u32, u32)>,
     /// How many deposits there are.
     count: usize,
-    /// Per path, the path length before each point, mm.
-    pub(crate) arc: Vec<Vec<f64>>,
+    /// Per path, the path length before each point.
+    arc: Vec<PathLength>,
     /// The grid over `ids[..built]`, made when a search first needs it and
     /// remade (at least twice as large) when a search needs later deposits.
     grid: std::cell::RefCell<(SegGrid, usize)>,
@@ -116,13 +147,15 @@ impl<'a> Deposits<'a> {
         let mut arc = Vec::with_capacity(paths.len());
         let mut c_max = f64::NEG_INFINITY;
         for (p, tp) in paths.iter().enumerate() {
-            let mut s = crate::base::mem::with_capacity(tp.points.len());
+            let mut s = Vec::with_capacity(tp.points.len() / ARC_EVERY + 1);
             let mut acc = 0.0;
             s.push(0.0);
             for (k, (st, ab)) in tp.strings.iter().zip(tp.points.windows(2)).enumerate() {
                 let l = ab[0].distance(ab[1]);
                 acc += l;
-                s.push(acc);
+                if (k + 1) % ARC_EVERY == 0 {
+                    s.push(acc);
+                }
                 // a hair holds nothing up: it is no deposit
                 if !st.travel && !st.hair && l > 0.0 {
                     if !listed && (p, k) != (0, count) {
@@ -141,7 +174,10 @@ impl<'a> Deposits<'a> {
                     c_max = c_max.max(st.c);
                 }
             }
-            arc.push(s);
+            arc.push(PathLength {
+                every: s,
+                cursor: std::cell::Cell::new((0, 0.0)),
+            });
         }
         // the widest string is the one of the largest cross-section (a
         // width is a chain of rounded steps that never decrease in c), at
@@ -175,6 +211,11 @@ impl<'a> Deposits<'a> {
             *grid = (SegGrid::build(n, self.cell, |i| self.ends(i as u32)), n);
         }
         grid.0.search(p, r, g, f)
+    }
+
+    /// Path `p`'s length before its point `k`, mm.
+    pub(crate) fn arc(&self, p: usize, k: usize) -> f64 {
+        self.arc[p].at(&self.paths[p].points, k)
     }
 
     /// Ends of deposit i.
@@ -327,7 +368,8 @@ fn scan_part(
 ) -> PartTally {
     let p = &recipe.printer;
     let tol = p.checks.support_tolerance;
-    let arc = &dep.arc[pi];
+    // the path length before string k, summed as `Deposits::arc` sums it
+    let mut arc_k = 0.0;
     let mut runs = Runs {
         max_bridge: p.checks.max_bridge,
         tally: PartTally {
@@ -344,6 +386,8 @@ fn scan_part(
     for (k, s) in tp.strings.iter().enumerate() {
         let (a, b) = tp.ends(k);
         let l = a.distance(b);
+        let before = arc_k;
+        arc_k += l;
         if s.travel {
             runs.close(None);
             last_ok = None;
@@ -369,7 +413,7 @@ fn scan_part(
         for i in 0..n {
             let u = (i as f64 + 0.5) / n as f64;
             let q = a.lerp(b, u);
-            let sq = arc[k] + u * l;
+            let sq = before + u * l;
             let ok = q.z <= tol * w || {
                 hint = rests(dep, *g, pi as u32, sq, q, w, tol, hint);
                 hint.is_some()
@@ -630,8 +674,8 @@ fn holds(dep: &Deposits, j: u32, pi: u32, sq: f64, q: DVec3, w: f64, tol: f64) -
     if pj != pi {
         return true;
     }
-    let arc = &dep.arc[pj as usize];
-    let sj = arc[k] + u * (arc[k + 1] - arc[k]);
+    let (s0, s1) = (dep.arc(pj as usize, k), dep.arc(pj as usize, k + 1));
+    let sj = s0 + u * (s1 - s0);
     sq - sj > (3.0 * d).max(w)
 }
 
@@ -711,8 +755,8 @@ fn overhang(dep: &Deposits, g: u32, pi: u32, sq: f64, q: DVec3, w: f64) -> Optio
             return false;
         }
         let own_tail = pj == pi && {
-            let arc = &dep.arc[pj as usize];
-            sq - (arc[k] + u * (arc[k + 1] - arc[k])) <= (3.0 * d).max(w)
+            let (s0, s1) = (dep.arc(pj as usize, k), dep.arc(pj as usize, k + 1));
+            sq - (s0 + u * (s1 - s0)) <= (3.0 * d).max(w)
         };
         if !own_tail {
             let wj = width(tp.strings[k].c, dep.nozzle);
@@ -804,7 +848,7 @@ mod tests {
             tp.draw(DVec3::new(k as f64 + 1.0, 0.0, 0.2), c, 30.0);
         }
         tp.travel(DVec3::new(20.0, 0.0, 0.2), 100.0);
-        tp.strings.last_mut().unwrap().c = 50.0;
+        tp.strings.make_mut().last_mut().unwrap().c = 50.0;
         tp.draw(DVec3::new(21.0, 0.0, 0.2), 0.15, 30.0);
         let refs = [&tp];
         let dep = Deposits::new(&refs, 0.4, 1.5);
@@ -834,6 +878,35 @@ mod tests {
         assert_eq!(dep.len(), h.len() + 9);
         assert_eq!(dep.id(7), (0, 7));
         assert_eq!(dep.id(h.len() as u32 + 8), (1, 9));
+    }
+
+    #[test]
+    fn path_lengths_kept_every_64_points_are_a_full_table_s_bits() {
+        // a wobbling helix, so the lengths differ string by string
+        let mut tp = Toolpath::new(DVec3::new(10.0, 0.0, 0.2));
+        for k in 1..1000 {
+            let a = k as f64 * 0.1;
+            let r = 10.0 + libm::sin(k as f64 * 0.37);
+            tp.draw(
+                DVec3::new(r * libm::cos(a), r * libm::sin(a), 0.2 + 0.001 * k as f64),
+                0.1,
+                30.0,
+            );
+        }
+        let mut full = vec![0.0];
+        for k in 0..tp.len() {
+            full.push(full[k] + tp.length(k));
+        }
+        let refs = [&tp];
+        let dep = Deposits::new(&refs, 0.4, 1.5);
+        assert_eq!(dep.arc[0].every.len(), 1000 / ARC_EVERY + 1);
+        // asked forwards, backwards, across blocks and again: the same bits
+        let asks = (0..1000)
+            .chain((0..1000).rev())
+            .chain([999, 0, 640, 63, 64, 65, 700, 3]);
+        for k in asks {
+            assert_eq!(dep.arc(0, k).to_bits(), full[k].to_bits(), "point {k}");
+        }
     }
 
     #[test]

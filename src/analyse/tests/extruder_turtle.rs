@@ -75,7 +75,7 @@ fn hairs_are_rows_of_declared_hairs_of_the_recipes_length_that_pass_check() {
     // the three checks exist to find
     assert_eq!(codes(&r, &tp), Vec::<&str>::new());
     let mut bare = tp.clone();
-    for s in &mut bare.strings {
+    for s in bare.strings.make_mut() {
         s.hair = false;
     }
     let found = codes(&r, &bare);
@@ -87,7 +87,7 @@ fn hairs_are_rows_of_declared_hairs_of_the_recipes_length_that_pass_check() {
     let tp = only_part(&r);
     assert_eq!(codes(&r, &tp), Vec::<&str>::new());
     let mut bare = tp.clone();
-    for s in &mut bare.strings {
+    for s in bare.strings.make_mut() {
         s.hair = false;
     }
     assert!(codes(&r, &bare).contains(&"thin-string"));

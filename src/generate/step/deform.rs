@@ -49,7 +49,7 @@ impl Deform {
         let n = tp.len();
         let points = &tp.points;
         let turns = &tp.turns;
-        try_chunks(&mut tp.strings, PAR_MIN, |start, chunk| {
+        try_chunks(tp.strings.make_mut(), PAR_MIN, |start, chunk| {
             // LANES strings at a time (Expr::eval_many: the same values as
             // eval); travel strings are evaluated too but keep their c and v
             let mut vars = [[0.0; var::COUNT]; LANES];

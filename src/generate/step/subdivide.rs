@@ -1,7 +1,7 @@
 //! `subdivide`: split long strings so later deformations bend the path smoothly.
 
 use crate::base::error::{Error, Result};
-use crate::base::toolpath::Toolpath;
+use crate::base::toolpath::{Strands, Toolpath};
 
 /// Splits every string longer than `max` into `ceil(L / max)` equal pieces,
 /// refusing when the part would exceed `max_strings`.
@@ -30,7 +30,9 @@ pub(super) fn apply(tp: &mut Toolpath, max: f64, max_strings: u64) -> Result<()>
         return Ok(());
     }
     let mut points = Vec::with_capacity(total as usize + 1);
-    let mut strings = Vec::with_capacity(total as usize);
+    // strings all alike stay held once
+    let alike = tp.strings.alike();
+    let mut strings = Vec::with_capacity(if alike.is_some() { 0 } else { total as usize });
     points.push(tp.points[0]);
     // new index of the first piece of each old string (and of the end), so
     // events stay before the same string
@@ -42,26 +44,33 @@ pub(super) fn apply(tp: &mut Toolpath, max: f64, max_strings: u64) -> Result<()>
         t
     });
     for k in 0..tp.len() {
-        first.push(strings.len());
+        first.push(points.len() - 1);
         let (a, b) = tp.ends(k);
         let m = pieces(k);
         for j in 1..m {
             points.push(a.lerp(b, j as f64 / m as f64));
-            strings.push(tp.strings[k]);
+            if alike.is_none() {
+                strings.push(tp.strings[k]);
+            }
             if let (Some(t), Some(u)) = (&mut turns, &tp.turns) {
                 t.push(u[k] + (u[k + 1] - u[k]) * (j as f64 / m as f64));
             }
         }
         points.push(b);
-        strings.push(tp.strings[k]);
+        if alike.is_none() {
+            strings.push(tp.strings[k]);
+        }
         if let (Some(t), Some(u)) = (&mut turns, &tp.turns) {
             t.push(u[k + 1]);
         }
     }
     tp.turns = turns;
-    first.push(strings.len());
+    first.push(points.len() - 1);
     tp.points = points;
-    tp.strings = strings;
+    tp.strings = match alike {
+        Some(s) => Strands::same(s, total as usize),
+        None => Strands::from(strings),
+    };
     for ev in &mut tp.events {
         ev.0 = first[ev.0];
     }

@@ -87,7 +87,7 @@ fn split_first(recipe: &Recipe, k: usize, tp: &Toolpath) -> (Toolpath, Toolpath)
     let first = Toolpath {
         name: tp.name.clone(),
         points: tp.points[..=n].to_vec(),
-        strings: tp.strings[..n].to_vec(),
+        strings: tp.strings.range(0, n),
         events: Vec::new(),
         markers: Vec::new(),
         turns: None,
@@ -95,7 +95,7 @@ fn split_first(recipe: &Recipe, k: usize, tp: &Toolpath) -> (Toolpath, Toolpath)
     let rest = Toolpath {
         name: tp.name.clone(),
         points: tp.points[n..].to_vec(),
-        strings: tp.strings[n..].to_vec(),
+        strings: tp.strings.range(n, tp.len()),
         events: Vec::new(),
         markers: Vec::new(),
         turns: None,
