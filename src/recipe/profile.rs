@@ -354,13 +354,7 @@ pub(crate) fn variable(v: RawVariable) -> Value {
 }
 
 fn flavor(f: RawFlavor) -> Flavor {
-    match f {
-        RawFlavor::Marlin => Flavor::Marlin,
-        RawFlavor::Klipper => Flavor::Klipper,
-        RawFlavor::Reprap => Flavor::Reprap,
-        RawFlavor::Prusa => Flavor::Prusa,
-        RawFlavor::Bambu => Flavor::Bambu,
-    }
+    f.flavor()
 }
 
 fn retraction(r: RawRetraction) -> Retraction {

@@ -1306,3 +1306,70 @@ fn a_bambu_sequence_builds_with_its_reach_and_flush() {
     let e = edited("M211 R", "M290 X40 Y40 Z2");
     assert!(e.contains("`M290` is refused"), "{e}");
 }
+
+/// The constructs of Bambu's current start G-code (a preset written for the
+/// tests in their style, issue 39): the X1's "reset machine status"
+/// `M290`, the H2's `M901 D4`, the hot end's power off and on around the
+/// camera's start (`M562`), a flush at 290 °C that sets the printer's
+/// `max_nozzle_temp` where the preset names none (the X1E's), and a wipe in
+/// circles at the plate's edge whose sweep sets the reach along Y (the A1
+/// mini's); each moved past what the maker wrote is refused by name.
+#[test]
+fn bambus_current_start_gcode_builds_with_its_own_commands() {
+    let dir = vase_dir("bambu-current");
+    let t8 = fixture("bbl/machine/Acme T8 0.4 nozzle.json");
+    let pla = fixture("bbl/filament/Acme PLA.json");
+    let out = p3dp(&dir, &["printers", "import", path(&t8), "-o", "t8.yaml"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let yaml = std::fs::read_to_string(dir.join("t8.yaml")).unwrap();
+    for line in [
+        "flavor: bambu",
+        "max_nozzle_temp: 290",
+        "envelope: { margin: 5, below_bed: 1.01, x: [-48.2, 261], y: [-5, 262] }",
+        "# - max_nozzle_temp 290: the hottest the maker's own G-code heats the nozzle (start_gcode line 10: `M109 S290`); the preset names no limit",
+        "# - envelope.y [-5, 262]: where the maker's own G-code takes the head (start_gcode line 17: `G2 I1 J0 X2 Y0 F2000`), past the bed grown by 5 mm",
+    ] {
+        assert!(yaml.lines().any(|l| l == line), "no `{line}` in\n{yaml}");
+    }
+    let g = build_with(&dir, &["--printer", "t8.yaml", "--filament", path(&pla)]).unwrap();
+    has_lines(
+        &g,
+        &[
+            "M290 X40 Y40 Z2.6666666 ; the firmware's resting state",
+            "M901 D4",
+            "M562 P1 E0 B1 ; the hot end's power off",
+            "M562 P1 E1 B1 ; and on again",
+            "M109 S290 ; flush at the common flush temperature",
+            "G2 I1 J0 X2 Y0 F2000 ; wipe in circles",
+            "M109 S215",
+        ],
+    );
+    let edited = |from: &str, to: &str| {
+        assert!(yaml.contains(from), "{from}");
+        std::fs::write(dir.join("edited.yaml"), yaml.replace(from, to)).unwrap();
+        build_with(
+            &dir,
+            &["--printer", "edited.yaml", "--filament", path(&pla)],
+        )
+        .unwrap_err()
+    };
+    let e = edited("M290 X40 Y40 Z2.6666666", "M290 X40 Y40 Z2");
+    assert!(
+        e.contains("start_gcode line 2: `M290 X40 Y40 Z2 ; the firmware's resting state`: `M290` is refused: it shifts the coordinates"),
+        "{e}"
+    );
+    let e = edited("G2 I1 J0 X2 Y0 F2000", "G2 I2 J0 X4 Y0 F2000");
+    assert!(
+        e.contains("the arc's sweep: y = 263 mm is outside the machine's travel envelope (y from -5 to 262 mm: the profile's envelope.y)"),
+        "{e}"
+    );
+    let e = edited("M109 S290 ;", "M109 S295 ;");
+    assert!(
+        e.contains("`M109 S295 ; flush at the common flush temperature`: a nozzle temperature of 295 °C, above the limit 290 °C"),
+        "{e}"
+    );
+}

@@ -27,7 +27,8 @@ fn start(r: &Recipe, text: &str) -> Result<usize, String> {
 
 /// Bambu's sequence commands are read as its firmware reads them: inert
 /// ones pass, a motion's coordinates and a heating word are checked, a
-/// code whose effect no preset states (`M290`) stays refused by name.
+/// code whose effect no preset states stays refused by name, as does a
+/// babystep other than the maker's own reset (`M290`).
 #[test]
 fn bambus_own_commands_are_read_as_its_firmware_reads_them() {
     let r = on(Flavor::Bambu);
@@ -53,11 +54,8 @@ fn bambus_own_commands_are_read_as_its_firmware_reads_them() {
             "G29.1 Z-3",
             "offsets the coordinates by Z -3 mm; expected at most 0.5 mm",
         ),
-        ("M290 X40 Y40 Z2.6666666", "`M290` is refused: it shifts"),
-        (
-            "M562 P1 E0 B1",
-            "`M562` is a command p3dp cannot check on Bambu",
-        ),
+        ("M290 Z0.05", "`M290` is refused: it shifts"),
+        ("M9999", "`M9999` is a command p3dp cannot check on Bambu"),
     ] {
         let e = start(&r, line).unwrap_err();
         assert!(e.contains(why), "{line}: {e}");
@@ -154,4 +152,84 @@ fn a_makers_flush_may_be_hotter_than_the_material_but_not_the_print() {
         Start::At(glam::DVec3::new(100.0, 100.0, 10.0), 0.0),
     );
     assert!(end.is_err());
+}
+
+/// Bambu's own codes of the current presets (issue 39): the maker's
+/// "reset machine status" `M290 X40 Y40 Z2.6666666` passes, the position
+/// forgotten after it; any other M290 is a shift p3dp cannot follow, as is
+/// that line in a recipe's command. `M901 D4` may move the head where the
+/// firmware goes on its own (the position forgotten); `M562`'s power off
+/// and on around the camera's start moves and heats nothing.
+#[test]
+fn bambus_reset_timelapse_end_and_hot_end_power_are_read() {
+    let r = on(Flavor::Bambu);
+    let ok = "M290 X40 Y40 Z2.6666666\nM901 D4\nM104 S0\nM562 P1 E0 B1\nM18 E\nM562 P1 E1 B1\nG28\nG1 X10 Y10 Z5";
+    assert_eq!(start(&r, ok), Ok(8));
+    for (text, why) in [
+        ("M290 Z0.5", "`M290` is refused: it shifts the coordinates"),
+        (
+            "M290 X40 Y40 Z2.6",
+            "only the maker's own `M290 X40 Y40 Z2.6666666`",
+        ),
+        ("M290 X40 Y40 Z2.6666666 S1", "only the maker's own"),
+        ("M290 X40 Y40", "only the maker's own"),
+    ] {
+        let e = start(&r, text).unwrap_err();
+        assert!(e.contains(why), "{text}: {e}");
+    }
+    // the position is unknown after M290 and M901: an arc from there is
+    // refused, and the relative moves span at most the machine
+    for first in ["M290 X40 Y40 Z2.6666666", "M901 D4"] {
+        let e = start(&r, &format!("G1 X10 Y10\n{first}\nG2 X12 Y10 I1 J0")).unwrap_err();
+        assert!(
+            e.contains("an arc from an unknown position"),
+            "{first}: {e}"
+        );
+    }
+    for t in ["M290 X40 Y40 Z2.6666666", "M901 D4"] {
+        assert!(command(t, &r.printer, &r.material).is_err(), "{t}");
+    }
+    command("M562 P1 E1 B1", &r.printer, &r.material).unwrap();
+    // on Marlin M562 and M901 are no known command; M290 a babystep
+    let m = on(Flavor::Marlin);
+    assert!(start(&m, "M901 D4").is_err());
+    assert!(start(&m, "M290 X40 Y40 Z2.6666666").is_err());
+}
+
+/// The H2's nozzle load line (issue 39): after homing, a relative arc (a
+/// helical circle `G3 Z0.4 I1.217 J0`) from a position unknown in Y is held
+/// as the relative lines are (its sweep on a known X inside the envelope,
+/// on Y within the machine's width), its filament bounded; a line that
+/// starts with no letter and holds no number is no command to Marlin and
+/// reads as nothing, one with a number stays refused.
+#[test]
+fn a_relative_arc_from_an_unknown_position_and_a_banner_line() {
+    let r = on(Flavor::Bambu);
+    let ok = "G28\nG90\nG1 X250 F6000\nM83\nG1 E5 F300\nG91\nG3 Z0.4 I1.217 J0 F6000\nG90\n    ========== record data ==========";
+    assert_eq!(start(&r, ok), Ok(ok.lines().count()));
+    for (text, why) in [
+        // the known X swept past the bed
+        (
+            "G28\nG1 X250\nG91\nG3 I10 J0",
+            "the arc's sweep: x = 270 mm is outside",
+        ),
+        // circles whose Y offsets span more than the machine
+        (
+            "G28\nG91\nG3 I0 J150\nG3 I0 J-150",
+            "the relative X moves since the position was last known span 300 mm",
+        ),
+        (
+            "G28\nG1 X100\nG91\nG3 I1 J0 E1500",
+            "feeds 1500 mm of filament",
+        ),
+        // absolute words from an unknown start
+        (
+            "G28\nG90\nG3 X10 Y10 I1 J0",
+            "an arc from an unknown position",
+        ),
+        ("=G1 X500", "does not start with a command"),
+    ] {
+        let e = start(&r, text).unwrap_err();
+        assert!(e.contains(why), "{text}: {e}");
+    }
 }

@@ -249,6 +249,17 @@ fn space(c: u8) -> bool {
 fn marlin<'a>(code: &'a str, quoted: bool, out: &mut Line<'a>) -> Result<(), String> {
     let b = code.as_bytes();
     let letter = b[0].to_ascii_uppercase();
+    if !(b[0].is_ascii_alphanumeric() || b[0] == b'_' || b.iter().any(u8::is_ascii_digit)) {
+        // no letter first and no number anywhere (a maker's banner that lost
+        // its `;`, Bambu's `==== record data ====`): Marlin takes no command
+        // letter from it and answers "unknown command"; read as a named
+        // command of its first word, which the checks name
+        let first = code.split([' ', '\t']).next().unwrap_or(code);
+        out.code = Some(Code::Name(first.to_string()));
+        let rest = code[first.len()..].trim_matches([' ', '\t']);
+        out.text = (!rest.is_empty()).then_some(rest);
+        return Ok(());
+    }
     if !matches!(letter, b'G' | b'M' | b'T') {
         // not a command Marlin runs (it answers "unknown command"); read as
         // a named one so that the checks can say so, or a flavour's table

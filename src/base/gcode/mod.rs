@@ -194,6 +194,35 @@ pub(crate) struct Arc {
     pub(crate) feed: Option<f64>,
 }
 
+/// The points an arc's extent rests on: its two ends and each
+/// quarter-turn extreme (0°, 90°, 180°, 270° about the centre) its sweep
+/// passes, from `from` to `to` about the centre `from + ij`, clockwise
+/// unless `ccw`. Ends that meet make a full circle (as Marlin's
+/// `plan_arc` reads them).
+pub(crate) fn arc_extremes(from: [f64; 2], to: [f64; 2], ij: [f64; 2], ccw: bool) -> Vec<[f64; 2]> {
+    let (cx, cy) = (from[0] + ij[0], from[1] + ij[1]);
+    let r = ij[0].hypot(ij[1]);
+    let a0 = libm::atan2(from[1] - cy, from[0] - cx);
+    let tau = std::f64::consts::TAU;
+    // the sweep's size (a full circle when the ends meet) and its end angle
+    let a1 = libm::atan2(to[1] - cy, to[0] - cx);
+    let mut sweep = if ccw { a1 - a0 } else { a0 - a1 }.rem_euclid(tau);
+    if sweep < 1e-12 {
+        sweep = tau;
+    }
+    let a1 = if ccw { a0 + sweep } else { a0 - sweep };
+    let quarter = std::f64::consts::FRAC_PI_2;
+    let (lo, hi) = (a0.min(a1), a0.max(a1));
+    let mut pts = vec![from, to];
+    let mut q = libm::ceil(lo / quarter);
+    while q * quarter <= hi {
+        let t = q * quarter;
+        pts.push([cx + r * libm::cos(t), cy + r * libm::sin(t)]);
+        q += 1.0;
+    }
+    pts
+}
+
 /// A host's cancel-object label (Klipper's `EXCLUDE_OBJECT_START`/`_END`,
 /// and the `; printing object` comments slicers write); the objects'
 /// `EXCLUDE_OBJECT_DEFINE` lines are the header's (`output::gcode::labels`).

@@ -26,6 +26,7 @@ use indexmap::IndexMap;
 use super::{refuse, Format, Kind, Preset};
 use crate::base::error::{Error, Result};
 use crate::base::slicer_macro::Template;
+use crate::machine::limits::NOZZLE_TEMP_MAX;
 use crate::recipe::schema::{
     RawBed, RawExtrusion, RawFlavor, RawKinematics, RawPrinter, RawRetraction, RawVariable,
 };
@@ -264,6 +265,7 @@ pub fn import(p: &Preset) -> Result<Imported> {
     // than the print (docs/checks.md)
     raw.maker_temperatures = true;
     reach(&mut raw, &mut notes);
+    hot_end(&mut raw, &mut notes);
     for (key, why) in IGNORED {
         if p.has(key) {
             notes.push(format!("{key} ignored: {why}"));
@@ -286,12 +288,53 @@ fn reach(raw: &mut RawPrinter, notes: &mut Vec<String>) {
             ("start_gcode", raw.start_gcode.as_str()),
             ("end_gcode", raw.end_gcode.as_str()),
         ];
-        let r = super::reach::reach(&texts, min, max, raw.envelope.margin);
+        let flavor = raw.flavor.flavor();
+        let r = super::reach::reach(&texts, min, max, raw.envelope.margin, flavor);
         [raw.envelope.x, raw.envelope.y] = r.xy;
         if let Some(d) = r.below {
             raw.envelope.below_bed = d;
         }
         notes.extend(r.notes);
+    }
+}
+
+/// The printer's `max_nozzle_temp`, which no slicer's printer preset
+/// gives: raised from p3dp's default to the hottest literal nozzle
+/// temperature (`M104`/`M109 S`) of the maker's own start and end G-code,
+/// the maker's statement of what its hot end takes (Bambu's X1E flushes at
+/// `M109 S290`), at most [`NOZZLE_TEMP_MAX`] (a hotter one the build names).
+fn hot_end(raw: &mut RawPrinter, notes: &mut Vec<String>) {
+    let mut hottest: Option<(f64, String)> = None;
+    for (key, text) in [
+        ("start_gcode", &raw.start_gcode),
+        ("end_gcode", &raw.end_gcode),
+    ] {
+        for (n, line) in text.split('\n').enumerate() {
+            let code = line.split(';').next().unwrap_or("").trim();
+            let mut words = code.split_ascii_whitespace();
+            let first = words.next().map(str::to_ascii_uppercase);
+            if !matches!(first.as_deref(), Some("M104" | "M109")) {
+                continue;
+            }
+            for w in words {
+                let Some(v) = w
+                    .strip_prefix(['S', 's'])
+                    .and_then(|v| v.parse::<f64>().ok())
+                else {
+                    continue;
+                };
+                let hotter = hottest.as_ref().is_none_or(|(t, _)| v > *t);
+                if v.is_finite() && v <= NOZZLE_TEMP_MAX && hotter {
+                    hottest = Some((v, format!("{key} line {}: `{code}`", n + 1)));
+                }
+            }
+        }
+    }
+    if let Some((t, at)) = hottest.filter(|(t, _)| *t > raw.max_nozzle_temp) {
+        raw.max_nozzle_temp = t;
+        notes.push(format!(
+            "max_nozzle_temp {t}: the hottest the maker's own G-code heats the nozzle ({at}); the preset names no limit"
+        ));
     }
 }
 

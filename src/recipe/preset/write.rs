@@ -68,6 +68,13 @@ impl Imported {
         if r.max_speed != d.max_speed {
             let _ = writeln!(y, "max_speed: {}", num(r.max_speed));
         }
+        if r.max_nozzle_temp != d.max_nozzle_temp {
+            let _ = writeln!(
+                y,
+                "# the hottest the maker's own G-code heats the nozzle (see the notes)\nmax_nozzle_temp: {}",
+                num(r.max_nozzle_temp)
+            );
+        }
         if r.travel_speed != d.travel_speed {
             let _ = writeln!(y, "travel_speed: {}", num(r.travel_speed));
         }

@@ -11,7 +11,7 @@
 
 use serde::Deserialize;
 
-use crate::machine::{CheckLimits, Head, Kinematics, Retraction};
+use crate::machine::{CheckLimits, Flavor, Head, Kinematics, Retraction};
 
 /// `flavor:` the G-code dialect of the firmware.
 #[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
@@ -24,6 +24,19 @@ pub(crate) enum RawFlavor {
     Reprap,
     Prusa,
     Bambu,
+}
+
+impl RawFlavor {
+    /// The firmware flavour the profile's `flavor:` names.
+    pub(crate) fn flavor(self) -> Flavor {
+        match self {
+            RawFlavor::Marlin => Flavor::Marlin,
+            RawFlavor::Klipper => Flavor::Klipper,
+            RawFlavor::Reprap => Flavor::Reprap,
+            RawFlavor::Prusa => Flavor::Prusa,
+            RawFlavor::Bambu => Flavor::Bambu,
+        }
+    }
 }
 
 /// `extrusion:` absolute (M82) or relative (M83) E values.

@@ -439,6 +439,24 @@ impl Checker {
             }
             (Kind::FrameOnly(why), Policy::Raw) => Err(format!("`{shown}` is refused: it {why}")),
             (Kind::Inert | Kind::FrameOnly(_), _) => Ok(()),
+            (Kind::Exactly(words, why), policy) => {
+                let listed = |k: &str| words.iter().any(|(w, _)| *w == k);
+                let mut same = policy == Policy::Frame && l.params.iter().all(|p| listed(&p.key));
+                for (key, v) in words {
+                    let given = l.number(key)?;
+                    same &= given.is_some_and(|g| (g - v).abs() <= 1e-6);
+                }
+                if !same {
+                    let want: Vec<String> =
+                        words.iter().map(|(k, v)| format!("{k}{v}")).collect();
+                    return Err(format!(
+                        "`{shown}` is refused: it {why}; p3dp accepts only the maker's own `{shown} {}` in a profile's start or end G-code",
+                        want.join(" ")
+                    ));
+                }
+                self.unknown_position();
+                Ok(())
+            }
             (Kind::Trim(key, max), _) => {
                 for v in l.numbers(key)? {
                     if !(v.is_finite() && v.abs() <= max) {
@@ -674,6 +692,9 @@ impl Checker {
     /// `G2`/`G3` with I J: the whole sweep inside the envelope.
     fn arc(&mut self, c: &Command, a: &crate::base::gcode::Arc) -> std::result::Result<(), String> {
         let (Some(x0), Some(y0)) = (self.st.pos[0], self.st.pos[1]) else {
+            if self.st.relative_xyz {
+                return self.relative_arc(c, a);
+            }
             return Err("an arc from an unknown position; p3dp cannot check where it goes".into());
         };
         let mut probe = self.st.clone();
@@ -688,29 +709,8 @@ impl Checker {
             return Ok(());
         };
         let (x1, y1) = (to[0].unwrap_or(x0), to[1].unwrap_or(y0));
-        let (i, j) = (a.ij[0], a.ij[1]);
-        let (cx, cy) = (x0 + i, y0 + j);
-        let r = i.hypot(j);
-        let a0 = libm::atan2(y0 - cy, x0 - cx);
-        let tau = std::f64::consts::TAU;
-        // the sweep's size (a full circle when the ends meet) and its end angle
-        let a1 = libm::atan2(y1 - cy, x1 - cx);
-        let mut sweep = if a.ccw { a1 - a0 } else { a0 - a1 }.rem_euclid(tau);
-        if sweep < 1e-12 {
-            sweep = tau;
-        }
-        let a1 = if a.ccw { a0 + sweep } else { a0 - sweep };
-        // the ends and every quarter-turn extreme the sweep passes
-        let quarter = std::f64::consts::FRAC_PI_2;
-        let (lo, hi) = (a0.min(a1), a0.max(a1));
-        let mut pts = vec![(x0, y0), (x1, y1)];
-        let mut q = libm::ceil(lo / quarter);
-        while q * quarter <= hi {
-            let t = q * quarter;
-            pts.push((cx + r * libm::cos(t), cy + r * libm::sin(t)));
-            q += 1.0;
-        }
-        for (x, y) in pts {
+        let pts = crate::base::gcode::arc_extremes([x0, y0], [x1, y1], a.ij, a.ccw);
+        for [x, y] in pts {
             within(0, "x", x, &self.lim).map_err(|e| format!("the arc's sweep: {e}"))?;
             within(1, "y", y, &self.lim).map_err(|e| format!("the arc's sweep: {e}"))?;
             self.within_circle([Some(x), Some(y), None])
@@ -724,6 +724,78 @@ impl Checker {
             within(2, "z", z, &self.lim)?;
         }
         self.filament(de, to.map(Some) != before)
+    }
+
+    /// A relative `G2`/`G3` from a position unknown on X or Y (Bambu's
+    /// nozzle wiped in a circle after homing): on a known axis its sweep is
+    /// held to the envelope; on an unknown one the sweep's offsets from
+    /// where it starts count in the relative moves' span, as a line's do.
+    fn relative_arc(
+        &mut self,
+        c: &Command,
+        a: &crate::base::gcode::Arc,
+    ) -> std::result::Result<(), String> {
+        let pos = self.st.pos;
+        let from = [pos[0].unwrap_or(0.0), pos[1].unwrap_or(0.0)];
+        let to = [0, 1].map(|k| from[k] + a.to[k].unwrap_or(0.0));
+        if !(to.iter().all(|v| v.is_finite()) && a.ij.iter().all(|v| v.is_finite())) {
+            return Err("cannot read its X, Y, I or J value".into());
+        }
+        let pts = crate::base::gcode::arc_extremes(from, to, a.ij, a.ccw);
+        let span = self.lim.span();
+        for (k, axis) in ["x", "y"].iter().enumerate() {
+            if pos[k].is_some() {
+                for p in &pts {
+                    within(k, axis, p[k], &self.lim)
+                        .map_err(|e| format!("the arc's sweep: {e}"))?;
+                }
+                continue;
+            }
+            let lo = pts
+                .iter()
+                .map(|p| p[k] - from[k])
+                .fold(f64::INFINITY, f64::min);
+            let hi = pts
+                .iter()
+                .map(|p| p[k] - from[k])
+                .fold(f64::NEG_INFINITY, f64::max);
+            let d = &mut self.drift[k];
+            d.1 = d.1.min(d.0 + lo);
+            d.2 = d.2.max(d.0 + hi);
+            d.0 += to[k] - from[k];
+            if d.2 - d.1 > span[k] + 1e-9 {
+                return Err(format!(
+                    "the relative {} moves since the position was last known span {} mm, more than the machine is wide ({} mm)",
+                    axis.to_ascii_uppercase(),
+                    fmt_num(d.2 - d.1),
+                    fmt_num(span[k])
+                ));
+            }
+        }
+        let dz = a.to[2].unwrap_or(0.0);
+        if pos[2].is_none() {
+            let d = &mut self.drift[2];
+            d.0 += dz;
+            d.1 = d.1.min(d.0);
+            d.2 = d.2.max(d.0);
+            if d.2 - d.1 > span[2] + 1e-9 {
+                return Err(format!(
+                    "the relative Z moves since the position was last known span {} mm, more than the machine is wide ({} mm)",
+                    fmt_num(d.2 - d.1),
+                    fmt_num(span[2])
+                ));
+            }
+        }
+        let de = match a.e {
+            None => 0.0,
+            Some(v) if self.st.e_relative() => v,
+            Some(v) => v - self.st.e,
+        };
+        self.st.apply(c);
+        if let Some(z) = self.st.pos[2] {
+            within(2, "z", z, &self.lim)?;
+        }
+        self.filament(de, true)
     }
 
     /// A setting's values within the machine's limits.

@@ -40,11 +40,18 @@ pub(crate) enum Kind {
     /// on; `M206 X0 Y0 Z0`: no home offset), the last of a repeated word
     /// as the firmware reads it.
     RefusedUnless(&'static [&'static [(&'static str, f64)]], &'static str),
+    /// The firmware's resting state set again: accepted in a profile's own
+    /// G-code with exactly these words and values (the maker's own start
+    /// sequence's), the position unknown after it; refused with any other
+    /// words, and in a recipe's command, for the reason given.
+    Exactly(&'static [(&'static str, f64)], &'static str),
     /// Refused, and why.
     Refused(&'static str),
 }
 
-use Kind::{Firmware, FrameOnly, Heats, Inert, MovesAndHeats, Refused, RefusedUnless, Trim};
+use Kind::{
+    Exactly, Firmware, FrameOnly, Heats, Inert, MovesAndHeats, Refused, RefusedUnless, Trim,
+};
 
 const MOTORS_OFF: &str = "turns the motors off, and the printer loses the head's position: an end G-code's command, not one in the middle of a print";
 const SHIFTS: &str =
@@ -302,8 +309,35 @@ const NOZZLE_T: &[(&str, Heater)] = &[("T", Heater::Nozzle(0))];
 /// from the comments the presets carry beside them; a subcode not in
 /// [`BAMBU_SUB`] is read as its code). Bambu publishes no reference: a code
 /// whose effect the presets do not say is not here, so it is refused as
-/// one p3dp cannot check (`M290`, which Marlin reads as babystepping).
+/// one p3dp cannot check. Where the community's readings (the Bambu Lab
+/// forum's "X1 specific G-code" thread, OpenBambuAPI's `gcode.md`, the
+/// annotated start G-code of the P2S) differ, the code is given the kind
+/// that holds every reading (docs/printers.md).
 const BAMBU: &[(u8, u32, Kind)] = &[
+    // "reset machine status": every X1, P1 and X1E start G-code of Bambu
+    // Studio sends exactly `M290 X40 Y40 Z2.6666666` before its first
+    // homing, and Bambu publishes no meaning. Marlin reads M290 as a
+    // babystep clamped to ±2 mm (these values are not one); what the
+    // firmware does with it, the maker's every print starts with it and
+    // prints land where the slicer put them, so these values are the
+    // firmware's resting state, not a shift in force during a print. That
+    // line is accepted (the position forgotten after it); any other M290
+    // is a shift p3dp cannot follow.
+    (
+        b'M',
+        290,
+        Exactly(&[("X", 40.0), ("Y", 40.0), ("Z", 2.666_666_6)], SHIFTS),
+    ),
+    // `M901 D4` of the H2 family's "reset machine status": read by the
+    // community either as the end of a smooth timelapse at the firmware's
+    // safe place or as a pressure-advance mode; at most the firmware's own
+    // move to its own place, the position forgotten after it
+    (b'M', 901, Firmware),
+    // `M562 P<n> E0 B1` … `E1`: the hot end's power off and on again
+    // around the toolhead camera's start (Bambu Studio's commit "prevent
+    // toolhead camera initialization failure", after `M104 S0`); no
+    // temperature of its own, no motion
+    (b'M', 562, Inert),
     // a purge line at the firmware's own place and flow
     (b'G', 130, Firmware),
     // nozzle wipes and the purge chute ("wipe mouth", "move to garbage
