@@ -30,6 +30,7 @@ pub(crate) mod yaml;
 pub(crate) use params::parse_set;
 #[cfg(any(test, feature = "testing"))]
 pub use resolve::load;
+#[cfg(any(test, feature = "testing"))]
 pub use resolve::load_in;
 #[cfg(any(test, feature = "testing"))]
 pub(crate) use resolve::resolve;

@@ -230,6 +230,7 @@ impl Template {
     /// [`Template::expand`] with the `global` variables of the templates
     /// expanded before it (a start G-code's, for its end G-code), which it
     /// may read and add to.
+    #[cfg(any(test, feature = "testing"))]
     pub(crate) fn expand_with(
         &self,
         vars: &Vars,
