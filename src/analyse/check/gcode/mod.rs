@@ -45,7 +45,7 @@ use crate::machine::limits::{
     JUNCTION_DEVIATION_MAX, PRESSURE_ADVANCE_MAX, RETRACTION_MAX, SHAPER_FREQUENCY_MAX, SPEED_MAX,
 };
 use crate::machine::{Bed, Extrusion, Flavor, Material, Printer};
-use vocabulary::Kind;
+use vocabulary::{Kind, Only};
 
 /// Where the head is when the G-code starts.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -414,49 +414,49 @@ impl Checker {
         };
         match (kind, self.policy) {
             (Kind::Refused(why), _) => Err(format!("`{shown}` is refused: it {why}")),
-            (Kind::RefusedUnless(defaults, why), _) => {
-                for set in defaults {
-                    let mut all = true;
+            (Kind::RefusedUnless(sets, only, why), policy) => {
+                let resting = only == Only::Resting;
+                for set in sets {
+                    let listed = |k: &str| set.iter().any(|(w, _)| *w == k);
+                    // a resting state: the maker's own line, no other word
+                    let mut same = !resting
+                        || (policy == Policy::Frame && l.params.iter().all(|p| listed(&p.key)));
                     for (key, v) in *set {
-                        all &= l.number(key)? == Some(*v);
+                        same &= l.number(key)?.is_some_and(|g| (g - v).abs() <= 1e-6);
                     }
-                    if all {
+                    if same {
+                        if resting {
+                            self.unknown_position();
+                        }
                         return Ok(());
                     }
                 }
-                let shown_defaults: Vec<String> = defaults
+                let shown_sets: Vec<String> = sets
                     .iter()
                     .map(|set| {
-                        let words: Vec<String> =
-                            set.iter().map(|(k, v)| format!("{k}{}", fmt_num(*v))).collect();
+                        let words: Vec<String> = set
+                            .iter()
+                            .map(|(k, v)| match only {
+                                Only::Assumed => format!("{k}{}", fmt_num(*v)),
+                                Only::Resting => format!("{k}{v}"),
+                            })
+                            .collect();
                         format!("`{} {}`", code.shown(), words.join(" "))
                     })
                     .collect();
-                Err(format!(
-                    "`{shown}` is refused: it {why} (accepted as {}, which sets what p3dp assumes)",
-                    shown_defaults.join(" or ")
-                ))
+                Err(match only {
+                    Only::Assumed => format!(
+                        "`{shown}` is refused: it {why} (accepted as {}, which sets what p3dp assumes)",
+                        shown_sets.join(" or ")
+                    ),
+                    Only::Resting => format!(
+                        "`{shown}` is refused: it {why}; p3dp accepts only the maker's own {} in a profile's start or end G-code",
+                        shown_sets.join(" or ")
+                    ),
+                })
             }
             (Kind::FrameOnly(why), Policy::Raw) => Err(format!("`{shown}` is refused: it {why}")),
             (Kind::Inert | Kind::FrameOnly(_), _) => Ok(()),
-            (Kind::Exactly(words, why), policy) => {
-                let listed = |k: &str| words.iter().any(|(w, _)| *w == k);
-                let mut same = policy == Policy::Frame && l.params.iter().all(|p| listed(&p.key));
-                for (key, v) in words {
-                    let given = l.number(key)?;
-                    same &= given.is_some_and(|g| (g - v).abs() <= 1e-6);
-                }
-                if !same {
-                    let want: Vec<String> =
-                        words.iter().map(|(k, v)| format!("{k}{v}")).collect();
-                    return Err(format!(
-                        "`{shown}` is refused: it {why}; p3dp accepts only the maker's own `{shown} {}` in a profile's start or end G-code",
-                        want.join(" ")
-                    ));
-                }
-                self.unknown_position();
-                Ok(())
-            }
             (Kind::Trim(key, max), _) => {
                 for v in l.numbers(key)? {
                     if !(v.is_finite() && v.abs() <= max) {

@@ -34,24 +34,32 @@ pub(crate) enum Kind {
     /// p3dp checks itself, and refused in a recipe's command: why it is
     /// refused there.
     FrameOnly(&'static str),
-    /// Refused, and why — unless the line sets what p3dp assumes already:
-    /// one of the alternatives, each a set of words with their values
-    /// (`M200 D0`: E read as filament length; `M211 S1`: the soft endstops
-    /// on; `M206 X0 Y0 Z0`: no home offset), the last of a repeated word
-    /// as the firmware reads it.
-    RefusedUnless(&'static [&'static [(&'static str, f64)]], &'static str),
-    /// The firmware's resting state set again: accepted in a profile's own
-    /// G-code with exactly these words and values (the maker's own start
-    /// sequence's), the position unknown after it; refused with any other
-    /// words, and in a recipe's command, for the reason given.
-    Exactly(&'static [(&'static str, f64)], &'static str),
+    /// Refused, and why — unless the line gives one of the alternatives,
+    /// each a set of words with their values (the last of a repeated word,
+    /// as the firmware reads it), which [`Only`] says when to accept.
+    RefusedUnless(
+        &'static [&'static [(&'static str, f64)]],
+        Only,
+        &'static str,
+    ),
     /// Refused, and why.
     Refused(&'static str),
 }
 
-use Kind::{
-    Exactly, Firmware, FrameOnly, Heats, Inert, MovesAndHeats, Refused, RefusedUnless, Trim,
-};
+/// When a [`Kind::RefusedUnless`] line's values are accepted.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Only {
+    /// Anywhere: the values set what p3dp assumes already (`M200 D0`: E
+    /// read as filament length; `M211 S1`: the soft endstops on; `M206 X0
+    /// Y0 Z0`: no home offset); other words may follow.
+    Assumed,
+    /// In a profile's own start or end G-code, with no other word: the
+    /// firmware's resting state set again by the maker's own sequence,
+    /// the head's position unknown after it.
+    Resting,
+}
+
+use Kind::{Firmware, FrameOnly, Heats, Inert, MovesAndHeats, Refused, RefusedUnless, Trim};
 
 const MOTORS_OFF: &str = "turns the motors off, and the printer loses the head's position: an end G-code's command, not one in the middle of a print";
 const SHIFTS: &str =
@@ -141,16 +149,20 @@ const MARLIN_M: &[(u32, Kind)] = &[
     (165, Refused(EXTRUSION)),
     (
         200,
-        RefusedUnless(&[&[("D", 0.0)], &[("S", 0.0)]], EXTRUSION),
+        RefusedUnless(&[&[("D", 0.0)], &[("S", 0.0)]], Only::Assumed, EXTRUSION),
     ),
     (205, Inert),
     (
         206,
-        RefusedUnless(&[&[("X", 0.0), ("Y", 0.0), ("Z", 0.0)]], SHIFTS),
+        RefusedUnless(
+            &[&[("X", 0.0), ("Y", 0.0), ("Z", 0.0)]],
+            Only::Assumed,
+            SHIFTS,
+        ),
     ),
     (208, Inert),
     (209, Inert),
-    (211, RefusedUnless(&[&[("S", 1.0)]], LIMIT)),
+    (211, RefusedUnless(&[&[("S", 1.0)]], Only::Assumed, LIMIT)),
     (217, Inert),
     (218, Refused(SHIFTS)),
     (226, Inert),
@@ -326,7 +338,11 @@ const BAMBU: &[(u8, u32, Kind)] = &[
     (
         b'M',
         290,
-        Exactly(&[("X", 40.0), ("Y", 40.0), ("Z", 2.666_666_6)], SHIFTS),
+        RefusedUnless(
+            &[&[("X", 40.0), ("Y", 40.0), ("Z", 2.666_666_6)]],
+            Only::Resting,
+            SHIFTS,
+        ),
     ),
     // `M901 D4` of the H2 family's "reset machine status": read by the
     // community either as the end of a smooth timelapse at the firmware's
