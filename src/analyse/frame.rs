@@ -294,27 +294,34 @@ pub(crate) fn extent(recipe: &Recipe, paths: &[Toolpath]) -> Extent {
         drawn: None,
     };
     let (mut dlo, mut dhi) = (f64::INFINITY, f64::NEG_INFINITY);
-    let extruding = |t: &Toolpath, k: usize| !t.strings[k].travel && t.strings[k].c > 0.0;
-    for t in paths {
-        for k in 0..t.len() {
-            if t.strings[k].travel {
+    // per path, the strings that may lie in the first layer: those below
+    // twice the lowest extrusion so far (the lowest only falls, so every
+    // string below twice the final one is among them)
+    let mut near_bed: Vec<Option<(usize, usize)>> = vec![None; paths.len()];
+    for (t, near) in paths.iter().zip(&mut near_bed) {
+        for (k, s) in t.strings.iter().enumerate() {
+            if s.travel {
                 continue;
             }
             let (a, b) = t.ends(k);
-            dlo = dlo.min(a.z.min(b.z));
+            let zmin = a.z.min(b.z);
+            dlo = dlo.min(zmin);
             dhi = dhi.max(a.z.max(b.z));
-            if !extruding(t, k) {
+            if s.c <= 0.0 || s.c.is_nan() {
                 continue;
             }
-            let (c, v) = (t.strings[k].c, t.strings[k].v);
+            let (c, v) = (s.c, s.v);
             if e.first_c == 0.0 {
                 (e.first_c, e.first_v) = (c, v);
             }
             e.max_flow = e.max_flow.max(c * v);
             e.volume += c * a.distance(b);
-            e.low = e.low.min(a.z.min(b.z));
+            e.low = e.low.min(zmin);
             e.high = e.high.max(a.z.max(b.z));
             e.last = b.z;
+            if !(zmin >= 2.0 * e.low) {
+                *near = Some(near.map_or((k, k), |(lo, _)| (lo, k)));
+            }
         }
     }
     e.drawn = (dlo <= dhi).then_some((dlo, dhi));
@@ -325,8 +332,10 @@ pub(crate) fn extent(recipe: &Recipe, paths: &[Toolpath]) -> Extent {
     }
     // the first layer: strings whose lower end lies below where a second
     // layer of the first one's height would start
-    for t in paths {
-        for k in 0..t.len() {
+    let extruding = |t: &Toolpath, k: usize| !t.strings[k].travel && t.strings[k].c > 0.0;
+    for (t, near) in paths.iter().zip(near_bed) {
+        let Some((lo, hi)) = near else { continue };
+        for k in lo..=hi {
             let (a, b) = t.ends(k);
             if !extruding(t, k) || a.z.min(b.z) >= 2.0 * e.low {
                 continue;
@@ -802,6 +811,53 @@ mod tests {
         let text = format!("p3dp: 1\nname: t\nmaterial: {material}\nparts:\n  - primitive: {{helix: {{radius: 10, height: 2, pitch: 0.5}}}}\n");
         let raw: crate::recipe::RawRecipe = crate::recipe::parse_yaml(&text, "t.yaml").unwrap();
         crate::recipe::resolve(&raw, &[], None, std::path::Path::new(".")).unwrap()
+    }
+
+    /// The first layer's corners as defined: every extruding string whose
+    /// lower end lies below twice the lowest extrusion, over every path,
+    /// however late the lowest comes (the extent measures them among the
+    /// strings below twice the lowest so far).
+    #[test]
+    fn the_first_layer_is_every_string_below_twice_the_lowest() {
+        let r = recipe("pla");
+        let p = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
+        // a part that starts high, dips to 0.3 late, then climbs; a second
+        // that reaches the lowest, 0.2, at its end; a travel and a string
+        // of no cross-section low down count for nothing
+        let mut a = Toolpath::new(p(0.0, 0.0, 5.0));
+        a.draw(p(1.0, 0.0, 5.0), 0.1, 20.0);
+        a.draw(p(-7.0, 3.0, 0.35), 0.1, 20.0);
+        a.draw(p(-8.0, 3.0, 0.3), 0.1, 20.0);
+        a.draw(p(-8.0, 9.0, 3.0), 0.1, 20.0);
+        a.travel(p(-30.0, -30.0, 0.0), 100.0);
+        a.draw(p(-31.0, -30.0, 0.0), 0.0, 20.0);
+        let mut b = Toolpath::new(p(20.0, 0.0, 4.0));
+        b.draw(p(21.0, 0.0, 1.0), 0.1, 20.0);
+        b.draw(p(22.0, 5.0, 0.2), 0.1, 20.0);
+        let paths = [a, b];
+        let e = extent(&r, &paths);
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for t in &paths {
+            for k in 0..t.len() {
+                let (u, v) = t.ends(k);
+                let s = t.strings[k];
+                if s.travel || s.c <= 0.0 || u.z.min(v.z) >= 2.0 * 0.2 {
+                    continue;
+                }
+                for q in [u, v] {
+                    let m = r.printer.to_machine(q);
+                    lo = [lo[0].min(m.x), lo[1].min(m.y)];
+                    hi = [hi[0].max(m.x), hi[1].max(m.y)];
+                }
+            }
+        }
+        assert_eq!(e.low, 0.2);
+        assert_eq!((e.first_min, e.first_max), (lo, hi));
+        // the string from z 0.35 to 0.3 and the one to 0.2 are in it
+        let o = r.printer.to_machine(p(-8.0, 3.0, 0.3));
+        assert_eq!(e.first_min[0], o.x);
+        assert_eq!(e.first_max[0], r.printer.to_machine(p(22.0, 5.0, 0.2)).x);
+        assert_eq!(e.top(), 5.0);
     }
 
     /// Every variable the two tables list has a value (a built-in

@@ -174,8 +174,9 @@ impl State {
         }
     }
 
-    /// A `G0`/`G1`.
-    fn line(&mut self, m: &Move) -> Motion {
+    /// A `G0`/`G1`: [`State::apply`] of a [`Command::Move`].
+    #[inline]
+    pub(crate) fn line(&mut self, m: &Move) -> Motion {
         let from = self.pos;
         for k in 0..3 {
             if let Some(v) = m.to[k] {

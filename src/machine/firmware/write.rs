@@ -23,7 +23,7 @@
 //! cooling (Klipper's `MINIMUM=`); a target of 0 (off) is never waited for.
 
 use crate::base::format::{fmt_num, units, Chunk};
-use crate::base::gcode::{Command, Heater, Object, Setting};
+use crate::base::gcode::{Command, Heater, Move, Object, Setting};
 use crate::base::safe_text::one_line;
 use crate::machine::printer::Flavor;
 
@@ -102,12 +102,7 @@ pub(crate) fn refusal(d: Dialect, c: &Command) -> Option<String> {
 /// checks refuse it before any G-code is written).
 pub(crate) fn write(d: Dialect, c: &Command, note: &str, out: &mut Chunk) {
     match c {
-        Command::Move(m) => {
-            out.put(if m.travel { b"G0" } else { b"G1" });
-            axes(out, m.to);
-            e_word(out, m.e);
-            feed_word(out, m.feed);
-        }
+        Command::Move(m) => move_words(m, out),
         Command::Arc(a) => {
             out.put(if a.ccw { b"G3" } else { b"G2" });
             axes(out, a.to);
@@ -170,6 +165,27 @@ pub(crate) fn write(d: Dialect, c: &Command, note: &str, out: &mut Chunk) {
         out.put(one_line(note).as_bytes());
     }
     out.push(b'\n');
+}
+
+/// A straight move (`G0`/`G1`, the same words in every dialect), then
+/// `note` and a line feed: [`write`] of a [`Command::Move`] without the
+/// dispatch, for the emitter's own moves.
+#[inline]
+pub(crate) fn write_move(m: &Move, note: &str, out: &mut Chunk) {
+    move_words(m, out);
+    if !note.is_empty() {
+        out.put(one_line(note).as_bytes());
+    }
+    out.push(b'\n');
+}
+
+/// A move's words, without the line feed.
+#[inline]
+fn move_words(m: &Move, out: &mut Chunk) {
+    out.put(if m.travel { b"G0" } else { b"G1" });
+    axes(out, m.to);
+    e_word(out, m.e);
+    feed_word(out, m.feed);
 }
 
 /// `; text`, the text on one line.

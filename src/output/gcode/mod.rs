@@ -478,8 +478,20 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
     /// that change, and whether any does.
     #[inline]
     fn axes(&mut self, to: DVec3, only: [bool; 3]) -> ([Option<f64>; 3], bool) {
+        let u = self.units_of(to);
+        self.axes_units(u, only)
+    }
+
+    /// `to` (recipe coordinates) in the machine's µm, as written.
+    #[inline]
+    fn units_of(&self, to: DVec3) -> [i64; 3] {
         let m = self.printer.to_machine(to);
-        let u = [units(m.x, XYZ), units(m.y, XYZ), units(m.z, XYZ)];
+        [units(m.x, XYZ), units(m.y, XYZ), units(m.z, XYZ)]
+    }
+
+    /// [`Emitter::axes`] of a position already in µm.
+    #[inline]
+    fn axes_units(&mut self, u: [i64; 3], only: [bool; 3]) -> ([Option<f64>; 3], bool) {
         let mut words = [None; 3];
         let mut changed = false;
         for k in 0..3 {
@@ -525,7 +537,7 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
             feed,
             ..Move::default()
         };
-        self.s.command(&Command::Move(m), " ; retract")
+        self.s.line(&m, " ; retract")
     }
 
     #[inline]
@@ -557,7 +569,7 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
             feed,
             ..Move::default()
         };
-        self.s.command(&Command::Move(m), " ; unretract")
+        self.s.line(&m, " ; unretract")
     }
 
     /// A straight travel move to `to` (G0), retracting first when it is long.
@@ -587,7 +599,7 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
             e: None,
             feed,
         };
-        self.s.command(&Command::Move(m), "")?;
+        self.s.line(&m, "")?;
         self.stats.travel_moves += 1;
         self.stats.travel_length += dist;
         self.head = Some(target);
@@ -690,7 +702,10 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
 
     /// One G1 extruding move to `to` carrying `filament` mm at `v` mm/s.
     fn extrude_line(&mut self, to: DVec3, filament: f64, v: f64) -> io::Result<()> {
-        if self.writes_nothing(to, filament) {
+        // the written position, once (what comes before the move's line
+        // writes no axis)
+        let u = self.units_of(to);
+        if self.written == Some(u) && units(self.e_exact + filament, E) == self.e_units {
             // no axis and no E step once rounded (`G1 E0.00000`): firmware
             // ignores such a line, and a planner would stop the head for
             // it; its filament joins the exact E total, written next
@@ -709,7 +724,7 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
         let len = from.distance(to);
         let t = if len > 0.0 { len / f } else { filament / f };
         self.s.progress_point()?;
-        let (words, _) = self.axes(to, [true; 3]);
+        let (words, _) = self.axes_units(u, [true; 3]);
         let e = self.next_e(filament);
         let feed = self.feed_word(feed);
         let m = Move {
@@ -718,23 +733,16 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
             e: Some(e),
             feed,
         };
-        self.s.command(&Command::Move(m), "")?;
+        self.s.line(&m, "")?;
         self.count_extrusion(len, filament, t, &[from, to]);
         self.head = Some(to);
         Ok(())
     }
 
-    /// Whether a move to `to` feeding `filament` mm rounds to the written
-    /// position and E value: a line that would say nothing.
-    fn writes_nothing(&self, to: DVec3, filament: f64) -> bool {
-        let m = self.printer.to_machine(to);
-        let u = [units(m.x, XYZ), units(m.y, XYZ), units(m.z, XYZ)];
-        self.written == Some(u) && units(self.e_exact + filament, E) == self.e_units
-    }
-
     /// Counts one extruding move in the stats: `len` mm through `points`,
     /// carrying `filament` mm (the firmware feeds it times the flow
     /// factor) in `t` s.
+    #[inline]
     fn count_extrusion(&mut self, len: f64, filament: f64, t: f64, points: &[DVec3]) {
         let fed = filament * self.flow;
         let st = &mut self.stats;
@@ -912,7 +920,7 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
             feed,
             ..Move::default()
         };
-        self.s.command(&Command::Move(m), " ; extrude in place")?;
+        self.s.line(&m, " ; extrude in place")?;
         let fed = filament * self.flow;
         let st = &mut self.stats;
         st.filament += fed;

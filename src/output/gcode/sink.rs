@@ -12,8 +12,9 @@ use glam::DVec3;
 
 use crate::analyse::planner::{MoveKind, Moves};
 use crate::base::format::Chunk;
-use crate::base::gcode::{Command, Setting, Verbatim};
-use crate::machine::firmware::{write::write, Dialect, Motion, State};
+use crate::base::gcode::{Command, Move, Setting, Verbatim};
+use crate::machine::firmware::write::{write, write_move};
+use crate::machine::firmware::{Dialect, Motion, State};
 
 /// Text formatted into chunks and handed to `out`.
 pub(crate) struct Out<W: Write> {
@@ -133,6 +134,18 @@ impl<W: Write, M: Moves> Stream<W, M> {
         Ok(())
     }
 
+    /// Writes the straight move `m` and follows it: [`Stream::command`]
+    /// of a [`Command::Move`] without the dispatch (the emitter's own
+    /// moves, most of a G-code).
+    #[inline]
+    pub(crate) fn line(&mut self, m: &Move, note: &str) -> io::Result<()> {
+        write_move(m, note, self.out.chunk());
+        self.out.hand_on()?;
+        let motion = self.state.line(m);
+        self.motion(motion, m.to == [None; 3]);
+        Ok(())
+    }
+
     /// Text written as it is (comments, the header), a line feed added
     /// when it does not end with one; nothing for empty text.
     pub(crate) fn text(&mut self, s: &str) -> io::Result<()> {
@@ -214,7 +227,25 @@ impl<W: Write, M: Moves> Stream<W, M> {
             *l = length.unwrap_or(*l);
             *v = speed.unwrap_or(*v);
         }
-        match self.state.apply(c) {
+        let motion = self.state.apply(c);
+        let no_axes = matches!(c, Command::Move(m) if m.to == [None; 3]);
+        match motion {
+            Motion::Stop => match c {
+                Command::FirmwareRetract { .. } => {
+                    let (l, v) = self.firmware_retraction;
+                    self.moves.extrude_only(l, v);
+                }
+                _ => self.moves.stop(),
+            },
+            m => self.motion(m, no_axes),
+        }
+    }
+
+    /// Hands on the motion a command made (`no_axes`: a move that names
+    /// no axis); a stop as a stop.
+    #[inline]
+    fn motion(&mut self, motion: Motion, no_axes: bool) {
+        match motion {
             Motion::None => {}
             Motion::Line {
                 to,
@@ -224,7 +255,7 @@ impl<W: Write, M: Moves> Stream<W, M> {
                 from,
             } => {
                 let f = feed.unwrap_or(0.0) / 60.0 * self.speed;
-                if to == from && matches!(c, Command::Move(m) if m.to == [None; 3]) {
+                if to == from && no_axes {
                     // E alone: a retraction, its undoing, or filament fed in place
                     self.moves.extrude_only(de.abs(), f);
                     return;
@@ -254,13 +285,7 @@ impl<W: Write, M: Moves> Stream<W, M> {
                 self.arc(from, to, center, ccw, de, f)
             }
             Motion::Dwell(s) => self.moves.dwell(s),
-            Motion::Stop => match c {
-                Command::FirmwareRetract { .. } => {
-                    let (l, v) = self.firmware_retraction;
-                    self.moves.extrude_only(l, v);
-                }
-                _ => self.moves.stop(),
-            },
+            Motion::Stop => self.moves.stop(),
         }
     }
 
