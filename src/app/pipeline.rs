@@ -19,9 +19,10 @@
 //! between them; the writer plans too when the backlog grows, and once
 //! everything is written it takes the checks not yet taken. A G-code with
 //! progress lines (`M73`, Bambu's header) needs the print's time before its
-//! first line: its commands are followed once without being formatted (the
-//! moves alone, planned as they come), then written once with a
-//! `Clock` reading the planned times.
+//! first line: it is formatted once into a scratch file while its moves are
+//! planned and `Marks` keeps where progress lines may go, then copied to
+//! the output with the lines put in from the planned times
+//! (`progressive`).
 
 use std::collections::VecDeque;
 use std::io::{self, Write};
