@@ -319,7 +319,7 @@ pub(crate) fn extent(recipe: &Recipe, paths: &[Toolpath]) -> Extent {
             e.low = e.low.min(zmin);
             e.high = e.high.max(a.z.max(b.z));
             e.last = b.z;
-            if !(zmin >= 2.0 * e.low) {
+            if zmin < 2.0 * e.low || zmin.is_nan() {
                 *near = Some(near.map_or((k, k), |(lo, _)| (lo, k)));
             }
         }
