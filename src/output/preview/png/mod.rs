@@ -236,9 +236,10 @@ fn layout(scene: &Scene, opts: &Options) -> ([f64; 4], bool, u32) {
 /// rasteriser in bands ([`paint_bands`]): the same bytes on any number of
 /// threads.
 pub(crate) fn thumbnails(scene: &Scene, sizes: &[Size]) -> Vec<Pixmap> {
-    let Some(&big) = sizes
+    let Some((bi, &big)) = sizes
         .iter()
-        .max_by_key(|s| u64::from(s.width) * u64::from(s.height))
+        .enumerate()
+        .max_by_key(|(_, s)| u64::from(s.width) * u64::from(s.height))
     else {
         return Vec::new();
     };
@@ -276,39 +277,55 @@ pub(crate) fn thumbnails(scene: &Scene, sizes: &[Size]) -> Vec<Pixmap> {
     });
     drop(model);
     let pad = scene.pad();
-    sizes
-        .iter()
-        .map(|&size| {
-            let to = Frame::fit_box(frame.basis, lo, hi, rect(size), pad);
-            let k = if frame.scale > 0.0 {
-                to.scale / frame.scale
-            } else {
-                0.0
-            };
-            let at = |p: (f32, f32)| {
-                let x = to.pixel_centre.0 + k * (f64::from(p.0) - frame.pixel_centre.0);
-                let y = to.pixel_centre.1 + k * (f64::from(p.1) - frame.pixel_centre.1);
-                (x as f32, y as f32)
-            };
-            let sized = |p: &Px| Px {
-                a: at(p.a),
-                b: at(p.b),
-                r: match p.alpha {
-                    255 => (f64::from(p.r) * k).max(0.5) as f32,
-                    _ => 0.5,
-                },
-                ..*p
-            };
-            let mut list: Vec<Px> = if k < 1.0 {
-                remerge(&strokes, k).into_iter().map(|p| sized(&p)).collect()
-            } else {
-                strokes.iter().map(sized).collect()
-            };
-            sort_far_first(&mut list);
-            let mut pm = Pixmap::new(size.width, size.height).expect("sizes are 1..=8192");
-            paint_bands(&mut pm, &once(list));
-            pm
-        })
+    // a size's scale k against the largest, and a stroke scaled to it
+    let scaling = |size: Size| {
+        let to = Frame::fit_box(frame.basis, lo, hi, rect(size), pad);
+        let k = if frame.scale > 0.0 {
+            to.scale / frame.scale
+        } else {
+            0.0
+        };
+        let at = move |p: (f32, f32)| {
+            let x = to.pixel_centre.0 + k * (f64::from(p.0) - frame.pixel_centre.0);
+            let y = to.pixel_centre.1 + k * (f64::from(p.1) - frame.pixel_centre.1);
+            (x as f32, y as f32)
+        };
+        let sized = move |p: &Px| Px {
+            a: at(p.a),
+            b: at(p.b),
+            r: match p.alpha {
+                255 => (f64::from(p.r) * k).max(0.5) as f32,
+                _ => 0.5,
+            },
+            ..*p
+        };
+        (k, sized)
+    };
+    let paint = |size: Size, mut list: Vec<Px>| {
+        sort_far_first(&mut list);
+        let mut pm = Pixmap::new(size.width, size.height).expect("sizes are 1..=8192");
+        paint_bands(&mut pm, &once(list));
+        pm
+    };
+    let mut out: Vec<Option<Pixmap>> = sizes.iter().map(|_| None).collect();
+    for (i, &size) in sizes.iter().enumerate().filter(|(i, _)| *i != bi) {
+        let (k, sized) = scaling(size);
+        let list: Vec<Px> = if k < 1.0 {
+            remerge(&strokes, k).iter().map(sized).collect()
+        } else {
+            strokes.iter().map(sized).collect()
+        };
+        out[i] = Some(paint(size, list));
+    }
+    // the largest last, its strokes scaled where they lie: no copy of them
+    let (_, sized) = scaling(big);
+    let mut strokes = strokes;
+    for p in &mut strokes {
+        *p = sized(p);
+    }
+    out[bi] = Some(paint(big, strokes));
+    out.into_iter()
+        .map(|pm| pm.expect("every size is drawn"))
         .collect()
 }
 
@@ -465,7 +482,7 @@ fn pick(size: Size, strokes: &[(Px, u32)], objects: &[std::ops::Range<usize>]) -
 /// each way, not 600 000 (whose painting took tens of seconds). Strokes
 /// alike have one depth, so they lie together in the sorted `strokes`: only
 /// a run of equal depths is searched.
-fn once(strokes: Vec<Px>) -> Vec<Px> {
+fn once(mut strokes: Vec<Px>) -> Vec<Px> {
     let key = |p: &Px| {
         (
             [p.a.0, p.a.1, p.b.0, p.b.1, p.r].map(f32::to_bits),
@@ -473,9 +490,9 @@ fn once(strokes: Vec<Px>) -> Vec<Px> {
             p.alpha,
         )
     };
-    let mut kept = Vec::with_capacity(strokes.len());
+    // kept in place: the strokes kept so far are strokes[..w], w ≤ i
     let mut seen = std::collections::HashSet::new();
-    let mut i = 0;
+    let (mut w, mut i) = (0, 0);
     while i < strokes.len() {
         let depth = strokes[i].depth.to_bits();
         let end = i + strokes[i..]
@@ -483,17 +500,25 @@ fn once(strokes: Vec<Px>) -> Vec<Px> {
             .take_while(|p| p.depth.to_bits() == depth)
             .count();
         if end - i == 1 {
-            kept.push(strokes[i]);
+            strokes[w] = strokes[i];
+            w += 1;
         } else {
             // the last of each alike, kept in painting order
             seen.clear();
-            let from = kept.len();
-            kept.extend(strokes[i..end].iter().rev().filter(|p| seen.insert(key(p))));
-            kept[from..].reverse();
+            let mut run: Vec<Px> = strokes[i..end]
+                .iter()
+                .rev()
+                .filter(|p| seen.insert(key(p)))
+                .copied()
+                .collect();
+            run.reverse();
+            strokes[w..w + run.len()].copy_from_slice(&run);
+            w += run.len();
         }
         i = end;
     }
-    kept
+    strokes.truncate(w);
+    strokes
 }
 
 /// PNG bytes of `pm`: RGB, or RGBA with `alpha` (colours un-premultiplied),
@@ -572,12 +597,18 @@ mod tests {
         let m = remerge(&strokes, 0.25);
         assert_eq!(m.len(), 10 + 1 + 8);
         for (j, p) in m[..10].iter().enumerate() {
-            assert_eq!((p.a, p.b), ((8.0 * j as f32, 5.0), (8.0 * (j + 1) as f32, 5.0)));
+            assert_eq!(
+                (p.a, p.b),
+                ((8.0 * j as f32, 5.0), (8.0 * (j + 1) as f32, 5.0))
+            );
             assert_eq!(p.depth, 4.0 * j as f32 + 1.5);
         }
         // the travel and the strokes that do not join stay their own
         assert_eq!(m[10].alpha, 90);
-        assert!(m[11..].iter().zip(&strokes[41..]).all(|(p, q)| p.a == q.a && p.b == q.b));
+        assert!(m[11..]
+            .iter()
+            .zip(&strokes[41..])
+            .all(|(p, q)| p.a == q.a && p.b == q.b));
         // at the size they were made for nothing merges
         assert_eq!(remerge(&strokes, 1.0).len(), strokes.len());
     }

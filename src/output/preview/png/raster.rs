@@ -127,9 +127,6 @@ fn prefetch<T>(x: &T) {
 /// Lays stroke `px` under what rows `y0..y1` of a premultiplied RGBA
 /// image `width` pixels wide, held in `band`, already hold (see
 /// [`paint_bands`]); returns how many of its pixels it made opaque.
-///
-/// Only the pixels of a row that may lie within r + ½ of the segment are
-/// measured ([`reach`]); the others have no share.
 fn capsule(band: &mut [u8], width: usize, y0: usize, y1: usize, px: &Px) -> usize {
     let (a, b, r) = (px.a, px.b, px.r);
     if !(r.is_finite() && a.0.is_finite() && a.1.is_finite() && b.0.is_finite() && b.1.is_finite())
@@ -153,33 +150,11 @@ fn capsule(band: &mut [u8], width: usize, y0: usize, y1: usize, px: &Px) -> usiz
     // tested on the square distance, a little beyond (the square rounded
     // in f32 stays below it), to skip the square root there
     let far = (ext * 1.001 + 1e-3) * (ext * 1.001 + 1e-3);
-    // a row's pixels are sought a quarter pixel and more beyond that, so
-    // that f32's rounding of the two ways cannot leave one out; a segment
-    // too short for 1 / l2 (or its square) to be a number measures its
-    // whole box, as the pixels' own test would
-    let reach_r = ext * 1.002 + 0.26;
-    let spans = inv.is_finite() && l2 >= 1e-12;
-    let l = l2.sqrt();
     let mut filled = 0;
     for y in top as usize..bottom as usize {
         let py = y as f32 + 0.5 - a.1;
-        let (x0, x1) = if spans {
-            // pixel x's centre lies at x + ½ − a.0 from a
-            match reach(dx, dy, l, l2, py, reach_r) {
-                Some((lo, hi)) => (
-                    floor(a.0 + lo - 0.5).max(left),
-                    (ceil(a.0 + hi - 0.5) + 1.0).min(right),
-                ),
-                None => continue,
-            }
-        } else {
-            (left, right)
-        };
-        if x0 >= x1 {
-            continue;
-        }
         let row = &mut band[(y - y0) * width * 4..(y - y0 + 1) * width * 4];
-        for x in x0 as usize..x1 as usize {
+        for x in left as usize..right as usize {
             let p = &mut row[4 * x..4 * x + 4];
             if p[3] == 255 {
                 continue; // hidden by what is nearer
@@ -209,42 +184,6 @@ fn capsule(band: &mut [u8], width: usize, y0: usize, y1: usize, px: &Px) -> usiz
     filled
 }
 
-/// Where the horizontal line at height `py` crosses the points within `e`
-/// of the segment from (0, 0) to (dx, dy) (length l, l² = `l2` > 0): the
-/// interval of x, or none. That set (a capsule) is convex, the union of
-/// the discs round its ends and the band between them, so its crossing
-/// is the hull of theirs: a disc's is x = cx ± sqrt(e² − (py − cy)²); the
-/// band's is where |dx·py − dy·x| ≤ e·l (the distance to the line) and
-/// 0 ≤ dx·x + dy·py ≤ l² (the foot within the segment).
-fn reach(dx: f32, dy: f32, l: f32, l2: f32, py: f32, e: f32) -> Option<(f32, f32)> {
-    let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
-    for (cx, cy) in [(0.0, 0.0), (dx, dy)] {
-        let q = e * e - (py - cy) * (py - cy);
-        if q >= 0.0 {
-            let s = q.sqrt();
-            (lo, hi) = (lo.min(cx - s), hi.max(cx + s));
-        }
-    }
-    let (mut blo, mut bhi) = (f32::NEG_INFINITY, f32::INFINITY);
-    let (c, el) = (dx * py, e * l);
-    if dy != 0.0 {
-        let (p, q) = ((c - el) / dy, (c + el) / dy);
-        (blo, bhi) = (blo.max(p.min(q)), bhi.min(p.max(q)));
-    } else if c.abs() > el {
-        return (lo <= hi).then_some((lo, hi));
-    }
-    if dx != 0.0 {
-        let (p, q) = (-py * dy / dx, (l2 - py * dy) / dx);
-        (blo, bhi) = (blo.max(p.min(q)), bhi.min(p.max(q)));
-    } else if !(0.0..=l2).contains(&(py * dy)) {
-        return (lo <= hi).then_some((lo, hi));
-    }
-    if blo <= bhi {
-        (lo, hi) = (lo.min(blo), hi.max(bhi));
-    }
-    (lo <= hi).then_some((lo, hi))
-}
-
 /// ⌊x⌋ for the finite x of a stroke's box, without a call to the C
 /// library's `floorf` (no SSE4.1 on every x86_64); beyond ±2³¹ it gives
 /// ±2³¹, which the box's clamps to the image make the same.
@@ -268,116 +207,11 @@ fn ceil(x: f32) -> f32 {
 mod tests {
     use super::*;
 
-    #[allow(clippy::needless_range_loop)]
-    /// Lays stroke `px` under what rows `y0..y1` of a premultiplied RGBA
-    /// image `width` pixels wide, held in `band`, already hold (see
-    /// [`paint_bands`]); returns how many of its pixels it made opaque.
-    fn capsule_boxed(band: &mut [u8], width: usize, y0: usize, y1: usize, px: &Px) -> usize {
-        let (a, b, r) = (px.a, px.b, px.r);
-        if !(r.is_finite() && a.0.is_finite() && a.1.is_finite() && b.0.is_finite() && b.1.is_finite())
-        {
-            return 0;
-        }
-        let alpha = f32::from(px.alpha);
-        let ext = r + 0.5;
-        let top = (a.1.min(b.1) - ext).floor().max(y0 as f32);
-        let bottom = (a.1.max(b.1) + ext).ceil().min(y1 as f32);
-        let left = (a.0.min(b.0) - ext).floor().max(0.0);
-        let right = (a.0.max(b.0) + ext).ceil().min(width as f32);
-        if top >= bottom || left >= right {
-            return 0;
-        }
-        let (dx, dy) = (b.0 - a.0, b.1 - a.1);
-        let l2 = dx * dx + dy * dy;
-        let inv = if l2 > 0.0 { 1.0 / l2 } else { 0.0 };
-        let src = px.rgb.map(u32::from);
-        // beyond r + ½ a pixel has no share (min(d + ½, r) ≤ r ≤ max(d − ½, −r));
-        // tested on the square distance, a little beyond (the square rounded
-        // in f32 stays below it), to skip the square root there
-        let far = (ext * 1.001 + 1e-3) * (ext * 1.001 + 1e-3);
-        let mut filled = 0;
-        for y in top as usize..bottom as usize {
-            let py = y as f32 + 0.5 - a.1;
-            let row = &mut band[(y - y0) * width * 4..(y - y0 + 1) * width * 4];
-            for x in left as usize..right as usize {
-                let p = &mut row[4 * x..4 * x + 4];
-                if p[3] == 255 {
-                    continue; // hidden by what is nearer
-                }
-                let px = x as f32 + 0.5 - a.0;
-                let t = ((px * dx + py * dy) * inv).clamp(0.0, 1.0);
-                let (ex, ey) = (px - t * dx, py - t * dy);
-                let d2 = ex * ex + ey * ey;
-                if d2 > far {
-                    continue; // d > r + ½: no share
-                }
-                let d = d2.sqrt();
-                let cov = ((d + 0.5).min(r) - (d - 0.5).max(-r)).clamp(0.0, 1.0);
-                let k = (cov * alpha + 0.5) as u32;
-                if k == 0 {
-                    continue;
-                }
-                // under: the share k of what still shows, w = k·(255 − α)
-                let w = k * (255 - u32::from(p[3]));
-                for (c, s) in p.iter_mut().zip(src) {
-                    *c += ((s * w + 32_512) / 65_025) as u8;
-                }
-                p[3] += ((w + 127) / 255) as u8;
-                filled += usize::from(p[3] == 255);
-            }
-        }
-        filled
-    }
-
-    /// Every pixel and the count of opaque ones the same as measuring the
-    /// stroke's whole box (`capsule_boxed`, the rasteriser before rows were
-    /// cut to their reach), for strokes of every slope, length and width,
-    /// tiny and degenerate ones too, over a band half painted already.
-    #[test]
-    fn rows_cut_to_their_reach_paint_what_the_whole_box_paints() {
-        let (width, rows) = (64usize, 40usize);
-        // a small linear congruential generator: the same strokes every run
-        let mut seed = 0x2545_f491_u64;
-        let mut next = move || {
-            seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
-            ((seed >> 33) as f32) / ((1u64 << 31) as f32)
-        };
-        let mut base = vec![0u8; width * rows * 4];
-        for (i, p) in base.chunks_exact_mut(4).enumerate() {
-            if i % 3 == 0 {
-                p.copy_from_slice(&[40, 20, 10, 120]);
-            } else if i % 7 == 0 {
-                p.copy_from_slice(&[90, 90, 90, 255]);
-            }
-        }
-        for n in 0..4000 {
-            let a = (next() * 80.0 - 8.0, next() * 56.0 - 8.0);
-            let len = [0.0, 1e-7, 1e-3, 0.3, 2.0, 9.0, 70.0][n % 7];
-            let ang = next() * 6.3;
-            let mut b = (a.0 + len * ang.cos(), a.1 + len * ang.sin());
-            if n % 11 == 0 {
-                b.1 = a.1; // level
-            } else if n % 13 == 0 {
-                b.0 = a.0; // upright
-            }
-            let px = Px {
-                a,
-                b,
-                r: [0.5, 0.43, 1.7, 6.0, 0.05][n % 5],
-                rgb: [250, 143, 41],
-                alpha: [255, 90][n % 2],
-                ..Px::default()
-            };
-            let (mut one, mut two) = (base.clone(), base.clone());
-            let f1 = capsule(&mut one, width, 8, 8 + rows, &px);
-            let f2 = capsule_boxed(&mut two, width, 8, 8 + rows, &px);
-            assert!(one == two && f1 == f2, "stroke {n}: {:?} {:?} {}", px.a, px.b, px.r);
-        }
-    }
-
     #[test]
     fn floor_and_ceil_are_the_library_s() {
-        for x in [-3.5f32, -3.0, -0.2, -0.0, 0.0, 0.2, 2.0, 2.7, 8191.5, 1e12, -1e12] {
+        for x in [
+            -3.5f32, -3.0, -0.2, -0.0, 0.0, 0.2, 2.0, 2.7, 8191.5, 1e12, -1e12,
+        ] {
             let clamp = |v: f32| v.clamp(-2e9, 2e9);
             assert_eq!(clamp(floor(x)), clamp(x.floor()), "{x}");
             assert_eq!(clamp(ceil(x)), clamp(x.ceil()), "{x}");
