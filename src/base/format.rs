@@ -322,11 +322,13 @@ mod tests {
         assert_eq!(fmt_value(1.0 / 3.0), "0.333333");
     }
 
-    /// The formatter before [`Chunk`]: libm's round, then itoa's digits.
-    fn reference(v: f64, d: u32) -> String {
+    /// The formatter before [`Chunk`]: libm's round, then itoa's digits,
+    /// written into `s` (cleared first, so that a long comparison reuses
+    /// one buffer).
+    fn reference_into(s: &mut String, v: f64, d: u32) {
         let u = libm::round(v * 10f64.powi(d as i32)) as i64;
         let pow = 10i64.pow(d);
-        let mut s = String::new();
+        s.clear();
         if u < 0 {
             s.push('-');
         }
@@ -339,17 +341,22 @@ mod tests {
             s.push('0');
         }
         s.push_str(frac);
-        s
     }
 
-    fn fixed(v: f64, d: u32) -> String {
-        let mut c = Chunk::new();
+    /// `v` with `d` decimals as [`Chunk::put_fixed`] writes it, through `c`
+    /// (cleared first: a new chunk is 65 kB of zeroed room).
+    fn fixed_in(c: &mut Chunk, v: f64, d: u32) -> &str {
+        c.clear();
         match d {
             3 => c.put_fixed::<3>(units(v, 1e3)),
             5 => c.put_fixed::<5>(units(v, 1e5)),
             _ => unreachable!("the G-code's decimals are 3 and 5"),
         }
-        String::from_utf8(c.bytes().to_vec()).unwrap()
+        std::str::from_utf8(c.bytes()).unwrap()
+    }
+
+    fn fixed(v: f64, d: u32) -> String {
+        fixed_in(&mut Chunk::new(), v, d).to_string()
     }
 
     #[test]
@@ -451,9 +458,12 @@ mod tests {
     #[test]
     fn chunk_numbers_are_the_old_formatter_s() {
         let mut st = 7;
-        let check = |v: f64| {
-            assert_eq!(fixed(v, 3), reference(v, 3), "{v:e} with 3 decimals");
-            assert_eq!(fixed(v, 5), reference(v, 5), "{v:e} with 5 decimals");
+        let (mut c, mut s) = (Chunk::new(), String::new());
+        let mut check = |v: f64| {
+            for d in [3, 5] {
+                reference_into(&mut s, v, d);
+                assert_eq!(fixed_in(&mut c, v, d), s, "{v:e} with {d} decimals");
+            }
         };
         for v in edges() {
             check(v);
@@ -470,7 +480,7 @@ mod tests {
         let mut ints = vec![0, 1, -1, 9, 10, 99, 100, 101, i64::MAX, i64::MIN];
         ints.extend((0..100_000).map(|_| next(&mut st) as i64 >> (next(&mut st) % 64)));
         for v in ints {
-            let mut c = Chunk::new();
+            c.clear();
             c.put_int(v);
             assert_eq!(c.bytes(), ib.format(v).as_bytes());
         }

@@ -144,25 +144,40 @@ fn each_corpus_recipe_triggers_exactly_its_finding() {
     }
 }
 
-#[test]
-fn the_gallery_has_no_errors() {
-    let dir = tmp("checks-gallery");
-    let mut args = vec!["check".to_string()];
+/// Every recipe of `recipes/`, sorted.
+fn gallery_recipes() -> Vec<PathBuf> {
     let mut recipes: Vec<PathBuf> = std::fs::read_dir(root().join("recipes"))
         .unwrap()
         .map(|e| e.unwrap().path())
         .filter(|p| p.extension().is_some_and(|e| e == "yaml"))
         .collect();
     recipes.sort();
-    args.extend(recipes.iter().map(|p| p.display().to_string()));
-    let args: Vec<&str> = args.iter().map(String::as_str).collect();
-    let out = p3dp(&dir, &args);
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{stdout}{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    recipes
+}
+
+/// The report of `p3dp check` on every recipe of `recipes/` (by absolute
+/// path), which exits 0; run once and shared with `gallery.rs`.
+pub(crate) fn gallery_checked() -> std::sync::Arc<String> {
+    crate::common::once("p3dp check recipes/*.yaml", || {
+        let dir = tmp("checks-gallery");
+        let mut args = vec!["check".to_string()];
+        args.extend(gallery_recipes().iter().map(|p| p.display().to_string()));
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let out = p3dp(&dir, &args);
+        let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+        assert!(
+            out.status.success(),
+            "{stdout}{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        stdout
+    })
+}
+
+#[test]
+fn the_gallery_has_no_errors() {
+    let recipes = gallery_recipes();
+    let stdout = gallery_checked();
     for r in &recipes {
         let line = stdout
             .lines()
@@ -176,7 +191,6 @@ fn the_gallery_has_no_errors() {
         .filter(|l| l.contains("[bridge]") && l.contains("ring-"))
         .count();
     assert_eq!(rings, 8, "{stdout}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]

@@ -50,3 +50,22 @@ pub fn p3dp_peak(dir: &Path, args: &[&str]) -> (Output, u64) {
     let out = child.wait_with_output().expect("p3dp ran");
     (out, peak.join().expect("the peak"))
 }
+
+/// `make()` for `key`, made once per run of the test binary and shared by
+/// every test that asks for the same key (a build several tests read, such
+/// as a recipe on each built-in printer); a second caller waits for the
+/// first instead of making it again.
+pub fn once(key: &str, make: impl FnOnce() -> String) -> std::sync::Arc<String> {
+    use std::collections::HashMap;
+    use std::sync::{Arc, Mutex, OnceLock};
+    type Slot = Arc<OnceLock<Arc<String>>>;
+    static MADE: OnceLock<Mutex<HashMap<String, Slot>>> = OnceLock::new();
+    let slot = MADE
+        .get_or_init(Default::default)
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .entry(key.to_string())
+        .or_default()
+        .clone();
+    slot.get_or_init(|| Arc::new(make())).clone()
+}

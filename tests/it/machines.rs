@@ -287,6 +287,14 @@ fn build(recipe_name: &str, printer: &str) -> String {
     text
 }
 
+/// [`build`] of `recipe_name` on `printer`, built once per run and shared
+/// by the tests that read the same pair (the cup on every profile).
+fn shared(recipe_name: &str, printer: &str) -> std::sync::Arc<String> {
+    crate::common::once(&format!("machines {recipe_name} on {printer}"), || {
+        build(recipe_name, printer)
+    })
+}
+
 // ------------------------------------------------------------------- tests
 
 #[test]
@@ -326,7 +334,7 @@ fn every_built_in_profile_builds_the_globe_and_the_cup_inside_its_volume() {
     for name in PROFILES {
         let printer = p3dp::testing::profile::built_in(name).unwrap();
         for r in ["globe.yaml", "cup.yaml"] {
-            let text = build(r, name);
+            let text = shared(r, name);
             assert!(text.contains(&format!("; printer: {name} ")), "{name}");
             assert_inside(&text, &printer, &format!("{r} on {name}"));
             check_dialect(&text, printer.flavor.name());
@@ -339,7 +347,7 @@ fn every_built_in_profile_builds_the_globe_and_the_cup_inside_its_volume() {
 #[test]
 fn start_gcode_matches_the_recorded_expectations() {
     for name in PROFILES {
-        let text = build("cup.yaml", name);
+        let text = shared("cup.yaml", name);
         let got: Vec<&str> = text
             .lines()
             // before the start G-code: progress and object labels (issue 31)
@@ -366,8 +374,8 @@ fn corner_and_centre_origins_place_the_recipe_alike() {
             .map(|m| m.to)
             .collect()
     };
-    let corner = parts(&build("cup.yaml", "generic-220"));
-    let centre = parts(&build("cup.yaml", "rostock-max"));
+    let corner = parts(&shared("cup.yaml", "generic-220"));
+    let centre = parts(&shared("cup.yaml", "rostock-max"));
     assert_eq!(corner.len(), centre.len());
     for (a, b) in corner.iter().zip(&centre) {
         // equal but for the µm rounding of each (a half-µm rounds away from 0)

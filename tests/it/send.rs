@@ -333,7 +333,9 @@ fn read_request(req: &mut tiny_http::Request) -> Seen {
         len += n as u64;
         let room = (1usize << 20).saturating_sub(body.len());
         body.extend_from_slice(&buf[..n.min(room)]);
-        tail.extend_from_slice(&buf[..n]);
+        // the last 64 bytes: of this read alone when it has as many
+        let last = &buf[n.saturating_sub(64)..n];
+        tail.extend_from_slice(last);
         let cut = tail.len().saturating_sub(64);
         tail.drain(..cut);
     }
@@ -685,11 +687,9 @@ fn peak_kb(pid: u32) -> u64 {
 }
 
 #[test]
-fn a_fifo_is_refused_unopened_and_a_2_gb_file_is_streamed() {
-    use std::io::{Seek, SeekFrom, Write};
-    use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
-    use std::sync::Arc;
-    let dir = tmp("send-streamed");
+fn a_fifo_is_refused_unopened() {
+    use std::sync::atomic::AtomicU32;
+    let dir = tmp("send-fifo");
     gcode_in(&dir);
     let made = Command::new("mkfifo").arg(dir.join("pipe.gcode")).status();
     assert!(made.is_ok_and(|s| s.success()), "mkfifo");
@@ -713,6 +713,17 @@ fn a_fifo_is_refused_unopened_and_a_2_gb_file_is_streamed() {
         host.seen().is_empty(),
         "nothing is sent when one file is refused"
     );
+}
+
+/// The upload's whole point is its size (2 GB through loopback, seconds of
+/// both cores): an ignored test, which CI runs (`.ci/run`, README).
+#[test]
+#[ignore = "heavy: CI runs it, see README"]
+fn a_2_gb_file_is_streamed() {
+    use std::io::{Seek, SeekFrom, Write};
+    use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
+    use std::sync::Arc;
+    let dir = tmp("send-streamed");
 
     // 2 GiB and 5 bytes, sparse, marked at both ends
     let size: u64 = (2 << 30) + 5;

@@ -161,6 +161,9 @@ impl<'a> Scene<'a> {
     }
 
     fn find_range(&self, mode: ColorMode) -> (f64, f64) {
+        if !mode.has_value() {
+            return (0.0, 0.0); // every string's value is 0
+        }
         if mode == ColorMode::Order {
             let end = self.time().iter().flatten().last().copied().unwrap_or(0.0);
             return (0.0, end / 60.0);
@@ -185,26 +188,23 @@ impl<'a> Scene<'a> {
         }
     }
 
-    /// Calls `f` on the finite ends of every extruding string, in print order
-    /// (on every finite point when nothing extrudes), a point the same bits
-    /// as the one just passed not again (the end two strings in a row
-    /// share): [`Scene::extruding_points`] without holding them.
+    /// Calls `f` on every finite point that ends an extruding string, in
+    /// print order, once each (on every finite point when nothing
+    /// extrudes): what the drawings fit and shade by, read point by point
+    /// (a point ends string k − 1 and begins string k), without holding the
+    /// points.
     pub(crate) fn each_extruding_point(&self, mut f: impl FnMut(DVec3)) {
         let mut any = false;
-        let bits = |p: DVec3| p.to_array().map(f64::to_bits);
         for tp in &self.plan.paths {
-            let mut last = None;
-            for (k, s) in tp.strings.iter().enumerate() {
-                if !s.travel {
-                    any = true;
-                    let (a, b) = tp.ends(k);
-                    for p in [a, b] {
-                        if p.is_finite() && last != Some(bits(p)) {
-                            last = Some(bits(p));
-                            f(p);
-                        }
-                    }
+            // whether the string before the point extrudes
+            let mut before = false;
+            for (k, p) in tp.points.iter().enumerate() {
+                let after = tp.strings.get(k).is_some_and(|s| !s.travel);
+                if (before || after) && p.is_finite() {
+                    f(*p);
                 }
+                any |= after;
+                before = after;
             }
         }
         if !any {

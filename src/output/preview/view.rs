@@ -133,6 +133,12 @@ impl ColorMode {
             ColorMode::Findings | ColorMode::Plain => "",
         }
     }
+
+    /// Whether the colour shows a number of each string (else every
+    /// string's value is 0, [`super::Scene::value`]).
+    pub(crate) fn has_value(self) -> bool {
+        !matches!(self, ColorMode::Findings | ColorMode::Plain)
+    }
 }
 
 /// What a preview shows and how big.

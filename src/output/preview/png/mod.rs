@@ -224,17 +224,22 @@ fn layout(scene: &Scene, opts: &Options) -> ([f64; 4], bool, u32) {
 /// size: the model alone in filament colour, iso view, on a transparent
 /// background, its strings round tubes at least 1 px wide.
 ///
-/// The strokes are collected once, fitted to the largest size (pieces of
-/// [`PIECE`] strings shared over the pool as the preview's, no neighbouring
-/// pass looked for), coloured, sorted far to near ([`sort_far_first`]) and
-/// kept [`once`]; each size takes them scaled about the image's centre (a
-/// frame fitted to the same box differs only in its scale, p' = c' +
-/// (s'/s)(p − c)) and paints them with the preview's rasteriser in bands
-/// ([`paint_bands`]): the same bytes on any number of threads.
+/// The strokes are collected once, in print order, fitted to the largest
+/// size (pieces of [`PIECE`] strings shared over the pool as the
+/// preview's, no neighbouring pass looked for) and coloured. Each size
+/// takes them scaled about the image's centre (a frame fitted to the same
+/// box differs only in its scale, p' = c' + (s'/s)(p − c)); a smaller size
+/// merges those its scale makes short again ([`remerge`]), so that its
+/// strokes number about its own length of the model over
+/// [`model::MERGE_PX`], not the largest size's; then they are sorted far to
+/// near ([`sort_far_first`]), kept [`once`] and painted with the preview's
+/// rasteriser in bands ([`paint_bands`]): the same bytes on any number of
+/// threads.
 pub(crate) fn thumbnails(scene: &Scene, sizes: &[Size]) -> Vec<Pixmap> {
-    let Some(&big) = sizes
+    let Some((bi, &big)) = sizes
         .iter()
-        .max_by_key(|s| u64::from(s.width) * u64::from(s.height))
+        .enumerate()
+        .max_by_key(|(_, s)| u64::from(s.width) * u64::from(s.height))
     else {
         return Vec::new();
     };
@@ -258,7 +263,7 @@ pub(crate) fn thumbnails(scene: &Scene, sizes: &[Size]) -> Vec<Pixmap> {
     // size; a travel faint and grey, 1 px at every size (alpha 90 marks it).
     // No marks: a thumbnail is the print as the printer's screen shows it,
     // not the turtles' draw_turtle markers
-    let mut strokes = model.strokes(|it| match it.kind {
+    let strokes = model.strokes(|it| match it.kind {
         1 => Px {
             rgb: [150, 155, 165],
             alpha: 90,
@@ -271,39 +276,96 @@ pub(crate) fn thumbnails(scene: &Scene, sizes: &[Size]) -> Vec<Pixmap> {
         },
     });
     drop(model);
-    sort_far_first(&mut strokes);
-    let strokes = once(strokes);
-    sizes
-        .iter()
-        .map(|&size| {
-            let to = Frame::fit_box(frame.basis, lo, hi, rect(size), scene.pad());
-            let k = if frame.scale > 0.0 {
-                to.scale / frame.scale
-            } else {
-                0.0
-            };
-            let at = |p: (f32, f32)| {
-                let x = to.pixel_centre.0 + k * (f64::from(p.0) - frame.pixel_centre.0);
-                let y = to.pixel_centre.1 + k * (f64::from(p.1) - frame.pixel_centre.1);
-                (x as f32, y as f32)
-            };
-            let sized: Vec<Px> = strokes
-                .iter()
-                .map(|p| Px {
-                    a: at(p.a),
-                    b: at(p.b),
-                    r: match p.alpha {
-                        255 => (f64::from(p.r) * k).max(0.5) as f32,
-                        _ => 0.5,
-                    },
-                    ..*p
-                })
-                .collect();
-            let mut pm = Pixmap::new(size.width, size.height).expect("sizes are 1..=8192");
-            paint_bands(&mut pm, &sized);
-            pm
-        })
+    let pad = scene.pad();
+    // a size's scale k against the largest, and a stroke scaled to it
+    let scaling = |size: Size| {
+        let to = Frame::fit_box(frame.basis, lo, hi, rect(size), pad);
+        let k = if frame.scale > 0.0 {
+            to.scale / frame.scale
+        } else {
+            0.0
+        };
+        let at = move |p: (f32, f32)| {
+            let x = to.pixel_centre.0 + k * (f64::from(p.0) - frame.pixel_centre.0);
+            let y = to.pixel_centre.1 + k * (f64::from(p.1) - frame.pixel_centre.1);
+            (x as f32, y as f32)
+        };
+        let sized = move |p: &Px| Px {
+            a: at(p.a),
+            b: at(p.b),
+            r: match p.alpha {
+                255 => (f64::from(p.r) * k).max(0.5) as f32,
+                _ => 0.5,
+            },
+            ..*p
+        };
+        (k, sized)
+    };
+    let paint = |size: Size, mut list: Vec<Px>| {
+        sort_far_first(&mut list);
+        let mut pm = Pixmap::new(size.width, size.height).expect("sizes are 1..=8192");
+        paint_bands(&mut pm, &once(list));
+        pm
+    };
+    let mut out: Vec<Option<Pixmap>> = sizes.iter().map(|_| None).collect();
+    for (i, &size) in sizes.iter().enumerate().filter(|(i, _)| *i != bi) {
+        let (k, sized) = scaling(size);
+        let list: Vec<Px> = if k < 1.0 {
+            remerge(&strokes, k).iter().map(sized).collect()
+        } else {
+            strokes.iter().map(sized).collect()
+        };
+        out[i] = Some(paint(size, list));
+    }
+    // the largest last, its strokes scaled where they lie: no copy of them
+    let (_, sized) = scaling(big);
+    let mut strokes = strokes;
+    for p in &mut strokes {
+        *p = sized(p);
+    }
+    out[bi] = Some(paint(big, strokes));
+    out.into_iter()
+        .map(|pm| pm.expect("every size is drawn"))
         .collect()
+}
+
+/// The strokes of `strokes` (in print order, pixels of the largest size)
+/// for a size `k` times as large: consecutive strokes that join end to
+/// start, alike in opacity (lit or travel), taken as one while shorter
+/// than [`model::MERGE_PX`] at that size, as [`Model`] merges strings. The
+/// merged stroke goes from the first's start to the last's end, at the
+/// middle of their depths, coloured and as wide as its middle stroke.
+fn remerge(strokes: &[Px], k: f64) -> Vec<Px> {
+    let joins = |p: &Px, q: &Px| {
+        p.alpha == q.alpha
+            && p.b.0.to_bits() == q.a.0.to_bits()
+            && p.b.1.to_bits() == q.a.1.to_bits()
+    };
+    let span = |a: (f32, f32), b: (f32, f32)| {
+        let (dx, dy) = (f64::from(b.0 - a.0), f64::from(b.1 - a.1));
+        k * (dx * dx + dy * dy).sqrt()
+    };
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < strokes.len() {
+        let first = strokes[i];
+        let mut end = i + 1;
+        while span(first.a, strokes[end - 1].b) < model::MERGE_PX
+            && end < strokes.len()
+            && joins(&strokes[end - 1], &strokes[end])
+        {
+            end += 1;
+        }
+        let last = strokes[end - 1];
+        out.push(Px {
+            a: first.a,
+            b: last.b,
+            depth: 0.5 * (first.depth + last.depth),
+            ..strokes[(i + end - 1) / 2]
+        });
+        i = end;
+    }
+    out
 }
 
 /// Bambu's top and pick pictures of `scene` (as [`Scene::round`] reads
@@ -420,7 +482,7 @@ fn pick(size: Size, strokes: &[(Px, u32)], objects: &[std::ops::Range<usize>]) -
 /// each way, not 600 000 (whose painting took tens of seconds). Strokes
 /// alike have one depth, so they lie together in the sorted `strokes`: only
 /// a run of equal depths is searched.
-fn once(strokes: Vec<Px>) -> Vec<Px> {
+fn once(mut strokes: Vec<Px>) -> Vec<Px> {
     let key = |p: &Px| {
         (
             [p.a.0, p.a.1, p.b.0, p.b.1, p.r].map(f32::to_bits),
@@ -428,9 +490,9 @@ fn once(strokes: Vec<Px>) -> Vec<Px> {
             p.alpha,
         )
     };
-    let mut kept = Vec::with_capacity(strokes.len());
+    // kept in place: the strokes kept so far are strokes[..w], w ≤ i
     let mut seen = std::collections::HashSet::new();
-    let mut i = 0;
+    let (mut w, mut i) = (0, 0);
     while i < strokes.len() {
         let depth = strokes[i].depth.to_bits();
         let end = i + strokes[i..]
@@ -438,17 +500,25 @@ fn once(strokes: Vec<Px>) -> Vec<Px> {
             .take_while(|p| p.depth.to_bits() == depth)
             .count();
         if end - i == 1 {
-            kept.push(strokes[i]);
+            strokes[w] = strokes[i];
+            w += 1;
         } else {
             // the last of each alike, kept in painting order
             seen.clear();
-            let from = kept.len();
-            kept.extend(strokes[i..end].iter().rev().filter(|p| seen.insert(key(p))));
-            kept[from..].reverse();
+            let mut run: Vec<Px> = strokes[i..end]
+                .iter()
+                .rev()
+                .filter(|p| seen.insert(key(p)))
+                .copied()
+                .collect();
+            run.reverse();
+            strokes[w..w + run.len()].copy_from_slice(&run);
+            w += run.len();
         }
         i = end;
     }
-    kept
+    strokes.truncate(w);
+    strokes
 }
 
 /// PNG bytes of `pm`: RGB, or RGBA with `alpha` (colours un-premultiplied),
@@ -495,6 +565,52 @@ mod tests {
         assert_eq!(f.pixel(DVec3::new(10.0, 5.0, 0.0)), (200.0, 0.0));
         let f = Frame::fit(View::Front.basis(), &pts, [0.0, 0.0, 200.0, 100.0], 0.0);
         assert_eq!(f.pixel(DVec3::new(0.0, 0.0, 3.0)).1, 50.0 - 1.5 * f.scale);
+    }
+
+    #[test]
+    fn a_smaller_size_merges_what_its_scale_makes_short() {
+        // a lit chain of 40 strokes 2 px long, a travel, then 8 lit strokes
+        // that do not join one another (gaps between them)
+        let mut strokes: Vec<Px> = (0..40)
+            .map(|i| Px {
+                a: (2.0 * i as f32, 5.0),
+                b: (2.0 * (i + 1) as f32, 5.0),
+                depth: i as f32,
+                r: 1.0,
+                alpha: 255,
+                ..Px::default()
+            })
+            .collect();
+        strokes.push(Px {
+            a: (80.0, 5.0),
+            b: (80.0, 9.0),
+            alpha: 90,
+            ..Px::default()
+        });
+        strokes.extend((0..8).map(|i| Px {
+            a: (80.0 + i as f32, 9.0),
+            b: (80.5 + i as f32, 9.0),
+            alpha: 255,
+            ..Px::default()
+        }));
+        // at a quarter of the size a 2 px stroke is ½ px: four make one
+        let m = remerge(&strokes, 0.25);
+        assert_eq!(m.len(), 10 + 1 + 8);
+        for (j, p) in m[..10].iter().enumerate() {
+            assert_eq!(
+                (p.a, p.b),
+                ((8.0 * j as f32, 5.0), (8.0 * (j + 1) as f32, 5.0))
+            );
+            assert_eq!(p.depth, 4.0 * j as f32 + 1.5);
+        }
+        // the travel and the strokes that do not join stay their own
+        assert_eq!(m[10].alpha, 90);
+        assert!(m[11..]
+            .iter()
+            .zip(&strokes[41..])
+            .all(|(p, q)| p.a == q.a && p.b == q.b));
+        // at the size they were made for nothing merges
+        assert_eq!(remerge(&strokes, 1.0).len(), strokes.len());
     }
 
     #[test]

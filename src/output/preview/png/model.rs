@@ -10,7 +10,7 @@ use crate::base::par;
 use crate::output::preview::{colormap, Basis, ColorMode, Scene, View};
 
 /// Strings shorter than this on screen are merged with their neighbours, px.
-const MERGE_PX: f64 = 2.0;
+pub(super) const MERGE_PX: f64 = 2.0;
 /// The thinnest the preview draws a string, px.
 const MIN_PX: f32 = 0.75;
 /// When following the neighbouring pass from stroke to stroke
@@ -247,11 +247,14 @@ impl<'s, 'p> Model<'s, 'p> {
         let tp = &scene.plan.paths[pi];
         let end = self.run_end(pi, k, k1);
         let (mut len, mut csum, mut vsum) = (0.0, 0.0, 0.0);
+        let valued = mode.has_value();
         for j in k..end {
             let l = tp.length(j);
             len += l;
             csum += tp.strings[j].c * l;
-            vsum += scene.value(mode, pi, j) * l;
+            if valued {
+                vsum += scene.value(mode, pi, j) * l;
+            }
         }
         let (c, v) = if len > 0.0 {
             (csum / len, vsum / len)

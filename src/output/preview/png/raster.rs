@@ -89,11 +89,14 @@ pub(super) fn over(pm: &mut Pixmap, background: [u8; 3]) {
 fn bins(strokes: &[Px], height: usize) -> Vec<Vec<u32>> {
     let mut bins: Vec<Vec<u32>> = vec![Vec::new(); height.div_ceil(BAND)];
     for (i, px) in strokes.iter().enumerate() {
+        if !(px.r.is_finite() && px.a.1.is_finite() && px.b.1.is_finite()) {
+            continue; // not a number: [`capsule`] paints none of it
+        }
         let ext = px.r + 0.5;
-        let top = (px.a.1.min(px.b.1) - ext).floor();
-        let bottom = (px.a.1.max(px.b.1) + ext).ceil().min(height as f32);
+        let top = floor(px.a.1.min(px.b.1) - ext);
+        let bottom = ceil(px.a.1.max(px.b.1) + ext).min(height as f32);
         if !(top < bottom && bottom > 0.0) {
-            continue; // off the image, or not a number
+            continue; // off the image
         }
         let first = top.max(0.0) as usize / BAND;
         let last = (bottom as usize - 1) / BAND;
@@ -132,10 +135,10 @@ fn capsule(band: &mut [u8], width: usize, y0: usize, y1: usize, px: &Px) -> usiz
     }
     let alpha = f32::from(px.alpha);
     let ext = r + 0.5;
-    let top = (a.1.min(b.1) - ext).floor().max(y0 as f32);
-    let bottom = (a.1.max(b.1) + ext).ceil().min(y1 as f32);
-    let left = (a.0.min(b.0) - ext).floor().max(0.0);
-    let right = (a.0.max(b.0) + ext).ceil().min(width as f32);
+    let top = floor(a.1.min(b.1) - ext).max(y0 as f32);
+    let bottom = ceil(a.1.max(b.1) + ext).min(y1 as f32);
+    let left = floor(a.0.min(b.0) - ext).max(0.0);
+    let right = ceil(a.0.max(b.0) + ext).min(width as f32);
     if top >= bottom || left >= right {
         return 0;
     }
@@ -179,4 +182,39 @@ fn capsule(band: &mut [u8], width: usize, y0: usize, y1: usize, px: &Px) -> usiz
         }
     }
     filled
+}
+
+/// ⌊x⌋ for the finite x of a stroke's box, without a call to the C
+/// library's `floorf` (no SSE4.1 on every x86_64); beyond ±2³¹ it gives
+/// ±2³¹, which the box's clamps to the image make the same.
+#[inline]
+fn floor(x: f32) -> f32 {
+    let i = x as i32 as f32;
+    if i > x {
+        i - 1.0
+    } else {
+        i
+    }
+}
+
+/// ⌈x⌉ as [`floor`] gives ⌊x⌋.
+#[inline]
+fn ceil(x: f32) -> f32 {
+    -floor(-x)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn floor_and_ceil_are_the_library_s() {
+        for x in [
+            -3.5f32, -3.0, -0.2, -0.0, 0.0, 0.2, 2.0, 2.7, 8191.5, 1e12, -1e12,
+        ] {
+            let clamp = |v: f32| v.clamp(-2e9, 2e9);
+            assert_eq!(clamp(floor(x)), clamp(x.floor()), "{x}");
+            assert_eq!(clamp(ceil(x)), clamp(x.ceil()), "{x}");
+        }
+    }
 }
