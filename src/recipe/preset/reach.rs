@@ -183,19 +183,48 @@ impl Reacher {
 
 /// A template's line as the maker states it: a placeholder whose value is
 /// a constant (`Y{(0 < 4 ? -7 : -4.5)}`: no variable, no `random`) is the
-/// maker's literal; any other (`{…}`, `[name]`) becomes `?`, a word
-/// without a value, which places nothing.
-fn literal(raw: &str) -> String {
-    let folded = (raw.contains('{') && !raw.contains("random"))
-        .then(|| {
-            crate::base::slicer_macro::Template::parse(raw)
-                .ok()?
-                .expand_io(&Default::default(), &mut Default::default())
-                .ok()
-                .map(|(text, _)| text)
-        })
-        .flatten();
-    mask(folded.as_deref().unwrap_or(raw))
+/// maker's literal, written as the slicer writes it; any other (`{…}`,
+/// `[name]`) becomes `?`, a word without a value, which places nothing.
+fn literal(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut depth = 0usize;
+    let mut square = false;
+    let mut from = 0;
+    for (i, c) in text.char_indices() {
+        match c {
+            '{' if !square => {
+                if depth == 0 {
+                    from = i;
+                }
+                depth += 1;
+            }
+            '}' if depth > 0 => {
+                depth -= 1;
+                if depth == 0 {
+                    out.push_str(&constant(&text[from..=i]).unwrap_or_else(|| "?".into()));
+                }
+            }
+            '[' if depth == 0 && !square => {
+                square = true;
+                out.push('?');
+            }
+            ']' if square => square = false,
+            _ if depth > 0 || square => {}
+            _ => out.push(c),
+        }
+    }
+    out
+}
+
+/// The value of one placeholder `{…}` that reads no variable.
+fn constant(code: &str) -> Option<String> {
+    if code.contains("random") {
+        return None;
+    }
+    let t = crate::base::slicer_macro::Template::parse(code).ok()?;
+    t.expand_io(&Default::default(), &mut Default::default())
+        .ok()
+        .map(|(text, _)| text)
 }
 
 /// The line read as `flavor`'s firmware reads it (the one reader,
@@ -207,33 +236,6 @@ fn read_line(flavor: Flavor, text: &str) -> Option<Line<'_>> {
         Ok(r) => Some(r.line),
         Err(_) => lex(firmware::read::grammar(flavor), text).ok(),
     }
-}
-
-/// `text` with each `{…}` (nested braces included) and `[name]`
-/// placeholder replaced by `?`.
-fn mask(text: &str) -> String {
-    let mut out = String::with_capacity(text.len());
-    let mut depth = 0usize;
-    let mut square = false;
-    for c in text.chars() {
-        match c {
-            '{' => {
-                if depth == 0 && !square {
-                    out.push('?');
-                }
-                depth += 1;
-            }
-            '}' if depth > 0 => depth -= 1,
-            '[' if depth == 0 && !square => {
-                square = true;
-                out.push('?');
-            }
-            ']' if square && depth == 0 => square = false,
-            _ if depth > 0 || square => {}
-            _ => out.push(c),
-        }
-    }
-    out
 }
 
 /// An axis word of a line as the firmware reads it.

@@ -242,8 +242,10 @@ const MARLIN_M: &[(u32, Kind)] = &[
     (2012, Inert),
     // FlashForge's case fan ("M651 S255; start case fan", the Guider 2s;
     // the Adventurer 3 and 4 send the same line): a fan on the housing,
-    // no motion, no heat
+    // no motion, no heat; `M652` ("turn off rear fan", their end G-code)
+    // turns it off
     (651, Inert),
+    (652, Inert),
     // Anker's planner mode ("Enable v3 jerk and S-curve acceleration"): how
     // the firmware shapes accelerations, no motion or heat of its own
     (4899, Inert),
