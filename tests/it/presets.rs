@@ -1030,6 +1030,19 @@ fn multi_tool_machines_print_with_the_tool_their_start_gcode_selects() {
     let d2 = fixture("bbl/machine/Acme D2 0.4 nozzle.json");
     let p = import(&d2, None, None).unwrap();
     assert_eq!((p.extruders, p.tool), (2, 1));
+    // one note says which extruder prints, not two that disagree
+    let o = p3dp(&dir, &["printers", "import", path(&d2), "-o", "d2.yaml"]);
+    let notes = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{notes}");
+    let tool_notes: Vec<&str> = notes
+        .lines()
+        .filter(|l| l.contains("p3dp prints with"))
+        .collect();
+    assert_eq!(tool_notes.len(), 1, "{notes}");
+    assert!(
+        tool_notes[0].contains("extruder 2, the main one"),
+        "{notes}"
+    );
     let g = build_with(&dir, &["--printer", path(&d2)]).unwrap();
     has_lines(
         &g,

@@ -71,8 +71,14 @@ fn targets(a: &Options, jobs: &[Job]) -> Result<(Vec<Result<Target>>, PathBuf)> 
     };
     let mut out: Vec<Result<Target>> = Vec::with_capacity(jobs.len());
     let mut seen: Vec<(PathBuf, String)> = Vec::new();
+    // a recipe's name is read once, however many variants it sweeps
+    let mut names: std::collections::HashMap<&Path, Result<String>> = Default::default();
     for job in jobs {
-        let t = a.builds.name_of(job).map(|name| {
+        let name = names
+            .entry(job.recipe.as_path())
+            .or_insert_with(|| a.builds.name_of(job))
+            .clone();
+        let t = name.map(|name| {
             let file = format!("{}.gcode", variant_stem(&name, &job.sweep));
             if dir == Path::new(".") {
                 PathBuf::from(file)

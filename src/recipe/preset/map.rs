@@ -356,11 +356,6 @@ fn extruder(p: &Preset, notes: &mut Vec<String>) -> Result<(f64, f64, RawExtrusi
             format!("a printer of {extruders} extruders (at most {MAX_EXTRUDERS})"),
         ));
     }
-    if extruders > 1 {
-        notes.push(format!(
-            "a printer of {extruders} extruders or filament slots (nozzle_diameter lists {extruders}): p3dp prints with the first, the tool its start G-code selects (initial_tool 0)"
-        ));
-    }
     let filament = match p.number("filament_diameter")? {
         Some(d) => d,
         None => {
@@ -384,6 +379,11 @@ fn extruder(p: &Preset, notes: &mut Vec<String>) -> Result<(f64, f64, RawExtrusi
 /// (1-based; the H2D's right-hand nozzle, its T0), else the first.
 fn main_extruder(p: &Preset, extruders: usize, notes: &mut Vec<String>) -> Result<usize> {
     let Some(m) = p.number("master_extruder_id")? else {
+        if extruders > 1 {
+            notes.push(format!(
+                "a printer of {extruders} extruders or filament slots (nozzle_diameter lists {extruders}): p3dp prints with the first, the tool its start G-code selects (initial_tool 0)"
+            ));
+        }
         return Ok(0);
     };
     if m < 1.0 || m > extruders as f64 || m.fract() != 0.0 {
@@ -395,7 +395,7 @@ fn main_extruder(p: &Preset, extruders: usize, notes: &mut Vec<String>) -> Resul
     }
     if extruders > 1 {
         notes.push(format!(
-            "p3dp prints with extruder {m} of {extruders}, the main one (master_extruder_id)"
+            "a printer of {extruders} extruders (nozzle_diameter lists {extruders}): p3dp prints with extruder {m}, the main one (master_extruder_id), its one filament the first (initial_tool 0, filament_map [{m}])"
         ));
     }
     Ok(m as usize - 1)
