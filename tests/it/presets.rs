@@ -1386,3 +1386,65 @@ fn bambus_current_start_gcode_builds_with_its_own_commands() {
         "{e}"
     );
 }
+
+/// A Klipper maker's probe sequence (FlyingBear's S1, InfiMech's TX): Z
+/// set to 0 where the probe touched (`SET_KINEMATIC_POSITION Z=0`), then
+/// homed again before the print; and a park at a placeholder whose value
+/// is a constant (Prusa's XL 5T: `Y{(0 < 4 ? -7 : -4.5)}`), which the
+/// import's reach reads as the maker's literal. Left unhomed, the build is
+/// refused naming the line.
+#[test]
+fn a_klipper_probe_sequence_and_a_constant_placeholder_build() {
+    let dir = vase_dir("orca-probe");
+    let profiles = fixture("orca/profiles/Acme");
+    let file = fixture("orca/profiles/Acme/machine/Acme Probe 0.4 nozzle.json");
+    let out = p3dp(
+        &dir,
+        &[
+            "printers",
+            "import",
+            path(&file),
+            "--profiles",
+            path(&profiles),
+            "-o",
+            "probe.yaml",
+        ],
+    );
+    let notes = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(out.status.success(), "{notes}");
+    assert!(
+        notes.contains("envelope.y [-12, 230]") && notes.contains("start_gcode line 12"),
+        "{notes}"
+    );
+    let g = build_with(&dir, &["--printer", "probe.yaml"]).unwrap();
+    for line in [
+        "SET_KINEMATIC_POSITION Z=0 ; the probe touched the bed",
+        "G0 X30 Y-12 Z10 F6000 ; park at the sheet's edge",
+    ] {
+        assert!(g.contains(line), "{line}");
+    }
+    let file = fixture("orca/profiles/Acme/machine/Acme Probe Unhomed 0.4 nozzle.json");
+    let out = p3dp(
+        &dir,
+        &[
+            "printers",
+            "import",
+            path(&file),
+            "--profiles",
+            path(&profiles),
+            "-o",
+            "unhomed.yaml",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let e = build_with(&dir, &["--printer", "unhomed.yaml"]).unwrap_err();
+    assert!(
+        e.contains("start_gcode line 7")
+            && e.contains("SET_KINEMATIC_POSITION redefined Z and no G28 homes it again"),
+        "{e}"
+    );
+}

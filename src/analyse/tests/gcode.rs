@@ -131,11 +131,6 @@ fn coordinate_shifts_limits_and_firmware_updates_are_refused_by_name() {
             "SET_GCODE_OFFSET Z=1",
             "shifts the coordinates",
         ),
-        (
-            "voron-350",
-            "SET_KINEMATIC_POSITION Z=0",
-            "shifts the coordinates",
-        ),
         ("voron-350", "G92", "sets every axis to 0"),
         ("voron-350", "M104.1 S200", "cannot check"),
         ("voron-350", "G1 X100 \"Y5000\"", "cannot read"),
@@ -161,6 +156,48 @@ fn coordinate_shifts_limits_and_firmware_updates_are_refused_by_name() {
         let e = refused_on(printer, line);
         assert!(e.contains(why), "{printer}: {line}: {e}");
     }
+}
+
+/// Klipper's `SET_KINEMATIC_POSITION` in a maker's start G-code (Z set to
+/// 0 where its probe touched the bed, FlyingBear's S1 and InfiMech's TX):
+/// the axis's position forgotten, its moves bounded by the machine's span
+/// from the point it was given at, until a G28 homes it again; left in
+/// force at the end, with words p3dp does not follow, after the firmware
+/// moved the head (a relative move), or in a recipe's command, refused.
+#[test]
+fn set_kinematic_position_forgets_the_axis_until_it_is_homed() {
+    let r = recipe_for("voron-350");
+    let probe = "G28\nG90\nG1 X110 Y110 F6000\nPROBE\nSET_KINEMATIC_POSITION Z=0 ; Z homing\nG1 Z5\nZ_TILT_ADJUST\nG1 Z10\nG28\nG1 X5 Y5 Z0.3";
+    check("start_gcode", probe, &r, Start::Unknown).unwrap();
+    for (text, why) in [
+        (
+            "G28\nPROBE\nSET_KINEMATIC_POSITION Z=0\nG1 Z5",
+            "no G28 homes it again",
+        ),
+        (
+            "G28\nSET_KINEMATIC_POSITION Z=0\nG1 Z200\nG1 Z-200\nG28",
+            "the Z moves since SET_KINEMATIC_POSITION redefined it span 400 mm",
+        ),
+        // a second redefinition counts from the first one's point: Y 20
+        // and then 300 below Y 300's point span 320 mm of a 360 mm bed+margin
+        (
+            "G28\nG1 X230 Y300\nSET_KINEMATIC_POSITION Y=0\nG1 Y20\nG1 Y0\nSET_KINEMATIC_POSITION Y=300\nG1 Y-50\nG28",
+            "the Y moves since SET_KINEMATIC_POSITION redefined it span 370 mm",
+        ),
+        (
+            "G28\nSET_KINEMATIC_POSITION Z=0\nQUAD_GANTRY_LEVEL\nG91\nG1 Z5\nG90\nG28",
+            "a relative Z move after SET_KINEMATIC_POSITION",
+        ),
+        (
+            "G28\nSET_KINEMATIC_POSITION CLEAR=Z\nG28",
+            "follows its X, Y and Z words only",
+        ),
+    ] {
+        let e = check("start_gcode", text, &r, Start::Unknown).unwrap_err().to_string();
+        assert!(e.contains(why), "{text}: {e}");
+    }
+    let e = command("SET_KINEMATIC_POSITION Z=0", &r.printer, &r.material).unwrap_err();
+    assert!(e.contains("shifts the coordinates"), "{e}");
 }
 
 #[test]

@@ -24,7 +24,8 @@ fn start(r: &Recipe, text: &str) -> Result<usize, String> {
         .map_err(|e| e.to_string())
 }
 
-/// Anker's planner mode, Geeetech's light, iQ's housing fan, Sailfish's
+/// Anker's planner mode, Geeetech's light, iQ's housing fan, FlashForge's
+/// case fan (`M651 S255`, `M652` off), Sailfish's
 /// waits for the tool and the platform (`M6`, `M7`): inert, as
 /// their presets' comments say; Sailfish's recall of the home offsets is
 /// the firmware's own homing, after which the position is unknown (a
@@ -32,7 +33,7 @@ fn start(r: &Recipe, text: &str) -> Result<usize, String> {
 #[test]
 fn makers_codes_with_a_stated_effect_are_known() {
     let r = marlin();
-    let seq = "M4899 T3 ; S-curve\nM2012 P8 S1 F100 ; light\nM806 S0 ; housing fan\nG28\nM132 X Y Z A B\nG1 Z50 F420\nG1 X10 Y10\nM7 T0 ; platform\nM6 T0 ; tool";
+    let seq = "M4899 T3 ; S-curve\nM2012 P8 S1 F100 ; light\nM806 S0 ; housing fan\nG28\nM132 X Y Z A B\nG1 Z50 F420\nG1 X10 Y10\nM7 T0 ; platform\nM6 T0 ; tool\nM651 S255; start case fan\nM652; turn off rear fan";
     assert_eq!(start(&r, seq), Ok(seq.lines().count()));
     let e = start(&r, "G28\nM132 X Y Z A B\nG91\nG1 X-300").unwrap_err();
     assert!(e.contains("more than the machine is wide"), "{e}");

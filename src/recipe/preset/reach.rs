@@ -11,7 +11,8 @@
 //! [`Envelope::MAX_BELOW_BED`].
 
 use crate::analyse::check::gcode::vocabulary::{self, Kind};
-use crate::base::gcode::lex::Code;
+use crate::base::gcode::lex::{lex, Code, Line, Value};
+use crate::machine::firmware;
 use crate::machine::printer::Envelope;
 use crate::machine::Flavor;
 
@@ -51,49 +52,46 @@ pub(crate) fn reach(
         let mut relative = false;
         // the head's X and Y as the literal moves so far fix them
         let mut pos: [Option<f64>; 2] = [None, None];
-        for (n, line) in text.split('\n').enumerate() {
-            let code = line.split(';').next().unwrap_or("").trim();
-            let at = || format!("{key} line {}: `{}`", n + 1, code);
-            let mut words = code.split_ascii_whitespace();
-            let Some(first) = words.next().map(str::to_ascii_uppercase) else {
+        for (n, raw) in text.split('\n').enumerate() {
+            let at = || {
+                let code = raw.split(';').next().unwrap_or("").trim();
+                format!("{key} line {}: `{code}`", n + 1)
+            };
+            let masked = literal(raw);
+            let Some(l) = read_line(flavor, &masked) else {
+                pos = [None, None];
                 continue;
             };
-            let words: Vec<(usize, Option<f64>)> = words.filter_map(axis_word).collect();
-            match first.as_str() {
-                "G90" => relative = false,
-                "G91" => relative = true,
-                "G0" | "G1" => {
-                    for &(k, v) in &words {
-                        if k == 2 {
-                            let Some(v) = v.filter(|_| !relative) else {
-                                continue;
-                            };
-                            let deeper = below.as_ref().is_none_or(|(d, _)| -v > *d);
-                            if v < 0.0 && -v <= Envelope::MAX_BELOW_BED && deeper {
-                                below = Some((-v, at()));
-                            }
-                            continue;
-                        }
-                        if k > 2 {
-                            continue;
-                        }
-                        // a literal number only: a placeholder's value is the print's
-                        pos[k] = match (v, relative) {
-                            (Some(v), false) => Some(v),
-                            (Some(d), true) => pos[k].map(|p| p + d),
-                            (None, _) => None,
-                        };
-                        if let Some(p) = pos[k] {
-                            r.extend(k, p, &at);
-                        }
+            let Some(code) = &l.code else { continue };
+            let g =
+                |n: u32| matches!(code, Code::Number { letter: b'G', number, .. } if *number == n);
+            if g(90) {
+                relative = false;
+            } else if g(91) {
+                relative = true;
+            } else if g(0) || g(1) {
+                if let Some(z) = word(&l, "Z").literal().filter(|_| !relative) {
+                    let deeper = below.as_ref().is_none_or(|(d, _)| -z > *d);
+                    if z < 0.0 && -z <= Envelope::MAX_BELOW_BED && deeper {
+                        below = Some((-z, at()));
                     }
                 }
-                "G2" | "G3" => {
-                    pos = r.arc(&words, pos, relative, first == "G3", &at);
+                for (k, axis) in ["X", "Y"].iter().enumerate() {
+                    // a literal number only: a placeholder's value is the print's
+                    pos[k] = match (word(&l, axis), relative) {
+                        (Word::Absent, _) => pos[k],
+                        (Word::Known(v), false) => Some(v),
+                        (Word::Known(d), true) => pos[k].map(|p| p + d),
+                        (Word::Unknown, _) => None,
+                    };
+                    if let Some(p) = pos[k] {
+                        r.extend(k, p, &at);
+                    }
                 }
-                "G4" | "G92" => {}
-                _ if moves_on_its_own(flavor, &first) => pos = [None, None],
-                _ => {}
+            } else if g(2) || g(3) {
+                pos = r.arc(&l, pos, relative, g(3), &at);
+            } else if !(g(4) || g(92)) && moves_on_its_own(flavor, code) {
+                pos = [None, None];
             }
         }
     }
@@ -146,31 +144,33 @@ impl Reacher {
     /// where it ends, if known.
     fn arc(
         &mut self,
-        words: &[(usize, Option<f64>)],
+        l: &Line,
         pos: [Option<f64>; 2],
         relative: bool,
         ccw: bool,
         at: &dyn Fn() -> String,
     ) -> [Option<f64>; 2] {
-        let word = |k: usize| words.iter().rev().find(|w| w.0 == k).map(|w| w.1);
         let (Some(x0), Some(y0)) = (pos[0], pos[1]) else {
             return [None, None];
         };
+        if l.has("R") {
+            return [None, None];
+        }
         let mut to = [x0, y0];
         for (k, p) in to.iter_mut().enumerate() {
-            match (word(k), relative) {
-                (None, _) => {}
-                (Some(Some(v)), false) => *p = v,
-                (Some(Some(d)), true) => *p += d,
-                (Some(None), _) => return [None, None],
+            match (word(l, ["X", "Y"][k]), relative) {
+                (Word::Absent, _) => {}
+                (Word::Known(v), false) => *p = v,
+                (Word::Known(d), true) => *p += d,
+                (Word::Unknown, _) => return [None, None],
             }
         }
         let mut ij = [0.0; 2];
         for (k, c) in ij.iter_mut().enumerate() {
-            match word(3 + k) {
-                None => {}
-                Some(Some(v)) => *c = v,
-                Some(None) => return [None, None],
+            match word(l, ["I", "J"][k]) {
+                Word::Absent => {}
+                Word::Known(v) => *c = v,
+                Word::Unknown => return [None, None],
             }
         }
         for p in crate::base::gcode::arc_extremes([x0, y0], to, ij, ccw) {
@@ -181,44 +181,108 @@ impl Reacher {
     }
 }
 
-/// A word's axis (0 X, 1 Y, 2 Z, 3 I, 4 J) and its literal value (`None`
-/// for a placeholder); `None` for any other word.
-fn axis_word(w: &str) -> Option<(usize, Option<f64>)> {
-    let k = match w.as_bytes().first()?.to_ascii_uppercase() {
-        b'X' => 0,
-        b'Y' => 1,
-        b'Z' => 2,
-        b'I' => 3,
-        b'J' => 4,
-        _ => return None,
-    };
-    Some((k, w[1..].parse::<f64>().ok()))
+/// A template's line as the maker states it: a placeholder whose value is
+/// a constant (`Y{(0 < 4 ? -7 : -4.5)}`: no variable, no `random`) is the
+/// maker's literal, written as the slicer writes it; any other (`{…}`,
+/// `[name]`) becomes `?`, a word without a value, which places nothing.
+fn literal(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut depth = 0usize;
+    let mut square = false;
+    let mut from = 0;
+    for (i, c) in text.char_indices() {
+        match c {
+            '{' if !square => {
+                if depth == 0 {
+                    from = i;
+                }
+                depth += 1;
+            }
+            '}' if depth > 0 => {
+                depth -= 1;
+                if depth == 0 {
+                    out.push_str(&constant(&text[from..=i]).unwrap_or_else(|| "?".into()));
+                }
+            }
+            '[' if depth == 0 && !square => {
+                square = true;
+                out.push('?');
+            }
+            ']' if square => square = false,
+            _ if depth > 0 || square => {}
+            _ => out.push(c),
+        }
+    }
+    out
+}
+
+/// The value of one placeholder `{…}` that reads no variable.
+fn constant(code: &str) -> Option<String> {
+    if code.contains("random") {
+        return None;
+    }
+    let t = crate::base::slicer_macro::Template::parse(code).ok()?;
+    t.expand_io(&Default::default(), &mut Default::default())
+        .ok()
+        .map(|(text, _)| text)
+}
+
+/// The line read as `flavor`'s firmware reads it (the one reader,
+/// [`firmware::read`]: the last of a repeated word, `M 104`, `M104.1`,
+/// letters in quotes), `None` when no firmware could read it; a value the
+/// firmware reads as text (Klipper's `X?`) leaves its word without one.
+fn read_line(flavor: Flavor, text: &str) -> Option<Line<'_>> {
+    match firmware::read(flavor, text) {
+        Ok(r) => Some(r.line),
+        Err(_) => lex(firmware::read::grammar(flavor), text).ok(),
+    }
+}
+
+/// An axis word of a line as the firmware reads it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Word {
+    /// Not given: the axis keeps its place.
+    Absent,
+    /// Given without a number p3dp knows (a placeholder).
+    Unknown,
+    /// A literal number.
+    Known(f64),
+}
+
+impl Word {
+    /// The number, if literal.
+    fn literal(self) -> Option<f64> {
+        match self {
+            Word::Known(v) => Some(v),
+            _ => None,
+        }
+    }
+}
+
+/// `key`'s word in `l` (the last of a repeated one, as the firmware).
+fn word(l: &Line, key: &str) -> Word {
+    match l.get(key) {
+        None => Word::Absent,
+        Some(Value::Number(v)) if v.is_finite() => Word::Known(*v),
+        Some(_) => Word::Unknown,
+    }
 }
 
 /// Whether the command `first` (`G28`, `M620.1`, `T1`) may move the head
 /// where the literal moves do not say: any G-code but the moves, a tool
 /// change, and what the checks' vocabulary reads as the firmware's own
 /// motion (or does not know).
-fn moves_on_its_own(flavor: Flavor, first: &str) -> bool {
-    let (head, sub) = match first.split_once('.') {
-        Some((h, s)) => (h, s.parse::<u32>().ok()),
-        None => (first, None),
-    };
-    let letter = head.as_bytes().first().copied().unwrap_or(b'?');
-    let Ok(number) = head[1..].parse::<u32>() else {
-        return true;
-    };
-    match letter {
-        b'M' => {
-            let code = Code::Number {
-                letter,
-                number,
-                sub,
-            };
+fn moves_on_its_own(flavor: Flavor, code: &Code) -> bool {
+    match code {
+        Code::Number {
+            letter: b'M',
+            number,
+            ..
+        } => {
             !matches!(
-                vocabulary::kind(flavor, &code),
+                vocabulary::kind(flavor, code),
                 Some(Kind::Inert | Kind::Heats(_) | Kind::Trim(..) | Kind::FrameOnly(_))
-            ) && !typed_m(number)
+            ) && !typed_m(*number)
         }
         _ => true,
     }
@@ -344,5 +408,63 @@ mod tests {
             Flavor::Marlin,
         );
         assert_eq!(r, Reach::default());
+    }
+    /// The lines are read as the firmware reads them (the one reader):
+    /// `G 1` and `G1X-30` are moves, the last of a repeated word counts, a
+    /// letter in quotes is a word on Marlin, `g1` is `G1`; Klipper's
+    /// `G1.1` is no move (a command of its own); a placeholder's constant
+    /// value is the maker's literal (Prusa's XL 5T parks at
+    /// `Y{(0 < 4 ? -7 : -4.5)}`).
+    #[test]
+    fn the_reach_reads_lines_as_the_firmware_does() {
+        let reach_of = |text: &str, flavor: Flavor| {
+            reach(
+                &[("start_gcode", text)],
+                [0.0, 0.0],
+                [200.0, 200.0],
+                5.0,
+                flavor,
+            )
+            .xy
+        };
+        for (text, x, y) in [
+            ("G 1 X-20", Some([-20.0, 205.0]), None),
+            ("G1X-21Y-8", Some([-21.0, 205.0]), Some([-8.0, 205.0])),
+            ("G1 X-40 X-22", Some([-22.0, 205.0]), None),
+            ("G1 X-23 \"Y-9\"", Some([-23.0, 205.0]), Some([-9.0, 205.0])),
+            ("g1 x-24", Some([-24.0, 205.0]), None),
+            (
+                "G1 X{5 - 30} Y{(0 < 4 ? -7 : -4.5)}",
+                Some([-25.0, 205.0]),
+                Some([-7.0, 205.0]),
+            ),
+            (
+                "G1 X{first_layer_print_min[0] - 30} Y-10",
+                None,
+                Some([-10.0, 205.0]),
+            ),
+            (
+                "G1 X[first_layer_print_min] Y-11",
+                None,
+                Some([-11.0, 205.0]),
+            ),
+            ("G1 X{random(2, 8) - 40}", None, None),
+        ] {
+            assert_eq!(reach_of(text, Flavor::Marlin), [x, y], "{text}");
+        }
+        // Klipper: `G1.1` is a command of its own, the place forgotten
+        assert_eq!(
+            reach_of("G1 X10 Y10\nG1.1 X5\nG91\nG1 X-30", Flavor::Klipper),
+            [None, None]
+        );
+        assert_eq!(
+            reach_of("G1 X10 Y10\nG91\nG1 X-30", Flavor::Klipper),
+            [Some([-20.0, 205.0]), None]
+        );
+        // a placeholder is a word without a value on Klipper too
+        assert_eq!(
+            reach_of("G1 X{first_layer_print_min[0]} Y-12", Flavor::Klipper),
+            [None, Some([-12.0, 205.0])]
+        );
     }
 }

@@ -154,6 +154,11 @@ struct Checker {
     /// Per axis whose position is unknown: the relative moves' sum since it
     /// became unknown, and the least and most of that sum so far.
     drift: [(f64, f64, f64); 3],
+    /// Per axis whose coordinates Klipper's `SET_KINEMATIC_POSITION`
+    /// redefined (until the axis is homed): the coordinate of the point
+    /// where the drift is 0, so that an absolute move's drift is its
+    /// coordinate less this (see [`Checker::kinematic_position`]).
+    shifted: [Option<f64>; 3],
     /// Filament fed in place since the head last moved, mm.
     in_place: f64,
 }
@@ -208,6 +213,12 @@ pub(crate) fn check(key: &str, text: &str, recipe: &Recipe, start: Start) -> Res
             text: line.to_string(),
             commands: read.commands,
         });
+    }
+    if let Some(why) = c.still_shifted() {
+        return Err(Error::input(
+            format!("{key} line {}", body.split('\n').count()),
+            why,
+        ));
     }
     if let (true, Some((t, k, line))) = (maker, last_nozzle) {
         if t > material.0 {
@@ -277,6 +288,7 @@ impl Checker {
             // firmware keeps from a print before, each feed is bounded
             st: State::new(flavor),
             drift: [(0.0, 0.0, 0.0); 3],
+            shifted: [None; 3],
             in_place: 0.0,
         }
     }
@@ -406,6 +418,12 @@ impl Checker {
                 ));
             }
         }
+        if self.flavor == Flavor::Klipper
+            && self.policy == Policy::Frame
+            && matches!(code, Code::Name(n) if n == "SET_KINEMATIC_POSITION")
+        {
+            return self.kinematic_position(l);
+        }
         let Some(kind) = vocabulary::kind(self.flavor, code) else {
             return Err(format!(
                 "`{shown}` is a command p3dp cannot check on {} firmware; expected moves (G0–G3), dwell (G4), units (G21), modes (G90, G91, M82, M83, G92 E), homing or probing (G28, G29), temperatures, fans, or a command its table of known commands names (docs/printers.md)",
@@ -531,7 +549,62 @@ impl Checker {
     /// The position, unknown from here on.
     fn unknown_position(&mut self) {
         self.st.pos = [None; 3];
-        self.drift = [(0.0, 0.0, 0.0); 3];
+        for k in 0..3 {
+            self.drift[k] = match self.shifted[k] {
+                // the firmware moved the head in redefined coordinates: the
+                // drift's bounds stay (an absolute move counts from the
+                // same point), its sum is lost for relative moves
+                Some(_) => (f64::NAN, self.drift[k].1, self.drift[k].2),
+                None => (0.0, 0.0, 0.0),
+            };
+        }
+    }
+
+    /// Klipper's `SET_KINEMATIC_POSITION` (its `force_move` module): the
+    /// head does not move, Klipper takes it to be where the words say
+    /// (an axis not named keeps its position), and its soft limits then
+    /// hold in those coordinates. A maker sets `Z=0` where its probe just
+    /// touched the bed. p3dp cannot know where the redefined coordinates
+    /// lie in the machine: each named axis's position is forgotten, and
+    /// its moves from here count as moves from an unknown position (their
+    /// span at most the machine's), an absolute one by how far it goes
+    /// from the coordinate given, until a `G28` homes the axis again.
+    fn kinematic_position(&mut self, l: &Line) -> std::result::Result<(), String> {
+        for p in &l.params {
+            if !matches!(p.key.as_str(), "X" | "Y" | "Z") {
+                return Err(format!(
+                    "`SET_KINEMATIC_POSITION {}=…` is refused: p3dp follows its X, Y and Z words only",
+                    p.key
+                ));
+            }
+        }
+        for (k, axis) in ["X", "Y", "Z"].iter().enumerate() {
+            let Some(g) = l.number(axis)? else { continue };
+            if !g.is_finite() {
+                return Err(format!("cannot read its {axis} value"));
+            }
+            // a second redefinition: its point is the head's, at the
+            // drift's sum from the first one's (unknown after the
+            // firmware's own motion: the bounds start again)
+            let d = self.drift[k];
+            self.drift[k] = match self.shifted[k] {
+                Some(_) if d.0.is_finite() => d,
+                _ => (0.0, 0.0, 0.0),
+            };
+            self.shifted[k] = Some(g - self.drift[k].0);
+            self.st.pos[k] = None;
+        }
+        Ok(())
+    }
+
+    /// The error when coordinates are still redefined at the end of a
+    /// profile's G-code: the print's own moves would land elsewhere.
+    fn still_shifted(&self) -> Option<String> {
+        let k = (0..3).find(|&k| self.shifted[k].is_some())?;
+        Some(format!(
+            "SET_KINEMATIC_POSITION redefined {} and no G28 homes it again before the G-code ends: p3dp's moves would land where it cannot check",
+            ["X", "Y", "Z"][k]
+        ))
     }
 
     /// One typed command.
@@ -589,6 +662,7 @@ impl Checker {
                     if homed {
                         self.st.pos[k] = None;
                         self.drift[k] = (0.0, 0.0, 0.0);
+                        self.shifted[k] = None;
                     }
                 }
                 Ok(())
@@ -622,14 +696,23 @@ impl Checker {
             if !v.is_finite() {
                 return Err(format!("cannot read its {axis} value"));
             }
-            if self.st.relative_xyz && before[k].is_none() {
+            let shifted = self.shifted[k];
+            if (self.st.relative_xyz && before[k].is_none()) || shifted.is_some() {
                 let d = &mut self.drift[k];
-                d.0 += v;
+                match shifted {
+                    Some(g) if !self.st.relative_xyz => d.0 = v - g,
+                    _ if d.0.is_nan() => return Err(lost_drift(axis)),
+                    _ => d.0 += v,
+                }
                 d.1 = d.1.min(d.0);
                 d.2 = d.2.max(d.0);
                 if d.2 - d.1 > span[k] + 1e-9 {
+                    let moves = match shifted {
+                        Some(_) => "moves since SET_KINEMATIC_POSITION redefined it",
+                        None => "relative moves since the position was last known",
+                    };
                     return Err(format!(
-                        "the relative {axis} moves since the position was last known span {} mm, more than the machine is wide ({} mm)",
+                        "the {axis} {moves} span {} mm, more than the machine is wide ({} mm)",
                         fmt_num(d.2 - d.1),
                         fmt_num(span[k])
                     ));
@@ -637,11 +720,16 @@ impl Checker {
             }
         }
         let motion = self.st.apply(c);
+        for k in 0..3 {
+            if self.shifted[k].is_some() {
+                self.st.pos[k] = None;
+            }
+        }
         let firmware::Motion::Line { to, de, .. } = motion else {
             return Ok(());
         };
         for (k, axis) in ["x", "y", "z"].iter().enumerate() {
-            if let Some(v) = to[k] {
+            if let (Some(v), None) = (to[k], self.shifted[k]) {
                 within(k, axis, v, &self.lim)?;
             }
         }
@@ -760,6 +848,9 @@ impl Checker {
                 .map(|p| p[k] - from[k])
                 .fold(f64::NEG_INFINITY, f64::max);
             let d = &mut self.drift[k];
+            if d.0.is_nan() {
+                return Err(lost_drift(&axis.to_ascii_uppercase()));
+            }
             d.1 = d.1.min(d.0 + lo);
             d.2 = d.2.max(d.0 + hi);
             d.0 += to[k] - from[k];
@@ -775,6 +866,9 @@ impl Checker {
         let dz = a.to[2].unwrap_or(0.0);
         if pos[2].is_none() {
             let d = &mut self.drift[2];
+            if d.0.is_nan() {
+                return Err(lost_drift("Z"));
+            }
             d.0 += dz;
             d.1 = d.1.min(d.0);
             d.2 = d.2.max(d.0);
@@ -1009,6 +1103,14 @@ fn feed(f: f64, lim: &Limits) -> std::result::Result<(), String> {
 }
 
 /// Axis `k` (named `axis`) at machine coordinate `v` inside the envelope.
+/// A relative move on an axis `SET_KINEMATIC_POSITION` redefined, after
+/// the firmware moved the head on its own.
+fn lost_drift(axis: &str) -> String {
+    format!(
+        "a relative {axis} move after SET_KINEMATIC_POSITION redefined {axis} and the firmware moved the head: p3dp cannot bound where it goes; expected an absolute move or a G28 first"
+    )
+}
+
 fn within(k: usize, axis: &str, v: f64, lim: &Limits) -> std::result::Result<(), String> {
     const EPS: f64 = 1e-9;
     if !v.is_finite() {

@@ -240,6 +240,12 @@ const MARLIN_M: &[(u32, Kind)] = &[
     (806, Inert),
     // Geeetech's light ("ON Light")
     (2012, Inert),
+    // FlashForge's case fan ("M651 S255; start case fan", the Guider 2s;
+    // the Adventurer 3 and 4 send the same line): a fan on the housing,
+    // no motion, no heat; `M652` ("turn off rear fan", their end G-code)
+    // turns it off
+    (651, Inert),
+    (652, Inert),
     // Anker's planner mode ("Enable v3 jerk and S-curve acceleration"): how
     // the firmware shapes accelerations, no motion or heat of its own
     (4899, Inert),
@@ -524,6 +530,9 @@ const REPRAP: &[(u8, u32, Kind)] = &[
 /// Klipper's extended commands and macros refused by name.
 const KLIPPER_REFUSED: &[(&str, &str)] = &[
     ("SET_GCODE_OFFSET", SHIFTS),
+    // in a profile's start or end G-code the checks follow it instead
+    // (`Checker::kinematic_position`): the axes' positions forgotten, their
+    // moves bounded by the machine's span until they are homed again
     ("SET_KINEMATIC_POSITION", SHIFTS),
     ("SET_SKEW", SHIFTS),
     ("SKEW_PROFILE", SHIFTS),
