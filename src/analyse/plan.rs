@@ -3,7 +3,7 @@
 
 use crate::analyse::check::{self, Finding};
 use crate::analyse::frame::Frame;
-use crate::base::error::Result;
+use crate::base::error::{Error, Result};
 use crate::base::toolpath::Toolpath;
 use crate::generate::model::Recipe;
 
@@ -38,6 +38,7 @@ impl Plan {
     /// checked now (see `analyse::frame`): an error if unsafe,
     /// kept in `frame_error` (see [`Plan::frame_ok`]).
     pub(crate) fn new(path: String, recipe: Recipe, paths: Vec<Toolpath>) -> Result<Plan> {
+        one_value_a_line(&paths).map_err(|e| e.in_file(&path))?;
         let extent = crate::analyse::frame::extent(&recipe, &paths);
         let (frame, frame_error) = match crate::analyse::frame::frame(&recipe, &extent) {
             Ok(f) => (f, None),
@@ -104,4 +105,33 @@ impl Plan {
     pub fn failing(&self, strict: bool) -> Vec<&Finding> {
         check::failing(&self.findings, strict)
     }
+}
+
+/// Refuses a line test whose line `k` (a `set` with `band: k`) is given two
+/// values: the report's bands and `calibrate apply --band k` name one value
+/// a line. The same value again (a line drawn in two parts) is the same band.
+fn one_value_a_line(paths: &[Toolpath]) -> Result<()> {
+    use crate::base::toolpath::Event;
+    let mut seen: std::collections::HashMap<u32, (f64, &str)> = Default::default();
+    for tp in paths {
+        for (_, e) in &tp.events {
+            let (Event::Set { band: Some(b), .. } | Event::Band { band: b, .. }) = e else {
+                continue;
+            };
+            if b.z.is_some() {
+                continue; // a height band
+            }
+            let (v, part) = *seen.entry(b.index).or_insert((b.value, &tp.name));
+            if v.to_bits() != b.value.to_bits() {
+                return Err(Error::input(
+                    "set.band",
+                    format!(
+                        "line {} of the line test is given {} (part `{part}`) and {} (part `{}`); expected each line its own `band` (a different k for each value)",
+                        b.index, v, b.value, tp.name
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
 }

@@ -501,3 +501,49 @@ fn the_guide_runs_the_tests_in_the_recommended_order() {
         assert!(at(w[0]) < at(w[1]), "{} after {}", w[0], w[1]);
     }
 }
+
+/// A line test's line has one value: two `set`s giving line 1 two values
+/// are refused by name (the bands table and `calibrate apply --band 1`
+/// would not know which), nothing written; the same value again is one band.
+#[test]
+fn a_line_given_two_values_is_refused() {
+    let dir = tmp("calibrate-one-value-a-line");
+    let recipe = |band: &str| {
+        format!(
+            "p3dp: 1\nname: lines\nparams: {{lines: 3}}\nparts:\n  - primitive:\n      turtle:\n        program:\n          - for: {{k: \"0..lines - 1\"}}\n            do:\n              - pen_up\n              - {{goto: [-20, \"5*k\", 0.2]}}\n              - pen_down\n              - {{set: {{band: {band}, pressure_advance: \"0.01*k\"}}}}\n              - {{forward: 40}}\n"
+        )
+    };
+    std::fs::write(dir.join("twice.yaml"), recipe("1")).unwrap();
+    let out = p3dp(&dir, &["build", "twice.yaml", "-o", "twice.gcode"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("twice.yaml") && err.contains("set.band: line 1 of the line test is given 0"),
+        "{err}"
+    );
+    assert!(!dir.join("twice.gcode").exists());
+    std::fs::write(dir.join("each.yaml"), recipe("k")).unwrap();
+    let out = p3dp(
+        &dir,
+        &[
+            "build",
+            "each.yaml",
+            "-o",
+            "each.gcode",
+            "--stats-json",
+            "s.json",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let lines: Vec<u64> = stats(&dir, "s.json")["bands"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|b| b["line"].as_u64().unwrap())
+        .collect();
+    assert_eq!(lines, [0, 1, 2]);
+}
