@@ -720,6 +720,16 @@ fn build_with(dir: &Path, args: &[&str]) -> Result<String, String> {
     }
 }
 
+/// `p3dp printers import FILE [--profiles DIR] -o OUT` run in `dir`.
+fn import_to(dir: &Path, file: &Path, profiles: Option<&Path>, out: &str) -> std::process::Output {
+    let mut args = vec!["printers", "import", path(file)];
+    if let Some(p) = profiles {
+        args.extend(["--profiles", path(p)]);
+    }
+    args.extend(["-o", out]);
+    p3dp(dir, &args)
+}
+
 fn vase_dir(name: &str) -> crate::common::Tmp {
     let dir = tmp(name);
     std::fs::write(dir.join("vase.yaml"), VASE).unwrap();
@@ -1031,7 +1041,7 @@ fn multi_tool_machines_print_with_the_tool_their_start_gcode_selects() {
     let p = import(&d2, None, None).unwrap();
     assert_eq!((p.extruders, p.tool), (2, 1));
     // one note says which extruder prints, not two that disagree
-    let o = p3dp(&dir, &["printers", "import", path(&d2), "-o", "d2.yaml"]);
+    let o = import_to(&dir, &d2, None, "d2.yaml");
     let notes = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{notes}");
     let tool_notes: Vec<&str> = notes
@@ -1398,18 +1408,7 @@ fn a_klipper_probe_sequence_and_a_constant_placeholder_build() {
     let dir = vase_dir("orca-probe");
     let profiles = fixture("orca/profiles/Acme");
     let file = fixture("orca/profiles/Acme/machine/Acme Probe 0.4 nozzle.json");
-    let out = p3dp(
-        &dir,
-        &[
-            "printers",
-            "import",
-            path(&file),
-            "--profiles",
-            path(&profiles),
-            "-o",
-            "probe.yaml",
-        ],
-    );
+    let out = import_to(&dir, &file, Some(&profiles), "probe.yaml");
     let notes = String::from_utf8_lossy(&out.stderr).into_owned();
     assert!(out.status.success(), "{notes}");
     assert!(
@@ -1424,18 +1423,7 @@ fn a_klipper_probe_sequence_and_a_constant_placeholder_build() {
         assert!(g.contains(line), "{line}");
     }
     let file = fixture("orca/profiles/Acme/machine/Acme Probe Unhomed 0.4 nozzle.json");
-    let out = p3dp(
-        &dir,
-        &[
-            "printers",
-            "import",
-            path(&file),
-            "--profiles",
-            path(&profiles),
-            "-o",
-            "unhomed.yaml",
-        ],
-    );
+    let out = import_to(&dir, &file, Some(&profiles), "unhomed.yaml");
     assert!(
         out.status.success(),
         "{}",
