@@ -267,9 +267,46 @@ fn has_values(
     Ok(())
 }
 
-/// The heights and the first layer of `paths`, in one pass over their
-/// strings (and one over the first layer's).
+/// Strings per piece of [`extent`]'s work: a fixed size, not a share of
+/// the threads, so the pieces (and the volume's sum) are the same on any
+/// number of them.
+const PIECE: usize = 1 << 15;
+
+/// What one piece of a path's strings adds to the [`Extent`].
+#[derive(Clone, Copy)]
+struct Piece {
+    /// Lowest and highest z of a string that is not a travel.
+    drawn: (f64, f64),
+    /// The first extruding string's cross-section and speed.
+    first: Option<(f64, f64)>,
+    max_flow: f64,
+    volume: f64,
+    /// Lowest and highest extruding z, and the last extruding string's end z.
+    low: f64,
+    high: f64,
+    last: Option<f64>,
+    /// Highest z of the piece's points (travel included).
+    top: f64,
+    /// Whether an extruding string's height is not a number (its piece
+    /// is looked at for the first layer, as every piece below twice `low`).
+    nan: bool,
+}
+
+/// The heights and the first layer of `paths`: pieces of their strings
+/// measured side by side ([`crate::base::par`]) and put together in print
+/// order, then the first layer's strings in the pieces that reach below
+/// twice the lowest extrusion.
 pub(crate) fn extent(recipe: &Recipe, paths: &[Toolpath]) -> Extent {
+    let pieces: Vec<(usize, usize, usize)> = paths
+        .iter()
+        .enumerate()
+        .flat_map(|(i, t)| {
+            (0..t.len())
+                .step_by(PIECE)
+                .map(move |k| (i, k, (k + PIECE).min(t.len())))
+        })
+        .collect();
+    let measured = crate::base::par::map(&pieces, |&(i, k0, k1)| piece(&paths[i], k0, k1));
     let mut e = Extent {
         low: f64::INFINITY,
         high: f64::NEG_INFINITY,
@@ -280,9 +317,10 @@ pub(crate) fn extent(recipe: &Recipe, paths: &[Toolpath]) -> Extent {
         first_v: 0.0,
         max_flow: 0.0,
         end_at: paths.iter().rev().find_map(|t| t.points.last().copied()),
+        // a path's last point, after its last piece's strings
         top: paths
             .iter()
-            .flat_map(|t| t.points.iter().map(|p| p.z))
+            .filter_map(|t| t.points.last().map(|p| p.z))
             .fold(0.0, f64::max),
         ends_retracted: paths.iter().rev().find(|t| !t.is_empty()).is_some_and(|t| {
             let k = t.len() - 1;
@@ -294,35 +332,20 @@ pub(crate) fn extent(recipe: &Recipe, paths: &[Toolpath]) -> Extent {
         drawn: None,
     };
     let (mut dlo, mut dhi) = (f64::INFINITY, f64::NEG_INFINITY);
-    // per path, the strings that may lie in the first layer: those below
-    // twice the lowest extrusion so far (the lowest only falls, so every
-    // string below twice the final one is among them)
-    let mut near_bed: Vec<Option<(usize, usize)>> = vec![None; paths.len()];
-    for (t, near) in paths.iter().zip(&mut near_bed) {
-        for (k, s) in t.strings.iter().enumerate() {
-            if s.travel {
-                continue;
-            }
-            let (a, b) = t.ends(k);
-            let zmin = a.z.min(b.z);
-            dlo = dlo.min(zmin);
-            dhi = dhi.max(a.z.max(b.z));
-            if s.c <= 0.0 || s.c.is_nan() {
-                continue;
-            }
-            let (c, v) = (s.c, s.v);
-            if e.first_c == 0.0 {
-                (e.first_c, e.first_v) = (c, v);
-            }
-            e.max_flow = e.max_flow.max(c * v);
-            e.volume += c * a.distance(b);
-            e.low = e.low.min(zmin);
-            e.high = e.high.max(a.z.max(b.z));
-            e.last = b.z;
-            if zmin < 2.0 * e.low || zmin.is_nan() {
-                *near = Some(near.map_or((k, k), |(lo, _)| (lo, k)));
-            }
+    for m in &measured {
+        dlo = dlo.min(m.drawn.0);
+        dhi = dhi.max(m.drawn.1);
+        if let (true, Some((c, v))) = (e.first_c == 0.0, m.first) {
+            (e.first_c, e.first_v) = (c, v);
         }
+        e.max_flow = e.max_flow.max(m.max_flow);
+        e.volume += m.volume;
+        e.low = e.low.min(m.low);
+        e.high = e.high.max(m.high);
+        if let Some(z) = m.last {
+            e.last = z;
+        }
+        e.top = e.top.max(m.top);
     }
     e.drawn = (dlo <= dhi).then_some((dlo, dhi));
     if !e.low.is_finite() {
@@ -331,23 +354,75 @@ pub(crate) fn extent(recipe: &Recipe, paths: &[Toolpath]) -> Extent {
         return e;
     }
     // the first layer: strings whose lower end lies below where a second
-    // layer of the first one's height would start
+    // layer of the first one's height would start (only pieces reaching
+    // below it can hold one; NaN heights are looked at as before)
     let extruding = |t: &Toolpath, k: usize| !t.strings[k].travel && t.strings[k].c > 0.0;
-    for (t, near) in paths.iter().zip(near_bed) {
-        let Some((lo, hi)) = near else { continue };
-        for k in lo..=hi {
+    let (low, printer) = (e.low, &recipe.printer);
+    let near: Vec<(usize, usize, usize)> = pieces
+        .iter()
+        .zip(&measured)
+        .filter(|(_, m)| m.nan || m.low < 2.0 * low)
+        .map(|(p, _)| *p)
+        .collect();
+    let corners = crate::base::par::map(&near, |&(i, k0, k1)| {
+        let t = &paths[i];
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for k in k0..k1 {
             let (a, b) = t.ends(k);
-            if !extruding(t, k) || a.z.min(b.z) >= 2.0 * e.low {
+            if !extruding(t, k) || a.z.min(b.z) >= 2.0 * low {
                 continue;
             }
             for q in [a, b] {
-                let m = recipe.printer.to_machine(q);
-                e.first_min = [e.first_min[0].min(m.x), e.first_min[1].min(m.y)];
-                e.first_max = [e.first_max[0].max(m.x), e.first_max[1].max(m.y)];
+                let m = printer.to_machine(q);
+                lo = [lo[0].min(m.x), lo[1].min(m.y)];
+                hi = [hi[0].max(m.x), hi[1].max(m.y)];
             }
         }
+        (lo, hi)
+    });
+    for (lo, hi) in corners {
+        e.first_min = [e.first_min[0].min(lo[0]), e.first_min[1].min(lo[1])];
+        e.first_max = [e.first_max[0].max(hi[0]), e.first_max[1].max(hi[1])];
     }
     e
+}
+
+/// What strings `k0..k1` of `t` add to the [`Extent`] (see [`Piece`]).
+fn piece(t: &Toolpath, k0: usize, k1: usize) -> Piece {
+    let mut m = Piece {
+        drawn: (f64::INFINITY, f64::NEG_INFINITY),
+        first: None,
+        max_flow: 0.0,
+        volume: 0.0,
+        low: f64::INFINITY,
+        high: f64::NEG_INFINITY,
+        last: None,
+        top: f64::NEG_INFINITY,
+        nan: false,
+    };
+    for k in k0..k1 {
+        m.top = m.top.max(t.points[k].z);
+        let s = t.strings[k];
+        if s.travel {
+            continue;
+        }
+        let (a, b) = t.ends(k);
+        let zmin = a.z.min(b.z);
+        m.drawn = (m.drawn.0.min(zmin), m.drawn.1.max(a.z.max(b.z)));
+        if s.c <= 0.0 || s.c.is_nan() {
+            continue;
+        }
+        if m.first.is_none() {
+            m.first = Some((s.c, s.v));
+        }
+        m.max_flow = m.max_flow.max(s.c * s.v);
+        m.volume += s.c * a.distance(b);
+        m.low = m.low.min(zmin);
+        m.high = m.high.max(a.z.max(b.z));
+        m.last = Some(b.z);
+        m.nan |= zmin.is_nan();
+    }
+    m
 }
 
 /// A temperature as the slicers hold it: an integer (a fraction of a
@@ -858,6 +933,68 @@ mod tests {
         assert_eq!(e.first_min[0], o.x);
         assert_eq!(e.first_max[0], r.printer.to_machine(p(22.0, 5.0, 0.2)).x);
         assert_eq!(e.top(), 5.0);
+    }
+
+    /// A path of several pieces ([`PIECE`] strings each) whose lowest
+    /// string comes in a late piece: the pieces put together give the
+    /// figures their definitions give over the whole path, the same on one
+    /// thread and on two (the volume summed in the same pieces).
+    #[test]
+    fn pieces_put_together_are_the_whole_path_s_figures() {
+        let r = recipe("pla");
+        let n = 3 * PIECE + 17;
+        let mut t = Toolpath::new(DVec3::new(0.0, 0.0, 9.0));
+        for k in 1..=n {
+            let a = k as f64 * 0.01;
+            // a slow descent to z 0.25 three quarters in, then a climb;
+            // a travel every 1000th string
+            let z = 0.25 + (k as f64 / n as f64 - 0.75).abs() * 12.0;
+            let q = DVec3::new(30.0 * libm::cos(a), 30.0 * libm::sin(a), z);
+            if k % 1000 == 0 {
+                t.travel(q, 100.0);
+            } else {
+                t.draw(q, 0.1 + (k % 7) as f64 * 0.01, 20.0 + (k % 5) as f64);
+            }
+        }
+        let paths = [t];
+        let t = &paths[0];
+        let extruding: Vec<usize> = (0..t.len())
+            .filter(|&k| !t.strings[k].travel && t.strings[k].c > 0.0)
+            .collect();
+        let zmin = |k: usize| t.points[k].z.min(t.points[k + 1].z);
+        let low = extruding
+            .iter()
+            .map(|&k| zmin(k))
+            .fold(f64::INFINITY, f64::min);
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for &k in extruding.iter().filter(|&&k| zmin(k) < 2.0 * low) {
+            for q in [t.points[k], t.points[k + 1]] {
+                let m = r.printer.to_machine(q);
+                lo = [lo[0].min(m.x), lo[1].min(m.y)];
+                hi = [hi[0].max(m.x), hi[1].max(m.y)];
+            }
+        }
+        let volume: f64 = extruding
+            .iter()
+            .map(|&k| t.strings[k].c * t.length(k))
+            .sum();
+        let last = &t.strings[extruding[0]];
+        let one = crate::base::par::on_threads(1, || extent(&r, &paths));
+        let two = crate::base::par::on_threads(2, || extent(&r, &paths));
+        for e in [one, two] {
+            assert_eq!(e.low, low);
+            assert!((low - 0.25).abs() < 1e-3, "{low}");
+            assert_eq!((e.first_min, e.first_max), (lo, hi));
+            assert_eq!((e.first_c, e.first_v), (last.c, last.v));
+            assert_eq!(e.last, t.points[*extruding.last().unwrap() + 1].z);
+            assert_eq!(e.top(), t.points.iter().map(|p| p.z).fold(0.0, f64::max));
+            assert!(
+                (e.volume - volume).abs() <= 1e-9 * volume,
+                "{} {volume}",
+                e.volume
+            );
+        }
+        assert_eq!(one.volume.to_bits(), two.volume.to_bits());
     }
 
     /// Every variable the two tables list has a value (a built-in

@@ -22,7 +22,9 @@
 //! first line: it is formatted once into a scratch file while its moves are
 //! planned and `Marks` keeps where progress lines may go, then copied to
 //! the output with the lines put in from the planned times
-//! (`progressive`).
+//! (`progressive`), each piece hashed on the second thread while this one
+//! makes and writes the next (`copied`). The thumbnails are drawn on the
+//! writer's side while the other side checks.
 
 use std::collections::VecDeque;
 use std::io::{self, Write};
@@ -41,7 +43,7 @@ use crate::base::error::{Error, Result};
 use crate::base::finding::Finding;
 use crate::output::file::{HashWriter, Scratch};
 use crate::output::gcode::metadata::{Ahead, Options};
-use crate::output::gcode::Head;
+use crate::output::gcode::{Head, WithProgress};
 use crate::output::preview;
 
 /// How many threads a command may use; at least 1.
@@ -210,9 +212,9 @@ fn ahead(plan: &Plan, job: &Job) -> bool {
 fn written<W: Write>(
     plan: &Plan,
     job: &Job,
-    out: W,
+    out: Hashing<W>,
     failed: Option<&AtomicBool>,
-) -> Result<(W, MoveStats)> {
+) -> Result<(Hashing<W>, MoveStats)> {
     let never = AtomicBool::new(false);
     let failed = failed.unwrap_or(&never);
     let thumbnails = crate::output::preview::thumbnail::blocks(plan)?;
@@ -256,8 +258,8 @@ fn progressive<W: Write>(
     head: Head,
     feed: &Feed,
     failed: &AtomicBool,
-    out: W,
-) -> Result<(W, MoveStats)> {
+    out: Hashing<W>,
+) -> Result<(Hashing<W>, MoveStats)> {
     let io = |e: io::Error| Error::io_from(&plan.path, format!("cannot write the G-code: {e}"), &e);
     let scratch = Until {
         out: Scratch::new(),
@@ -273,9 +275,59 @@ fn progressive<W: Write>(
     drop(marks);
     let ahead = Ahead::of(&moves);
     let text = scratch.out.into_reader().map_err(io)?;
-    let out = Until { out, failed };
-    let out = crate::output::gcode::with_progress(plan, &head, &ahead, text, &lines, out)?;
-    Ok((out.out, moves))
+    let mut copy = WithProgress::new(plan, &head, &ahead, text, &lines);
+    let mut out = out;
+    copied(&mut copy, &mut out, failed).map_err(io)?;
+    Ok((out, moves))
+}
+
+/// Bytes of G-code a piece of [`copied`] holds.
+const PIECE: usize = 1 << 20;
+
+/// Writes out every piece of `copy` to `out` (see [`WithProgress`]); with
+/// a hash and a second thread, each piece is hashed there while this one
+/// makes the next and writes it (the SHA-256 is the copy's longest part).
+/// `failed` stops it as [`Until`] does.
+fn copied<R: io::Read + Send, W: Write>(
+    copy: &mut WithProgress<'_, R>,
+    out: &mut Hashing<W>,
+    failed: &AtomicBool,
+) -> io::Result<()> {
+    let (sink, mut hasher, bytes) = out.parts()?;
+    let (mut cur, mut prev) = (
+        Vec::with_capacity(PIECE + 256),
+        Vec::with_capacity(PIECE + 256),
+    );
+    let mut more = copy.fill(&mut cur, PIECE)?;
+    while !cur.is_empty() {
+        if failed.load(Ordering::Relaxed) {
+            return Err(io::Error::other("stopped: the checks failed"));
+        }
+        std::mem::swap(&mut cur, &mut prev);
+        cur.clear();
+        let mut next = || -> io::Result<()> {
+            if more {
+                more = copy.fill(&mut cur, PIECE)?;
+            }
+            sink.write_all(&prev)
+        };
+        match hasher.as_deref_mut() {
+            Some(h) if parallel() => {
+                let prev = &prev;
+                rayon::in_place_scope(|s| {
+                    s.spawn(move |_| sha2::Digest::update(h, prev));
+                    next()
+                })?;
+            }
+            Some(h) => {
+                sha2::Digest::update(h, &prev);
+                next()?;
+            }
+            None => next()?,
+        }
+        *bytes += prev.len() as u64;
+    }
+    sink.flush()
 }
 
 /// [`write`] with checks beside the writing (see the module comment).
@@ -284,8 +336,8 @@ fn checked_beside<W: Write>(
     job: &Job,
     allow: &[String],
     stop: Stop,
-    out: W,
-) -> Result<(W, MoveStats)> {
+    out: Hashing<W>,
+) -> Result<(Hashing<W>, MoveStats)> {
     let this = &*plan;
     let tasks = Tasks::new(
         &this.recipe,
@@ -302,9 +354,6 @@ fn checked_beside<W: Write>(
     });
     let failed = AtomicBool::new(false);
     let (queue, feed, failed) = (&queue, &feed, &failed);
-    // drawn before the checks' side begins: it plans until the writer's
-    // side ends the feed, which a refused thumbnail would never do
-    let thumbnails = crate::output::preview::thumbnail::blocks(this)?;
     let written = rayon::in_place_scope(|s| {
         // the checks' side: every task it can take, planning between them;
         // then, unless they refuse the build, the planning that is left
@@ -319,7 +368,15 @@ fn checked_beside<W: Write>(
                 feed.plan_to_end();
             }
         });
-        let written = written_beside(this, job, two_passes, feed, failed, thumbnails, out);
+        // the thumbnails drawn here while the other side checks; a refused
+        // one ends the feed, which the other side plans until it ends
+        let written = match crate::output::preview::thumbnail::blocks(this) {
+            Ok(thumbnails) => written_beside(this, job, two_passes, feed, failed, thumbnails, out),
+            Err(e) => {
+                feed.close();
+                Err(e)
+            }
+        };
         if written.is_ok() {
             // the checks not yet taken (the other side may not have begun)
             while queue.run_next() {}
@@ -342,8 +399,8 @@ fn written_beside<W: Write>(
     feed: &Feed,
     failed: &AtomicBool,
     thumbnails: String,
-    out: W,
-) -> Result<(W, MoveStats)> {
+    out: Hashing<W>,
+) -> Result<(Hashing<W>, MoveStats)> {
     let head = Head {
         options: job.stamp,
         thumbnails,
@@ -478,6 +535,15 @@ impl<W: Write> Hashing<W> {
             Hashing::Hashed(HashWriter::new(out))
         } else {
             Hashing::Counted(Counted { out, bytes: 0 })
+        }
+    }
+
+    /// The output, its hasher (when hashed) and the size counted so far,
+    /// to be written, hashed and counted apart (see [`HashWriter::parts`]).
+    fn parts(&mut self) -> io::Result<(&mut W, Option<&mut sha2::Sha256>, &mut u64)> {
+        match self {
+            Hashing::Hashed(h) => h.parts().map(|(w, s, n)| (w, Some(s), n)),
+            Hashing::Counted(c) => Ok((&mut c.out, None, &mut c.bytes)),
         }
     }
 

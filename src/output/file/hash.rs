@@ -44,6 +44,16 @@ impl<W: Write> HashWriter<W> {
         }
     }
 
+    /// The writer, the hasher and the byte count apart, what was buffered
+    /// written out first: for a caller that writes and hashes the same
+    /// pieces on two threads (what goes to one must go to the other, in
+    /// order, and be counted).
+    pub(crate) fn parts(&mut self) -> io::Result<(&mut W, &mut Sha256, &mut u64)> {
+        self.inner.flush()?;
+        let h = self.inner.get_mut();
+        Ok((&mut h.out, &mut h.hasher, &mut h.bytes))
+    }
+
     /// The SHA-256 in hex and the byte count.
     pub(crate) fn finish(self) -> (String, u64) {
         let (hex, bytes, _) = self.finish_into();

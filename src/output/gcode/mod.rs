@@ -84,71 +84,97 @@ pub(crate) fn write<W: Write, M: Moves>(
     Ok((stream.out.out, stats))
 }
 
-/// The G-code of `plan` formatted into `scratch` (see [`write`]; the
-/// header that needs the print's totals left out) put into `out`: that
-/// header (Bambu's block, from `ahead`), then the text with a progress line
-/// (`M73`) before each offset of `lines` — the way slicers put progress in,
-/// from the planner's times, the text formatted once.
-pub(crate) fn with_progress<W: Write>(
-    plan: &Plan,
-    head: &Head,
-    ahead: &metadata::Ahead,
-    scratch: impl std::io::Read,
-    lines: &[(u64, crate::analyse::planner::Progress)],
-    mut out: W,
-) -> Result<W> {
-    let io = |e: io::Error| {
-        crate::base::error::Error::io_from(&plan.path, format!("cannot write the G-code: {e}"), &e)
-    };
-    if head.options.bambu {
-        let extent = metadata::Extent::of(plan);
-        let layers = metadata::Layers::of(&extent, plan.recipe.printer.nozzle_diameter);
-        let block = metadata::bambu_header(&plan.recipe, ahead, layers.as_ref());
-        out.write_all(block.as_bytes()).map_err(io)?;
-    }
-    let d = dialect(&plan.recipe.printer);
-    let mut text = scratch;
-    // the text in large pieces: each a few reads and one write through
-    let mut buf = vec![0u8; 1 << 20];
-    let mut at = 0u64;
-    let mut line = crate::base::format::Chunk::new();
-    for &(offset, p) in lines {
-        copy_exactly(&mut text, &mut out, offset.saturating_sub(at), &mut buf).map_err(io)?;
-        line.clear();
-        let c = Command::Progress {
-            percent: p.percent,
-            minutes_left: p.minutes_left,
-        };
-        crate::machine::firmware::write::write(d, &c, "", &mut line);
-        out.write_all(line.bytes()).map_err(io)?;
-        at = offset;
-    }
-    loop {
-        let k = text.read(&mut buf).map_err(io)?;
-        if k == 0 {
-            break;
-        }
-        out.write_all(&buf[..k]).map_err(io)?;
-    }
-    out.flush().map_err(io)?;
-    Ok(out)
+/// The G-code of `plan` formatted into a scratch text (see [`write`]; the
+/// header that needs the print's totals left out) with what it lacked put
+/// in, piece by piece ([`WithProgress::fill`]): that header (Bambu's block,
+/// from the planner's totals), then the text with a progress line (`M73`)
+/// before each offset of its `lines` — the way slicers put progress in,
+/// from the planner's times, the text formatted once. The caller writes
+/// and hashes each piece (beside the next one's making, when it can).
+pub(crate) struct WithProgress<'a, R> {
+    text: R,
+    lines: &'a [(u64, crate::analyse::planner::Progress)],
+    /// The next of `lines` to put in, and the offset in `text` read to.
+    next: usize,
+    at: u64,
+    dialect: Dialect,
+    /// Bambu's header block, until the first piece takes it.
+    header: Vec<u8>,
+    line: crate::base::format::Chunk,
 }
 
-/// Copies `n` bytes of `from` to `to` through `buf`.
-fn copy_exactly(
-    from: &mut impl Read,
-    to: &mut impl Write,
-    n: u64,
-    buf: &mut [u8],
-) -> io::Result<()> {
-    let mut left = n;
-    while left > 0 {
-        let k = left.min(buf.len() as u64) as usize;
-        from.read_exact(&mut buf[..k])?;
-        to.write_all(&buf[..k])?;
-        left -= k as u64;
+impl<'a, R: Read> WithProgress<'a, R> {
+    /// The text `scratch` of `plan` (whose moves add up to `ahead`) with
+    /// progress lines before the offsets of `lines` (non-decreasing).
+    pub(crate) fn new(
+        plan: &Plan,
+        head: &Head,
+        ahead: &metadata::Ahead,
+        scratch: R,
+        lines: &'a [(u64, crate::analyse::planner::Progress)],
+    ) -> WithProgress<'a, R> {
+        let mut header = Vec::new();
+        if head.options.bambu {
+            let extent = metadata::Extent::of(plan);
+            let layers = metadata::Layers::of(&extent, plan.recipe.printer.nozzle_diameter);
+            let block = metadata::bambu_header(&plan.recipe, ahead, layers.as_ref());
+            header.extend_from_slice(block.as_bytes());
+        }
+        WithProgress {
+            text: scratch,
+            lines,
+            next: 0,
+            at: 0,
+            dialect: dialect(&plan.recipe.printer),
+            header,
+            line: crate::base::format::Chunk::new(),
+        }
     }
-    Ok(())
+
+    /// Appends the next piece of the G-code to `buf`, until it holds at
+    /// least `want` bytes or the text ends; false once nothing is left.
+    pub(crate) fn fill(&mut self, buf: &mut Vec<u8>, want: usize) -> io::Result<bool> {
+        buf.append(&mut self.header);
+        while buf.len() < want {
+            let room = (want - buf.len()) as u64;
+            let Some(&(offset, p)) = self.lines.get(self.next) else {
+                // no line left to put in: the rest of the text
+                if read_up_to(&mut self.text, buf, room)? == 0 {
+                    return Ok(false);
+                }
+                continue;
+            };
+            let n = offset.saturating_sub(self.at).min(room);
+            read_exactly(&mut self.text, buf, n)?;
+            self.at += n;
+            if self.at >= offset {
+                self.line.clear();
+                let c = Command::Progress {
+                    percent: p.percent,
+                    minutes_left: p.minutes_left,
+                };
+                crate::machine::firmware::write::write(self.dialect, &c, "", &mut self.line);
+                buf.extend_from_slice(self.line.bytes());
+                self.at = self.at.max(offset);
+                self.next += 1;
+            }
+        }
+        Ok(true)
+    }
+}
+
+/// Appends exactly `n` bytes of `from` to `buf`.
+fn read_exactly(from: &mut impl Read, buf: &mut Vec<u8>, n: u64) -> io::Result<()> {
+    if read_up_to(from, buf, n)? as u64 == n {
+        Ok(())
+    } else {
+        Err(io::ErrorKind::UnexpectedEof.into())
+    }
+}
+
+/// Appends up to `n` bytes of `from` to `buf` (fewer at its end): how many.
+fn read_up_to(from: &mut impl Read, buf: &mut Vec<u8>, n: u64) -> io::Result<usize> {
+    from.take(n).read_to_end(buf)
 }
 
 /// [`write`], the stream back.
@@ -1049,5 +1075,58 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
         self.text(&summary).map_err(io)?;
         self.s.flush().map_err(io)?;
         Ok((self.s, self.stats))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::analyse::planner::Progress;
+
+    /// The text with its progress lines put in is the same whatever the
+    /// size of the pieces asked for: each line before its offset, a line
+    /// at the end of the text after it, the text whole.
+    #[test]
+    fn progress_lines_go_in_at_their_offsets_whatever_the_pieces() {
+        let text: &[u8] = b"G1 X1\nG1 X2\nG1 X3\nG1 X4\n";
+        let at = |percent: u32, minutes_left: u64| Progress {
+            percent,
+            minutes_left,
+        };
+        let lines = [
+            (0, at(0, 3)),
+            (12, at(50, 1)),
+            (12, at(60, 1)),
+            (24, at(100, 0)),
+        ];
+        let dialect = Dialect {
+            flavor: crate::machine::Flavor::Marlin,
+            object_labels: false,
+            prusa_8bit: false,
+        };
+        let whole = |want: usize| {
+            let mut copy = WithProgress {
+                text,
+                lines: &lines,
+                next: 0,
+                at: 0,
+                dialect,
+                header: b"; header\n".to_vec(),
+                line: crate::base::format::Chunk::new(),
+            };
+            let (mut out, mut buf) = (Vec::new(), Vec::new());
+            loop {
+                buf.clear();
+                let more = copy.fill(&mut buf, want).unwrap();
+                out.extend_from_slice(&buf);
+                if !more {
+                    return String::from_utf8(out).unwrap();
+                }
+            }
+        };
+        let expected = "; header\nM73 P0 R3\nG1 X1\nG1 X2\nM73 P50 R1\nM73 P60 R1\nG1 X3\nG1 X4\nM73 P100 R0\n";
+        for want in [1, 2, 5, 7, 12, 13, 1 << 20] {
+            assert_eq!(whole(want), expected, "pieces of {want} bytes");
+        }
     }
 }
