@@ -79,6 +79,9 @@ pub(crate) struct Extent {
     /// Lowest and highest z of any string that is not a travel (extruding
     /// or not), recipe z: the G-code's layers.
     pub(crate) drawn: Option<(f64, f64)>,
+    /// The box of every point, recipe coordinates (None when a point is not
+    /// finite, or there is none).
+    pub(crate) points: Option<(DVec3, DVec3)>,
 }
 
 impl Extent {
@@ -285,8 +288,11 @@ struct Piece {
     low: f64,
     high: f64,
     last: Option<f64>,
-    /// Highest z of the piece's points (travel included).
-    top: f64,
+    /// The box of its points (its highest z the highest point's), and
+    /// whether every one is finite.
+    lo: DVec3,
+    hi: DVec3,
+    finite: bool,
     /// Whether an extruding string's height is not a number (its piece
     /// is looked at for the first layer, as every piece below twice `low`).
     nan: bool,
@@ -330,7 +336,14 @@ pub(crate) fn extent(recipe: &Recipe, paths: &[Toolpath]) -> Extent {
         }),
         volume: 0.0,
         drawn: None,
+        points: None,
     };
+    // every point: the pieces' (their strings' first ends) and each path's last
+    let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    let mut finite = true;
+    for q in paths.iter().filter_map(|t| t.points.last()) {
+        (lo, hi, finite) = (lo.min(*q), hi.max(*q), finite && q.is_finite());
+    }
     let (mut dlo, mut dhi) = (f64::INFINITY, f64::NEG_INFINITY);
     for m in &measured {
         dlo = dlo.min(m.drawn.0);
@@ -345,8 +358,10 @@ pub(crate) fn extent(recipe: &Recipe, paths: &[Toolpath]) -> Extent {
         if let Some(z) = m.last {
             e.last = z;
         }
-        e.top = e.top.max(m.top);
+        e.top = e.top.max(m.hi.z);
+        (lo, hi, finite) = (lo.min(m.lo), hi.max(m.hi), finite && m.finite);
     }
+    e.points = (finite && lo.cmple(hi).all()).then_some((lo, hi));
     e.drawn = (dlo <= dhi).then_some((dlo, dhi));
     if !e.low.is_finite() {
         // nothing extrudes: every height is the bed's
@@ -397,11 +412,18 @@ fn piece(t: &Toolpath, k0: usize, k1: usize) -> Piece {
         low: f64::INFINITY,
         high: f64::NEG_INFINITY,
         last: None,
-        top: f64::NEG_INFINITY,
         nan: false,
+        lo: DVec3::INFINITY,
+        hi: DVec3::NEG_INFINITY,
+        finite: true,
     };
+    let mut nan = false;
     for k in k0..k1 {
-        m.top = m.top.max(t.points[k].z);
+        let p = t.points[k];
+        (m.lo, m.hi) = (m.lo.min(p), m.hi.max(p));
+        // min and max pass over NaN: a sum tells it (and inf − inf)
+        let sum = p.x + p.y + p.z;
+        nan |= sum.is_nan();
         let s = t.strings[k];
         if s.travel {
             continue;
@@ -422,6 +444,7 @@ fn piece(t: &Toolpath, k0: usize, k1: usize) -> Piece {
         m.last = Some(b.z);
         m.nan |= zmin.is_nan();
     }
+    m.finite = !nan && m.lo.is_finite() && m.hi.is_finite();
     m
 }
 
@@ -988,6 +1011,13 @@ mod tests {
             assert_eq!((e.first_c, e.first_v), (last.c, last.v));
             assert_eq!(e.last, t.points[*extruding.last().unwrap() + 1].z);
             assert_eq!(e.top(), t.points.iter().map(|p| p.z).fold(0.0, f64::max));
+            let (lo, hi) = t
+                .points
+                .iter()
+                .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
+                    (lo.min(*p), hi.max(*p))
+                });
+            assert_eq!(e.points, Some((lo, hi)));
             assert!(
                 (e.volume - volume).abs() <= 1e-9 * volume,
                 "{} {volume}",
@@ -995,6 +1025,11 @@ mod tests {
             );
         }
         assert_eq!(one.volume.to_bits(), two.volume.to_bits());
+        // a point not a number, in any piece: no box (every point is then
+        // looked at where the box would have spared it)
+        let mut bad = paths[0].clone();
+        bad.points[2 * PIECE + 5].y = f64::NAN;
+        assert_eq!(extent(&r, &[bad]).points, None);
     }
 
     /// Every variable the two tables list has a value (a built-in

@@ -282,7 +282,7 @@ fn progressive<W: Write>(
 }
 
 /// Bytes of G-code a piece of [`copied`] holds.
-const PIECE: usize = 1 << 20;
+const PIECE: usize = 1 << 18;
 
 /// Writes out every piece of `copy` to `out` (see [`WithProgress`]); with
 /// a hash and a second thread, each piece is hashed there while this one
@@ -422,7 +422,7 @@ pub(crate) fn preview(
     out: &Path,
     opts: &preview::Options,
 ) -> Result<preview::Finished> {
-    crate::analyse::check::within_reach(&plan.recipe, &plan.paths, "preview")
+    crate::analyse::check::within_reach(&plan.recipe, &plan.paths, plan.extent.points, "preview")
         .map_err(|e| e.in_file(&plan.path))?;
     let job = preview::Job::new(plan, out, opts)?;
     let mut reader = job.reader();

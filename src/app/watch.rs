@@ -414,7 +414,7 @@ fn build(opts: &Options, cx: &Context, drawn: &(dyn Fn(Value) + Sync)) -> Result
     use crate::output::preview::html;
     crate::app::pipeline::run(opts.threads, || {
         let mut p = prepare_in(&opts.recipe, &opts.build, cx)?;
-        crate::analyse::check::within_reach(&p.recipe, &p.paths, "preview")
+        crate::analyse::check::within_reach(&p.recipe, &p.paths, p.extent.points, "preview")
             .map_err(|e| e.in_file(&p.path))?;
         // the viewer's moves read from the G-code beside the passes' spacing
         let draw = || -> Result<[f64; 3]> {

@@ -40,9 +40,16 @@ pub(crate) fn fmt_p(p: DVec3) -> String {
 /// length, so their work grows with the coordinates (a helix of radius 1e8
 /// mm would take minutes and gigabytes) while a model near the bed, even
 /// off it, is drawn as it is. `what` names the output (`preview`, `mesh`).
+///
+/// `known`: the box of every point when it is known ([`Extent`]'s, all
+/// finite): within reach, the points are not looked at one by one (q = p +
+/// origin rounds monotonically, so the box's corners bound every q).
+///
+/// [`Extent`]: crate::analyse::frame::Extent
 pub(crate) fn within_reach(
     recipe: &Recipe,
     paths: &[Toolpath],
+    known: Option<(DVec3, DVec3)>,
     what: &str,
 ) -> crate::base::error::Result<()> {
     let printer = &recipe.printer;
@@ -63,6 +70,12 @@ pub(crate) fn within_reach(
             (DVec3::new(-r, -r, -m), DVec3::new(r, r, max_z + m), m)
         }
     };
+    if let Some((a, b)) = known {
+        let (a, b) = (printer.to_machine(a), printer.to_machine(b));
+        if a.cmpge(lo).all() && b.cmple(hi).all() {
+            return Ok(());
+        }
+    }
     for tp in paths {
         for p in &tp.points {
             let q = printer.to_machine(*p);

@@ -59,7 +59,7 @@ impl Format {
 /// atomically); returns the report line.
 pub(crate) fn write(plan: &Plan, out: &Path) -> Result<String> {
     let format = Format::of(out)?;
-    crate::analyse::check::within_reach(&plan.recipe, &plan.paths, "mesh")
+    crate::analyse::check::within_reach(&plan.recipe, &plan.paths, plan.extent.points, "mesh")
         .map_err(|e| e.in_file(&plan.path))?;
     let mesh = super::of_plan(plan);
     let shown = out.display().to_string();

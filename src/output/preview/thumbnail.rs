@@ -64,7 +64,7 @@ pub(crate) fn images(plan: &Plan) -> Result<Vec<(ThumbSpec, Vec<u8>)>> {
     let specs = thumbnails(list).map_err(|e| e.in_file(&plan.recipe.printer.name))?;
     // a picture's work grows with the model's extent, as a preview's: a
     // model metres away is refused before it is drawn
-    crate::analyse::check::within_reach(&plan.recipe, &plan.paths, "thumbnail")
+    crate::analyse::check::within_reach(&plan.recipe, &plan.paths, plan.extent.points, "thumbnail")
         .map_err(|e| e.in_file(&plan.path))?;
     let sizes: Vec<Size> = specs.iter().map(|t| t.size).collect();
     let pixmaps = png::thumbnails(&Scene::round(plan), &sizes);
