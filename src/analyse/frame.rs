@@ -420,7 +420,16 @@ fn piece(t: &Toolpath, k0: usize, k1: usize) -> Piece {
     let mut nan = false;
     for k in k0..k1 {
         let p = t.points[k];
-        (m.lo, m.hi) = (m.lo.min(p), m.hi.max(p));
+        // plain comparisons: f64::min's and max's results (a NaN passed
+        // over), without their handling of a NaN bound, which never comes
+        for i in 0..3 {
+            if p[i] < m.lo[i] {
+                m.lo[i] = p[i];
+            }
+            if p[i] > m.hi[i] {
+                m.hi[i] = p[i];
+            }
+        }
         // min and max pass over NaN: a sum tells it (and inf − inf)
         let sum = p.x + p.y + p.z;
         nan |= sum.is_nan();

@@ -120,18 +120,15 @@ pub(crate) fn each<T: Send>(items: &mut [T], f: impl Fn(&mut T) + Sync + Send) {
     items.par_iter_mut().with_max_len(1).for_each(f);
 }
 
-/// Sorts `items` by `order` (unstable), over the pool when it has a
-/// second thread; `order` must be total with no ties for the result to be
-/// the same whatever the threads.
-pub(crate) fn sort_unstable_by<T: Send>(
-    items: &mut [T],
-    order: impl Fn(&T, &T) -> std::cmp::Ordering + Sync,
-) {
+/// Sorts `items` by `key` (unstable; the key computed at each comparison,
+/// so it should be cheap), over the pool when it has a second thread;
+/// keys must be distinct for the result to be the same whatever the threads.
+pub(crate) fn sort_unstable_by_key<T: Send, K: Ord>(items: &mut [T], key: impl Fn(&T) -> K + Sync) {
     use rayon::slice::ParallelSliceMut;
     if width() > 1 {
-        items.par_sort_unstable_by(order);
+        items.par_sort_unstable_by_key(key);
     } else {
-        items.sort_unstable_by(order);
+        items.sort_unstable_by_key(key);
     }
 }
 

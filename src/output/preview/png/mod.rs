@@ -197,8 +197,15 @@ fn sort_far_first(strokes: &mut [Px]) {
     for (i, px) in strokes.iter_mut().enumerate() {
         px.seq = i as u32;
     }
-    let order = |a: &Px, b: &Px| a.depth.total_cmp(&b.depth).then(a.seq.cmp(&b.seq));
-    par::sort_unstable_by(strokes, order);
+    par::sort_unstable_by_key(strokes, |p| (total_order(p.depth) << 32) | u64::from(p.seq));
+}
+
+/// The bits of `x` as an unsigned number in [`f32::total_cmp`]'s order
+/// (−NaN < −∞ < … < −0 < +0 < … < +∞ < NaN): negative numbers' bits all
+/// flipped, the others' sign bit set.
+fn total_order(x: f32) -> u64 {
+    let b = x.to_bits();
+    u64::from(if b >> 31 == 1 { !b } else { b | 0x8000_0000 })
 }
 
 /// Where the model goes in the image, whether the text goes round it, and
@@ -552,6 +559,35 @@ pub(crate) fn encode(pm: &Pixmap, alpha: bool) -> Vec<u8> {
 
 #[cfg(test)]
 mod tests {
+    /// The sort key's order of depths is `f32::total_cmp`'s.
+    #[test]
+    fn total_order_is_total_cmp_s() {
+        let xs = [
+            f32::NEG_INFINITY,
+            -1e30,
+            -2.5,
+            -1e-40,
+            -0.0,
+            0.0,
+            1e-40,
+            0.5,
+            3.0,
+            1e30,
+            f32::INFINITY,
+            f32::NAN,
+            -f32::NAN,
+        ];
+        for a in xs {
+            for b in xs {
+                assert_eq!(
+                    super::total_order(a).cmp(&super::total_order(b)),
+                    a.total_cmp(&b),
+                    "{a} {b}"
+                );
+            }
+        }
+    }
+
     use super::*;
     use crate::output::preview::View;
 

@@ -115,13 +115,24 @@ impl<'s, 'p> Model<'s, 'p> {
         let mut lo = DVec3::splat(f64::INFINITY);
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
         let mut depths = (f64::INFINITY, f64::NEG_INFINITY);
+        // the points are finite (each_extruding_point): a plain comparison
+        // is f64::min's and max's result, without their NaN handling
+        let low = |a: &mut f64, x: f64| *a = if x < *a { x } else { *a };
+        let high = |a: &mut f64, x: f64| *a = if x > *a { x } else { *a };
         scene.each_extruding_point(|p| {
             let (u, w, d) = basis.project(p);
-            lo2 = (lo2.0.min(u), lo2.1.min(w));
-            hi2 = (hi2.0.max(u), hi2.1.max(w));
-            depths = (depths.0.min(d), depths.1.max(d));
-            lo = lo.min(p);
-            hi = hi.max(p);
+            low(&mut lo2.0, u);
+            low(&mut lo2.1, w);
+            high(&mut hi2.0, u);
+            high(&mut hi2.1, w);
+            low(&mut depths.0, d);
+            high(&mut depths.1, d);
+            low(&mut lo.x, p.x);
+            low(&mut lo.y, p.y);
+            low(&mut lo.z, p.z);
+            high(&mut hi.x, p.x);
+            high(&mut hi.y, p.y);
+            high(&mut hi.z, p.z);
         });
         let frame = Frame::fit_box(basis, lo2, hi2, rect, scene.pad());
         let neighbours = passes == Passes::Followed;
