@@ -29,7 +29,7 @@ pub(crate) enum Command {
     /// Write G-code (default ./NAME.gcode) and print a stats report.
     Build(BuildArgs),
     /// Build a calibration print of the gallery for a printer and material (`--list`), or write the value read off one into a profile (`calibrate apply`).
-    Calibrate(CalibrateArgs),
+    Calibrate(Box<CalibrateArgs>),
     /// Put several recipes on one bed, arranged and printed one after another (RECIPE*N: N copies); write its G-code as build does.
     Plate(PlateArgs),
     /// Draw the toolpath: a PNG image, or a self-contained HTML file with a 3D viewer.
@@ -299,6 +299,9 @@ pub(crate) enum CalibrateAction {
         /// The params it was built with: NAME=VALUE; repeatable.
         #[arg(long = "set", value_name = "NAME=VALUE")]
         sets: Vec<String>,
+        /// A folder the printer's profile may be read from besides the project; repeatable.
+        #[arg(long = "allow-read", value_name = "DIR")]
+        allow_read: Vec<PathBuf>,
         /// The profile to write.
         #[arg(short = 'o', long, value_name = "OUT.yaml")]
         output: PathBuf,
@@ -487,7 +490,7 @@ fn errors(r: Result<Vec<Error>>) -> Vec<Error> {
 pub fn run(cli: Cli) -> Vec<Error> {
     match cli.command {
         Command::Build(a) => errors(build(&a)),
-        Command::Calibrate(a) => errors(calibrate(a)),
+        Command::Calibrate(a) => errors(calibrate(*a)),
         Command::Plate(a) => errors(plate(&a)),
         Command::Preview(a) => errors(preview(&a)),
         Command::Mesh(a) => errors(mesh(&a)),
@@ -568,6 +571,7 @@ fn calibrate(a: CalibrateArgs) -> Result<Vec<Error>> {
         printer,
         material,
         sets,
+        allow_read,
         output,
     }) = a.action
     {
@@ -582,6 +586,7 @@ fn calibrate(a: CalibrateArgs) -> Result<Vec<Error>> {
             printer,
             material,
             sets: sets.iter().map(|s| parse_set(s)).collect::<Result<_>>()?,
+            allow_read,
             output,
         })?;
         crate::sayln!("{line}");

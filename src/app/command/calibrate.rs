@@ -277,7 +277,7 @@ pub(crate) fn run(o: &Options) -> Vec<Error> {
 fn prepare(o: &Options) -> Result<(build::Options, tempfile::TempDir)> {
     let t = test(&o.test)?;
     let mut opts = o.build.clone();
-    let printer = printer(opts.builds.printer.as_deref(), t)?;
+    let printer = printer(opts.builds.printer.as_deref(), t, &opts.builds.allow_read)?;
     let material = o.material.as_deref().unwrap_or("pla");
     let user_end = opts.builds.sets.iter().any(|(k, _)| k == "end");
     opts.builds.sets = sets(t, material, printer.nozzle_diameter, &opts.builds.sets);
@@ -333,7 +333,11 @@ fn recipe_for(t: &Test, printer: &crate::machine::Printer) -> (&'static str, Opt
 }
 
 /// The printer `printer` names (the recipe's own when none is given).
-fn printer(printer: Option<&str>, t: &Test) -> Result<crate::machine::Printer> {
+fn printer(
+    printer: Option<&str>,
+    t: &Test,
+    allow_read: &[PathBuf],
+) -> Result<crate::machine::Printer> {
     let spec = match printer {
         Some(p) => p.to_string(),
         None => {
@@ -343,6 +347,9 @@ fn printer(printer: Option<&str>, t: &Test) -> Result<crate::machine::Printer> {
     };
     let reads = crate::base::input::Reads::default();
     reads.allow(Path::new("."));
+    for dir in allow_read {
+        reads.allow(dir);
+    }
     crate::recipe::profile::resolve(&spec, Path::new("."), &reads)
 }
 
@@ -367,6 +374,8 @@ pub(crate) struct Apply {
     pub(crate) material: Option<String>,
     /// `--set`, as the print was built.
     pub(crate) sets: Vec<(String, String)>,
+    /// `--allow-read`: folders the printer's profile may be read from.
+    pub(crate) allow_read: Vec<PathBuf>,
     /// `-o`: the profile written.
     pub(crate) output: PathBuf,
 }
@@ -377,7 +386,7 @@ pub(crate) struct Apply {
 pub(crate) fn apply(a: &Apply) -> Result<String> {
     let t = test(&a.test)?;
     let printer = a.printer.clone().unwrap_or_else(|| "generic-220".into());
-    let key = recipe_for(t, &self::printer(Some(&printer), t)?).1;
+    let key = recipe_for(t, &self::printer(Some(&printer), t, &a.allow_read)?).1;
     let band = picked(a, &printer)?;
     let value = band.value;
     let Some(key) = key else {
@@ -425,6 +434,7 @@ fn picked(a: &Apply, printer: &str) -> Result<crate::analyse::stats::BandStats> 
             builds: super::Builds {
                 printer: Some(printer.to_string()),
                 sets: a.sets.clone(),
+                allow_read: a.allow_read.clone(),
                 ..super::Builds::default()
             },
             ..build::Options::default()
@@ -436,6 +446,7 @@ fn picked(a: &Apply, printer: &str) -> Result<crate::analyse::stats::BandStats> 
         &crate::app::prepare::Options {
             sets: opts.builds.sets.clone(),
             printer: Some(printer.to_string()),
+            allow_read: opts.builds.allow_read.clone(),
             ..Default::default()
         },
     )?;
@@ -531,6 +542,14 @@ mod tests {
         ];
         for s in sets {
             args.extend(["--set", s]);
+        }
+        // a profile a test wrote in its own folder may be read
+        let folder = std::path::Path::new(&printer)
+            .parent()
+            .filter(|d| d.is_absolute() && !d.starts_with(root()))
+            .map(|d| d.display().to_string());
+        if let Some(d) = &folder {
+            args.extend(["--allow-read", d]);
         }
         let out = p3dp(&dir, &args);
         if !out.success() {
@@ -777,11 +796,107 @@ mod tests {
         }
     }
 
+    /// Firmware retraction per band, every flavour with `G10`/`G11`: each
+    /// band's length is set (`M207`, Klipper's `SET_RETRACTION`) to its
+    /// value, never between a `G10` and its `G11` (Klipper's and
+    /// RepRapFirmware's `G11` give back the length in force, not what the
+    /// `G10` took), and every band retracts at its own length.
+    #[test]
+    fn firmware_retraction_bands_set_their_length_outside_a_retraction() {
+        let dir = tmp("calibrate-firmware-retraction");
+        for (printer, flavor) in FLAVOURS.into_iter().filter(|(_, f)| *f != Flavor::Bambu) {
+            let profile = dir.join(format!("fw-{printer}.yaml"));
+            std::fs::write(
+                &profile,
+                format!("inherits: {printer}\nname: fw-{printer}\nfirmware_retraction: true\n"),
+            )
+            .unwrap();
+            let b = build(
+                "retraction",
+                &profile.display().to_string(),
+                &["step=3/10", "end=2"],
+            )
+            .unwrap();
+            let values: Vec<f64> = b.stats["bands"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x["value"].as_f64().unwrap())
+                .collect();
+            let (mut length, mut taken): (Option<f64>, Option<Option<f64>>) = (None, None);
+            let mut set = Vec::new();
+            let mut retracts = vec![0; values.len()];
+            for line in b.gcode.lines() {
+                for c in read(flavor, line).unwrap().commands {
+                    match c {
+                        Command::Set(Setting::Retraction {
+                            length: Some(l), ..
+                        }) => {
+                            assert_eq!(taken, None, "{printer}: `{line}` inside a retraction");
+                            length = Some(l);
+                            set.push(l);
+                        }
+                        Command::FirmwareRetract { undo: false } => {
+                            assert_eq!(taken, None, "{printer}: `{line}` retracted twice");
+                            taken = Some(length);
+                            if let Some(k) = length
+                                .and_then(|l| values.iter().position(|v| (v - l).abs() < 1e-9))
+                            {
+                                retracts[k] += 1;
+                            }
+                        }
+                        Command::FirmwareRetract { undo: true } => {
+                            assert_eq!(
+                                taken,
+                                Some(length),
+                                "{printer}: `{line}` gives back another length"
+                            );
+                            taken = None;
+                        }
+                        _ => {}
+                    }
+                }
+            }
+            assert_eq!(set, values, "{printer}: one setting a band, its value");
+            assert!(
+                retracts.iter().skip(1).all(|&n| n > 0),
+                "{printer}: {retracts:?}"
+            );
+        }
+        // the profile read off the print, from the folder it was allowed
+        let profile = dir.join("fw-generic-220.yaml").display().to_string();
+        let folder = dir.display().to_string();
+        let apply = |extra: &[&str]| {
+            let mut args = vec!["calibrate", "apply", "retraction", "--band", "2"];
+            args.extend([
+                "--printer",
+                &profile,
+                "--set",
+                "step=3/10",
+                "--set",
+                "end=2",
+            ]);
+            args.extend(extra);
+            args.extend(["-o", "applied.yaml"]);
+            p3dp(&dir, &args)
+        };
+        let refused = apply(&[]);
+        assert_eq!(refused.code, 2, "{}", refused.stderr);
+        assert!(
+            refused.stderr.contains("--allow-read"),
+            "{}",
+            refused.stderr
+        );
+        let out = apply(&["--allow-read", &folder]);
+        assert!(out.success(), "{}", out.stderr);
+        let text = std::fs::read_to_string(dir.join("applied.yaml")).unwrap();
+        assert!(text.contains("retraction: { length: 0.8 }"), "{text}");
+    }
+
     /// p3dp's own retraction per band, every flavour: after band k's note
     /// every retraction the reader reads takes back `start + k·step` mm, in
-    /// absolute and relative E; the labels are the bands' values. (These
-    /// printers retract with E moves; firmware retraction's `M207` /
-    /// `SET_RETRACTION` per band is not read back here.)
+    /// absolute and relative E; the labels are the bands' values (firmware
+    /// retraction: the test above).
     #[test]
     fn retraction_bands_are_the_retractions_read_back() {
         for (printer, flavor) in FLAVOURS {

@@ -919,6 +919,10 @@ impl<'a, W: Write, M: Moves> Emitter<'a, W, M> {
                 );
                 return self.text(&t);
             }
+            // Klipper's and RepRapFirmware's G11 give back the length in
+            // force then, not what their G10 took (Marlin's, what it took):
+            // back from a retraction before its length changes
+            Setting::Retraction { .. } if self.retracted => self.unretract_now()?,
             _ => {}
         }
         self.s.command(&Command::Set(s), &note)
