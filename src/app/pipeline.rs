@@ -23,8 +23,7 @@
 //! planned and `Marks` keeps where progress lines may go, then copied to
 //! the output with the lines put in from the planned times
 //! (`progressive`), each piece hashed on the second thread while this one
-//! makes and writes the next (`copied`). The thumbnails are drawn on the
-//! writer's side while the other side checks.
+//! makes and writes the next (`copied`).
 
 use std::collections::VecDeque;
 use std::io::{self, Write};
@@ -282,7 +281,7 @@ fn progressive<W: Write>(
 }
 
 /// Bytes of G-code a piece of [`copied`] holds.
-const PIECE: usize = 1 << 18;
+const PIECE: usize = 1 << 20;
 
 /// Writes out every piece of `copy` to `out` (see [`WithProgress`]); with
 /// a hash and a second thread, each piece is hashed there while this one
@@ -354,6 +353,10 @@ fn checked_beside<W: Write>(
     });
     let failed = AtomicBool::new(false);
     let (queue, feed, failed) = (&queue, &feed, &failed);
+    // drawn before the checks' side begins (on both threads: the pictures
+    // split their work over the pool): that side plans until the writer's
+    // side ends the feed, which a refused thumbnail would never do
+    let thumbnails = crate::output::preview::thumbnail::blocks(this)?;
     let written = rayon::in_place_scope(|s| {
         // the checks' side: every task it can take, planning between them;
         // then, unless they refuse the build, the planning that is left
@@ -368,15 +371,7 @@ fn checked_beside<W: Write>(
                 feed.plan_to_end();
             }
         });
-        // the thumbnails drawn here while the other side checks; a refused
-        // one ends the feed, which the other side plans until it ends
-        let written = match crate::output::preview::thumbnail::blocks(this) {
-            Ok(thumbnails) => written_beside(this, job, two_passes, feed, failed, thumbnails, out),
-            Err(e) => {
-                feed.close();
-                Err(e)
-            }
-        };
+        let written = written_beside(this, job, two_passes, feed, failed, thumbnails, out);
         if written.is_ok() {
             // the checks not yet taken (the other side may not have begun)
             while queue.run_next() {}
