@@ -312,7 +312,14 @@ pub(crate) fn extent(recipe: &Recipe, paths: &[Toolpath]) -> Extent {
                 .map(move |k| (i, k, (k + PIECE).min(t.len())))
         })
         .collect();
-    let measured = crate::base::par::map(&pieces, |&(i, k0, k1)| piece(&paths[i], k0, k1));
+    let measure = |&(i, k0, k1): &(usize, usize, usize)| piece(&paths[i], k0, k1);
+    // a small print on this thread: its few pieces are not worth waking
+    // another (nor the memory a second thread's first allocations take)
+    let measured: Vec<Piece> = if pieces.len() < 4 {
+        pieces.iter().map(measure).collect()
+    } else {
+        crate::base::par::map(&pieces, measure)
+    };
     let mut e = Extent {
         low: f64::INFINITY,
         high: f64::NEG_INFINITY,
