@@ -281,7 +281,7 @@ fn progressive<W: Write>(
 }
 
 /// Bytes of G-code a piece of [`copied`] holds.
-const PIECE: usize = 1 << 20;
+const PIECE: usize = 1 << 18;
 
 /// Writes out every piece of `copy` to `out` (see [`WithProgress`]); with
 /// a hash and a second thread, each piece is hashed there while this one
