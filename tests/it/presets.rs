@@ -1220,19 +1220,10 @@ fn a_json_parent_linked_out_of_the_project_is_refused() {
 #[test]
 fn a_profile_folder_of_links_to_one_big_file_is_scanned_once() {
     let dir = tmp("json-links");
-    let profiles = dir.join("profiles");
-    std::fs::create_dir_all(profiles.join("machine")).unwrap();
-    // one 15 MB preset, linked 8000 times
-    let big = dir.join("big.json");
-    let pad = "x".repeat(15 << 20);
-    std::fs::write(
-        &big,
-        format!(r#"{{"type": "machine", "name": "big", "printer_notes": "{pad}"}}"#),
-    )
-    .unwrap();
-    for k in 0..8000 {
-        std::os::unix::fs::symlink(&big, profiles.join(format!("machine/l{k:04}.json"))).unwrap();
-    }
+    // one 15 MB preset, linked 8000 times: the folder made once in the
+    // target folder and kept (8000 new inodes on every run cost ext4 up to
+    // seconds of searching its recently deleted ones)
+    let profiles = links_to_one_big_preset();
     std::fs::write(
         dir.join("mine.json"),
         r#"{"type": "machine", "name": "mine", "inherits": "nowhere", "printable_area": ["0x0", "200x0", "200x200", "0x200"], "printable_height": "200"}"#,
@@ -1241,7 +1232,13 @@ fn a_profile_folder_of_links_to_one_big_file_is_scanned_once() {
     let t = std::time::Instant::now();
     let out = p3dp(
         &dir,
-        &["printers", "import", "mine.json", "--profiles", "profiles"],
+        &[
+            "printers",
+            "import",
+            "mine.json",
+            "--profiles",
+            profiles.to_str().unwrap(),
+        ],
     );
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
@@ -1252,6 +1249,38 @@ fn a_profile_folder_of_links_to_one_big_file_is_scanned_once() {
     assert!(err.contains("stopped at its cap of 4000 files"), "{err}");
     // unbounded, 8000 parses of 15 MB take minutes
     assert!(t.elapsed().as_secs_f64() < 30.0, "{:?}", t.elapsed());
+}
+
+/// A profile folder of 8000 links to one 15 MB preset (`machine/l0000.json`
+/// …), in the tests' folder of the target directory: made whole once (in a
+/// folder of its own, renamed into place) and reused by later runs.
+fn links_to_one_big_preset() -> std::path::PathBuf {
+    const LINKS: usize = 8000;
+    let root = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
+    let done = root.join("json-links-8000");
+    if done
+        .join("machine")
+        .join(format!("l{:04}.json", LINKS - 1))
+        .exists()
+    {
+        return done;
+    }
+    let making = root.join(format!("json-links-making-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&making);
+    std::fs::create_dir_all(making.join("machine")).unwrap();
+    let big = done.join("big.json");
+    let pad = "x".repeat(15 << 20);
+    std::fs::write(
+        making.join("big.json"),
+        format!(r#"{{"type": "machine", "name": "big", "printer_notes": "{pad}"}}"#),
+    )
+    .unwrap();
+    for k in 0..LINKS {
+        std::os::unix::fs::symlink(&big, making.join(format!("machine/l{k:04}.json"))).unwrap();
+    }
+    let _ = std::fs::remove_dir_all(&done);
+    std::fs::rename(&making, &done).unwrap();
+    done
 }
 
 /// A Bambu printer's own sequence (a preset written for the tests in its
