@@ -56,7 +56,9 @@ fn measure(tris: &[[[f32; 3]; 3]]) -> (f64, [f64; 3], [f64; 3]) {
 /// once each way (0: closed, consistently oriented shells), and how many
 /// faces and vertices it has.
 fn obj_edges(text: &str) -> (usize, usize, usize) {
-    let mut edges: HashMap<(u32, u32), i32> = HashMap::new();
+    // each directed edge a → b as one number, sorted: an edge is good when
+    // it appears once and so does its reverse b → a
+    let mut edges: Vec<u64> = Vec::new();
     let (mut nv, mut nf) = (0, 0);
     for l in text.lines() {
         if l.starts_with("v ") {
@@ -70,14 +72,26 @@ fn obj_edges(text: &str) -> (usize, usize, usize) {
                 "degenerate {l}"
             );
             for e in 0..3 {
-                *edges.entry((i[e], i[(e + 1) % 3])).or_default() += 1;
+                edges.push(u64::from(i[e]) << 32 | u64::from(i[(e + 1) % 3]));
             }
         }
     }
-    let bad = edges
-        .iter()
-        .filter(|(&(a, b), &n)| n != 1 || edges.get(&(b, a)) != Some(&1))
-        .count();
+    edges.sort_unstable();
+    let count = |e: u64| {
+        let from = edges.partition_point(|&x| x < e);
+        edges[from..].iter().take_while(|&&x| x == e).count()
+    };
+    let mut bad = 0;
+    let mut k = 0;
+    while k < edges.len() {
+        let e = edges[k];
+        let n = edges[k..].iter().take_while(|&&x| x == e).count();
+        let reverse = (e << 32) | (e >> 32);
+        if n != 1 || count(reverse) != 1 {
+            bad += 1;
+        }
+        k += n;
+    }
     (bad, nf, nv)
 }
 
