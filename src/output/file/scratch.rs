@@ -22,13 +22,15 @@ impl Scratch {
         }
     }
 
-    /// What was written, to read from the start.
+    /// What was written, to read from the start. The file unbuffered: its
+    /// reader takes pieces of hundreds of KiB straight into its own buffer
+    /// (a buffer here would copy every byte once more).
     pub(crate) fn into_reader(self) -> io::Result<Box<dyn Read + Send>> {
         Ok(match self {
             Scratch::File(w) => {
                 let mut f = w.into_inner().map_err(|e| e.into_error())?;
                 f.rewind()?;
-                Box::new(io::BufReader::with_capacity(1 << 16, f))
+                Box::new(f)
             }
             Scratch::Memory(v) => Box::new(io::Cursor::new(v)),
         })
