@@ -86,7 +86,7 @@ fn obj_edges(text: &str) -> (usize, usize, usize) {
     while k < edges.len() {
         let e = edges[k];
         let n = edges[k..].iter().take_while(|&&x| x == e).count();
-        let reverse = (e << 32) | (e >> 32);
+        let reverse = e.rotate_left(32); // b → a
         if n != 1 || count(reverse) != 1 {
             bad += 1;
         }
