@@ -108,8 +108,10 @@ pub mod testing {
         fn recipe_mut(&mut self) -> &mut Recipe;
         /// Skirt, then parts, in print order.
         fn paths(&self) -> &[Toolpath];
-        /// Skirt, then parts, to change before writing.
-        fn paths_mut(&mut self) -> &mut Vec<Toolpath>;
+        /// Puts `paths` (skirt, then parts) in place of the strings, and
+        /// measures again what the plan derives from them (the extent, the
+        /// start and end G-code); the checks' findings are cleared.
+        fn set_paths(&mut self, paths: Vec<Toolpath>) -> crate::Result<()>;
         /// Where each part holds on to the bed, as the checks measured it.
         fn footprints(&self) -> &[Footprint];
         /// The start G-code as it is written, expanded.
@@ -128,8 +130,9 @@ pub mod testing {
         fn paths(&self) -> &[Toolpath] {
             &self.paths
         }
-        fn paths_mut(&mut self) -> &mut Vec<Toolpath> {
-            &mut self.paths
+        fn set_paths(&mut self, paths: Vec<Toolpath>) -> crate::Result<()> {
+            *self = Plan::new(self.path.clone(), self.recipe.clone(), paths)?;
+            Ok(())
         }
         fn footprints(&self) -> &[Footprint] {
             &self.footprints

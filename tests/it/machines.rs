@@ -516,7 +516,7 @@ fn events_and_firmware_retraction_in_each_dialect() {
         }
         tp.event(Event::Fan { speed: 0.0 });
         tp.name = "events".into();
-        *pl.paths_mut() = vec![tp];
+        pl.set_paths(vec![tp]).unwrap();
         let job = p3dp::pipeline::Job::default();
         let bytes = p3dp::pipeline::write(&mut pl, &job, Vec::new())
             .unwrap()
