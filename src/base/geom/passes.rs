@@ -197,15 +197,18 @@ impl<'t> Grid<'t> {
         best.map(|(_, k, q)| (q, k))
     }
 
+    #[cfg(test)]
     /// The surface a string from `a` to `b` lies in, told by the nearest
     /// other pass to its middle (arc length `sm`): see [`Local`].
     pub(crate) fn local(&self, a: DVec3, b: DVec3, sm: f64) -> Option<Local> {
         self.local_near(a, b, sm, None, false).map(|(l, _)| l)
     }
 
-    /// [`Grid::local`] with a hint (see [`Grid::nearest_other_near`]), and
-    /// the neighbouring string it found; with `follow`, the neighbour
-    /// [`Grid::follow_other`] finds.
+    /// The surface a string from `a` to `b` lies in, told by the nearest
+    /// other pass to its middle (arc length `sm`, see [`Local`]), looked
+    /// for first near string `hint` (see [`Grid::nearest_other_near`]: the
+    /// same answer with or without it), and the neighbouring string it
+    /// found; with `follow`, the neighbour [`Grid::follow_other`] finds.
     pub(crate) fn local_near(
         &self,
         a: DVec3,
@@ -601,6 +604,47 @@ mod tests {
                 .unwrap();
             assert_eq!(pool.install(|| pass_spacing(&tp.points)), Some(want), "{t}");
         }
+    }
+
+    #[test]
+    fn a_hint_changes_where_the_search_starts_not_what_it_finds() {
+        // a wavy helix: passes 0.2 mm apart whose spacing varies, and a
+        // loop closed on itself at the top
+        let mut tp = Toolpath::new(DVec3::new(5.0, 0.0, 0.0));
+        for i in 1..=100 * 20 {
+            let a = std::f64::consts::TAU * i as f64 / 100.0;
+            let r = 5.0 + 0.3 * libm::sin(7.0 * a) + 0.05 * libm::sin(0.3 * a);
+            let z = 0.2 * i as f64 / 100.0 + 0.03 * libm::sin(11.0 * a);
+            tp.draw(DVec3::new(r * a.cos(), r * a.sin(), z), 0.1, 30.0);
+        }
+        let g = Grid::new(&tp.points, 0.6);
+        let n = tp.points.len() - 1;
+        let mut found = 0;
+        for k in (0..n).step_by(3) {
+            let (a, b) = (tp.points[k], tp.points[k + 1]);
+            let sm = (g.arc(k) + g.arc(k + 1)) / 2.0;
+            let want = g.local_near(a, b, sm, None, false);
+            found += usize::from(want.is_some());
+            // the neighbour itself, near it, the string's own, far away,
+            // past the end
+            let right = want.map_or(k, |(_, j)| j);
+            for hint in [
+                right,
+                right + 1,
+                right.saturating_sub(2),
+                k,
+                k + 1000,
+                n + 5,
+            ] {
+                assert_eq!(
+                    g.local_near(a, b, sm, Some(hint), false),
+                    want,
+                    "string {k}, hint {hint}"
+                );
+            }
+        }
+        // a neighbouring pass beside nearly every string
+        assert!(found * 3 > n * 9 / 10, "{found} of {}", n / 3);
     }
 
     #[test]

@@ -2,7 +2,7 @@
 //! OBJ; the writers are in [`write`]).
 //!
 //! Cross-section. A string of cross-section c laid h from the next pass (the
-//! previews' reading, [`crate::base::geom::passes::Grid::local`]: h along the surface,
+//! previews' reading, [`crate::base::geom::passes::Grid::local_near`]: h along the surface,
 //! the surface normal n across it) becomes the bead a slicer assumes: h tall
 //! along the surface, w wide along n, its two sides rounded. The rounded sides
 //! are cut as chamfers of the same area, so the section is an octagon: the
@@ -177,6 +177,11 @@ pub(crate) fn add_path(mesh: &mut Mesh, tp: &Toolpath, h_typ: f64) {
     // where the bead's next string starts (strings too short are skipped
     // over, so the one after them starts here)
     let mut from: Option<DVec3> = None;
+    // the neighbour found for an earlier string (its string, the
+    // neighbour's): the next string's lies about as far along, and a
+    // search that starts from it ends sooner with the same answer
+    // ([`Grid::local_near`])
+    let mut hint: Option<(usize, usize)> = None;
     for k in 0..tp.len() {
         let s = tp.strings[k];
         let (a0, b) = tp.ends(k);
@@ -196,7 +201,10 @@ pub(crate) fn add_path(mesh: &mut Mesh, tp: &Toolpath, h_typ: f64) {
         // the previews' section: h the spacing to the neighbouring pass, kept
         // within half and twice the part's typical spacing (as they draw it)
         let sm = (grid.arc(k) + grid.arc(k + 1)) / 2.0;
-        let local = grid.local(a, b, sm).filter(|l| {
+        let guess = hint.map(|(at, j)| j + (k - at));
+        let found = grid.local_near(a, b, sm, guess, false);
+        hint = found.map(|(_, j)| (k, j)).or(hint);
+        let local = found.map(|(l, _)| l).filter(|l| {
             // a neighbour much nearer than the typical spacing may lie ahead
             // of the string, not beside it (a loop's own start met again at
             // its end): such a one is no neighbouring pass

@@ -18,7 +18,7 @@
 //!
 //! Width. A string of cross-section c laid h from the next pass (a helix's
 //! layer height, measured on the path:
-//! [`crate::base::geom::passes::Grid::local`]) fills those h along
+//! [`crate::base::geom::passes::Grid::local_near`]) fills those h along
 //! the surface and is c / h thick across it, the real string width. The
 //! previews draw it as that flat tube seen from the view: the projection of
 //! its cross-section (an ellipse of axes h along the surface and c / h along
