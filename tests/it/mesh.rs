@@ -77,21 +77,15 @@ fn obj_edges(text: &str) -> (usize, usize, usize) {
         }
     }
     edges.sort_unstable();
-    let count = |e: u64| {
-        let from = edges.partition_point(|&x| x < e);
-        edges[from..].iter().take_while(|&&x| x == e).count()
+    // whether `e` is in the list exactly once
+    let once = |e: u64| {
+        let i = edges.partition_point(|&x| x < e);
+        edges.get(i) == Some(&e) && edges.get(i + 1) != Some(&e)
     };
-    let mut bad = 0;
-    let mut k = 0;
-    while k < edges.len() {
-        let e = edges[k];
-        let n = edges[k..].iter().take_while(|&&x| x == e).count();
-        let reverse = e.rotate_left(32); // b → a
-        if n != 1 || count(reverse) != 1 {
-            bad += 1;
-        }
-        k += n;
-    }
+    let bad = edges
+        .chunk_by(|a, b| a == b)
+        .filter(|same| same.len() != 1 || !once(same[0].rotate_left(32))) // b → a
+        .count();
     (bad, nf, nv)
 }
 
@@ -344,4 +338,17 @@ fn bad_invocations_exit_2_and_write_nothing() {
     );
     assert!(dir.join("sphere.stl").exists());
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn the_edge_check_tells_a_closed_shell_from_an_open_or_flipped_one() {
+    // a tetrahedron, its faces turned outwards
+    let tet = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n";
+    assert_eq!(obj_edges(tet), (0, 4, 4));
+    // a face left out: its three edges have no partner
+    let open = tet.replace("f 2 3 4\n", "");
+    assert_eq!(obj_edges(&open).0, 3);
+    // a face flipped: its edges run the same way as its neighbours'
+    let flipped = tet.replace("f 2 3 4\n", "f 2 4 3\n");
+    assert!(obj_edges(&flipped).0 > 0);
 }
