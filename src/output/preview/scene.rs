@@ -188,36 +188,6 @@ impl<'a> Scene<'a> {
         }
     }
 
-    /// Calls `f` on every finite point that ends an extruding string, in
-    /// print order, once each (on every finite point when nothing
-    /// extrudes): what the drawings fit and shade by, read point by point
-    /// (a point ends string k − 1 and begins string k), without holding the
-    /// points.
-    pub(crate) fn each_extruding_point(&self, mut f: impl FnMut(DVec3)) {
-        let mut any = false;
-        for tp in &self.plan.paths {
-            // whether the string before the point extrudes
-            let mut before = false;
-            for (k, p) in tp.points.iter().enumerate() {
-                let after = tp.strings.get(k).is_some_and(|s| !s.travel);
-                if (before || after) && p.is_finite() {
-                    f(*p);
-                }
-                any |= after;
-                before = after;
-            }
-        }
-        if !any {
-            for tp in &self.plan.paths {
-                for p in &tp.points {
-                    if p.is_finite() {
-                        f(*p);
-                    }
-                }
-            }
-        }
-    }
-
     /// Half the widest a string is drawn, mm: room to leave round the model.
     pub(crate) fn pad(&self) -> f64 {
         let mut w: f64 = 0.0;

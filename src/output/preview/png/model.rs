@@ -61,6 +61,75 @@ pub(super) struct Model<'s, 'p> {
     neighbours: bool,
 }
 
+/// What a model's points span: on the screen plane (u, w), in depth, and
+/// in recipe coordinates; and whether any string extrudes.
+#[derive(Clone, Copy)]
+struct Reach {
+    lo2: (f64, f64),
+    hi2: (f64, f64),
+    depths: (f64, f64),
+    lo: DVec3,
+    hi: DVec3,
+    any: bool,
+}
+
+impl Reach {
+    const EMPTY: Reach = Reach {
+        lo2: (f64::INFINITY, f64::INFINITY),
+        hi2: (f64::NEG_INFINITY, f64::NEG_INFINITY),
+        depths: (f64::INFINITY, f64::NEG_INFINITY),
+        lo: DVec3::INFINITY,
+        hi: DVec3::NEG_INFINITY,
+        any: false,
+    };
+
+    /// The points of path `tp` that end its extruding strings `k0..k1`
+    /// (the finite ones).
+    fn of_piece(basis: Basis, tp: &crate::base::toolpath::Toolpath, k0: usize, k1: usize) -> Reach {
+        let mut r = Reach::EMPTY;
+        for k in k0..k1 {
+            if tp.strings[k].travel {
+                continue;
+            }
+            r.any = true;
+            for p in [tp.points[k], tp.points[k + 1]] {
+                if p.is_finite() {
+                    r.add(basis, p);
+                }
+            }
+        }
+        r
+    }
+
+    /// Takes finite point `p` in.
+    fn add(&mut self, basis: Basis, p: DVec3) {
+        // a plain comparison is f64::min's and max's result for a finite x
+        let low = |a: &mut f64, x: f64| *a = if x < *a { x } else { *a };
+        let high = |a: &mut f64, x: f64| *a = if x > *a { x } else { *a };
+        let (u, w, d) = basis.project(p);
+        low(&mut self.lo2.0, u);
+        low(&mut self.lo2.1, w);
+        high(&mut self.hi2.0, u);
+        high(&mut self.hi2.1, w);
+        low(&mut self.depths.0, d);
+        high(&mut self.depths.1, d);
+        self.lo = self.lo.min(p);
+        self.hi = self.hi.max(p);
+    }
+
+    /// Both spans in one.
+    fn join(a: Reach, b: Reach) -> Reach {
+        Reach {
+            lo2: (a.lo2.0.min(b.lo2.0), a.lo2.1.min(b.lo2.1)),
+            hi2: (a.hi2.0.max(b.hi2.0), a.hi2.1.max(b.hi2.1)),
+            depths: (a.depths.0.min(b.depths.0), a.depths.1.max(b.depths.1)),
+            lo: a.lo.min(b.lo),
+            hi: a.hi.max(b.hi),
+            any: a.any || b.any,
+        }
+    }
+}
+
 /// How wide a lit stroke is drawn.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) enum Passes {
@@ -110,30 +179,42 @@ impl<'s, 'p> Model<'s, 'p> {
         parts: usize,
     ) -> Model<'s, 'p> {
         let basis = view.basis();
-        let mut lo2 = (f64::INFINITY, f64::INFINITY);
-        let mut hi2 = (f64::NEG_INFINITY, f64::NEG_INFINITY);
-        let mut lo = DVec3::splat(f64::INFINITY);
-        let mut hi = DVec3::splat(f64::NEG_INFINITY);
-        let mut depths = (f64::INFINITY, f64::NEG_INFINITY);
-        // the points are finite (each_extruding_point): a plain comparison
-        // is f64::min's and max's result, without their NaN handling
-        let low = |a: &mut f64, x: f64| *a = if x < *a { x } else { *a };
-        let high = |a: &mut f64, x: f64| *a = if x > *a { x } else { *a };
-        scene.each_extruding_point(|p| {
-            let (u, w, d) = basis.project(p);
-            low(&mut lo2.0, u);
-            low(&mut lo2.1, w);
-            high(&mut hi2.0, u);
-            high(&mut hi2.1, w);
-            low(&mut depths.0, d);
-            high(&mut depths.1, d);
-            low(&mut lo.x, p.x);
-            low(&mut lo.y, p.y);
-            low(&mut lo.z, p.z);
-            high(&mut hi.x, p.x);
-            high(&mut hi.y, p.y);
-            high(&mut hi.z, p.z);
-        });
+        let mut pieces = Vec::new();
+        for (pi, tp) in scene.plan.paths.iter().enumerate() {
+            let mut k = 0;
+            while k < tp.len() {
+                let end = k.saturating_add(piece).min(tp.len());
+                pieces.push((pi, k, end));
+                k = end;
+            }
+        }
+        // what the extruding points span, piece by piece over the pool (a
+        // lowest and a highest are the same whatever order they are found
+        // in); every finite point's when nothing extrudes
+        let reach = par::map(&pieces, |&(pi, k0, k1)| {
+            Reach::of_piece(basis, &scene.plan.paths[pi], k0, k1)
+        })
+        .into_iter()
+        .fold(Reach::EMPTY, Reach::join);
+        let reach = if reach.any {
+            reach
+        } else {
+            let mut all = Reach::EMPTY;
+            for tp in &scene.plan.paths {
+                for p in tp.points.iter().filter(|p| p.is_finite()) {
+                    all.add(basis, *p);
+                }
+            }
+            all
+        };
+        let Reach {
+            lo2,
+            hi2,
+            depths,
+            lo,
+            hi,
+            ..
+        } = reach;
         let frame = Frame::fit_box(basis, lo2, hi2, rect, scene.pad());
         let neighbours = passes == Passes::Followed;
         let grids: Vec<Grid> = if neighbours {
@@ -147,15 +228,6 @@ impl<'s, 'p> Model<'s, 'p> {
         } else {
             Vec::new()
         };
-        let mut pieces = Vec::new();
-        for (pi, tp) in scene.plan.paths.iter().enumerate() {
-            let mut k = 0;
-            while k < tp.len() {
-                let end = k.saturating_add(piece).min(tp.len());
-                pieces.push((pi, k, end));
-                k = end;
-            }
-        }
         Model {
             scene,
             frame,
@@ -181,18 +253,25 @@ impl<'s, 'p> Model<'s, 'p> {
     where
         T: Copy + Default + Send,
     {
-        let counts = par::map(&self.pieces, |&(pi, k0, k1)| self.count(pi, k0, k1));
+        // each piece's runs found once: their ends, then how many strokes
+        let ends = par::map(&self.pieces, |&(pi, k0, k1)| self.run_ends(pi, k0, k1));
+        let counts: Vec<usize> = self
+            .pieces
+            .iter()
+            .zip(&ends)
+            .map(|(&(pi, k0, _), e)| self.count(pi, k0, e))
+            .collect();
         let mut out = vec![T::default(); counts.iter().sum()];
         let mut shares = Vec::with_capacity(self.pieces.len());
         let mut rest = out.as_mut_slice();
-        for (&piece, &n) in self.pieces.iter().zip(&counts) {
+        for ((&piece, &n), e) in self.pieces.iter().zip(&counts).zip(&ends) {
             let (share, tail) = rest.split_at_mut(n);
-            shares.push((piece, share));
+            shares.push((piece, e, share));
             rest = tail;
         }
-        par::each(&mut shares, |((pi, k0, k1), share)| {
+        par::each(&mut shares, |((pi, k0, _), ends, share)| {
             let mut n = 0;
-            self.collect(*pi, *k0, *k1, |item| {
+            self.collect(*pi, *k0, ends, |item| {
                 share[n] = f(&item);
                 n += 1;
             });
@@ -200,30 +279,45 @@ impl<'s, 'p> Model<'s, 'p> {
         out
     }
 
-    /// How many strokes [`Model::collect`] makes of strings `k0..k1` of
-    /// path `pi`.
-    fn count(&self, pi: usize, k0: usize, k1: usize) -> usize {
-        let tp = &self.scene.plan.paths[pi];
-        let (mut k, mut n) = (k0, 0);
+    /// The ends of the runs [`Model::collect`] makes of strings `k0..k1`
+    /// of path `pi` ([`Model::run_end`]), each less `k0`.
+    fn run_ends(&self, pi: usize, k0: usize, k1: usize) -> Vec<u32> {
+        let mut ends = Vec::new();
+        let mut k = k0;
         while k < k1 {
-            let (first, end) = (k, self.run_end(pi, k, k1));
-            k = end;
+            k = self.run_end(pi, k, k1);
+            ends.push(u32::try_from(k - k0).expect("a piece's strings number below 2³²"));
+        }
+        ends
+    }
+
+    /// How many strokes [`Model::collect`] makes of the runs of path `pi`
+    /// from string `k0` that end at `ends` (less `k0`): those whose ends
+    /// are finite.
+    fn count(&self, pi: usize, k0: usize, ends: &[u32]) -> usize {
+        let tp = &self.scene.plan.paths[pi];
+        let mut first = k0;
+        let mut n = 0;
+        for &e in ends {
+            let end = k0 + e as usize;
             n += usize::from(tp.points[first].is_finite() && tp.points[end].is_finite());
+            first = end;
         }
         n
     }
 
-    /// The strokes of strings `k0..k1` of path `pi`, in order, passed to
-    /// `emit`: runs shorter than [`MERGE_PX`] on screen become one stroke
-    /// ([`Model::run`]), so that the strokes number about the path's length
-    /// on screen over [`MERGE_PX`] at most, however many strings it has; a
-    /// run with an end that is not finite is left out.
-    fn collect(&self, pi: usize, k0: usize, k1: usize, mut emit: impl FnMut(Item)) {
+    /// The strokes of the runs of path `pi` from string `k0` that end at
+    /// `ends` (less `k0`, as [`Model::run_ends`] finds them), in order,
+    /// passed to `emit`: runs shorter than [`MERGE_PX`] on screen become
+    /// one stroke ([`Model::run`]), so that the strokes number about the
+    /// path's length on screen over [`MERGE_PX`] at most, however many
+    /// strings it has; a run with an end that is not finite is left out.
+    fn collect(&self, pi: usize, k0: usize, ends: &[u32], mut emit: impl FnMut(Item)) {
         let tp = &self.scene.plan.paths[pi];
         let mut follow = Follow::default();
         let mut k = k0;
-        while k < k1 {
-            let run = self.run(pi, k, k1);
+        for &e in ends {
+            let run = self.run(pi, k, k0 + e as usize);
             k = run.end;
             let (a, b) = (tp.points[run.first], tp.points[run.end]);
             if a.is_finite() && b.is_finite() {
@@ -251,12 +345,11 @@ impl<'s, 'p> Model<'s, 'p> {
         end
     }
 
-    /// The run of strings from `k` ([`Model::run_end`]), its cross-section
-    /// and value weighted by length.
-    fn run(&self, pi: usize, k: usize, k1: usize) -> Run {
+    /// The run of strings `k..end` ([`Model::run_end`]'s), its
+    /// cross-section and value weighted by length.
+    fn run(&self, pi: usize, k: usize, end: usize) -> Run {
         let (scene, mode) = (self.scene, self.mode);
         let tp = &scene.plan.paths[pi];
-        let end = self.run_end(pi, k, k1);
         let (mut len, mut csum, mut vsum) = (0.0, 0.0, 0.0);
         let valued = mode.has_value();
         for j in k..end {
@@ -492,6 +585,59 @@ fn shade(t: DVec3, normal: Option<(DVec3, DVec3, f64)>, light: DVec3, basis: Bas
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The extruding points' span found piece by piece and joined is the
+    /// span of the points themselves, whatever the pieces: travels' own
+    /// ends and points that are not finite left out.
+    #[test]
+    fn a_span_joined_from_pieces_is_the_whole_path_s() {
+        use crate::base::toolpath::Toolpath;
+        let mut tp = Toolpath::new(DVec3::new(1.0, 2.0, 0.2));
+        for k in 1..=40 {
+            let a = f64::from(k) * 0.4;
+            let q = DVec3::new(
+                9.0 * libm::cos(a),
+                7.0 * libm::sin(a),
+                0.2 + 0.05 * f64::from(k),
+            );
+            if k % 9 == 0 {
+                tp.travel(q + DVec3::new(50.0, 0.0, 0.0), 100.0);
+                tp.travel(q, 100.0);
+            } else {
+                tp.draw(q, 0.1, 20.0);
+            }
+        }
+        tp.travel(DVec3::new(-80.0, 0.0, 5.0), 100.0);
+        tp.draw(DVec3::new(f64::NAN, 0.0, 5.0), 0.1, 20.0);
+        let basis = View::Iso.basis();
+        // the points next to an extruding string, one by one
+        let mut want = Reach::EMPTY;
+        for k in 0..tp.len() {
+            if !tp.strings[k].travel {
+                want.any = true;
+                for p in [tp.points[k], tp.points[k + 1]] {
+                    if p.is_finite() {
+                        want.add(basis, p);
+                    }
+                }
+            }
+        }
+        assert!(want.hi.x < 50.0, "a travel's far end is not in it");
+        for piece in [1, 3, 7, 1000] {
+            let mut got = Reach::EMPTY;
+            let mut k = 0;
+            while k < tp.len() {
+                let end = (k + piece).min(tp.len());
+                got = Reach::join(got, Reach::of_piece(basis, &tp, k, end));
+                k = end;
+            }
+            assert_eq!(
+                (got.lo2, got.hi2, got.depths),
+                (want.lo2, want.hi2, want.depths)
+            );
+            assert_eq!((got.lo, got.hi, got.any), (want.lo, want.hi, want.any));
+        }
+    }
 
     #[test]
     fn wall_strings_look_as_tall_face_on_and_as_thick_edge_on() {
