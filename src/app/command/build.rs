@@ -289,6 +289,9 @@ fn build_job(
         }
     }
     let options = super::stamp()?;
+    // the G-code's SHA-256 only where something shows it: the summary of
+    // several builds (and a sweep's summary.csv) and `--stats-json`
+    let hash = !single || a.stats_json.is_some();
     if let Target::File(f, _) = &target {
         if Package::of(f) != Package::Gcode {
             return build_package(a, p, f, options, single);
@@ -302,7 +305,10 @@ fn build_job(
         let folder = f.parent().filter(|d| !d.as_os_str().is_empty());
         if folder.is_none_or(|d| d.is_dir()) {
             if let Ok(mut file) = AtomicFile::create(f) {
-                let job = a.builds.job(options);
+                let job = pipeline::Job {
+                    hash,
+                    ..a.builds.job(options)
+                };
                 let stats = pipeline::write(&mut p, &job, file.streaming()).map(|w| w.stats);
                 early = Some((file, stats));
             }
@@ -321,8 +327,12 @@ fn build_job(
     let mut files = Vec::new();
     let lines = Vec::new();
     let built = match &target {
-        Target::Stdout => pipeline::write(&mut p, &unchecked(options), crate::output::file::Stdout)
-            .map(|w| (w.stats, "standard output".to_string(), true)),
+        Target::Stdout => pipeline::write(
+            &mut p,
+            &unchecked(options, hash),
+            crate::output::file::Stdout,
+        )
+        .map(|w| (w.stats, "standard output".to_string(), true)),
         Target::File(f, _) => {
             let (file, stats) = match early {
                 Some((file, stats)) => (file, stats?),
@@ -330,7 +340,7 @@ fn build_job(
                     make_parent(f)?;
                     let mut file = AtomicFile::create(f)?;
                     let stats =
-                        pipeline::write(&mut p, &unchecked(options), file.streaming())?.stats;
+                        pipeline::write(&mut p, &unchecked(options, hash), file.streaming())?.stats;
                     (file, stats)
                 }
             };
@@ -341,11 +351,12 @@ fn build_job(
     extras(a, &p, pattern, zbuffer, built, files, lines, single)
 }
 
-/// A job that writes the G-code of a plan already checked, hashed.
-fn unchecked(stamp: Stamp) -> pipeline::Job<'static> {
+/// A job that writes the G-code of a plan already checked, hashed when
+/// `hash`.
+fn unchecked(stamp: Stamp, hash: bool) -> pipeline::Job<'static> {
     pipeline::Job {
         stamp,
-        hash: true,
+        hash,
         ..pipeline::Job::default()
     }
 }
