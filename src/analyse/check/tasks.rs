@@ -64,6 +64,9 @@ pub(crate) struct Tasks<'a> {
     bed: OnceLock<first_layer::Bed>,
     contacts: OnceLock<Vec<Option<first_layer::Contact>>>,
     areas: OnceLock<Vec<u64>>,
+    /// The first layer's findings and footprints, from both halves, made
+    /// once however often the findings are merged.
+    first_layer: OnceLock<(Vec<Finding>, Vec<first_layer::Footprint>)>,
 }
 
 impl<'a> Tasks<'a> {
@@ -85,6 +88,7 @@ impl<'a> Tasks<'a> {
             bed: OnceLock::new(),
             contacts: OnceLock::new(),
             areas: OnceLock::new(),
+            first_layer: OnceLock::new(),
         }
     }
 
@@ -143,8 +147,10 @@ impl<'a> Tasks<'a> {
             ..Costly::default()
         };
         if let (Some(c), Some(a)) = (self.contacts.get(), self.areas.get()) {
-            (costly.first_layer, costly.footprints) =
-                first_layer::findings(self.recipe, &self.paths, c, a);
+            let (f, p) = self
+                .first_layer
+                .get_or_init(|| first_layer::findings(self.recipe, &self.paths, c, a));
+            (costly.first_layer, costly.footprints) = (f.clone(), p.clone());
         }
         merge(cheap, costly)
     }
